@@ -1,0 +1,1 @@
+"""bt_controller: see the package README and package.xml."""

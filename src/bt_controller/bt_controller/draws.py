@@ -1,0 +1,69 @@
+"""Counter-based random draws shared by every road of the project.
+
+Each random number is a pure function of a 64-bit stream key and a counter, so a draw never depends on
+how many other draws were made before it, on the batch a trial sits in, or on the process that runs it.
+That is what lets the compiled batch evaluator, the reference simulator and the ROS 2 node graph draw
+exactly the same numbers for the same (seed, trial, robot, step).
+
+The mixing function is SplitMix64's finaliser (Steele, Lea and Flood, 2014). Keys are derived by
+chaining: ``derive(derive(root_key(seed), trial), robot)``.
+
+All functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
+slowly, from plain Python with Python ints (which must be non-negative and below 2**64).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MUL1 = np.uint64(0xBF58476D1CE4E5B9)
+_MUL2 = np.uint64(0x94D049BB133111EB)
+_SEED_SALT = np.uint64(0x5EED5EED5EED5EED)
+_TO_UNIT = 1.0 / 9007199254740992.0  # 2**-53
+
+MAX_SEED = 2**63 - 1
+"""Seeds are integers in [0, MAX_SEED]."""
+
+
+@numba.njit(cache=True, inline="always")
+def mix64(z: np.uint64) -> np.uint64:
+    """SplitMix64 finaliser: a bijective avalanche of 64 bits."""
+    z = np.uint64(z)
+    z = (z ^ (z >> np.uint64(30))) * _MUL1
+    z = (z ^ (z >> np.uint64(27))) * _MUL2
+    return z ^ (z >> np.uint64(31))
+
+
+@numba.njit(cache=True, inline="always")
+def derive(key: np.uint64, value: int) -> np.uint64:
+    """The key of the sub-stream ``value`` of stream ``key``."""
+    return mix64(np.uint64(key) ^ mix64(np.uint64(value) + _GOLDEN))
+
+
+@numba.njit(cache=True, inline="always")
+def uniform(key: np.uint64, counter: int) -> float:
+    """Draw number ``counter`` of stream ``key``: a float uniform in [0, 1) with 53 random bits."""
+    return float(derive(key, counter) >> np.uint64(11)) * _TO_UNIT
+
+
+@numba.njit(cache=True, inline="always")
+def choose(key: np.uint64, counter: int, n: int) -> int:
+    """Draw number ``counter`` of stream ``key`` as an integer uniform in [0, n)."""
+    return min(int(uniform(key, counter) * n), n - 1)
+
+
+@numba.njit(cache=True)
+def root_key(seed: int) -> np.uint64:
+    """The root stream key of a seed."""
+    return mix64(np.uint64(seed) ^ _SEED_SALT)
+
+
+def check_seed(seed: object) -> int:
+    """Return ``seed`` as an int, or raise ValueError saying what a seed must be."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
+    if not 0 <= int(seed) <= MAX_SEED:
+        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed}")
+    return int(seed)

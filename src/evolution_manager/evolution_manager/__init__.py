@@ -1,0 +1,1 @@
+"""evolution_manager: see the package README and package.xml."""

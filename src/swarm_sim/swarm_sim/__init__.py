@@ -1,0 +1,1 @@
+"""swarm_sim: see the package README and package.xml."""
