@@ -1,0 +1,381 @@
+"""The tree model, its text format, parser and canonical printer.
+
+A tree is immutable data: ``Condition``, ``Action`` and ``Composite`` nodes, all frozen, hashable and
+ordered (by canonical text, so that sets of trees can be sorted deterministically). The text format is::
+
+    sel(seq(in_nest, stop), prob(forward, forward_left))
+
+- composites ``seq``, ``sel``, ``prob`` take 2, 3 or 4 children in parentheses, separated by commas;
+  DEAP's arity-suffixed names (``seq2``, ``sel3``, ``prob4``) are accepted as input and the suffix must match
+  the number of children;
+- conditions and actions (see ``bt_controller.vocabulary``) are bare names; a single leaf is a tree;
+- whitespace and newlines are free anywhere between tokens.
+
+``to_text`` writes the one canonical form (no suffixes, ``", "`` between children) and
+``parse(to_text(t)) == t`` for every tree ``t``. The parser is iterative (no recursion, no ``eval``); it
+refuses trees with more than ``max_nodes`` nodes or deeper than ``max_depth`` (a single leaf has depth 0, as
+DEAP's height) with a ``TreeLimitError``, and malformed input with a ``TreeSyntaxError``; both say the line
+and column.
+"""
+
+from __future__ import annotations
+
+import re
+from bisect import bisect_right
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from bt_controller.errors import TreeLimitError, TreeSyntaxError
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+
+MAX_NODES = 1000
+"""Default limit on the number of nodes of a parsed tree."""
+
+MAX_DEPTH = 17
+"""Default limit on the depth of a parsed tree (a single leaf has depth 0; DEAP's usual static limit)."""
+
+
+class Node:
+    """Base of the three node types. Trees compare equal by structure and order by canonical text."""
+
+    __slots__ = ()
+    size: int
+    depth: int
+
+    def to_text(self) -> str:
+        """The canonical one-line text of this tree."""
+        return to_text(self)
+
+    def __str__(self) -> str:
+        return to_text(self)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}<{to_text(self)}>"
+
+    def _key(self) -> str:
+        return to_text(self)
+
+    def __lt__(self, other: object) -> bool:
+        if not isinstance(other, Node):
+            return NotImplemented
+        return self._key() < other._key()
+
+    def __le__(self, other: object) -> bool:
+        if not isinstance(other, Node):
+            return NotImplemented
+        return self._key() <= other._key()
+
+    def __gt__(self, other: object) -> bool:
+        if not isinstance(other, Node):
+            return NotImplemented
+        return self._key() > other._key()
+
+    def __ge__(self, other: object) -> bool:
+        if not isinstance(other, Node):
+            return NotImplemented
+        return self._key() >= other._key()
+
+    def preorder(self) -> Iterator[Node]:
+        """The nodes of this tree in pre-order (the node itself first); index i is the node's local index."""
+        stack: list[Node] = [self]
+        while stack:
+            node = stack.pop()
+            yield node
+            if isinstance(node, Composite):
+                stack.extend(reversed(node.children))
+
+
+@dataclass(frozen=True, repr=False)
+class Condition(Node):
+    """A condition leaf: succeeds when its blackboard entry is true, else fails."""
+
+    name: str
+    size: int = field(init=False, compare=False, default=1)
+    depth: int = field(init=False, compare=False, default=0)
+
+    def __post_init__(self) -> None:
+        if self.name not in CONDITIONS:
+            raise TreeSyntaxError(
+                f"unknown condition {self.name!r}; known conditions: {', '.join(CONDITIONS)}"
+            )
+
+    @property
+    def index(self) -> int:
+        """The blackboard index of this condition."""
+        return CONDITIONS.index(self.name)
+
+    def __hash__(self) -> int:
+        return hash(("condition", self.name))
+
+
+@dataclass(frozen=True, repr=False)
+class Action(Node):
+    """An action leaf: on its first tick it sets the wheels and runs; on the next tick it succeeds."""
+
+    name: str
+    size: int = field(init=False, compare=False, default=1)
+    depth: int = field(init=False, compare=False, default=0)
+
+    def __post_init__(self) -> None:
+        if self.name not in ACTIONS:
+            raise TreeSyntaxError(f"unknown action {self.name!r}; known actions: {', '.join(ACTIONS)}")
+
+    @property
+    def index(self) -> int:
+        """The index of this action in ``ACTIONS``."""
+        return ACTIONS.index(self.name)
+
+    def __hash__(self) -> int:
+        return hash(("action", self.name))
+
+
+@dataclass(frozen=True, repr=False)
+class Composite(Node):
+    """A composite with memory: ``kind`` is ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children."""
+
+    kind: str
+    children: tuple[Node, ...]
+    size: int = field(init=False, compare=False)
+    depth: int = field(init=False, compare=False)
+    _hash: int = field(init=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.kind not in COMPOSITES:
+            raise TreeSyntaxError(
+                f"unknown composite {self.kind!r}; known composites: {', '.join(COMPOSITES)}"
+            )
+        children = tuple(self.children)
+        object.__setattr__(self, "children", children)
+        if not MIN_CHILDREN <= len(children) <= MAX_CHILDREN:
+            raise TreeSyntaxError(
+                f"{self.kind} takes {MIN_CHILDREN} to {MAX_CHILDREN} children, got {len(children)}"
+            )
+        for child in children:
+            if not isinstance(child, Node):
+                raise TypeError(f"a child of {self.kind} must be a Node, got {type(child).__name__}")
+        object.__setattr__(self, "size", 1 + sum(child.size for child in children))
+        object.__setattr__(self, "depth", 1 + max(child.depth for child in children))
+        object.__setattr__(self, "_hash", hash((self.kind, children)))
+
+    def __hash__(self) -> int:
+        return self._hash
+
+
+def leaf(name: str) -> Condition | Action:
+    """The condition or action called ``name``."""
+    if name in CONDITIONS:
+        return Condition(name)
+    if name in ACTIONS:
+        return Action(name)
+    raise TreeSyntaxError(f"unknown leaf {name!r}; {_known_names()}")
+
+
+def seq(*children: Node | str) -> Composite:
+    """A sequence with memory; string children are leaf names."""
+    return Composite("seq", tuple(_as_node(c) for c in children))
+
+
+def sel(*children: Node | str) -> Composite:
+    """A selector with memory; string children are leaf names."""
+    return Composite("sel", tuple(_as_node(c) for c in children))
+
+
+def prob(*children: Node | str) -> Composite:
+    """A probabilistic composite with memory; string children are leaf names."""
+    return Composite("prob", tuple(_as_node(c) for c in children))
+
+
+def _as_node(child: Node | str) -> Node:
+    return leaf(child) if isinstance(child, str) else child
+
+
+# ---------------------------------------------------------------------------------------------- printing
+
+
+def to_text(tree: Node) -> str:
+    """The canonical one-line text: no arity suffixes, ``", "`` between children."""
+    parts: list[str] = []
+    # Iterative, so that even trees built in code far beyond the parse limits print.
+    stack: list[Node | str] = [tree]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            parts.append(item)
+        elif isinstance(item, Composite):
+            parts.append(item.kind + "(")
+            stack.append(")")
+            for i, child in enumerate(reversed(item.children)):
+                stack.append(child)
+                if i < len(item.children) - 1:
+                    stack.append(", ")
+        else:
+            parts.append(item.name)  # type: ignore[attr-defined]
+    return "".join(parts)
+
+
+def to_indented(tree: Node, indent: str = "    ") -> str:
+    """A multi-line view, one node per line, children indented under their parent (also parseable)."""
+    lines: list[str] = []
+
+    def visit(node: Node, level: int, last: bool) -> None:
+        pad = indent * level
+        tail = "" if last else ","
+        if isinstance(node, Composite):
+            lines.append(f"{pad}{node.kind}(")
+            for i, child in enumerate(node.children):
+                visit(child, level + 1, i == len(node.children) - 1)
+            lines.append(f"{pad}){tail}")
+        else:
+            lines.append(f"{pad}{node.name}{tail}")  # type: ignore[attr-defined]
+
+    visit(tree, 0, True)
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------- parsing
+
+_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|([(),])|(\S))")
+_COMPOSITE_NAME = re.compile(r"^(seq|sel|prob)([0-9]*)$")
+
+
+def _known_names() -> str:
+    return (
+        f"known names: composites {', '.join(COMPOSITES)} (with 2 to 4 children); "
+        f"conditions {', '.join(CONDITIONS)}; actions {', '.join(ACTIONS)}"
+    )
+
+
+class _Tokens:
+    """Tokens of the text with their offsets; offsets turn into 1-based line and column on demand."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.pos = 0
+        self._line_starts = [0] + [m.end() for m in re.finditer(r"\n", text)]
+
+    def where(self, offset: int) -> tuple[int, int]:
+        line = bisect_right(self._line_starts, offset)
+        return line, offset - self._line_starts[line - 1] + 1
+
+    def next(self) -> tuple[str, str, int]:
+        """(kind, value, offset) of the next token; kind is 'name', 'punct', 'bad' or 'end'."""
+        match = _TOKEN.match(self.text, self.pos)
+        if match is None:  # only whitespace is left
+            self.pos = len(self.text)
+            return "end", "", len(self.text)
+        self.pos = match.end()
+        if match.group(1) is not None:
+            return "name", match.group(1), match.start(1)
+        if match.group(2) is not None:
+            return "punct", match.group(2), match.start(2)
+        return "bad", match.group(3), match.start(3)
+
+    def error(self, offset: int, reason: str) -> TreeSyntaxError:
+        line, column = self.where(offset)
+        return TreeSyntaxError(reason, line, column)
+
+
+def _describe(kind: str, value: str) -> str:
+    if kind == "end":
+        return "end of input"
+    if kind == "bad":
+        return f"unexpected character {value!r}"
+    return repr(value)
+
+
+@dataclass
+class _Frame:
+    kind: str
+    arity: int | None
+    offset: int
+    children: list[Node]
+
+
+def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
+    """Parse tree text (see the module docstring); raise TreeSyntaxError or TreeLimitError.
+
+    ``max_nodes`` and ``max_depth`` bound the accepted trees (defaults ``MAX_NODES`` and ``MAX_DEPTH``).
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"tree text must be a str, got {type(text).__name__}")
+    if max_nodes < 1 or max_depth < 0:
+        raise ValueError(f"max_nodes must be >= 1 and max_depth >= 0, got {max_nodes} and {max_depth}")
+    tokens = _Tokens(text)
+    stack: list[_Frame] = []
+    count = 0
+    while True:
+        # A node is expected here.
+        kind, value, offset = tokens.next()
+        if kind != "name":
+            what = "the tree" if not stack else f"a child of {stack[-1].kind}"
+            raise tokens.error(offset, f"expected a node name for {what}, found {_describe(kind, value)}")
+        count += 1
+        if count > max_nodes:
+            line, column = tokens.where(offset)
+            raise TreeLimitError(f"tree has more than max_nodes={max_nodes} nodes", line, column)
+        if len(stack) > max_depth:
+            line, column = tokens.where(offset)
+            raise TreeLimitError(f"tree is deeper than max_depth={max_depth}", line, column)
+        composite = _COMPOSITE_NAME.match(value)
+        node: Node
+        if composite is not None:
+            arity = int(composite.group(2)) if composite.group(2) else None
+            if arity is not None and not MIN_CHILDREN <= arity <= MAX_CHILDREN:
+                raise tokens.error(
+                    offset, f"{value!r}: a composite takes {MIN_CHILDREN} to {MAX_CHILDREN} children"
+                )
+            kind2, value2, offset2 = tokens.next()
+            if (kind2, value2) != ("punct", "("):
+                raise tokens.error(offset2, f"expected '(' after {value!r}, found {_describe(kind2, value2)}")
+            stack.append(_Frame(composite.group(1), arity, offset, []))
+            continue
+        if value in CONDITIONS:
+            node = Condition(value)
+        elif value in ACTIONS:
+            node = Action(value)
+        else:
+            raise tokens.error(offset, f"unknown node {value!r}; {_known_names()}")
+        # Attach finished nodes to their parents until one expects another child.
+        while True:
+            kind, value, offset = tokens.next()
+            if not stack:
+                if kind != "end":
+                    if (kind, value) == ("punct", "("):
+                        reason = f"{node} is a leaf and takes no children"
+                    else:
+                        reason = f"expected end of input after the tree, found {_describe(kind, value)}"
+                    raise tokens.error(offset, reason)
+                return node
+            frame = stack[-1]
+            frame.children.append(node)
+            if (kind, value) == ("punct", ","):
+                if len(frame.children) >= MAX_CHILDREN:
+                    raise tokens.error(
+                        offset, f"expected ')': {frame.kind} takes at most {MAX_CHILDREN} children"
+                    )
+                break
+            if (kind, value) == ("punct", ")"):
+                n = len(frame.children)
+                if n < MIN_CHILDREN:
+                    raise tokens.error(
+                        offset, f"expected ',': {frame.kind} takes at least {MIN_CHILDREN} children"
+                    )
+                if frame.arity is not None and frame.arity != n:
+                    raise tokens.error(
+                        offset, f"{frame.kind}{frame.arity} expects {frame.arity} children, found {n}"
+                    )
+                stack.pop()
+                node = Composite(frame.kind, tuple(frame.children))
+                continue
+            if (kind, value) == ("punct", "(") and not isinstance(node, Composite):
+                raise tokens.error(offset, f"{node} is a leaf and takes no children")
+            raise tokens.error(offset, f"expected ',' or ')' in {frame.kind}, found {_describe(kind, value)}")
+
+
+def check_limits(tree: Node, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
+    """Return ``tree`` if it is within the limits, else raise TreeLimitError (for trees built in code)."""
+    if tree.size > max_nodes:
+        raise TreeLimitError(f"tree has {tree.size} nodes, more than max_nodes={max_nodes}")
+    if tree.depth > max_depth:
+        raise TreeLimitError(f"tree has depth {tree.depth}, more than max_depth={max_depth}")
+    return tree

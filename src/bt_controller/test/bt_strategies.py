@@ -1,0 +1,20 @@
+"""Hypothesis strategies for trees and blackboards, shared by the tests of bt_controller."""
+
+from __future__ import annotations
+
+from hypothesis import strategies as st
+
+from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS
+
+leaves = st.one_of(st.sampled_from(CONDITIONS).map(Condition), st.sampled_from(ACTIONS).map(Action))
+
+
+def _composites(children: st.SearchStrategy[Node]) -> st.SearchStrategy[Node]:
+    kids = st.lists(children, min_size=2, max_size=4).map(tuple)
+    return st.builds(Composite, st.sampled_from(COMPOSITES), kids)
+
+
+trees: st.SearchStrategy[Node] = st.recursive(leaves, _composites, max_leaves=40)
+blackboards = st.lists(st.booleans(), min_size=len(CONDITIONS), max_size=len(CONDITIONS))
+keys = st.integers(0, 2**64 - 1)
