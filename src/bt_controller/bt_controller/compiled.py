@@ -1,0 +1,383 @@
+"""The compiled interpreter: flat trees and a numba tick loop, tick-for-tick equal to ``reference``.
+
+The layout is the contract of ``docs/interfaces.md`` ("Compiled tree interpreter"): a tree is flattened in
+pre-order (root 0, indices local to the tree) to
+
+- ``op`` int8: 0 seq, 1 sel, 2 prob, 3 condition, 4 action;
+- ``arg`` int8: condition or action index, -1 for composites;
+- ``first`` int32: index into ``children`` of the node's first child (-1 for leaves);
+- ``nchild`` int8: number of children (0 for leaves);
+- ``children`` int32: the children of every composite, composite after composite in pre-order.
+
+Per robot, ``memory`` is int8 with one entry per node (see ``reference``). ``tick`` is an ``njit`` function
+that other compiled kernels call with a tree's slices; ``tick_batch`` and ``run_ticks`` tick many robots of
+many packed trees. ``tick`` walks the tree with an explicit stack of ancestors that lives on the machine stack
+(no allocation per tick), so a flat tree may be at most ``MAX_COMPILED_DEPTH`` deep.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from bt_controller.draws import choose, derive
+from bt_controller.errors import TreeLimitError
+from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, FAILURE, RUNNING, SUCCESS
+
+OP_SEQ, OP_SEL, OP_PROB, OP_CONDITION, OP_ACTION = 0, 1, 2, 3, 4
+N_COUNTS = 1 + len(ACTIONS)
+MAX_COMPILED_DEPTH = 63
+"""Deepest tree ``flatten`` accepts (the tick's ancestor stack has MAX_COMPILED_DEPTH + 1 slots)."""
+_STACK_SLOTS = MAX_COMPILED_DEPTH + 1
+
+
+@dataclass(frozen=True)
+class FlatTree:
+    """One tree flattened in pre-order (see the module docstring)."""
+
+    op: np.ndarray
+    arg: np.ndarray
+    first: np.ndarray
+    nchild: np.ndarray
+    children: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes."""
+        return len(self.op)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(op, arg, first, nchild, children)``, the first five arguments of ``tick``."""
+        return self.op, self.arg, self.first, self.nchild, self.children
+
+
+def flatten(tree: Node) -> FlatTree:
+    """Flatten ``tree`` to the contract's arrays; raise TreeLimitError if deeper than MAX_COMPILED_DEPTH."""
+    if tree.depth > MAX_COMPILED_DEPTH:
+        raise TreeLimitError(
+            f"tree has depth {tree.depth}; the compiled interpreter takes {MAX_COMPILED_DEPTH}"
+        )
+    nodes = list(tree.preorder())
+    index = 0
+    op = np.empty(len(nodes), np.int8)
+    arg = np.full(len(nodes), -1, np.int8)
+    first = np.full(len(nodes), -1, np.int32)
+    nchild = np.zeros(len(nodes), np.int8)
+    children: list[int] = []
+    for index, node in enumerate(nodes):
+        if isinstance(node, Composite):
+            op[index] = COMPOSITES.index(node.kind)
+        elif isinstance(node, Condition):
+            op[index], arg[index] = OP_CONDITION, node.index
+        elif isinstance(node, Action):
+            op[index], arg[index] = OP_ACTION, node.index
+        else:
+            raise TypeError(f"not a tree node: {type(node).__name__}")
+    # Second pass: children of each composite, in pre-order of the composites.
+    index = 0
+    sizes = [node.size for node in nodes]
+    for index, node in enumerate(nodes):
+        if isinstance(node, Composite):
+            first[index] = len(children)
+            nchild[index] = len(node.children)
+            child = index + 1
+            for _ in node.children:
+                children.append(child)
+                child += sizes[child]
+    return FlatTree(op, arg, first, nchild, np.asarray(children, np.int32))
+
+
+@dataclass(frozen=True)
+class PackedTrees:
+    """Many flat trees concatenated; tree ``t`` owns nodes ``node_offset[t]:node_offset[t + 1]`` and
+    children ``child_offset[t]:child_offset[t + 1]`` (values inside stay local to the tree)."""
+
+    op: np.ndarray
+    arg: np.ndarray
+    first: np.ndarray
+    nchild: np.ndarray
+    children: np.ndarray
+    node_offset: np.ndarray
+    child_offset: np.ndarray
+
+    @property
+    def n_trees(self) -> int:
+        """Number of trees."""
+        return len(self.node_offset) - 1
+
+    @property
+    def max_nodes(self) -> int:
+        """Node count of the largest tree (the width of a memory table)."""
+        return int(np.diff(self.node_offset).max(initial=0))
+
+    def tree(self, t: int) -> FlatTree:
+        """Views of tree ``t``'s arrays."""
+        a, b = self.node_offset[t], self.node_offset[t + 1]
+        c, d = self.child_offset[t], self.child_offset[t + 1]
+        return FlatTree(self.op[a:b], self.arg[a:b], self.first[a:b], self.nchild[a:b], self.children[c:d])
+
+
+def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
+    """Flatten (if needed) and concatenate ``trees``."""
+    flats = [t if isinstance(t, FlatTree) else flatten(t) for t in trees]
+    node_offset = np.zeros(len(flats) + 1, np.int64)
+    child_offset = np.zeros(len(flats) + 1, np.int64)
+    node_offset[1:] = np.cumsum([f.n_nodes for f in flats])
+    child_offset[1:] = np.cumsum([len(f.children) for f in flats])
+
+    def cat(name: str, dtype: type) -> np.ndarray:
+        parts = [getattr(f, name) for f in flats]
+        return np.concatenate(parts).astype(dtype, copy=False) if parts else np.empty(0, dtype)
+
+    return PackedTrees(
+        cat("op", np.int8),
+        cat("arg", np.int8),
+        cat("first", np.int32),
+        cat("nchild", np.int8),
+        cat("children", np.int32),
+        node_offset,
+        child_offset,
+    )
+
+
+# ---------------------------------------------------------------------------------------------- kernels
+
+
+@intrinsic
+def _stack_slots(typingctx, n):  # noqa: ANN001 (numba intrinsic signature)
+    """A pointer to ``n`` int32 slots on the machine stack of the calling function (``n`` a literal)."""
+    if not isinstance(n, types.IntegerLiteral):
+        return None
+    size = n.literal_value
+
+    def codegen(context, builder, signature, args):  # noqa: ANN001
+        return cgutils.alloca_once(builder, context.get_value_type(types.int32), size=size)
+
+    return types.CPointer(types.int32)(n), codegen
+
+
+@numba.njit(cache=True)
+def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
+    """Set ``memory`` to the fresh state of the tree ``op``: -1 for composites, 0 for leaves."""
+    for i in range(len(op)):
+        memory[i] = -1 if op[i] <= OP_PROB else 0
+
+
+@numba.njit(cache=True)
+def tick(
+    op: np.ndarray,
+    arg: np.ndarray,
+    first: np.ndarray,
+    nchild: np.ndarray,
+    children: np.ndarray,
+    memory: np.ndarray,
+    blackboard: np.ndarray,
+    key: np.uint64,
+    tick_index: int,
+    counts: np.ndarray,
+) -> tuple[int, int]:
+    """Tick the root once; update ``memory`` and ``counts``; return ``(status, action started or -1)``.
+
+    Semantics, memory and counts exactly as ``bt_controller.reference.tick``. ``blackboard`` is any array
+    of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
+    """
+    stack = numba.carray(_stack_slots(_STACK_SLOTS), _STACK_SLOTS)
+    depth = 0
+    node = 0
+    while True:
+        # Descend from ``node`` to a leaf, remembering the position taken at each composite.
+        kind = op[node]
+        while kind <= OP_PROB:
+            position = memory[node]
+            if position < 0:
+                position = choose(derive(key, tick_index), node, nchild[node]) if kind == OP_PROB else 0
+                memory[node] = position
+            stack[depth] = node
+            depth += 1
+            node = children[first[node] + position]
+            kind = op[node]
+        # The leaf.
+        if kind == OP_CONDITION:
+            counts[0] += 1
+            status = SUCCESS if blackboard[arg[node]] else FAILURE
+        elif memory[node] != 0:
+            memory[node] = 0
+            status = SUCCESS
+        else:
+            memory[node] = 1
+            action = arg[node]
+            counts[1 + action] += 1
+            # Running climbs to the root with every position on the way already remembered.
+            return RUNNING, action
+        # Climb while composites finish; stop at a sequence or selector that moves on to its next child.
+        moved_on = False
+        while depth > 0:
+            parent = stack[depth - 1]
+            kind = op[parent]
+            if kind == OP_PROB or status == (FAILURE if kind == OP_SEQ else SUCCESS):
+                memory[parent] = -1
+                depth -= 1
+                continue
+            position = memory[parent] + 1
+            if position < nchild[parent]:
+                memory[parent] = position
+                node = children[first[parent] + position]
+                moved_on = True
+                break
+            memory[parent] = -1
+            status = SUCCESS if kind == OP_SEQ else FAILURE
+            depth -= 1
+        if not moved_on:
+            return status, -1
+
+
+@numba.njit(cache=True)
+def tick_batch(
+    op: np.ndarray,
+    arg: np.ndarray,
+    first: np.ndarray,
+    nchild: np.ndarray,
+    children: np.ndarray,
+    node_offset: np.ndarray,
+    child_offset: np.ndarray,
+    robot_tree: np.ndarray,
+    memory: np.ndarray,
+    blackboards: np.ndarray,
+    keys: np.ndarray,
+    tick_index: int,
+    counts: np.ndarray,
+    status_out: np.ndarray,
+    action_out: np.ndarray,
+) -> None:
+    """Tick every robot ``r`` once with tree ``robot_tree[r]`` of a pack, memory row ``memory[r]``,
+    blackboard ``blackboards[r]``, key ``keys[r]`` and counts row ``counts[r]``; write status and action."""
+    for r in range(len(robot_tree)):
+        t = robot_tree[r]
+        a, b = node_offset[t], node_offset[t + 1]
+        c, d = child_offset[t], child_offset[t + 1]
+        status, action = tick(
+            op[a:b],
+            arg[a:b],
+            first[a:b],
+            nchild[a:b],
+            children[c:d],
+            memory[r, : b - a],
+            blackboards[r],
+            keys[r],
+            tick_index,
+            counts[r],
+        )
+        status_out[r] = status
+        action_out[r] = action
+
+
+@numba.njit(cache=True)
+def _run_ticks(
+    op: np.ndarray,
+    arg: np.ndarray,
+    first: np.ndarray,
+    nchild: np.ndarray,
+    children: np.ndarray,
+    node_offset: np.ndarray,
+    child_offset: np.ndarray,
+    robot_tree: np.ndarray,
+    memory: np.ndarray,
+    blackboards: np.ndarray,
+    keys: np.ndarray,
+    counts: np.ndarray,
+    status_out: np.ndarray,
+    action_out: np.ndarray,
+):
+    for r in range(len(robot_tree)):
+        t = robot_tree[r]
+        a, b = node_offset[t], node_offset[t + 1]
+        c, d = child_offset[t], child_offset[t + 1]
+        t_op, t_arg, t_first, t_nchild, t_children = op[a:b], arg[a:b], first[a:b], nchild[a:b], children[c:d]
+        row = memory[r, : b - a]
+        for k in range(blackboards.shape[0]):
+            status, action = tick(
+                t_op, t_arg, t_first, t_nchild, t_children, row, blackboards[k, r], keys[r], k, counts[r]
+            )
+            status_out[k, r] = status
+            action_out[k, r] = action
+
+
+@dataclass(frozen=True)
+class Run:
+    """What ``run_ticks`` returns: per tick and robot the status and action, and the final state."""
+
+    status: np.ndarray  # int8 (ticks, robots)
+    action: np.ndarray  # int8 (ticks, robots)
+    counts: np.ndarray  # int64 (robots, N_COUNTS)
+    memory: np.ndarray  # int8 (robots, max_nodes)
+
+
+def new_memory(packed: PackedTrees, robot_tree: np.ndarray) -> np.ndarray:
+    """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed``."""
+    memory = np.zeros((len(robot_tree), max(packed.max_nodes, 1)), np.int8)
+    for r, t in enumerate(robot_tree):
+        a, b = packed.node_offset[t], packed.node_offset[t + 1]
+        reset_memory(packed.op[a:b], memory[r, : b - a])
+    return memory
+
+
+def run_ticks(packed: PackedTrees, robot_tree: np.ndarray, keys: np.ndarray, blackboards: np.ndarray) -> Run:
+    """Tick robots from fresh memory for ``blackboards.shape[0]`` ticks (tick indices 0, 1, ...).
+
+    ``robot_tree`` (robots,) picks each robot's tree in ``packed``; ``keys`` (robots,) uint64 stream keys;
+    ``blackboards`` (ticks, robots, 8) bool.
+    """
+    robot_tree = np.asarray(robot_tree, np.int64)
+    keys = np.asarray(keys, np.uint64)
+    n_ticks, n_robots = blackboards.shape[0], len(robot_tree)
+    if blackboards.shape[1:] != (n_robots, 8) or keys.shape != (n_robots,):
+        raise ValueError(f"need blackboards (ticks, {n_robots}, 8) and keys ({n_robots},)")
+    if n_robots and (robot_tree.min() < 0 or robot_tree.max() >= packed.n_trees):
+        raise ValueError(f"robot_tree must index the {packed.n_trees} packed trees")
+    memory = new_memory(packed, robot_tree)
+    counts = np.zeros((n_robots, N_COUNTS), np.int64)
+    status = np.empty((n_ticks, n_robots), np.int8)
+    action = np.empty((n_ticks, n_robots), np.int8)
+    _run_ticks(
+        packed.op,
+        packed.arg,
+        packed.first,
+        packed.nchild,
+        packed.children,
+        packed.node_offset,
+        packed.child_offset,
+        robot_tree,
+        memory,
+        blackboards,
+        keys,
+        counts,
+        status,
+        action,
+    )
+    return Run(status, action, counts, memory)
+
+
+class CompiledRobot:
+    """One robot ticking a flat tree from Python (for tests and tools; kernels call ``tick`` directly)."""
+
+    def __init__(self, tree: Node | FlatTree, key: int) -> None:
+        self.flat = tree if isinstance(tree, FlatTree) else flatten(tree)
+        self.key = np.uint64(key)
+        self.memory = np.empty(self.flat.n_nodes, np.int8)
+        reset_memory(self.flat.op, self.memory)
+        self.counts = np.zeros(N_COUNTS, np.int64)
+        self.tick_index = 0
+
+    def step(self, blackboard: Sequence[bool] | np.ndarray) -> tuple[int, int]:
+        """Tick once with ``blackboard`` and advance the tick counter; returns ``(status, action)``."""
+        board = np.asarray(blackboard, np.bool_)
+        status, action = tick(*self.flat.arrays(), self.memory, board, self.key, self.tick_index, self.counts)
+        self.tick_index += 1
+        return int(status), int(action)

@@ -1,0 +1,53 @@
+"""Random trees and blackboards for tests and benchmarks (every function takes its own generator)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+
+
+def random_leaf(rng: np.random.Generator, p_condition: float = 0.5) -> Node:
+    """A uniformly chosen condition (with probability ``p_condition``) or action."""
+    if rng.random() < p_condition:
+        return Condition(CONDITIONS[rng.integers(len(CONDITIONS))])
+    return Action(ACTIONS[rng.integers(len(ACTIONS))])
+
+
+def random_tree(rng: np.random.Generator, size: int, p_condition: float = 0.5) -> Node:
+    """A random tree of exactly ``size`` nodes (``size`` is 1 or at least 3: 2 nodes make no tree)."""
+    if size == 2 or size < 1:
+        raise ValueError(f"no tree has {size} nodes; size must be 1 or at least 3")
+    if size == 1:
+        return random_leaf(rng, p_condition)
+    rest = size - 1
+    while True:
+        n = int(rng.integers(MIN_CHILDREN, min(MAX_CHILDREN, rest) + 1))
+        # Split ``rest`` nodes among ``n`` children, none of them 2 nodes (no such tree).
+        cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False)) if n > 1 else []
+        parts = np.diff(np.concatenate(([0], cuts, [rest]))).astype(int)
+        if np.all(parts != 2):
+            break
+    kind = COMPOSITES[rng.integers(len(COMPOSITES))]
+    return Composite(kind, tuple(random_tree(rng, int(p), p_condition) for p in parts))
+
+
+def random_tree_grow(rng: np.random.Generator, max_depth: int, p_leaf: float = 0.3) -> Node:
+    """A random tree at most ``max_depth`` deep: the root is a composite (unless ``max_depth`` is 0) and
+    every node below it is a leaf with probability ``p_leaf`` (always at ``max_depth``)."""
+    return _grow(rng, max_depth, 0.0 if max_depth > 0 else 1.0, p_leaf)
+
+
+def _grow(rng: np.random.Generator, max_depth: int, p_here: float, p_leaf: float) -> Node:
+    if max_depth == 0 or rng.random() < p_here:
+        return random_leaf(rng)
+    n = int(rng.integers(MIN_CHILDREN, MAX_CHILDREN + 1))
+    kind = COMPOSITES[rng.integers(len(COMPOSITES))]
+    return Composite(kind, tuple(_grow(rng, max_depth - 1, p_leaf, p_leaf) for _ in range(n)))
+
+
+def random_blackboards(rng: np.random.Generator, n_ticks: int, n_robots: int) -> np.ndarray:
+    """Blackboards (ticks, robots, 8) bool; each robot has its own probability of true per condition."""
+    p_true = rng.random((1, n_robots, len(CONDITIONS)))
+    return rng.random((n_ticks, n_robots, len(CONDITIONS))) < p_true

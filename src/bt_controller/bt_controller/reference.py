@@ -1,0 +1,137 @@
+"""The reference interpreter: the readable definition of one tick of a tree for one robot.
+
+This module *is* the meaning of a behaviour tree in this project (``shared/design/model.md``, section
+"Behaviour-tree semantics"); the compiled interpreter (``bt_controller.compiled``) is tested against it tick
+for tick. All state is explicit and laid out exactly as the compiled interpreter's: ``memory`` has one int
+entry per node in pre-order (root 0) -- for a composite the remembered child position (-1 for none), for an
+action 1 when it returned running on its last tick (else 0), for a condition always 0.
+
+One tick (``tick``):
+
+- sequence: resume at the remembered child (the first if none); a failure clears memory and fails; running is
+  remembered and returned; success moves on to the next child; all succeeded clears memory and succeeds.
+- selector: the same with success and failure swapped.
+- probabilistic: with no remembered child, pick one uniformly at random with the counter-based draw
+  ``choose(derive(key, tick_index), node_index, n_children)`` (``docs/interfaces.md``); tick it; running is
+  remembered and returned; otherwise clear memory and return the child's status.
+- condition: success if its blackboard entry is true, else failure; counted in ``counts[0]``.
+- action: if it is not running, it starts (counted in ``counts[1 + action]``) and returns running; if it
+  returned running last tick, it returns success now.
+
+Why not py_trees for the definition: py_trees' ``Sequence``/``Selector(memory=True)`` do resume at the running
+child, but their state lives inside behaviour objects (status, ``current_child``, ``initialise``/``terminate``
+hooks) rather than in one array the compiled kernel can share, a tick is a generator walk costing tens of
+microseconds, and the probabilistic composite, the counter-based draw and the action counting would all be our
+own code anyway. ``bt_controller.pytrees`` builds the same tree from py_trees behaviours for its rendering and
+blackboard tooling, and ``test_pytrees.py`` shows that it agrees with this module tick for tick.
+"""
+
+from __future__ import annotations
+
+from collections.abc import MutableSequence, Sequence
+
+import numpy as np
+
+from bt_controller.draws import choose, derive
+from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, FAILURE, RUNNING, STOP, SUCCESS
+
+N_COUNTS = 1 + len(ACTIONS)
+"""Length of a counts vector: condition-node ticks, then starts of each action."""
+
+
+def new_memory(tree: Node) -> list[int]:
+    """Fresh memory for ``tree``: -1 (nothing remembered) for composites, 0 for leaves."""
+    return [-1 if isinstance(node, Composite) else 0 for node in tree.preorder()]
+
+
+def new_counts() -> list[int]:
+    """A zeroed counts vector (see ``N_COUNTS``)."""
+    return [0] * N_COUNTS
+
+
+def tick(
+    tree: Node,
+    memory: MutableSequence[int],
+    blackboard: Sequence[bool],
+    key: int,
+    tick_index: int,
+    counts: MutableSequence[int],
+) -> tuple[int, int]:
+    """Tick the root of ``tree`` once; update ``memory`` and ``counts`` in place.
+
+    Returns ``(status, action)``: the root status and the index of the action started by this tick, or -1
+    when none started. ``key`` is the robot's tree stream key, ``tick_index`` the 0-based tick in the trial.
+    """
+    started = -1
+
+    def run(node: Node, index: int) -> int:
+        nonlocal started
+        if isinstance(node, Condition):
+            counts[0] += 1
+            return SUCCESS if blackboard[node.index] else FAILURE
+        if isinstance(node, Action):
+            if memory[index]:
+                memory[index] = 0
+                return SUCCESS
+            memory[index] = 1
+            counts[1 + node.index] += 1
+            started = node.index
+            return RUNNING
+        assert isinstance(node, Composite)
+        child_indices = _child_indices(node, index)
+        n = len(node.children)
+        if node.kind == "prob":
+            position = memory[index]
+            if position < 0:
+                position = int(choose(np.uint64(derive(np.uint64(key), tick_index)), index, n))
+            status = run(node.children[position], child_indices[position])
+            memory[index] = position if status == RUNNING else -1
+            return status
+        # seq stops at the first failure, sel at the first success; otherwise they move on.
+        stop_at, exhausted = (FAILURE, SUCCESS) if node.kind == "seq" else (SUCCESS, FAILURE)
+        for position in range(max(memory[index], 0), n):
+            status = run(node.children[position], child_indices[position])
+            if status == RUNNING:
+                memory[index] = position
+                return RUNNING
+            if status == stop_at:
+                memory[index] = -1
+                return status
+        memory[index] = -1
+        return exhausted
+
+    status = run(tree, 0)
+    return status, started
+
+
+def _child_indices(node: Composite, index: int) -> list[int]:
+    """Pre-order indices of the children of the composite at pre-order ``index``."""
+    indices = []
+    next_index = index + 1
+    for child in node.children:
+        indices.append(next_index)
+        next_index += child.size
+    return indices
+
+
+def wheels(status: int, action: int) -> tuple[int, int]:
+    """Wheel speeds (left, right) for the next 0.5 s: the started action's while running, else stop."""
+    return ACTION_WHEELS[action] if status == RUNNING and action >= 0 else ACTION_WHEELS[STOP]
+
+
+class ReferenceRobot:
+    """One robot running a tree: its memory, counts, stream key and tick counter, ticked by ``step``."""
+
+    def __init__(self, tree: Node, key: int) -> None:
+        self.tree = tree
+        self.key = int(key)
+        self.memory = new_memory(tree)
+        self.counts = new_counts()
+        self.tick_index = 0
+
+    def step(self, blackboard: Sequence[bool]) -> tuple[int, int]:
+        """Tick once with ``blackboard`` and advance the tick counter; returns ``(status, action)``."""
+        result = tick(self.tree, self.memory, blackboard, self.key, self.tick_index, self.counts)
+        self.tick_index += 1
+        return result

@@ -1,0 +1,168 @@
+"""Hand-worked tick sequences for every node type, run on the reference and the compiled interpreter."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bt_controller.compiled import CompiledRobot
+from bt_controller.draws import choose, derive
+from bt_controller.reference import ReferenceRobot, wheels
+from bt_controller.tree import parse
+from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, FAILURE, RUNNING, SUCCESS
+
+S, F, R = SUCCESS, FAILURE, RUNNING
+FWD, REV, STOP = ACTION_INDEX["forward"], ACTION_INDEX["reverse"], ACTION_INDEX["stop"]
+
+
+def board(*true: str) -> list[bool]:
+    values = [False] * len(CONDITION_INDEX)
+    for name in true:
+        values[CONDITION_INDEX[name]] = True
+    return values
+
+
+@pytest.fixture(params=["reference", "compiled"])
+def robot(request):
+    cls = ReferenceRobot if request.param == "reference" else CompiledRobot
+
+    def make(text: str, key: int = 7):
+        return cls(parse(text), key)
+
+    return make
+
+
+def memory(r) -> list[int]:
+    return [int(m) for m in r.memory]
+
+
+def test_condition_leaf(robot):
+    r = robot("on_food")
+    assert r.step(board("on_food")) == (S, -1)
+    assert r.step(board()) == (F, -1)
+    assert list(r.counts) == [2, 0, 0, 0, 0, 0, 0, 0]
+
+
+def test_action_runs_then_succeeds_then_starts_again(robot):
+    r = robot("forward")
+    assert r.step(board()) == (R, FWD)
+    assert memory(r) == [1]
+    assert r.step(board()) == (S, -1)
+    assert memory(r) == [0]
+    assert r.step(board()) == (R, FWD)
+    assert list(r.counts) == [0, 0, 2, 0, 0, 0, 0, 0]
+
+
+def test_sequence_resumes_at_running_child_without_reticking_earlier_ones(robot):
+    r = robot("seq(on_food, forward, stop)")
+    assert r.step(board("on_food")) == (R, FWD)
+    assert memory(r) == [1, 0, 1, 0]
+    # on_food is false now, but the sequence resumes at forward: on_food is not ticked again.
+    assert r.step(board()) == (R, STOP)
+    assert memory(r) == [2, 0, 0, 1]
+    assert r.counts[0] == 1
+    assert r.step(board()) == (S, -1)  # stop succeeds, all succeeded: memory cleared
+    assert memory(r) == [-1, 0, 0, 0]
+    assert r.step(board()) == (F, -1)  # afresh: on_food fails
+    assert memory(r) == [-1, 0, 0, 0]
+    assert list(r.counts) == [2, 1, 1, 0, 0, 0, 0, 0]
+
+
+def test_sequence_failure_after_running_clears_memory(robot):
+    r = robot("seq(forward, in_nest, stop)")
+    assert r.step(board()) == (R, FWD)
+    assert memory(r) == [0, 1, 0, 0]
+    assert r.step(board()) == (F, -1)  # forward succeeds, in_nest fails
+    assert memory(r) == [-1, 0, 0, 0]
+    assert r.step(board("in_nest")) == (R, FWD)  # starts from the first child again
+    assert memory(r) == [0, 1, 0, 0]
+
+
+def test_selector_resumes_at_running_child_and_succeeds(robot):
+    r = robot("sel(on_food, forward, stop)")
+    assert r.step(board()) == (R, FWD)
+    assert memory(r) == [1, 0, 1, 0]
+    # on_food is true now, but the selector resumes at forward, which succeeds: the selector succeeds.
+    assert r.step(board("on_food")) == (S, -1)
+    assert memory(r) == [-1, 0, 0, 0]
+    assert r.counts[0] == 1
+    assert r.step(board("on_food")) == (S, -1)
+    assert r.counts[0] == 2
+
+
+def test_selector_all_fail_clears_memory(robot):
+    r = robot("sel(on_food, seq(forward, in_nest))")
+    assert r.step(board()) == (R, FWD)
+    assert memory(r) == [1, 0, 0, 1, 0]
+    assert r.step(board()) == (F, -1)  # forward succeeds, in_nest fails, seq fails, sel exhausted
+    assert memory(r) == [-1, 0, -1, 0, 0]
+    assert r.step(board("on_food")) == (S, -1)
+    assert list(r.counts) == [3, 0, 1, 0, 0, 0, 0, 0]
+
+
+def test_nested_memory_resumes_deep_running_action(robot):
+    r = robot("sel(seq(in_nest, stop, reverse), forward)")
+    assert r.step(board("in_nest")) == (R, STOP)
+    assert memory(r) == [0, 1, 0, 1, 0, 0]
+    assert r.step(board()) == (R, REV)
+    assert memory(r) == [0, 2, 0, 0, 1, 0]
+    assert r.step(board()) == (S, -1)
+    assert memory(r) == [-1, -1, 0, 0, 0, 0]
+    assert r.step(board()) == (R, FWD)  # in_nest fails, seq fails, selector moves on to forward
+    assert memory(r) == [1, -1, 0, 0, 0, 1]
+
+
+def _key_with_draws(first: int, second: int, n: int, node: int = 0) -> int:
+    """A stream key whose probabilistic draws at ticks 0 and 1 (for ``node``) are ``first`` and ``second``."""
+    for key in range(1, 10_000):
+        k = np.uint64(key)
+        if (
+            choose(np.uint64(derive(k, 0)), node, n) == first
+            and choose(np.uint64(derive(k, 1)), node, n) == second
+        ):
+            return key
+    raise AssertionError("no such key")
+
+
+def test_prob_child_is_the_counter_based_draw(robot):
+    for key in range(20):
+        r = robot("prob(on_food, in_nest, food_left)", key)
+        status, _ = r.step(board("in_nest"))
+        chosen = choose(np.uint64(derive(np.uint64(key), 0)), 0, 3)
+        assert status == (S if chosen == 1 else F)
+        assert memory(r) == [-1, 0, 0, 0]
+
+
+def test_prob_remembers_running_child_and_draws_only_when_nothing_remembered(robot):
+    key = _key_with_draws(0, 1, 2)
+    r = robot("prob(forward, reverse)", key)
+    assert r.step(board()) == (R, FWD)  # draw 0 picks forward
+    assert memory(r) == [0, 1, 0]
+    assert r.step(board()) == (S, -1)  # tick 1's draw would pick reverse, but forward is remembered
+    assert memory(r) == [-1, 0, 0]
+    r2 = robot("prob(forward, reverse)", key)
+    r2.step(board())
+    r2.step(board())
+    assert r2.counts[1 + REV] == 0
+
+
+def test_prob_uses_the_local_preorder_index_of_the_node(robot):
+    key = _key_with_draws(1, 0, 2, node=3)
+    r = robot("seq(on_food, stop, prob(forward, reverse))", key)
+    assert r.step(board("on_food")) == (R, STOP)
+    assert r.step(board("on_food")) == (R, REV if choose(np.uint64(derive(np.uint64(key), 1)), 3, 2) else FWD)
+
+
+def test_prob_draws_are_uniform_over_children():
+    seen = np.zeros(4, int)
+    for key in range(4000):
+        r = ReferenceRobot(parse("prob(stop, forward, forward_left, forward_right)"), key)
+        _, action = r.step(board())
+        seen[action] += 1
+    assert seen.min() > 850
+
+
+def test_wheels_are_the_running_actions_else_stop():
+    assert wheels(R, FWD) == (1, 1)
+    assert wheels(S, -1) == (0, 0)
+    assert wheels(F, -1) == (0, 0)
