@@ -27,6 +27,8 @@ setup(
     entry_points={
         "console_scripts": [
             # "EXECUTABLE = swarm_sim.MODULE:main": run with `ws/run swarm_sim EXECUTABLE`.
+            "evaluate = swarm_sim.cli:evaluate_main",
+            "bench = swarm_sim.bench:main",
         ],
     },
 )

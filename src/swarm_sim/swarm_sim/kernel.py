@@ -13,9 +13,9 @@ import math
 
 import numba
 import numpy as np
+
 from bt_controller.compiled import N_COUNTS, reset_memory, tick
 from bt_controller.vocabulary import RUNNING, STOP
-
 from swarm_sim import world
 from swarm_sim.config import Params
 from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
@@ -180,6 +180,43 @@ def run_jobs(
     """Run every job ``j`` (tree ``job_tree[j]`` of a pack, seed key, trial, gap) into row ``j`` of the
     outputs (``values_out``: jobs x N_VALUES; ``poses_out``: jobs x 2 x n_robots x 3)."""
     for j in range(job_tree.shape[0]):
+        t = job_tree[j]
+        a, b = node_offset[t], node_offset[t + 1]
+        c, d = child_offset[t], child_offset[t + 1]
+        simulate_trial(
+            op[a:b],
+            arg[a:b],
+            first[a:b],
+            nchild[a:b],
+            children[c:d],
+            job_seed_key[j],
+            job_trial[j],
+            job_gap[j],
+            p,
+            values_out[j],
+            poses_out[j],
+        )
+
+
+@numba.njit(cache=True, parallel=True)
+def run_jobs_parallel(
+    op: np.ndarray,
+    arg: np.ndarray,
+    first: np.ndarray,
+    nchild: np.ndarray,
+    children: np.ndarray,
+    node_offset: np.ndarray,
+    child_offset: np.ndarray,
+    job_tree: np.ndarray,
+    job_seed_key: np.ndarray,
+    job_trial: np.ndarray,
+    job_gap: np.ndarray,
+    p: Params,
+    values_out: np.ndarray,
+    poses_out: np.ndarray,
+) -> None:
+    """``run_jobs`` with the jobs spread over numba's threads; every job still writes only its own rows."""
+    for j in numba.prange(job_tree.shape[0]):
         t = job_tree[j]
         a, b = node_offset[t], node_offset[t + 1]
         c, d = child_offset[t], child_offset[t + 1]

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+
 from bt_controller.draws import derive, root_key
 
 POSITION = 0
@@ -35,7 +36,7 @@ PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
 
 def stream_key(seed: int, trial: int, robot: int, purpose: int) -> np.uint64:
     """The stream key of ``(seed, trial, robot, purpose)``, from Python."""
-    return derive(derive(derive(root_key(seed), trial), robot), purpose)
+    return np.uint64(derive(derive(derive(np.uint64(root_key(seed)), trial), robot), purpose))
 
 
 @numba.njit(cache=True)

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from bt_controller.draws import check_seed, root_key
 
+from bt_controller.draws import check_seed, root_key
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
@@ -42,7 +42,7 @@ def setup_trial(seed: int, trial: int, config: Config = DEFAULT) -> TrialSetup:
     if isinstance(trial, bool) or not isinstance(trial, int) or trial < 0:
         raise ValueError(f"trial must be a non-negative integer, got {trial!r}")
     p = config.params()
-    keys = trial_keys(root_key(seed), trial, p.n_robots)
+    keys = trial_keys(np.uint64(root_key(seed)), trial, p.n_robots)
     return TrialSetup(
         trial=trial,
         gap=config.gap(trial),

@@ -1,0 +1,98 @@
+"""``ws/run swarm_sim bench``: evaluations per second of both roads, and (``--parity N``) their agreement.
+
+    bench [--trees 200] [--reference-trees 4] [--trials 10] [--seed 0] [--parity N] [--threads K]
+
+Trees are ``randtrees.random_trees(seed, n)`` (10 to 60 nodes). The batch evaluator is timed after a warm-up
+batch (compilation excluded) on one batch of ``--trees`` requests; the reference road on the first
+``--reference-trees`` of them. ``--parity N`` then evaluates N random trees by both roads and counts
+disagreements (any bit of any of the six values); the exit status is 1 if there is one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+
+import numba
+
+from swarm_sim import reference
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.randtrees import random_trees
+
+
+def _batch_rate(evaluator: BatchEvaluator, requests: list[EvaluationRequest]) -> tuple[float, float]:
+    evaluator.evaluate(requests[:2])  # compile or load the kernels
+    start = time.perf_counter()
+    results = evaluator.evaluate(requests)
+    elapsed = time.perf_counter() - start
+    bad = [r.error for r in results if r.error]
+    if bad:
+        raise RuntimeError(f"benchmark trees failed: {bad[0]}")
+    return len(requests) / elapsed, elapsed
+
+
+def _reference_rate(requests: list[EvaluationRequest]) -> tuple[float, float]:
+    trees = [check_request(r) for r in requests]
+    reference.evaluate(trees[0], 0, 1)  # warm the compiled world functions
+    start = time.perf_counter()
+    for tree, request in zip(trees, requests, strict=True):
+        reference.evaluate(tree, request.seed, request.trials)
+    elapsed = time.perf_counter() - start
+    return len(requests) / elapsed, elapsed
+
+
+def parity(n_trees: int, seed: int, trials: int) -> int:
+    """Evaluate ``n_trees`` random trees by both roads; print and return the number of disagreements."""
+    evaluator = BatchEvaluator()
+    texts = random_trees(seed + 1, n_trees)
+    requests = [EvaluationRequest(t, seed + k, trials) for k, t in enumerate(texts)]
+    batch = evaluator.evaluate_trials(requests)
+    mismatches = 0
+    for request, (result, records) in zip(requests, batch, strict=True):
+        values, ref_records = reference.evaluate(check_request(request), request.seed, request.trials)
+        assert result.fitness is not None and result.descriptors is not None
+        same = values == result.fitness + result.descriptors and all(
+            a.values == b.values and (a.end_poses == b.end_poses).all()
+            for a, b in zip(records, ref_records, strict=True)
+        )
+        if not same:
+            mismatches += 1
+            print(f"parity: MISMATCH seed {request.seed} tree {request.tree}", file=sys.stderr)
+    print(f"parity: {n_trees - mismatches}/{n_trees} random trees identical on both roads ({trials} trials)")
+    return mismatches
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Console entry point of ``bench``."""
+    parser = argparse.ArgumentParser(prog="bench", description=__doc__.split("\n")[0])
+    parser.add_argument("--trees", type=int, default=200, help="requests in the timed batch")
+    parser.add_argument("--reference-trees", type=int, default=4, help="requests timed on the reference road")
+    parser.add_argument("--trials", type=int, default=10, help="trials per evaluation")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the tree set and of the requests")
+    parser.add_argument("--parity", type=int, default=0, metavar="N", help="also compare roads on N trees")
+    parser.add_argument("--threads", type=int, default=1, help="numba threads (default 1)")
+    args = parser.parse_args(argv)
+    numba.set_num_threads(args.threads)
+
+    texts = random_trees(args.seed, args.trees)
+    requests = [EvaluationRequest(t, args.seed + k, args.trials) for k, t in enumerate(texts)]
+    sizes = [check_request(r).size for r in requests]
+    print(
+        f"trees: {len(texts)} random, {min(sizes)}-{max(sizes)} nodes (mean {sum(sizes) / len(sizes):.1f}); "
+        f"{args.trials} trials per evaluation"
+    )
+    batch_rate, batch_time = _batch_rate(BatchEvaluator(threads=args.threads), requests)
+    print(f"batch:     {batch_rate:8.1f} evaluations/s ({len(requests)} in {batch_time:.2f} s)")
+    ref_requests = requests[: args.reference_trees]
+    ref_rate, ref_time = _reference_rate(ref_requests)
+    print(f"reference: {ref_rate:8.2f} evaluations/s ({len(ref_requests)} in {ref_time:.2f} s)")
+    print(f"ratio:     {batch_rate / ref_rate:8.0f}x")
+    if args.parity:
+        return 1 if parity(args.parity, args.seed, args.trials) else 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
+
+    evaluate --tree TREE [--trials 10] [--seed S] [--engine compiled|reference] [--per-trial]
+
+Prints ``{"tree", "seed", "trials", "fitness": {density, nest, food}, "descriptors": {movement, rotation,
+conditionality}}`` (``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start
+and end poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr,
+exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+from bt_controller.draws import MAX_SEED
+from bt_controller.tree import to_text
+from swarm_sim import reference
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.trial import VALUE_NAMES, TrialRecord
+
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """Bad command-line input; the message is printed as one line."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(message)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="evaluate", description="Evaluate one behaviour tree; print one JSON object.")
+    parser.add_argument("--tree", required=True, help="tree text, e.g. 'sel(seq(in_nest, stop), forward)'")
+    parser.add_argument("--trials", type=int, default=10, help="number of trials (default 10)")
+    parser.add_argument("--seed", type=int, default=0, help=f"seed in [0, {MAX_SEED}] (default 0)")
+    parser.add_argument(
+        "--engine",
+        choices=("compiled", "reference"),
+        default="compiled",
+        help="batch kernels (default) or the reference road",
+    )
+    parser.add_argument("--per-trial", action="store_true", help="add each trial's values and poses")
+    return parser
+
+
+def evaluation_json(
+    tree_text: str, seed: int, trials: int, values: Sequence[float], records: Sequence[TrialRecord] | None
+) -> str:
+    """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``)."""
+    named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
+    document: dict[str, object] = {
+        "tree": tree_text,
+        "seed": seed,
+        "trials": trials,
+        "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
+        "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
+    }
+    if records is not None:
+        document["per_trial"] = [r.as_dict() for r in records]
+    return json.dumps(document)
+
+
+def run(argv: Sequence[str] | None = None) -> str:
+    """Parse ``argv``, evaluate, and return the JSON text; raise UsageError on bad input."""
+    args = _parser().parse_args(argv)
+    if not 1 <= args.trials <= MAX_TRIALS:
+        raise UsageError(f"--trials must be in [1, {MAX_TRIALS}], got {args.trials}")
+    if not 0 <= args.seed <= MAX_SEED:
+        raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
+    request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
+    try:
+        tree = check_request(request)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    if args.engine == "reference":
+        values, records = reference.evaluate(tree, args.seed, args.trials)
+    else:
+        result, records = BatchEvaluator().evaluate_trials([request])[0]
+        if result.error is not None:
+            raise UsageError(result.error)
+        assert result.fitness is not None and result.descriptors is not None
+        values = result.fitness + result.descriptors
+    return evaluation_json(to_text(tree), args.seed, args.trials, values, records if args.per_trial else None)
+
+
+def evaluate_main(argv: Sequence[str] | None = None) -> int:
+    """Console entry point of ``evaluate``."""
+    try:
+        text = run(argv)
+    except UsageError as error:
+        message = " ".join(str(error).split())
+        print(f"evaluate: error: {message}", file=sys.stderr)
+        return EXIT_USAGE
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(evaluate_main())

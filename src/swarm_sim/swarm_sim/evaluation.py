@@ -1,0 +1,202 @@
+"""The Evaluator contract (``docs/interfaces.md``) and its in-process implementation, ``BatchEvaluator``.
+
+An evaluation of a (tree, seed) is ``trials`` trials (trial ``k`` in arena configuration ``k % 2``); its
+fitness is the (density, nest, food) objectives and its descriptors (movement, rotation, conditionality),
+each averaged over robots and trials and each in [0, 1]. A result depends only on its request.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numba
+import numpy as np
+
+from bt_controller.compiled import FlatTree, flatten, pack
+from bt_controller.draws import check_seed, root_key
+from bt_controller.errors import TreeError
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
+from swarm_sim import kernel, world
+from swarm_sim.config import DEFAULT, Config
+from swarm_sim.trial import TrialRecord, combine
+
+MAX_TRIALS = 10_000
+"""Most trials one request may ask for."""
+
+
+@dataclass(frozen=True)
+class EvaluationRequest:
+    """Evaluate ``tree`` (tree text) with ``seed`` over ``trials`` trials."""
+
+    tree: str
+    seed: int
+    trials: int = 10
+
+
+@dataclass(frozen=True)
+class EvaluationResult:
+    """Fitness (density, nest, food) and descriptors (movement, rotation, conditionality), or an error."""
+
+    fitness: tuple[float, float, float] | None
+    descriptors: tuple[float, float, float] | None
+    error: str | None
+
+    @property
+    def ok(self) -> bool:
+        """True when the request was evaluated."""
+        return self.error is None
+
+
+@runtime_checkable
+class Evaluator(Protocol):
+    """Anything that turns requests into results, one result per request in the same order."""
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request; a bad request gives an error result, never an exception."""
+        ...
+
+
+def failed(reason: str) -> EvaluationResult:
+    """An error result."""
+    return EvaluationResult(fitness=None, descriptors=None, error=reason)
+
+
+def from_values(values: Sequence[float]) -> EvaluationResult:
+    """A result from six values (``trial.VALUE_NAMES`` order)."""
+    v = tuple(float(x) for x in values)
+    return EvaluationResult(fitness=(v[0], v[1], v[2]), descriptors=(v[3], v[4], v[5]), error=None)
+
+
+def check_request(request: object, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
+    """The parsed tree of a valid request; raise ValueError saying what is wrong otherwise."""
+    if not isinstance(request, EvaluationRequest):
+        raise ValueError(f"expected an EvaluationRequest, got {type(request).__name__}")
+    if not isinstance(request.tree, str):
+        raise ValueError(f"tree must be tree text (str), got {type(request.tree).__name__}")
+    check_seed(request.seed)
+    trials = request.trials
+    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or not 1 <= trials <= MAX_TRIALS:
+        raise ValueError(f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}")
+    try:
+        return parse(request.tree, max_nodes=max_nodes, max_depth=max_depth)
+    except TreeError as error:
+        raise ValueError(f"bad tree: {error}") from None
+
+
+@dataclass(frozen=True)
+class _Job:
+    request: int
+    flat: FlatTree
+
+
+class BatchEvaluator:
+    """The in-process evaluator: every trial of every request in compiled kernels.
+
+    ``evaluate`` answers the contract; ``evaluate_trials`` also returns each trial's record (values and
+    poses). Trees are refused beyond ``max_nodes`` nodes or ``max_depth`` depth. With ``threads`` > 1 the
+    trials are spread over that many numba threads; results are the same bits either way.
+    """
+
+    def __init__(
+        self,
+        config: Config = DEFAULT,
+        max_nodes: int = MAX_NODES,
+        max_depth: int = MAX_DEPTH,
+        threads: int = 1,
+    ) -> None:
+        if (
+            isinstance(threads, bool)
+            or not isinstance(threads, int)
+            or not 1 <= threads <= numba.config.NUMBA_NUM_THREADS
+        ):
+            raise ValueError(
+                f"threads must be an integer in [1, {numba.config.NUMBA_NUM_THREADS}], got {threads!r}"
+            )
+        self.threads = threads
+        self.config = config
+        self.max_nodes = max_nodes
+        self.max_depth = max_depth
+        self._params = config.params()
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request (see ``Evaluator``)."""
+        return [result for result, _ in self._evaluate(requests, keep_records=False)]
+
+    def evaluate_trials(
+        self, requests: Sequence[EvaluationRequest]
+    ) -> list[tuple[EvaluationResult, list[TrialRecord]]]:
+        """Evaluate every request; with each result, its trials' records (empty for an error)."""
+        return self._evaluate(requests, keep_records=True)
+
+    def _evaluate(
+        self, requests: Sequence[EvaluationRequest], keep_records: bool
+    ) -> list[tuple[EvaluationResult, list[TrialRecord]]]:
+        out: list[tuple[EvaluationResult, list[TrialRecord]] | None] = [None] * len(requests)
+        jobs: list[_Job] = []
+        for index, request in enumerate(requests):
+            try:
+                tree = check_request(request, self.max_nodes, self.max_depth)
+                jobs.append(_Job(index, flatten(tree)))
+            except (ValueError, TreeError) as error:
+                out[index] = (failed(str(error)), [])
+        if jobs:
+            self._run(requests, jobs, out, keep_records)
+        return [item for item in out if item is not None]
+
+    def _run(
+        self,
+        requests: Sequence[EvaluationRequest],
+        jobs: list[_Job],
+        out: list[tuple[EvaluationResult, list[TrialRecord]] | None],
+        keep_records: bool,
+    ) -> None:
+        packed = pack([job.flat for job in jobs])
+        trials = [int(requests[job.request].trials) for job in jobs]
+        job_tree = np.repeat(np.arange(len(jobs), dtype=np.int64), trials)
+        job_trial = np.concatenate([np.arange(t, dtype=np.int64) for t in trials])
+        seed_keys = [root_key(int(requests[job.request].seed)) for job in jobs]
+        job_seed_key = np.repeat(np.array(seed_keys, dtype=np.uint64), trials)
+        gaps = np.array(self.config.gaps, dtype=np.float64)
+        job_gap = gaps[job_trial % len(gaps)]
+        n_jobs = job_tree.shape[0]
+        values = np.zeros((n_jobs, world.N_VALUES))
+        poses = np.zeros((n_jobs, 2, self._params.n_robots, 3))
+        if self.threads > 1:
+            numba.set_num_threads(self.threads)
+        run = kernel.run_jobs_parallel if self.threads > 1 else kernel.run_jobs
+        run(
+            packed.op,
+            packed.arg,
+            packed.first,
+            packed.nchild,
+            packed.children,
+            packed.node_offset,
+            packed.child_offset,
+            job_tree,
+            job_seed_key,
+            job_trial,
+            job_gap,
+            self._params,
+            values,
+            poses,
+        )
+        row = 0
+        for job, n_trials in zip(jobs, trials, strict=True):
+            if not keep_records:
+                out[job.request] = (from_values(world.mean_values(values[row : row + n_trials])), [])
+                row += n_trials
+                continue
+            records = [
+                TrialRecord(
+                    trial=k,
+                    gap=float(job_gap[row + k]),
+                    values=tuple(float(v) for v in values[row + k]),
+                    start_poses=poses[row + k, 0].copy(),
+                    end_poses=poses[row + k, 1].copy(),
+                )
+                for k in range(n_trials)
+            ]
+            out[job.request] = (from_values(combine(records)), records)
+            row += n_trials
