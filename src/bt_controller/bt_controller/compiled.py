@@ -170,7 +170,7 @@ def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
         memory[i] = -1 if op[i] <= OP_PROB else 0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def tick(
     op: np.ndarray,
     arg: np.ndarray,
@@ -187,8 +187,9 @@ def tick(
 
     Semantics, memory and counts exactly as ``bt_controller.reference.tick``. ``blackboard`` is any array
     of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
+    Inlined into calling kernels (a call would cost more than the tick itself).
     """
-    stack = numba.carray(_stack_slots(_STACK_SLOTS), _STACK_SLOTS)
+    stack = numba.carray(_stack_slots(_STACK_SLOTS), _STACK_SLOTS)  # ancestors of ``node``
     depth = 0
     node = 0
     while True:
@@ -206,36 +207,31 @@ def tick(
         # The leaf.
         if kind == OP_CONDITION:
             counts[0] += 1
-            status = SUCCESS if blackboard[arg[node]] else FAILURE
-        elif memory[node] != 0:
-            memory[node] = 0
-            status = SUCCESS
-        else:
+            status = np.int64(FAILURE if blackboard[arg[node]] == 0 else SUCCESS)
+        elif memory[node] == 0:
             memory[node] = 1
-            action = arg[node]
+            action = np.int64(arg[node])
             counts[1 + action] += 1
             # Running climbs to the root with every position on the way already remembered.
-            return RUNNING, action
-        # Climb while composites finish; stop at a sequence or selector that moves on to its next child.
-        moved_on = False
+            return np.int64(RUNNING), action
+        else:
+            memory[node] = 0
+            status = np.int64(SUCCESS)
+        # Climb while composites finish. A sequence (op 0) moves on after SUCCESS (0) and a selector (op 1)
+        # after FAILURE (1), i.e. when ``status == op``; when it has no next child it finishes with that
+        # same status. A probabilistic composite (op 2) always finishes with its child's status.
         while depth > 0:
             parent = stack[depth - 1]
-            kind = op[parent]
-            if kind == OP_PROB or status == (FAILURE if kind == OP_SEQ else SUCCESS):
-                memory[parent] = -1
-                depth -= 1
-                continue
-            position = memory[parent] + 1
-            if position < nchild[parent]:
-                memory[parent] = position
-                node = children[first[parent] + position]
-                moved_on = True
-                break
+            if status == op[parent]:
+                position = memory[parent] + 1
+                if position < nchild[parent]:
+                    memory[parent] = position
+                    node = children[first[parent] + position]
+                    break  # descend into the next child
             memory[parent] = -1
-            status = SUCCESS if kind == OP_SEQ else FAILURE
             depth -= 1
-        if not moved_on:
-            return status, -1
+        else:
+            return status, np.int64(-1)
 
 
 @numba.njit(cache=True)
@@ -301,50 +297,59 @@ def _run_ticks(
         c, d = child_offset[t], child_offset[t + 1]
         t_op, t_arg, t_first, t_nchild, t_children = op[a:b], arg[a:b], first[a:b], nchild[a:b], children[c:d]
         row = memory[r, : b - a]
-        for k in range(blackboards.shape[0]):
+        for k in range(blackboards.shape[1]):
             status, action = tick(
-                t_op, t_arg, t_first, t_nchild, t_children, row, blackboards[k, r], keys[r], k, counts[r]
+                t_op, t_arg, t_first, t_nchild, t_children, row, blackboards[r, k], keys[r], k, counts[r]
             )
-            status_out[k, r] = status
-            action_out[k, r] = action
+            status_out[r, k] = status
+            action_out[r, k] = action
 
 
 @dataclass(frozen=True)
 class Run:
     """What ``run_ticks`` returns: per tick and robot the status and action, and the final state."""
 
-    status: np.ndarray  # int8 (ticks, robots)
-    action: np.ndarray  # int8 (ticks, robots)
+    status: np.ndarray  # int8 (robots, ticks)
+    action: np.ndarray  # int8 (robots, ticks)
     counts: np.ndarray  # int64 (robots, N_COUNTS)
     memory: np.ndarray  # int8 (robots, max_nodes)
 
 
+@numba.njit(cache=True)
+def _reset_rows(op: np.ndarray, node_offset: np.ndarray, robot_tree: np.ndarray, memory: np.ndarray) -> None:
+    for r in range(len(robot_tree)):
+        a, b = node_offset[robot_tree[r]], node_offset[robot_tree[r] + 1]
+        reset_memory(op[a:b], memory[r, : b - a])
+
+
 def new_memory(packed: PackedTrees, robot_tree: np.ndarray) -> np.ndarray:
     """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed``."""
+    robot_tree = np.asarray(robot_tree, np.int64)
     memory = np.zeros((len(robot_tree), max(packed.max_nodes, 1)), np.int8)
-    for r, t in enumerate(robot_tree):
-        a, b = packed.node_offset[t], packed.node_offset[t + 1]
-        reset_memory(packed.op[a:b], memory[r, : b - a])
+    _reset_rows(packed.op, packed.node_offset, robot_tree, memory)
     return memory
 
 
 def run_ticks(packed: PackedTrees, robot_tree: np.ndarray, keys: np.ndarray, blackboards: np.ndarray) -> Run:
-    """Tick robots from fresh memory for ``blackboards.shape[0]`` ticks (tick indices 0, 1, ...).
+    """Tick robots from fresh memory for ``blackboards.shape[1]`` ticks (tick indices 0, 1, ...).
 
     ``robot_tree`` (robots,) picks each robot's tree in ``packed``; ``keys`` (robots,) uint64 stream keys;
-    ``blackboards`` (ticks, robots, 8) bool.
+    ``blackboards`` (robots, ticks, 8), each robot's sequence of blackboards (bool or int).
     """
     robot_tree = np.asarray(robot_tree, np.int64)
     keys = np.asarray(keys, np.uint64)
-    n_ticks, n_robots = blackboards.shape[0], len(robot_tree)
-    if blackboards.shape[1:] != (n_robots, 8) or keys.shape != (n_robots,):
-        raise ValueError(f"need blackboards (ticks, {n_robots}, 8) and keys ({n_robots},)")
+    n_robots = len(robot_tree)
+    if blackboards.ndim != 3 or blackboards.shape[0] != n_robots or blackboards.shape[2] != 8:
+        raise ValueError(f"need blackboards of shape ({n_robots}, ticks, 8), got {blackboards.shape}")
+    if keys.shape != (n_robots,):
+        raise ValueError(f"need keys of shape ({n_robots},), got {keys.shape}")
+    n_ticks = blackboards.shape[1]
     if n_robots and (robot_tree.min() < 0 or robot_tree.max() >= packed.n_trees):
         raise ValueError(f"robot_tree must index the {packed.n_trees} packed trees")
     memory = new_memory(packed, robot_tree)
     counts = np.zeros((n_robots, N_COUNTS), np.int64)
-    status = np.empty((n_ticks, n_robots), np.int8)
-    action = np.empty((n_ticks, n_robots), np.int8)
+    status = np.empty((n_robots, n_ticks), np.int8)
+    action = np.empty((n_robots, n_ticks), np.int8)
     _run_ticks(
         packed.op,
         packed.arg,

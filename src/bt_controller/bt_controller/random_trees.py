@@ -47,7 +47,7 @@ def _grow(rng: np.random.Generator, max_depth: int, p_here: float, p_leaf: float
     return Composite(kind, tuple(_grow(rng, max_depth - 1, p_leaf, p_leaf) for _ in range(n)))
 
 
-def random_blackboards(rng: np.random.Generator, n_ticks: int, n_robots: int) -> np.ndarray:
-    """Blackboards (ticks, robots, 8) bool; each robot has its own probability of true per condition."""
-    p_true = rng.random((1, n_robots, len(CONDITIONS)))
-    return rng.random((n_ticks, n_robots, len(CONDITIONS))) < p_true
+def random_blackboards(rng: np.random.Generator, n_robots: int, n_ticks: int) -> np.ndarray:
+    """Blackboards (robots, ticks, 8) bool; each robot has its own probability of true per condition."""
+    p_true = rng.random((n_robots, 1, len(CONDITIONS)))
+    return rng.random((n_robots, n_ticks, len(CONDITIONS))) < p_true
