@@ -9,10 +9,10 @@ readings, broadcast estimates and wheel commands.
 from __future__ import annotations
 
 import numpy as np
+
 from bt_controller.reference import ReferenceRobot
 from bt_controller.tree import Node
 from bt_controller.vocabulary import RUNNING, STOP
-
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.robot import RobotView, sense_swarm

@@ -36,7 +36,10 @@ PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
 
 def stream_key(seed: int, trial: int, robot: int, purpose: int) -> np.uint64:
     """The stream key of ``(seed, trial, robot, purpose)``, from Python."""
-    return np.uint64(derive(derive(derive(np.uint64(root_key(seed)), trial), robot), purpose))
+    key = np.uint64(root_key(seed))
+    for value in (trial, robot, purpose):
+        key = np.uint64(derive(key, value))
+    return key
 
 
 @numba.njit(cache=True)

@@ -20,9 +20,9 @@ import math
 
 import numba
 import numpy as np
+
 from bt_controller.draws import uniform
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
-
 from swarm_sim.config import Params
 
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)

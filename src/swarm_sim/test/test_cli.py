@@ -1,0 +1,79 @@
+"""The evaluate command: one JSON object on stdout, byte-identical for a seed; clean errors."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from swarm_sim.cli import evaluate_main
+
+TREE = "sel2(seq2(in_nest, stop), forward)"
+
+
+def _run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "swarm_sim.cli", *args],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
+    )
+
+
+def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
+    first = _run("--tree", TREE, "--seed", "5", "--trials", "4")
+    second = _run("--tree", TREE, "--seed", "5", "--trials", "4")
+    assert first.returncode == 0, first.stderr
+    assert first.stdout == second.stdout
+    document = json.loads(first.stdout)
+    assert list(document) == ["tree", "seed", "trials", "fitness", "descriptors"]
+    assert document["tree"] == "sel(seq(in_nest, stop), forward)"
+    assert (document["seed"], document["trials"]) == (5, 4)
+    assert list(document["fitness"]) == ["density", "nest", "food"]
+    assert list(document["descriptors"]) == ["movement", "rotation", "conditionality"]
+
+
+def test_different_seeds_differ(capsys):
+    outputs = []
+    for seed in ("1", "2"):
+        assert evaluate_main(["--tree", TREE, "--seed", seed, "--trials", "2"]) == 0
+        outputs.append(json.loads(capsys.readouterr().out))
+    assert outputs[0]["fitness"] != outputs[1]["fitness"]
+
+
+def test_engines_print_the_same_document(capsys):
+    documents = []
+    for engine in ("compiled", "reference"):
+        args = ["--tree", TREE, "--seed", "9", "--trials", "2", "--engine", engine, "--per-trial"]
+        assert evaluate_main(args) == 0
+        documents.append(capsys.readouterr().out)
+    assert documents[0] == documents[1]
+    per_trial = json.loads(documents[0])["per_trial"]
+    assert [t["trial"] for t in per_trial] == [0, 1] and [t["gap"] for t in per_trial] == [500.0, 700.0]
+    assert len(per_trial[0]["start_poses"]) == 9 and len(per_trial[0]["end_poses"][0]) == 3
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--tree", "sel(in_nest"], "bad tree"),
+        (["--tree", "dance"], "dance"),
+        (["--tree", "stop", "--trials", "0"], "--trials"),
+        (["--tree", "stop", "--seed", "-3"], "--seed"),
+        (["--tree", "stop", "--engine", "fast"], "--engine"),
+        (["--tree", "stop", "--trials", "many"], "--trials"),
+        ([], "--tree"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(capsys, args, words):
+    assert evaluate_main(args) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.count("\n") == 1 and words in captured.err and "Traceback" not in captured.err
+
+
+def test_bad_input_from_the_shell():
+    done = _run("--tree", "seq(stop)")
+    assert done.returncode == 2 and done.stdout == "" and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

@@ -1,0 +1,180 @@
+"""Message delivery, ground sensing, estimates, smoothing and the blackboard against brute force."""
+
+import math
+
+import numpy as np
+import pytest
+
+from swarm_sim import world
+from swarm_sim.config import DEFAULT, Config
+from swarm_sim.robot import Readings, RobotView, sense_swarm
+from swarm_sim.streams import DROPS, stream_key
+from swarm_sim.trial import setup_trial
+
+P = DEFAULT.params()
+
+
+def _buffers(n):
+    return np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n)
+
+
+def test_delivery_rate_within_range_is_095_and_nothing_comes_from_beyond():
+    # Robot 0 at the centre; the others at ranges straddling 1 m.
+    ranges = np.array([0.0, 200.0, 600.0, 999.0, 1000.0, 1000.001, 1200.0, 3000.0, 170.0])
+    angles = np.linspace(0.0, 2 * np.pi, 9, endpoint=False)
+    x, y = ranges * np.cos(angles), ranges * np.sin(angles)
+    heard = np.zeros(9, np.int64)
+    nest, food = np.zeros(9), np.zeros(9)
+    senders, r, nv, fv = _buffers(9)
+    steps = 4000
+    for step in range(steps):
+        count = world.sense_robot(
+            0, x, y, nest, food, stream_key(3, 0, 0, DROPS), step, P, senders, r, nv, fv
+        )
+        heard[senders[:count]] += 1
+        assert (r[:count] <= 1000.0).all()
+    assert heard[0] == 0 and heard[5] == heard[6] == heard[7] == 0
+    within = heard[[1, 2, 3, 4, 8]]
+    n = within.size * steps
+    rate = within.sum() / n
+    assert abs(rate - 0.95) < 4 * math.sqrt(0.95 * 0.05 / n)  # 4 sigma
+    for count in within:  # each pair alone, too
+        assert abs(count / steps - 0.95) < 5 * math.sqrt(0.95 * 0.05 / steps)
+
+
+def test_drops_are_independent_per_ordered_pair():
+    x, y = np.array([0.0, 500.0]), np.array([0.0, 0.0])
+    z = np.zeros(2)
+    a, b = [], []
+    for step in range(2000):
+        for receiver, out in ((0, a), (1, b)):
+            key = stream_key(9, 1, receiver, DROPS)
+            out.append(world.sense_robot(receiver, x, y, z, z, key, step, P, *_buffers(2)))
+    a, b = np.array(a), np.array(b)
+    both_dropped = ((a == 0) & (b == 0)).mean()
+    assert both_dropped < 0.01  # independent: 0.0025 expected; identical streams would give 0.05
+
+
+def test_ground_sensor():
+    assert world.ground(0.0, 500.0, 500.0, P) == (True, False)
+    assert world.ground(0.0, 500.001, 500.0, P) == (False, False)
+    assert world.ground(999.999, 0.0, 500.0, P) == (False, False)
+    assert world.ground(600.0, 800.0, 500.0, P) == (False, True)
+    assert world.ground(600.0, 800.0, 700.0, P) == (False, False)
+    assert world.ground(0.0, -1200.0, 700.0, P) == (False, True)
+
+
+def test_estimate_matches_brute_force_on_hand_built_readings():
+    ranges = np.array([400.0, 250.0, 900.0, 170.0])
+    nest = np.array([300.0, 700.0, 0.0, 5000.0])
+    food = np.array([5000.0, 5000.0, 4500.0, 4900.0])
+    got = world.estimate(False, False, 4, ranges, nest, food, P)
+    # nest: 700, 950, 900, 5170 -> 700 from message 0; food: 5400, 5250, 5400, 5070 -> all capped.
+    assert got[0] == 700.0 and got[3] == 0
+    assert got[1] == 5000.0 and got[4] == -1
+    assert got[2] == pytest.approx(sum((170.0 / r) ** 2 for r in ranges) / 6.0, rel=1e-15)
+    assert got[5] == 3
+    inside = world.estimate(True, True, 4, ranges, nest, food, P)
+    assert inside[:2] == (0.0, 0.0) and inside[3:5] == (-1, -1)
+    nothing = world.estimate(False, False, 0, ranges, nest, food, P)
+    assert nothing == (5000.0, 5000.0, 0.0, -1, -1, -1)
+    # ties go to the first message
+    tie = world.estimate(False, False, 2, np.array([300.0, 300.0]), np.array([100.0, 100.0]), food, P)
+    assert tie[3] == 0 and tie[5] == 0
+
+
+def _shortest(x, y, sources, cap, max_range):
+    """Bellman-Ford from every source robot over links of at most max_range: the converged estimates."""
+    n = len(x)
+    best = np.where(sources, 0.0, np.inf)
+    for _ in range(n):
+        for i in range(n):
+            if sources[i]:
+                continue
+            for j in range(n):
+                d = math.hypot(x[j] - x[i], y[j] - y[i])
+                if j != i and d <= max_range and best[j] + d < best[i]:
+                    best[i] = best[j] + d
+    return np.minimum(best, cap)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_converged_estimates_equal_shortest_hop_paths(seed):
+    config = Config(delivery_probability=1.0)
+    p = config.params()
+    rng = np.random.default_rng(seed)
+    n = 9
+    x, y = rng.uniform(-2000, 2000, n), rng.uniform(-2000, 2000, n)
+    x[0], y[0] = 100.0, 0.0  # one robot in the nest
+    h = rng.uniform(-np.pi, np.pi, n)
+    gap = 500.0
+    views = [RobotView(p) for _ in range(n)]
+    ground = [world.ground(x[i], y[i], gap, p) for i in range(n)]
+    bn = np.array([world.initial_broadcast(*g, p)[0] for g in ground])
+    bf = np.array([world.initial_broadcast(*g, p)[1] for g in ground])
+    keys = np.array([stream_key(seed, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
+    for step in range(n + 1):
+        for i, reading in enumerate(sense_swarm(x, y, h, bn, bf, keys, step, gap, p)):
+            views[i].update(reading)
+        bn = np.array([v.nest for v in views])
+        bf = np.array([v.food for v in views])
+    in_nest = np.array([g[0] for g in ground])
+    on_food = np.array([g[1] for g in ground])
+    np.testing.assert_allclose(bn, _shortest(x, y, in_nest, 5000.0, 1000.0), rtol=1e-12)
+    np.testing.assert_allclose(bf, _shortest(x, y, on_food, 5000.0, 1000.0), rtol=1e-12)
+    for i, v in enumerate(views):
+        d = np.hypot(x - x[i], y - y[i])
+        near = (d <= 1000.0) & (np.arange(n) != i)
+        assert v.density == pytest.approx(np.sum((170.0 / d[near]) ** 2) / 6.0, rel=1e-12)
+
+
+def test_smoothing_is_the_mean_of_the_last_seven_samples():
+    window = np.zeros((7, 3))
+    count = 0
+    samples = [(float(k), 2.0 * k, 0.5 * k) for k in range(12)]
+    for k, s in enumerate(samples):
+        count = world.push_sample(window, count, *s)
+        last = np.array(samples[max(0, k - 6) : k + 1])
+        np.testing.assert_allclose(world.smoothed(window, count), last.mean(axis=0), rtol=1e-15)
+
+
+def test_blackboard_sides_from_bearings():
+    # A robot at the origin facing +y: a neighbour at (-300, 10) is on its left, (300, 10) on its right.
+    heading = math.pi / 2
+    left = world.bearing(0.0, 0.0, heading, -300.0, 10.0)
+    right = world.bearing(0.0, 0.0, heading, 300.0, 10.0)
+    assert 0 < left < math.pi and -math.pi < right < 0
+    assert world.bearing(0.0, 0.0, 0.0, 100.0, 0.0) == 0.0  # dead ahead counts as left ([0, pi))
+    out = np.zeros(8, np.bool_)
+    world.blackboard(False, True, left, right, math.nan, out)
+    # on_food, in_nest, food_left, food_right, nest_left, nest_right, robot_left, robot_right
+    assert out.tolist() == [True, False, False, True, True, False, False, False]
+
+
+def test_robot_view_blackboard_uses_the_estimate_sources():
+    p = DEFAULT.params()
+    view = RobotView(p)
+    # Sender 4 gives the best nest estimate and lies left; sender 7 is nearest and lies right; food capped.
+    readings = Readings(
+        in_nest=False,
+        on_food=False,
+        senders=np.array([4, 7]),
+        ranges=np.array([600.0, 200.0]),
+        bearings=np.array([1.0, -2.0]),
+        nest=np.array([100.0, 900.0]),
+        food=np.array([5000.0, 4900.0]),
+    )
+    view.update(readings)
+    assert (view.nest, view.food) == (700.0, 5000.0)
+    assert view.blackboard().tolist() == [False, False, False, False, True, False, False, True]
+
+
+def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
+    s = setup_trial(2, 0)
+    p = DEFAULT.params()
+    x, y, h = s.poses.T.copy()
+    z = np.full(9, 5000.0)
+    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 0, s.gap, p):
+        assert (np.diff(reading.senders) > 0).all()
+        assert len(reading.senders) == len(reading.ranges) == len(reading.bearings)
+    assert world.initial_broadcast(True, False, p) == (0.0, 5000.0)
