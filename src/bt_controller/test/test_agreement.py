@@ -9,21 +9,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bt_controller import reference
+from bt_controller.agreement import check_random, compare, random_forest
 from bt_controller.compiled import (
     N_COUNTS,
     CompiledRobot,
     flatten,
-    new_memory,
     pack,
     reset_memory,
     run_ticks,
     tick,
-    tick_batch,
 )
-from bt_controller.random_trees import random_blackboards, random_tree, random_tree_grow
+from bt_controller.random_trees import random_blackboards, random_tree
+from bt_controller.tree import parse
 
 
-@settings(max_examples=1500, derandomize=True, deadline=None)
+@settings(max_examples=1000, derandomize=True, deadline=None)
 @given(tree=trees, key=keys, boards=st.lists(blackboards, min_size=1, max_size=30))
 def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards):
     ref = reference.ReferenceRobot(tree, key)
@@ -34,46 +34,41 @@ def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards):
         assert list(fast.counts) == ref.counts
 
 
-def _random_forest(rng: np.random.Generator, n: int) -> list:
-    trees_ = []
-    for i in range(n):
-        if i % 2:
-            size = int(rng.integers(1, 60))
-            trees_.append(random_tree(rng, size if size != 2 else 3))
-        else:
-            trees_.append(random_tree_grow(rng, int(rng.integers(0, 7)), p_leaf=float(rng.uniform(0.1, 0.6))))
-    return trees_
-
-
 def test_compiled_agrees_with_reference_on_10000_random_trees():
-    rng = np.random.default_rng(20230412)
-    n_trees, n_ticks = 10_000, 24
-    forest = _random_forest(rng, n_trees)
+    mismatch = check_random(seed=20230412, n_trees=10_000, n_ticks=24)
+    assert mismatch is None, str(mismatch)
+
+
+def test_run_ticks_ends_where_tick_by_tick_ticking_ends():
+    rng = np.random.default_rng(11)
+    forest = random_forest(rng, 300)
     packed = pack(forest)
-    robot_tree = np.arange(n_trees)
-    keys_ = rng.integers(0, 2**64, size=n_trees, dtype=np.uint64)
-    boards = random_blackboards(rng, n_trees, n_ticks)
-    memory = new_memory(packed, robot_tree)
-    counts = np.zeros((n_trees, N_COUNTS), np.int64)
-    status = np.empty(n_trees, np.int8)
-    action = np.empty(n_trees, np.int8)
-    ref_memory = [reference.new_memory(t) for t in forest]
-    ref_counts = [reference.new_counts() for _ in forest]
-    for k in range(n_ticks):
-        tick_batch(
-            packed.op, packed.arg, packed.first, packed.nchild, packed.children, packed.node_offset,
-            packed.child_offset, robot_tree, memory, boards[:, k], keys_, k, counts, status, action,
-        )  # fmt: skip
-        for r, tree in enumerate(forest):
-            expected = reference.tick(tree, ref_memory[r], boards[r, k], int(keys_[r]), k, ref_counts[r])
-            assert (status[r], action[r]) == expected, (str(tree), k)
-            assert list(memory[r, : tree.size]) == ref_memory[r], (str(tree), k)
-    assert counts.tolist() == ref_counts
-    # run_ticks (all ticks in one kernel call) ends in the same state.
-    run = run_ticks(packed, robot_tree, keys_, boards)
-    assert run.counts.tolist() == ref_counts
-    assert np.array_equal(run.memory, memory)
-    assert np.array_equal(run.status[:, -1], status) and np.array_equal(run.action[:, -1], action)
+    keys_ = rng.integers(0, 2**64, size=300, dtype=np.uint64)
+    boards = random_blackboards(rng, 300, 40)
+    run = run_ticks(packed, np.arange(300), keys_, boards)
+    for r, tree in enumerate(forest):
+        robot = reference.ReferenceRobot(tree, int(keys_[r]))
+        results = [robot.step(boards[r, k]) for k in range(40)]
+        assert [s for s, _ in results] == run.status[r].tolist()
+        assert [a for _, a in results] == run.action[r].tolist()
+        assert robot.counts == run.counts[r].tolist()
+        assert robot.memory == run.memory[r, : tree.size].tolist()
+
+
+def test_a_planted_difference_is_reported(monkeypatch):
+    forest = [parse("seq(on_food, forward)")]
+    boards = np.ones((1, 3, 8), bool)
+    assert compare(forest, np.array([1], np.uint64), boards) is None
+    real_tick = reference.tick
+
+    def wrong_tick(*args):
+        status, action = real_tick(*args)
+        return (status, action) if args[4] < 2 else (1 - status, action)
+
+    monkeypatch.setattr(reference, "tick", wrong_tick)
+    mismatch = compare(forest, np.array([1], np.uint64), boards)
+    assert mismatch is not None and mismatch.tick_index == 2 and mismatch.what == "status and action"
+    assert "seq(on_food, forward)" in str(mismatch)
 
 
 def test_tick_accepts_int_blackboards_and_leaves_other_rows_alone():

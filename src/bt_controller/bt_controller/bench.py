@@ -1,0 +1,96 @@
+"""Benchmark of the compiled interpreter (``ws/run bt_controller bench``); a benchmark, never a test.
+
+Measures robot-ticks per second of the compiled interpreter on random trees of 10, 30 and 100 nodes (one
+core: the kernel is serial), of the reference interpreter on a sample of the same robots, and their ratio.
+``--agreement N`` also checks the two interpreters tick for tick on N more random trees.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from bt_controller.agreement import check_random
+from bt_controller.compiled import N_COUNTS, new_memory, pack, run_ticks
+from bt_controller.compiled import _run_ticks as run_kernel
+from bt_controller.random_trees import random_blackboards, random_tree
+from bt_controller.reference import ReferenceRobot
+
+
+def _compiled_rate(
+    sizes_seed: int, size: int, n_trees: int, n_robots: int, n_ticks: int, repeats: int
+) -> float:
+    rng = np.random.default_rng(sizes_seed)
+    packed = pack([random_tree(rng, size) for _ in range(n_trees)])
+    robot_tree = np.arange(n_robots, dtype=np.int64) % n_trees
+    keys = rng.integers(0, 2**64, size=n_robots, dtype=np.uint64)
+    boards = random_blackboards(rng, n_robots, n_ticks)
+    run_ticks(packed, robot_tree[:1], keys[:1], boards[:1])  # compile or load the cache
+    best = np.inf
+    for _ in range(repeats):
+        memory = new_memory(packed, robot_tree)
+        counts = np.zeros((n_robots, N_COUNTS), np.int64)
+        status = np.empty((n_robots, n_ticks), np.int8)
+        action = np.empty((n_robots, n_ticks), np.int8)
+        start = time.perf_counter()
+        run_kernel(packed.op, packed.arg, packed.first, packed.nchild, packed.children, packed.node_offset,
+                   packed.child_offset, robot_tree, memory, boards, keys, counts, status, action)  # fmt: skip
+        best = min(best, time.perf_counter() - start)
+    return n_robots * n_ticks / best
+
+
+def _reference_rate(seed: int, size: int, n_robots: int, n_ticks: int) -> float:
+    rng = np.random.default_rng(seed)
+    robots = [ReferenceRobot(random_tree(rng, size), int(k)) for k in rng.integers(0, 2**63, size=n_robots)]
+    boards = random_blackboards(rng, n_robots, n_ticks).tolist()
+    start = time.perf_counter()
+    for robot, robot_boards in zip(robots, boards, strict=True):
+        for board in robot_boards:
+            robot.step(board)
+    return n_robots * n_ticks / (time.perf_counter() - start)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print a table; exit 1 if an agreement run finds a difference."""
+    parser = argparse.ArgumentParser(prog="bench", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100], help="tree sizes in nodes")
+    parser.add_argument("--trees", type=int, default=256, help="distinct random trees per size")
+    parser.add_argument("--robots", type=int, default=8192, help="robots ticked per repeat (compiled)")
+    parser.add_argument("--ticks", type=int, default=40, help="ticks per robot (a trial has 40)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed repeats; the best is reported")
+    parser.add_argument("--reference-robots", type=int, default=300, help="robots ticked by the reference")
+    parser.add_argument("--agreement", type=int, default=0, metavar="N", help="also check N random trees")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the random trees and blackboards")
+    args = parser.parse_args(argv)
+    for size in args.sizes:
+        if size == 2 or size < 1:
+            parser.error(f"no tree has {size} nodes")
+
+    print(f"robot-ticks per second on one core: best of {args.repeats} repeats of {args.robots} robots")
+    print(f"x {args.ticks} ticks over {args.trees} random trees; reference: {args.reference_robots} robots")
+    print(f"{'nodes':>5}  {'compiled':>14}  {'reference':>12}  {'ratio':>7}")
+    for size in args.sizes:
+        fast = _compiled_rate(args.seed, size, args.trees, args.robots, args.ticks, args.repeats)
+        slow = _reference_rate(args.seed, size, args.reference_robots, args.ticks)
+        print(f"{size:>5}  {fast / 1e6:>12.2f} M  {slow / 1e3:>10.1f} k  {fast / slow:>6.0f}x", flush=True)
+
+    if args.agreement:
+        chunk, checked, start = 2000, 0, time.perf_counter()
+        while checked < args.agreement:
+            n = min(chunk, args.agreement - checked)
+            mismatch = check_random(seed=args.seed * 1_000_003 + checked, n_trees=n, n_ticks=args.ticks)
+            if mismatch is not None:
+                print(f"agreement: DIFFERENCE after {checked} trees: {mismatch}", flush=True)
+                return 1
+            checked += n
+            print(f"agreement: {checked} trees x {args.ticks} ticks agree", file=sys.stderr, flush=True)
+        print(f"agreement: {checked} random trees x {args.ticks} ticks: no difference "
+              f"({time.perf_counter() - start:.0f} s)")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
