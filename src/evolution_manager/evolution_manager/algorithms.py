@@ -1,0 +1,365 @@
+"""GP_o, GP_fnd and MAP-Elites (QD_o) as ask/tell objects.
+
+An algorithm proposes a batch of tree texts with :meth:`ask` and is told the evaluator's results for
+exactly that batch, in order, with :meth:`tell`; calling them out of order raises :class:`AskTellError`.
+Algorithms never evaluate, never write files and never read the clock: a run loop, a ROS 2 node or a test
+drives them. Each owns a ``random.Random`` seeded from its configuration (see :mod:`.operators`), and
+:meth:`to_state` / :meth:`from_state` turn it into JSON-able data and back, between a ``tell`` and the next
+``ask``, so that a resumed run continues exactly where it stopped.
+
+A budget of evaluations is part of every algorithm: :meth:`ask` never proposes more trees than remain and
+:attr:`done` says when the budget is spent. Trees whose evaluation failed (``result.error``) count against
+the budget, never enter an archive and lose every tournament.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from .archive import Entry, Repertoire
+from .errors import AskTellError, ConfigError
+from .operators import best_of, half_and_half, tournament, vary
+from .primitives import (
+    MAX_TREE_NODES,
+    OBJECTIVES,
+    BehaviourTree,
+    make_primitive_set,
+    tree_from_text,
+    tree_to_text,
+)
+
+FAILED = -1.0
+"""The fitness given, on every objective, to a tree whose evaluation failed: below every real fitness."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What an algorithm needs to know of one evaluation (see ``swarm_sim.evaluation.EvaluationResult``)."""
+
+    fitness: tuple[float, float, float] | None
+    descriptors: tuple[float, float, float] | None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None and self.fitness is not None and self.descriptors is not None
+
+
+def _outcome(result: object) -> Outcome:
+    fitness = getattr(result, "fitness", None)
+    descriptors = getattr(result, "descriptors", None)
+    error = getattr(result, "error", None)
+    return Outcome(
+        tuple(float(v) for v in fitness) if fitness is not None else None,  # type: ignore[arg-type]
+        tuple(float(v) for v in descriptors) if descriptors is not None else None,  # type: ignore[arg-type]
+        error,
+    )
+
+
+@dataclass(frozen=True)
+class GPParameters:
+    """GP_o and GP_fnd (model.md, "Algorithms"; paper, table 5)."""
+
+    population: int = 25
+    tournament: int = 3
+    elites_per_objective: int = 1
+    crossover: float = 0.8
+    mutations: tuple[tuple[str, float], ...] = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
+    init_min_height: int = 1
+    init_max_height: int = 4
+    max_height: int = 8
+    max_nodes: int = MAX_TREE_NODES
+
+
+@dataclass(frozen=True)
+class QDParameters:
+    """MAP-Elites in a qdpy grid with the GP operators as variation (model.md, "Algorithms")."""
+
+    init_batch: int = 100
+    batch: int = 50
+    crossover: float = 0.8
+    mutations: tuple[tuple[str, float], ...] = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
+    init_min_height: int = 1
+    init_max_height: int = 4
+    max_height: int = 8
+    max_nodes: int = MAX_TREE_NODES
+
+
+def _check_probability(value: float, name: str) -> None:
+    if not 0.0 <= value <= 1.0:
+        raise ConfigError(f"{name} must be a probability in [0, 1], got {value}")
+
+
+class AskTell:
+    """The ask/tell protocol, the budget and the generator shared by every algorithm."""
+
+    name = "base"
+
+    def __init__(self, budget: int, seed: int) -> None:
+        if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+            raise ConfigError(f"the budget must be a positive number of evaluations, got {budget!r}")
+        self.budget = budget
+        self.seed = seed
+        self.rng = random.Random(seed)
+        self.pset = make_primitive_set()
+        self.evaluations = 0
+        self._asked: list[BehaviourTree] | None = None
+        self._asked_texts: list[str] = []
+
+    @property
+    def done(self) -> bool:
+        """Whether the budget is spent."""
+        return self.evaluations >= self.budget
+
+    def ask(self) -> list[str]:
+        """The next batch of tree texts to evaluate (never more than the remaining budget)."""
+        if self._asked is not None:
+            raise AskTellError("ask() called twice: tell() the results of the last batch first")
+        if self.done:
+            raise AskTellError(f"the budget of {self.budget} evaluations is spent")
+        batch = self._propose()[: self.budget - self.evaluations]
+        self._asked = batch
+        self._asked_texts = [tree_to_text(tree) for tree in batch]
+        return list(self._asked_texts)
+
+    def tell(self, results: Sequence[object]) -> None:
+        """The evaluator's results for the last batch, in the order it was asked."""
+        if self._asked is None:
+            raise AskTellError("tell() called without a batch: call ask() first")
+        if len(results) != len(self._asked):
+            raise AskTellError(
+                f"tell() needs {len(self._asked)} results, one per asked tree, got {len(results)}"
+            )
+        batch, self._asked = self._asked, None
+        outcomes = [_outcome(r) for r in results]
+        for tree, outcome in zip(batch, outcomes, strict=True):
+            tree.fitness.values = outcome.fitness if outcome.ok else (FAILED,) * len(OBJECTIVES)
+        self.evaluations += len(batch)
+        self._accept(batch, outcomes, self._asked_texts)
+
+    # State -------------------------------------------------------------------------------------------
+    def to_state(self) -> dict:
+        """Everything needed to continue, as JSON-able data (only between a tell and the next ask)."""
+        if self._asked is not None:
+            raise AskTellError("to_state() between ask() and tell(): the asked batch would be lost")
+        version, internal, gauss = self.rng.getstate()
+        return {
+            "algorithm": self.name,
+            "budget": self.budget,
+            "seed": self.seed,
+            "evaluations": self.evaluations,
+            "rng": [version, list(internal), gauss],
+            **self._state(),
+        }
+
+    def _restore_common(self, state: dict) -> None:
+        if state.get("algorithm") != self.name:
+            raise ValueError(f"a state of {state.get('algorithm')!r} cannot restore {self.name!r}")
+        self.budget = int(state["budget"])
+        self.evaluations = int(state["evaluations"])
+        version, internal, gauss = state["rng"]
+        self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
+
+    def _tree(self, text: str, fitness: Sequence[float] | None) -> BehaviourTree:
+        tree = tree_from_text(text, self.pset)
+        if fitness is not None:
+            tree.fitness.values = tuple(float(v) for v in fitness)
+        return tree
+
+    @staticmethod
+    def _record(tree: BehaviourTree) -> list:
+        return [tree_to_text(tree), list(tree.fitness.values) if tree.fitness.valid else None]
+
+    # For subclasses ----------------------------------------------------------------------------------
+    def _propose(self) -> list[BehaviourTree]:
+        raise NotImplementedError
+
+    def _accept(self, batch: list[BehaviourTree], outcomes: list[Outcome], texts: list[str]) -> None:
+        raise NotImplementedError
+
+    def _state(self) -> dict:
+        raise NotImplementedError
+
+
+class GeneticProgramming(AskTell):
+    """Generational GP with tournaments, the parsimony tie-break and elitism.
+
+    ``objectives`` are indices into ``OBJECTIVES``. With one objective this is GP_o (population 25,
+    tournament 3, one elite). With all three it is GP_fnd: every tournament compares on an objective drawn
+    uniformly, and the best tree found so far on each objective is kept as an elite (population 75,
+    tournament 5). A generation copies the elites, fills the population with varied tournament winners
+    and asks for the evaluation of every offspring that an operator touched; untouched ones keep their
+    parent's fitness (as DEAP's ``eaSimple``).
+    """
+
+    name = "gp"
+
+    def __init__(self, objectives: Sequence[int], budget: int, seed: int, parameters: GPParameters) -> None:
+        super().__init__(budget, seed)
+        objectives = tuple(int(o) for o in objectives)
+        if (
+            not objectives
+            or any(o not in range(len(OBJECTIVES)) for o in objectives)
+            or len(set(objectives)) != len(objectives)
+        ):
+            raise ConfigError(f"objectives must be distinct indices into {OBJECTIVES}, got {objectives}")
+        p = parameters
+        elites = p.elites_per_objective * len(objectives)
+        if p.population < 2 or elites >= p.population:
+            raise ConfigError(
+                f"the population ({p.population}) must exceed the elites ({elites}) and be >= 2"
+            )
+        if p.tournament < 1:
+            raise ConfigError(f"the tournament size must be >= 1, got {p.tournament}")
+        _check_probability(p.crossover, "the crossover probability")
+        for mutation, probability in p.mutations:
+            _check_probability(probability, f"the {mutation} mutation probability")
+        if not 1 <= p.init_min_height <= p.init_max_height <= p.max_height:
+            raise ConfigError("heights must satisfy 1 <= init_min_height <= init_max_height <= max_height")
+        self.objectives = objectives
+        self.parameters = p
+        self.population: list[BehaviourTree] = []
+        self.elites: list[list[BehaviourTree]] = [[] for _ in objectives]  # per objective, best first
+        self.generation = 0
+        self._offspring: list[BehaviourTree] = []
+
+    def _propose(self) -> list[BehaviourTree]:
+        p = self.parameters
+        if not self.population:
+            self._offspring = [
+                half_and_half(self.pset, self.rng, p.init_min_height, p.init_max_height)
+                for _ in range(p.population)
+            ]
+            return list(self._offspring)
+        while True:
+            kept = [tree.clone() for trees in self.elites for tree in trees]
+            parents = tournament(
+                self.population, p.population - len(kept), p.tournament, self.rng, self.objectives
+            )
+            offspring = vary(
+                parents, self.pset, self.rng, p.crossover, p.mutations, p.max_height, p.max_nodes
+            )
+            self._offspring = kept + offspring
+            batch = [tree for tree in offspring if not tree.fitness.valid]
+            if batch:
+                return batch
+            self._next_generation(self._offspring)  # nothing changed: the generation is complete as it is
+
+    def _accept(self, batch: list[BehaviourTree], outcomes: list[Outcome], texts: list[str]) -> None:
+        evaluated = {id(tree) for tree in batch}
+        # Trees left unevaluated because the budget ran out are dropped.
+        generation = [t for t in self._offspring if t.fitness.valid or id(t) in evaluated]
+        self._next_generation(generation)
+
+    def _next_generation(self, population: list[BehaviourTree]) -> None:
+        self.population = population
+        self._offspring = []
+        self.generation += 1
+        for k, objective in enumerate(self.objectives):
+            candidates = self.elites[k] + self.population
+            ranked: list[BehaviourTree] = []
+            for _ in range(min(self.parameters.elites_per_objective, len(candidates))):
+                winner = best_of([c for c in candidates if all(c is not r for r in ranked)], objective)
+                ranked.append(winner)
+            self.elites[k] = [tree.clone() for tree in ranked]
+
+    def best(self, objective: int) -> BehaviourTree | None:
+        """The best tree found so far on ``objective`` (one of this algorithm's objectives)."""
+        k = self.objectives.index(objective)
+        return self.elites[k][0] if self.elites[k] else None
+
+    def _state(self) -> dict:
+        return {
+            "objectives": list(self.objectives),
+            "generation": self.generation,
+            "population": [self._record(t) for t in self.population],
+            "elites": [[self._record(t) for t in trees] for trees in self.elites],
+        }
+
+    def restore(self, state: dict) -> None:
+        """Continue from a state written by :meth:`to_state` of an algorithm with the same configuration."""
+        self._restore_common(state)
+        if tuple(state["objectives"]) != self.objectives:
+            raise ValueError(
+                f"the state is for objectives {state['objectives']}, not {list(self.objectives)}"
+            )
+        self.generation = int(state["generation"])
+        self.population = [self._tree(text, fitness) for text, fitness in state["population"]]
+        self.elites = [[self._tree(text, fitness) for text, fitness in trees] for trees in state["elites"]]
+
+
+class MapElites(AskTell):
+    """MAP-Elites (QD_o): a qdpy grid of 8 x 8 x 8 bins, 3 trees per bin, as the population.
+
+    First ``init_batch`` random trees (half-and-half); then, batch after batch, ``batch`` parents drawn
+    uniformly with replacement from the archive are varied by the GP operators (qdpy's ``qdSimple`` with
+    DEAP's ``varAnd``) and every touched offspring is evaluated and offered to the archive on ``objective``.
+    Parents are drawn from the archive in its canonical order (bin index, then arrival), so the draw does
+    not depend on the order in which qdpy keeps its items.
+    """
+
+    name = "qd"
+
+    def __init__(self, objective: int, budget: int, seed: int, parameters: QDParameters) -> None:
+        super().__init__(budget, seed)
+        if objective not in range(len(OBJECTIVES)):
+            raise ConfigError(f"objective must be an index into {OBJECTIVES}, got {objective}")
+        p = parameters
+        if p.init_batch < 1 or p.batch < 1:
+            raise ConfigError(f"batch sizes must be >= 1, got init {p.init_batch} and batch {p.batch}")
+        _check_probability(p.crossover, "the crossover probability")
+        for mutation, probability in p.mutations:
+            _check_probability(probability, f"the {mutation} mutation probability")
+        if not 1 <= p.init_min_height <= p.init_max_height <= p.max_height:
+            raise ConfigError("heights must satisfy 1 <= init_min_height <= init_max_height <= max_height")
+        self.objective = objective
+        self.parameters = p
+        self.archive = Repertoire()
+        self.batches = 0
+
+    def _random_batch(self, size: int) -> list[BehaviourTree]:
+        p = self.parameters
+        return [half_and_half(self.pset, self.rng, p.init_min_height, p.init_max_height) for _ in range(size)]
+
+    def _propose(self) -> list[BehaviourTree]:
+        p = self.parameters
+        entries = self.archive.entries()
+        if not entries:
+            return self._random_batch(p.init_batch)
+        while True:
+            parents = [self._parent(entries[self.rng.randrange(len(entries))]) for _ in range(p.batch)]
+            offspring = vary(
+                parents, self.pset, self.rng, p.crossover, p.mutations, p.max_height, p.max_nodes
+            )
+            batch = [tree for tree in offspring if not tree.fitness.valid]
+            if batch:
+                return batch
+
+    def _parent(self, entry: Entry) -> BehaviourTree:
+        if entry.genome is None:
+            entry.genome = tree_from_text(entry.tree, self.pset)
+        tree: BehaviourTree = entry.genome  # type: ignore[assignment]
+        tree.fitness.values = (entry.value,) * len(OBJECTIVES)
+        return tree
+
+    def _accept(self, batch: list[BehaviourTree], outcomes: list[Outcome], texts: list[str]) -> None:
+        self.batches += 1
+        first = self.evaluations - len(batch)
+        for offset, (tree, outcome) in enumerate(zip(batch, outcomes, strict=True)):
+            if outcome.ok:
+                fitness = outcome.fitness[self.objective]  # type: ignore[index]
+                descriptors = outcome.descriptors
+                self.archive.offer(texts[offset], fitness, descriptors, first + offset, tree)  # type: ignore[arg-type]
+
+    def _state(self) -> dict:
+        return {"objective": self.objective, "batches": self.batches, "archive": self.archive.to_state()}
+
+    def restore(self, state: dict) -> None:
+        """Continue from a state written by :meth:`to_state` of an algorithm with the same configuration."""
+        self._restore_common(state)
+        if int(state["objective"]) != self.objective:
+            raise ValueError(f"the state is for objective {state['objective']}, not {self.objective}")
+        self.batches = int(state["batches"])
+        self.archive = Repertoire.from_state(state["archive"])

@@ -1,0 +1,134 @@
+"""The configuration of one run: algorithm, objective, budget, seed; and the per-evaluation seeds.
+
+Defaults follow ``shared/design/model.md`` ("Algorithms"): GP_o and QD_o spend 25,000 evaluations on one
+objective, GP_fnd 75,000 on all three at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from bt_controller.draws import MAX_SEED, derive, root_key
+
+from .algorithms import AskTell, GeneticProgramming, GPParameters, MapElites, QDParameters
+from .errors import ConfigError
+from .primitives import OBJECTIVES
+
+ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
+"""Command-line names: GP_o, GP_fnd, QD_o (MAP-Elites)."""
+
+DEFAULT_EVALUATIONS = {"gp": 25_000, "gp-fnd": 75_000, "qd": 25_000}
+
+LABELS = {"gp": "GP_o", "gp-fnd": "GP_fnd", "qd": "QD_o"}
+
+_SEED_PURPOSE_EVALUATION = 1
+_SEED_PURPOSE_ALGORITHM = 2
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One run. ``objective`` is None for ``gp-fnd``, which evolves all three objectives."""
+
+    algorithm: str
+    objective: str | None
+    evaluations: int
+    seed: int
+    trials: int = 10
+    gp: GPParameters = field(default_factory=GPParameters)
+    qd: QDParameters = field(default_factory=QDParameters)
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
+        if self.algorithm == "gp-fnd":
+            if self.objective is not None:
+                raise ConfigError("gp-fnd evolves all three objectives at once: leave out the objective")
+        elif self.objective not in OBJECTIVES:
+            raise ConfigError(
+                f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; got {self.objective!r}"
+            )
+        if (
+            isinstance(self.evaluations, bool)
+            or not isinstance(self.evaluations, int)
+            or self.evaluations < 1
+        ):
+            raise ConfigError(f"evaluations must be a positive integer, got {self.evaluations!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
+            raise ConfigError(f"seed must be an integer in [0, {MAX_SEED}], got {self.seed!r}")
+        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 1:
+            raise ConfigError(f"trials must be a positive integer, got {self.trials!r}")
+
+    @classmethod
+    def make(
+        cls, algorithm: str, objective: str | None, evaluations: int | None, seed: int, trials: int = 10
+    ) -> RunConfig:
+        """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
+        for gp-fnd) and its default budget when ``evaluations`` is None."""
+        if algorithm not in ALGORITHMS:
+            raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
+        gp = GPParameters(population=75, tournament=5) if algorithm == "gp-fnd" else GPParameters()
+        budget = DEFAULT_EVALUATIONS[algorithm] if evaluations is None else evaluations
+        return cls(algorithm, objective, budget, seed, trials, gp=gp)
+
+    @property
+    def objectives(self) -> tuple[str, ...]:
+        """The objectives this run evolves."""
+        return OBJECTIVES if self.objective is None else (self.objective,)
+
+    @property
+    def label(self) -> str:
+        """``GP_o``-style label: GP_food, GP_fnd, QD_nest."""
+        if self.algorithm == "gp-fnd":
+            return "GP_fnd"
+        return f"{LABELS[self.algorithm][:-2]}_{self.objective}"
+
+    def to_json(self) -> dict:
+        data = asdict(self)
+        data["gp"]["mutations"] = [list(m) for m in self.gp.mutations]
+        data["qd"]["mutations"] = [list(m) for m in self.qd.mutations]
+        return data
+
+    @classmethod
+    def from_json(cls, data: dict) -> RunConfig:
+        try:
+            gp = dict(data["gp"])
+            qd = dict(data["qd"])
+            gp["mutations"] = tuple((str(n), float(p)) for n, p in gp["mutations"])
+            qd["mutations"] = tuple((str(n), float(p)) for n, p in qd["mutations"])
+            return cls(
+                str(data["algorithm"]),
+                None if data["objective"] is None else str(data["objective"]),
+                int(data["evaluations"]),
+                int(data["seed"]),
+                int(data["trials"]),
+                gp=GPParameters(**gp),
+                qd=QDParameters(**qd),
+            )
+        except (KeyError, TypeError, ValueError) as error:
+            if isinstance(error, ConfigError):
+                raise
+            raise ConfigError(f"not a run configuration: {error}") from error
+
+    def make_algorithm(self) -> AskTell:
+        """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
+        algorithm_seed = _key(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
+        if self.algorithm == "qd":
+            return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)
+        objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
+        return GeneticProgramming(list(objectives), self.evaluations, algorithm_seed, self.gp)
+
+
+def evaluation_seed(run_seed: int, index: int) -> int:
+    """The simulator seed of evaluation number ``index`` (0-based) of a run: a pure function of the run
+    seed and the index, so that a resumed or distributed run draws exactly the same trials."""
+    return _key(run_seed, _SEED_PURPOSE_EVALUATION, index) & MAX_SEED
+
+
+def _key(seed: int, *path: int) -> int:
+    """The stream key reached from the root key of ``seed`` by deriving along ``path``."""
+    key = np.uint64(root_key(seed))
+    for value in path:
+        key = np.uint64(derive(key, int(value)))
+    return int(key)

@@ -1,0 +1,110 @@
+"""Small file helpers: atomic writes, strict JSON, append-only CSV logs that can be cut back on resume."""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+from .errors import RunDirectoryError
+
+
+def write_atomic(path: Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` so that a reader (or a killed writer) sees the old file or the new one,
+    never a mixture: a temporary file in the same folder, flushed to disk, then renamed over ``path``."""
+    path = Path(path)
+    raw = data.encode() if isinstance(data, str) else data
+    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(descriptor, "wb") as handle:
+            handle.write(raw)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temporary)
+        raise
+
+
+def dumps(data: object, indent: int | None = 1) -> str:
+    """Strict JSON (no NaN or infinity), keys in the order given, with a final newline; ``indent=None``
+    writes one compact line (much faster, for checkpoints)."""
+    return json.dumps(data, indent=indent, allow_nan=False) + "\n"
+
+
+def write_json(path: Path, data: object, indent: int | None = 1) -> None:
+    """Write ``data`` as strict JSON, atomically."""
+    write_atomic(path, dumps(data, indent))
+
+
+def read_json(path: Path) -> object:
+    """Read a JSON file, saying which file is damaged when it cannot be read."""
+    try:
+        return json.loads(Path(path).read_text(), parse_constant=_reject_constant)
+    except FileNotFoundError as error:
+        raise RunDirectoryError(f"{path} does not exist") from error
+    except (OSError, ValueError) as error:
+        raise RunDirectoryError(f"{path} is not a readable JSON file: {error}") from error
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not allowed in our JSON files")
+
+
+def number(value: float | None) -> str:
+    """A float as CSV text that reads back to the same float (empty for None)."""
+    if value is None:
+        return ""
+    if not math.isfinite(value):
+        raise ValueError(f"refusing to write the non-finite number {value}")
+    return repr(float(value))
+
+
+class CsvLog:
+    """An append-only CSV file whose length after each batch is recorded in the checkpoint, so that a
+    resumed run cuts it back to the last checkpoint and appends exactly what an uninterrupted run would."""
+
+    def __init__(self, path: Path, header: Sequence[str]) -> None:
+        self.path = Path(path)
+        self.header = list(header)
+
+    def create(self) -> int:
+        """Start the file with its header; return its length in bytes."""
+        write_atomic(self.path, self._rows([self.header]))
+        return self.path.stat().st_size
+
+    def append(self, rows: Sequence[Sequence[str]]) -> int:
+        """Append rows; return the new length in bytes."""
+        with open(self.path, "ab") as handle:
+            handle.write(self._rows(rows).encode())
+            handle.flush()
+            return handle.tell()
+
+    def cut(self, size: int) -> None:
+        """Cut the file back to ``size`` bytes (the length recorded in a checkpoint)."""
+        actual = self.path.stat().st_size if self.path.exists() else -1
+        if actual < size:
+            raise RunDirectoryError(
+                f"{self.path} is shorter ({actual} bytes) than its checkpoint says ({size})"
+            )
+        with open(self.path, "r+b") as handle:
+            handle.truncate(size)
+
+    def read(self) -> list[dict[str, str]]:
+        """All rows as dictionaries."""
+        with open(self.path, newline="") as handle:
+            return list(csv.DictReader(handle))
+
+    @staticmethod
+    def _rows(rows: Sequence[Sequence[str]]) -> str:
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerows(rows)
+        return buffer.getvalue()

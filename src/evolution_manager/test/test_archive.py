@@ -1,0 +1,61 @@
+"""Repertoires on qdpy grids: the replacement rule, bins, metrics, and state round trips."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+
+from evolution_manager.archive import Repertoire
+
+
+def test_a_full_bin_replaces_its_worst_only_with_a_strictly_better_tree():
+    grid = Repertoire()
+    d = (0.5, 0.5, 0.5)
+    for i, f in enumerate((0.3, 0.1, 0.2)):
+        assert grid.offer(f"t{i}", f, d, i)
+    assert not grid.offer("tie", 0.1, d, 3)  # equal to the worst: rejected
+    assert not grid.offer("worse", 0.05, d, 4)
+    assert grid.offer("better", 0.25, d, 5)
+    assert [e.tree for e in grid.entries()] == ["t0", "t2", "better"]
+    assert len(grid) == 3 and grid.filled_bins == 1 and grid.qd_score == 0.3
+
+
+def test_bins_coverage_and_qd_score_agree_with_qdpy():
+    rng = random.Random(1)
+    grid = Repertoire()
+    for i in range(3000):
+        descriptors = (rng.random(), rng.random() ** 3, 1.0 if i % 7 == 0 else rng.random())
+        grid.offer(f"t{i}", rng.random(), descriptors, i)
+    assert grid.bin_of((1.0, 0.0, 0.999)) == (7, 0, 7)
+    assert grid.coverage == grid.filled_bins / 512 == grid.grid.filled_bins / 512
+    # qdpy's normalised QD score is the sum of each bin's best on the fitness domain [0, 1]
+    assert grid.qd_score == pytest.approx(grid.grid.qd_score(normalized=True), abs=1e-9)
+    assert grid.best_value == max(e.value for e in grid.entries()) == grid.best().value
+    assert all(len(entries) <= 3 for _, entries in grid.bins())
+
+
+def test_values_out_of_range_are_refused():
+    grid = Repertoire()
+    with pytest.raises(ValueError, match="fitness"):
+        grid.offer("t", 1.5, (0.5, 0.5, 0.5), 0)
+    with pytest.raises(ValueError, match="descriptor"):
+        grid.offer("t", 0.5, (0.5, -0.2, 0.5), 0)
+    with pytest.raises(ValueError, match="descriptor"):
+        grid.offer("t", 0.5, (0.5, float("nan"), 0.5), 0)
+    assert len(grid) == 0 and grid.offered == 0
+
+
+def test_state_round_trip_rebuilds_the_same_grid_that_then_evolves_the_same():
+    rng = random.Random(2)
+    offers = [
+        (f"t{i}", rng.random(), (rng.random(), rng.random(), rng.random() ** 4), i) for i in range(2000)
+    ]
+    grid = Repertoire()
+    for offer in offers[:1000]:
+        grid.offer(*offer)
+    copy = Repertoire.from_state(grid.to_state())
+    assert copy.to_state() == grid.to_state()
+    for offer in offers[1000:]:
+        assert grid.offer(*offer) == copy.offer(*offer)
+    assert copy.to_state() == grid.to_state()

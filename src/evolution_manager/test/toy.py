@@ -1,0 +1,73 @@
+"""A tiny evaluator for the tests: a deterministic function of (tree text, seed), not a model of anything.
+
+Fitness rewards some leaves per objective, plus a little seed noise; descriptors come from the mix of
+actions and conditions, so MAP-Elites has somewhere to spread. It answers the evaluator contract.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from collections import Counter
+from collections.abc import Sequence
+
+from swarm_sim.evaluation import EvaluationRequest, EvaluationResult
+
+_WORD = re.compile(r"[a-z_]+")
+
+
+def _noise(tree: str, seed: int) -> float:
+    digest = hashlib.blake2b(f"{tree}|{seed}".encode(), digest_size=8).digest()
+    return int.from_bytes(digest, "little") / 2**64
+
+
+class ToyEvaluator:
+    """Deterministic, fast, and enough structure for selection to matter."""
+
+    def __init__(self, noise: float = 0.05, fail_on: str | None = None) -> None:
+        self.noise = noise
+        self.fail_on = fail_on
+        self.calls = 0
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        self.calls += 1
+        return [self.one(r) for r in requests]
+
+    def one(self, request: EvaluationRequest) -> EvaluationResult:
+        if self.fail_on is not None and self.fail_on in request.tree:
+            return EvaluationResult(None, None, f"refused: contains {self.fail_on}")
+        words = Counter(w for w in _WORD.findall(request.tree) if w not in ("seq", "sel", "prob"))
+        total = max(1, sum(words.values()))
+        actions = sum(
+            words[a]
+            for a in (
+                "stop",
+                "forward",
+                "forward_left",
+                "forward_right",
+                "reverse",
+                "reverse_left",
+                "reverse_right",
+            )
+        )
+        conditions = total - actions
+        n = self.noise * _noise(request.tree, request.seed)
+        density = (words["stop"] + words["robot_left"]) / total
+        nest = (words["in_nest"] + words["nest_left"] + words["forward"]) / total
+        food = (words["on_food"] + words["food_right"] + words["forward_left"]) / total
+        fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food))
+        a = max(1, actions)
+        movement = 0.5 + 0.5 * (words["forward"] - words["reverse"]) / a
+        rotation = (
+            0.5
+            + 0.5
+            * (
+                words["forward_left"]
+                + words["reverse_right"]
+                - words["forward_right"]
+                - words["reverse_left"]
+            )
+            / a
+        )
+        conditionality = conditions / total
+        return EvaluationResult(fitness, (movement, rotation, conditionality), None)
