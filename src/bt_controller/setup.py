@@ -27,6 +27,8 @@ setup(
     entry_points={
         "console_scripts": [
             # "EXECUTABLE = bt_controller.MODULE:main": run with `ws/run bt_controller EXECUTABLE`.
+            "bt = bt_controller.cli:main",
+            "bench = bt_controller.bench:main",
         ],
     },
 )

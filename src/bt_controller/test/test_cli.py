@@ -1,0 +1,75 @@
+"""The ``bt`` console script: outputs, and one line with exit status 2 for bad input."""
+
+from __future__ import annotations
+
+import pytest
+
+from bt_controller.cli import main
+from bt_controller.formats import from_xml
+from bt_controller.tree import parse
+
+TREE = "sel3(seq(in_nest,stop), forward, reverse)"
+
+
+def test_check(capsys):
+    assert main(["check", TREE]) == 0
+    assert capsys.readouterr().out == "ok: 6 nodes, depth 2: sel(seq(in_nest, stop), forward, reverse)\n"
+
+
+def test_show_formats(capsys):
+    assert main(["show", TREE]) == 0
+    assert capsys.readouterr().out.startswith("sel\n├── seq\n")
+    assert main(["show", TREE, "--format", "tree"]) == 0
+    assert capsys.readouterr().out == "sel(seq(in_nest, stop), forward, reverse)\n"
+    assert main(["show", TREE, "-f", "xml"]) == 0
+    assert from_xml(capsys.readouterr().out) == parse(TREE)
+    assert main(["show", TREE, "-f", "dot"]) == 0
+    assert capsys.readouterr().out.startswith("digraph")
+
+
+def test_export_by_suffix_and_read_back(tmp_path, capsys):
+    for suffix in ("xml", "dot", "svg", "png", "txt"):
+        out = tmp_path / f"tree.{suffix}"
+        assert main(["export", TREE, "--output", str(out)]) == 0
+        assert out.stat().st_size > 0
+    assert main(["check", str(tmp_path / "tree.xml")]) == 0
+    assert main(["check", str(tmp_path / "tree.txt")]) == 0
+    assert capsys.readouterr().out.count("ok: 6 nodes") == 2
+
+
+def test_stdin(monkeypatch, capsys):
+    monkeypatch.setattr("sys.stdin", __import__("io").StringIO("seq(\n on_food,\n stop)\n"))
+    assert main(["check", "-"]) == 0
+    assert "seq(on_food, stop)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["check", "seq(stop, fly)"], "line 1, column 11: unknown node 'fly'"),
+        (["check", "seq(stop"], "expected ',' or ')'"),
+        (["check", "nosuch/file.xml"], "no such file"),
+        (["check", "seq(" * 30 + "stop" + ", stop)" * 30], "max_depth=17"),
+        (["check", "seq(stop, stop)", "--max-nodes", "2"], "max_nodes=2"),
+        (["show", "stop", "--format", "png"], "give --output"),
+        (["show", "stop", "--format", "pdf"], "invalid choice"),
+        (["frobnicate", "stop"], "invalid choice"),
+        ([], "required"),
+        (["export", "stop"], "required"),
+        (["export", "stop", "-o", "/nonexistent-dir/x.xml"], "No such file"),
+        (["check", "<root><BehaviorTree>"], "malformed XML"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(argv, fragment, capsys):
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.count("\n") == 1 and captured.err.startswith("bt: error: ")
+    assert fragment in captured.err
+
+
+def test_binary_file_is_a_clear_error(tmp_path, capsys):
+    path = tmp_path / "tree.bin"
+    path.write_bytes(b"\xff\xfe\x00seq")
+    assert main(["check", str(path)]) == 2
+    assert "UTF-8" in capsys.readouterr().err
