@@ -18,12 +18,13 @@ One tick (``tick``):
 - action: if it is not running, it starts (counted in ``counts[1 + action]``) and returns running; if it
   returned running last tick, it returns success now.
 
-Why not py_trees for the definition: py_trees' ``Sequence``/``Selector(memory=True)`` do resume at the running
-child, but their state lives inside behaviour objects (status, ``current_child``, ``initialise``/``terminate``
-hooks) rather than in one array the compiled kernel can share, a tick is a generator walk costing tens of
-microseconds, and the probabilistic composite, the counter-based draw and the action counting would all be our
-own code anyway. ``bt_controller.pytrees`` builds the same tree from py_trees behaviours for its rendering and
-blackboard tooling, and ``test_pytrees.py`` shows that it agrees with this module tick for tick.
+Why not py_trees for the definition: py_trees' ``Sequence``/``Selector(memory=True)`` do match our composites
+(``bt_controller.pytrees`` maps our trees onto them and ``test_pytrees.py`` shows it agrees with this module
+tick for tick), but their state lives inside behaviour objects (status, ``current_child``,
+``initialise``/``terminate`` hooks) rather than in the one array the compiled kernel shares, the probabilistic
+composite, the counter-based draw and the counting would be our own code anyway, and a py_trees tick (a
+generator walk) is slower still than this one. So the definition is this plain function, and py_trees is an
+optional view for its displays and tools.
 """
 
 from __future__ import annotations
