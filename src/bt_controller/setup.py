@@ -29,6 +29,7 @@ setup(
             # "EXECUTABLE = bt_controller.MODULE:main": run with `ws/run bt_controller EXECUTABLE`.
             "bt = bt_controller.cli:main",
             "bench = bt_controller.bench:main",
+            "footbot_controller = bt_controller.nodes.footbot_controller:main",
         ],
     },
 )
