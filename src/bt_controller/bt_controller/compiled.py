@@ -65,32 +65,26 @@ def flatten(tree: Node) -> FlatTree:
             f"tree has depth {tree.depth}; the compiled interpreter takes {MAX_COMPILED_DEPTH}"
         )
     nodes = list(tree.preorder())
-    index = 0
     op = np.empty(len(nodes), np.int8)
     arg = np.full(len(nodes), -1, np.int8)
     first = np.full(len(nodes), -1, np.int32)
     nchild = np.zeros(len(nodes), np.int8)
-    children: list[int] = []
+    children: list[int] = []  # composite after composite, in pre-order
     for index, node in enumerate(nodes):
         if isinstance(node, Composite):
             op[index] = COMPOSITES.index(node.kind)
+            first[index] = len(children)
+            nchild[index] = len(node.children)
+            child = index + 1  # the first child follows its parent in pre-order ...
+            for sibling in node.children:
+                children.append(child)
+                child += sibling.size  # ... and each next one follows the previous one's subtree
         elif isinstance(node, Condition):
             op[index], arg[index] = OP_CONDITION, node.index
         elif isinstance(node, Action):
             op[index], arg[index] = OP_ACTION, node.index
         else:
             raise TypeError(f"not a tree node: {type(node).__name__}")
-    # Second pass: children of each composite, in pre-order of the composites.
-    index = 0
-    sizes = [node.size for node in nodes]
-    for index, node in enumerate(nodes):
-        if isinstance(node, Composite):
-            first[index] = len(children)
-            nchild[index] = len(node.children)
-            child = index + 1
-            for _ in node.children:
-                children.append(child)
-                child += sizes[child]
     return FlatTree(op, arg, first, nchild, np.asarray(children, np.int32))
 
 
