@@ -17,8 +17,21 @@ import numpy as np
 from bt_controller.compiled import N_COUNTS, reset_memory, tick
 from bt_controller.vocabulary import RUNNING, STOP
 from swarm_sim import world
+from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
 from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
+
+drop_stale_cache(
+    __file__,
+    (
+        "bt_controller.compiled",
+        "bt_controller.draws",
+        "bt_controller.vocabulary",
+        "swarm_sim.config",
+        "swarm_sim.streams",
+        "swarm_sim.world",
+    ),
+)
 
 
 @numba.njit(cache=True)

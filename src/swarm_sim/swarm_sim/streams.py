@@ -25,6 +25,9 @@ import numba
 import numpy as np
 
 from bt_controller.draws import derive, root_key
+from swarm_sim._numba_cache import drop_stale_cache
+
+drop_stale_cache(__file__, ("bt_controller.draws",))
 
 POSITION = 0
 HEADING = 1

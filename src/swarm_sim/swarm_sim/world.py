@@ -23,7 +23,10 @@ import numpy as np
 
 from bt_controller.draws import uniform
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
+from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
+
+drop_stale_cache(__file__, ("bt_controller.draws", "bt_controller.vocabulary", "swarm_sim.config"))
 
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 """(left, right) wheel settings of each action, in units of the nominal wheel speed."""
@@ -112,11 +115,11 @@ def move_robot(
     omega = (v_right - v_left) / p.wheel_separation
     if omega == 0.0:
         return x + v * p.step_dt * math.cos(heading), y + v * p.step_dt * math.sin(heading), heading
-    end = heading + omega * p.step_dt
-    turn_radius = v / omega
-    x_new = x + turn_radius * (math.sin(end) - math.sin(heading))
-    y_new = y - turn_radius * (math.cos(end) - math.cos(heading))
-    return x_new, y_new, wrap_angle(end)
+    # The exact arc, written as its chord: length 2 (v / omega) sin(turn / 2), along the mean heading.
+    half_turn = 0.5 * omega * p.step_dt
+    chord = 2.0 * (v / omega) * math.sin(half_turn)
+    middle = heading + half_turn
+    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + omega * p.step_dt)
 
 
 @numba.njit(cache=True)
