@@ -13,7 +13,7 @@ from bt_controller.formats import from_xml, to_xml
 from bt_controller.tree import Node, parse, to_indented, to_text
 
 FUZZ = settings(
-    max_examples=600, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+    max_examples=400, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )
 TOKENS = [
     "seq",
