@@ -9,7 +9,9 @@ The mixing function is SplitMix64's finaliser (Steele, Lea and Flood, 2014). Key
 chaining: ``derive(derive(root_key(seed), trial), robot)``.
 
 All functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
-slowly, from plain Python with Python ints (which must be non-negative and below 2**64).
+slowly, from plain Python. From Python, pass keys as ``np.uint64`` (e.g. ``derive(np.uint64(key), 3)``): a
+plain int of 2**63 or more raises OverflowError once a function has been compiled for int64 arguments, and
+the functions return plain ints, so wrap a returned key in ``np.uint64`` before passing it on.
 """
 
 from __future__ import annotations
