@@ -23,7 +23,7 @@ from bt_controller.random_trees import random_blackboards, random_tree
 from bt_controller.tree import parse
 
 
-@settings(max_examples=1000, derandomize=True, deadline=None)
+@settings(max_examples=600, derandomize=True, deadline=None)
 @given(tree=trees, key=keys, boards=st.lists(blackboards, min_size=1, max_size=30))
 def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards):
     ref = reference.ReferenceRobot(tree, key)
