@@ -27,6 +27,13 @@ setup(
     entry_points={
         "console_scripts": [
             # "EXECUTABLE = evolution_manager.MODULE:main": run with `ws/run evolution_manager EXECUTABLE`.
+            "trial = evolution_manager.nodes.trial:main",
+            "record = evolution_manager.nodes.recorder:main",
+            "replay = evolution_manager.nodes.replay:main",
+            "evolve = evolution_manager.cli:main",
+            "experiment = evolution_manager.experiment:main",
+            "report = evolution_manager.report:main",
+            "measure = evolution_manager.measure:main",
         ],
     },
 )

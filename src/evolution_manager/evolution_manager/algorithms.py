@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from .archive import Entry, Repertoire
 from .errors import AskTellError, ConfigError
 from .operators import best_of, half_and_half, tournament, vary
+from .parameters import GPParameters, QDParameters
 from .primitives import (
-    MAX_TREE_NODES,
     OBJECTIVES,
     BehaviourTree,
     make_primitive_set,
@@ -56,35 +56,6 @@ def _outcome(result: object) -> Outcome:
         tuple(float(v) for v in descriptors) if descriptors is not None else None,  # type: ignore[arg-type]
         error,
     )
-
-
-@dataclass(frozen=True)
-class GPParameters:
-    """GP_o and GP_fnd (model.md, "Algorithms"; paper, table 5)."""
-
-    population: int = 25
-    tournament: int = 3
-    elites_per_objective: int = 1
-    crossover: float = 0.8
-    mutations: tuple[tuple[str, float], ...] = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
-    init_min_height: int = 1
-    init_max_height: int = 4
-    max_height: int = 8
-    max_nodes: int = MAX_TREE_NODES
-
-
-@dataclass(frozen=True)
-class QDParameters:
-    """MAP-Elites in a qdpy grid with the GP operators as variation (model.md, "Algorithms")."""
-
-    init_batch: int = 100
-    batch: int = 50
-    crossover: float = 0.8
-    mutations: tuple[tuple[str, float], ...] = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
-    init_min_height: int = 1
-    init_max_height: int = 4
-    max_height: int = 8
-    max_nodes: int = MAX_TREE_NODES
 
 
 def _check_probability(value: float, name: str) -> None:

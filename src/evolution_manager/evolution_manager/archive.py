@@ -243,3 +243,15 @@ class Repertoire:
                     raise ValueError(f"bin {record['bin']} holds more than {repertoire.items_per_bin} items")
         repertoire.offered = int(state["offered"])
         return repertoire
+
+    @classmethod
+    def from_items(cls, items: list[dict]) -> Repertoire:
+        """Rebuild a repertoire from the ``items`` of a repertoire file (bin by bin, in order of arrival)."""
+        repertoire = cls()
+        for item in items:
+            descriptors = tuple(float(d) for d in item["descriptors"])
+            entry = Entry(str(item["tree"]), float(item["fitness"]), descriptors, int(item["evaluation"]))
+            if repertoire.grid.add(entry) is None:
+                raise ValueError(f"bin {item['bin']} holds more than {repertoire.items_per_bin} items")
+        repertoire.offered = len(items)
+        return repertoire

@@ -7,14 +7,20 @@ objective, GP_fnd 75,000 on all three at once.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bt_controller.draws import MAX_SEED, derive, root_key
 
-from .algorithms import AskTell, GeneticProgramming, GPParameters, MapElites, QDParameters
 from .errors import ConfigError
-from .primitives import OBJECTIVES
+from .parameters import GPParameters, QDParameters
+
+if TYPE_CHECKING:
+    from .algorithms import AskTell
+
+OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
+"""Objective names in the order of ``EvaluationResult.fitness`` (also ``primitives.OBJECTIVES``)."""
 
 ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
 """Command-line names: GP_o, GP_fnd, QD_o (MAP-Elites)."""
@@ -113,6 +119,8 @@ class RunConfig:
 
     def make_algorithm(self) -> AskTell:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
+        from .algorithms import GeneticProgramming, MapElites
+
         algorithm_seed = _key(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
         if self.algorithm == "qd":
             return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)

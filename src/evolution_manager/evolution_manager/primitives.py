@@ -16,16 +16,24 @@ from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, parse
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
 
 from .errors import TreeTextError
+from .parameters import MAX_TREE_NODES
+
+__all__ = [
+    "DESCRIPTORS",
+    "MAX_TREE_NODES",
+    "OBJECTIVES",
+    "BehaviourTree",
+    "TripleFitness",
+    "make_primitive_set",
+    "tree_from_text",
+    "tree_to_text",
+]
 
 OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
 """Objective names in the order of ``EvaluationResult.fitness``."""
 
 DESCRIPTORS: tuple[str, ...] = ("movement", "rotation", "conditionality")
 """Behaviour descriptor names in the order of ``EvaluationResult.descriptors``."""
-
-MAX_TREE_NODES = MAX_NODES
-"""The most nodes a tree may have: the evaluator's limit (``bt_controller.tree.MAX_NODES``), so that the
-operators never make a tree the evaluator would refuse."""
 
 
 class TripleFitness(base.Fitness):

@@ -93,7 +93,7 @@ class RunDirectory:
 class Run:
     """One run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
 
-    def __init__(self, config: RunConfig, directory: RunDirectory, evaluator: Evaluator) -> None:
+    def __init__(self, config: RunConfig, directory: RunDirectory, evaluator: Evaluator | None) -> None:
         self.config = config
         self.directory = directory
         self.evaluator = evaluator
@@ -120,8 +120,9 @@ class Run:
         return run
 
     @classmethod
-    def resume(cls, root: Path, evaluator: Evaluator) -> Run:
-        """The run in ``root`` as it was at its last checkpoint, its CSV files cut back to match."""
+    def resume(cls, root: Path, evaluator: Evaluator | None, cut: bool = True) -> Run:
+        """The run in ``root`` as it was at its last checkpoint, its CSV files cut back to match (with
+        ``cut=False``, for reading only, the files are left as they are)."""
         directory = RunDirectory(root)
         if not directory.started():
             raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
@@ -144,8 +145,9 @@ class Run:
             run.timing = Timing(**state["timing"])
         except (KeyError, TypeError, ValueError) as error:
             raise RunDirectoryError(f"{directory.checkpoint} is damaged: {error}") from error
-        directory.evaluations.cut(run.offsets["evaluations"])
-        directory.progress.cut(run.offsets["progress"])
+        if cut:
+            directory.evaluations.cut(run.offsets["evaluations"])
+            directory.progress.cut(run.offsets["progress"])
         return run
 
     # Execution ---------------------------------------------------------------------------------------
@@ -177,6 +179,8 @@ class Run:
                 for i, tree in enumerate(trees)
             ]
             asked = time.perf_counter()
+            if self.evaluator is None:
+                raise RunDirectoryError("this run was opened for reading: it has no evaluator")
             results = list(self.evaluator.evaluate(requests))
             evaluated = time.perf_counter()
             self.algorithm.tell(results)
@@ -187,9 +191,14 @@ class Run:
             if on_batch is not None:
                 on_batch(self.evaluations, self.config.evaluations)
             if time.monotonic() - last_checkpoint >= checkpoint_interval:
-                self.checkpoint()
+                self._timed_checkpoint()
                 last_checkpoint = time.monotonic()
+        self._timed_checkpoint()
+
+    def _timed_checkpoint(self) -> None:
+        started = time.perf_counter()
         self.checkpoint()
+        self.timing.manager += time.perf_counter() - started
 
     def _record(self, requests: Sequence, results: Sequence) -> None:
         rows = []

@@ -1,0 +1,204 @@
+"""``evolve``: run one algorithm on one objective (or GP_fnd on all three) and write a run directory.
+
+    ws/run evolution_manager evolve --algorithm qd --objective food --evaluations 25000 --seed 1 --out runs/qd
+    ws/run evolution_manager evolve --out runs/qd --resume        # continue a killed or interrupted run
+
+Bad options print one line saying what was expected and exit with status 2; nothing already saved is
+touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
+from .errors import EvolutionError
+
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class UsageError(Exception):
+    """A command-line option that cannot be used; the message says why."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # argparse prints usage and exits 2; we keep the 2, in one line
+        raise UsageError(message)
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer seed, got {text!r}") from None
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``evolve`` command line."""
+    parser = _Parser(prog="evolve", description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
+    )
+    parser.add_argument(
+        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
+    )
+    budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
+    parser.add_argument("--evaluations", type=_positive, help=f"evaluation budget (default: {budgets})")
+    parser.add_argument("--seed", type=_seed, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
+    parser.add_argument("--trials", type=_positive, help="trials per evaluation (default 10)")
+    parser.add_argument(
+        "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
+    )
+    parser.add_argument("--workers", type=_positive, default=1, help="evaluator threads (default 1)")
+    parser.add_argument(
+        "--resume", action="store_true", help="continue the run in --out from its last checkpoint"
+    )
+    parser.add_argument(
+        "--checkpoint-every",
+        type=_seconds,
+        default=30.0,
+        metavar="SECONDS",
+        help="checkpoint period (default 30)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-figures", action="store_true", help="write results but no figures")
+    return parser
+
+
+def _config(args: argparse.Namespace) -> RunConfig:
+    if args.algorithm is None:
+        raise UsageError("--algorithm is required to start a run (gp, gp-fnd or qd)")
+    if args.algorithm != "gp-fnd" and args.objective is None:
+        raise UsageError(f"--algorithm {args.algorithm} needs --objective ({', '.join(OBJECTIVES)})")
+    if args.algorithm == "gp-fnd" and args.objective is not None:
+        raise UsageError("--algorithm gp-fnd evolves all three objectives at once: leave out --objective")
+    seed = 0 if args.seed is None else args.seed
+    return RunConfig.make(args.algorithm, args.objective, args.evaluations, seed, args.trials or 10)
+
+
+def _check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
+    given = {
+        "algorithm": args.algorithm,
+        "objective": args.objective,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": args.trials,
+    }
+    for name, value in given.items():
+        if value is not None and value != getattr(saved, name):
+            raise UsageError(
+                f"--{name} {value} differs from the run being resumed ({getattr(saved, name)}); "
+                "leave it out or start a new run in another --out"
+            )
+
+
+def _evaluator(workers: int) -> object:
+    from swarm_sim.evaluation import BatchEvaluator
+
+    try:
+        return BatchEvaluator(threads=workers)
+    except ValueError as error:
+        raise UsageError(f"--workers: {error}") from None
+
+
+def _progress_bar(config: RunConfig, initial: int, enabled: bool):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=config.evaluations,
+        initial=initial,
+        unit="eval",
+        desc=config.label,
+        dynamic_ncols=True,
+        disable=None,
+    )
+
+
+def evolve(argv: Sequence[str] | None = None) -> int:
+    """Run ``evolve``; return the exit status."""
+    try:
+        args = build_parser().parse_args(argv)
+        config = None if args.resume else _config(args)
+        from .files import read_json
+        from .outputs import write_results
+        from .run import Run, RunDirectory
+
+        directory = RunDirectory(args.out)
+        if args.resume:
+            if not directory.started():
+                raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
+            _check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+            run = Run.resume(args.out, _evaluator(args.workers))
+        else:
+            if directory.started():
+                raise UsageError(
+                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
+                )
+            evaluator = _evaluator(args.workers)
+            run = Run.start(config, args.out, evaluator)
+    except (UsageError, EvolutionError) as error:
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    bar = _progress_bar(run.config, run.evaluations, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            best = [run.passive[o].best_value for o in run.config.objectives]
+            bar.set_postfix_str(
+                " ".join(
+                    f"{o}={b:.3f}" for o, b in zip(run.config.objectives, best, strict=True) if b is not None
+                )
+            )
+
+    try:
+        run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+        print(f"evolve: interrupted; continue with: evolve --out {args.out} --resume", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if bar is not None:
+        bar.close()
+    write_results(run, with_figures=not args.no_figures)
+    summary = run.passive
+    lines = [
+        f"{o}: best {summary[o].best_value:.4f}, coverage {summary[o].coverage:.4f}, "
+        f"QD score {summary[o].qd_score:.2f}"
+        for o in run.config.objectives
+        if summary[o].best_value is not None
+    ]
+    print(f"{run.config.label}: {run.evaluations} evaluations in {args.out}\n" + "\n".join(lines))
+    return 0
+
+
+def main() -> None:
+    """Console entry point of ``evolve``."""
+    sys.exit(evolve())

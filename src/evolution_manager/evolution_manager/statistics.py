@@ -1,0 +1,152 @@
+"""Pairwise comparisons of algorithms as in the paper's table 6, plus effect sizes and a correction.
+
+For two samples (one value per run): Shapiro-Wilk on each; if either rejects normality at ``alpha``, a
+two-sided Mann-Whitney U test, else a two-sided Welch t-test (a t-test that does not assume equal
+variances). Shapiro-Wilk needs at least 3 values: a smaller sample counts as not shown to be normal, so it
+gets Mann-Whitney. A sample whose values are all equal cannot be tested for normality either and gets
+Mann-Whitney too. Effect sizes: Cohen's d (pooled standard deviation) and Vargha-Delaney A (the
+probability that a value of the first sample beats one of the second, ties counting half). p-values of the
+whole table are corrected for multiple comparisons with Holm's step-down method.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+from scipy import stats
+
+ALPHA = 0.05
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One row of the table."""
+
+    metric: str
+    objective: str
+    first: str
+    second: str
+    n_first: int
+    n_second: int
+    mean_first: float
+    mean_second: float
+    shapiro_first: float | None
+    shapiro_second: float | None
+    test: str
+    p_value: float
+    cohens_d: float | None
+    vargha_delaney_a: float
+    p_holm: float = math.nan
+
+    @property
+    def significant(self) -> bool:
+        """Significant after Holm's correction."""
+        return self.p_holm <= ALPHA
+
+
+def shapiro(values: Sequence[float]) -> float | None:
+    """The Shapiro-Wilk p-value, or None when the sample is too small or constant to be tested."""
+    if len(values) < 3 or max(values) == min(values):
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return float(stats.shapiro(values).pvalue)
+
+
+def cohens_d(a: Sequence[float], b: Sequence[float]) -> float | None:
+    """(mean a - mean b) / pooled standard deviation: None when undefined (fewer than 2 values each, or
+    no spread at all between different means); 0 for two constant, equal samples."""
+    if len(a) < 2 or len(b) < 2:
+        return None
+    ma, mb = sum(a) / len(a), sum(b) / len(b)
+    va = sum((x - ma) ** 2 for x in a) / (len(a) - 1)
+    vb = sum((x - mb) ** 2 for x in b) / (len(b) - 1)
+    pooled = math.sqrt(((len(a) - 1) * va + (len(b) - 1) * vb) / (len(a) + len(b) - 2))
+    if pooled == 0.0:
+        return 0.0 if ma == mb else None
+    return (ma - mb) / pooled
+
+
+def vargha_delaney(a: Sequence[float], b: Sequence[float]) -> float:
+    """P(X > Y) + P(X = Y) / 2 for X from ``a`` and Y from ``b``."""
+    wins = sum((x > y) + 0.5 * (x == y) for x in a for y in b)
+    return wins / (len(a) * len(b))
+
+
+def compare(
+    metric: str, objective: str, first: str, a: Sequence[float], second: str, b: Sequence[float]
+) -> Comparison:
+    """Compare two samples (see the module docstring for the choice of test)."""
+    a = [float(x) for x in a]
+    b = [float(x) for x in b]
+    if not a or not b:
+        raise ValueError(f"cannot compare {first} and {second} on {metric}/{objective}: a sample is empty")
+    pa, pb = shapiro(a), shapiro(b)
+    normal = pa is not None and pb is not None and pa > ALPHA and pb > ALPHA
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if a == b or (max(a) == min(a) == max(b) == min(b)):
+            test, p = "identical samples", 1.0
+        elif normal:
+            test, p = "t-test (Welch)", float(stats.ttest_ind(a, b, equal_var=False).pvalue)
+        else:
+            test, p = "Mann-Whitney U", float(stats.mannwhitneyu(a, b, alternative="two-sided").pvalue)
+    return Comparison(
+        metric,
+        objective,
+        first,
+        second,
+        len(a),
+        len(b),
+        sum(a) / len(a),
+        sum(b) / len(b),
+        pa,
+        pb,
+        test,
+        p,
+        cohens_d(a, b),
+        vargha_delaney(a, b),
+    )
+
+
+def holm(rows: Sequence[Comparison]) -> list[Comparison]:
+    """The rows with Holm-corrected p-values (same order)."""
+    order = sorted(range(len(rows)), key=lambda i: (rows[i].p_value, i))
+    corrected = [math.nan] * len(rows)
+    running = 0.0
+    for rank, i in enumerate(order):
+        running = max(running, min(1.0, (len(rows) - rank) * rows[i].p_value))
+        corrected[i] = running
+    return [replace(row, p_holm=p) for row, p in zip(rows, corrected, strict=True)]
+
+
+def _p(value: float) -> str:
+    return "< 0.0001" if value < 1e-4 else f"{value:.4f}"
+
+
+def _optional(value: float | None, digits: int = 3) -> str:
+    return "n/a" if value is None else f"{value:.{digits}f}"
+
+
+def markdown_table(rows: Sequence[Comparison]) -> str:
+    """The table in Markdown; significant rows (after correction) in bold."""
+    header = (
+        "| metric | objective | comparison | n | means | Shapiro-Wilk p | test | p | p (Holm) "
+        "| Cohen's d | A |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    lines = []
+    for r in rows:
+        strong = "**" if r.significant else ""
+        lines.append(
+            f"| {r.metric} | {r.objective} | {strong}{r.first} vs {r.second}{strong} "
+            f"| {r.n_first}/{r.n_second} "
+            f"| {r.mean_first:.4g} / {r.mean_second:.4g} "
+            f"| {_optional(r.shapiro_first)} / {_optional(r.shapiro_second)} | {r.test} "
+            f"| {_p(r.p_value)} | {strong}{_p(r.p_holm)}{strong} | {_optional(r.cohens_d, 2)} "
+            f"| {r.vargha_delaney_a:.2f} |"
+        )
+    return header + "\n".join(lines) + "\n"

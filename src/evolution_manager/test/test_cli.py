@@ -1,0 +1,156 @@
+"""The command lines, run as users run them (subprocesses, the real swarm_sim batch evaluator)."""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from evolution_manager.cli import evolve
+
+PACKAGES = Path(__file__).resolve().parents[2]
+PYTHONPATH = os.pathsep.join(str(PACKAGES / p) for p in ("bt_controller", "swarm_sim", "evolution_manager"))
+COMPARED = [
+    "config.json",
+    "evaluations.csv",
+    "progress.csv",
+    "summary.json",
+    "archive.json",
+    "repertoire_density.json",
+    "repertoire_nest.json",
+    "repertoire_food.json",
+    "best/food.txt",
+]
+
+
+def command(tool: str, *args: str) -> list[str]:
+    module = {"evolve": "cli", "experiment": "experiment", "report": "report"}[tool]
+    return [sys.executable, "-c", f"from evolution_manager.{module} import main; main()", *args]
+
+
+def environment(**extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = PYTHONPATH + os.pathsep + env.get("PYTHONPATH", "")
+    env.update(extra)
+    return env
+
+
+def run(tool: str, *args: str, **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        command(tool, *args), env=environment(**env), capture_output=True, text=True, timeout=300
+    )
+
+
+def files(root: Path) -> dict[str, bytes]:
+    return {name: (root / name).read_bytes() for name in COMPARED if (root / name).exists()}
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--algorithm", "qd", "--out", "X"], "needs --objective"),
+        (["--algorithm", "gp-fnd", "--objective", "food", "--out", "X"], "leave out --objective"),
+        (["--algorithm", "qd", "--objective", "speed", "--out", "X"], "invalid choice"),
+        (
+            ["--algorithm", "gp", "--objective", "food", "--evaluations", "0", "--out", "X"],
+            "positive integer",
+        ),
+        (["--algorithm", "gp", "--objective", "food", "--seed", "-3", "--out", "X"], "seed must be"),
+        (["--algorithm", "gp", "--objective", "food", "--workers", "999", "--out", "X"], "threads must be"),
+        (["--out", "X", "--resume"], "no run to continue"),
+        (["--algorithm", "qd", "--objective", "food"], "--out"),
+    ],
+)
+def test_bad_options_say_why_and_exit_2(tmp_path, capsys, args, message):
+    args = [str(tmp_path / "X") if a == "X" else a for a in args]
+    assert evolve(args) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "X" / "config.json").exists()
+
+
+def test_a_bad_option_exits_2_without_a_traceback_from_the_command_line(tmp_path):
+    result = run(
+        "evolve", "--algorithm", "qd", "--objective", "food", "--evaluations", "many", "--out", str(tmp_path)
+    )
+    assert result.returncode == 2
+    assert "expected a positive integer, got 'many'" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_nothing_saved_is_overwritten_and_resume_refuses_other_options(tmp_path):
+    out = tmp_path / "run"
+    assert (
+        run(
+            "evolve", "--algorithm", "qd", "--objective", "food", "--evaluations", "150", "--out", str(out)
+        ).returncode
+        == 0
+    )
+    before = files(out)
+    again = run(
+        "evolve", "--algorithm", "gp", "--objective", "nest", "--evaluations", "150", "--out", str(out)
+    )
+    assert again.returncode == 2 and "already holds a run" in again.stderr
+    other = run("evolve", "--out", str(out), "--resume", "--seed", "5")
+    assert other.returncode == 2 and "differs from the run being resumed" in other.stderr
+    assert files(out) == before
+    finished = run("evolve", "--out", str(out), "--resume")  # a finished run: results rewritten, unchanged
+    assert finished.returncode == 0 and files(out) == before
+    assert run("report", str(out)).returncode == 0 and files(out) == before
+    assert (out / "figures" / "heatmap_food.png").exists() and (out / "best" / "food.txt").exists()
+
+
+def test_same_seed_same_files_under_another_pythonhashseed(tmp_path):
+    common = [
+        "--algorithm",
+        "gp",
+        "--objective",
+        "food",
+        "--evaluations",
+        "260",
+        "--seed",
+        "21",
+        "--no-figures",
+    ]
+    a = run("evolve", *common, "--out", str(tmp_path / "a"), PYTHONHASHSEED="1")
+    b = run("evolve", *common, "--out", str(tmp_path / "b"), PYTHONHASHSEED="2")
+    assert a.returncode == b.returncode == 0, a.stderr + b.stderr
+    assert files(tmp_path / "a") == files(tmp_path / "b")
+    assert len(files(tmp_path / "a")) == len(COMPARED) - 1  # all but archive.json (GP has none)
+
+
+def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_path):
+    common = ["--evaluations", "900", "--seed", "8", "--checkpoint-every", "0", "--no-figures"]
+    straight = tmp_path / "straight"
+    assert evolve(["--algorithm", "qd", "--objective", "food", *common, "--out", str(straight)]) == 0
+    killed = tmp_path / "killed"
+    rng = random.Random(99)
+    kills = 0
+    args = ["--algorithm", "qd", "--objective", "food", *common, "--out", str(killed)]
+    while True:
+        process = subprocess.Popen(
+            command("evolve", *args), env=environment(), stderr=subprocess.PIPE, text=True
+        )
+        args = ["--out", str(killed), "--resume"]
+        if kills == 3:
+            break
+        # wait until the run has evaluated something, then kill it at a random moment
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and process.poll() is None:
+            progress = killed / "progress.csv"
+            if progress.exists() and progress.stat().st_size > 200 * (kills + 1):
+                break
+            time.sleep(0.05)
+        time.sleep(rng.uniform(0.0, 0.6))
+        if process.poll() is not None:
+            break  # finished before the kill: nothing more to interrupt
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        kills += 1
+    assert process.wait(timeout=300) == 0, process.stderr.read()
+    assert kills >= 2
+    assert files(killed) == files(straight)
