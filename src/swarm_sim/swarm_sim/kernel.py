@@ -34,7 +34,7 @@ drop_stale_cache(
 )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _source_bearing(i: int, source: int, x: np.ndarray, y: np.ndarray, heading: np.ndarray) -> float:
     if source < 0:
         return math.nan
@@ -80,10 +80,11 @@ def simulate_trial(
     window = np.zeros((n, p.window, 3))
     ground_now = np.zeros((n, 2), dtype=np.bool_)
     sources = np.full((n, 3), -1, dtype=np.int64)  # sender ids: nest source, food source, nearest
-    senders = np.empty(n, dtype=np.int64)
-    ranges = np.empty(n)
-    nest_values = np.empty(n)
-    food_values = np.empty(n)
+    counts_in = np.zeros(n, dtype=np.int64)  # messages received by each robot this step
+    senders = np.zeros((n, n), dtype=np.int64)
+    ranges = np.zeros((n, n))
+    nest_values = np.zeros((n, n))
+    food_values = np.zeros((n, n))
     samples = 0
 
     memory = np.empty((n, op.shape[0]), dtype=np.int8)
@@ -125,33 +126,22 @@ def simulate_trial(
                     actions[i] = action if status == RUNNING else STOP
             world.physics_step(x, y, heading, actions, gains, p, x_before, y_before)
         # Sense: every robot hears the estimates broadcast from the previous step.
+        world.sense_step(
+            x, y, broadcast_nest, broadcast_food, drop_keys, step, p, counts_in, senders, ranges, nest_values, food_values
+        )
         for i in range(n):
             in_nest, on_food = world.ground(x[i], y[i], gap, p)
-            count = world.sense_robot(
-                i,
-                x,
-                y,
-                broadcast_nest,
-                broadcast_food,
-                drop_keys[i],
-                step,
-                p,
-                senders,
-                ranges,
-                nest_values,
-                food_values,
-            )
             nest, food, density, nest_source, food_source, nearest = world.estimate(
-                in_nest, on_food, count, ranges, nest_values, food_values, p
+                in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
             )
             world.push_sample(window[i], samples, nest, food, density)
             raw_nest[i] = nest
             raw_food[i] = food
             ground_now[i, 0] = in_nest
             ground_now[i, 1] = on_food
-            sources[i, 0] = senders[nest_source] if nest_source >= 0 else -1
-            sources[i, 1] = senders[food_source] if food_source >= 0 else -1
-            sources[i, 2] = senders[nearest] if nearest >= 0 else -1
+            sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
+            sources[i, 1] = senders[i, food_source] if food_source >= 0 else -1
+            sources[i, 2] = senders[i, nearest] if nearest >= 0 else -1
         samples += 1
         for i in range(n):
             broadcast_nest[i] = raw_nest[i]

@@ -46,28 +46,26 @@ def sense_swarm(
 ) -> list[Readings]:
     """Every robot's readings at sensing step ``step`` (the simulator's side, robot by robot)."""
     n = x.shape[0]
+    counts = np.zeros(n, dtype=np.int64)
+    senders = np.zeros((n, n), dtype=np.int64)
+    ranges, nest, food = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    world.sense_step(x, y, broadcast_nest, broadcast_food, drop_keys, step, p, counts, senders, ranges, nest, food)
     out = []
     for i in range(n):
-        senders = np.empty(n, dtype=np.int64)
-        ranges = np.empty(n)
-        nest = np.empty(n)
-        food = np.empty(n)
-        count = world.sense_robot(
-            i, x, y, broadcast_nest, broadcast_food, drop_keys[i], step, p, senders, ranges, nest, food
-        )
+        count = counts[i]
         bearings = np.array(
-            [world.bearing(x[i], y[i], heading[i], x[j], y[j]) for j in senders[:count]], dtype=np.float64
+            [world.bearing(x[i], y[i], heading[i], x[j], y[j]) for j in senders[i, :count]], dtype=np.float64
         )
         in_nest, on_food = world.ground(x[i], y[i], gap, p)
         out.append(
             Readings(
                 bool(in_nest),
                 bool(on_food),
-                senders[:count].copy(),
-                ranges[:count].copy(),
+                senders[i, :count].copy(),
+                ranges[i, :count].copy(),
                 bearings,
-                nest[:count].copy(),
-                food[:count].copy(),
+                nest[i, :count].copy(),
+                food[i, :count].copy(),
             )
         )
     return out

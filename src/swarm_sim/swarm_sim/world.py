@@ -1,7 +1,7 @@
 """The world model as compiled pure functions, split the way the ROS 2 node graph splits it.
 
 (a) physics: ``start_poses``, ``wheel_gains``, ``move_robot``, ``resolve_collisions``, ``physics_step``;
-(b) message delivery and ground sensing: ``ground``, ``sense_robot``, ``bearing``, ``initial_broadcast``;
+(b) message delivery and ground sensing: ``ground``, ``sense_step``, ``bearing``, ``initial_broadcast``;
 (c) one robot's view from its own readings: ``estimate``, ``push_sample``, ``smoothed``, ``blackboard``;
 (d) objectives and descriptors: ``robot_objectives``, ``robot_descriptors``, ``trial_values``,
 ``mean_values``.
@@ -45,7 +45,7 @@ TWO_PI = 2.0 * math.pi
 # ---------------------------------------------------------------------------------------------------- (a)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def wrap_angle(a: float) -> float:
     """``a`` mapped into [-pi, pi) (one turn of correction at most on each side, as steps are small)."""
     if a >= math.pi:
@@ -102,7 +102,7 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     return gains
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def move_robot(
     x: float, y: float, heading: float, action: int, gain_left: float, gain_right: float, p: Params
 ) -> tuple:
@@ -122,7 +122,7 @@ def move_robot(
     return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + omega * p.step_dt)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _clamp_to_walls(x: np.ndarray, y: np.ndarray, p: Params) -> None:
     limit = p.arena_half - p.robot_radius
     for i in range(x.shape[0]):
@@ -130,7 +130,7 @@ def _clamp_to_walls(x: np.ndarray, y: np.ndarray, p: Params) -> None:
         y[i] = min(max(y[i], -limit), limit)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def resolve_collisions(
     x: np.ndarray, y: np.ndarray, x_before: np.ndarray, y_before: np.ndarray, p: Params
 ) -> None:
@@ -185,7 +185,7 @@ def resolve_collisions(
                             changed = True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def physics_step(
     x: np.ndarray,
     y: np.ndarray,
@@ -210,7 +210,7 @@ def physics_step(
 # ---------------------------------------------------------------------------------------------------- (b)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def ground(x: float, y: float, gap: float, p: Params) -> tuple:
     """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) in an arena with ``gap``."""
     d2 = x * x + y * y
@@ -218,53 +218,66 @@ def ground(x: float, y: float, gap: float, p: Params) -> tuple:
     return d2 <= p.nest_radius * p.nest_radius, d2 >= food_radius * food_radius
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def initial_broadcast(in_nest: bool, on_food: bool, p: Params) -> tuple:
     """What a robot broadcasts before it has any estimate: (nest, food), 0 for a region it is in, else
     the cap."""
     return (0.0 if in_nest else p.estimate_cap), (0.0 if on_food else p.estimate_cap)
 
 
-@numba.njit(cache=True)
-def sense_robot(
-    i: int,
+@numba.njit(cache=True, inline="always")
+def sense_step(
     x: np.ndarray,
     y: np.ndarray,
     broadcast_nest: np.ndarray,
     broadcast_food: np.ndarray,
-    drop_key: np.uint64,
+    drop_keys: np.ndarray,
     step: int,
     p: Params,
+    counts: np.ndarray,
     senders: np.ndarray,
     ranges: np.ndarray,
     nest_values: np.ndarray,
     food_values: np.ndarray,
-) -> int:
-    """Messages robot ``i`` receives at sensing step ``step``; returns how many.
+) -> None:
+    """The messages every robot receives at sensing step ``step``.
 
-    Robot ``j``'s message arrives when the centres are within ``message_range`` and draw ``step * n + j`` of
-    ``i``'s drop stream is below ``delivery_probability``. The first entries of ``senders``, ``ranges``,
-    ``nest_values`` and ``food_values`` receive the messages in sender order.
+    Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range`` and draw
+    ``step * n + j`` of ``i``'s drop stream (``drop_keys[i]``) is below ``delivery_probability``. Robot ``i``'s
+    messages fill the first ``counts[i]`` entries of row ``i`` of ``senders``, ``ranges``, ``nest_values`` and
+    ``food_values`` (n x n), in sender order. Each pair's range is computed once for both directions (the
+    same bits either way: ``(-d) * (-d) == d * d``).
     """
     n = x.shape[0]
     range2 = p.message_range * p.message_range
-    count = 0
-    for j in range(n):
-        if j == i:
-            continue
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
-        d2 = dx * dx + dy * dy
-        if d2 <= range2 and uniform(drop_key, step * n + j) < p.delivery_probability:
-            senders[count] = j
-            ranges[count] = math.sqrt(d2)
-            nest_values[count] = broadcast_nest[j]
-            food_values[count] = broadcast_food[j]
-            count += 1
-    return count
+    for i in range(n):
+        counts[i] = 0
+    # Row i receives from k < i while k's row is scanned (k increasing), then from j > i: sender order.
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx = x[j] - x[i]
+            dy = y[j] - y[i]
+            d2 = dx * dx + dy * dy
+            if d2 > range2:
+                continue
+            d = math.sqrt(d2)
+            if uniform(drop_keys[i], step * n + j) < p.delivery_probability:
+                c = counts[i]
+                senders[i, c] = j
+                ranges[i, c] = d
+                nest_values[i, c] = broadcast_nest[j]
+                food_values[i, c] = broadcast_food[j]
+                counts[i] = c + 1
+            if uniform(drop_keys[j], step * n + i) < p.delivery_probability:
+                c = counts[j]
+                senders[j, c] = i
+                ranges[j, c] = d
+                nest_values[j, c] = broadcast_nest[i]
+                food_values[j, c] = broadcast_food[i]
+                counts[j] = c + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) -> float:
     """Bearing of (x_other, y_other) from a robot at (x, y) facing ``heading``, in [-pi, pi)."""
     return wrap_angle(math.atan2(y_other - y, x_other - x) - heading)
@@ -273,7 +286,7 @@ def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) 
 # ---------------------------------------------------------------------------------------------------- (c)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def estimate(
     in_nest: bool,
     on_food: bool,
@@ -289,27 +302,19 @@ def estimate(
     readings (-1 for none) of the message that gave the minimum nest / food estimate (first on ties; none
     inside the region or when the estimate is capped) and of the nearest sender (first on ties).
     """
-    nest = 0.0
+    nest = 0.0 if in_nest else p.estimate_cap
+    food = 0.0 if on_food else p.estimate_cap
     nest_source = -1
-    if not in_nest:
-        nest = p.estimate_cap
-        for k in range(count):
-            candidate = nest_values[k] + ranges[k]
-            if candidate < nest:
-                nest = candidate
-                nest_source = k
-    food = 0.0
     food_source = -1
-    if not on_food:
-        food = p.estimate_cap
-        for k in range(count):
-            candidate = food_values[k] + ranges[k]
-            if candidate < food:
-                food = candidate
-                food_source = k
-    total = 0.0
     nearest = -1
+    total = 0.0
     for k in range(count):
+        if not in_nest and nest_values[k] + ranges[k] < nest:
+            nest = nest_values[k] + ranges[k]
+            nest_source = k
+        if not on_food and food_values[k] + ranges[k] < food:
+            food = food_values[k] + ranges[k]
+            food_source = k
         q = p.density_range / ranges[k]
         total += q * q
         if nearest < 0 or ranges[k] < ranges[nearest]:
@@ -317,7 +322,7 @@ def estimate(
     return nest, food, total / p.density_divisor, nest_source, food_source, nearest
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def push_sample(window: np.ndarray, count: int, nest: float, food: float, density: float) -> int:
     """Store one raw sample (nest, food, density) in a ring ``window`` (w x 3) holding ``count`` samples so
     far; returns the new count."""
@@ -328,7 +333,7 @@ def push_sample(window: np.ndarray, count: int, nest: float, food: float, densit
     return count + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def smoothed(window: np.ndarray, count: int) -> tuple:
     """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first."""
     w = window.shape[0]
@@ -344,19 +349,19 @@ def smoothed(window: np.ndarray, count: int) -> tuple:
     return nest / m, food / m, density / m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def is_left(b: float) -> bool:
     """A bearing in [0, pi) is on the left (NaN, meaning no bearing, is on neither side)."""
     return 0.0 <= b < math.pi
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def is_right(b: float) -> bool:
     """A bearing in (-pi, 0) is on the right."""
     return -math.pi < b < 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def blackboard(
     in_nest: bool,
     on_food: bool,

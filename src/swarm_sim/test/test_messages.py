@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from bt_controller.draws import uniform
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.robot import Readings, RobotView, sense_swarm
@@ -15,44 +16,83 @@ P = DEFAULT.params()
 
 
 def _buffers(n):
-    return np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n)
+    return (
+        np.zeros(n, np.int64),
+        np.zeros((n, n), np.int64),
+        np.zeros((n, n)),
+        np.zeros((n, n)),
+        np.zeros((n, n)),
+    )
+
+
+def _range(x, y, i, j):
+    """The range as the simulator computes it (products, not ``**``, which numpy rounds differently)."""
+    dx, dy = x[j] - x[i], y[j] - y[i]
+    return math.sqrt(dx * dx + dy * dy)
+
+
+def _keys(seed, n):
+    return np.array([stream_key(seed, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
 
 
 def test_delivery_rate_within_range_is_095_and_nothing_comes_from_beyond():
-    # Robot 0 at the centre; the others at ranges straddling 1 m.
+    # Robot 0 at the centre; the others at ranges straddling 1 m (so they are far from each other too).
     ranges = np.array([0.0, 200.0, 600.0, 999.0, 1000.0, 1000.001, 1200.0, 3000.0, 170.0])
     angles = np.linspace(0.0, 2 * np.pi, 9, endpoint=False)
     x, y = ranges * np.cos(angles), ranges * np.sin(angles)
-    heard = np.zeros(9, np.int64)
+    heard = np.zeros((9, 9), np.int64)
     nest, food = np.zeros(9), np.zeros(9)
-    senders, r, nv, fv = _buffers(9)
+    counts, senders, r, nv, fv = _buffers(9)
+    keys = _keys(3, 9)
+    distance = np.array([[_range(x, y, i, j) for j in range(9)] for i in range(9)])
     steps = 4000
     for step in range(steps):
-        count = world.sense_robot(
-            0, x, y, nest, food, stream_key(3, 0, 0, DROPS), step, P, senders, r, nv, fv
-        )
-        heard[senders[:count]] += 1
-        assert (r[:count] <= 1000.0).all()
-    assert heard[0] == 0 and heard[5] == heard[6] == heard[7] == 0
-    within = heard[[1, 2, 3, 4, 8]]
-    n = within.size * steps
-    rate = within.sum() / n
+        world.sense_step(x, y, nest, food, keys, step, P, counts, senders, r, nv, fv)
+        for i in range(9):
+            heard[i, senders[i, : counts[i]]] += 1
+            np.testing.assert_array_equal(r[i, : counts[i]], distance[i, senders[i, : counts[i]]])
+    within = (distance <= 1000.0) & ~np.eye(9, dtype=bool)
+    assert within.sum() > 20 and (~within).sum() > 20
+    assert (heard[~within] == 0).all()  # nothing from beyond 1 m, nothing from oneself
+    assert heard[0, 4] > 0  # exactly 1 m is within
+    n = within.sum() * steps
+    rate = heard[within].sum() / n
     assert abs(rate - 0.95) < 4 * math.sqrt(0.95 * 0.05 / n)  # 4 sigma
-    for count in within:  # each pair alone, too
+    for count in heard[within]:  # each ordered pair alone, too
         assert abs(count / steps - 0.95) < 5 * math.sqrt(0.95 * 0.05 / steps)
 
 
 def test_drops_are_independent_per_ordered_pair():
     x, y = np.array([0.0, 500.0]), np.array([0.0, 0.0])
     z = np.zeros(2)
-    a, b = [], []
+    counts, senders, r, nv, fv = _buffers(2)
+    keys = _keys(9, 2)
+    both_dropped = 0
     for step in range(2000):
-        for receiver, out in ((0, a), (1, b)):
-            key = stream_key(9, 1, receiver, DROPS)
-            out.append(world.sense_robot(receiver, x, y, z, z, key, step, P, *_buffers(2)))
-    a, b = np.array(a), np.array(b)
-    both_dropped = ((a == 0) & (b == 0)).mean()
-    assert both_dropped < 0.01  # independent: 0.0025 expected; identical streams would give 0.05
+        world.sense_step(x, y, z, z, keys, step, P, counts, senders, r, nv, fv)
+        both_dropped += counts[0] == 0 and counts[1] == 0
+    assert both_dropped / 2000 < 0.01  # independent: 0.0025 expected; one shared draw would give 0.05
+
+
+def test_sense_step_matches_a_plain_per_pair_computation():
+    rng = np.random.default_rng(4)
+    n = 9
+    counts, senders, r, nv, fv = _buffers(n)
+    keys = _keys(17, n)
+    for step in range(200):
+        x, y = rng.uniform(-900, 900, n), rng.uniform(-900, 900, n)
+        bn, bf = rng.uniform(0, 5000, n), rng.uniform(0, 5000, n)
+        world.sense_step(x, y, bn, bf, keys, step, P, counts, senders, r, nv, fv)
+        for i in range(n):
+            expected = [
+                j
+                for j in range(n)
+                if j != i and _range(x, y, i, j) <= 1000.0 and uniform(keys[i], step * n + j) < 0.95
+            ]
+            assert senders[i, : counts[i]].tolist() == expected
+            got = slice(0, counts[i])
+            assert (r[i, got] == [_range(x, y, i, j) for j in expected]).all()
+            assert (nv[i, got] == bn[expected]).all() and (fv[i, got] == bf[expected]).all()
 
 
 def test_ground_sensor():
