@@ -10,11 +10,14 @@ from the robots' smoothed values at the first tick and after the last step, as t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from bt_controller.controller import FootbotController, Schedule
+from bt_controller.perception import PerceptionParams
+from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
@@ -152,6 +155,42 @@ class LockstepTrial:
             self.setup.gap,
             self.p,
         )
+
+
+def run_with_controllers(
+    tree: Node,
+    seed: int,
+    trial: int,
+    config: Config = DEFAULT,
+    on_step: Callable[[LockstepTrial], None] | None = None,
+) -> TrialRecord:
+    """Run a trial in-process exactly as the node graph runs it: the lockstep world and one
+    ``FootbotController`` per robot, exchanging readings and answers. ``on_step(trial)`` is called after
+    each step's readings are out (for example to collect the poses a simulator node would publish)."""
+    world = LockstepTrial(seed, trial, config)
+    p = world.p
+    schedule = Schedule(p.settle_steps, p.steps_per_tick, p.ticks)
+    perception = PerceptionParams(p.window, p.estimate_cap, p.density_range, p.density_divisor)
+    controllers = []
+    for key in world.setup.tree_keys:
+        controller = FootbotController()
+        controller.load(tree)
+        controller.start_trial(int(key), schedule, perception)
+        controllers.append(controller)
+    counts = np.zeros((p.n_robots, 8), dtype=np.int64)
+    while not world.done:
+        if on_step is not None:
+            on_step(world)
+        answers = []
+        for i, (controller, readings) in enumerate(zip(controllers, world.readings(), strict=True)):
+            outcome = controller.on_step(world.step, readings)
+            if outcome.tick is not None:
+                counts[i, 0] += outcome.tick.condition_ticks
+                if outcome.tick.started >= 0:
+                    counts[i, 1 + outcome.tick.started] += 1
+            answers.append(RobotAnswer(outcome.action, outcome.broadcast, outcome.smoothed))
+        world.advance(answers)
+    return world.record(counts)
 
 
 def warm_up(config: Config = DEFAULT) -> None:

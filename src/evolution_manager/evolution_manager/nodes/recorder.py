@@ -22,7 +22,7 @@ import rclpy
 from geometry_msgs.msg import PoseArray
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
@@ -38,9 +38,6 @@ from swarm_msgs.msg import (
 )
 
 RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
 
 
 def msgtype_name(msg_class: type) -> str:
@@ -83,8 +80,7 @@ class GraphRecorder:
         self.last_stamp = 0
         self._lock = threading.Lock()
         for topic, msg_class in self.topics:
-            qos = LATCHED if msg_class is TrialStart else RELIABLE
-            node.create_subscription(msg_class, topic, self._writer(topic, msg_class), qos)
+            node.create_subscription(msg_class, topic, self._writer(topic, msg_class), RELIABLE)
 
     def _writer(self, topic: str, msg_class: type):
         msgtype = msgtype_name(msg_class)

@@ -9,6 +9,7 @@ storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` f
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import tempfile
 import time
@@ -27,13 +28,11 @@ from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
+from evolution_manager.replay import RESULT_TOPIC
 from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
 from swarm_sim.config import DEFAULT
 from swarm_sim.trial import VALUE_NAMES, TrialRecord
-
-RESULT_TOPIC = "/trial_result"
-"""Topic of the bag's last message: the trial's tree, seed and values (swarm_msgs/EvaluationResult)."""
 
 
 class TrialFailedError(RuntimeError):
@@ -83,6 +82,12 @@ class TrialRunner:
                 raise TrialFailedError(f"timed out waiting for {what}")
             self.executor.spin_once(timeout_sec=0.05)
 
+    def spin_for(self, seconds: float) -> None:
+        """Spin for ``seconds``."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+
     def call(self, client: rclpy.client.Client, request: object, what: str) -> object:
         self.spin_until(client.service_is_ready, f"the {client.srv_name} service")
         future = client.call_async(request)
@@ -109,27 +114,55 @@ class TrialRunner:
         )
 
 
-def run_recorded_trial(
-    tree_text: str, seed: int, trial: int, bag_path: Path, *, robots: int = 9, timeout: float = 60.0
-) -> TrialRecord:
-    """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
-    ``bag_path``; return its record."""
-    with (
-        reserved_domain() as domain,
-        tempfile.TemporaryDirectory(prefix="swarm-trial-logs-") as logs,
-        Graph(domain, log_dir=Path(logs)) as graph,
-    ):
-        start_trial_graph(graph, robots)
-        context = rclpy.Context()
-        rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
-        runner = TrialRunner(context, graph, robots, timeout)
+class TrialGraph:
+    """A running trial graph (simulator and one controller process per robot, in a ROS domain of their own)
+    that runs any number of trials, each optionally recorded to a bag of its own. A context manager."""
+
+    def __init__(self, *, robots: int = 9, timeout: float = 60.0) -> None:
+        self.robots = robots
+        self.timeout = timeout
+        self._stack = contextlib.ExitStack()
+        self.runner: TrialRunner | None = None
+        self.graph: Graph | None = None
+
+    def __enter__(self) -> TrialGraph:
+        stack = self._stack.__enter__()
+        try:
+            domain = stack.enter_context(reserved_domain())
+            logs = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="swarm-trial-logs-")))
+            self.graph = stack.enter_context(Graph(domain, log_dir=logs))
+            start_trial_graph(self.graph, self.robots)
+            context = rclpy.Context()
+            rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
+            stack.callback(rclpy.try_shutdown, context=context)
+            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout)
+            stack.callback(self.runner.close)
+        except BaseException:
+            stack.close()
+            raise
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self._stack.__exit__(*exc_info)
+
+    def run(self, tree_text: str, seed: int, trial: int, bag_path: Path | None = None) -> TrialRecord:
+        """Run trial ``trial`` of ``seed`` with ``tree_text`` on every robot; record it to ``bag_path`` when
+        given (a new directory); return its record."""
+        runner = self.runner
+        if runner is None:
+            raise RuntimeError("the trial graph is not started: use it as a context manager")
+        runner.load_tree(tree_text)
+        if bag_path is None:
+            return runner.run_trial(seed, trial)
+        node = Node("trial_recorder", context=runner.node.context)
+        runner.executor.add_node(node)
         try:
             with BagRecorder(bag_path) as bag:
-                recorder = GraphRecorder(runner.node, bag, trial_topics(robots))
-                runner.spin_until(lambda: recorder.all_publishers_seen(runner.node), "the graph's publishers")
-                runner.load_tree(tree_text)
+                recorder = GraphRecorder(node, bag, trial_topics(self.robots))
+                runner.spin_until(lambda: recorder.all_publishers_seen(node), "the graph's publishers")
+                runner.spin_for(0.5)  # let the publishers match the new subscriptions too
                 record = runner.run_trial(seed, trial)
-                expected = expected_messages(robots)
+                expected = expected_messages(self.robots)
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
                     "the last messages",
@@ -138,8 +171,17 @@ def run_recorded_trial(
                 write_result(bag, tree_text, seed, record, recorder.last_stamp + 1)
             return record
         finally:
-            runner.close()
-            rclpy.try_shutdown(context=context)
+            runner.executor.remove_node(node)
+            node.destroy_node()
+
+
+def run_recorded_trial(
+    tree_text: str, seed: int, trial: int, bag_path: Path, *, robots: int = 9, timeout: float = 60.0
+) -> TrialRecord:
+    """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
+    ``bag_path``; return its record."""
+    with TrialGraph(robots=robots, timeout=timeout) as graph:
+        return graph.run(tree_text, seed, trial, bag_path)
 
 
 def write_result(bag: BagRecorder, tree_text: str, seed: int, record: TrialRecord, stamp_ns: int) -> None:

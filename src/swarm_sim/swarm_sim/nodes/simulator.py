@@ -9,7 +9,7 @@ Parameters:
 
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step.
-    /trial_start (swarm_msgs/TrialStart, transient local): each trial's seed, index and the robots' stream
+    /trial_start (swarm_msgs/TrialStart): each trial's seed, index and the robots' stream
         keys.
     /footbot_<i>/ground (swarm_msgs/GroundSensor) and /footbot_<i>/range_and_bearing
         (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
@@ -42,7 +42,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
@@ -62,9 +62,6 @@ from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, war
 from swarm_sim.trial import VALUE_NAMES
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
 
 
 class TrialAbandonedError(RuntimeError):
@@ -109,7 +106,7 @@ class SimulatorNode(Node):
         self._inbox = _Inbox()
         listeners = ReentrantCallbackGroup()
         self._clock = self.create_publisher(Clock, "/clock", RELIABLE)
-        self._trial_start = self.create_publisher(TrialStart, "/trial_start", LATCHED)
+        self._trial_start = self.create_publisher(TrialStart, "/trial_start", RELIABLE)
         self._state = self.create_publisher(SwarmState, "/swarm_state", RELIABLE)
         self._poses = self.create_publisher(PoseArray, "/poses", RELIABLE)
         self._ground, self._readings, self._start_clients = [], [], []
