@@ -1,0 +1,70 @@
+"""A small experiment end to end (real swarm_sim evaluator, parallel processes) and its report."""
+
+from __future__ import annotations
+
+import json
+import re
+
+from evolution_manager.experiment import experiment, plan
+from evolution_manager.report import report
+from evolution_manager.statistics import compare, holm
+
+FIGURES = [
+    "fig4_best_fitness.png",
+    "fig5_coverage.png",
+    "fig6_qd_score.png",
+    "fig8_histograms.png",
+    *(f"fig7_grid_{o}.png" for o in ("density", "nest", "food")),
+    *(f"progress_{o}.png" for o in ("density", "nest", "food")),
+]
+
+
+def test_the_plan_covers_every_algorithm_objective_and_run_with_distinct_seeds():
+    planned = plan(runs=3, evaluations=100, seed=4)
+    labels = sorted({config.label for config, _ in planned})
+    assert labels == sorted(
+        ["GP_density", "GP_nest", "GP_food", "GP_fnd", "QD_density", "QD_nest", "QD_food"]
+    )
+    assert len(planned) == 7 * 3
+    assert len({config.seed for config, _ in planned}) == len(planned)
+    assert all(config.evaluations == (300 if config.label == "GP_fnd" else 100) for config, _ in planned)
+    assert plan(runs=3, evaluations=100, seed=4) == planned
+
+
+def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tmp_path, capsys):
+    out = tmp_path / "experiment"
+    args = ["--runs", "2", "--evaluations", "150", "--out", str(out), "--processes", "2", "--no-progress"]
+    assert experiment(args) == 0
+    summaries = sorted(out.glob("runs/*/run*/summary.json"))
+    assert len(summaries) == 14
+    assert all(json.loads(p.read_text())["finished"] for p in summaries)
+    text = (out / "report.md").read_text()
+    for name in FIGURES:
+        assert (out / "figures" / name).stat().st_size > 1000
+        assert f"(figures/{name})" in text
+    table = [line for line in text.splitlines() if re.match(r"\| (best fitness|coverage|QD score) \|", line)]
+    assert len(table) == 3 * 3 * 3  # metrics x objectives x pairs
+    assert "Mann-Whitney U" in text  # two runs cannot be shown normal
+    # the same command continues (nothing to do) and report rebuilds the same report
+    before = text
+    assert experiment(args) == 0
+    assert report([str(out)]) == 0
+    assert (out / "report.md").read_text() == before
+    # another experiment's options are refused, nothing is lost
+    assert experiment(["--runs", "3", "--evaluations", "150", "--out", str(out), "--no-progress"]) == 2
+    assert "other options" in capsys.readouterr().err
+    assert (out / "report.md").read_text() == before
+
+
+def test_tests_follow_the_papers_rule_and_holm_corrects():
+    normal_a = [0.50, 0.52, 0.49, 0.51, 0.505, 0.515, 0.495, 0.50, 0.51, 0.49]
+    normal_b = [x + 0.05 for x in normal_a]
+    row = compare("best fitness", "food", "GP_food", normal_a, "QD_food", normal_b)
+    assert row.test.startswith("t-test") and row.p_value < 0.001 and row.cohens_d < -2
+    skewed = [0.1] * 8 + [0.9, 0.95]
+    row = compare("coverage", "food", "GP_food", skewed, "QD_food", normal_b)
+    assert row.test == "Mann-Whitney U" and row.shapiro_first < 0.05
+    assert compare("x", "food", "a", [1.0, 1.0], "b", [1.0, 1.0]).p_value == 1.0
+    rows = holm([row, row, row])
+    assert [r.p_holm for r in rows] == [min(1.0, 3 * row.p_value)] * 3
+    assert 0.0 <= row.vargha_delaney_a <= 1.0
