@@ -7,6 +7,7 @@ each averaged over robots and trials and each in [0, 1]. A result depends only o
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -71,6 +72,12 @@ def from_values(values: Sequence[float]) -> EvaluationResult:
 
 def check_request(request: object, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
     """The parsed tree of a valid request; raise ValueError saying what is wrong otherwise."""
+    _check_fields(request)
+    assert isinstance(request, EvaluationRequest)
+    return _parse(request.tree, max_nodes, max_depth)
+
+
+def _check_fields(request: object) -> None:
     if not isinstance(request, EvaluationRequest):
         raise ValueError(f"expected an EvaluationRequest, got {type(request).__name__}")
     if not isinstance(request.tree, str):
@@ -79,10 +86,20 @@ def check_request(request: object, max_nodes: int = MAX_NODES, max_depth: int = 
     trials = request.trials
     if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or not 1 <= trials <= MAX_TRIALS:
         raise ValueError(f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}")
+
+
+def _parse(text: str, max_nodes: int, max_depth: int) -> Node:
     try:
-        return parse(request.tree, max_nodes=max_nodes, max_depth=max_depth)
+        return parse(text, max_nodes=max_nodes, max_depth=max_depth)
     except TreeError as error:
         raise ValueError(f"bad tree: {error}") from None
+
+
+@functools.lru_cache(maxsize=4096)
+def _flat_tree(text: str, max_nodes: int, max_depth: int) -> FlatTree:
+    """The flat tree of a tree text, remembered: evolution offers the same tree again and again. (Errors are
+    not cached; a FlatTree's arrays are only read.)"""
+    return flatten(_parse(text, max_nodes, max_depth))
 
 
 @dataclass(frozen=True)
@@ -137,8 +154,8 @@ class BatchEvaluator:
         jobs: list[_Job] = []
         for index, request in enumerate(requests):
             try:
-                tree = check_request(request, self.max_nodes, self.max_depth)
-                jobs.append(_Job(index, flatten(tree)))
+                _check_fields(request)
+                jobs.append(_Job(index, _flat_tree(request.tree, self.max_nodes, self.max_depth)))
             except (ValueError, TreeError) as error:
                 out[index] = (failed(str(error)), [])
         if jobs:
