@@ -26,6 +26,7 @@ drop_stale_cache(
     (
         "bt_controller.compiled",
         "bt_controller.draws",
+        "bt_controller.perception",
         "bt_controller.vocabulary",
         "swarm_sim.config",
         "swarm_sim.streams",
@@ -127,7 +128,18 @@ def simulate_trial(
             world.physics_step(x, y, heading, actions, gains, p, x_before, y_before)
         # Sense: every robot hears the estimates broadcast from the previous step.
         world.sense_step(
-            x, y, broadcast_nest, broadcast_food, drop_keys, step, p, counts_in, senders, ranges, nest_values, food_values
+            x,
+            y,
+            broadcast_nest,
+            broadcast_food,
+            drop_keys,
+            step,
+            p,
+            counts_in,
+            senders,
+            ranges,
+            nest_values,
+            food_values,
         )
         for i in range(n):
             in_nest, on_food = world.ground(x[i], y[i], gap, p)

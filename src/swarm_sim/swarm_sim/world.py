@@ -2,7 +2,8 @@
 
 (a) physics: ``start_poses``, ``wheel_gains``, ``move_robot``, ``resolve_collisions``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``sense_step``, ``bearing``, ``initial_broadcast``;
-(c) one robot's view from its own readings: ``estimate``, ``push_sample``, ``smoothed``, ``blackboard``;
+(c) one robot's view from its own readings: ``estimate``, ``push_sample``, ``smoothed``, ``blackboard``
+(from ``bt_controller.perception``, inlined);
 (d) objectives and descriptors: ``robot_objectives``, ``robot_descriptors``, ``trial_values``,
 ``mean_values``.
 
@@ -21,12 +22,16 @@ import math
 import numba
 import numpy as np
 
+from bt_controller import perception
 from bt_controller.draws import uniform
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
 
-drop_stale_cache(__file__, ("bt_controller.draws", "bt_controller.vocabulary", "swarm_sim.config"))
+drop_stale_cache(
+    __file__,
+    ("bt_controller.draws", "bt_controller.perception", "bt_controller.vocabulary", "swarm_sim.config"),
+)
 
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 """(left, right) wheel settings of each action, in units of the nominal wheel speed."""
@@ -243,9 +248,9 @@ def sense_step(
     """The messages every robot receives at sensing step ``step``.
 
     Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range`` and draw
-    ``step * n + j`` of ``i``'s drop stream (``drop_keys[i]``) is below ``delivery_probability``. Robot ``i``'s
-    messages fill the first ``counts[i]`` entries of row ``i`` of ``senders``, ``ranges``, ``nest_values`` and
-    ``food_values`` (n x n), in sender order. Each pair's range is computed once for both directions (the
+    ``step * n + j`` of ``i``'s drop stream (``drop_keys[i]``) is below ``delivery_probability``. Robot
+    ``i``'s messages fill the first ``counts[i]`` entries of row ``i`` of ``senders``, ``ranges``,
+    ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range is computed once for both directions (the
     same bits either way: ``(-d) * (-d) == d * d``).
     """
     n = x.shape[0]
@@ -284,105 +289,18 @@ def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) 
 
 
 # ---------------------------------------------------------------------------------------------------- (c)
+# A robot's perception is robot-side software, defined once in ``bt_controller.perception`` (what the
+# controller node runs, and the reference road through its ``RobotView``). The batch kernels inline the very
+# same source: numba does not inline calls between separately compiled functions, and inlining these saves
+# ~15 %. These wrappers are compiled only where a kernel inlines them (or on a first call from Python); no
+# disk cache, as their source file is not this one.
 
-
-@numba.njit(cache=True, inline="always")
-def estimate(
-    in_nest: bool,
-    on_food: bool,
-    count: int,
-    ranges: np.ndarray,
-    nest_values: np.ndarray,
-    food_values: np.ndarray,
-    p: Params,
-) -> tuple:
-    """A robot's raw estimates from one step's readings.
-
-    Returns ``(nest, food, density, nest_source, food_source, nearest)``: the sources are positions in the
-    readings (-1 for none) of the message that gave the minimum nest / food estimate (first on ties; none
-    inside the region or when the estimate is capped) and of the nearest sender (first on ties).
-    """
-    nest = 0.0 if in_nest else p.estimate_cap
-    food = 0.0 if on_food else p.estimate_cap
-    nest_source = -1
-    food_source = -1
-    nearest = -1
-    total = 0.0
-    for k in range(count):
-        if not in_nest and nest_values[k] + ranges[k] < nest:
-            nest = nest_values[k] + ranges[k]
-            nest_source = k
-        if not on_food and food_values[k] + ranges[k] < food:
-            food = food_values[k] + ranges[k]
-            food_source = k
-        q = p.density_range / ranges[k]
-        total += q * q
-        if nearest < 0 or ranges[k] < ranges[nearest]:
-            nearest = k
-    return nest, food, total / p.density_divisor, nest_source, food_source, nearest
-
-
-@numba.njit(cache=True, inline="always")
-def push_sample(window: np.ndarray, count: int, nest: float, food: float, density: float) -> int:
-    """Store one raw sample (nest, food, density) in a ring ``window`` (w x 3) holding ``count`` samples so
-    far; returns the new count."""
-    slot = count % window.shape[0]
-    window[slot, 0] = nest
-    window[slot, 1] = food
-    window[slot, 2] = density
-    return count + 1
-
-
-@numba.njit(cache=True, inline="always")
-def smoothed(window: np.ndarray, count: int) -> tuple:
-    """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first."""
-    w = window.shape[0]
-    m = min(count, w)
-    nest = 0.0
-    food = 0.0
-    density = 0.0
-    for k in range(count - m, count):
-        slot = k % w
-        nest += window[slot, 0]
-        food += window[slot, 1]
-        density += window[slot, 2]
-    return nest / m, food / m, density / m
-
-
-@numba.njit(cache=True, inline="always")
-def is_left(b: float) -> bool:
-    """A bearing in [0, pi) is on the left (NaN, meaning no bearing, is on neither side)."""
-    return 0.0 <= b < math.pi
-
-
-@numba.njit(cache=True, inline="always")
-def is_right(b: float) -> bool:
-    """A bearing in (-pi, 0) is on the right."""
-    return -math.pi < b < 0.0
-
-
-@numba.njit(cache=True, inline="always")
-def blackboard(
-    in_nest: bool,
-    on_food: bool,
-    nest_bearing: float,
-    food_bearing: float,
-    nearest_bearing: float,
-    out: np.ndarray,
-) -> None:
-    """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest step.
-
-    The bearings are those of the sources ``estimate`` returned (NaN for none): a side is true only when
-    the source exists and lies on it.
-    """
-    out[0] = on_food
-    out[1] = in_nest
-    out[2] = is_left(food_bearing)
-    out[3] = is_right(food_bearing)
-    out[4] = is_left(nest_bearing)
-    out[5] = is_right(nest_bearing)
-    out[6] = is_left(nearest_bearing)
-    out[7] = is_right(nearest_bearing)
+estimate = numba.njit(inline="always")(perception.estimate.py_func)
+push_sample = numba.njit(inline="always")(perception.push_sample.py_func)
+smoothed = numba.njit(inline="always")(perception.smoothed.py_func)
+blackboard = numba.njit(inline="always")(perception.blackboard.py_func)
+is_left = perception.is_left
+is_right = perception.is_right
 
 
 # ---------------------------------------------------------------------------------------------------- (d)
