@@ -14,12 +14,16 @@ import math
 import numba
 import numpy as np
 
-from bt_controller.compiled import N_COUNTS, reset_memory, tick
-from bt_controller.vocabulary import RUNNING, STOP
+from bt_controller.compiled import N_COUNTS, OP_CONDITION, reset_memory, tick
+from bt_controller.vocabulary import CONDITION_INDEX, RUNNING, STOP
 from swarm_sim import world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
 from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
+
+FOOD_LEFT, FOOD_RIGHT = CONDITION_INDEX["food_left"], CONDITION_INDEX["food_right"]
+NEST_LEFT, NEST_RIGHT = CONDITION_INDEX["nest_left"], CONDITION_INDEX["nest_right"]
+ROBOT_LEFT, ROBOT_RIGHT = CONDITION_INDEX["robot_left"], CONDITION_INDEX["robot_right"]
 
 drop_stale_cache(
     __file__,
@@ -36,10 +40,28 @@ drop_stale_cache(
 
 
 @numba.njit(cache=True, inline="always")
-def _source_bearing(i: int, source: int, x: np.ndarray, y: np.ndarray, heading: np.ndarray) -> float:
-    if source < 0:
+def _source_bearing(
+    needed: bool, i: int, source: int, x: np.ndarray, y: np.ndarray, heading: np.ndarray
+) -> float:
+    # A bearing the tree never reads is not computed (NaN: neither side); the ticks are the same.
+    if source < 0 or not needed:
         return math.nan
     return world.bearing(x[i], y[i], heading[i], x[source], y[source])
+
+
+@numba.njit(cache=True)
+def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
+    """Which of the blackboard's side pairs the tree reads: (nest, food, robot), from its condition nodes."""
+    read = np.zeros(3, dtype=np.bool_)
+    for k in range(op.shape[0]):
+        if op[k] == OP_CONDITION:
+            if arg[k] == FOOD_LEFT or arg[k] == FOOD_RIGHT:
+                read[1] = True
+            elif arg[k] == NEST_LEFT or arg[k] == NEST_RIGHT:
+                read[0] = True
+            elif arg[k] == ROBOT_LEFT or arg[k] == ROBOT_RIGHT:
+                read[2] = True
+    return read
 
 
 @numba.njit(cache=True)
@@ -93,6 +115,7 @@ def simulate_trial(
         reset_memory(op, memory[i])
     counts = np.zeros((n, N_COUNTS), dtype=np.int64)
     board = np.zeros(8, dtype=np.bool_)
+    sides = _sides_read(op, arg)
     actions = np.full(n, STOP, dtype=np.int64)
     initial = np.empty((n, 3))
     final = np.empty((n, 3))
@@ -107,9 +130,9 @@ def simulate_trial(
                     world.blackboard(
                         ground_now[i, 0],
                         ground_now[i, 1],
-                        _source_bearing(i, sources[i, 0], x, y, heading),
-                        _source_bearing(i, sources[i, 1], x, y, heading),
-                        _source_bearing(i, sources[i, 2], x, y, heading),
+                        _source_bearing(sides[0], i, sources[i, 0], x, y, heading),
+                        _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
+                        _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
                         board,
                     )
                     status, action = tick(
