@@ -112,6 +112,8 @@ class Run:
             raise RunDirectoryError(
                 f"{root} already holds a run: continue it with --resume, or choose another --out"
             )
+        if directory.root.exists() and any(directory.root.iterdir()):
+            raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
         directory.root.mkdir(parents=True, exist_ok=True)
         run = cls(config, directory, evaluator)
         write_json(directory.config, config.to_json())

@@ -47,3 +47,11 @@ BAD = ["", "sel(stop)", "seq(stop, stop", "seq3(stop, stop)", "fly", "sel(a, b)"
 def test_bad_text_is_refused_with_a_reason(pset, bad):
     with pytest.raises(TreeTextError, match="not a behaviour tree"):
         tree_from_text(bad, pset)
+
+
+def test_the_size_limit_of_trees_is_the_evaluators():
+    from bt_controller.tree import MAX_DEPTH, MAX_NODES
+    from evolution_manager.parameters import GPParameters, QDParameters
+
+    assert GPParameters().max_nodes == QDParameters().max_nodes == MAX_NODES
+    assert GPParameters().max_height <= MAX_DEPTH

@@ -114,6 +114,11 @@ def test_a_run_never_overwrites_another_and_resume_needs_a_run(tmp_path):
     assert _files(tmp_path / "r", ["config.json", "checkpoint.json"]) == before
     with pytest.raises(RunDirectoryError, match="no run to resume"):
         Run.resume(tmp_path / "empty", ToyEvaluator())
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "progress.csv").write_text("someone else's file\n")
+    with pytest.raises(RunDirectoryError, match="not empty"):
+        Run.start(config, tmp_path / "other", ToyEvaluator())
+    assert (tmp_path / "other" / "progress.csv").read_text() == "someone else's file\n"
 
 
 def test_a_damaged_checkpoint_is_refused_with_its_name(tmp_path):
