@@ -26,9 +26,12 @@ def wheel_command(typestore, step):
         robot=step % 9,
         step=step,
         left=1.0,
-        right=-1.0,
+        right=0.0,
         nest_estimate=0.5 * step,
         food_estimate=5000.0,
+        smoothed_nest=0.25 * step,
+        smoothed_food=5000.0,
+        smoothed_density=0.5,
     )
 
 
