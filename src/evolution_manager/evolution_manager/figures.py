@@ -51,19 +51,22 @@ def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
 
 
 def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path:
-    """Fitness of every tree in each repertoire (fig. 8): one row per objective, one panel per algorithm,
-    each titled with the repertoire's size. ``rows[objective][algorithm label]``."""
+    """Fitness of every tree in each repertoire (fig. 8): one row per objective, one panel per algorithm
+    (in the order given), each titled with the repertoire's size. ``rows[objective][algorithm label]``."""
     objectives = list(rows)
-    labels = sorted({label for row in rows.values() for label in row})
+    columns = max(len(row) for row in rows.values())
     figure, axes = plt.subplots(
-        len(objectives), len(labels), figsize=(3.6 * len(labels), 2.6 * len(objectives)), squeeze=False
+        len(objectives), columns, figsize=(3.6 * columns, 2.6 * len(objectives)), squeeze=False
     )
     bins = np.linspace(0.0, 1.0, 41)
     for i, objective in enumerate(objectives):
-        for j, label in enumerate(labels):
+        for j in range(columns):
             axis = axes[i][j]
-            repertoire = rows[objective].get(label)
-            values = [e.value for e in repertoire.entries()] if repertoire is not None else []
+            if j >= len(rows[objective]):
+                axis.axis("off")
+                continue
+            label, repertoire = list(rows[objective].items())[j]
+            values = [e.value for e in repertoire.entries()]
             axis.hist(values, bins=bins, color="tab:blue")
             axis.set_title(f"{objective}: {label}, {len(values)} solutions", fontsize=9)
             axis.set_xlim(0.0, 1.0)

@@ -152,14 +152,14 @@ def build_report(root: Path) -> Path:
     first = {}
     for run in runs:
         first.setdefault((run.algorithm, run.objective), run)
-    histogram_rows = {
-        o: {
-            run.label(o): _repertoire(run, o)
-            for (algorithm, objective), run in sorted(first.items(), key=lambda kv: (kv[0][0], str(kv[0][1])))
-            if objective in (None, o)
-        }
-        for o in OBJECTIVES
-    }
+    histogram_rows = {}
+    for objective in OBJECTIVES:
+        row = {}
+        for algorithm in ("gp", "gp-fnd", "qd"):
+            run = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
+            if run is not None:
+                row[run.label(objective)] = _repertoire(run, objective)
+        histogram_rows[objective] = row
     path = figures.histograms(histogram_rows, folder / "fig8_histograms.png")
     parts.append(
         "### Fig. 8-style: fitness of the repertoires of one run each\n\n"
