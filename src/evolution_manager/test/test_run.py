@@ -7,12 +7,13 @@ import itertools
 import json
 
 import pytest
+from recompute import check_repertoires
 from toy import ToyEvaluator
 
 from evolution_manager.config import RunConfig, evaluation_seed
 from evolution_manager.errors import RunDirectoryError
 from evolution_manager.outputs import write_results
-from evolution_manager.primitives import DESCRIPTORS, OBJECTIVES
+from evolution_manager.primitives import OBJECTIVES
 from evolution_manager.run import Run
 
 RESULT_FILES = [
@@ -62,29 +63,9 @@ def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_pa
     assert [int(r["evaluation"]) for r in rows] == list(range(900))
     assert all(int(r["seed"]) == evaluation_seed(12, i) for i, r in enumerate(rows))
     assert any(r["error"] for r in rows)
+    check_repertoires(tmp_path / "r")
     for objective in OBJECTIVES:
-        # Recompute: a bin keeps 3 trees; a full bin swaps its worst (the first of equal worsts) for a
-        # strictly better one.
-        bins: dict[tuple, list[tuple[float, int]]] = {}
-        for r in rows:
-            if r["error"]:
-                continue
-            key = tuple(min(int(float(r[d]) * 8), 7) for d in DESCRIPTORS)
-            items = bins.setdefault(key, [])
-            value = float(r[objective])
-            if len(items) < 3:
-                items.append((value, int(r["evaluation"])))
-                continue
-            worst = min(range(3), key=lambda i: (items[i][0], i))
-            if value > items[worst][0]:
-                del items[worst]
-                items.append((value, int(r["evaluation"])))
         document = json.loads((tmp_path / "r" / f"repertoire_{objective}.json").read_text())
-        assert sorted(bins) == sorted({tuple(i["bin"]) for i in document["items"]})
-        recomputed = [(list(k), v, e) for k in sorted(bins) for v, e in bins[k]]
-        assert recomputed == [(i["bin"], i["fitness"], i["evaluation"]) for i in document["items"]]
-        assert document["coverage"] == len(bins) / 512
-        assert document["qd_score"] == pytest.approx(sum(max(v for v, _ in items) for items in bins.values()))
         grid = run.passive[objective]
         assert grid.qd_score == document["qd_score"] and grid.coverage == document["coverage"]
     archive = json.loads((tmp_path / "r" / "archive.json").read_text())
