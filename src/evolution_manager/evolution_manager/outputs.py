@@ -4,8 +4,8 @@
     the passive grid of that objective: bin, tree text, fitness, descriptors and evaluation index of every
     tree it holds (for MAP-Elites, the grid of its own objective is its archive, also in ``archive.json``);
 ``summary.json``
-    configuration, evaluations, and per objective the best fitness and tree, coverage, QD score and
-    repertoire size (deterministic: same seed, same file);
+    configuration, evaluations, and under ``objectives`` per objective the best fitness and tree,
+    coverage, QD score and repertoire size (deterministic: same seed, same file);
 ``timing.json``
     wall-clock seconds in the evaluator and in the algorithm's own work, evaluations per second;
 ``figures/``
@@ -79,7 +79,7 @@ def summary_document(run: Run) -> dict:
         "config": run.config.to_json(),
         "evaluations": run.evaluations,
         "finished": run.done,
-        "metrics": metrics,
+        "objectives": metrics,
     }
 
 

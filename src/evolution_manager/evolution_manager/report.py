@@ -72,7 +72,7 @@ def _samples(runs: Sequence[FinishedRun], key: str) -> dict[str, dict[str, list[
         for objective in OBJECTIVES:
             if run.objective not in (None, objective):
                 continue
-            value = run.summary["metrics"][objective][key]
+            value = run.summary["objectives"][objective][key]
             if value is not None:
                 samples[objective][run.label(objective)].append(float(value))
     return samples
