@@ -30,6 +30,7 @@ setup(
             "trial = evolution_manager.nodes.trial:main",
             "record = evolution_manager.nodes.recorder:main",
             "replay = evolution_manager.nodes.replay:main",
+            "manager = evolution_manager.nodes.manager:main",
             "evolve = evolution_manager.cli:main",
             "experiment = evolution_manager.experiment:main",
             "report = evolution_manager.report:main",

@@ -1,0 +1,245 @@
+"""``ServiceEvaluator``: the evaluator contract over every ``EvaluateBatch`` service of the ROS domain.
+
+It finds the services by type (``swarm_msgs/srv/EvaluateBatch``, whatever their node's name, on this machine
+or others in the domain), keeps looking during a run, and spreads each batch over them in chunks with
+``call_async`` (``Client.call`` would never learn that a server died). The bookkeeping — chunks, deadlines,
+re-sending the work of an evaluator that vanished, timed out or answered wrongly, accepting each result once —
+is :class:`evolution_manager.dispatch.Dispatcher`; this module only talks to ROS.
+
+A service counts as present while ``Client.service_is_ready()``: Fast DDS forgets a killed process after its
+lease (about 20 s here) although its service name may stay listed, so a chunk's timeout is what usually
+notices a dead evaluator first.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from rclpy.client import Client
+from rclpy.executors import Executor
+from rclpy.node import Node
+from rclpy.task import Future
+
+from bt_controller.draws import MAX_SEED
+from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
+from swarm_msgs.srv import EvaluateBatch
+from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
+
+SERVICE_TYPE = "swarm_msgs/srv/EvaluateBatch"
+OBJECTIVES = ("density", "nest", "food")
+
+
+class NoEvaluatorError(DispatchError):
+    """No evaluator service answered within the wait; the message says how long it waited."""
+
+
+@dataclass(frozen=True)
+class ServiceSettings:
+    """How batches are spread: chunk size, timeouts and how often to look for services (seconds)."""
+
+    max_chunk: int = 50
+    timeouts: Timeouts = field(default_factory=Timeouts)
+    discovery_period: float = 1.0
+    wait: float = 120.0  # how long to go on with pending work and no evaluator before giving up
+    objective: str = "food"  # the objective each result's `fitness` field reports (all three come back)
+
+    def __post_init__(self) -> None:
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {self.objective!r}")
+        if not self.discovery_period > 0 or not self.wait > 0:
+            raise ValueError("discovery_period and wait must be positive numbers of seconds")
+
+
+def _check(request: object) -> str:
+    """Why ``request`` cannot be sent (the in-process evaluator's error), or the empty string."""
+    if not isinstance(request, EvaluationRequest):
+        return f"expected an EvaluationRequest, got {type(request).__name__}"
+    if not isinstance(request.tree, str):
+        return f"tree must be tree text (str), got {type(request.tree).__name__}"
+    seed = request.seed
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        return f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}"
+    trials = request.trials
+    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
+        return f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}"
+    return ""
+
+
+def result_from_message(msg: object) -> EvaluationResult:
+    """The contract's result from a ``swarm_msgs/msg/EvaluationResult`` (values copied bit for bit)."""
+    if not msg.ok:  # type: ignore[attr-defined]
+        return failed(msg.error)  # type: ignore[attr-defined]
+    m = msg
+    return EvaluationResult(
+        fitness=(m.density, m.nest, m.food),  # type: ignore[attr-defined]
+        descriptors=(m.movement, m.rotation, m.conditionality),  # type: ignore[attr-defined]
+        error=None,
+    )
+
+
+class ServiceEvaluator:
+    """Evaluates batches over every evaluate service in ``node``'s domain (see the module docstring).
+
+    ``node`` must be spun only by this object while :meth:`evaluate` runs (it spins ``executor`` itself).
+    ``log(level, text)`` receives what happens to evaluators (level ``"info"`` or ``"warn"``).
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        executor: Executor,
+        settings: ServiceSettings | None = None,
+        log: Callable[[str, str], None] | None = None,
+    ) -> None:
+        self.node = node
+        self.executor = executor
+        self.settings = settings or ServiceSettings()
+        self.dispatcher = Dispatcher(self.settings.max_chunk, self.settings.timeouts)
+        self._log = log or (lambda level, text: None)
+        self._clients: dict[str, Client] = {}
+        self._futures: dict[int, tuple[Future, Chunk, EvaluateBatch.Request]] = {}
+        self._requests: list[EvaluationRequest] = []
+        self._next_discovery = 0.0
+        self.calls = 0
+
+    # Discovery ---------------------------------------------------------------------------------------
+    def discover(self) -> list[str]:
+        """Look for evaluate services now; return the names of those ready."""
+        listed = {name for name, types in self.node.get_service_names_and_types() if SERVICE_TYPE in types}
+        for name in sorted(listed - set(self._clients)):
+            self._clients[name] = self.node.create_client(EvaluateBatch, name)
+        ready = []
+        for name, client in self._clients.items():
+            state = self.dispatcher.state(name)
+            if client.service_is_ready():
+                ready.append(name)
+                if state is None or state is WorkerState.GONE:
+                    self._log("info", f"evaluator {name} {'is back' if state else 'found'}")
+                self.dispatcher.appeared(name)
+            elif state in (WorkerState.IDLE, WorkerState.BUSY, WorkerState.LATE):
+                chunk = self.dispatcher.vanished(name)
+                lost = ""
+                if chunk is not None and state is WorkerState.BUSY:
+                    lost = f"; re-sending its {len(chunk.indices)} requests"
+                self._log("warn", f"evaluator {name} vanished{lost}")
+                if chunk is not None:
+                    self._forget(chunk)
+        return ready
+
+    def wait_for(self, count: int, timeout: float) -> list[str]:
+        """Spin until ``count`` evaluators are ready or ``timeout`` seconds passed; return those ready."""
+        deadline = time.monotonic() + timeout
+        ready = self.discover()
+        while len(ready) < count and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.2)
+            ready = self.discover()
+        return ready
+
+    # Evaluation --------------------------------------------------------------------------------------
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request over the services; results in request order (see ``Evaluator``)."""
+        self.calls += 1
+        results: list[EvaluationResult | None] = [None] * len(requests)
+        sendable = []
+        for index, request in enumerate(requests):
+            problem = _check(request)
+            if problem:
+                results[index] = failed(problem)
+            else:
+                sendable.append(index)
+        self._requests = [requests[i] for i in sendable]
+        if self._requests:
+            dispatched = self._dispatch()
+            for index, result in zip(sendable, dispatched, strict=True):
+                results[index] = result
+        return results  # type: ignore[return-value]
+
+    def _dispatch(self) -> list[EvaluationResult]:
+        dispatcher = self.dispatcher
+        dispatcher.start_batch([r.trials for r in self._requests], [r.trials for r in self._requests])
+        starved_since: float | None = None
+        while not dispatcher.done:
+            now = time.monotonic()
+            if now >= self._next_discovery:
+                self.discover()
+                self._next_discovery = now + self.settings.discovery_period
+            for chunk in dispatcher.expire(now):
+                self._log(
+                    "warn",
+                    f"evaluator {chunk.worker} did not answer within {chunk.deadline - chunk.sent:.0f} s; "
+                    f"re-sending its {len(chunk.indices)} requests",
+                )
+            for chunk in dispatcher.assign(now):
+                self._send(chunk)
+            if dispatcher.has_capacity():
+                starved_since = None
+            elif starved_since is None:
+                starved_since = now
+            elif now - starved_since > self.settings.wait:
+                raise NoEvaluatorError(
+                    f"no evaluator service ({SERVICE_TYPE}) took work for {self.settings.wait:.0f} s: "
+                    "start evaluator nodes in this ROS domain (ws/run swarm_sim evaluator)"
+                )
+            wait = self.settings.discovery_period
+            deadline = dispatcher.next_deadline()
+            if deadline is not None:
+                wait = min(wait, max(deadline - now, 0.0) + 0.01)
+            self.executor.spin_once(timeout_sec=wait)
+            self._collect()
+        return dispatcher.results()  # type: ignore[return-value]
+
+    def _send(self, chunk: Chunk) -> None:
+        request = EvaluateBatch.Request()
+        request.trees = [self._requests[i].tree for i in chunk.indices]
+        request.seeds = [self._requests[i].seed for i in chunk.indices]
+        request.trials = int(chunk.key)  # type: ignore[call-overload]
+        request.objective = self.settings.objective
+        future = self._clients[chunk.worker].call_async(request)
+        self._futures[chunk.id] = (future, chunk, request)
+
+    def _collect(self) -> None:
+        for chunk_id in [k for k, (future, _, _) in self._futures.items() if future.done()]:
+            future, chunk, request = self._futures.pop(chunk_id)
+            response = future.result() if future.exception() is None else None
+            problem = self._problem(response, request)
+            if problem:
+                self._log(
+                    "warn", f"evaluator {chunk.worker} answered wrongly ({problem}); not using it again"
+                )
+                self.dispatcher.refused(chunk)
+                continue
+            if response.message:
+                results = [failed(response.message)] * len(chunk.indices)  # the whole request was refused
+            else:
+                results = [result_from_message(m) for m in response.results]
+            self.dispatcher.answered(chunk, results, time.monotonic())
+
+    @staticmethod
+    def _problem(response: object, request: EvaluateBatch.Request) -> str:
+        if response is None:
+            return "no response"
+        if response.message:  # type: ignore[attr-defined]
+            return ""
+        results = response.results  # type: ignore[attr-defined]
+        if len(results) != len(request.trees):
+            return f"{len(results)} results for {len(request.trees)} trees"
+        for msg, seed in zip(results, request.seeds, strict=True):
+            if msg.seed != seed or msg.trials != request.trials:
+                return f"a result for seed {msg.seed} and {msg.trials} trials where {seed} was sent"
+        return ""
+
+    def _forget(self, chunk: Chunk) -> None:
+        """Drop the call of a vanished evaluator (its answer can no longer come)."""
+        entry = self._futures.pop(chunk.id, None)
+        client = self._clients.get(chunk.worker)
+        if entry is not None and client is not None:
+            client.remove_pending_request(entry[0])
+
+    def close(self) -> None:
+        """Destroy the clients."""
+        for client in self._clients.values():
+            self.node.destroy_client(client)
+        self._clients.clear()
+        self._futures.clear()
