@@ -238,8 +238,14 @@ def manage(argv: Sequence[str]) -> int:
         wait=args.wait,
         objective=args.objective or OBJECTIVES[0],
     )
-    log = {"info": logger.info, "warn": logger.warning}
-    services = ServiceEvaluator(node, executor, settings, lambda level, text: log[level](text))
+
+    def log(level: str, text: str) -> None:  # rclpy wants one severity per call site
+        if level == "warn":
+            logger.warning(text)
+        else:
+            logger.info(text)
+
+    services = ServiceEvaluator(node, executor, settings, log)
     evaluator = _Remember(services)
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     try:
@@ -258,12 +264,12 @@ def manage(argv: Sequence[str]) -> int:
             )
         logger.info(f"{len(ready)} evaluator(s): {', '.join(ready)}; run directory {args.out}")
         return _execute(args, node, run, evaluator)
-    except (cli.UsageError, EvolutionError) as error:
-        print(f"manager: error: {error}", file=sys.stderr)
-        return cli.EXIT_USAGE
     except (DispatchError, GraphError, BagError) as error:
         print(f"manager: error: {error}; continue with --resume --out {args.out}", file=sys.stderr)
         return EXIT_FAILED
+    except (cli.UsageError, EvolutionError) as error:
+        print(f"manager: error: {error}", file=sys.stderr)
+        return cli.EXIT_USAGE
     except (KeyboardInterrupt, ExternalShutdownException):
         print(f"manager: interrupted; continue with: manager --out {args.out} --resume", file=sys.stderr)
         return cli.EXIT_INTERRUPTED
