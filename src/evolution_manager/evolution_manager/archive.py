@@ -141,6 +141,10 @@ class Repertoire:
         if len(descriptors) != len(self.shape):
             raise ValueError(f"expected {len(self.shape)} descriptors, got {len(descriptors)}")
         self.offered += 1
+        # qdpy would refuse a tree no better than the worst of a full bin: say so without building an entry
+        held = self.grid.solutions[self.grid._index_grid_features(descriptors)]
+        if len(held) >= self.items_per_bin and fitness <= min(e.value for e in held):
+            return False
         return self.grid.add(Entry(tree, fitness, descriptors, evaluation, genome)) is not None
 
     def bin_of(self, descriptors: tuple[float, ...]) -> tuple[int, ...]:

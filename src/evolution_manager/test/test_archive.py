@@ -59,3 +59,29 @@ def test_state_round_trip_rebuilds_the_same_grid_that_then_evolves_the_same():
     for offer in offers[1000:]:
         assert grid.offer(*offer) == copy.offer(*offer)
     assert copy.to_state() == grid.to_state()
+
+
+def test_the_repertoire_keeps_exactly_what_a_plain_qdpy_grid_keeps():
+    """Our shortcuts (bin from descriptors, no item search, early refusal) do not change qdpy's choices."""
+    from qdpy.containers import Grid
+    from qdpy.phenotype import Features, Fitness, Individual
+
+    plain = Grid(
+        shape=(8, 8, 8),
+        max_items_per_bin=3,
+        fitness_domain=((0.0, 1.0),),
+        features_domain=((0.0, 1.0),) * 3,
+        fitness_weights=(1.0,),
+    )
+    ours = Repertoire()
+    rng = random.Random(3)
+    for i in range(4000):
+        fitness = round(rng.random(), 2)  # many exact ties
+        descriptors = (rng.random() ** 2, rng.choice([0.0, 0.5, 1.0]), rng.random())
+        individual = Individual([i], name=str(i))
+        individual.fitness = Fitness((fitness,), weights=(1.0,))
+        individual.features = Features(descriptors)
+        plain.add(individual)
+        ours.offer(f"t{i}", fitness, descriptors, i)
+    expected = {k: [int(ind.name) for ind in v] for k, v in plain.solutions.items() if v}
+    assert {k: [e.evaluation for e in v] for k, v in ours.bins()} == expected
