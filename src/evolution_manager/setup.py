@@ -31,6 +31,7 @@ setup(
             "record = evolution_manager.nodes.recorder:main",
             "replay = evolution_manager.nodes.replay:main",
             "manager = evolution_manager.nodes.manager:main",
+            "measure-services = evolution_manager.nodes.measure_services:main",
             "main = evolution_manager.nodes.main_job:main",
             "evolve = evolution_manager.cli:main",
             "experiment = evolution_manager.experiment:main",

@@ -83,7 +83,8 @@ class ServiceEvaluator:
     """Evaluates batches over every evaluate service in ``node``'s domain (see the module docstring).
 
     ``node`` must be spun only by this object while :meth:`evaluate` runs (it spins ``executor`` itself).
-    ``log(level, text)`` receives what happens to evaluators (level ``"info"`` or ``"warn"``).
+    ``log(level, text)`` receives what happens to evaluators (level ``"info"`` or ``"warn"``). With ``only``,
+    just the services of those names are used.
     """
 
     def __init__(
@@ -92,7 +93,9 @@ class ServiceEvaluator:
         executor: Executor,
         settings: ServiceSettings | None = None,
         log: Callable[[str, str], None] | None = None,
+        only: Sequence[str] | None = None,
     ) -> None:
+        self.only = None if only is None else frozenset(only)
         self.node = node
         self.executor = executor
         self.settings = settings or ServiceSettings()
@@ -107,7 +110,11 @@ class ServiceEvaluator:
     # Discovery ---------------------------------------------------------------------------------------
     def discover(self) -> list[str]:
         """Look for evaluate services now; return the names of those ready."""
-        listed = {name for name, types in self.node.get_service_names_and_types() if SERVICE_TYPE in types}
+        listed = {
+            name
+            for name, types in self.node.get_service_names_and_types()
+            if SERVICE_TYPE in types and (self.only is None or name in self.only)
+        }
         for name in sorted(listed - set(self._clients)):
             self._clients[name] = self.node.create_client(EvaluateBatch, name)
         ready = []
