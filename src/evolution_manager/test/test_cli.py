@@ -124,7 +124,7 @@ def test_same_seed_same_files_under_another_pythonhashseed(tmp_path):
 
 
 def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_path):
-    common = ["--evaluations", "900", "--seed", "8", "--checkpoint-every", "0", "--no-figures"]
+    common = ["--evaluations", "700", "--seed", "8", "--checkpoint-every", "0", "--no-figures"]
     straight = tmp_path / "straight"
     assert evolve(["--algorithm", "qd", "--objective", "food", *common, "--out", str(straight)]) == 0
     killed = tmp_path / "killed"
