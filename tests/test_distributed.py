@@ -6,11 +6,18 @@ import csv
 import subprocess
 import time
 
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
 from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import read_bag
 from evolution_manager.cli import evolve
 from evolution_manager.config import evaluation_seed
 from evolution_manager.graph import Graph, executable
+from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.randtrees import random_trees
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here
 SEED = 5
@@ -105,3 +112,38 @@ def test_a_manager_with_no_evaluator_says_so(tmp_path):
         )
     assert done.returncode == 1
     assert "no evaluator service found" in done.stderr
+
+
+def test_the_service_evaluator_finds_evaluators_started_later_and_answers_as_in_process(tmp_path):
+    requests = [EvaluationRequest(t, 100 + i, 2) for i, t in enumerate(random_trees(seed=3, count=20))]
+    requests += [
+        EvaluationRequest("sel(forward", 1, 2),  # not a tree
+        EvaluationRequest("forward", -1, 2),  # not a seed
+        EvaluationRequest("forward", 1, 3),  # other trials: another chunk
+        EvaluationRequest("stop", 2, 0),  # not a number of trials
+    ]
+    expected = BatchEvaluator().evaluate(requests)
+    assert sum(r.error is not None for r in expected) == 3
+    with reserved_domain() as domain, Graph(domain, log_dir=tmp_path / "logs") as graph:
+        graph.start("evaluator_1", "swarm_sim", "evaluator", node_name="evaluator_1")
+        context = rclpy.Context()
+        rclpy.init(context=context, domain_id=domain)
+        node = Node("service_evaluator_test", context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        try:
+            services = ServiceEvaluator(node, executor, ServiceSettings(max_chunk=4, discovery_period=0.2))
+            assert services.wait_for(1, 120) == ["/evaluator_1/evaluate"]
+            assert services.evaluate(requests) == expected
+            graph.start("evaluator_2", "swarm_sim", "evaluator", node_name="evaluator_2")
+            deadline = time.monotonic() + 120
+            while len(services.discover()) < 2 and time.monotonic() < deadline:  # the run goes on meanwhile
+                assert services.evaluate(requests[:3]) == expected[:3]
+            before = services.dispatcher.answered_chunks("/evaluator_2/evaluate")
+            assert services.evaluate(requests) == expected
+            assert services.dispatcher.answered_chunks("/evaluator_2/evaluate") > before
+            graph.check()
+        finally:
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.shutdown(context=context)

@@ -140,6 +140,11 @@ class Dispatcher:
         """The names of the workers in any of ``states`` (every worker when none is given)."""
         return [w.name for w in self._workers.values() if not states or w.state in states]
 
+    def answered_chunks(self, name: str) -> int:
+        """How many chunks worker ``name`` has answered (0 if never seen)."""
+        worker = self._workers.get(name)
+        return 0 if worker is None else worker.answered
+
     def has_capacity(self) -> bool:
         """Whether some worker is idle or busy, so the work can go on without a new one."""
         return any(w.state in (WorkerState.IDLE, WorkerState.BUSY) for w in self._workers.values())

@@ -17,12 +17,13 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
 from rclpy.client import Client
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
 
-from bt_controller.draws import MAX_SEED
+from bt_controller.draws import check_seed
 from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
 from swarm_msgs.srv import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
@@ -53,16 +54,18 @@ class ServiceSettings:
 
 
 def _check(request: object) -> str:
-    """Why ``request`` cannot be sent (the in-process evaluator's error), or the empty string."""
+    """Why ``request`` cannot be sent (the in-process evaluator's words), or the empty string; the tree itself
+    is checked by the evaluator node."""
     if not isinstance(request, EvaluationRequest):
         return f"expected an EvaluationRequest, got {type(request).__name__}"
     if not isinstance(request.tree, str):
         return f"tree must be tree text (str), got {type(request.tree).__name__}"
-    seed = request.seed
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-        return f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}"
+    try:
+        check_seed(request.seed)
+    except ValueError as error:
+        return str(error)
     trials = request.trials
-    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
+    if isinstance(trials, bool) or not isinstance(trials, int | np.integer) or not 1 <= trials <= MAX_TRIALS:
         return f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}"
     return ""
 
@@ -200,7 +203,7 @@ class ServiceEvaluator:
     def _send(self, chunk: Chunk) -> None:
         request = EvaluateBatch.Request()
         request.trees = [self._requests[i].tree for i in chunk.indices]
-        request.seeds = [self._requests[i].seed for i in chunk.indices]
+        request.seeds = [int(self._requests[i].seed) for i in chunk.indices]
         request.trials = int(chunk.key)  # type: ignore[call-overload]
         request.objective = self.settings.objective
         future = self._clients[chunk.worker].call_async(request)
@@ -221,7 +224,10 @@ class ServiceEvaluator:
                 results = [failed(response.message)] * len(chunk.indices)  # the whole request was refused
             else:
                 results = [result_from_message(m) for m in response.results]
+            late = self.dispatcher.state(chunk.worker) is WorkerState.LATE
             self.dispatcher.answered(chunk, results, time.monotonic())
+            if late:
+                self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
     @staticmethod
     def _problem(response: object, request: EvaluateBatch.Request) -> str:
