@@ -166,6 +166,9 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     except (UsageError, EvolutionError) as error:
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_USAGE
+    except OSError as error:  # an --out that cannot be created or written
+        print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
+        return EXIT_USAGE
     bar = _progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:

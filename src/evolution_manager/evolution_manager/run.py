@@ -112,6 +112,8 @@ class Run:
             raise RunDirectoryError(
                 f"{root} already holds a run: continue it with --resume, or choose another --out"
             )
+        if directory.root.exists() and not directory.root.is_dir():
+            raise RunDirectoryError(f"{root} is a file, not a directory: choose another --out")
         if directory.root.exists() and any(directory.root.iterdir()):
             raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
         directory.root.mkdir(parents=True, exist_ok=True)

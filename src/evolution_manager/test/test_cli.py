@@ -74,6 +74,15 @@ def test_bad_options_say_why_and_exit_2(tmp_path, capsys, args, message):
     assert not (tmp_path / "X" / "config.json").exists()
 
 
+def test_an_out_that_is_a_file_or_cannot_be_made_is_refused(tmp_path, capsys):
+    (tmp_path / "file").write_text("keep me\n")
+    assert evolve(["--algorithm", "gp", "--objective", "food", "--out", str(tmp_path / "file")]) == 2
+    assert "is a file" in capsys.readouterr().err
+    assert evolve(["--algorithm", "gp", "--objective", "food", "--out", str(tmp_path / "file" / "run")]) == 2
+    assert "evolve: error:" in capsys.readouterr().err
+    assert (tmp_path / "file").read_text() == "keep me\n"
+
+
 def test_a_bad_option_exits_2_without_a_traceback_from_the_command_line(tmp_path):
     result = run(
         "evolve", "--algorithm", "qd", "--objective", "food", "--evaluations", "many", "--out", str(tmp_path)
