@@ -129,6 +129,9 @@ def experiment(argv: Sequence[str] | None = None) -> int:
     except (UsageError, EvolutionError) as error:
         print(f"experiment: error: {error}", file=sys.stderr)
         return EXIT_USAGE
+    except OSError as error:  # an --out that cannot be created or written
+        print(f"experiment: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
     bar = None
     if not args.no_progress:
         from tqdm import tqdm

@@ -204,6 +204,10 @@ def report(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("dir", type=Path, help="an experiment folder or a run directory")
     try:
         args = parser.parse_args(argv)
+    except UsageError as error:
+        print(f"report: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    try:
         if (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
             print(build_report(args.dir))
         elif (args.dir / "config.json").exists():
@@ -211,8 +215,8 @@ def report(argv: Sequence[str] | None = None) -> int:
                 print(path)
         else:
             raise UsageError(f"{args.dir} is neither an experiment folder nor a run directory")
-    except (UsageError, EvolutionError) as error:
-        print(f"report: error: {error}", file=sys.stderr)
+    except (UsageError, EvolutionError, OSError, KeyError, ValueError) as error:
+        print(f"report: error: {error!s} (is {args.dir} a finished run or experiment?)", file=sys.stderr)
         return EXIT_USAGE
     return 0
 

@@ -68,3 +68,9 @@ def test_tests_follow_the_papers_rule_and_holm_corrects():
     rows = holm([row, row, row])
     assert [r.p_holm for r in rows] == [min(1.0, 3 * row.p_value)] * 3
     assert 0.0 <= row.vargha_delaney_a <= 1.0
+
+
+def test_report_on_a_folder_without_runs_says_so(tmp_path, capsys):
+    assert report([str(tmp_path)]) == 2
+    assert "neither an experiment folder nor a run directory" in capsys.readouterr().err
+    assert report([]) == 2
