@@ -249,7 +249,10 @@ def manage(argv: Sequence[str]) -> int:
     evaluator = _Remember(services)
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     try:
-        run = _open_run(args, evaluator)
+        try:
+            run = _open_run(args, evaluator)
+        except OSError as error:  # an --out that cannot be created or written
+            raise cli.UsageError(f"{args.out}: {error.strerror or error}") from None
         if args.evaluators:
             graph.log_dir = Path(args.out) / "logs"
             for i in range(1, args.evaluators + 1):
