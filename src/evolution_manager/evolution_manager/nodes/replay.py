@@ -1,8 +1,9 @@
 """Replay a bag, or verify that a recorded trial reproduces.
 
 ``ws/run evolution_manager replay BAG [--rate X]`` republishes every message of the bag on its topic, paced
-by the recorded timestamps (``--rate 2`` twice as fast, ``--rate 0`` as fast as possible), with ``/clock``
-following the bag's time, so any ROS tool (``ros2 topic echo``, RViz, Foxglove) can watch the trial again.
+by the recorded timestamps (``--rate 2`` twice as fast, ``--rate 0`` as fast as possible) after ``--delay``
+seconds for discovery, with ``/clock`` following the bag's time, so any ROS tool (``ros2 topic echo``, RViz,
+Foxglove) can watch the trial again.
 
 ``ws/run evolution_manager replay BAG --verify`` publishes nothing: it re-runs the recorded trial from its
 seed and reports whether it reproduces the recording bit for bit (exit code 0) or where it first differs (1).
@@ -23,6 +24,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
+from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
 from evolution_manager.bags import BagError, read_bag
@@ -37,31 +39,32 @@ def message_class(msgtype: str) -> type:
     return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
 
-def replay(bag: Path, rate: float, stop: threading.Event) -> int:
-    """Publish every message of ``bag``; return how many were published."""
+def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
+    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many."""
+    topics = bag_topics(bag)
     context = rclpy.Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
-    publishers: dict[str, object] = {}
     clock = node.create_publisher(Clock, "/clock", RELIABLE)
+    publishers = {
+        topic: node.create_publisher(message_class(msgtype), topic, RELIABLE)
+        for topic, msgtype in topics.items()
+        if topic != "/clock"
+    }
+    publishers["/clock"] = clock
     published = 0
     try:
-        messages = read_bag(bag)
+        stop.wait(delay)  # let subscribers discover and match the publishers
         wall_start = time.monotonic()
         bag_start: int | None = None
-        for message in messages:
+        for message in read_bag(bag):
             if stop.is_set():
                 break
-            if message.topic not in publishers:
-                publishers[message.topic] = node.create_publisher(
-                    message_class(message.msgtype), message.topic, RELIABLE
-                )
-                time.sleep(0.2)  # let subscribers match the new publisher
             bag_start = message.timestamp_ns if bag_start is None else bag_start
             if rate > 0:
                 due = wall_start + (message.timestamp_ns - bag_start) / 1e9 / rate
                 time.sleep(max(0.0, due - time.monotonic()))
-            if message.topic != "/clock":
+            if "/clock" not in topics:
                 seconds, nanoseconds = divmod(message.timestamp_ns, 1_000_000_000)
                 clock.publish(Clock(clock=rclpy.time.Time(seconds=seconds, nanoseconds=nanoseconds).to_msg()))
             publishers[message.topic].publish(message.data)
@@ -72,15 +75,24 @@ def replay(bag: Path, rate: float, stop: threading.Event) -> int:
     return published
 
 
+def bag_topics(bag: Path) -> dict[str, str]:
+    """Every topic of a whole bag with its message type."""
+    if not (bag / "metadata.yaml").exists():
+        read_bag(bag)  # raises the BagError that explains what to do
+    with Reader(bag) as reader:
+        return {connection.topic: connection.msgtype for connection in reader.connections}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``replay``: republish a bag, or ``--verify`` a recorded trial."""
     parser = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[1])
     parser.add_argument("bag", type=Path, help="the bag directory")
     parser.add_argument("--rate", type=float, default=1.0, help="playback speed; 0 = as fast as possible")
+    parser.add_argument("--delay", type=float, default=1.0, help="seconds to wait for discovery first")
     parser.add_argument("--verify", action="store_true", help="re-run the recorded trial and compare")
     args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
-    if args.rate < 0:
-        print(f"replay: --rate must be 0 or positive, got {args.rate}", file=sys.stderr)
+    if args.rate < 0 or args.delay < 0:
+        print(f"replay: --rate and --delay must not be negative: {args.rate}, {args.delay}", file=sys.stderr)
         return 2
     try:
         if args.verify:
@@ -90,7 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         stop = threading.Event()
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, lambda *_: stop.set())
-        count = replay(args.bag, args.rate, stop)
+        count = replay(args.bag, args.rate, args.delay, stop)
     except BagError as error:
         print(f"replay: {error}", file=sys.stderr)
         return 2

@@ -1,0 +1,140 @@
+"""Replay: a trial bag is republished in order for ROS tools; --verify accepts a faithful recording and names
+the first step where a tampered one differs."""
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from bt_controller.nodes.isolation import domain_environment, reserved_domain
+from bt_controller.tree import parse
+from evolution_manager.bags import BagRecorder
+from evolution_manager.graph import executable
+from evolution_manager.replay import RESULT_TOPIC, verify_trial_bag
+from swarm_msgs.msg import SwarmState
+from swarm_sim.lockstep import run_with_controllers
+from swarm_sim.trial import VALUE_NAMES
+
+TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
+SEED, TRIAL = 21, 2
+STEP_NS = 125_000_000
+
+
+def write_trial_bag(path, tamper_step=None):
+    """The bag `trial --bag` would write for (TREE, SEED, TRIAL), from the in-process twin of the graph:
+    /trial_start, one /swarm_state per step, /trial_result; optionally with one pose moved by 1 mm."""
+    states = []
+    record = run_with_controllers(
+        parse(TREE), SEED, TRIAL, on_step=lambda world: states.append((world.step, world.poses().tolist()))
+    )
+    with BagRecorder(path) as bag:
+        types = bag.typestore.types
+
+        def header(step):
+            stamp = types["builtin_interfaces/msg/Time"](sec=step // 8, nanosec=(step % 8) * STEP_NS)
+            return types["std_msgs/msg/Header"](stamp=stamp, frame_id="arena")
+
+        start = bag.message(
+            "swarm_msgs/msg/TrialStart",
+            header=header(0),
+            seed=SEED,
+            trial=TRIAL,
+            arena_configuration=TRIAL % 2,
+            robots=9,
+            tree_keys=np.zeros(9, dtype=np.uint64),
+        )
+        bag.write("/trial_start", start, 0)
+        for step, poses in states:
+            if step == tamper_step:
+                poses[4][0] += 1.0
+            robots = [bag.message("swarm_msgs/msg/RobotPose", x=x, y=y, theta=t) for x, y, t in poses]
+            state = bag.message(
+                "swarm_msgs/msg/SwarmState",
+                header=header(step),
+                seed=SEED,
+                trial=TRIAL,
+                step=step,
+                poses=robots,
+            )
+            bag.write("/swarm_state", state, step * STEP_NS)
+        values = dict(zip(VALUE_NAMES, record.values, strict=True))
+        result = bag.message(
+            "swarm_msgs/msg/EvaluationResult",
+            tree=TREE,
+            seed=SEED,
+            trials=1,
+            ok=True,
+            error="",
+            fitness=values["food"],
+            **values,
+        )
+        bag.write(RESULT_TOPIC, result, len(states) * STEP_NS)
+    return len(states)
+
+
+def test_verify_accepts_a_faithful_recording(tmp_path):
+    steps = write_trial_bag(tmp_path / "faithful")
+    verification = verify_trial_bag(tmp_path / "faithful")
+    assert verification.reproduced, verification.summary()
+    assert verification.steps_compared == steps == 176
+
+
+def test_verify_names_the_first_step_that_differs(tmp_path):
+    write_trial_bag(tmp_path / "tampered", tamper_step=100)
+    verification = verify_trial_bag(tmp_path / "tampered")
+    assert not verification.reproduced
+    assert "step 100" in verification.first_divergence
+    done = subprocess.run(
+        [str(executable("evolution_manager", "replay")), str(tmp_path / "tampered"), "--verify"],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 1 and "NOT reproduced" in done.stdout
+
+
+def test_replay_republishes_the_bag_in_order(tmp_path):
+    write_trial_bag(tmp_path / "bag")
+    with reserved_domain() as domain:
+        context = rclpy.Context()
+        rclpy.init(context=context, domain_id=domain)
+        try:
+            node = Node("replay_listener", context=context)
+            received = []
+            qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+            node.create_subscription(SwarmState, "/swarm_state", lambda m: received.append(m.step), qos)
+            executor = rclpy.executors.SingleThreadedExecutor(context=context)
+            executor.add_node(node)
+            command = [str(executable("evolution_manager", "replay")), str(tmp_path / "bag"), "--rate", "20"]
+            replay = subprocess.Popen(
+                [*command, "--delay", "3"],
+                env=domain_environment(domain),
+                stdout=subprocess.PIPE,
+                text=True,
+            )
+            deadline = time.monotonic() + 120
+            while replay.poll() is None and time.monotonic() < deadline:
+                executor.spin_once(timeout_sec=0.05)
+            for _ in range(20):
+                executor.spin_once(timeout_sec=0.05)
+            assert replay.wait(timeout=10) == 0
+            assert "replayed 178 messages" in replay.stdout.read()
+            assert received == list(range(176))
+        finally:
+            executor.shutdown()
+            rclpy.shutdown(context=context)
+
+
+def test_replay_refuses_a_bad_rate(tmp_path):
+    done = subprocess.run(
+        [str(executable("evolution_manager", "replay")), str(tmp_path), "--rate", "-1"],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 2 and "--rate" in done.stderr
+
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
