@@ -231,13 +231,6 @@ def manage(argv: Sequence[str]) -> int:
     executor.add_node(node)
     logger = node.get_logger()
     p = node.parameters
-    settings = ServiceSettings(
-        max_chunk=p.chunk_size,
-        timeouts=Timeouts(timeout=p.timeout, first_timeout=p.first_timeout),
-        discovery_period=p.discovery_period,
-        wait=args.wait,
-        objective=args.objective or OBJECTIVES[0],
-    )
 
     def log(level: str, text: str) -> None:  # rclpy wants one severity per call site
         if level == "warn":
@@ -245,7 +238,21 @@ def manage(argv: Sequence[str]) -> int:
         else:
             logger.info(text)
 
-    services = ServiceEvaluator(node, executor, settings, log)
+    try:
+        settings = ServiceSettings(
+            max_chunk=p.chunk_size,
+            timeouts=Timeouts(timeout=p.timeout, first_timeout=p.first_timeout),
+            discovery_period=p.discovery_period,
+            wait=args.wait,
+            objective=args.objective or OBJECTIVES[0],
+        )
+        services = ServiceEvaluator(node, executor, settings, log)
+    except ValueError as error:
+        print(f"manager: error: {error} (see the node's parameters and --wait)", file=sys.stderr)
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+        return cli.EXIT_USAGE
     evaluator = _Remember(services)
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     try:
