@@ -47,7 +47,8 @@ class Outcome:
         return self.error is None and self.fitness is not None and self.descriptors is not None
 
 
-def _outcome(result: object) -> Outcome:
+def as_outcome(result: object) -> Outcome:
+    """An evaluator's result (anything with ``fitness``, ``descriptors`` and ``error``) as an Outcome."""
     fitness = getattr(result, "fitness", None)
     descriptors = getattr(result, "descriptors", None)
     error = getattr(result, "error", None)
@@ -104,7 +105,7 @@ class AskTell:
                 f"tell() needs {len(self._asked)} results, one per asked tree, got {len(results)}"
             )
         batch, self._asked = self._asked, None
-        outcomes = [_outcome(r) for r in results]
+        outcomes = [as_outcome(r) for r in results]
         for tree, outcome in zip(batch, outcomes, strict=True):
             tree.fitness.values = outcome.fitness if outcome.ok else (FAILED,) * len(OBJECTIVES)
         self.evaluations += len(batch)

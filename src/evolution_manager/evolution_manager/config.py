@@ -121,7 +121,7 @@ class RunConfig:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
         from .algorithms import GeneticProgramming, MapElites
 
-        algorithm_seed = _key(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
+        algorithm_seed = derive_seed(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
         if self.algorithm == "qd":
             return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)
         objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
@@ -131,10 +131,10 @@ class RunConfig:
 def evaluation_seed(run_seed: int, index: int) -> int:
     """The simulator seed of evaluation number ``index`` (0-based) of a run: a pure function of the run
     seed and the index, so that a resumed or distributed run draws exactly the same trials."""
-    return _key(run_seed, _SEED_PURPOSE_EVALUATION, index) & MAX_SEED
+    return derive_seed(run_seed, _SEED_PURPOSE_EVALUATION, index) & MAX_SEED
 
 
-def _key(seed: int, *path: int) -> int:
+def derive_seed(seed: int, *path: int) -> int:
     """The stream key reached from the root key of ``seed`` by deriving along ``path``."""
     key = np.uint64(root_key(seed))
     for value in path:

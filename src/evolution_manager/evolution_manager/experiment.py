@@ -23,7 +23,7 @@ from pathlib import Path
 from bt_controller.draws import MAX_SEED
 
 from .cli import EXIT_INTERRUPTED, EXIT_USAGE, UsageError, _Parser, _positive, _seed
-from .config import ALGORITHMS, RunConfig, _key
+from .config import ALGORITHMS, RunConfig, derive_seed
 from .errors import EvolutionError
 from .files import read_json, write_json
 from .primitives import OBJECTIVES
@@ -41,7 +41,7 @@ def plan(runs: int, evaluations: int, seed: int, trials: int = 10) -> list[tuple
         for objective in objectives:
             o = -1 if objective is None else OBJECTIVES.index(objective)
             for r in range(runs):
-                run_seed = _key(seed, _SEED_PURPOSE_EXPERIMENT, a, o + 1, r) & MAX_SEED
+                run_seed = derive_seed(seed, _SEED_PURPOSE_EXPERIMENT, a, o + 1, r) & MAX_SEED
                 config = RunConfig.make(algorithm, objective, budget, run_seed, trials)
                 planned.append((config, f"runs/{config.label}/run{r:02d}"))
     return planned

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from .algorithms import AskTell, GeneticProgramming, MapElites, _outcome
+from .algorithms import AskTell, GeneticProgramming, MapElites, as_outcome
 from .archive import Repertoire
 from .config import RunConfig, evaluation_seed
 from .errors import RunDirectoryError
@@ -208,7 +208,7 @@ class Run:
         rows = []
         for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
             index = self.evaluations + offset
-            outcome = _outcome(result)
+            outcome = as_outcome(result)
             if outcome.ok:
                 for k, objective in enumerate(OBJECTIVES):
                     self.passive[objective].offer(
