@@ -42,6 +42,7 @@ class Graph:
         self.domain = domain
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen] = {}
+        self._logs: list[object] = []
 
     def __enter__(self) -> Graph:
         return self
@@ -73,6 +74,7 @@ class Graph:
         if self.log_dir is not None:
             self.log_dir.mkdir(parents=True, exist_ok=True)
             output = (self.log_dir / f"{name}.log").open("w")
+            self._logs.append(output)
         else:
             output = subprocess.DEVNULL
         process = subprocess.Popen(
@@ -112,6 +114,9 @@ class Graph:
                 process.kill()
                 process.wait()
         self.processes.clear()
+        for log in self._logs:
+            log.close()
+        self._logs.clear()
 
 
 def start_trial_graph(graph: Graph, robots: int = 9) -> None:
