@@ -11,6 +11,7 @@ import re
 from collections import Counter
 from collections.abc import Sequence
 
+from bt_controller.vocabulary import ACTIONS
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult
 
 _WORD = re.compile(r"[a-z_]+")
@@ -38,18 +39,7 @@ class ToyEvaluator:
             return EvaluationResult(None, None, f"refused: contains {self.fail_on}")
         words = Counter(w for w in _WORD.findall(request.tree) if w not in ("seq", "sel", "prob"))
         total = max(1, sum(words.values()))
-        actions = sum(
-            words[a]
-            for a in (
-                "stop",
-                "forward",
-                "forward_left",
-                "forward_right",
-                "reverse",
-                "reverse_left",
-                "reverse_right",
-            )
-        )
+        actions = sum(words[a] for a in ACTIONS)
         conditions = total - actions
         n = self.noise * _noise(request.tree, request.seed)
         density = (words["stop"] + words["robot_left"]) / total

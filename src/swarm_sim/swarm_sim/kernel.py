@@ -198,6 +198,43 @@ def simulate_trial(
         poses_out[1, i, 2] = heading[i]
 
 
+@numba.njit(cache=True, inline="always")
+def _run_job(
+    j: int,
+    op: np.ndarray,
+    arg: np.ndarray,
+    first: np.ndarray,
+    nchild: np.ndarray,
+    children: np.ndarray,
+    node_offset: np.ndarray,
+    child_offset: np.ndarray,
+    job_tree: np.ndarray,
+    job_seed_key: np.ndarray,
+    job_trial: np.ndarray,
+    job_gap: np.ndarray,
+    p: Params,
+    values_out: np.ndarray,
+    poses_out: np.ndarray,
+) -> None:
+    """Run job ``j`` into row ``j`` of the outputs: its tree's slices of the pack, seed key, trial, gap."""
+    t = job_tree[j]
+    a, b = node_offset[t], node_offset[t + 1]
+    c, d = child_offset[t], child_offset[t + 1]
+    simulate_trial(
+        op[a:b],
+        arg[a:b],
+        first[a:b],
+        nchild[a:b],
+        children[c:d],
+        job_seed_key[j],
+        job_trial[j],
+        job_gap[j],
+        p,
+        values_out[j],
+        poses_out[j],
+    )
+
+
 @numba.njit(cache=True)
 def run_jobs(
     op: np.ndarray,
@@ -218,21 +255,22 @@ def run_jobs(
     """Run every job ``j`` (tree ``job_tree[j]`` of a pack, seed key, trial, gap) into row ``j`` of the
     outputs (``values_out``: jobs x N_VALUES; ``poses_out``: jobs x 2 x n_robots x 3)."""
     for j in range(job_tree.shape[0]):
-        t = job_tree[j]
-        a, b = node_offset[t], node_offset[t + 1]
-        c, d = child_offset[t], child_offset[t + 1]
-        simulate_trial(
-            op[a:b],
-            arg[a:b],
-            first[a:b],
-            nchild[a:b],
-            children[c:d],
-            job_seed_key[j],
-            job_trial[j],
-            job_gap[j],
+        _run_job(
+            j,
+            op,
+            arg,
+            first,
+            nchild,
+            children,
+            node_offset,
+            child_offset,
+            job_tree,
+            job_seed_key,
+            job_trial,
+            job_gap,
             p,
-            values_out[j],
-            poses_out[j],
+            values_out,
+            poses_out,
         )
 
 
@@ -255,19 +293,20 @@ def run_jobs_parallel(
 ) -> None:
     """``run_jobs`` with the jobs spread over numba's threads; every job still writes only its own rows."""
     for j in numba.prange(job_tree.shape[0]):
-        t = job_tree[j]
-        a, b = node_offset[t], node_offset[t + 1]
-        c, d = child_offset[t], child_offset[t + 1]
-        simulate_trial(
-            op[a:b],
-            arg[a:b],
-            first[a:b],
-            nchild[a:b],
-            children[c:d],
-            job_seed_key[j],
-            job_trial[j],
-            job_gap[j],
+        _run_job(
+            j,
+            op,
+            arg,
+            first,
+            nchild,
+            children,
+            node_offset,
+            child_offset,
+            job_tree,
+            job_seed_key,
+            job_trial,
+            job_gap,
             p,
-            values_out[j],
-            poses_out[j],
+            values_out,
+            poses_out,
         )

@@ -250,8 +250,8 @@ def sense_step(
     Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range`` and draw
     ``step * n + j`` of ``i``'s drop stream (``drop_keys[i]``) is below ``delivery_probability``. Robot
     ``i``'s messages fill the first ``counts[i]`` entries of row ``i`` of ``senders``, ``ranges``,
-    ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range is computed once for both directions (the
-    same bits either way: ``(-d) * (-d) == d * d``).
+    ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range is computed once for both
+    directions (the same bits either way: ``(-d) * (-d) == d * d``).
     """
     n = x.shape[0]
     range2 = p.message_range * p.message_range
