@@ -25,12 +25,12 @@ class UsageError(Exception):
     """A command-line option that cannot be used; the message says why."""
 
 
-class _Parser(argparse.ArgumentParser):
+class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # argparse prints usage and exits 2; we keep the 2, in one line
         raise UsageError(message)
 
 
-def _positive(text: str) -> int:
+def positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -40,7 +40,7 @@ def _positive(text: str) -> int:
     return value
 
 
-def _seed(text: str) -> int:
+def seed_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -48,7 +48,7 @@ def _seed(text: str) -> int:
     return value
 
 
-def _seconds(text: str) -> float:
+def seconds(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -60,7 +60,7 @@ def _seconds(text: str) -> float:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``evolve`` command line."""
-    parser = _Parser(prog="evolve", description=__doc__.split("\n")[0])
+    parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
     parser.add_argument(
         "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
     )
@@ -68,19 +68,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
     )
     budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
-    parser.add_argument("--evaluations", type=_positive, help=f"evaluation budget (default: {budgets})")
-    parser.add_argument("--seed", type=_seed, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
-    parser.add_argument("--trials", type=_positive, help="trials per evaluation (default 10)")
+    parser.add_argument("--evaluations", type=positive_int, help=f"evaluation budget (default: {budgets})")
+    parser.add_argument("--seed", type=seed_int, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
+    parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
     parser.add_argument(
         "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
     )
-    parser.add_argument("--workers", type=_positive, default=1, help="evaluator threads (default 1)")
+    parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
     parser.add_argument(
         "--resume", action="store_true", help="continue the run in --out from its last checkpoint"
     )
     parser.add_argument(
         "--checkpoint-every",
-        type=_seconds,
+        type=seconds,
         default=30.0,
         metavar="SECONDS",
         help="checkpoint period (default 30)",
@@ -90,7 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _config(args: argparse.Namespace) -> RunConfig:
+def config_from_args(args: argparse.Namespace) -> RunConfig:
     if args.algorithm is None:
         raise UsageError("--algorithm is required to start a run (gp, gp-fnd or qd)")
     if args.algorithm != "gp-fnd" and args.objective is None:
@@ -101,7 +101,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
     return RunConfig.make(args.algorithm, args.objective, args.evaluations, seed, args.trials or 10)
 
 
-def _check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
+def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
     given = {
         "algorithm": args.algorithm,
         "objective": args.objective,
@@ -126,7 +126,7 @@ def _evaluator(workers: int) -> object:
         raise UsageError(f"--workers: {error}") from None
 
 
-def _progress_bar(config: RunConfig, initial: int, enabled: bool):
+def progress_bar(config: RunConfig, initial: int, enabled: bool) -> object:
     if not enabled:
         return None
     from tqdm import tqdm
@@ -145,7 +145,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     """Run ``evolve``; return the exit status."""
     try:
         args = build_parser().parse_args(argv)
-        config = None if args.resume else _config(args)
+        config = None if args.resume else config_from_args(args)
         from .files import read_json
         from .outputs import write_results
         from .run import Run, RunDirectory
@@ -154,7 +154,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
         if args.resume:
             if not directory.started():
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-            _check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+            check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
             run = Run.resume(args.out, _evaluator(args.workers))
         else:
             if directory.started():
@@ -169,7 +169,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     except OSError as error:  # an --out that cannot be created or written
         print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
         return EXIT_USAGE
-    bar = _progress_bar(run.config, run.evaluations, not args.no_progress)
+    bar = progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
         if bar is not None:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from bt_controller.draws import MAX_SEED
 
-from .cli import EXIT_INTERRUPTED, EXIT_USAGE, UsageError, _Parser, _positive, _seed
+from .cli import EXIT_INTERRUPTED, EXIT_USAGE, Parser, UsageError, positive_int, seed_int
 from .config import ALGORITHMS, RunConfig, derive_seed
 from .errors import EvolutionError
 from .files import read_json, write_json
@@ -75,23 +75,23 @@ def run_one(config_data: dict, root: str) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``experiment`` command line."""
-    parser = _Parser(prog="experiment", description=__doc__.split("\n")[0])
+    parser = Parser(prog="experiment", description=__doc__.split("\n")[0])
     parser.add_argument(
-        "--runs", type=_positive, default=10, help="runs per algorithm and objective (default 10)"
+        "--runs", type=positive_int, default=10, help="runs per algorithm and objective (default 10)"
     )
     parser.add_argument(
         "--evaluations",
-        type=_positive,
+        type=positive_int,
         default=25_000,
         help="budget per objective (default 25000; GP_fnd 3x)",
     )
     parser.add_argument(
         "--out", type=Path, required=True, help="experiment folder (continued when it exists)"
     )
-    parser.add_argument("--seed", type=_seed, default=0, help="experiment seed (default 0)")
-    parser.add_argument("--trials", type=_positive, default=10, help="trials per evaluation (default 10)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="experiment seed (default 0)")
+    parser.add_argument("--trials", type=positive_int, default=10, help="trials per evaluation (default 10)")
     parser.add_argument(
-        "--processes", type=_positive, default=os.cpu_count() or 1, help="runs at a time (default: CPU count)"
+        "--processes", type=positive_int, default=os.cpu_count() or 1, help="runs at once (default: cores)"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser

@@ -18,7 +18,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from .cli import EXIT_USAGE, UsageError, _Parser, _positive
+from .cli import EXIT_USAGE, Parser, UsageError, positive_int
 from .config import ALGORITHMS, RunConfig
 from .run import Run
 
@@ -51,14 +51,14 @@ def measure_one(
 
 def measure(argv: Sequence[str] | None = None) -> int:
     """Run ``measure``; return the exit status."""
-    parser = _Parser(prog="measure", description=__doc__.split("\n")[0])
+    parser = Parser(prog="measure", description=__doc__.split("\n")[0])
     parser.add_argument(
-        "--evaluations", type=_positive, default=5000, help="evaluations per run (default 5000)"
+        "--evaluations", type=positive_int, default=5000, help="evaluations per run (default 5000)"
     )
     parser.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS))
     parser.add_argument("--objective", default="food", help="objective of gp and qd (default food)")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--workers", type=_positive, default=1, help="evaluator threads (default 1)")
+    parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
     parser.add_argument("--json", type=Path, help="also write the measurements to this file")
     try:
         args = parser.parse_args(argv)

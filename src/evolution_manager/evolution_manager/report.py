@@ -19,7 +19,7 @@ from pathlib import Path
 
 from . import figures
 from .archive import Repertoire
-from .cli import EXIT_USAGE, UsageError, _Parser
+from .cli import EXIT_USAGE, Parser, UsageError
 from .errors import EvolutionError
 from .files import CsvLog, read_json, write_atomic
 from .primitives import OBJECTIVES
@@ -200,7 +200,7 @@ def rebuild_run(root: Path) -> list[Path]:
 
 def report(argv: Sequence[str] | None = None) -> int:
     """Run ``report``; return the exit status."""
-    parser = _Parser(prog="report", description=__doc__.split("\n")[0])
+    parser = Parser(prog="report", description=__doc__.split("\n")[0])
     parser.add_argument("dir", type=Path, help="an experiment folder or a run directory")
     try:
         args = parser.parse_args(argv)

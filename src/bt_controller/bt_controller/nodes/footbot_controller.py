@@ -25,15 +25,17 @@ interpreter; the logic is ``bt_controller.controller``.
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from bt_controller.controller import FootbotController, Schedule
 from bt_controller.errors import TreeError
+from bt_controller.nodes.spinning import spin_until_shutdown
 from bt_controller.perception import PerceptionParams, Readings, warm_up
 from bt_controller.tree import parse, to_text
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
@@ -157,13 +159,7 @@ def main(args: list[str] | None = None) -> None:
     try:
         node = FootbotControllerNode()
     except TreeError as error:
-        print(f"footbot_controller: the tree parameter is not a valid tree: {error}")
+        print(f"footbot_controller: the tree parameter is not a valid tree: {error}", file=sys.stderr)
         rclpy.try_shutdown()
         raise SystemExit(2) from None
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_shutdown(node)

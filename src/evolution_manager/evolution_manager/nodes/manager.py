@@ -68,12 +68,12 @@ PROGRESS_TYPE = "swarm_msgs/msg/ArchiveProgress"
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``manager`` command line: ``evolve``'s run options, and where the evaluators come from."""
-    parser = cli._Parser(prog="manager", description=__doc__.split("\n")[0])
+    parser = cli.Parser(prog="manager", description=__doc__.split("\n")[0])
     parser.add_argument("--algorithm", choices=cli.ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd")
     parser.add_argument("--objective", choices=cli.OBJECTIVES, help="the objective of gp and qd")
-    parser.add_argument("--evaluations", type=cli._positive, help="evaluation budget (default: as evolve)")
-    parser.add_argument("--seed", type=cli._seed, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
-    parser.add_argument("--trials", type=cli._positive, help="trials per evaluation (default 10)")
+    parser.add_argument("--evaluations", type=cli.positive_int, help="evaluation budget (default: as evolve)")
+    parser.add_argument("--seed", type=cli.seed_int, help="run seed in [0, 2**63 - 1] (default 0)")
+    parser.add_argument("--trials", type=cli.positive_int, help="trials per evaluation (default 10)")
     parser.add_argument("--out", type=Path, required=True, help="run directory (new, unless --resume)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument(
@@ -81,19 +81,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--expect",
-        type=cli._positive,
+        type=cli.positive_int,
         metavar="N",
         help="evaluators to wait for before starting (default 1 or K)",
     )
     parser.add_argument(
         "--wait",
-        type=cli._seconds,
+        type=cli.seconds,
         default=120.0,
         metavar="SECONDS",
         help="how long to wait for evaluators, at the start and whenever none is left (default 120)",
     )
     parser.add_argument(
-        "--checkpoint-every", type=cli._seconds, default=30.0, metavar="SECONDS", help="default 30"
+        "--checkpoint-every", type=cli.seconds, default=30.0, metavar="SECONDS", help="default 30"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--no-figures", action="store_true", help="write results but no figures")
@@ -205,13 +205,13 @@ def _open_run(args: argparse.Namespace, evaluator: object) -> object:
     if args.resume:
         if not directory.started():
             raise cli.UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-        cli._check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+        cli.check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
         return Run.resume(args.out, evaluator)
     if directory.started():
         raise cli.UsageError(
             f"{args.out} already holds a run: add --resume to continue it, or use another --out"
         )
-    return Run.start(cli._config(args), args.out, evaluator)
+    return Run.start(cli.config_from_args(args), args.out, evaluator)
 
 
 def manage(argv: Sequence[str]) -> int:
@@ -221,7 +221,7 @@ def manage(argv: Sequence[str]) -> int:
         if args.evaluators < 0:
             raise cli.UsageError(f"--evaluators must be 0 or more, got {args.evaluators}")
         if not args.resume:
-            cli._config(args)  # refuse bad options before anything starts
+            cli.config_from_args(args)  # refuse bad options before anything starts
     except (cli.UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return cli.EXIT_USAGE
@@ -294,7 +294,7 @@ def manage(argv: Sequence[str]) -> int:
 def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator: _Remember) -> int:
     from evolution_manager.outputs import write_results
 
-    bar = cli._progress_bar(run.config, run.evaluations, not args.no_progress)  # type: ignore[attr-defined]
+    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)  # type: ignore[attr-defined]
     with BagRecorder(bag_path(Path(args.out))) as recorder:
         recording = RunRecording(node, recorder, run.config)  # type: ignore[attr-defined]
 

@@ -13,9 +13,9 @@ spreads its batches over them.
 from __future__ import annotations
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
+from bt_controller.nodes.spinning import spin_until_shutdown
 from swarm_msgs.msg import EvaluationResult
 from swarm_msgs.srv import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest
@@ -71,11 +71,4 @@ class EvaluatorNode(Node):
 def main(args: list[str] | None = None) -> None:
     """Run an evaluator node until shut down."""
     rclpy.init(args=args)
-    node = EvaluatorNode()
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_shutdown(EvaluatorNode())

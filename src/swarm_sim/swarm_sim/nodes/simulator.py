@@ -40,12 +40,13 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, PoseArray
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
+from bt_controller.nodes.spinning import spin_until_shutdown
 from swarm_msgs.msg import (
     GroundSensor,
     RangeAndBearing,
@@ -315,14 +316,4 @@ def _pose(pose: np.ndarray) -> Pose:
 def main(args: list[str] | None = None) -> None:
     """Run the simulator node until shut down."""
     rclpy.init(args=args)
-    node = SimulatorNode()
-    executor = MultiThreadedExecutor(num_threads=4)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_shutdown(SimulatorNode(), MultiThreadedExecutor(num_threads=4))
