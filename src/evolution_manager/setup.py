@@ -33,6 +33,7 @@ setup(
             "manager = evolution_manager.nodes.manager:main",
             "measure-services = evolution_manager.nodes.measure_services:main",
             "main = evolution_manager.nodes.main_job:main",
+            "measure-graph = evolution_manager.nodes.measure_graph:main",
             "evolve = evolution_manager.cli:main",
             "experiment = evolution_manager.experiment:main",
             "report = evolution_manager.report:main",
