@@ -66,9 +66,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"manager node and {args.evaluators} evaluator nodes -> {out}",
         flush=True,
     )
+    try:
+        manager = str(executable("evolution_manager", "manager"))
+    except GraphError as error:
+        print(f"main: {error}", file=sys.stderr)
+        return 1
     with reserved_domain() as domain:
         command = [
-            str(executable("evolution_manager", "manager")),
+            manager,
             "--algorithm", "qd",
             "--objective", "food",
             "--evaluations", str(args.evaluations),

@@ -60,7 +60,7 @@ from swarm_msgs.msg import (
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
-from swarm_sim.trial import VALUE_NAMES
+from swarm_sim.trial import VALUE_NAMES, TrialRecord
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -174,7 +174,7 @@ class SimulatorNode(Node):
         response.end_poses = [RobotPose(x=p[0], y=p[1], theta=p[2]) for p in record.end_poses.tolist()]
         return response
 
-    def run_trial(self, seed: int, trial: int):  # noqa: ANN201 - returns swarm_sim.trial.TrialRecord
+    def run_trial(self, seed: int, trial: int) -> TrialRecord:
         """Run trial ``trial`` of ``seed`` through the controllers; return its record."""
         world = LockstepTrial(seed, trial, self.config)
         p = world.p
