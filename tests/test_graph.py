@@ -10,7 +10,7 @@ import pytest
 from mcap.reader import make_reader
 
 from bt_controller.tree import parse, to_text
-from evolution_manager.bags import read_bag, recover_bag
+from evolution_manager.bags import read_bag
 from evolution_manager.graph import executable
 from evolution_manager.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
@@ -97,7 +97,13 @@ def test_a_killed_recorder_leaves_a_recoverable_bag(graph, tmp_path):
     recorder.send_signal(signal.SIGKILL)
     recorder.wait(timeout=30)
     assert not (bag / "metadata.yaml").exists()
-    recovered = recover_bag(bag, tmp_path / "recovered")
+    done = subprocess.run(
+        [str(executable("evolution_manager", "recover")), str(bag), str(tmp_path / "recovered")],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    recovered = int(done.stdout.split()[1])
     assert recovered > 1000
     steps = [m.message.step for m in read_bag(tmp_path / "recovered") if m.topic == "/swarm_state"]
     assert steps[:176] == list(range(176))  # the first trial came through whole, in order

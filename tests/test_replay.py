@@ -137,4 +137,12 @@ def test_replay_refuses_a_bad_rate(tmp_path):
     assert done.returncode == 2 and "--rate" in done.stderr
 
 
+@pytest.mark.parametrize("extra", [[], ["--verify"]])
+def test_replay_of_a_missing_bag_is_a_clear_error(tmp_path, extra):
+    replay = str(executable("evolution_manager", "replay"))
+    done = subprocess.run([replay, str(tmp_path / "nothing"), *extra], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stderr.strip() == f"replay: no bag at {tmp_path / 'nothing'}"
+
+
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")

@@ -30,6 +30,7 @@ setup(
             "trial = evolution_manager.nodes.trial:main",
             "record = evolution_manager.nodes.recorder:main",
             "replay = evolution_manager.nodes.replay:main",
+            "recover = evolution_manager.nodes.replay:recover_main",
             "manager = evolution_manager.nodes.manager:main",
             "measure-services = evolution_manager.nodes.measure_services:main",
             "main = evolution_manager.nodes.main_job:main",

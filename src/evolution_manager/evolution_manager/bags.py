@@ -115,14 +115,26 @@ class BagMessage:
 
 
 def read_bag(path: Path | str, typestore: Typestore | None = None) -> Iterator[BagMessage]:
-    """Every message of a whole bag, in timestamp order, deserialised with ``typestore``."""
+    """Every message of a whole bag, in timestamp order, deserialised with ``typestore``.
+
+    Raises ``BagError`` at once (not on the first iteration) when ``path`` holds no whole bag."""
     path = Path(path)
+    check_bag(path)
+    return _messages(path, typestore or swarm_typestore())
+
+
+def check_bag(path: Path) -> None:
+    """Raise ``BagError`` saying what is wrong when ``path`` is not a whole rosbag2 bag."""
+    if not path.exists():
+        raise BagError(f"no bag at {path}")
     if not (path / "metadata.yaml").exists():
         raise BagError(
             f"{path} is not a whole rosbag2 bag (no metadata.yaml): if its recorder was killed, run "
             f"`ws/run evolution_manager recover {path} NEW_BAG`"
         )
-    store = typestore or swarm_typestore()
+
+
+def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:
     with Reader(path) as reader:
         for connection, timestamp, data in reader.messages():
             message = store.deserialize_cdr(data, connection.msgtype)

@@ -27,7 +27,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
-from evolution_manager.bags import BagError, read_bag
+from evolution_manager.bags import BagError, check_bag, read_bag, recover_bag
 from evolution_manager.replay import verify_trial_bag
 
 RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -77,8 +77,7 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
 
 def bag_topics(bag: Path) -> dict[str, str]:
     """Every topic of a whole bag with its message type."""
-    if not (bag / "metadata.yaml").exists():
-        read_bag(bag)  # raises the BagError that explains what to do
+    check_bag(bag)
     with Reader(bag) as reader:
         return {connection.topic: connection.msgtype for connection in reader.connections}
 
@@ -107,4 +106,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"replay: {error}", file=sys.stderr)
         return 2
     print(f"replayed {count} messages from {args.bag}")
+    return 0
+
+
+def recover_main(argv: Sequence[str] | None = None) -> int:
+    """``recover DAMAGED NEW_BAG``: write a whole bag from what a killed recorder left."""
+    parser = argparse.ArgumentParser(
+        prog="recover",
+        description="Write a whole bag at NEW_BAG from every message that reached the disk in DAMAGED, a bag "
+        "whose recorder was killed (no metadata.yaml, no MCAP summary).",
+    )
+    parser.add_argument("damaged", type=Path, help="the damaged bag directory (or its .mcap file)")
+    parser.add_argument("recovered", type=Path, help="the new bag directory to write")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        if not args.damaged.exists():
+            raise BagError(f"no bag at {args.damaged}")
+        count = recover_bag(args.damaged, args.recovered)
+    except BagError as error:
+        print(f"recover: {error}", file=sys.stderr)
+        return 2
+    print(f"recovered {count} messages into {args.recovered}")
     return 0
