@@ -14,10 +14,10 @@ from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from bt_controller.tree import parse
 from evolution_manager.bags import BagRecorder
 from evolution_manager.graph import executable
-from evolution_manager.replay import RESULT_TOPIC, verify_trial_bag
+from evolution_manager.nodes.trial import write_result
+from evolution_manager.replay import verify_trial_bag
 from swarm_msgs.msg import SwarmState
 from swarm_sim.lockstep import run_with_controllers
-from swarm_sim.trial import VALUE_NAMES
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 SEED, TRIAL = 21, 2
@@ -61,18 +61,7 @@ def write_trial_bag(path, tamper_step=None):
                 poses=robots,
             )
             bag.write("/swarm_state", state, step * STEP_NS)
-        values = dict(zip(VALUE_NAMES, record.values, strict=True))
-        result = bag.message(
-            "swarm_msgs/msg/EvaluationResult",
-            tree=TREE,
-            seed=SEED,
-            trials=1,
-            ok=True,
-            error="",
-            fitness=values["food"],
-            **values,
-        )
-        bag.write(RESULT_TOPIC, result, len(states) * STEP_NS)
+        write_result(bag, TREE, SEED, record, len(states) * STEP_NS)
     return len(states)
 
 
