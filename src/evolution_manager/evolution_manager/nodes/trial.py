@@ -29,6 +29,7 @@ from evolution_manager.bags import BagError, BagRecorder
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.replay import RESULT_TOPIC
+from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
 from swarm_sim.config import DEFAULT
@@ -40,18 +41,11 @@ class TrialFailedError(RuntimeError):
 
 
 def expected_messages(robots: int) -> dict[str, int]:
-    """How many messages each topic of a trial graph carries in one trial."""
+    """How many messages each topic of a trial graph (``trial_topics``) carries in one trial."""
     p = DEFAULT.params()
     steps = p.settle_steps + p.ticks * p.steps_per_tick
-    counts = {"/clock": steps, "/trial_start": 1, "/swarm_state": steps, "/poses": steps}
-    for i in range(robots):
-        counts |= {
-            f"/footbot_{i}/ground": steps,
-            f"/footbot_{i}/range_and_bearing": steps,
-            f"/footbot_{i}/wheels": steps,
-            f"/footbot_{i}/tree_status": p.ticks,
-        }
-    return counts
+    per_trial = {TrialStart: 1, TreeStatus: p.ticks}
+    return {topic: per_trial.get(msg_class, steps) for topic, msg_class in trial_topics(robots)}
 
 
 class TrialRunner:
