@@ -6,7 +6,7 @@ import subprocess
 
 from evolution_manager.bags import read_bag
 from evolution_manager.graph import executable
-from evolution_manager.replay import verify_trial_bag
+from evolution_manager.reproduce import verify_trial_bag
 
 
 def test_main_job_writes_the_run_and_the_recorded_best_trial(tmp_path):

@@ -15,7 +15,7 @@ from bt_controller.tree import parse
 from evolution_manager.bags import BagRecorder
 from evolution_manager.graph import executable
 from evolution_manager.nodes.trial import write_result
-from evolution_manager.replay import verify_trial_bag
+from evolution_manager.reproduce import verify_trial_bag
 from swarm_msgs.msg import SwarmState
 from swarm_sim.lockstep import run_with_controllers
 

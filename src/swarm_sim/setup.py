@@ -28,7 +28,7 @@ setup(
         "console_scripts": [
             # "EXECUTABLE = swarm_sim.MODULE:main": run with `ws/run swarm_sim EXECUTABLE`.
             "evaluate = swarm_sim.cli:evaluate_main",
-            "bench = swarm_sim.bench:main",
+            "bench = swarm_sim.batch_bench:main",
             "simulator = swarm_sim.nodes.simulator:main",
             "evaluator = swarm_sim.nodes.evaluator:main",
         ],

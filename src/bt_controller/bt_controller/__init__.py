@@ -1,7 +1,7 @@
 """bt_controller: the behaviour-tree engine of the swarm (see the package README).
 
 The light public API is re-exported here (no numba, no matplotlib on import); the interpreters live in
-``bt_controller.reference`` (the definition of a tick) and ``bt_controller.compiled`` (numba kernels).
+``bt_controller.semantics`` (the definition of a tick) and ``bt_controller.compiled`` (numba kernels).
 """
 
 from bt_controller.errors import TreeError, TreeLimitError, TreeSyntaxError

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller import reference
+from bt_controller import semantics
 from bt_controller.compiled import N_COUNTS, new_memory, pack, tick_batch
 from bt_controller.random_trees import random_blackboards, random_tree, random_tree_grow
 from bt_controller.tree import Node
@@ -58,15 +58,15 @@ def compare(forest: Sequence[Node], keys: np.ndarray, boards: np.ndarray) -> Mis
     counts = np.zeros((n_robots, N_COUNTS), np.int64)
     status = np.empty(n_robots, np.int8)
     action = np.empty(n_robots, np.int8)
-    ref_memory = [reference.new_memory(t) for t in forest]
-    ref_counts = [reference.new_counts() for _ in forest]
+    ref_memory = [semantics.new_memory(t) for t in forest]
+    ref_counts = [semantics.new_counts() for _ in forest]
     for k in range(n_ticks):
         tick_batch(
             packed.op, packed.arg, packed.first, packed.nchild, packed.children, packed.node_offset,
             packed.child_offset, robot_tree, memory, boards[:, k], keys, k, counts, status, action,
         )  # fmt: skip
         for r, tree in enumerate(forest):
-            expected = reference.tick(tree, ref_memory[r], boards[r, k], int(keys[r]), k, ref_counts[r])
+            expected = semantics.tick(tree, ref_memory[r], boards[r, k], int(keys[r]), k, ref_counts[r])
             checks = (
                 ("status and action", expected, (int(status[r]), int(action[r]))),
                 ("memory", ref_memory[r], memory[r, : tree.size].tolist()),

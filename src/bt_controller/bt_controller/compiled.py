@@ -179,7 +179,7 @@ def tick(
 ) -> tuple[int, int]:
     """Tick the root once; update ``memory`` and ``counts``; return ``(status, action started or -1)``.
 
-    Semantics, memory and counts exactly as ``bt_controller.reference.tick``. ``blackboard`` is any array
+    Semantics, memory and counts exactly as ``bt_controller.semantics.tick``. ``blackboard`` is any array
     of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
     Inlined into calling kernels (a call would cost more than the tick itself).
     """

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bt_controller.perception import PerceptionParams, Readings, RobotView
-from bt_controller.reference import ReferenceRobot
+from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, RUNNING, STOP
 

@@ -8,7 +8,7 @@ from bt_strategies import blackboards, keys, trees
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bt_controller import reference
+from bt_controller import semantics
 from bt_controller.agreement import check_random, compare, random_forest
 from bt_controller.compiled import (
     N_COUNTS,
@@ -26,7 +26,7 @@ from bt_controller.tree import parse
 @settings(max_examples=600, derandomize=True, deadline=None)
 @given(tree=trees, key=keys, boards=st.lists(blackboards, min_size=1, max_size=30))
 def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards):
-    ref = reference.ReferenceRobot(tree, key)
+    ref = semantics.ReferenceRobot(tree, key)
     fast = CompiledRobot(tree, key)
     for board in boards:
         assert fast.step(board) == ref.step(board)
@@ -47,7 +47,7 @@ def test_run_ticks_ends_where_tick_by_tick_ticking_ends():
     boards = random_blackboards(rng, 300, 40)
     run = run_ticks(packed, np.arange(300), keys_, boards)
     for r, tree in enumerate(forest):
-        robot = reference.ReferenceRobot(tree, int(keys_[r]))
+        robot = semantics.ReferenceRobot(tree, int(keys_[r]))
         results = [robot.step(boards[r, k]) for k in range(40)]
         assert [s for s, _ in results] == run.status[r].tolist()
         assert [a for _, a in results] == run.action[r].tolist()
@@ -59,13 +59,13 @@ def test_a_planted_difference_is_reported(monkeypatch):
     forest = [parse("seq(on_food, forward)")]
     boards = np.ones((1, 3, 8), bool)
     assert compare(forest, np.array([1], np.uint64), boards) is None
-    real_tick = reference.tick
+    real_tick = semantics.tick
 
     def wrong_tick(*args):
         status, action = real_tick(*args)
         return (status, action) if args[4] < 2 else (1 - status, action)
 
-    monkeypatch.setattr(reference, "tick", wrong_tick)
+    monkeypatch.setattr(semantics, "tick", wrong_tick)
     mismatch = compare(forest, np.array([1], np.uint64), boards)
     assert mismatch is not None and mismatch.tick_index == 2 and mismatch.what == "status and action"
     assert "seq(on_food, forward)" in str(mismatch)
@@ -101,7 +101,7 @@ def test_tick_is_callable_from_another_kernel():
     tree = random_tree(np.random.default_rng(5), 30)
     flat = flatten(tree)
     actions, counts = _simulator_like_kernel(*flat.arrays(), np.uint64(99), 40)
-    ref = reference.ReferenceRobot(tree, 99)
+    ref = semantics.ReferenceRobot(tree, 99)
     board = [False] * 8
     for k in range(40):
         board[k % 8] = not board[k % 8]

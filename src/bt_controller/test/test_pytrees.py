@@ -13,7 +13,7 @@ py_trees = pytest.importorskip("py_trees")
 from bt_controller.agreement import random_forest  # noqa: E402
 from bt_controller.pytrees import PyTreesRobot  # noqa: E402
 from bt_controller.random_trees import random_blackboards  # noqa: E402
-from bt_controller.reference import ReferenceRobot  # noqa: E402
+from bt_controller.semantics import ReferenceRobot  # noqa: E402
 from bt_controller.tree import parse  # noqa: E402
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from bt_controller.compiled import CompiledRobot
 from bt_controller.draws import choose, derive
-from bt_controller.reference import ReferenceRobot, wheels
+from bt_controller.semantics import ReferenceRobot, wheels
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, FAILURE, RUNNING, SUCCESS
 

@@ -18,9 +18,9 @@ from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.tree import to_text
-from swarm_sim import reference
+from swarm_sim import reference_road
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
-from swarm_sim.trial import VALUE_NAMES, TrialRecord
+from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 EXIT_USAGE = 2
 
@@ -79,7 +79,7 @@ def run(argv: Sequence[str] | None = None) -> str:
     except ValueError as error:
         raise UsageError(str(error)) from None
     if args.engine == "reference":
-        values, records = reference.evaluate(tree, args.seed, args.trials)
+        values, records = reference_road.evaluate(tree, args.seed, args.trials)
     else:
         result, records = BatchEvaluator().evaluate_trials([request])[0]
         if result.error is not None:

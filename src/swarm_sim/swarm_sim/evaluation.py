@@ -21,7 +21,7 @@ from bt_controller.errors import TreeError
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
 from swarm_sim import kernel, world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.trial import TrialRecord, combine
+from swarm_sim.trial_data import TrialRecord, combine
 
 MAX_TRIALS = 10_000
 """Most trials one request may ask for."""

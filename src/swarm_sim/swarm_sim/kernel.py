@@ -1,8 +1,9 @@
 """The batch road: whole trials in compiled kernels, with the compiled tree interpreter.
 
-``simulate_trial`` runs one trial of one flat tree exactly as ``swarm_sim.reference.run_trial`` does, with
-the same ``swarm_sim.world`` functions in the same order; it only skips work whose result is never read (a
-bearing is computed for the three senders the blackboard needs, at ticks, rather than for every message).
+``simulate_trial`` runs one trial of one flat tree exactly as ``swarm_sim.reference_road.run_trial``
+does, with the same ``swarm_sim.world`` functions in the same order; it only skips work whose result is never
+read (a bearing is computed for the three senders the blackboard needs, at ticks, rather than for every
+message).
 ``run_jobs`` runs many (tree, seed, trial) jobs; each job writes only its own output rows, so a job's result
 never depends on the others, their order or their number.
 """

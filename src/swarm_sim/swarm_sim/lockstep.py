@@ -5,7 +5,7 @@ sensor) and nothing of the robots' minds. After each sensing step it hands every
 for every robot's answer: the estimates it will broadcast next, its smoothed values, and (when the robots
 have just ticked their trees) the action that drives its wheels until the next tick. The objectives are scored
 from the robots' smoothed values at the first tick and after the last step, as the reference road does
-(``swarm_sim.reference``), so the node graph reproduces the batch evaluator exactly.
+(``swarm_sim.reference_road``), so the node graph reproduces the batch evaluator exactly.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.robot import Readings, sense_swarm
-from swarm_sim.trial import TrialRecord, setup_trial
+from swarm_sim.sensing import Readings, sense_swarm
+from swarm_sim.trial_data import TrialRecord, setup_trial
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ import pytest
 from bt_controller.tree import parse
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, run_with_controllers
 from swarm_sim.randtrees import random_trees
-from swarm_sim.reference import run_trial
+from swarm_sim.reference_road import run_trial
 
 TREES = [
     "forward",

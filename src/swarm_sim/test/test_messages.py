@@ -8,9 +8,9 @@ import pytest
 from bt_controller.draws import uniform
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.robot import Readings, RobotView, sense_swarm
+from swarm_sim.sensing import Readings, RobotView, sense_swarm
 from swarm_sim.streams import DROPS, stream_key
-from swarm_sim.trial import setup_trial
+from swarm_sim.trial_data import setup_trial
 
 P = DEFAULT.params()
 

@@ -6,17 +6,17 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference, world
+from swarm_sim import reference_road, world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.trial import setup_trial
+from swarm_sim.trial_data import setup_trial
 
 TRIALS = 4
 
 
 def both_roads(tree, seed, config, trials=TRIALS):
     """The reference road's values and records; the batch road must agree exactly."""
-    values, records = reference.evaluate(parse(tree), seed, trials, config)
+    values, records = reference_road.evaluate(parse(tree), seed, trials, config)
     result = BatchEvaluator(config).evaluate([EvaluationRequest(tree, seed, trials)])[0]
     assert result.fitness + result.descriptors == values
     return values, records

@@ -8,7 +8,7 @@ import pytest
 from bt_controller.vocabulary import ACTION_INDEX
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.trial import setup_trial
+from swarm_sim.trial_data import setup_trial
 
 P = DEFAULT.params()
 STEPS_PER_SECOND = round(1 / DEFAULT.step_dt)

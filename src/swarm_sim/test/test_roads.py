@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference
+from swarm_sim import reference_road
 from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
 from swarm_sim.randtrees import random_trees
@@ -27,7 +27,9 @@ def test_roads_agree_on_random_trees(config):
     requests = [EvaluationRequest(t, 1000 + k, TRIALS) for k, t in enumerate(texts)]
     batch = BatchEvaluator(config).evaluate_trials(requests)
     for request, (result, records) in zip(requests, batch, strict=True):
-        values, ref_records = reference.evaluate(parse(request.tree), request.seed, request.trials, config)
+        values, ref_records = reference_road.evaluate(
+            parse(request.tree), request.seed, request.trials, config
+        )
         assert result.fitness + result.descriptors == values, request.tree
         assert _records_equal(records, ref_records), request.tree
 

@@ -5,7 +5,7 @@ import numpy as np
 from bt_controller.draws import root_key
 from swarm_sim.config import DEFAULT
 from swarm_sim.streams import DROPS, PURPOSES, TREE, stream_key, trial_keys
-from swarm_sim.trial import setup_trial
+from swarm_sim.trial_data import setup_trial
 
 
 def test_trial_keys_match_the_documented_derivation():

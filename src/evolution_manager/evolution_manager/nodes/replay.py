@@ -28,7 +28,7 @@ from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
 from evolution_manager.bags import BagError, check_bag, read_bag, recover_bag
-from evolution_manager.replay import verify_trial_bag
+from evolution_manager.reproduce import verify_trial_bag
 
 RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 

@@ -28,12 +28,12 @@ from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
-from evolution_manager.replay import RESULT_TOPIC
+from evolution_manager.reproduce import RESULT_TOPIC
 from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
 from swarm_sim.config import DEFAULT
-from swarm_sim.trial import VALUE_NAMES, TrialRecord
+from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 
 class TrialFailedError(RuntimeError):

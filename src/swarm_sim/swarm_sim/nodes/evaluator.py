@@ -19,7 +19,7 @@ from bt_controller.nodes.spinning import spin_until_shutdown
 from swarm_msgs.msg import EvaluationResult
 from swarm_msgs.srv import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest
-from swarm_sim.trial import VALUE_NAMES
+from swarm_sim.trial_data import VALUE_NAMES
 
 OBJECTIVES = VALUE_NAMES[:3]
 

@@ -60,7 +60,7 @@ from swarm_msgs.msg import (
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
-from swarm_sim.trial import VALUE_NAMES, TrialRecord
+from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 

@@ -15,7 +15,7 @@ from bt_controller.errors import TreeError
 from bt_controller.tree import parse
 from evolution_manager.bags import BagError, read_bag
 from swarm_sim.lockstep import LockstepTrial, run_with_controllers
-from swarm_sim.trial import VALUE_NAMES
+from swarm_sim.trial_data import VALUE_NAMES
 
 RESULT_TOPIC = "/trial_result"
 """Topic of a trial bag's last message: its tree, seed and values (swarm_msgs/EvaluationResult)."""

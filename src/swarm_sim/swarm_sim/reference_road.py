@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from bt_controller.reference import ReferenceRobot
+from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
 from bt_controller.vocabulary import RUNNING, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.robot import RobotView, sense_swarm
-from swarm_sim.trial import TrialRecord, combine, setup_trial
+from swarm_sim.sensing import RobotView, sense_swarm
+from swarm_sim.trial_data import TrialRecord, combine, setup_trial
 
 
 def run_trial(tree: Node, seed: int, trial: int, config: Config = DEFAULT) -> TrialRecord:

@@ -19,7 +19,7 @@ from bt_controller.agreement import check_random
 from bt_controller.compiled import N_COUNTS, new_memory, pack, run_ticks
 from bt_controller.compiled import _run_ticks as run_kernel
 from bt_controller.random_trees import random_blackboards, random_tree
-from bt_controller.reference import ReferenceRobot
+from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import parse
 
 

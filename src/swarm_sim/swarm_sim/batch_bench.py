@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 import numba
 
-from swarm_sim import reference
+from swarm_sim import reference_road
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.randtrees import random_trees
 
@@ -37,10 +37,10 @@ def _batch_rate(evaluator: BatchEvaluator, requests: list[EvaluationRequest]) ->
 
 def _reference_rate(requests: list[EvaluationRequest]) -> tuple[float, float]:
     trees = [check_request(r) for r in requests]
-    reference.evaluate(trees[0], 0, 1)  # warm the compiled world functions
+    reference_road.evaluate(trees[0], 0, 1)  # warm the compiled world functions
     start = time.perf_counter()
     for tree, request in zip(trees, requests, strict=True):
-        reference.evaluate(tree, request.seed, request.trials)
+        reference_road.evaluate(tree, request.seed, request.trials)
     elapsed = time.perf_counter() - start
     return len(requests) / elapsed, elapsed
 
@@ -53,7 +53,7 @@ def parity(n_trees: int, seed: int, trials: int) -> int:
     batch = evaluator.evaluate_trials(requests)
     mismatches = 0
     for request, (result, records) in zip(requests, batch, strict=True):
-        values, ref_records = reference.evaluate(check_request(request), request.seed, request.trials)
+        values, ref_records = reference_road.evaluate(check_request(request), request.seed, request.trials)
         assert result.fitness is not None and result.descriptors is not None
         same = values == result.fitness + result.descriptors and all(
             a.values == b.values and (a.end_poses == b.end_poses).all()
