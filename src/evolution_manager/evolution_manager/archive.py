@@ -21,8 +21,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-from qdpy.containers import Grid
-from qdpy.phenotype import Features, Fitness, ScoresDict
+
+from .qdpy_grid import Features, Fitness, Grid, ScoresDict
 
 GRID_SHAPE: tuple[int, int, int] = (8, 8, 8)
 ITEMS_PER_BIN = 3

@@ -22,7 +22,6 @@ from pathlib import Path
 
 from bt_controller.tree import parse, to_indented
 
-from . import figures
 from .archive import Repertoire
 from .files import write_atomic, write_json
 from .primitives import DESCRIPTORS, OBJECTIVES
@@ -151,6 +150,8 @@ def write_best_trees(run: Run) -> list[Path]:
 
 def write_figures(run: Run) -> list[Path]:
     """Heatmaps of each evolved objective's grid, the histogram of every grid, the progress curves."""
+    from . import figures  # matplotlib (about 1.5 s to import) only when figures are drawn
+
     folder = run.directory.figures
     written = []
     for objective in run.config.objectives:
