@@ -64,7 +64,7 @@ def failed(reason: str) -> EvaluationResult:
     return EvaluationResult(fitness=None, descriptors=None, error=reason)
 
 
-def from_values(values: Sequence[float]) -> EvaluationResult:
+def from_values(values: Sequence[float] | np.ndarray) -> EvaluationResult:
     """A result from six values (``trial.VALUE_NAMES`` order)."""
     v = tuple(float(x) for x in values)
     return EvaluationResult(fitness=(v[0], v[1], v[2]), descriptors=(v[3], v[4], v[5]), error=None)
@@ -126,14 +126,9 @@ class BatchEvaluator:
         max_depth: int = MAX_DEPTH,
         threads: int = 1,
     ) -> None:
-        if (
-            isinstance(threads, bool)
-            or not isinstance(threads, int)
-            or not 1 <= threads <= numba.config.NUMBA_NUM_THREADS
-        ):
-            raise ValueError(
-                f"threads must be an integer in [1, {numba.config.NUMBA_NUM_THREADS}], got {threads!r}"
-            )
+        most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set by numba at import
+        if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= most:
+            raise ValueError(f"threads must be an integer in [1, {most}], got {threads!r}")
         self.threads = threads
         self.config = config
         self.max_nodes = max_nodes
