@@ -22,13 +22,10 @@ from typing import NoReturn
 
 from swarm_sim import validation
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 
 EXIT_USAGE = 2
-
-
-class UsageError(Exception):
-    """Bad command-line input; the message is printed as one line."""
 
 
 class _Parser(argparse.ArgumentParser):

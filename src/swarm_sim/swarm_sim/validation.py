@@ -19,6 +19,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from swarm_sim.errors import ReferenceFileError
+
 QUANTITIES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
 """The six quantities of an evaluation, in the evaluator's order (three objectives, three descriptors)."""
 RAW_DESCRIPTOR_HALF_RANGE = 40.0
@@ -29,14 +31,27 @@ TOLERANCE_ABSOLUTE = 0.03
 """Absolute slack added to the tolerance (model.md)."""
 MAX_Z = 4.0
 """Largest |z| of a difference still called indistinguishable."""
+RESOLUTION = 1e-6
+"""The reference files print 6 decimals: a smaller difference is rounding (say, -26.6 / 80 computed two
+ways), not a difference, and gets z = 0 even when both standard errors are 0."""
 
 AGREES = "agrees"
 INDISTINGUISHABLE = "indistinguishable"
 OUTSIDE = "OUTSIDE"
 
-
-class ReferenceFileError(ValueError):
-    """A reference TSV that cannot be read; the message names the file, the row and what was expected."""
+__all__ = [
+    "AGREES",
+    "INDISTINGUISHABLE",
+    "OUTSIDE",
+    "Comparison",
+    "Estimate",
+    "ReferenceFileError",
+    "compare",
+    "estimate",
+    "estimates",
+    "read_reference",
+    "render",
+]
 
 
 @dataclass(frozen=True)
@@ -69,10 +84,13 @@ class Comparison:
 
     @property
     def z(self) -> float:
-        """diff / sqrt(SE_ours^2 + SE_theirs^2); 0 for equal exact values, infinite for different ones."""
+        """diff / sqrt(SE_ours^2 + SE_theirs^2); 0 for a diff within ``RESOLUTION``, infinite for exact values
+        (both SE 0) that differ by more."""
+        if abs(self.diff) <= RESOLUTION:
+            return 0.0
         scale = math.hypot(self.ours.sem, self.theirs.sem)
         if scale == 0.0:
-            return 0.0 if self.diff == 0.0 else math.copysign(math.inf, self.diff)
+            return math.copysign(math.inf, self.diff)
         return self.diff / scale
 
     @property

@@ -35,6 +35,8 @@ def test_tolerance_and_verdicts_worked_by_hand():
     assert abs(far.z) < 4 and far.verdict == OUTSIDE
     exact = Comparison("t", "movement", Estimate(1.0, 0.0, 20), Estimate(1.0, 0.0, 20))
     assert exact.z == 0.0 and exact.verdict == INDISTINGUISHABLE
+    rounded = Comparison("t", "movement", Estimate(0.1675 + 1e-12, 0.0, 20), Estimate(0.1675, 0.0, 20))
+    assert rounded.diff != 0.0 and rounded.z == 0.0 and rounded.verdict == INDISTINGUISHABLE
     off = Comparison("t", "movement", Estimate(0.99, 0.0, 20), Estimate(1.0, 0.0, 20))
     assert off.z == -math.inf and off.verdict == AGREES  # within 0.03, but both exact and different
 
