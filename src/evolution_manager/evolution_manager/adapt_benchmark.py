@@ -11,8 +11,10 @@ evaluation of that seed is on the same fixed scenario, so all methods are scored
 - ``ite``: Intelligent Trial and Error over the repertoire (``adapt``'s search, run for the whole budget;
   where its stopping rule would have stopped is recorded too);
 - ``random``: distinct bins of the repertoire drawn at random, the same budget;
-- ``qd-scratch`` and ``gp-scratch``: MAP-Elites and GP_o from scratch in the changed world, the same budget;
-- the ceiling: the best fitness found by MAP-Elites and by GP_o from scratch with ``--ceiling`` evaluations.
+- ``qd-scratch`` and ``gp-scratch``: MAP-Elites and GP_o from scratch in the changed world, the same budget
+  (each with a seed of its own derived from ``s``);
+- the ceiling: the best fitness found by MAP-Elites and by GP_o from scratch with ``--ceiling`` evaluations
+  (algorithm seed ``s``).
 
 The repertoire methods run once per repertoire; the scratch methods and the ceiling once per seed.
 Writes ``DIR/runs.csv`` (every trial of every adaptation run: its tree, fitness and the best so far),
@@ -64,6 +66,7 @@ TARGET = 0.9
 RUN_HEADER = ["condition", "method", "repertoire", "seed", "trial", "tree", "fitness", "best_so_far"]
 CEILING_HEADER = ["condition", "seed", "algorithm", "evaluations", "simulated", "best_fitness", "tree"]
 _PURPOSE_RANDOM = 71
+_PURPOSE_SCRATCH = 72
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -180,8 +183,10 @@ def benchmark(args: argparse.Namespace) -> dict:
                 best_ceiling = max(best_ceiling, float(ceilings[key][5]))
             ceiling_of[(condition, seed)] = best_ceiling
             say(f"{condition} seed {seed}: ceiling {best_ceiling:.4f}; scratch and repertoire methods")
-            for algorithm in ("qd", "gp"):
-                trees, fitness = reevolve(algorithm, args.objective, args.budget, seed, evaluate)
+            for n, algorithm in enumerate(("qd", "gp")):
+                # Own seeds: with the same seed both would draw the same initial random trees.
+                own = derive_seed(seed, _PURPOSE_SCRATCH, n) & MAX_SEED
+                trees, fitness = reevolve(algorithm, args.objective, args.budget, own, evaluate)
                 add_run(condition, f"{algorithm}-scratch", "", seed, trees, fitness)
             for r, (name, candidates) in enumerate(repertoires.items()):
                 top = max(candidates, key=lambda c: c.prior)
