@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bt_controller.draws import MAX_SEED
+from bt_controller.draws import MAX_SEED, derive_seed
 
 from .adaptation import (
     AdaptationError,
@@ -50,7 +50,7 @@ from .adaptation import (
     run_picker,
 )
 from .cli import EXIT_USAGE, Parser, UsageError, positive_int
-from .config import OBJECTIVES, derive_seed
+from .config import OBJECTIVES
 from .files import write_atomic, write_json
 
 METHODS: tuple[str, ...] = ("unchanged", "ite", "random", "qd-scratch", "gp-scratch")
@@ -151,7 +151,7 @@ def benchmark(args: argparse.Namespace) -> dict:
 
     def add_run(
         condition: str, method: str, repertoire: str, seed: int, trees: list[str], fitness: list[float]
-    ):
+    ) -> None:
         curve = best_so_far(fitness)
         if method == "unchanged":  # one tree, kept: its fitness at every trial
             curve = curve * args.budget
@@ -274,7 +274,9 @@ def summarise(
             "methods": methods,
         }
     out["conditions"] = per_condition
-    return _finite(out)
+    finite = _finite(out)
+    assert isinstance(finite, dict)
+    return finite
 
 
 def _finite(data: object) -> object:

@@ -72,7 +72,7 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
             if not math.isfinite(fitness):
                 raise ValueError(f"fitness of bin {list(index)} is not finite")
             if index not in best or fitness > best[index].prior:
-                best[index] = Candidate(index, str(item["tree"]), fitness, descriptors)  # type: ignore[arg-type]
+                best[index] = Candidate(index, str(item["tree"]), fitness, descriptors)
     except EvolutionError as error:
         raise AdaptationError(str(error)) from None
     except (KeyError, TypeError, ValueError) as error:

@@ -98,7 +98,7 @@ class SimulatorNode(Node):
         ).value
         if self.robots != config.n_robots:
             self.config = replace(config, n_robots=self.robots)
-        conditions = self.declare_parameter(
+        conditions: str = self.declare_parameter(
             "conditions",
             "",
             ParameterDescriptor(
