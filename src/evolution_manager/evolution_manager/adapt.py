@@ -34,9 +34,9 @@ from .adaptation import (
     load_candidates,
     run_picker,
 )
-from .cli import EXIT_USAGE, Parser, UsageError, positive_int, seed_int
+from .cli import EXIT_USAGE, Parser, positive_int, seed_int
 from .config import OBJECTIVES
-from .errors import EvolutionError
+from .errors import EvolutionError, UsageError
 from .files import write_json
 
 RESULT = "adaptation.json"

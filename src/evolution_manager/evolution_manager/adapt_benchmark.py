@@ -49,8 +49,9 @@ from .adaptation import (
     reevolve,
     run_picker,
 )
-from .cli import EXIT_USAGE, Parser, UsageError, positive_int
+from .cli import EXIT_USAGE, Parser, positive_int
 from .config import OBJECTIVES
+from .errors import UsageError
 from .files import write_atomic, write_json
 
 METHODS: tuple[str, ...] = ("unchanged", "ite", "random", "qd-scratch", "gp-scratch")

@@ -26,17 +26,14 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from swarm_sim.config import DEFAULT, Config, ConfigError
+from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import ConditionError, ConfigError
 
 CONDITION_NAMES: tuple[str, ...] = ("dead-robots", "weak-wheel", "message-loss", "robots", "gap")
 """Every condition name, in the order they are applied (``robots`` is applied first, whatever the order
 given, so that ``dead-robots`` and ``weak-wheel`` are checked against the swarm they damage)."""
 
 _ORDER = ("robots", "gap", "message-loss", "dead-robots", "weak-wheel")
-
-
-class ConditionError(ValueError):
-    """A condition that cannot be applied; the message names it and says what was expected."""
 
 
 def _integer(name: str, text: str) -> int:
