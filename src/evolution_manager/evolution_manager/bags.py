@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import struct
 import tempfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -222,7 +223,7 @@ def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
                     elif isinstance(record, Message) and record.channel_id in channels:
                         topic, msgtype = channels[record.channel_id]
                         yield topic, msgtype, record.log_time, bytes(record.data)
-            except (McapError, EOFError, ValueError, OSError, AssertionError):
+            except (McapError, EOFError, ValueError, OSError, AssertionError, struct.error):
                 pass  # the truncated tail: everything before it is kept
 
 

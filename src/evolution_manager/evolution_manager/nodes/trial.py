@@ -29,7 +29,7 @@ from rclpy.signals import SignalHandlerOptions
 from bt_controller.errors import TreeError
 from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
-from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.bags import BagError, BagRecorder, check_new_bag
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.processes import exit_status, signals_as_interrupts
@@ -228,8 +228,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         tree = parse(tree_argument(args.tree))
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
-        if args.bag.exists():
-            raise BagError(f"refusing to overwrite {args.bag}: choose a new bag directory")
+        check_new_bag(args.bag)
+        args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)  # an unusable place fails here, at once
         with signals_as_interrupts():
             record = run_recorded_trial(to_text(tree), args.seed, args.trial, args.bag, timeout=args.timeout)
     except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
