@@ -25,14 +25,11 @@ from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from .errors import BagError
 from .processes import Lock, exclusive_lock, is_locked, lock_holder
 
 INTERFACE_PACKAGE = "swarm_msgs"
 LOCK_NAME = ".lock"  # in a bag directory while a recorder writes it
-
-
-class BagError(RuntimeError):
-    """A bag could not be written, read or recovered; the message says which and why."""
 
 
 def swarm_msgs_definitions() -> dict[str, str]:
@@ -102,7 +99,9 @@ class BagRecorder:
     def flush(self, sync: bool = False) -> None:
         """Put every message written so far on disk as a whole MCAP chunk, so that a kill from now on loses
         none of them (``recover`` reads them back); with ``sync``, also wait for the disk."""
-        storage = None if self._writer is None else self._writer.storage
+        # rosbags' MCAP writer (McapWriter) keeps the pending chunk and the file; its protocol type does not
+        # show them, hence Any.
+        storage: Any = None if self._writer is None else self._writer.storage
         if storage is None:
             return
         # rosbags closes a chunk only at 1 MiB or at the end; close the pending one now.
@@ -187,6 +186,19 @@ def check_bag(path: Path) -> None:
             f"{path} is not a whole rosbag2 bag (no metadata.yaml): if its recorder was killed, run "
             f"`ws/run evolution_manager recover {path} NEW_BAG`"
         )
+
+
+def topic_counts(path: Path) -> dict[str, int]:
+    """How many messages each topic of the whole bag at ``path`` holds (from its index, reading none)."""
+    check_bag(path)
+    try:
+        with Reader(path) as reader:
+            counts: dict[str, int] = {}
+            for connection in reader.connections:
+                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
+            return counts
+    except Exception as error:  # rosbags' ReaderError, a damaged metadata.yaml
+        raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
 
 
 def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:

@@ -23,26 +23,10 @@ from pathlib import Path
 from types import FrameType
 from typing import IO
 
-from .errors import EvolutionError
+from .errors import Interrupted, LockHeldError
 
 _PR_SET_PDEATHSIG = 1
 _libc = ctypes.CDLL(None, use_errno=True)  # loaded before any fork: preexec_fn only calls into it
-
-
-class LockHeldError(EvolutionError):
-    """Another process holds the lock; the message names it and its PID."""
-
-
-class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived; ``exit_status`` is 128 + the signal number (130 or 143)."""
-
-    def __init__(self, signum: int = signal.SIGINT) -> None:
-        super().__init__(signal.Signals(signum).name)
-        self.signum = signum
-
-    @property
-    def exit_status(self) -> int:
-        return 128 + self.signum
 
 
 def exit_status(interruption: BaseException) -> int:

@@ -35,8 +35,8 @@ from .algorithms import AskTell, GeneticProgramming, MapElites, as_outcome
 from .archive import Repertoire
 from .config import RunConfig, evaluation_seed
 from .errors import EvolutionError, RunDirectoryError
-from .files import CsvLog, _umask, number, read_json, write_json
-from .primitives import DESCRIPTORS, OBJECTIVES, tree_from_text
+from .files import CsvLog, _umask, number, read_json, read_json_object, write_json
+from .primitives import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
 from .processes import Lock, exclusive_lock, is_locked
 
 LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
@@ -198,7 +198,7 @@ class Run:
     def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:
         """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
         try:
-            config = RunConfig.from_json(read_json(directory.config))  # type: ignore[arg-type]
+            config = RunConfig.from_json(read_json_object(directory.config))
         except (KeyError, TypeError, ValueError) as error:
             raise RunDirectoryError(f"{directory.config} is damaged: {error}") from error
         state = read_json(directory.checkpoint)
@@ -212,7 +212,7 @@ class Run:
                 raise RunDirectoryError(
                     f"{directory.checkpoint} belongs to another configuration than config.json"
                 )
-            run.algorithm.restore(state["algorithm"])  # type: ignore[attr-defined]
+            run.algorithm.restore(state["algorithm"])
             run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
             run.evaluations = int(state["evaluations"])
             run.offsets = {k: int(state["offsets"][k]) for k in ("evaluations", "progress")}
@@ -293,12 +293,12 @@ class Run:
         for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
             index = self.evaluations + offset
             outcome = as_outcome(result)
-            if outcome.ok:
+            measured = outcome.measured()
+            if measured is not None:
+                fitness, descriptors = measured
                 for k, objective in enumerate(OBJECTIVES):
-                    self.passive[objective].offer(
-                        request.tree, outcome.fitness[k], outcome.descriptors, index
-                    )  # type: ignore[index]
-                values = [number(v) for v in outcome.fitness + outcome.descriptors]  # type: ignore[operator]
+                    self.passive[objective].offer(request.tree, fitness[k], descriptors, index)
+                values = [number(v) for v in fitness + descriptors]
                 error = ""
             else:
                 values = [""] * (len(OBJECTIVES) + len(DESCRIPTORS))
@@ -341,7 +341,5 @@ class Run:
     def population(self) -> list[str]:
         """GP's current population as tree texts (empty for MAP-Elites)."""
         if isinstance(self.algorithm, GeneticProgramming):
-            from .primitives import tree_to_text
-
             return [tree_to_text(t) for t in self.algorithm.population]
         return []

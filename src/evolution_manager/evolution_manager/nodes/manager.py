@@ -51,25 +51,31 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from evolution_manager import cli
-from evolution_manager.bags import BagError, BagRecorder, finish_rewrites, rewrite_bag
+from evolution_manager.bags import BagError, BagRecorder, finish_rewrites, rewrite_bag, topic_counts
 from evolution_manager.config import RunConfig
 from evolution_manager.dispatch import DispatchError, Timeouts
 from evolution_manager.errors import EvolutionError
+from evolution_manager.files import read_json_object
 from evolution_manager.graph import Graph, GraphError
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
+from evolution_manager.outputs import write_results
 from evolution_manager.primitives import OBJECTIVES
 from evolution_manager.processes import exit_status, signals_as_interrupts
+from evolution_manager.run import Run, RunDirectory
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
+from swarm_sim.evaluation import Evaluator
 
 EXIT_FAILED = 1
 FLUSH_PERIOD = 1.0  # seconds between flushes of the run bag
@@ -129,7 +135,7 @@ class ManagerNode(Node):
     def __init__(self) -> None:
         super().__init__("manager")
 
-        def declare(name: str, default: object, description: str) -> object:
+        def declare(name: str, default: object, description: str) -> Any:  # a parameter's value, as declared
             descriptor = ParameterDescriptor(description=description, read_only=True)
             return self.declare_parameter(name, default, descriptor).value
 
@@ -170,11 +176,11 @@ class RunRecording:
         self._last_ns = max(self._last_ns + 1, self.node.get_clock().now().nanoseconds)
         return self._last_ns
 
-    def _emit(self, publisher: object, topic: str, msgtype: str, msg: object) -> None:
-        publisher.publish(msg)  # type: ignore[attr-defined]
+    def _emit(self, publisher: Publisher, topic: str, msgtype: str, msg: object) -> None:
+        publisher.publish(msg)
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
-    def batch(self, run: object, requests: Sequence, results: Sequence) -> None:
+    def batch(self, run: Run, requests: Sequence, results: Sequence) -> None:
         """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
@@ -188,11 +194,11 @@ class RunRecording:
                 msg.error = result.error or "no fitness or descriptors"
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
-            grid = run.passive[name]  # type: ignore[attr-defined]
+            grid = run.passive[name]
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
                 objective=name,
-                evaluations=run.evaluations,  # type: ignore[attr-defined]
+                evaluations=run.evaluations,
                 best=float("nan") if grid.best_value is None else grid.best_value,
                 coverage=grid.coverage,
                 qd_score=grid.qd_score,
@@ -235,13 +241,9 @@ def settle_bags(out: Path, evaluations: int) -> int:
                 return deserialize_message(data, ArchiveProgress).evaluations <= evaluations
             return True
 
-        whole = (segment / "metadata.yaml").exists()
-        if whole:
-            from evolution_manager.bags import read_bag
-
-            count = sum(m.topic == EVALUATIONS_TOPIC for m in read_bag(segment))
-        else:
-            count = None
+        count: int | None = None  # unknown for a segment left by a killed manager
+        if (segment / "metadata.yaml").exists():
+            count = topic_counts(segment).get(EVALUATIONS_TOPIC, 0)
         if count is None or start + count > evaluations:
             rewrite_bag(segment, keep)
             count = min(state["evaluations"], evaluations) - start
@@ -249,15 +251,12 @@ def settle_bags(out: Path, evaluations: int) -> int:
     return seen
 
 
-def _open_run(args: argparse.Namespace, evaluator: object) -> object:
-    from evolution_manager.files import read_json
-    from evolution_manager.run import Run, RunDirectory
-
+def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
     directory = RunDirectory(args.out)
     if args.resume:
         if not directory.started():
             raise cli.UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-        cli.check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+        cli.check_resume_options(args, RunConfig.from_json(read_json_object(directory.config)))
         return Run.resume(args.out, evaluator)
     if directory.started():
         raise cli.UsageError(
@@ -385,19 +384,17 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
         rclpy.try_shutdown()
 
 
-def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator: _Remember) -> int:
-    from evolution_manager.outputs import write_results
-
+def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
     out = Path(args.out)
-    recorded = settle_bags(out, run.evaluations)  # type: ignore[attr-defined]
-    if recorded < run.evaluations:  # type: ignore[attr-defined]
+    recorded = settle_bags(out, run.evaluations)
+    if recorded < run.evaluations:
         node.get_logger().warning(
-            f"the run's bags hold {recorded} of the {run.evaluations} evaluations of the checkpoint "  # type: ignore[attr-defined]
+            f"the run's bags hold {recorded} of the {run.evaluations} evaluations of the checkpoint "
             "(a bag segment was removed or damaged)"
         )
-    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)  # type: ignore[attr-defined]
+    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)
     with BagRecorder(bag_path(out)) as recorder:
-        recording = RunRecording(node, recorder, run.config)  # type: ignore[attr-defined]
+        recording = RunRecording(node, recorder, run.config)
         flushed = time.monotonic()
 
         def on_batch(done: int, total: int) -> None:
@@ -410,7 +407,7 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator
                 bar.update(done - bar.n)
 
         try:
-            run.execute(  # type: ignore[attr-defined]
+            run.execute(
                 on_batch=on_batch,
                 checkpoint_interval=args.checkpoint_every,
                 before_checkpoint=lambda: recorder.flush(sync=True),
@@ -418,10 +415,10 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures)  # type: ignore[arg-type]
+    write_results(run, with_figures=not args.no_figures)
     dispatcher = evaluator.evaluator.dispatcher
     node.get_logger().info(
-        f"{run.config.label}: {run.evaluations} evaluations in {args.out} "  # type: ignore[attr-defined]
+        f"{run.config.label}: {run.evaluations} evaluations in {args.out} "
         f"(requests re-sent: {dispatcher.resent}, duplicate results ignored: {dispatcher.duplicates})"
     )
     return 0
