@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+
 from bt_controller.errors import UsageError
 from swarm_sim.errors import ConfigError as WorldConfigError
 
@@ -12,6 +14,8 @@ __all__ = [
     "DispatchError",
     "EvolutionError",
     "GraphError",
+    "Interrupted",
+    "LockHeldError",
     "NoEvaluatorError",
     "RunDirectoryError",
     "TreeTextError",
@@ -59,3 +63,19 @@ class GraphError(RuntimeError):
 
 class TrialFailedError(RuntimeError):
     """The trial could not be run through the graph; the message says why."""
+
+
+class LockHeldError(EvolutionError):
+    """Another process holds a lock (of a run directory or a bag); the message names it and its PID."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived; ``exit_status`` is 128 + the signal number (130 or 143)."""
+
+    def __init__(self, signum: int = signal.SIGINT) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum

@@ -109,5 +109,7 @@ def tree_from_text(
     nodes = []
     for node in root.preorder():
         name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else leaf_name(node)
+        if name not in pset.mapping:
+            raise TreeTextError(f"not a behaviour tree of this primitive set: unknown node {name!r}")
         nodes.append(pset.mapping[name])
     return BehaviourTree(nodes)

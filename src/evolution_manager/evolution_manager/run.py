@@ -22,6 +22,9 @@ run seed and the evaluation's index, it ends with exactly the files of an uninte
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -31,14 +34,24 @@ from typing import Protocol
 from .algorithms import AskTell, GeneticProgramming, MapElites, as_outcome
 from .archive import Repertoire
 from .config import RunConfig, evaluation_seed
-from .errors import RunDirectoryError
-from .files import CsvLog, number, read_json, read_json_object, write_json
-from .primitives import DESCRIPTORS, OBJECTIVES, tree_to_text
+from .errors import EvolutionError, RunDirectoryError
+from .files import CsvLog, _umask, number, read_json, read_json_object, write_json
+from .primitives import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
+from .processes import Lock, exclusive_lock, is_locked
+
+LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
 
 CHECKPOINT_FORMAT = 1
 
 EVALUATION_HEADER = ["evaluation", "seed", "tree", *OBJECTIVES, *DESCRIPTORS, "error"]
 PROGRESS_HEADER = ["evaluations"] + [f"{m}_{o}" for o in OBJECTIVES for m in ("best", "coverage", "qd_score")]
+
+
+def _remove_abandoned_starts(parent: Path, name: str) -> None:
+    """Remove what starts of a run at ``parent/name`` killed before their first checkpoint left behind."""
+    for leftover in parent.glob(f".{name}.new-*"):
+        if leftover.is_dir() and not is_locked(leftover / LOCK_NAME):
+            shutil.rmtree(leftover, ignore_errors=True)
 
 
 class Evaluator(Protocol):
@@ -89,6 +102,12 @@ class RunDirectory:
         """Whether a run was ever started here."""
         return self.config.exists()
 
+    def temporary_files(self) -> list[Path]:
+        """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
+        if not self.root.is_dir():
+            return []
+        return [p for p in self.root.rglob(".*.tmp") if p.is_file()]
+
 
 class Run:
     """One run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
@@ -102,11 +121,16 @@ class Run:
         self.evaluations = 0
         self.timing = Timing()
         self.offsets = {"evaluations": 0, "progress": 0}
+        self.lock: Lock | None = None  # the run directory's lock, held by a run that writes
 
     # Construction ------------------------------------------------------------------------------------
     @classmethod
     def start(cls, config: RunConfig, root: Path, evaluator: Evaluator) -> Run:
-        """A new run in ``root``, which must not hold a run already (nothing saved is ever overwritten)."""
+        """A new run in ``root``, which must not hold a run already (nothing saved is ever overwritten).
+
+        The directory appears whole or not at all: it is built as a hidden sibling (``.<name>.new-*``) with
+        its configuration, empty logs and first checkpoint, then renamed into place. The run holds the
+        directory's lock (``.lock``) until the process ends."""
         directory = RunDirectory(root)
         if directory.started():
             raise RunDirectoryError(
@@ -116,42 +140,96 @@ class Run:
             raise RunDirectoryError(f"{root} is a file, not a directory: choose another --out")
         if directory.root.exists() and any(directory.root.iterdir()):
             raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
-        directory.root.mkdir(parents=True, exist_ok=True)
-        run = cls(config, directory, evaluator)
-        write_json(directory.config, config.to_json())
-        run.offsets = {"evaluations": directory.evaluations.create(), "progress": directory.progress.create()}
-        run.checkpoint()
+        parent = directory.root.absolute().parent
+        parent.mkdir(parents=True, exist_ok=True)
+        _remove_abandoned_starts(parent, directory.root.name)
+        building = Path(tempfile.mkdtemp(prefix=f".{directory.root.name}.new-", dir=parent))
+        try:
+            os.chmod(building, 0o777 & ~_umask())
+            lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+            run = cls(config, RunDirectory(building), evaluator)
+            write_json(run.directory.config, config.to_json())
+            run.offsets = {
+                "evaluations": run.directory.evaluations.create(),
+                "progress": run.directory.progress.create(),
+            }
+            run.checkpoint()
+            try:
+                os.rename(building, directory.root)  # replaces an empty directory, never a full one
+            except OSError as error:
+                raise RunDirectoryError(
+                    f"{root} was created by another process meanwhile: choose another --out"
+                ) from error
+        except BaseException:
+            shutil.rmtree(building, ignore_errors=True)
+            raise
+        run.directory = directory
+        lock.moved(directory.root / LOCK_NAME)
+        run.lock = lock
         return run
 
     @classmethod
     def resume(cls, root: Path, evaluator: Evaluator | None, cut: bool = True) -> Run:
         """The run in ``root`` as it was at its last checkpoint, its CSV files cut back to match (with
-        ``cut=False``, for reading only, the files are left as they are)."""
+        ``cut=False``, for reading only, the files are left as they are and no lock is taken).
+
+        The checkpoint is checked whole (format, configuration, algorithm state, every tree in it) before
+        anything is changed; a writer's lock is taken first, and the temporary files of a killed writer are
+        removed."""
         directory = RunDirectory(root)
         if not directory.started():
             raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
-        config = RunConfig.from_json(read_json_object(directory.config))
+        lock = exclusive_lock(directory.root / LOCK_NAME, f"the run directory {root}") if cut else None
+        try:
+            run = cls._load(directory, evaluator)
+        except BaseException:
+            if lock is not None:
+                lock.release()
+            raise
+        run.lock = lock
+        if cut:
+            for temporary in directory.temporary_files():
+                temporary.unlink(missing_ok=True)
+            directory.evaluations.cut(run.offsets["evaluations"])
+            directory.progress.cut(run.offsets["progress"])
+        return run
+
+    @classmethod
+    def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:
+        """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
+        try:
+            config = RunConfig.from_json(read_json_object(directory.config))
+        except (KeyError, TypeError, ValueError) as error:
+            raise RunDirectoryError(f"{directory.config} is damaged: {error}") from error
         state = read_json(directory.checkpoint)
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
             raise RunDirectoryError(
                 f"{directory.checkpoint} is not a checkpoint of format {CHECKPOINT_FORMAT}"
             )
-        if RunConfig.from_json(state["config"]) != config:
-            raise RunDirectoryError(
-                f"{directory.checkpoint} belongs to another configuration than config.json"
-            )
         run = cls(config, directory, evaluator)
         try:
+            if RunConfig.from_json(state["config"]) != config:
+                raise RunDirectoryError(
+                    f"{directory.checkpoint} belongs to another configuration than config.json"
+                )
             run.algorithm.restore(state["algorithm"])
             run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
             run.evaluations = int(state["evaluations"])
-            run.offsets = {k: int(v) for k, v in state["offsets"].items()}
+            run.offsets = {k: int(state["offsets"][k]) for k in ("evaluations", "progress")}
             run.timing = Timing(**state["timing"])
-        except (KeyError, TypeError, ValueError) as error:
+            archive = run.archive()
+            grids = [*run.passive.values(), *([archive] if archive is not None else [])]
+            for grid in grids:
+                for entry in grid.entries():
+                    tree_from_text(entry.tree, run.algorithm.pset)
+            if run.algorithm.evaluations != run.evaluations or run.evaluations < 0:
+                raise ValueError(
+                    f"the algorithm counts {run.algorithm.evaluations} evaluations, the run {run.evaluations}"
+                )
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError, EvolutionError) as error:
+            if isinstance(error, RunDirectoryError):
+                raise
             raise RunDirectoryError(f"{directory.checkpoint} is damaged: {error}") from error
-        if cut:
-            directory.evaluations.cut(run.offsets["evaluations"])
-            directory.progress.cut(run.offsets["progress"])
         return run
 
     # Execution ---------------------------------------------------------------------------------------
@@ -164,11 +242,13 @@ class Run:
         on_batch: Callable[[int, int], None] | None = None,
         checkpoint_interval: float = 30.0,
         stop_after: int | None = None,
+        before_checkpoint: Callable[[], None] | None = None,
     ) -> None:
         """Run batches until the budget is spent (or ``stop_after`` evaluations, for tests and benchmarks).
 
         A checkpoint is written when ``checkpoint_interval`` seconds have passed since the last one, and
-        always at the end. ``on_batch(evaluations, budget)`` is called after every batch.
+        always at the end. ``on_batch(evaluations, budget)`` is called after every batch, and
+        ``before_checkpoint()`` before every checkpoint (to put what else records the run on disk first).
         """
         last_checkpoint = time.monotonic()
         make_request = _request_type()
@@ -195,8 +275,12 @@ class Run:
             if on_batch is not None:
                 on_batch(self.evaluations, self.config.evaluations)
             if time.monotonic() - last_checkpoint >= checkpoint_interval:
+                if before_checkpoint is not None:
+                    before_checkpoint()
                 self._timed_checkpoint()
                 last_checkpoint = time.monotonic()
+        if before_checkpoint is not None:
+            before_checkpoint()
         self._timed_checkpoint()
 
     def _timed_checkpoint(self) -> None:

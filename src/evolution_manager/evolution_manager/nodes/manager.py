@@ -13,10 +13,17 @@ it finds, waiting up to ``--wait`` seconds for ``--expect`` of them (default 1, 
 
 The run is recorded to ``<out>/run.bag/`` (rosbag2, MCAP storage; ``run.resume-<k>.bag/`` for the k-th
 resume): every evaluation on ``/evaluations`` and the archive's progress on ``/progress`` after each batch.
+The bag is flushed every second and before every checkpoint, so a killed manager loses at most the last
+second of it; a resume first cuts the bags back to the checkpoint (rewriting a killed segment as a whole
+bag), so that together they hold every evaluation exactly once.
+
+The run directory is locked (``<out>/.lock``) while a manager writes it: a second one exits at once naming
+the first one's PID. The evaluator processes it starts die with it, whatever kills it, and one that dies
+during the run is noticed at once, its work re-sent and a new one started in its place.
 
 Parameters (ROS, read once at start; ``--ros-args -p timeout:=20``):
     chunk_size (int, 50): most requests in one service call.
-    timeout (float, 60): seconds a chunk may take before its work is re-sent to another evaluator (longer
+    timeout (float, 3): seconds a chunk may take before its work is re-sent to another evaluator (longer
         when the chunk's expected time is: 10 times it).
     first_timeout (float, 300): the same for an evaluator's first chunk (it compiles its kernels).
     discovery_period (float, 1): seconds between looks for evaluate services.
@@ -29,15 +36,18 @@ Publishers:
 Service clients:
     every service of type swarm_msgs/srv/EvaluateBatch in the domain (``/<evaluator>/evaluate``).
 
-Exit status: 0 done; 1 no evaluator or an evaluation that could not be finished; 2 bad options; 130
-interrupted (continue with ``--resume``).
+Exit status: 0 done; 1 no evaluator, an evaluation that could not be finished or a bag that could not be
+written; 2 bad options, a damaged run directory or one in use by another process; 130 interrupted (SIGINT),
+143 terminated (SIGTERM): continue with ``--resume``.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,11 +58,12 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from evolution_manager import cli
-from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.bags import BagError, BagRecorder, finish_rewrites, rewrite_bag, topic_counts
 from evolution_manager.config import RunConfig
 from evolution_manager.dispatch import DispatchError, Timeouts
 from evolution_manager.errors import EvolutionError
@@ -61,11 +72,13 @@ from evolution_manager.graph import Graph, GraphError
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.outputs import write_results
 from evolution_manager.primitives import OBJECTIVES
+from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.run import Run, RunDirectory
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
 from swarm_sim.evaluation import Evaluator
 
 EXIT_FAILED = 1
+FLUSH_PERIOD = 1.0  # seconds between flushes of the run bag
 EVALUATIONS_TOPIC = "/evaluations"
 PROGRESS_TOPIC = "/progress"
 EVALUATION_TYPE = "swarm_msgs/msg/EvaluationResult"
@@ -128,7 +141,7 @@ class ManagerNode(Node):
 
         self.parameters = ManagerParameters(
             chunk_size=int(declare("chunk_size", 50, "most requests in one service call")),
-            timeout=float(declare("timeout", 60.0, "seconds before a chunk is re-sent elsewhere")),
+            timeout=float(declare("timeout", Timeouts().timeout, "seconds before a chunk is re-sent")),
             first_timeout=float(declare("first_timeout", 300.0, "the same for an evaluator's first chunk")),
             discovery_period=float(declare("discovery_period", 1.0, "seconds between service look-ups")),
         )
@@ -194,13 +207,48 @@ class RunRecording:
             self._emit(self.node.progress, PROGRESS_TOPIC, PROGRESS_TYPE, msg)
 
 
-def bag_path(out: Path) -> Path:
-    """``run.bag`` for a new run; ``run.resume-<k>.bag`` for the k-th resume."""
-    path, k = out / "run.bag", 0
+def bag_segments(out: Path) -> list[Path]:
+    """The run's bags in order: ``run.bag``, then ``run.resume-<k>.bag`` for k = 1, 2, ..."""
+    segments, path, k = [], out / "run.bag", 0
     while path.exists():
+        segments.append(path)
         k += 1
         path = out / f"run.resume-{k}.bag"
-    return path
+    return segments
+
+
+def bag_path(out: Path) -> Path:
+    """``run.bag`` for a new run; ``run.resume-<k>.bag`` for the k-th resume."""
+    k = len(bag_segments(out))
+    return out / ("run.bag" if k == 0 else f"run.resume-{k}.bag")
+
+
+def settle_bags(out: Path, evaluations: int) -> int:
+    """Cut the run's bags back to the checkpoint's ``evaluations``: a segment left by a killed manager is
+    rewritten as a whole bag, and messages past the checkpoint (they will be recorded again) are dropped, so
+    that the bags hold each evaluation once. Return how many evaluations the bags hold."""
+    finish_rewrites(out)
+    seen = 0
+    for segment in bag_segments(out):
+        start = seen
+        state = {"evaluations": start}
+
+        def keep(topic: str, msgtype: str, timestamp: int, data: bytes, state: dict = state) -> bool:
+            if topic == EVALUATIONS_TOPIC:
+                state["evaluations"] += 1
+                return state["evaluations"] <= evaluations
+            if topic == PROGRESS_TOPIC:
+                return deserialize_message(data, ArchiveProgress).evaluations <= evaluations
+            return True
+
+        count: int | None = None  # unknown for a segment left by a killed manager
+        if (segment / "metadata.yaml").exists():
+            count = topic_counts(segment).get(EVALUATIONS_TOPIC, 0)
+        if count is None or start + count > evaluations:
+            rewrite_bag(segment, keep)
+            count = min(state["evaluations"], evaluations) - start
+        seen = start + count
+    return seen
 
 
 def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
@@ -217,6 +265,38 @@ def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
     return Run.start(cli.config_from_args(args), args.out, evaluator)
 
 
+class OwnedEvaluators:
+    """The evaluator processes this manager started: one that dies is replaced at once by a new process under
+    a new node name (``<name>_<life>``), and :meth:`dead` tells the service evaluator which services died."""
+
+    def __init__(self, graph: Graph, log: object) -> None:
+        self.graph = graph
+        self.log = log
+        self.lives: dict[str, int] = {}  # process name -> its base name
+        self.replaced = 0
+
+    def start(self, base: str, life: int = 1) -> None:
+        name = base if life == 1 else f"{base}_{life}"
+        self.graph.start(name, "swarm_sim", "evaluator", node_name=name)
+        self.lives[name] = life
+
+    def dead(self) -> list[str]:
+        """The services of the processes that died since the last call (each one replaced)."""
+        services = []
+        for name in self.graph.exited():
+            code = self.graph.processes[name].returncode
+            self.graph.forget(name)
+            life = self.lives.pop(name, None)
+            if life is None:
+                continue
+            base = name if life == 1 else name.rsplit("_", 1)[0]
+            self.start(base, life + 1)
+            self.replaced += 1
+            self.log("warn", f"evaluator process {name} exited (code {code}); started {base}_{life + 1}")  # type: ignore[operator]
+            services.append(f"/{name}/evaluate")
+        return services
+
+
 def manage(argv: Sequence[str]) -> int:
     """Run the manager with ``argv`` (ROS arguments included); return the exit status."""
     try:
@@ -228,7 +308,12 @@ def manage(argv: Sequence[str]) -> int:
     except (cli.UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return cli.EXIT_USAGE
-    rclpy.init(args=list(argv))
+    with signals_as_interrupts():
+        return _manage(args, argv)
+
+
+def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
+    rclpy.init(args=list(argv), signal_handler_options=SignalHandlerOptions.NO)
     node = ManagerNode()
     executor = SingleThreadedExecutor()
     executor.add_node(node)
@@ -256,8 +341,10 @@ def manage(argv: Sequence[str]) -> int:
         node.destroy_node()
         rclpy.try_shutdown()
         return cli.EXIT_USAGE
-    evaluator = _Remember(services)
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    owned = OwnedEvaluators(graph, log)
+    services.watch = owned.dead
+    evaluator = _Remember(services)
     try:
         try:
             run = _open_run(args, evaluator)
@@ -266,7 +353,8 @@ def manage(argv: Sequence[str]) -> int:
         if args.evaluators:
             graph.log_dir = Path(args.out) / "logs"
             for i in range(1, args.evaluators + 1):
-                graph.start(f"evaluator_{i}", "swarm_sim", "evaluator", node_name=f"manager_evaluator_{i}")
+                # names of this manager's own: a killed manager's evaluators may linger in DDS for seconds
+                owned.start(f"manager_{os.getpid()}_evaluator_{i}")
         expect = args.expect or max(args.evaluators, 1)
         ready = services.wait_for(expect, args.wait)
         graph.check()
@@ -283,9 +371,11 @@ def manage(argv: Sequence[str]) -> int:
     except (cli.UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return cli.EXIT_USAGE
-    except (KeyboardInterrupt, ExternalShutdownException):
+    except (KeyboardInterrupt, ExternalShutdownException) as error:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # stop the children cleanly, whatever comes now
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         print(f"manager: interrupted; continue with: manager --out {args.out} --resume", file=sys.stderr)
-        return cli.EXIT_INTERRUPTED
+        return exit_status(error)
     finally:
         graph.stop()
         services.close()
@@ -295,17 +385,33 @@ def manage(argv: Sequence[str]) -> int:
 
 
 def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
+    out = Path(args.out)
+    recorded = settle_bags(out, run.evaluations)
+    if recorded < run.evaluations:
+        node.get_logger().warning(
+            f"the run's bags hold {recorded} of the {run.evaluations} evaluations of the checkpoint "
+            "(a bag segment was removed or damaged)"
+        )
     bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)
-    with BagRecorder(bag_path(Path(args.out))) as recorder:
+    with BagRecorder(bag_path(out)) as recorder:
         recording = RunRecording(node, recorder, run.config)
+        flushed = time.monotonic()
 
         def on_batch(done: int, total: int) -> None:
+            nonlocal flushed
             recording.batch(run, evaluator.requests, evaluator.results)
+            if time.monotonic() - flushed >= FLUSH_PERIOD:
+                recorder.flush()
+                flushed = time.monotonic()
             if bar is not None:
                 bar.update(done - bar.n)
 
         try:
-            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+            run.execute(
+                on_batch=on_batch,
+                checkpoint_interval=args.checkpoint_every,
+                before_checkpoint=lambda: recorder.flush(sync=True),
+            )
         finally:
             if bar is not None:
                 bar.close()

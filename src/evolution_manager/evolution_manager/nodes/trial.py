@@ -4,6 +4,10 @@
 footbot controller per robot as separate processes in a ROS domain of their own, loads the tree into every
 controller, runs trial K of seed S in lockstep, records every topic of the graph to a rosbag2 bag with MCAP
 storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
+
+``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
+this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
+graph that failed; 130 interrupted (SIGINT), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -27,10 +31,11 @@ from rclpy.signals import SignalHandlerOptions
 from bt_controller.errors import TreeError
 from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
-from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.bags import BagError, BagRecorder, check_new_bag
 from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
+from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.reproduce import RESULT_TOPIC
 from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree, RunTrial
@@ -202,6 +207,20 @@ def write_result(bag: BagRecorder, tree_text: str, seed: int, record: TrialRecor
     bag.write(RESULT_TOPIC, message, stamp_ns)
 
 
+def tree_argument(argument: str) -> str:
+    """The tree text of ``--tree``: the text itself, unless it names an existing file (as ``bt`` reads it)."""
+    try:
+        is_file = len(argument) < 4096 and "\n" not in argument and Path(argument).is_file()
+    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
+        is_file = False
+    if not is_file:
+        return argument
+    try:
+        return Path(argument).read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read the tree file {argument}: {error}") from None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``trial``: one trial through the node graph, recorded; prints the trial's JSON."""
     parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
@@ -213,17 +232,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
     )
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
-    text = Path(args.tree).read_text() if Path(args.tree).is_file() else args.tree
     try:
-        tree = parse(text)
+        tree = parse(tree_argument(args.tree))
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
-        if args.bag.exists():
-            raise BagError(f"refusing to overwrite {args.bag}: choose a new bag directory")
-        record = run_recorded_trial(to_text(tree), args.seed, args.trial, args.bag, timeout=args.timeout)
-    except (TreeError, ValueError, BagError, GraphError, TrialFailedError) as error:
+        check_new_bag(args.bag)
+        args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)  # an unusable place fails here, at once
+        with signals_as_interrupts():
+            record = run_recorded_trial(to_text(tree), args.seed, args.trial, args.bag, timeout=args.timeout)
+    except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as error:
+        print("trial: interrupted", file=sys.stderr)
+        return exit_status(error)
     print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record]))
     print(f"trial: recorded to {args.bag}", file=sys.stderr)
     return 0
