@@ -9,6 +9,7 @@ from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from swarm_ros.isolation import reserved_domain
 from swarm_ros.parameters import attribute_docs, declare_dataclass
 
 
@@ -27,12 +28,13 @@ class Settings:
 
 @pytest.fixture
 def context():
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=0)
-    try:
-        yield context
-    finally:
-        rclpy.shutdown(context=context)
+    with reserved_domain() as domain:
+        context = rclpy.Context()
+        rclpy.init(context=context, domain_id=domain)
+        try:
+            yield context
+        finally:
+            rclpy.shutdown(context=context)
 
 
 def test_attribute_docs_are_the_field_docstrings():
