@@ -10,6 +10,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from bt_controller.random_trees import random_trees
 from evolution_manager.bags import read_bag
 from evolution_manager.cli import evolve
 from evolution_manager.config import evaluation_seed
@@ -17,7 +18,6 @@ from evolution_manager.graph import Graph, executable
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.randtrees import random_trees
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here
 SEED = 5

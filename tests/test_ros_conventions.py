@@ -14,6 +14,7 @@ from rclpy.action import ActionClient
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
+from bt_controller.random_trees import random_trees
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.bags import read_bag
 from evolution_manager.graph import Graph, executable
@@ -24,7 +25,6 @@ from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.randtrees import random_trees
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 

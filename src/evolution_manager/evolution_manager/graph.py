@@ -15,6 +15,7 @@ import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import IO
 
 from ament_index_python.packages import (
     PackageNotFoundError,
@@ -22,12 +23,9 @@ from ament_index_python.packages import (
     get_package_share_directory,
 )
 
+from evolution_manager.errors import GraphError
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
-
-
-class GraphError(RuntimeError):
-    """A node of the graph could not be started or died; the message says which and why."""
 
 
 def executable(package: str, name: str) -> Path:
@@ -49,7 +47,7 @@ class Graph:
         self.domain = domain
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen] = {}
-        self._logs: list[object] = []
+        self._logs: list[IO[str]] = []
 
     def __enter__(self) -> Graph:
         return self
@@ -82,14 +80,13 @@ class Graph:
             command += ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
             command += ["-p", f"{key}:={value}"]
+        output: IO[str] | int = subprocess.DEVNULL
         env = domain_environment(self.domain)
         if self.log_dir is not None:
             self.log_dir.mkdir(parents=True, exist_ok=True)
             output = (self.log_dir / f"{name.replace('/', '_')}.log").open("w")
             self._logs.append(output)
             env["ROS_LOG_DIR"] = str(self.log_dir / "ros")
-        else:
-            output = subprocess.DEVNULL
         process = subprocess.Popen(
             command,
             env=env,

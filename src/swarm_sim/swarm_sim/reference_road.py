@@ -12,6 +12,7 @@ import numpy as np
 
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
+from bt_controller.validate import integer
 from bt_controller.vocabulary import RUNNING, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
@@ -63,7 +64,10 @@ def run_trial(tree: Node, seed: int, trial: int, config: Config = DEFAULT) -> Tr
             step += 1
 
     final = np.array([view.smoothed() for view in views])
-    end_ground = np.array([[view.latest.in_nest, view.latest.on_food] for view in views], dtype=np.bool_)
+    end_ground = np.zeros((n, 2), dtype=np.bool_)
+    for i, view in enumerate(views):
+        assert view.latest is not None, "every robot has sensed by the end of a trial"
+        end_ground[i] = view.latest.in_nest, view.latest.on_food
     counts = np.array([c.counts for c in controllers], dtype=np.int64)
     values = world.trial_values(initial, final, end_ground, counts, p)
     return TrialRecord(
@@ -80,7 +84,6 @@ def evaluate(
 ) -> tuple[tuple[float, ...], list[TrialRecord]]:
     """Evaluate ``tree`` over trials 0 .. trials - 1 of ``seed``: the six mean values and each trial's
     record."""
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials must be a positive integer, got {trials!r}")
+    integer(trials, "trials", 1)
     records = [run_trial(tree, seed, k, config) for k in range(trials)]
     return combine(records), records

@@ -60,8 +60,8 @@ def evaluation_result_of(msg: object) -> EvaluationResult:
     """The evaluator contract's result from an ``EvaluationResult`` message (values copied bit for bit)."""
     if not msg.ok:  # type: ignore[attr-defined]
         return failed(msg.error)  # type: ignore[attr-defined]
-    values = values_of(msg)
-    return EvaluationResult(fitness=values[:3], descriptors=values[3:], error=None)
+    d, n, f, m, r, c = values_of(msg)
+    return EvaluationResult(fitness=(d, n, f), descriptors=(m, r, c), error=None)
 
 
 def trial_fields(record: TrialRecord, pose: Callable[..., object]) -> dict[str, Any]:

@@ -52,7 +52,7 @@ class FootbotControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("footbot_controller")
-        declared = self.declare_parameter(
+        declared: int = self.declare_parameter(
             "robot",
             -1,
             descriptor(
@@ -64,7 +64,7 @@ class FootbotControllerNode(Node):
             ),
         ).value
         self.robot = robot_index(self.get_namespace(), declared)
-        initial_tree = self.declare_parameter(
+        initial_tree: str = self.declare_parameter(
             "tree", "", descriptor("tree to load at start (tree text)", read_only=True)
         ).value
         self.controller = FootbotController()
@@ -78,11 +78,14 @@ class FootbotControllerNode(Node):
         self.create_subscription(RangeAndBearingReadings, "range_and_bearing", self._on_readings, RELIABLE)
         self.create_service(LoadTree, "load_tree", self._on_load_tree)
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
+        loaded = ""
         if initial_tree:
-            self.controller.load(parse(initial_tree))
+            tree = parse(initial_tree)
+            self.controller.load(tree)
+            loaded = to_text(tree)
         self.get_logger().info(
             f"ready: robot {self.robot} in {self.get_namespace()}"
-            + (f" with tree {to_text(self.controller.tree)}" if initial_tree else "; waiting for load_tree")
+            + (f" with tree {loaded}" if loaded else "; waiting for load_tree")
         )
 
     def _on_load_tree(self, request: LoadTree.Request, response: LoadTree.Response) -> LoadTree.Response:

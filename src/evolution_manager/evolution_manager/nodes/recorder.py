@@ -17,8 +17,9 @@ import signal
 import sys
 import threading
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import PoseArray, PoseStamped
@@ -80,7 +81,7 @@ def is_latched(topic: str) -> bool:
     return topic.rsplit("/", 1)[-1] in LATCHED_TOPICS
 
 
-def stamp_ns(msg: object) -> int:
+def stamp_ns(msg: Any) -> int:  # any stamped ROS message (generated, untyped)
     """A message's time in nanoseconds: its header stamp, the clock of a Clock message, or the first marker's
     stamp of a MarkerArray (0 for an empty one)."""
     if isinstance(msg, Clock):
@@ -90,7 +91,7 @@ def stamp_ns(msg: object) -> int:
             return 0
         stamp = msg.markers[0].header.stamp
     else:
-        stamp = msg.header.stamp  # type: ignore[attr-defined]
+        stamp = msg.header.stamp
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
@@ -123,7 +124,7 @@ class GraphRecorder:
         with self._lock:
             self.armed = True
 
-    def _writer(self, topic: str, msg_class: type):
+    def _writer(self, topic: str, msg_class: type) -> Callable[[object], None]:
         msgtype = msgtype_name(msg_class)
 
         def write(msg: object) -> None:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import rclpy
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
@@ -47,7 +48,7 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
     clock = node.create_publisher(Clock, "/clock", RELIABLE)
-    publishers = {
+    publishers: dict[str, Publisher] = {
         topic: node.create_publisher(
             message_class(msgtype), topic, RECORDING_LATCHED if is_latched(topic) else RELIABLE
         )

@@ -18,25 +18,23 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
-import numpy as np
 from rclpy.action import ActionClient, get_action_names_and_types
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
 
 from bt_controller.draws import check_seed
-from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
+from bt_controller.validate import integer
+from evolution_manager.dispatch import Chunk, Dispatcher, Timeouts, WorkerState
+from evolution_manager.errors import NoEvaluatorError
 from swarm_msgs.action import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
 from swarm_sim.result_messages import OBJECTIVES, evaluation_result_of
 
 SERVICE_TYPE = "swarm_msgs/action/EvaluateBatch"
 """The type by which evaluators are found (their ``~/evaluate`` action; a service of that name wraps it)."""
-
-
-class NoEvaluatorError(DispatchError):
-    """No evaluator service answered within the wait; the message says how long it waited."""
 
 
 @dataclass(frozen=True)
@@ -65,11 +63,9 @@ def _check(request: object) -> str:
         return f"tree must be tree text (str), got {type(request.tree).__name__}"
     try:
         check_seed(request.seed)
+        integer(request.trials, "trials", 1, MAX_TRIALS, numpy=True)
     except ValueError as error:
         return str(error)
-    trials = request.trials
-    if isinstance(trials, bool) or not isinstance(trials, int | np.integer) or not 1 <= trials <= MAX_TRIALS:
-        return f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}"
     return ""
 
 
@@ -166,7 +162,7 @@ class ServiceEvaluator:
             dispatched = self._dispatch()
             for index, result in zip(sendable, dispatched, strict=True):
                 results[index] = result
-        return results  # type: ignore[return-value]
+        return results  # type: ignore[return-value]  # every slot was filled above, none is left None
 
     def _dispatch(self) -> list[EvaluationResult]:
         dispatcher = self.dispatcher
@@ -200,18 +196,18 @@ class ServiceEvaluator:
                 wait = min(wait, max(deadline - now, 0.0) + 0.01)
             self.executor.spin_once(timeout_sec=wait)
             self._collect()
-        return dispatcher.results()  # type: ignore[return-value]
+        return dispatcher.results()  # type: ignore[return-value]  # the dispatcher holds what we gave it
 
     def _send(self, chunk: Chunk) -> None:
         request = EvaluateBatch.Goal()
         request.trees = [self._requests[i].tree for i in chunk.indices]
         request.seeds = [int(self._requests[i].seed) for i in chunk.indices]
-        request.trials = int(chunk.key)  # type: ignore[call-overload]
+        request.trials = int(chunk.key)  # type: ignore[call-overload]  # a chunk key is its trial count (int)
         request.objective = self.settings.objective
         accepted = self._clients[chunk.worker].send_goal_async(request)
         self._futures[chunk.id] = _Call(chunk, request, accepted)
 
-    def _answer(self, call: _Call) -> tuple[bool, object | None]:
+    def _answer(self, call: _Call) -> tuple[bool, Any]:  # the result: an untyped ROS message, or None
         """Whether the goal of ``call`` has come to an end, and its result (None when refused or failed)."""
         if call.result is None:
             if not call.accepted.done():
@@ -234,7 +230,7 @@ class ServiceEvaluator:
             del self._futures[chunk_id]
             chunk, request = call.chunk, call.request
             problem = self._problem(response, request)
-            if problem:
+            if problem or response is None:
                 self._log(
                     "warn", f"evaluator {chunk.worker} answered wrongly ({problem}); not using it again"
                 )
@@ -250,12 +246,12 @@ class ServiceEvaluator:
                 self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
     @staticmethod
-    def _problem(response: object, request: EvaluateBatch.Goal) -> str:
+    def _problem(response: Any, request: EvaluateBatch.Goal) -> str:  # response: untyped ROS message
         if response is None:
             return "no response"
-        if response.message:  # type: ignore[attr-defined]
+        if response.message:
             return ""
-        results = response.results  # type: ignore[attr-defined]
+        results = response.results
         if len(results) != len(request.trees):
             return f"{len(results)} results for {len(request.trees)} trees"
         for msg, seed in zip(results, request.seeds, strict=True):

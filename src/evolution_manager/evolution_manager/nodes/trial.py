@@ -23,6 +23,7 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from rclpy.action import ActionClient
@@ -33,6 +34,7 @@ from rclpy.signals import SignalHandlerOptions
 from bt_controller.errors import TreeError
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, is_latched, trial_topics
 from evolution_manager.reproduce import RESULT_TOPIC
@@ -52,10 +54,6 @@ STARTUP_TIMEOUT = 600.0
 """Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
 numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
-
-
-class TrialFailedError(RuntimeError):
-    """The trial could not be run through the graph; the message says why."""
 
 
 def expected_messages(robots: int, namespace: str = "") -> dict[str, int]:
@@ -88,10 +86,12 @@ class TrialRunner:
         self.node = Node("trial_runner", namespace=namespace or "/", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
-        self.load_clients = [
+        self.load_clients: list[rclpy.client.Client] = [
             self.node.create_client(LoadTree, f"{robot}/load_tree") for robot in robot_namespaces(robots)
         ]
-        self.trial_client = ActionClient(self.node, RunTrial, "simulator/run_trial")
+        self.trial_client: ActionClient[Any, Any, Any] = ActionClient(
+            self.node, RunTrial, "simulator/run_trial"
+        )
         self.feedback: list[int] = []  # the steps reported by the last trial's feedback
 
     def close(self) -> None:
@@ -114,7 +114,7 @@ class TrialRunner:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.05)
 
-    def call(self, client: rclpy.client.Client, request: object, what: str) -> object:
+    def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
         self.spin_until(client.service_is_ready, f"the {client.srv_name} service", STARTUP_TIMEOUT)
         future = client.call_async(request)
         self.spin_until(future.done, what)
@@ -140,7 +140,7 @@ class TrialRunner:
         )
         self.spin_until(future.done, f"the simulator to accept trial {trial} of seed {seed}")
         handle = future.result()
-        if not handle.accepted:
+        if handle is None or not handle.accepted:
             raise TrialFailedError(f"the simulator refused trial {trial} of seed {seed}")
         return handle
 
@@ -230,7 +230,7 @@ class TrialGraph:
             raise
         return self
 
-    def __exit__(self, *exc_info: object) -> None:
+    def __exit__(self, *exc_info: Any) -> None:  # (type, value, traceback), passed on as received
         self._stack.__exit__(*exc_info)
         if self._temporary_logs is not None and exc_info[0] is None:
             shutil.rmtree(self._temporary_logs, ignore_errors=True)

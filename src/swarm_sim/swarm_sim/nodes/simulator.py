@@ -48,6 +48,7 @@ import threading
 import time
 from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
 import numpy as np
 import rclpy
@@ -56,8 +57,10 @@ from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
@@ -80,6 +83,7 @@ from swarm_ros.parameters import declare_dataclass, descriptor
 from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.config import DEFAULT, Config, ConfigError
+from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, warm_up
 from swarm_sim.nodes import visualisation
 from swarm_sim.result_messages import fill, trial_fields
@@ -90,10 +94,6 @@ WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "ga
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
 recorder that has just joined), so that none misses the trial's first messages."""
-
-
-class TrialAbandonedError(RuntimeError):
-    """A trial could not go on; the message says which robot and step."""
 
 
 class TrialCancelledError(RuntimeError):
@@ -116,7 +116,7 @@ class SimulatorNode(Node):
     def __init__(self, config: Config = DEFAULT) -> None:
         super().__init__("simulator")
         self.config = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
-        self.robots = self.config.n_robots
+        self.robots: int = self.config.n_robots
         self.namespaces = check_robot_namespaces(
             self.declare_parameter(
                 "robot_namespaces",
@@ -154,7 +154,10 @@ class SimulatorNode(Node):
         self._robot_markers = self.create_publisher(MarkerArray, "robot_markers", RELIABLE)
         self._state = self.create_publisher(SwarmState, "swarm_state", RELIABLE)
         self._poses = self.create_publisher(PoseArray, "poses", RELIABLE)
-        self._ground, self._readings, self._pose, self._start_clients = [], [], [], []
+        self._ground: list[Publisher] = []
+        self._readings: list[Publisher] = []
+        self._pose: list[Publisher] = []
+        self._start_clients: list[Client] = []
         for i, ns in enumerate(self.namespaces):
             self._ground.append(self.create_publisher(GroundSensor, f"{ns}/ground", RELIABLE))
             self._readings.append(
@@ -239,36 +242,36 @@ class SimulatorNode(Node):
                 f"trial {trial} uses arena configuration {own}, not {arena} (-1 means its own)"
             )
 
-    def _run(self, request: object, result: object, goal: ServerGoalHandle | None = None) -> object:
+    def _run(self, request: Any, result: Any, goal: ServerGoalHandle | None = None) -> Any:  # ROS messages
         """Run the trial ``request`` asks for into ``result`` (the action's result or the service's
         response), with feedback and cancel when ``goal`` is the action's goal."""
         try:
-            seed, trial = int(request.seed), int(request.trial)  # type: ignore[attr-defined]
-            self._check_goal(seed, trial, int(request.arena_configuration))  # type: ignore[attr-defined]
+            seed, trial = int(request.seed), int(request.trial)
+            self._check_goal(seed, trial, int(request.arena_configuration))
             with self._busy:
                 record = self.run_trial(seed, trial, goal)
         except (TrialAbandonedError, TrialCancelledError, ValueError) as error:
-            result.success = False  # type: ignore[attr-defined]
-            result.message = str(error)  # type: ignore[attr-defined]
+            result.success = False
+            result.message = str(error)
             if isinstance(error, TrialCancelledError):
-                self.get_logger().info(result.message)  # type: ignore[attr-defined]
+                self.get_logger().info(result.message)
             else:
-                self.get_logger().error(result.message)  # type: ignore[attr-defined]
+                self.get_logger().error(result.message)
             return result
         return fill(result, trial_fields(record, RobotPose))
 
     def _on_run_trial(self, request: RunTrial.Request, response: RunTrial.Response) -> RunTrial.Response:
-        return self._run(request, response)  # type: ignore[return-value]
+        return self._run(request, response)
 
     def _execute_trial(self, goal: ServerGoalHandle) -> RunTrialAction.Result:
         result = self._run(goal.request, RunTrialAction.Result(), goal)
         if goal.is_cancel_requested:
             goal.canceled()
-        elif result.success:  # type: ignore[attr-defined]
+        elif result.success:
             goal.succeed()
         else:
             goal.abort()
-        return result  # type: ignore[return-value]
+        return result
 
     def run_trial(self, seed: int, trial: int, goal: ServerGoalHandle | None = None) -> TrialRecord:
         """Run trial ``trial`` of ``seed`` through the controllers; return its record. With the action's
@@ -353,13 +356,12 @@ class SimulatorNode(Node):
             futures.append(client.call_async(request))
         for i, future in enumerate(futures):
             done = threading.Event()
-            future.add_done_callback(lambda _f, done=done: done.set())
-            if not done.wait(self.answer_timeout):
+            future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # rclpy is untyped
+            response = future.result() if done.wait(self.answer_timeout) else None
+            if response is None:
                 raise TrialAbandonedError(f"{self.namespaces[i]} did not answer start_trial")
-            if not future.result().success:
-                raise TrialAbandonedError(
-                    f"{self.namespaces[i]} cannot run the trial: {future.result().message}"
-                )
+            if not response.success:
+                raise TrialAbandonedError(f"{self.namespaces[i]} cannot run the trial: {response.message}")
 
     def _wait_for_subscribers(self) -> None:
         """Wait (at most ``MATCH_WAIT`` s) until every publisher has matched each subscription the graph knows
@@ -420,18 +422,21 @@ class SimulatorNode(Node):
 
     def _await_answers(self, step: int) -> list[WheelCommand]:
         with self._lock:
-            if not self._lock.wait_for(lambda: len(self._inbox.answers) == self.robots, self.answer_timeout):
-                missing = sorted(set(range(self.robots)) - set(self._inbox.answers))
+            answers = self._inbox.answers
+            assert answers is not None, "answers are awaited only during a step"
+            if not self._lock.wait_for(lambda: len(answers) == self.robots, self.answer_timeout):
+                missing = sorted(set(range(self.robots)) - set(answers))
                 raise TrialAbandonedError(
                     f"no answer to step {step} from {', '.join(self.namespaces[i] for i in missing)} "
                     f"in {self.answer_timeout} s"
                 )
-            return [self._inbox.answers[i] for i in range(self.robots)]
+            return [answers[i] for i in range(self.robots)]
 
     def _await_statuses(self, expected: int) -> np.ndarray:
         with self._lock:
             if not self._lock.wait_for(lambda: self._inbox.statuses >= expected, self.answer_timeout):
                 raise TrialAbandonedError(f"received {self._inbox.statuses} of {expected} tree statuses")
+            assert self._inbox.counts is not None, "statuses are awaited only during a trial"
             counts = self._inbox.counts.copy()
             self._inbox = _Inbox()
             return counts
