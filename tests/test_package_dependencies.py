@@ -27,6 +27,7 @@ ROSDEP_KEYS = {
     "py_trees": "py_trees",
     "yaml": "python3-yaml",
     "setuptools": "python3-setuptools",
+    "sklearn": "python3-sklearn",
 }
 """Python libraries by import name, with the key their package.xml dependency uses."""
 RUN_DEPENDENCIES = ("depend", "exec_depend")

@@ -155,18 +155,25 @@ class NodeSpec:
 
 
 def trial_graph_nodes(
-    robots: int = 9, namespace: str = "", tree: str = "", profile: str = ""
+    robots: int = 9,
+    namespace: str = "",
+    tree: str = "",
+    profile: str = "",
+    conditions: Sequence[str] = (),
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
     namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
-    profile when given (else its parameter file's)."""
+    profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
+    ``swarm_sim.conditions``) change the simulator's world."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
     prefix = namespace.rstrip("/")
     simulator: dict[str, object] = {"n_robots": robots}
     if profile:
         simulator["profile"] = profile
+    if conditions:
+        simulator["conditions"] = " ".join(conditions)
     nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator)]
     for robot in robot_namespaces(robots):
         nodes.append(
@@ -182,11 +189,17 @@ def trial_graph_nodes(
 
 
 def start_trial_graph(
-    graph: Graph, robots: int = 9, *, namespace: str = "", params_file: Path | None = None
+    graph: Graph,
+    robots: int = 9,
+    conditions: Sequence[str] = (),
+    *,
+    namespace: str = "",
+    params_file: Path | None = None,
 ) -> None:
-    """Start the nodes of ``trial_graph_nodes(robots, namespace)``, each in its own process, with its
-    package's parameter file and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``."""
-    for spec in trial_graph_nodes(robots, namespace):
+    """Start the nodes of ``trial_graph_nodes(robots, namespace, conditions=conditions)``, each in its own
+    process, with its package's parameter file and then ``params_file`` (every node's); ``robots`` overrides
+    ``n_robots``."""
+    for spec in trial_graph_nodes(robots, namespace, conditions=conditions):
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
         graph.start(
             spec.name,

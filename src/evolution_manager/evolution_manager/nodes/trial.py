@@ -22,6 +22,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +45,7 @@ from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.names import robot_namespaces
 from swarm_sim.cli import evaluation_json
+from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.trial_data import TrialRecord
@@ -186,7 +188,9 @@ class TrialGraph:
 
     ``domain``: the ROS domain (default: one reserved for this graph alone, so tests run side by side);
     ``namespace``: the graph's namespace (e.g. ``/swarm_a``); ``params_file``: a ROS parameter file for every
-    node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit)."""
+    node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
+    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
+    ``robots=N`` among them sets the number of controllers."""
 
     def __init__(
         self,
@@ -197,8 +201,11 @@ class TrialGraph:
         namespace: str = "",
         params_file: Path | None = None,
         log_dir: Path | None = None,
+        conditions: Sequence[str] = (),
     ) -> None:
-        self.robots = robots
+        self.conditions = list(conditions)
+        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots))
+        self.robots = self.config.n_robots
         self.timeout = timeout
         self.domain = domain
         self.namespace = graph_namespace(namespace)
@@ -219,7 +226,13 @@ class TrialGraph:
                 logs = Path(tempfile.mkdtemp(prefix="swarm-trial-logs-"))
                 self._temporary_logs = logs
             self.graph = stack.enter_context(Graph(domain, log_dir=logs))
-            start_trial_graph(self.graph, self.robots, namespace=self.namespace, params_file=self.params_file)
+            start_trial_graph(
+                self.graph,
+                self.robots,
+                self.conditions,
+                namespace=self.namespace,
+                params_file=self.params_file,
+            )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
             stack.callback(rclpy.try_shutdown, context=context)

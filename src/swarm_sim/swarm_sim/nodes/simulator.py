@@ -7,6 +7,9 @@ Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``)
     every field of ``swarm_sim.config.Config`` (read-only: world, timing and perception settings such as
         ``arena_half``, ``gaps``, ``n_robots``, ``wheel_speed``, ``step_dt``, ``ticks``, ``window``), with the
         model's defaults; a bad value stops the node with a one-line error naming it.
+    conditions (string, read-only): changes to the world, ``NAME=VALUE`` separated by spaces, e.g.
+        ``dead-robots=2 message-loss=0.5`` (``swarm_sim.conditions``; default none), applied after the
+        fields above. A ``robots=N`` among them must equal ``n_robots``.
     robot_namespaces (string array, read-only): the robots' namespaces, relative to the node's; robot ``i``
         is the i-th (default ``footbot_0`` .. ``footbot_<n_robots - 1>``).
     answer_timeout (float, seconds of wall time, may be changed at run time): how long to wait for the
@@ -82,6 +85,7 @@ from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namesp
 from swarm_ros.parameters import declare_dataclass, descriptor
 from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
+from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, warm_up
@@ -115,7 +119,17 @@ class SimulatorNode(Node):
 
     def __init__(self, config: Config = DEFAULT) -> None:
         super().__init__("simulator")
-        self.config = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
+        declared = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
+        conditions: str = self.declare_parameter(
+            "conditions",
+            "",
+            descriptor("changes to the world, NAME=VALUE separated by spaces", read_only=True),
+        ).value
+        self.config, self.conditions = apply_conditions(conditions.split(), declared)
+        if self.config.n_robots != declared.n_robots:
+            raise ConditionError(
+                f"condition robots={self.config.n_robots} differs from n_robots ({declared.n_robots})"
+            )
         self.robots: int = self.config.n_robots
         self.namespaces = check_robot_namespaces(
             self.declare_parameter(
@@ -453,7 +467,7 @@ def main(args: list[str] | None = None) -> None:
     rclpy.init(args=args)
     try:
         node = SimulatorNode()
-    except (ConfigError, NamespaceError) as error:
+    except (ConfigError, ConditionError, NamespaceError) as error:
         print(f"simulator: bad parameter: {error}", file=sys.stderr)
         rclpy.try_shutdown()
         raise SystemExit(2) from None
