@@ -39,6 +39,8 @@ setup(
             "experiment = evolution_manager.experiment:main",
             "report = evolution_manager.report:main",
             "measure = evolution_manager.measure:main",
+            "animate = evolution_manager.animation:main",
+            "explorer = evolution_manager.explorer:main",
         ],
     },
 )
