@@ -101,7 +101,7 @@ def _pack(frames: object, stride: int) -> dict:
         out += struct.pack("<B", 255 if tick < 0 else tick)
         out += bytes(255 if a < 0 else int(a) for a in frames.actions[k])
     return {
-        "seed": frames.seed,
+        "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
         "trial": frames.trial,
         "gap": frames.gap,
         "steps": [int(frames.steps[k]) for k in keep],
@@ -179,10 +179,10 @@ def explorer_data(root: Path, animate: bool = True, progress: object = None) -> 
                     key = f"{entry['simplified']}|{_seed_of(entry, seeds, run_seed)}"
                     if key in animations:
                         entry["animation"] = key
-                    entry["seed"] = _seed_of(entry, seeds, run_seed)
+                    entry["seed"] = str(_seed_of(entry, seeds, run_seed))
     return {
         "run": config.get("label") or root.name,
-        "seed": run_seed,
+        "seed": str(run_seed),
         "evaluations": summary.get("evaluations"),
         "evolved": evolved,
         "objectives": objectives,
