@@ -23,10 +23,16 @@ import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from PIL import Image, ImageDraw
 
 from bt_controller.vocabulary import ACTIONS
+
+if TYPE_CHECKING:
+    from swarm_sim.config import Config, Params
+    from swarm_sim.lockstep import LockstepTrial, RobotAnswer
 
 OBJECTIVE_NAMES = ("density", "nest", "food")
 
@@ -85,14 +91,14 @@ class TrialFrames:
         }
 
 
-def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray, p: object) -> np.ndarray:
+def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray, p: Params) -> np.ndarray:
     from swarm_sim import world
 
     counts = np.zeros((initial.shape[0], 8), dtype=np.int64)
     return world.trial_values(initial, current, ground, counts, p)[:3]
 
 
-def frames_from_tree(tree: str, seed: int, trial: int = 0, config: object | None = None) -> TrialFrames:
+def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
     """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it."""
     from bt_controller.tree import parse
     from swarm_sim.config import DEFAULT
@@ -100,29 +106,35 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: object | None
 
     config = config or DEFAULT
     p = config.params()
-    steps, poses, actions, ticks, links, fitness = [], [], [], [], [], []
+    steps: list[int] = []
+    ticks: list[int] = []
+    poses: list[np.ndarray] = []
+    actions: list[np.ndarray] = []
+    links: list[np.ndarray] = []
+    fitness: list[np.ndarray] = []
     current = np.full(p.n_robots, -1, dtype=np.int64)
-    state = {"tick": -1, "initial": None}
+    last_tick = [-1]
+    initial: list[np.ndarray] = []
 
-    def on_answers(world: object, answers: Sequence[object]) -> None:
+    def on_answers(world: LockstepTrial, answers: Sequence[RobotAnswer]) -> None:
         tick = world.tick_index()
         if tick >= 0:
             current[:] = [a.action for a in answers]
-            state["tick"] = tick
+            last_tick[0] = tick
         readings = world.readings()
         smoothed = np.array([a.smoothed for a in answers], dtype=np.float64)
         if world.step == p.settle_steps - 1:
-            state["initial"] = smoothed
+            initial.append(smoothed)
         steps.append(world.step)
         poses.append(world.poses())
         actions.append(current.copy())
-        ticks.append(state["tick"])
+        ticks.append(last_tick[0])
         links.append(np.array([(i, int(s)) for i, r in enumerate(readings) for s in r.senders], np.int64))
-        if state["initial"] is None:
+        if not initial:
             fitness.append(np.full(3, np.nan))
         else:
             ground = np.array([[r.in_nest, r.on_food] for r in readings], dtype=np.bool_)
-            fitness.append(_fitness_so_far(state["initial"], smoothed, ground, p))
+            fitness.append(_fitness_so_far(initial[0], smoothed, ground, p))
 
     run_with_controllers(parse(tree), seed, trial, config, on_answers=on_answers)
     return TrialFrames(
@@ -221,7 +233,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     )
 
 
-def _stamp_step(msg: object, states: dict) -> int:
+def _stamp_step(msg: Any, states: dict[int, Any]) -> int:
     """The step whose /swarm_state carries the same stamp as ``msg`` (tree statuses carry no step)."""
     stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
     for step, state in states.items():
@@ -250,10 +262,8 @@ def to_pixels(frames: TrialFrames, x: float, y: float) -> tuple[float, float]:
     return (x + frames.arena_half) * scale, (frames.arena_half - y) * scale
 
 
-def render_frame(frames: TrialFrames, k: int) -> object:
+def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     """Frame ``k`` as a Pillow RGB image (arena on the left, values on the right)."""
-    from PIL import Image, ImageDraw
-
     image = Image.new("RGB", (ARENA_PX + PANEL_PX, ARENA_PX), (255, 255, 255))
     draw = ImageDraw.Draw(image)
     scale = ARENA_PX / (2 * frames.arena_half)
@@ -315,13 +325,13 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16) -> Path
     suffix = out.suffix.lower()
     if suffix not in (".gif", ".mp4"):
         raise AnimationError(f"{out}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
-    encoder = shutil.which("ffmpeg") if suffix == ".mp4" else None
-    if suffix == ".mp4" and encoder is None:
+    encoder = shutil.which("ffmpeg") or ""
+    if suffix == ".mp4" and not encoder:
         raise AnimationError("writing .mp4 needs ffmpeg, which is not installed: write a .gif instead")
     out.parent.mkdir(parents=True, exist_ok=True)
     images = [render_frame(frames, k) for k in range(len(frames.steps))]
     if suffix == ".gif":
-        paletted = [im.convert("P", palette=1, colors=64) for im in images]  # 1: Image.Palette.ADAPTIVE
+        paletted = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=64) for im in images]
         paletted[0].save(
             out, save_all=True, append_images=paletted[1:], duration=int(1000 / fps), loop=0, optimize=False
         )
@@ -340,7 +350,7 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16) -> Path
 # ---------------------------------------------------------------------------------------------- command
 
 
-def _config_for(profile: str | None) -> object:
+def _config_for(profile: str | None) -> Config:
     """The model configuration of ``profile`` (None: the default)."""
     import dataclasses
 
@@ -350,8 +360,9 @@ def _config_for(profile: str | None) -> object:
         return DEFAULT
     if not any(f.name == "profile" for f in dataclasses.fields(Config)):
         raise AnimationError(f"--profile {profile}: this build of the model has no profiles")
+    choice: dict[str, Any] = {"profile": profile}
     try:
-        return dataclasses.replace(DEFAULT, profile=profile)
+        return dataclasses.replace(DEFAULT, **choice)
     except (ValueError, TypeError) as error:
         raise AnimationError(f"--profile {profile}: {error}") from None
 

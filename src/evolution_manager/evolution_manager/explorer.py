@@ -26,12 +26,13 @@ import math
 import struct
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
 
+from .animation import TrialFrames
 from .explorer_page import PAGE
 from .files import write_atomic
 
@@ -78,7 +79,7 @@ def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
     return evaluation_seed(run_seed, int(evaluation or 0))
 
 
-def _pack(frames: object, stride: int) -> dict:
+def _pack(frames: TrialFrames, stride: int) -> dict:
     """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
     heading (u8, 256 steps a turn); then density, nest, food so far (u16, value * 10000; 65535: not yet); the
     last tick (u8, 255: none); each robot's action (u8, 255: none). Little-endian."""
@@ -109,7 +110,10 @@ def _pack(frames: object, stride: int) -> dict:
     }
 
 
-def explorer_data(root: Path, animate: bool = True, progress: object = None) -> dict:
+Progress = Callable[[int, int], None] | None
+
+
+def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -> dict:
     """Everything the page shows, read from the run directory ``root``."""
     root = Path(root)
     config = _read(root / "config.json") if (root / "config.json").exists() else {}
@@ -220,7 +224,7 @@ def _read(path: Path) -> dict:
     return data
 
 
-def write_explorer(root: Path | str, animate: bool = True, progress: object = None) -> Path:
+def write_explorer(root: Path | str, animate: bool = True, progress: Progress = None) -> Path:
     """Build ``explorer.html`` in the run directory ``root``; return its path."""
     root = Path(root)
     data = explorer_data(root, animate, progress)
