@@ -18,10 +18,7 @@ from typing import IO
 from ament_index_python.packages import PackageNotFoundError, get_package_prefix
 
 from bt_controller.nodes.isolation import domain_environment
-
-
-class GraphError(RuntimeError):
-    """A node of the graph could not be started or died; the message says which and why."""
+from evolution_manager.errors import GraphError
 
 
 def executable(package: str, name: str) -> Path:

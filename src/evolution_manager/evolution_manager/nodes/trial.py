@@ -27,6 +27,7 @@ from bt_controller.errors import TreeError
 from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.reproduce import RESULT_TOPIC
@@ -35,10 +36,6 @@ from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
 from swarm_sim.config import DEFAULT
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
-
-
-class TrialFailedError(RuntimeError):
-    """The trial could not be run through the graph; the message says why."""
 
 
 def expected_messages(robots: int) -> dict[str, int]:

@@ -61,14 +61,11 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-
-
-class TrialAbandonedError(RuntimeError):
-    """A trial could not go on; the message says which robot and step."""
 
 
 @dataclass
