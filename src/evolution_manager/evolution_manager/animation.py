@@ -30,15 +30,13 @@ from PIL import Image, ImageDraw
 
 from bt_controller.vocabulary import ACTIONS
 
+from .errors import AnimationError
+
 if TYPE_CHECKING:
     from swarm_sim.config import Config, Params
     from swarm_sim.lockstep import LockstepTrial, RobotAnswer
 
 OBJECTIVE_NAMES = ("density", "nest", "food")
-
-
-class AnimationError(RuntimeError):
-    """An animation could not be made; the message says why."""
 
 
 @dataclass(frozen=True)

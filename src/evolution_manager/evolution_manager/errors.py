@@ -6,11 +6,13 @@ from bt_controller.errors import UsageError
 from swarm_sim.errors import ConfigError as WorldConfigError
 
 __all__ = [
+    "AnimationError",
     "AskTellError",
     "BagError",
     "ConfigError",
     "DispatchError",
     "EvolutionError",
+    "ExplorerError",
     "GraphError",
     "NoEvaluatorError",
     "RunDirectoryError",
@@ -59,3 +61,11 @@ class GraphError(RuntimeError):
 
 class TrialFailedError(RuntimeError):
     """The trial could not be run through the graph; the message says why."""
+
+
+class AnimationError(EvolutionError):
+    """A trial animation could not be made (a bag that is no trial bag, a format or encoder missing)."""
+
+
+class ExplorerError(EvolutionError):
+    """A run directory's explorer page could not be built (no repertoire files, a damaged file)."""

@@ -33,6 +33,7 @@ from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
 
 from .animation import TrialFrames
+from .errors import ExplorerError
 from .explorer_page import PAGE
 from .files import write_atomic
 
@@ -40,10 +41,6 @@ STRIDE = 2
 """One animation frame per this many sensing steps."""
 OBJECTIVES = ("density", "nest", "food")
 HELD_OUT_KEYS = ("held_out", "held_out_fitness", "heldout")
-
-
-class ExplorerError(RuntimeError):
-    """The explorer could not be built; the message says why."""
 
 
 def _held_out(item: dict) -> float | None:

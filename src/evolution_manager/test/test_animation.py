@@ -12,13 +12,13 @@ from PIL import Image
 
 from evolution_manager.animation import (
     ROBOT_COLOURS,
-    AnimationError,
     frames_from_tree,
     main,
     render_frame,
     to_pixels,
     write_animation,
 )
+from evolution_manager.errors import AnimationError
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 

@@ -101,7 +101,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     animation = out / "best" / "food_trial.gif"
     try:
-        from evolution_manager.animation import AnimationError, frames_from_bag, write_animation
+        from evolution_manager.animation import frames_from_bag, write_animation
+        from evolution_manager.errors import AnimationError
 
         write_animation(frames_from_bag(bag), animation)
     except AnimationError as error:
