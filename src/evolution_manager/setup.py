@@ -41,6 +41,8 @@ setup(
             "measure = evolution_manager.measure:main",
             "animate = evolution_manager.animation:main",
             "explorer = evolution_manager.explorer:main",
+            "adapt = evolution_manager.adapt:main",
+            "adapt-benchmark = evolution_manager.adapt_benchmark:main",
         ],
     },
 )

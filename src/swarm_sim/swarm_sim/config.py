@@ -40,6 +40,9 @@ class Params(NamedTuple):
     window: int
     collision_iterations: int
     collision_slack: float
+    dead_robots: int
+    weak_robots: int
+    weak_gain: float
 
 
 _INT_PARAMS = frozenset(
@@ -51,6 +54,8 @@ _INT_PARAMS = frozenset(
         "settle_steps",
         "window",
         "collision_iterations",
+        "dead_robots",
+        "weak_robots",
     )
 )
 
@@ -108,6 +113,13 @@ class Config:
     """Passes of pairwise positional correction per step before the fallback (undo the step's move)."""
     collision_slack: float = 1e-6
     """Extra separation added when two robots are pushed apart, so they end strictly apart (mm)."""
+    dead_robots: int = 0
+    """Damage (``swarm_sim.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they never
+    drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
+    weak_robots: int = 0
+    """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
+    weak_gain: float = 1.0
+    """Factor on the weak robots' left wheel gain, in [0, 1]."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -166,6 +178,12 @@ def _validate(c: Config) -> None:
         _count(c, name)
     _count(c, "settle_steps", 1)
     _count(c, "collision_iterations", 0)
+    for name in ("dead_robots", "weak_robots"):
+        if _count(c, name, 0) > c.n_robots:
+            raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
+    weak_gain = _number(c, "weak_gain")
+    if not 0.0 <= weak_gain <= 1.0:
+        raise ConfigError(f"weak_gain must be in [0, 1], got {weak_gain}")
     low, high = _positive(c, "gain_low"), _positive(c, "gain_high")
     if low > high:
         raise ConfigError(f"gain_low must not exceed gain_high, got {low} > {high}")
