@@ -153,7 +153,11 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None
 
 
 def _links_shape(links: np.ndarray) -> np.ndarray:
-    return links.reshape(-1, 2) if links.size else np.zeros((0, 2), np.int64)
+    """(k, 2) links sorted by receiver, then sender (a bag holds them in arrival order)."""
+    if not links.size:
+        return np.zeros((0, 2), np.int64)
+    pairs = links.reshape(-1, 2)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def frames_from_bag(path: Path | str) -> TrialFrames:
