@@ -8,11 +8,13 @@ from bt_controller.errors import UsageError
 from swarm_sim.errors import ConfigError as WorldConfigError
 
 __all__ = [
+    "AnimationError",
     "AskTellError",
     "BagError",
     "ConfigError",
     "DispatchError",
     "EvolutionError",
+    "ExplorerError",
     "GraphError",
     "Interrupted",
     "LockHeldError",
@@ -79,3 +81,11 @@ class Interrupted(KeyboardInterrupt):
     @property
     def exit_status(self) -> int:
         return 128 + self.signum
+
+
+class AnimationError(EvolutionError):
+    """A trial animation could not be made (a bag that is no trial bag, a format or encoder missing)."""
+
+
+class ExplorerError(EvolutionError):
+    """A run directory's explorer page could not be built (no repertoire files, a damaged file)."""

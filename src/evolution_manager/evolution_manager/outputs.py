@@ -11,21 +11,36 @@
 ``figures/``
     ``heatmap_<objective>.png`` (fig. 7), ``histogram.png`` (fig. 8), ``progress.png``;
 ``best/<objective>.*``
-    the best tree of each evolved objective as text, an indented view and, with the behaviour-tree
-    engine's formats, BehaviorTree.CPP XML, Graphviz DOT and an SVG drawing.
+    the best tree of each evolved objective, simplified (``bt_controller.simplify``: the same motors on every
+    tick), as text, an indented view, BehaviorTree.CPP XML, Graphviz DOT, an SVG and a PNG drawing, and the
+    tree as evolved in ``<objective>.original.txt``; a format that cannot be written is an error;
+``explorer.html``
+    the repertoire explorer (``evolution_manager.explorer``), one self-contained page.
+
+Trees are shown to people simplified, with the original kept: every item of a repertoire file has ``tree``
+(as evolved) and ``simplified``; the summary has ``best_tree`` and ``best_tree_simplified``.
 """
 
 from __future__ import annotations
 
-import contextlib
+from functools import cache
 from pathlib import Path
 
-from bt_controller.tree import parse, to_indented
+from bt_controller.formats import to_dot, to_xml
+from bt_controller.render import render
+from bt_controller.simplify import simplify
+from bt_controller.tree import parse, to_indented, to_text
 
 from .archive import Repertoire
 from .files import write_atomic, write_json
 from .primitives import DESCRIPTORS, OBJECTIVES
 from .run import Run, RunDirectory
+
+
+@cache
+def simplified(tree: str) -> str:
+    """The simplified text of a tree text (``bt_controller.simplify``)."""
+    return to_text(simplify(parse(tree)))
 
 
 def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
@@ -48,6 +63,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
             {
                 "bin": list(item.bin),
                 "tree": item.tree,
+                "simplified": simplified(item.tree),
                 "fitness": item.fitness,
                 "descriptors": list(item.descriptors),
                 "evaluation": item.evaluation,
@@ -67,6 +83,7 @@ def summary_document(run: Run) -> dict:
             "evolved": objective in run.config.objectives,
             "best_fitness": best.value if best else None,
             "best_tree": best.tree if best else None,
+            "best_tree_simplified": simplified(best.tree) if best else None,
             "best_descriptors": list(best.descriptors) if best else None,
             "best_evaluation": best.evaluation if best else None,
             "coverage": grid.coverage,
@@ -116,11 +133,15 @@ def write_results(run: Run, with_figures: bool = True) -> list[Path]:
     written += write_best_trees(run)
     if with_figures:
         written += write_figures(run)
+        from .explorer import write_explorer
+
+        written.append(write_explorer(directory.root))
     return written
 
 
 def write_best_trees(run: Run) -> list[Path]:
-    """The best tree of each evolved objective, in every format the behaviour-tree engine offers."""
+    """The best tree of each evolved objective, simplified, in every format the behaviour-tree engine
+    offers (text, indented, XML, DOT, SVG, PNG), and the original text. Any failure raises."""
     written = []
     directory = run.directory.best
     directory.mkdir(exist_ok=True)
@@ -128,23 +149,24 @@ def write_best_trees(run: Run) -> list[Path]:
         best = run.passive[objective].best()
         if best is None:
             continue
-        tree = parse(best.tree)
+        tree = simplify(parse(best.tree))
         header = f"# best {objective} tree of {run.config.label}: fitness {best.value!r}, "
-        header += f"evaluation {best.evaluation}\n"
-        files = {"txt": best.tree + "\n", "indented.txt": header + to_indented(tree)}
-        with contextlib.suppress(ImportError):
-            from bt_controller.formats import to_dot, to_xml
-
-            files["xml"] = to_xml(tree)
-            files["dot"] = to_dot(tree)
+        header += f"evaluation {best.evaluation}; simplified from {parse(best.tree).size} to {tree.size} "
+        header += "nodes "
+        header += f"(the same motors on every tick; the tree as evolved is in {objective}.original.txt)\n"
+        files = {
+            "txt": to_text(tree) + "\n",
+            "original.txt": best.tree + "\n",
+            "indented.txt": header + to_indented(tree),
+            "xml": to_xml(tree),
+            "dot": to_dot(tree),
+        }
         for suffix, text in files.items():
             path = directory / f"{objective}.{suffix}"
             write_atomic(path, text)
             written.append(path)
-        with contextlib.suppress(ImportError):
-            from bt_controller.render import render
-
-            written.append(Path(render(tree, directory / f"{objective}.svg", "svg")))
+        for fmt in ("svg", "png"):
+            written.append(Path(render(tree, directory / f"{objective}.{fmt}", fmt)))
     return written
 
 

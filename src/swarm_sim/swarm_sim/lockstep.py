@@ -163,10 +163,12 @@ def run_with_controllers(
     trial: int,
     config: Config = DEFAULT,
     on_step: Callable[[LockstepTrial], None] | None = None,
+    on_answers: Callable[[LockstepTrial, Sequence[RobotAnswer]], None] | None = None,
 ) -> TrialRecord:
     """Run a trial in-process exactly as the node graph runs it: the lockstep world and one
     ``FootbotController`` per robot, exchanging readings and answers. ``on_step(trial)`` is called after
-    each step's readings are out (for example to collect the poses a simulator node would publish)."""
+    each step's readings are out (for example to collect the poses a simulator node would publish);
+    ``on_answers(trial, answers)`` with the robots' answers to the step, before the world takes them."""
     world = LockstepTrial(seed, trial, config)
     p = world.p
     schedule = Schedule(p.settle_steps, p.steps_per_tick, p.ticks)
@@ -189,6 +191,8 @@ def run_with_controllers(
                 if outcome.tick.started >= 0:
                     counts[i, 1 + outcome.tick.started] += 1
             answers.append(RobotAnswer(outcome.action, outcome.broadcast, outcome.smoothed))
+        if on_answers is not None:
+            on_answers(world, answers)
         world.advance(answers)
     return world.record(counts)
 

@@ -152,6 +152,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as error:
         print(f"main: interrupted; continue with: ws/run --resume --out {out}", file=sys.stderr)
         return exit_status(error)
+    animation = out / "best" / "food_trial.gif"
+    try:
+        from evolution_manager.animation import frames_from_bag, write_animation
+        from evolution_manager.errors import AnimationError
+
+        write_animation(frames_from_bag(bag), animation)
+    except AnimationError as error:
+        print(f"main: the best tree's trial animation failed: {error}", file=sys.stderr)
+        return 1
     finished = time.monotonic()
 
     values = dict(zip(("density", "nest", "food"), record.values[:3], strict=True))
@@ -164,9 +173,12 @@ Run directory      {out}/
   repertoire       {out}/repertoire_food.json  (and one per objective: every tree was scored on all three)
   progress         {out}/progress.csv
   figures          {out}/figures/
-  best trees       {out}/best/
+  best trees       {out}/best/  (simplified; as evolved in best/food.original.txt)
+  explorer         {out}/explorer.html  (open it in a browser: every bin's trees, values and trial)
+  animation        {animation}  (the best tree's trial through the graph, one frame per step)
   run bag (MCAP)   {out}/run.bag/  (every evaluation on /evaluations, archive progress on /progress)
-Best tree          {best["best_tree"]}
+Best tree          {best.get("best_tree_simplified") or best["best_tree"]}  (simplified)
+  as evolved       {best["best_tree"]}
 Trial bag (MCAP)   {bag}/  (every topic of the graph; trial 0, food {values["food"]:.4f})
 Node logs          {out}/logs/
 
