@@ -25,6 +25,7 @@ from pathlib import Path
 
 from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import BagError
+from evolution_manager.config import SCENARIOS
 from evolution_manager.graph import GraphError, executable
 from evolution_manager.nodes.trial import TrialFailedError, run_recorded_trial
 
@@ -46,6 +47,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=int, default=DEFAULT_EVALUATIONS, help="evaluation budget")
     parser.add_argument("--seed", type=int, default=1, help="seed of the run (default 1)")
     parser.add_argument("--evaluators", type=int, default=DEFAULT_EVALUATORS, help="evaluator nodes to start")
+    parser.add_argument(
+        "--scenarios", choices=SCENARIOS, default="fixed", help="fixed (default) or fresh scenarios"
+    )
+    parser.add_argument(
+        "--scenario-seed", type=int, default=None, help="scenario seed (default: derived from --seed)"
+    )
     parser.add_argument("--out", type=Path, default=None, help="new run directory (default runs/main-<time>)")
     return parser
 
@@ -80,7 +87,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             "--seed", str(args.seed),
             "--out", str(out),
             "--evaluators", str(args.evaluators),
+            "--scenarios", args.scenarios,
         ]  # fmt: skip
+        if args.scenario_seed is not None:
+            command += ["--scenario-seed", str(args.scenario_seed)]
         if subprocess.run(command, env=domain_environment(domain), check=False).returncode != 0:
             print(f"main: the evolution run failed; its directory is {out}", file=sys.stderr)
             return 1
@@ -95,7 +105,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         flush=True,
     )
     try:
-        record = run_recorded_trial(best["best_tree"], args.seed, 0, bag)
+        config = summary["config"]
+        # under fixed scenarios, trial 0 of the scenario the run scored the tree on
+        trial_seed = config["scenario_seed"] if config.get("scenarios") == "fixed" else args.seed
+        record = run_recorded_trial(best["best_tree"], trial_seed, 0, bag)
     except (GraphError, BagError, TrialFailedError) as error:
         print(f"main: the trial through the node graph failed: {error}", file=sys.stderr)
         return 1
@@ -107,7 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).
 
 Run directory      {out}/
-  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.2f})
+  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.4f}, held-out {best["heldout_qd_score"]})
   repertoire       {out}/repertoire_food.json  (and one per objective: every tree was scored on all three)
   progress         {out}/progress.csv
   figures          {out}/figures/

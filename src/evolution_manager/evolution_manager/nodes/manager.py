@@ -74,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=cli.positive_int, help="evaluation budget (default: as evolve)")
     parser.add_argument("--seed", type=cli.seed_int, help="run seed in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=cli.positive_int, help="trials per evaluation (default 10)")
+    cli.add_scenario_options(parser)
     parser.add_argument("--out", type=Path, required=True, help="run directory (new, unless --resume)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument(
@@ -162,7 +163,9 @@ class RunRecording:
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
     def batch(self, run: object, requests: Sequence, results: Sequence) -> None:
-        """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
+        """Record the batch just told to the algorithm (``run.evaluations`` already counts it): the
+        evaluations simulated for it (under fixed scenarios, trees answered from the run's cache are not
+        sent, so not recorded again) and the repertoires' progress."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
             msg = EvaluationResult(tree=request.tree, seed=request.seed, trials=request.trials)
@@ -175,7 +178,7 @@ class RunRecording:
                 msg.error = result.error or "no fitness or descriptors"
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
-            grid = run.passive[name]  # type: ignore[attr-defined]
+            grid = run.repertoire(name)  # type: ignore[attr-defined]
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
                 objective=name,
@@ -294,12 +297,13 @@ def manage(argv: Sequence[str]) -> int:
 def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator: _Remember) -> int:
     from evolution_manager.outputs import write_results
 
-    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)  # type: ignore[attr-defined]
+    bar = cli.progress_bar(run.config, run.algorithm.produced, not args.no_progress)  # type: ignore[attr-defined]
     with BagRecorder(bag_path(Path(args.out))) as recorder:
         recording = RunRecording(node, recorder, run.config)  # type: ignore[attr-defined]
 
         def on_batch(done: int, total: int) -> None:
             recording.batch(run, evaluator.requests, evaluator.results)
+            evaluator.requests, evaluator.results = (), ()  # a batch answered from the cache sends none
             if bar is not None:
                 bar.update(done - bar.n)
 
@@ -308,7 +312,7 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures)  # type: ignore[arg-type]
+    write_results(run, with_figures=not args.no_figures, evaluator=evaluator)  # type: ignore[arg-type]
     dispatcher = evaluator.evaluator.dispatcher
     node.get_logger().info(
         f"{run.config.label}: {run.evaluations} evaluations in {args.out} "  # type: ignore[attr-defined]
