@@ -1,4 +1,8 @@
-"""Random trees and blackboards for tests and benchmarks (every function takes its own generator)."""
+"""Random trees and blackboards for tests, benchmarks and measurements (not the evolution's initialisation,
+which is DEAP's, in ``evolution_manager.primitives``). Every function takes its own generator or seed.
+
+``random_tree`` (exactly ``size`` nodes) and ``random_tree_grow`` (at most ``max_depth`` deep) build trees;
+``random_trees`` gives tree text for requests; ``random_blackboards`` gives blackboards to tick against."""
 
 from __future__ import annotations
 
@@ -25,7 +29,9 @@ def random_tree(rng: np.random.Generator, size: int, p_condition: float = 0.5) -
     while True:
         n = int(rng.integers(MIN_CHILDREN, min(MAX_CHILDREN, rest) + 1))
         # Split ``rest`` nodes among ``n`` children, none of them 2 nodes (no such tree).
-        cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False)) if n > 1 else []
+        cuts: np.ndarray | list[int] = []
+        if n > 1:
+            cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False))
         parts = np.diff(np.concatenate(([0], cuts, [rest]))).astype(int)
         if np.all(parts != 2):
             break
@@ -51,3 +57,11 @@ def random_blackboards(rng: np.random.Generator, n_robots: int, n_ticks: int) ->
     """Blackboards (robots, ticks, 8) bool; each robot has its own probability of true per condition."""
     p_true = rng.random((n_robots, 1, len(CONDITIONS)))
     return rng.random((n_robots, n_ticks, len(CONDITIONS))) < p_true
+
+
+def random_trees(seed: int, count: int, min_size: int = 10, max_size: int = 60) -> list[str]:
+    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``), reproducible
+    from ``seed``."""
+    rng = np.random.default_rng(seed)
+    sizes = [int(rng.integers(min_size + 1, max_size + 1)) for _ in range(count)]
+    return [str(random_tree(rng, 3 if size == 2 else size)) for size in sizes]

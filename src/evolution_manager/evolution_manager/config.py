@@ -14,9 +14,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
-import numpy as np
-
-from bt_controller.draws import MAX_SEED, derive, root_key
+from bt_controller.draws import (
+    MAX_SEED,
+    RUN_ALGORITHM,
+    RUN_EVALUATION,
+    RUN_HELDOUT,
+    RUN_SCENARIO,
+    derive_seed,
+)
 
 from .errors import ConfigError
 from .parameters import GPParameters, QDParameters
@@ -40,15 +45,10 @@ SCENARIOS: tuple[str, ...] = ("fixed", "fresh")
 HELDOUT_EVALUATIONS = 5
 """Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
 
-_SEED_PURPOSE_EVALUATION = 1
-_SEED_PURPOSE_ALGORITHM = 2
-_SEED_PURPOSE_SCENARIO = 4
-_SEED_PURPOSE_HELDOUT = 5
-
 
 def default_scenario_seed(run_seed: int) -> int:
     """The scenario seed of a run when none is given: derived from the run seed."""
-    return derive_seed(run_seed, _SEED_PURPOSE_SCENARIO) & MAX_SEED
+    return derive_seed(run_seed, RUN_SCENARIO)
 
 
 @dataclass(frozen=True)
@@ -131,7 +131,7 @@ class RunConfig:
     def heldout_seed(self, repeat: int) -> int:
         """The seed of held-out evaluation ``repeat`` (0 to ``HELDOUT_EVALUATIONS`` - 1), the same for every
         tree re-scored at the end of the run: scenarios the run never used."""
-        return derive_seed(self.scenario_seed, _SEED_PURPOSE_HELDOUT, repeat) & MAX_SEED
+        return derive_seed(self.scenario_seed, RUN_HELDOUT, repeat)
 
     @property
     def objectives(self) -> tuple[str, ...]:
@@ -179,7 +179,7 @@ class RunConfig:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
         from .algorithms import GeneticProgramming, MapElites
 
-        algorithm_seed = derive_seed(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
+        algorithm_seed = derive_seed(self.seed, RUN_ALGORITHM)
         if self.algorithm == "qd":
             return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)
         objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
@@ -189,12 +189,4 @@ class RunConfig:
 def evaluation_seed(run_seed: int, index: int) -> int:
     """The simulator seed of evaluation number ``index`` (0-based) of a run: a pure function of the run
     seed and the index, so that a resumed or distributed run draws exactly the same trials."""
-    return derive_seed(run_seed, _SEED_PURPOSE_EVALUATION, index) & MAX_SEED
-
-
-def derive_seed(seed: int, *path: int) -> int:
-    """The stream key reached from the root key of ``seed`` by deriving along ``path``."""
-    key = np.uint64(root_key(seed))
-    for value in path:
-        key = np.uint64(derive(key, int(value)))
-    return int(key)
+    return derive_seed(run_seed, RUN_EVALUATION, index)

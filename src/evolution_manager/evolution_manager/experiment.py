@@ -30,7 +30,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import Manager, get_context
 from pathlib import Path
 
-from bt_controller.draws import MAX_SEED
+from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
 
 from .cli import (
     EXIT_INTERRUPTED,
@@ -42,12 +42,11 @@ from .cli import (
     seconds,
     seed_int,
 )
-from .config import ALGORITHMS, RunConfig, derive_seed
+from .config import ALGORITHMS, RunConfig
 from .errors import EvolutionError
-from .files import read_json, write_json
+from .files import read_json, read_json_object, write_json
 from .primitives import OBJECTIVES
 
-_SEED_PURPOSE_EXPERIMENT = 3
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
 
@@ -68,7 +67,7 @@ def plan(
         for objective in objectives:
             o = -1 if objective is None else OBJECTIVES.index(objective)
             for r in range(runs):
-                run_seed = derive_seed(seed, _SEED_PURPOSE_EXPERIMENT, a, o + 1, r) & MAX_SEED
+                run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
                 config = RunConfig.make(
                     algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed
                 )
@@ -93,8 +92,8 @@ def produced_so_far(root: Path, budget: int) -> int:
     if not checkpoint.exists():
         return 0
     try:
-        state = read_json(checkpoint)
-        return min(budget, int(state["algorithm"].get("produced", 0)))  # type: ignore[index,union-attr]
+        state = read_json_object(checkpoint)
+        return min(budget, int(state["algorithm"].get("produced", 0)))
     except (EvolutionError, KeyError, TypeError, ValueError):
         return 0
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
 
 from .config import HELDOUT_EVALUATIONS
 from .errors import RunDirectoryError
@@ -28,7 +29,8 @@ from .run import Run
 HELDOUT_FORMAT = 1
 
 
-def heldout_path(run: Run):  # noqa: ANN201 - a Path
+def heldout_path(run: Run) -> Path:
+    """Where a run's held-out scores are written."""
     return run.directory.root / "heldout.json"
 
 
@@ -49,9 +51,9 @@ def score_heldout(run: Run, evaluator: object) -> dict:
     the file already there, when it belongs to this run)."""
     path = heldout_path(run)
     if path.exists():
-        document = read_json(path)
-        if isinstance(document, dict) and document.get("config") == run.config.to_json():
-            return document
+        saved = read_json(path)
+        if isinstance(saved, dict) and saved.get("config") == run.config.to_json():
+            return saved
     from swarm_sim.evaluation import EvaluationRequest
 
     seeds = [run.config.heldout_seed(repeat) for repeat in range(HELDOUT_EVALUATIONS)]

@@ -25,7 +25,7 @@ from . import figures
 from .archive import Repertoire
 from .cli import EXIT_USAGE, Parser, UsageError
 from .errors import EvolutionError
-from .files import CsvLog, number, read_json, write_atomic
+from .files import CsvLog, number, read_json, read_json_object, write_atomic
 from .primitives import OBJECTIVES
 from .run import PROGRESS_HEADER
 from .statistics import ALPHA, Comparison, compare, holm, markdown_table
@@ -122,8 +122,8 @@ def _samples(runs: Sequence[FinishedRun], key: str) -> dict[str, dict[str, list[
 
 
 def _repertoire(run: FinishedRun, objective: str) -> Repertoire:
-    document = read_json(run.directory / f"repertoire_{objective}.json")
-    return Repertoire.from_items(document["items"], int(document.get("items_per_bin", 3)))  # type: ignore[index,union-attr]
+    document = read_json_object(run.directory / f"repertoire_{objective}.json")
+    return Repertoire.from_items(document["items"], int(document.get("items_per_bin", 3)))
 
 
 def _comparisons(runs: Sequence[FinishedRun], pairs: str = "paper") -> list[Comparison]:
@@ -375,16 +375,16 @@ def build_report(root: Path) -> Path:
         parts.append(
             "### Comparisons the paper's table leaves out: GP_fnd vs QD_o\n\n" + markdown_table(extra)
         )
-    first = {}
+    first: dict[tuple[str, str | None], FinishedRun] = {}
     for run in runs:
         first.setdefault((run.algorithm, run.objective), run)
     histogram_rows = {}
     for objective in OBJECTIVES:
         row = {}
         for algorithm in ("gp", "gp-fnd", "qd"):
-            run = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
-            if run is not None:
-                row[run.label(objective)] = _repertoire(run, objective)
+            one = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
+            if one is not None:
+                row[one.label(objective)] = _repertoire(one, objective)
         histogram_rows[objective] = row
     path = figures.histograms(histogram_rows, folder / "fig8_histograms.png")
     parts.append(
@@ -393,16 +393,16 @@ def build_report(root: Path) -> Path:
         + _sizes_table(first, runs)
     )
     for objective in OBJECTIVES:
-        run = first.get(("qd", objective))
-        if run is None:
+        qd_run = first.get(("qd", objective))
+        if qd_run is None:
             continue
         path = figures.heatmaps(
-            _repertoire(run, objective),
-            f"QD_{objective} run {run.index}",
+            _repertoire(qd_run, objective),
+            f"QD_{objective} run {qd_run.index}",
             folder / f"fig7_grid_{objective}.png",
         )
         parts.append(
-            f"### Fig. 7-style: MAP-Elites grid, {objective} (run {run.index})\n\n"
+            f"### Fig. 7-style: MAP-Elites grid, {objective} (run {qd_run.index})\n\n"
             f"![grid](figures/{path.name})\n"
         )
     for objective in OBJECTIVES:

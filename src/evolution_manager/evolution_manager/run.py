@@ -41,7 +41,7 @@ from .algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outc
 from .archive import Repertoire
 from .config import RunConfig
 from .errors import RunDirectoryError
-from .files import CsvLog, number, read_json, write_json
+from .files import CsvLog, number, read_json, read_json_object, write_json
 from .primitives import DESCRIPTORS, OBJECTIVES
 
 CHECKPOINT_FORMAT = 1
@@ -148,7 +148,7 @@ class Run:
         directory = RunDirectory(root)
         if not directory.started():
             raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
-        config = RunConfig.from_json(read_json(directory.config))  # type: ignore[arg-type]
+        config = RunConfig.from_json(read_json_object(directory.config))
         state = read_json(directory.checkpoint)
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
             raise RunDirectoryError(
@@ -160,7 +160,7 @@ class Run:
             )
         run = cls(config, directory, evaluator)
         try:
-            run.algorithm.restore(state["algorithm"])  # type: ignore[attr-defined]
+            run.algorithm.restore(state["algorithm"])
             run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
             run.evaluations = int(state["evaluations"])
             run.offsets = {k: int(v) for k, v in state["offsets"].items()}
@@ -188,7 +188,9 @@ class Run:
                 self.known[tree] = Outcome(None, None, row["error"])
             else:
                 values = [float(row[name]) for name in (*OBJECTIVES, *DESCRIPTORS)]
-                self.known[tree] = Outcome(tuple(values[:3]), tuple(values[3:]))  # type: ignore[arg-type]
+                self.known[tree] = Outcome(
+                    (values[0], values[1], values[2]), (values[3], values[4], values[5])
+                )
 
     def _cached(self, tree: str) -> bool:
         return self.config.scenarios == "fixed" and tree in self.known
@@ -311,12 +313,12 @@ class Run:
         for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
             index = self.evaluations + offset
             outcome = as_outcome(result)
-            if outcome.ok:
+            measured = outcome.measured()
+            if measured is not None:
+                fitness, descriptors = measured
                 for k, objective in enumerate(OBJECTIVES):
-                    self.passive[objective].offer(
-                        request.tree, outcome.fitness[k], outcome.descriptors, index
-                    )  # type: ignore[index]
-                values = [number(v) for v in outcome.fitness + outcome.descriptors]  # type: ignore[operator]
+                    self.passive[objective].offer(request.tree, fitness[k], descriptors, index)
+                values = [number(v) for v in fitness + descriptors]
                 error = ""
             else:
                 values = [""] * (len(OBJECTIVES) + len(DESCRIPTORS))

@@ -125,7 +125,7 @@ class Config:
 
     def params(self) -> Params:
         """The configuration as a ``Params`` named tuple for compiled kernels."""
-        return Params(**{f: (int if f in _INT_PARAMS else float)(getattr(self, f)) for f in Params._fields})
+        return Params._make((int if f in _INT_PARAMS else float)(getattr(self, f)) for f in Params._fields)
 
     def as_dict(self) -> dict[str, object]:
         """Every parameter by name (gaps as a list), for writing next to results."""

@@ -63,7 +63,10 @@ def run_trial(tree: Node, seed: int, trial: int, config: Config = DEFAULT) -> Tr
             step += 1
 
     final = np.array([view.smoothed() for view in views])
-    end_ground = np.array([[view.latest.in_nest, view.latest.on_food] for view in views], dtype=np.bool_)
+    end_ground = np.zeros((n, 2), dtype=np.bool_)
+    for i, view in enumerate(views):
+        assert view.latest is not None, "every robot has sensed by the end of a trial"
+        end_ground[i] = view.latest.in_nest, view.latest.on_food
     counts = np.array([c.counts for c in controllers], dtype=np.int64)
     values = world.trial_values(initial, final, end_ground, counts, p)
     return TrialRecord(

@@ -11,10 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.draws import check_seed, root_key
+from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, check_seed, root_key, trial_keys
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
 
 VALUE_NAMES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
 """The six values of a trial or an evaluation, in ``world.N_VALUES`` order."""

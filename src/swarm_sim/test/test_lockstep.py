@@ -4,9 +4,9 @@ reference road exactly, and refuses misuse clearly."""
 import numpy as np
 import pytest
 
+from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, run_with_controllers
-from swarm_sim.randtrees import random_trees
 from swarm_sim.reference_road import run_trial
 
 TREES = [

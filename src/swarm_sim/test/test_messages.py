@@ -5,11 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from bt_controller.draws import uniform
+from bt_controller.draws import DROPS, stream_key, uniform
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.sensing import Readings, RobotView, sense_swarm
-from swarm_sim.streams import DROPS, stream_key
 from swarm_sim.trial_data import setup_trial
 
 P = DEFAULT.params()

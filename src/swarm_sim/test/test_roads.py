@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
+from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
 from swarm_sim import reference_road
 from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
-from swarm_sim.randtrees import random_trees
 
 # CI size; `ws/run swarm_sim bench --parity 300` runs the large comparison.
 N_TREES = 24

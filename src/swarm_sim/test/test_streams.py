@@ -2,9 +2,8 @@
 
 import numpy as np
 
-from bt_controller.draws import root_key
+from bt_controller.draws import DROPS, PURPOSES, TREE, root_key, stream_key, trial_keys
 from swarm_sim.config import DEFAULT
-from swarm_sim.streams import DROPS, PURPOSES, TREE, stream_key, trial_keys
 from swarm_sim.trial_data import setup_trial
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from rclpy.client import Client
@@ -70,14 +71,13 @@ def _check(request: object) -> str:
     return ""
 
 
-def result_from_message(msg: object) -> EvaluationResult:
+def result_from_message(msg: Any) -> EvaluationResult:  # a swarm_msgs message: generated, untyped
     """The contract's result from a ``swarm_msgs/msg/EvaluationResult`` (values copied bit for bit)."""
-    if not msg.ok:  # type: ignore[attr-defined]
-        return failed(msg.error)  # type: ignore[attr-defined]
-    m = msg
+    if not msg.ok:
+        return failed(msg.error)
     return EvaluationResult(
-        fitness=(m.density, m.nest, m.food),  # type: ignore[attr-defined]
-        descriptors=(m.movement, m.rotation, m.conditionality),  # type: ignore[attr-defined]
+        fitness=(msg.density, msg.nest, msg.food),
+        descriptors=(msg.movement, msg.rotation, msg.conditionality),
         error=None,
     )
 
@@ -164,7 +164,7 @@ class ServiceEvaluator:
             dispatched = self._dispatch()
             for index, result in zip(sendable, dispatched, strict=True):
                 results[index] = result
-        return results  # type: ignore[return-value]
+        return results  # type: ignore[return-value]  # every slot was filled above, none is left None
 
     def _dispatch(self) -> list[EvaluationResult]:
         dispatcher = self.dispatcher
@@ -198,13 +198,13 @@ class ServiceEvaluator:
                 wait = min(wait, max(deadline - now, 0.0) + 0.01)
             self.executor.spin_once(timeout_sec=wait)
             self._collect()
-        return dispatcher.results()  # type: ignore[return-value]
+        return dispatcher.results()  # type: ignore[return-value]  # the dispatcher holds what we gave it
 
     def _send(self, chunk: Chunk) -> None:
         request = EvaluateBatch.Request()
         request.trees = [self._requests[i].tree for i in chunk.indices]
         request.seeds = [int(self._requests[i].seed) for i in chunk.indices]
-        request.trials = int(chunk.key)  # type: ignore[call-overload]
+        request.trials = int(chunk.key)  # type: ignore[call-overload]  # a chunk key is its trial count (int)
         request.objective = self.settings.objective
         future = self._clients[chunk.worker].call_async(request)
         self._futures[chunk.id] = (future, chunk, request)
@@ -214,7 +214,7 @@ class ServiceEvaluator:
             future, chunk, request = self._futures.pop(chunk_id)
             response = future.result() if future.exception() is None else None
             problem = self._problem(response, request)
-            if problem:
+            if problem or response is None:
                 self._log(
                     "warn", f"evaluator {chunk.worker} answered wrongly ({problem}); not using it again"
                 )
@@ -230,12 +230,12 @@ class ServiceEvaluator:
                 self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
     @staticmethod
-    def _problem(response: object, request: EvaluateBatch.Request) -> str:
+    def _problem(response: Any, request: EvaluateBatch.Request) -> str:  # response: untyped ROS message
         if response is None:
             return "no response"
-        if response.message:  # type: ignore[attr-defined]
+        if response.message:
             return ""
-        results = response.results  # type: ignore[attr-defined]
+        results = response.results
         if len(results) != len(request.trees):
             return f"{len(results)} results for {len(request.trees)} trees"
         for msg, seed in zip(results, request.seeds, strict=True):
