@@ -149,3 +149,20 @@ def test_fixed_scenarios_give_one_fitness_per_tree_and_fresh_ones_a_seed_per_eva
     config = json.loads((tmp_path / "fixed" / "config.json").read_text())
     assert config["scenarios"] == "fixed" and config["scenario_seed"] == fixed.config.scenario_seed
     assert RunConfig.make("gp", "food", 500, 15, scenario_seed=7).scenario_seed == 7
+
+
+def test_evaluate_with_the_runs_scenario_seed_reproduces_every_stored_fitness(tmp_path):
+    from swarm_sim.cli import run as evaluate_command
+    from swarm_sim.evaluation import BatchEvaluator
+
+    run = _finish(Run.start(RunConfig.make("qd", "food", 50, 16), tmp_path / "r", BatchEvaluator()))
+    rows = run.directory.evaluations.read()
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    best = summary["objectives"]["food"]
+    chosen = [r for r in rows if r["tree"] == best["best_tree"]][:1] + rows[:: max(1, len(rows) // 3)]
+    seed = json.loads((tmp_path / "r" / "config.json").read_text())["scenario_seed"]
+    for row in chosen:
+        document = json.loads(evaluate_command(["--tree", row["tree"], "--seed", str(seed)]))
+        stored = [float(row[k]) for k in (*OBJECTIVES, "movement", "rotation", "conditionality")]
+        assert [*document["fitness"].values(), *document["descriptors"].values()] == stored  # exactly
+    assert chosen[0][best["evolved"] and "food"] and float(chosen[0]["food"]) == best["best_fitness"]
