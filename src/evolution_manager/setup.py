@@ -39,6 +39,8 @@ setup(
             "experiment = evolution_manager.experiment:main",
             "report = evolution_manager.report:main",
             "measure = evolution_manager.measure:main",
+            "adapt = evolution_manager.adapt:main",
+            "adapt-benchmark = evolution_manager.adapt_benchmark:main",
         ],
     },
 )

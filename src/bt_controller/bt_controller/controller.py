@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from bt_controller.perception import PerceptionParams, Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
+from bt_controller.validate import integer
 from bt_controller.vocabulary import ACTION_WHEELS, RUNNING, STOP
 
 
@@ -26,9 +27,7 @@ class Schedule:
 
     def __post_init__(self) -> None:
         for name in ("settle_steps", "steps_per_tick", "ticks"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+            integer(getattr(self, name), name, 1)
 
     @property
     def last_step(self) -> int:

@@ -22,6 +22,8 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from bt_controller.validate import integer
+
 from .archive import Entry, Repertoire
 from .errors import AskTellError, ConfigError
 from .operators import best_of, full_tree, tournament, vary
@@ -82,8 +84,7 @@ class AskTell:
     name = "base"
 
     def __init__(self, budget: int, seed: int) -> None:
-        if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
-            raise ConfigError(f"the budget must be a positive number of evaluations, got {budget!r}")
+        integer(budget, "the budget (evaluations)", 1, error=ConfigError)
         self.budget = budget
         self.seed = seed
         self.rng = random.Random(seed)

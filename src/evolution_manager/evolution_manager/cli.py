@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, SCENARIOS, RunConfig
-from .errors import EvolutionError
+from .errors import EvolutionError, UsageError
 
 if TYPE_CHECKING:  # imported where used: tqdm and the simulator load slowly, and not every command needs them
     from tqdm import tqdm
@@ -25,10 +25,6 @@ if TYPE_CHECKING:  # imported where used: tqdm and the simulator load slowly, an
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
-
-
-class UsageError(Exception):
-    """A command-line option that cannot be used; the message says why."""
 
 
 class Parser(argparse.ArgumentParser):

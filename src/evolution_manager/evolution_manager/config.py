@@ -22,6 +22,7 @@ from bt_controller.draws import (
     RUN_SCENARIO,
     derive_seed,
 )
+from bt_controller.validate import integer
 
 from .errors import ConfigError
 from .parameters import GPParameters, QDParameters
@@ -76,23 +77,14 @@ class RunConfig:
             raise ConfigError(
                 f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; got {self.objective!r}"
             )
-        if (
-            isinstance(self.evaluations, bool)
-            or not isinstance(self.evaluations, int)
-            or self.evaluations < 1
-        ):
-            raise ConfigError(f"evaluations must be a positive integer, got {self.evaluations!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
-            raise ConfigError(f"seed must be an integer in [0, {MAX_SEED}], got {self.seed!r}")
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 1:
-            raise ConfigError(f"trials must be a positive integer, got {self.trials!r}")
+        integer(self.evaluations, "evaluations", 1, error=ConfigError)
+        integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
+        integer(self.trials, "trials", 1, error=ConfigError)
         if self.scenarios not in SCENARIOS:
             raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
         if self.scenario_seed == -1:  # frozen: set once, at creation
             object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
-        seed = self.scenario_seed
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-            raise ConfigError(f"the scenario seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
+        integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
 
     @classmethod
     def make(

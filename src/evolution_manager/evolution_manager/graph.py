@@ -18,10 +18,7 @@ from typing import IO
 from ament_index_python.packages import PackageNotFoundError, get_package_prefix
 
 from bt_controller.nodes.isolation import domain_environment
-
-
-class GraphError(RuntimeError):
-    """A node of the graph could not be started or died; the message says which and why."""
+from evolution_manager.errors import GraphError
 
 
 def executable(package: str, name: str) -> Path:
@@ -119,9 +116,13 @@ class Graph:
         self._logs.clear()
 
 
-def start_trial_graph(graph: Graph, robots: int = 9) -> None:
-    """Start the simulator and one footbot controller per robot, each in its own process."""
-    graph.start("simulator", "swarm_sim", "simulator", parameters={"robots": robots})
+def start_trial_graph(graph: Graph, robots: int = 9, conditions: Sequence[str] = ()) -> None:
+    """Start the simulator and one footbot controller per robot, each in its own process; ``conditions``
+    (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world."""
+    parameters: dict[str, object] = {"robots": robots}
+    if conditions:
+        parameters["conditions"] = " ".join(conditions)
+    graph.start("simulator", "swarm_sim", "simulator", parameters=parameters)
     for i in range(robots):
         graph.start(
             f"footbot_{i}",

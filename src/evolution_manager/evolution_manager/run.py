@@ -42,7 +42,7 @@ from .archive import Repertoire
 from .config import RunConfig
 from .errors import RunDirectoryError
 from .files import CsvLog, number, read_json, read_json_object, write_json
-from .primitives import DESCRIPTORS, OBJECTIVES
+from .primitives import DESCRIPTORS, OBJECTIVES, tree_to_text
 
 CHECKPOINT_FORMAT = 1
 
@@ -363,7 +363,5 @@ class Run:
     def population(self) -> list[str]:
         """GP's current population as tree texts (empty for MAP-Elites)."""
         if isinstance(self.algorithm, GeneticProgramming):
-            from .primitives import tree_to_text
-
             return [tree_to_text(t) for t in self.algorithm.population]
         return []

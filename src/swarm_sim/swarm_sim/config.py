@@ -8,13 +8,11 @@ Units: millimetres, seconds, radians.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 from typing import NamedTuple
 
-
-class ConfigError(ValueError):
-    """A configuration value is out of its allowed range; the message names it and says why."""
+from bt_controller.validate import integer, number
+from swarm_sim.errors import ConfigError
 
 
 class Params(NamedTuple):
@@ -42,6 +40,9 @@ class Params(NamedTuple):
     window: int
     collision_iterations: int
     collision_slack: float
+    dead_robots: int
+    weak_robots: int
+    weak_gain: float
 
 
 _INT_PARAMS = frozenset(
@@ -53,6 +54,8 @@ _INT_PARAMS = frozenset(
         "settle_steps",
         "window",
         "collision_iterations",
+        "dead_robots",
+        "weak_robots",
     )
 )
 
@@ -110,6 +113,13 @@ class Config:
     """Passes of pairwise positional correction per step before the fallback (undo the step's move)."""
     collision_slack: float = 1e-6
     """Extra separation added when two robots are pushed apart, so they end strictly apart (mm)."""
+    dead_robots: int = 0
+    """Damage (``swarm_sim.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they never
+    drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
+    weak_robots: int = 0
+    """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
+    weak_gain: float = 1.0
+    """Factor on the weak robots' left wheel gain, in [0, 1]."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -137,28 +147,15 @@ class Config:
 
 
 def _number(config: Config, name: str) -> float:
-    value = getattr(config, name)
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{name} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ConfigError(f"{name} must be finite, got {value!r}")
-    return float(value)
+    return number(getattr(config, name), name, error=ConfigError)
 
 
 def _positive(config: Config, name: str) -> float:
-    value = _number(config, name)
-    if value <= 0:
-        raise ConfigError(f"{name} must be positive, got {value!r}")
-    return value
+    return number(getattr(config, name), name, positive=True, error=ConfigError)
 
 
 def _count(config: Config, name: str, minimum: int = 1) -> int:
-    value = getattr(config, name)
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(f"{name} must be an integer, got {value!r}")
-    if value < minimum:
-        raise ConfigError(f"{name} must be at least {minimum}, got {value}")
-    return value
+    return integer(getattr(config, name), name, minimum, error=ConfigError)
 
 
 def _validate(c: Config) -> None:
@@ -181,6 +178,12 @@ def _validate(c: Config) -> None:
         _count(c, name)
     _count(c, "settle_steps", 1)
     _count(c, "collision_iterations", 0)
+    for name in ("dead_robots", "weak_robots"):
+        if _count(c, name, 0) > c.n_robots:
+            raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
+    weak_gain = _number(c, "weak_gain")
+    if not 0.0 <= weak_gain <= 1.0:
+        raise ConfigError(f"weak_gain must be in [0, 1], got {weak_gain}")
     low, high = _positive(c, "gain_low"), _positive(c, "gain_high")
     if low > high:
         raise ConfigError(f"gain_low must not exceed gain_high, got {low} > {high}")
@@ -189,9 +192,8 @@ def _validate(c: Config) -> None:
         raise ConfigError(f"delivery_probability must be in [0, 1], got {p}")
     if not isinstance(c.gaps, tuple) or not c.gaps:
         raise ConfigError(f"gaps must be a non-empty tuple of positive numbers, got {c.gaps!r}")
-    for gap in c.gaps:
-        if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not math.isfinite(gap) or gap <= 0:
-            raise ConfigError(f"gaps must hold positive finite numbers, got {c.gaps!r}")
+    for k, gap in enumerate(c.gaps):
+        number(gap, f"gaps[{k}]", positive=True, error=ConfigError)
     if c.robot_radius >= c.arena_half:
         raise ConfigError(f"robot_radius must be below arena_half, got {c.robot_radius} >= {c.arena_half}")
     if c.start_radius + c.robot_radius > c.arena_half:

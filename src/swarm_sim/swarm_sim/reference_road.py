@@ -12,6 +12,7 @@ import numpy as np
 
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
+from bt_controller.validate import integer
 from bt_controller.vocabulary import RUNNING, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
@@ -83,7 +84,6 @@ def evaluate(
 ) -> tuple[tuple[float, ...], list[TrialRecord]]:
     """Evaluate ``tree`` over trials 0 .. trials - 1 of ``seed``: the six mean values and each trial's
     record."""
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials must be a positive integer, got {trials!r}")
+    integer(trials, "trials", 1)
     records = [run_trial(tree, seed, k, config) for k in range(trials)]
     return combine(records), records

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, check_seed, root_key, trial_keys
+from bt_controller.validate import integer
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 
@@ -38,8 +39,7 @@ class TrialSetup:
 def setup_trial(seed: int, trial: int, config: Config = DEFAULT) -> TrialSetup:
     """Draw trial ``trial`` of ``seed``: start poses, wheel gains and the robots' stream keys."""
     seed = check_seed(seed)
-    if isinstance(trial, bool) or not isinstance(trial, int) or trial < 0:
-        raise ValueError(f"trial must be a non-negative integer, got {trial!r}")
+    integer(trial, "trial", 0)
     p = config.params()
     keys = trial_keys(np.uint64(root_key(seed)), trial, p.n_robots)
     return TrialSetup(

@@ -97,13 +97,24 @@ def start_poses(position_keys: np.ndarray, heading_keys: np.ndarray, p: Params) 
 
 @numba.njit(cache=True)
 def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
-    """Each robot's (left, right) wheel gains, uniform in [gain_low, gain_high) (n_robots x 2)."""
+    """Each robot's (left, right) wheel gains, uniform in [gain_low, gain_high) (n_robots x 2).
+
+    Damage acts here, on what a trial starts from (``swarm_sim.conditions``): robots below ``dead_robots``
+    get gains 0 (they never drive or turn, though others can still push them), and the left wheel of the last
+    ``weak_robots`` robots is scaled by ``weak_gain``. Every draw is made either way, so the undamaged robots'
+    gains do not depend on the damage.
+    """
     n = p.n_robots
     gains = np.empty((n, 2))
     span = p.gain_high - p.gain_low
     for i in range(n):
         gains[i, 0] = p.gain_low + span * uniform(gain_keys[i], 0)
         gains[i, 1] = p.gain_low + span * uniform(gain_keys[i], 1)
+        if i >= n - p.weak_robots:
+            gains[i, 0] *= p.weak_gain
+        if i < p.dead_robots:
+            gains[i, 0] = 0.0
+            gains[i, 1] = 0.0
     return gains
 
 

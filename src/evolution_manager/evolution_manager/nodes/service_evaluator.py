@@ -18,23 +18,20 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 from rclpy.client import Client
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
 
 from bt_controller.draws import check_seed
-from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
+from bt_controller.validate import integer
+from evolution_manager.dispatch import Chunk, Dispatcher, Timeouts, WorkerState
+from evolution_manager.errors import NoEvaluatorError
 from swarm_msgs.srv import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
 
 SERVICE_TYPE = "swarm_msgs/srv/EvaluateBatch"
 OBJECTIVES = ("density", "nest", "food")
-
-
-class NoEvaluatorError(DispatchError):
-    """No evaluator service answered within the wait; the message says how long it waited."""
 
 
 @dataclass(frozen=True)
@@ -63,11 +60,9 @@ def _check(request: object) -> str:
         return f"tree must be tree text (str), got {type(request.tree).__name__}"
     try:
         check_seed(request.seed)
+        integer(request.trials, "trials", 1, MAX_TRIALS, numpy=True)
     except ValueError as error:
         return str(error)
-    trials = request.trials
-    if isinstance(trials, bool) or not isinstance(trials, int | np.integer) or not 1 <= trials <= MAX_TRIALS:
-        return f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}"
     return ""
 
 

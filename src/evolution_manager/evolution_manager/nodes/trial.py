@@ -14,6 +14,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,18 +28,16 @@ from bt_controller.errors import TreeError
 from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.reproduce import RESULT_TOPIC
 from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
-from swarm_sim.config import DEFAULT
+from swarm_sim.conditions import apply_conditions
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
-
-
-class TrialFailedError(RuntimeError):
-    """The trial could not be run through the graph; the message says why."""
 
 
 def expected_messages(robots: int) -> dict[str, int]:
@@ -52,9 +51,12 @@ def expected_messages(robots: int) -> dict[str, int]:
 class TrialRunner:
     """A client node that loads trees into the controllers and asks the simulator for trials."""
 
-    def __init__(self, context: rclpy.Context, graph: Graph, robots: int, timeout: float) -> None:
+    def __init__(
+        self, context: rclpy.Context, graph: Graph, robots: int, timeout: float, config: Config = DEFAULT
+    ) -> None:
         self.graph = graph
         self.robots = robots
+        self.config = config
         self.timeout = timeout
         self.node = Node("trial_runner", context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -102,7 +104,7 @@ class TrialRunner:
             raise TrialFailedError(f"the simulator could not run the trial: {response.message}")
         return TrialRecord(
             trial=trial,
-            gap=DEFAULT.gap(trial),
+            gap=self.config.gap(trial),
             values=tuple(getattr(response, name) for name in VALUE_NAMES),
             start_poses=np.array([[p.x, p.y, p.theta] for p in response.start_poses]),
             end_poses=np.array([[p.x, p.y, p.theta] for p in response.end_poses]),
@@ -111,10 +113,15 @@ class TrialRunner:
 
 class TrialGraph:
     """A running trial graph (simulator and one controller process per robot, in a ROS domain of their own)
-    that runs any number of trials, each optionally recorded to a bag of its own. A context manager."""
+    that runs any number of trials, each optionally recorded to a bag of its own. A context manager.
 
-    def __init__(self, *, robots: int = 9, timeout: float = 60.0) -> None:
-        self.robots = robots
+    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world; a
+    ``robots=N`` among them sets the number of controllers."""
+
+    def __init__(self, *, robots: int = 9, timeout: float = 60.0, conditions: Sequence[str] = ()) -> None:
+        self.conditions = list(conditions)
+        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots))
+        self.robots = self.config.n_robots
         self.timeout = timeout
         self._stack = contextlib.ExitStack()
         self.runner: TrialRunner | None = None
@@ -126,11 +133,11 @@ class TrialGraph:
             domain = stack.enter_context(reserved_domain())
             logs = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="swarm-trial-logs-")))
             self.graph = stack.enter_context(Graph(domain, log_dir=logs))
-            start_trial_graph(self.graph, self.robots)
+            start_trial_graph(self.graph, self.robots, self.conditions)
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
             stack.callback(rclpy.try_shutdown, context=context)
-            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout)
+            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout, self.config)
             stack.callback(self.runner.close)
         except BaseException:
             stack.close()

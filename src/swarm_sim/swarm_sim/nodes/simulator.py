@@ -4,6 +4,9 @@ Node ``simulator``.
 
 Parameters:
     robots (int, read-only): number of footbots, footbot_0 .. footbot_<robots - 1> (default 9).
+    conditions (string, read-only): changes to the world, ``NAME=VALUE`` separated by spaces, e.g.
+        ``dead-robots=2 message-loss=0.5`` (``swarm_sim.conditions``; default none). A ``robots=N`` among them
+        must equal the ``robots`` parameter.
     answer_timeout (float, seconds of wall time): how long to wait for the controllers at any step before the
         trial is abandoned with an error (default 60): it detects dead nodes; it is no speed limit.
 
@@ -60,15 +63,13 @@ from swarm_msgs.msg import (
     WheelCommand,
 )
 from swarm_msgs.srv import RunTrial, StartTrial
+from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-
-
-class TrialAbandonedError(RuntimeError):
-    """A trial could not go on; the message says which robot and step."""
 
 
 @dataclass
@@ -94,6 +95,18 @@ class SimulatorNode(Node):
         ).value
         if self.robots != config.n_robots:
             self.config = replace(config, n_robots=self.robots)
+        conditions: str = self.declare_parameter(
+            "conditions",
+            "",
+            ParameterDescriptor(
+                description="changes to the world, NAME=VALUE separated by spaces", read_only=True
+            ),
+        ).value
+        self.config, self.conditions = apply_conditions(conditions.split(), self.config)
+        if self.config.n_robots != self.robots:
+            raise ConditionError(
+                f"condition robots={self.config.n_robots} differs from the robots parameter ({self.robots})"
+            )
         self.answer_timeout: float = self.declare_parameter(
             "answer_timeout",
             60.0,
