@@ -228,7 +228,6 @@ class Run:
             evaluated = time.perf_counter()
             self.algorithm.tell(results)
             self._record(requests, results)
-            self._offer_generations()
             finished = time.perf_counter()
             self.timing.evaluator += evaluated - asked
             self.timing.manager += (asked - started) + (finished - evaluated)
@@ -326,6 +325,7 @@ class Run:
             rows.append([str(index), str(request.seed), request.tree, *values, error])
             self._first.setdefault(request.tree, index)
         self.evaluations += len(requests)
+        self._offer_generations()  # before the progress row, which measures the repertoires
         self.offsets["evaluations"] = self.directory.evaluations.append(rows)
         self.offsets["progress"] = self.directory.progress.append([self.progress_row()])
 

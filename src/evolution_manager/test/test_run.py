@@ -131,6 +131,10 @@ def test_gp_metrics_recomputed_from_the_run_files_equal_the_reported_ones(tmp_pa
         )
         # GP's best is its elite: the best of the final population, which is the best ever kept
         assert summary["objectives"][o]["best_fitness"] == max(i["fitness"] for i in document["items"])
+        # the last progress row measures the final repertoire
+        last = run.directory.progress.read()[-1]
+        for key, metric in (("best", "best_fitness"), ("coverage", "coverage"), ("qd_score", "qd_score")):
+            assert float(last[f"{key}_{o}"]) == summary["objectives"][o][metric]
 
 
 def test_fixed_scenarios_give_one_fitness_per_tree_and_fresh_ones_a_seed_per_evaluation(tmp_path):
