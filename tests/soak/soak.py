@@ -129,7 +129,8 @@ class Soak:
         if (self.out / "config.json").exists():
             options.append("--resume")
         else:
-            options += ["--algorithm", "qd", "--objective", "food"]
+            # fresh scenarios: every evaluation is simulated, so each has its own message in the bags
+            options += ["--algorithm", "qd", "--objective", "food", "--scenarios", "fresh"]
             options += ["--evaluations", str(self.args.evaluations), "--seed", str(self.args.seed)]
         self.starts += 1
         self.log.write(f"--- start {self.starts}: {' '.join(options)}\n")
@@ -260,6 +261,7 @@ def main() -> int:
     t = time.monotonic()
     options = ["--algorithm", "qd", "--objective", "food", "--evaluations", str(args.evaluations)]
     options += ["--seed", str(args.seed), "--out", str(reference), "--no-figures", "--no-progress"]
+    options += ["--scenarios", "fresh"]
     if evolve(options) != 0:
         raise SystemExit("soak: the undisturbed run failed")
     undisturbed_wall = time.monotonic() - t

@@ -48,12 +48,16 @@ class BehaviourTree(gp.PrimitiveTree):
     def __init__(self, content: list) -> None:
         super().__init__(content)
         self.fitness = TripleFitness()
+        self.descriptors: tuple[float, ...] | None = None
+        """The descriptors of the evaluation that gave the fitness (None until evaluated, or failed)."""
 
     def clone(self) -> BehaviourTree:
-        """A copy of the tree (nodes are shared, they are immutable) with a copy of its fitness."""
+        """A copy of the tree (nodes are shared, they are immutable) with a copy of its fitness and
+        descriptors."""
         twin = BehaviourTree(self)
         if self.fitness.valid:
             twin.fitness.values = self.fitness.values
+        twin.descriptors = self.descriptors
         return twin
 
 

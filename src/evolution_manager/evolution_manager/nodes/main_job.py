@@ -31,6 +31,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from evolution_manager.bags import BagError
+from evolution_manager.config import SCENARIOS
 from evolution_manager.graph import GraphError, executable
 from evolution_manager.nodes.trial import TrialFailedError, run_recorded_trial
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
@@ -54,6 +55,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=int, default=DEFAULT_EVALUATIONS, help="evaluation budget")
     parser.add_argument("--seed", type=int, default=1, help="seed of the run (default 1)")
     parser.add_argument("--evaluators", type=int, default=DEFAULT_EVALUATORS, help="evaluator nodes to start")
+    parser.add_argument(
+        "--scenarios", choices=SCENARIOS, default="fixed", help="fixed (default) or fresh scenarios"
+    )
+    parser.add_argument(
+        "--scenario-seed", type=int, default=None, help="scenario seed (default: derived from --seed)"
+    )
     parser.add_argument("--out", type=Path, default=None, help="new run directory (default runs/main-<time>)")
     parser.add_argument(
         "--resume", action="store_true", help="continue the interrupted job in --out (with its own options)"
@@ -119,7 +126,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             "--seed", str(args.seed),
             "--out", str(out),
             "--evaluators", str(args.evaluators),
+            "--scenarios", args.scenarios,
         ]  # fmt: skip
+        if args.scenario_seed is not None:
+            command += ["--scenario-seed", str(args.scenario_seed)]
         if args.resume and (out / "config.json").exists():
             command = [manager, "--out", str(out), "--resume", "--evaluators", str(args.evaluators)]
         status, received = run_manager(command, domain_environment(domain))
@@ -142,10 +152,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.resume and bag.exists():
         shutil.rmtree(bag)  # an interrupted trial's bag: the trial is run again (it takes seconds)
     try:
+        config = summary["config"]
+        # under fixed scenarios, trial 0 of the scenario the run scored the tree on
+        trial_seed = config["scenario_seed"] if config.get("scenarios") == "fixed" else summary["seed"]
         with signals_as_interrupts():
-            record = run_recorded_trial(
-                best["best_tree"], summary["seed"], 0, bag, log_dir=out / "logs" / "trial"
-            )
+            record = run_recorded_trial(best["best_tree"], trial_seed, 0, bag, log_dir=out / "logs" / "trial")
     except (GraphError, BagError, TrialFailedError) as error:
         print(f"main: the trial through the node graph failed: {error}", file=sys.stderr)
         return 1
@@ -169,7 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).
 
 Run directory      {out}/
-  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.2f})
+  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.4f}, held-out {best["heldout_qd_score"]})
   repertoire       {out}/repertoire_food.json  (and one per objective: every tree was scored on all three)
   progress         {out}/progress.csv
   figures          {out}/figures/

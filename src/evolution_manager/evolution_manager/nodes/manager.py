@@ -95,6 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=cli.positive_int, help="evaluation budget (default: as evolve)")
     parser.add_argument("--seed", type=cli.seed_int, help="run seed in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=cli.positive_int, help="trials per evaluation (default 10)")
+    cli.add_scenario_options(parser)
     parser.add_argument("--out", type=Path, required=True, help="run directory (new, unless --resume)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument(
@@ -177,14 +178,16 @@ class RunRecording:
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
     def batch(self, run: Run, requests: Sequence, results: Sequence) -> None:
-        """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
+        """Record the batch just told to the algorithm (``run.evaluations`` already counts it): the
+        evaluations simulated for it (under fixed scenarios, trees answered from the run's cache are not
+        sent, so not recorded again) and the repertoires' progress."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
             fields = evaluation_fields(request.tree, request.seed, request.trials, result, objective)
             msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
-            grid = run.passive[name]
+            grid = run.repertoire(name)
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
                 objective=name,
@@ -213,10 +216,12 @@ def bag_path(out: Path) -> Path:
     return out / ("run.bag" if k == 0 else f"run.resume-{k}.bag")
 
 
-def settle_bags(out: Path, evaluations: int) -> int:
-    """Cut the run's bags back to the checkpoint's ``evaluations``: a segment left by a killed manager is
-    rewritten as a whole bag, and messages past the checkpoint (they will be recorded again) are dropped, so
-    that the bags hold each evaluation once. Return how many evaluations the bags hold."""
+def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
+    """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only simulated
+    evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's cache) and the
+    progress of its first ``evaluations``. A segment left by a killed manager is rewritten as a whole bag, and
+    messages past the checkpoint (they will be recorded again) are dropped, so that the bags hold each
+    simulated evaluation once. Return how many evaluation messages the bags hold."""
     finish_rewrites(out)
     seen = 0
     for segment in bag_segments(out):
@@ -226,7 +231,7 @@ def settle_bags(out: Path, evaluations: int) -> int:
         def keep(topic: str, msgtype: str, timestamp: int, data: bytes, state: dict = state) -> bool:
             if topic == EVALUATIONS_TOPIC:
                 state["evaluations"] += 1
-                return state["evaluations"] <= evaluations
+                return state["evaluations"] <= simulations
             if topic == PROGRESS_TOPIC:
                 return deserialize_message(data, ArchiveProgress).evaluations <= evaluations
             return True
@@ -234,9 +239,9 @@ def settle_bags(out: Path, evaluations: int) -> int:
         count: int | None = None  # unknown for a segment left by a killed manager
         if (segment / "metadata.yaml").exists():
             count = topic_counts(segment).get(EVALUATIONS_TOPIC, 0)
-        if count is None or start + count > evaluations:
+        if count is None or start + count > simulations:
             rewrite_bag(segment, keep)
-            count = min(state["evaluations"], evaluations) - start
+            count = min(state["evaluations"], simulations) - start
         seen = start + count
     return seen
 
@@ -376,13 +381,13 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
 
 def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
     out = Path(args.out)
-    recorded = settle_bags(out, run.evaluations)
-    if recorded < run.evaluations:
+    recorded = settle_bags(out, run.simulations, run.evaluations)
+    if recorded < run.simulations:
         node.get_logger().warning(
-            f"the run's bags hold {recorded} of the {run.evaluations} evaluations of the checkpoint "
+            f"the run's bags hold {recorded} of the {run.simulations} simulated evaluations of the checkpoint "
             "(a bag segment was removed or damaged)"
         )
-    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)
+    bar = cli.progress_bar(run.config, run.algorithm.produced, not args.no_progress)
     with BagRecorder(bag_path(out)) as recorder:
         recording = RunRecording(node, recorder, run.config)
         flushed = time.monotonic()
@@ -393,6 +398,7 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _
             if time.monotonic() - flushed >= FLUSH_PERIOD:
                 recorder.flush()
                 flushed = time.monotonic()
+            evaluator.requests, evaluator.results = (), ()  # a batch answered from the cache sends none
             if bar is not None:
                 bar.update(done - bar.n)
 
@@ -405,7 +411,7 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures)
+    write_results(run, with_figures=not args.no_figures, evaluator=evaluator)
     dispatcher = evaluator.evaluator.dispatcher
     node.get_logger().info(
         f"{run.config.label}: {run.evaluations} evaluations in {args.out} "
