@@ -217,9 +217,9 @@ def bag_path(out: Path) -> Path:
 
 
 def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
-    """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only simulated
-    evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's cache) and the
-    progress of its first ``evaluations``. A segment left by a killed manager is rewritten as a whole bag, and
+    """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only
+    simulated evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's cache)
+    and the progress of its first ``evaluations``. A segment left by a killed manager is rewritten as a whole bag, and
     messages past the checkpoint (they will be recorded again) are dropped, so that the bags hold each
     simulated evaluation once. Return how many evaluation messages the bags hold."""
     finish_rewrites(out)
@@ -384,8 +384,8 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _
     recorded = settle_bags(out, run.simulations, run.evaluations)
     if recorded < run.simulations:
         node.get_logger().warning(
-            f"the run's bags hold {recorded} of the {run.simulations} simulated evaluations of the checkpoint "
-            "(a bag segment was removed or damaged)"
+            f"the run's bags hold {recorded} of the {run.simulations} simulated evaluations of the "
+            "checkpoint (a bag segment was removed or damaged)"
         )
     bar = cli.progress_bar(run.config, run.algorithm.produced, not args.no_progress)
     with BagRecorder(bag_path(out)) as recorder:
