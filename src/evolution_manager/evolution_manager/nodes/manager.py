@@ -218,10 +218,10 @@ def bag_path(out: Path) -> Path:
 
 def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
     """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only
-    simulated evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's cache)
-    and the progress of its first ``evaluations``. A segment left by a killed manager is rewritten as a whole bag, and
-    messages past the checkpoint (they will be recorded again) are dropped, so that the bags hold each
-    simulated evaluation once. Return how many evaluation messages the bags hold."""
+    simulated evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's
+    cache) and the progress of its first ``evaluations``. A segment left by a killed manager is rewritten as
+    a whole bag, and messages past the checkpoint (they will be recorded again) are dropped, so that the bags
+    hold each simulated evaluation once. Return how many evaluation messages the bags hold."""
     finish_rewrites(out)
     seen = 0
     for segment in bag_segments(out):
