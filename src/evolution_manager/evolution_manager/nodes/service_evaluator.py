@@ -158,7 +158,7 @@ class ServiceEvaluator:
                 self._forget(chunk)
             client = self._clients.pop(name, None)
             if client is not None:
-                self.node.destroy_client(client)
+                client.destroy()
 
     def wait_for(self, count: int, timeout: float) -> list[str]:
         """Spin until ``count`` evaluators are ready or ``timeout`` seconds passed; return those ready."""
