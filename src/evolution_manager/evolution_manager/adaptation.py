@@ -303,12 +303,18 @@ def reevolve(
     k = OBJECTIVES.index(objective)
     trees: list[str] = []
     fitness: list[float] = []
-    while not search.done:
-        batch = search.ask()
+    while not search.done and len(trees) < budget:
+        asked = search.ask()
+        # The budget counts evaluations, as adaptation's trials do (the algorithms' own budgets count the
+        # individuals produced after their initial population): the batch that reaches it is cut there, and
+        # the search, which cannot be told part of a batch, ends with it.
+        batch = asked[: budget - len(trees)]
         outcomes = evaluate(batch)
-        search.tell(outcomes)
         trees.extend(batch)
         fitness.extend(o.fitness[k] for o in outcomes)  # type: ignore[index]  # None only for a failed evaluation
+        if len(batch) < len(asked):
+            break
+        search.tell(outcomes)
     return trees, fitness
 
 
