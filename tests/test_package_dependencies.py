@@ -28,6 +28,7 @@ ROSDEP_KEYS = {
     "yaml": "python3-yaml",
     "setuptools": "python3-setuptools",
     "sklearn": "python3-sklearn",
+    "PIL": "python3-pil",
 }
 """Python libraries by import name, with the key their package.xml dependency uses."""
 RUN_DEPENDENCIES = ("depend", "exec_depend")
