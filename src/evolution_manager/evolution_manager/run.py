@@ -327,6 +327,7 @@ class Run:
         the batch) is answered from the cache; the others go to the evaluator in one batch."""
         outcomes: list[Outcome | None] = [None] * len(requests)
         fresh: list = []
+        fresh_at: list[int] = []  # the position in ``requests`` of each fresh request
         first_of: dict[str, int] = {}
         for i, request in enumerate(requests):
             if self._cached(request.tree):
@@ -337,12 +338,15 @@ class Run:
             else:
                 first_of[request.tree] = len(fresh)
                 fresh.append(request)
+                fresh_at.append(i)
         results = list(self.evaluator.evaluate(fresh)) if fresh else []  # type: ignore[union-attr]
         if len(results) != len(fresh):
             raise RunDirectoryError(f"the evaluator answered {len(results)} of {len(fresh)} requests")
         self.simulations += len(fresh)
-        for request, result in zip(fresh, results, strict=True):
-            self.known[request.tree] = as_outcome(result)
+        for i, request, result in zip(fresh_at, fresh, results, strict=True):
+            # Under fresh scenarios a tree asked twice is simulated twice, on two seeds: each request keeps
+            # its own result (the cache serves fixed scenarios only).
+            outcomes[i] = self.known[request.tree] = as_outcome(result)
         for i, request in enumerate(requests):
             if outcomes[i] is None:
                 outcomes[i] = self.known[request.tree]
