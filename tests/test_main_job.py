@@ -34,7 +34,8 @@ def test_main_job_writes_the_run_and_the_recorded_best_trial(tmp_path):
     assert food["best_tree"] in done.stdout and str(out / "best_trial.bag") in done.stdout
 
     evaluations = [m for m in read_bag(out / "run.bag") if m.topic == "/evaluations"]
-    assert len(evaluations) == 300
+    # the bag holds every simulated evaluation once (under fixed scenarios a repeated tree is not simulated)
+    assert len(evaluations) == summary["simulations"] > 0
     assert verify_trial_bag(out / "best_trial.bag").reproduced
 
 
