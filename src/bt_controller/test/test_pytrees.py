@@ -14,16 +14,18 @@ from bt_controller.agreement import random_forest  # noqa: E402
 from bt_controller.pytrees import PyTreesRobot  # noqa: E402
 from bt_controller.random_trees import random_blackboards  # noqa: E402
 from bt_controller.semantics import ReferenceRobot  # noqa: E402
+from bt_controller.timeline import CLEAN, PAPER  # noqa: E402
 from bt_controller.tree import parse  # noqa: E402
 
 
 def _agree(tree, key, boards) -> None:
-    ref = ReferenceRobot(tree, key)
-    pyt = PyTreesRobot(tree, key)
-    for k, board in enumerate(boards):
-        assert pyt.step(board) == ref.step(board), (str(tree), k)
-        assert pyt.memory == ref.memory, (str(tree), k)
-        assert pyt.counts == ref.counts, (str(tree), k)
+    for profile in (PAPER, CLEAN):
+        ref = ReferenceRobot(tree, key, profile)
+        pyt = PyTreesRobot(tree, key, profile)
+        for k, board in enumerate(boards):
+            assert pyt.step(board) == ref.step(board), (str(tree), k, profile)
+            assert pyt.memory == ref.memory, (str(tree), k, profile)
+            assert pyt.counts == ref.counts, (str(tree), k, profile)
 
 
 @settings(max_examples=300, derandomize=True, deadline=None)

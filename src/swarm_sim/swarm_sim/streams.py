@@ -1,22 +1,22 @@
-"""Where every random number of a trial comes from.
+"""Where every random number of a chain comes from.
 
-A trial's randomness is a pure function of ``(seed, trial, robot, purpose)``: the stream key of a purpose is
+A chain's randomness is a pure function of ``(seed, chain, robot, purpose)``: the stream key of a purpose is
 
-    derive(derive(derive(root_key(seed), trial), robot), purpose)
+    derive(derive(derive(root_key(seed), chain), robot), purpose)
 
-and each draw is ``bt_controller.draws.uniform(key, counter)`` with a counter fixed below, so any trial, any
-robot and any step can be replayed alone, by any road, in any process.
+and each draw is ``bt_controller.draws.uniform(key, counter)`` with a counter fixed below, so any chain, any
+robot and any step can be replayed alone, by any road, in any process. A chain is the 5 trials simulated as one
+under ``paper`` (chain ``k // 5`` for trial ``k``), or one trial under ``clean`` (chain ``k``).
 
 | purpose | counters |
 |---|---|
-| ``POSITION`` | attempt ``a`` of placing the robot: ``2a`` (radius), ``2a + 1`` (angle) |
-| ``HEADING`` | ``0`` |
-| ``GAINS`` | ``0`` (left wheel), ``1`` (right wheel) |
-| ``DROPS`` | message from robot ``j`` to this robot at sensing step ``s``: ``s * n_robots + j`` |
-| ``TREE`` | the tree's stream key, passed to the tree interpreter (see ``docs/interfaces.md``) |
+| ``POSITION`` | trial ``t`` of the chain, attempt ``a`` of placing the robot: ``2 (10 t + a)`` (x), the next (y) |
+| ``HEADING`` | trial ``t`` of the chain: ``t`` |
+| ``GAINS`` | ``0`` (right wheel), ``1`` (left wheel) |
+| ``DROPS`` | message from robot ``j`` to this robot at chain step ``k``: ``k * n_robots + j`` |
+| ``TREE`` | the tree's stream key, passed to the tree interpreter with the chain's tick number |
 
-Sensing steps are numbered from 0 within a trial, the settling steps first. Trial ``k`` uses arena
-configuration ``k % len(config.gaps)``.
+(10 is ``max_start_attempts``.)
 """
 
 from __future__ import annotations
@@ -37,18 +37,18 @@ TREE = 4
 PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
 
 
-def stream_key(seed: int, trial: int, robot: int, purpose: int) -> np.uint64:
-    """The stream key of ``(seed, trial, robot, purpose)``, from Python."""
+def stream_key(seed: int, chain: int, robot: int, purpose: int) -> np.uint64:
+    """The stream key of ``(seed, chain, robot, purpose)``, from Python."""
     key = np.uint64(root_key(seed))
-    for value in (trial, robot, purpose):
+    for value in (chain, robot, purpose):
         key = np.uint64(derive(key, value))
     return key
 
 
 @numba.njit(cache=True)
-def trial_keys(seed_key: np.uint64, trial: int, n_robots: int) -> np.ndarray:
-    """Every stream key of one trial: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
-    tkey = derive(seed_key, trial)
+def chain_keys(seed_key: np.uint64, chain: int, n_robots: int) -> np.ndarray:
+    """Every stream key of one chain: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
+    tkey = derive(seed_key, chain)
     keys = np.empty((len(PURPOSES), n_robots), dtype=np.uint64)
     for robot in range(n_robots):
         rkey = derive(tkey, robot)
