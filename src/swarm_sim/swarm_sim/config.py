@@ -272,9 +272,10 @@ def _validate(c: Config) -> None:
             f"start_half must keep robots inside the walls: start_half + robot_radius = "
             f"{c.start_half + c.robot_radius} > arena_half = {c.arena_half}"
         )
-    if c.initial_step >= c.ticks * c.steps_per_tick:
+    if c.initial_step >= c.ticks * c.steps_per_tick or c.initial_step % c.steps_per_tick:
         raise ConfigError(
-            f"initial_step must fall inside a trial's {c.ticks * c.steps_per_tick} steps, got {c.initial_step}"
+            f"initial_step must be a multiple of steps_per_tick ({c.steps_per_tick}) inside a trial's "
+            f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), got {c.initial_step}"
         )
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
