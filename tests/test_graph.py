@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
+from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import read_bag
 from evolution_manager.graph import executable
 from evolution_manager.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.randtrees import random_trees
 
 PARITY_TREES = 20
 

@@ -61,10 +61,7 @@ def compare(forest: Sequence[Node], keys: np.ndarray, boards: np.ndarray) -> Mis
     ref_memory = [semantics.new_memory(t) for t in forest]
     ref_counts = [semantics.new_counts() for _ in forest]
     for k in range(n_ticks):
-        tick_batch(
-            packed.op, packed.arg, packed.first, packed.nchild, packed.children, packed.node_offset,
-            packed.child_offset, robot_tree, memory, boards[:, k], keys, k, counts, status, action,
-        )  # fmt: skip
+        tick_batch(packed, robot_tree, memory, boards[:, k], keys, k, counts, status, action)
         for r, tree in enumerate(forest):
             expected = semantics.tick(tree, ref_memory[r], boards[r, k], int(keys[r]), k, ref_counts[r])
             checks = (

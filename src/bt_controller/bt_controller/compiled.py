@@ -1,4 +1,4 @@
-"""The compiled interpreter: flat trees and a numba tick loop, tick-for-tick equal to ``reference``.
+"""The compiled interpreter: flat trees and a numba tick loop, tick-for-tick equal to ``semantics``.
 
 The layout is the contract of ``docs/interfaces.md`` ("Compiled tree interpreter"): a tree is flattened in
 pre-order (root 0, indices local to the tree) to
@@ -9,8 +9,11 @@ pre-order (root 0, indices local to the tree) to
 - ``nchild`` int8: number of children (0 for leaves);
 - ``children`` int32: the children of every composite, composite after composite in pre-order.
 
-Per robot, ``memory`` is int8 with one entry per node (see ``reference``). ``tick`` is an ``njit`` function
-that other compiled kernels call with a tree's slices; ``tick_batch`` and ``run_ticks`` tick many robots of
+The five arrays travel together as a ``FlatTree`` and many trees as one ``PackedTrees`` (named tuples of
+arrays, which numba passes to kernels whole); ``tree_at`` is the one place a pack is cut into trees.
+
+Per robot, ``memory`` is int8 with one entry per node (see ``semantics``). ``tick`` is an ``njit`` function
+that other compiled kernels call with a ``FlatTree``; ``tick_batch`` and ``run_ticks`` tick many robots of
 many packed trees. ``tick`` walks the tree with an explicit stack of ancestors that lives on the machine stack
 (no allocation per tick), so a flat tree may be at most ``MAX_COMPILED_DEPTH`` deep.
 """
@@ -19,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -39,9 +43,8 @@ MAX_COMPILED_DEPTH = 63
 _STACK_SLOTS = MAX_COMPILED_DEPTH + 1
 
 
-@dataclass(frozen=True)
-class FlatTree:
-    """One tree flattened in pre-order (see the module docstring)."""
+class FlatTree(NamedTuple):
+    """One tree flattened in pre-order (see the module docstring). Kernels receive it whole."""
 
     op: np.ndarray
     arg: np.ndarray
@@ -53,10 +56,6 @@ class FlatTree:
     def n_nodes(self) -> int:
         """Number of nodes."""
         return len(self.op)
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(op, arg, first, nchild, children)``, the first five arguments of ``tick``."""
-        return self.op, self.arg, self.first, self.nchild, self.children
 
 
 def flatten(tree: Node) -> FlatTree:
@@ -89,10 +88,10 @@ def flatten(tree: Node) -> FlatTree:
     return FlatTree(op, arg, first, nchild, np.asarray(children, np.int32))
 
 
-@dataclass(frozen=True)
-class PackedTrees:
+class PackedTrees(NamedTuple):
     """Many flat trees concatenated; tree ``t`` owns nodes ``node_offset[t]:node_offset[t + 1]`` and
-    children ``child_offset[t]:child_offset[t + 1]`` (values inside stay local to the tree)."""
+    children ``child_offset[t]:child_offset[t + 1]`` (values inside stay local to the tree). Kernels receive
+    it whole and take a tree's views with ``tree_at``."""
 
     op: np.ndarray
     arg: np.ndarray
@@ -113,10 +112,8 @@ class PackedTrees:
         return int(np.diff(self.node_offset).max(initial=0))
 
     def tree(self, t: int) -> FlatTree:
-        """Views of tree ``t``'s arrays."""
-        a, b = self.node_offset[t], self.node_offset[t + 1]
-        c, d = self.child_offset[t], self.child_offset[t + 1]
-        return FlatTree(self.op[a:b], self.arg[a:b], self.first[a:b], self.nchild[a:b], self.children[c:d])
+        """Views of tree ``t``'s arrays (``tree_at`` from Python)."""
+        return tree_at(self, t)
 
 
 def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
@@ -158,6 +155,14 @@ def _stack_slots(typingctx, n):  # noqa: ANN001 (numba intrinsic signature)
     return types.CPointer(types.int32)(n), codegen
 
 
+@numba.njit(cache=True, inline="always")
+def tree_at(trees: PackedTrees, t: int) -> FlatTree:
+    """Views of tree ``t`` of a pack: the one place where a pack is cut into trees."""
+    a, b = trees.node_offset[t], trees.node_offset[t + 1]
+    c, d = trees.child_offset[t], trees.child_offset[t + 1]
+    return FlatTree(trees.op[a:b], trees.arg[a:b], trees.first[a:b], trees.nchild[a:b], trees.children[c:d])
+
+
 @numba.njit(cache=True)
 def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
     """Set ``memory`` to the fresh state of the tree ``op``: -1 for composites, 0 for leaves."""
@@ -178,11 +183,7 @@ def start_memory(op: np.ndarray, memory: np.ndarray, profile: int) -> None:
 
 @numba.njit(cache=True, inline="always")
 def tick(
-    op: np.ndarray,
-    arg: np.ndarray,
-    first: np.ndarray,
-    nchild: np.ndarray,
-    children: np.ndarray,
+    tree: FlatTree,
     memory: np.ndarray,
     blackboard: np.ndarray,
     key: np.uint64,
@@ -195,6 +196,7 @@ def tick(
     of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
     Inlined into calling kernels (a call would cost more than the tick itself).
     """
+    op, arg, first, nchild, children = tree  # locals: a field read inside the loop would cost a refcount
     stack = numba.carray(_stack_slots(_STACK_SLOTS), _STACK_SLOTS)  # ancestors of ``node``
     depth = 0
     node = 0
@@ -242,13 +244,7 @@ def tick(
 
 @numba.njit(cache=True)
 def tick_batch(
-    op: np.ndarray,
-    arg: np.ndarray,
-    first: np.ndarray,
-    nchild: np.ndarray,
-    children: np.ndarray,
-    node_offset: np.ndarray,
-    child_offset: np.ndarray,
+    trees: PackedTrees,
     robot_tree: np.ndarray,
     memory: np.ndarray,
     blackboards: np.ndarray,
@@ -261,34 +257,17 @@ def tick_batch(
     """Tick every robot ``r`` once with tree ``robot_tree[r]`` of a pack, memory row ``memory[r]``,
     blackboard ``blackboards[r]``, key ``keys[r]`` and counts row ``counts[r]``; write status and action."""
     for r in range(len(robot_tree)):
-        t = robot_tree[r]
-        a, b = node_offset[t], node_offset[t + 1]
-        c, d = child_offset[t], child_offset[t + 1]
+        tree = tree_at(trees, robot_tree[r])
         status, action = tick(
-            op[a:b],
-            arg[a:b],
-            first[a:b],
-            nchild[a:b],
-            children[c:d],
-            memory[r, : b - a],
-            blackboards[r],
-            keys[r],
-            tick_index,
-            counts[r],
+            tree, memory[r, : tree.op.shape[0]], blackboards[r], keys[r], tick_index, counts[r]
         )
         status_out[r] = status
         action_out[r] = action
 
 
 @numba.njit(cache=True)
-def _run_ticks(
-    op: np.ndarray,
-    arg: np.ndarray,
-    first: np.ndarray,
-    nchild: np.ndarray,
-    children: np.ndarray,
-    node_offset: np.ndarray,
-    child_offset: np.ndarray,
+def run_ticks_kernel(
+    trees: PackedTrees,
     robot_tree: np.ndarray,
     memory: np.ndarray,
     blackboards: np.ndarray,
@@ -296,17 +275,14 @@ def _run_ticks(
     counts: np.ndarray,
     status_out: np.ndarray,
     action_out: np.ndarray,
-):
+) -> None:
+    """Tick every robot ``r`` with tree ``robot_tree[r]`` through its blackboards ``blackboards[r, k]``
+    (tick index ``k``); write status and action per robot and tick (``run_ticks`` from Python)."""
     for r in range(len(robot_tree)):
-        t = robot_tree[r]
-        a, b = node_offset[t], node_offset[t + 1]
-        c, d = child_offset[t], child_offset[t + 1]
-        t_op, t_arg, t_first, t_nchild, t_children = op[a:b], arg[a:b], first[a:b], nchild[a:b], children[c:d]
-        row = memory[r, : b - a]
+        tree = tree_at(trees, robot_tree[r])
+        row = memory[r, : tree.op.shape[0]]
         for k in range(blackboards.shape[1]):
-            status, action = tick(
-                t_op, t_arg, t_first, t_nchild, t_children, row, blackboards[r, k], keys[r], k, counts[r]
-            )
+            status, action = tick(tree, row, blackboards[r, k], keys[r], k, counts[r])
             status_out[r, k] = status
             action_out[r, k] = action
 
@@ -322,19 +298,18 @@ class Run:
 
 
 @numba.njit(cache=True)
-def _reset_rows(
-    op: np.ndarray, node_offset: np.ndarray, robot_tree: np.ndarray, memory: np.ndarray, profile: int
-) -> None:
+def _reset_rows(trees: PackedTrees, robot_tree: np.ndarray, memory: np.ndarray, profile: int) -> None:
     for r in range(len(robot_tree)):
-        a, b = node_offset[robot_tree[r]], node_offset[robot_tree[r] + 1]
-        start_memory(op[a:b], memory[r, : b - a], profile)
+        op = tree_at(trees, robot_tree[r]).op
+        start_memory(op, memory[r, : op.shape[0]], profile)
 
 
 def new_memory(packed: PackedTrees, robot_tree: np.ndarray, profile: int = PAPER) -> np.ndarray:
-    """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed`` (``start_memory``)."""
+    """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed``
+    (``start_memory``)."""
     robot_tree = np.asarray(robot_tree, np.int64)
     memory = np.zeros((len(robot_tree), max(packed.max_nodes, 1)), np.int8)
-    _reset_rows(packed.op, packed.node_offset, robot_tree, memory, profile)
+    _reset_rows(packed, robot_tree, memory, profile)
     return memory
 
 
@@ -364,22 +339,7 @@ def run_ticks(
     counts = np.zeros((n_robots, N_COUNTS), np.int64)
     status = np.empty((n_robots, n_ticks), np.int8)
     action = np.empty((n_robots, n_ticks), np.int8)
-    _run_ticks(
-        packed.op,
-        packed.arg,
-        packed.first,
-        packed.nchild,
-        packed.children,
-        packed.node_offset,
-        packed.child_offset,
-        robot_tree,
-        memory,
-        blackboards,
-        keys,
-        counts,
-        status,
-        action,
-    )
+    run_ticks_kernel(packed, robot_tree, memory, blackboards, keys, counts, status, action)
     return Run(status, action, counts, memory)
 
 
@@ -397,6 +357,6 @@ class CompiledRobot:
     def step(self, blackboard: Sequence[bool] | np.ndarray) -> tuple[int, int]:
         """Tick once with ``blackboard`` and advance the tick counter; returns ``(status, action)``."""
         board = np.asarray(blackboard, np.bool_)
-        status, action = tick(*self.flat.arrays(), self.memory, board, self.key, self.tick_index, self.counts)
+        status, action = tick(self.flat, self.memory, board, self.key, self.tick_index, self.counts)
         self.tick_index += 1
         return int(status), int(action)

@@ -2,10 +2,10 @@
 
 This is the core of the footbot controller node (``bt_controller.nodes.footbot_controller``), kept free of ROS
 so that it can be tested, and checked against the batch evaluator, without a graph; the reference road and the
-in-process lockstep run it too. It follows ``bt_controller.timeline`` step by step: sense, refresh the smoothed
-values, tick the tree with the reference interpreter, broadcast and drive. A chain's trials follow each other
-without a reset: the tree's memory, the smoothing window and the estimates carry over (A1 under ``paper``;
-under ``clean`` a chain is one trial).
+in-process lockstep run it too. It follows ``bt_controller.timeline`` step by step: sense, refresh the
+smoothed values, tick the tree with the reference interpreter, broadcast and drive. A chain's trials follow
+each other without a reset: the tree's memory, the smoothing window and the estimates carry over (A1 under
+``paper``; under ``clean`` a chain is one trial).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Counter-based random draws shared by every road of the project.
+"""Every random number of the project: counter-based draws, and the one table of where each stream comes from.
 
 Each random number is a pure function of a 64-bit stream key and a counter, so a draw never depends on
 how many other draws were made before it, on the batch a trial sits in, or on the process that runs it.
@@ -6,12 +6,31 @@ That is what lets the compiled batch evaluator, the reference simulator and the 
 exactly the same numbers for the same (seed, trial, robot, step).
 
 The mixing function is SplitMix64's finaliser (Steele, Lea and Flood, 2014). Keys are derived by
-chaining: ``derive(derive(root_key(seed), trial), robot)``.
+chaining from a seed's root key: ``key_path(seed, a, b, ...) = derive(derive(root_key(seed), a), b) ...``.
 
-All functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
+Streams of a chain (``swarm_sim``; a chain is the 5 trials simulated as one under the ``paper`` profile, chain
+``k // 5`` for trial ``k``, or one trial under ``clean``, chain ``k``): the key of a purpose is
+``key_path(seed, chain, robot, purpose)`` and each draw is ``uniform(key, counter)`` with a counter fixed
+below, so any chain, any robot and any step can be replayed alone, by any road, in any process.
+
+| purpose | counters |
+|---|---|
+| ``POSITION`` | trial ``t`` of the chain, try ``a`` (of 10) to place the robot: ``2 (10 t + a)``, + 1 |
+| ``HEADING`` | trial ``t`` of the chain: ``t`` |
+| ``GAINS`` | ``0`` (right wheel), ``1`` (left wheel) |
+| ``DROPS`` | message from robot ``j`` to this robot at the chain's control step ``k``: ``k * n_robots + j`` |
+| ``TREE`` | the tree's stream key, passed to the tree interpreter with the chain's tick number |
+
+Seeds of a run (``evolution_manager``), each ``derive_seed(run seed, purpose, ...)``:
+``RUN_EVALUATION, i`` is the simulator seed of evaluation ``i``; ``RUN_ALGORITHM`` seeds the algorithm's own
+generator; ``RUN_EXPERIMENT, a, o, r`` is the run seed of repetition ``r`` of algorithm ``a`` and objective
+``o`` in an experiment (keyed by the experiment's seed).
+
+All draw functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
 slowly, from plain Python. From Python, pass keys as ``np.uint64`` (e.g. ``derive(np.uint64(key), 3)``): a
 plain int of 2**63 or more raises OverflowError once a function has been compiled for int64 arguments, and
-the functions return plain ints, so wrap a returned key in ``np.uint64`` before passing it on.
+the functions return plain ints, so wrap a returned key in ``np.uint64`` before passing it on (``key_path``
+does).
 """
 
 from __future__ import annotations
@@ -69,3 +88,48 @@ def check_seed(seed: object) -> int:
     if not 0 <= int(seed) <= MAX_SEED:
         raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed}")
     return int(seed)
+
+
+# --------------------------------------------------------------------------------------- stream paths
+
+POSITION = 0
+HEADING = 1
+GAINS = 2
+DROPS = 3
+TREE = 4
+PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
+"""The purposes of a chain's per-robot streams, in index order."""
+
+RUN_EVALUATION = 1
+RUN_ALGORITHM = 2
+RUN_EXPERIMENT = 3
+
+
+def key_path(seed: int, *path: int) -> np.uint64:
+    """The stream key reached from ``root_key(seed)`` by deriving along ``path``, from Python."""
+    key = np.uint64(root_key(seed))
+    for value in path:
+        key = np.uint64(derive(key, int(value)))
+    return key
+
+
+def stream_key(seed: int, chain: int, robot: int, purpose: int) -> np.uint64:
+    """The stream key of ``(seed, chain, robot, purpose)``, from Python."""
+    return key_path(seed, chain, robot, purpose)
+
+
+def derive_seed(seed: int, *path: int) -> int:
+    """A seed in [0, MAX_SEED] derived from ``seed`` along ``path`` (the key of ``key_path``, top bit off)."""
+    return int(key_path(seed, *path)) & MAX_SEED
+
+
+@numba.njit(cache=True)
+def chain_keys(seed_key: np.uint64, chain: int, n_robots: int) -> np.ndarray:
+    """Every stream key of one chain: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
+    tkey = derive(seed_key, chain)
+    keys = np.empty((len(PURPOSES), n_robots), dtype=np.uint64)
+    for robot in range(n_robots):
+        rkey = derive(tkey, robot)
+        for purpose in range(len(PURPOSES)):
+            keys[purpose, robot] = derive(rkey, purpose)
+    return keys

@@ -45,7 +45,8 @@ def motors_after_tick(status: int, started: int, resumed: int) -> int:
 
 @numba.njit(cache=True)
 def movement_of(motors: int) -> int:
-    """A tick's contribution to the movement descriptor: +1 forward, -1 reverse (``CBlackBoard.cpp:494-504``)."""
+    """A tick's contribution to the movement descriptor: +1 forward, -1 reverse
+    (``CBlackBoard.cpp:494-504``)."""
     if motors == _FORWARD:
         return 1
     if motors == _REVERSE:
@@ -57,8 +58,8 @@ def movement_of(motors: int) -> int:
 def rotation_of(motors: int) -> int:
     """A tick's contribution to the rotation descriptor: +1 forward_left or reverse_right, -1 forward_right or
     reverse_left (``CBlackBoard.cpp:506-516``)."""
-    if motors == _FORWARD_LEFT or motors == _REVERSE_RIGHT:
+    if motors in (_FORWARD_LEFT, _REVERSE_RIGHT):
         return 1
-    if motors == _FORWARD_RIGHT or motors == _REVERSE_LEFT:
+    if motors in (_FORWARD_RIGHT, _REVERSE_LEFT):
         return -1
     return 0

@@ -35,9 +35,11 @@ class PerceptionParams(NamedTuple):
     """A neighbour at range r adds 1 / (pi (r / density_range)^2) to the density sum: ARGoS's range in cm
     divided by 1000 (``footbot_bt.cpp:334``) is the range in mm divided by 10000 (mm)."""
     density_divisor: float = 1107.0 * 6.0
-    """The density sum is divided by this: 1107 per touching neighbour, 6 neighbours (``CBlackBoard.cpp:295``)."""
+    """The density sum is divided by this: 1107 per touching neighbour, 6 neighbours
+    (``CBlackBoard.cpp:295``)."""
     profile: int = PAPER
-    """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard (A2)."""
+    """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard
+    (A2)."""
 
 
 @numba.njit(cache=True)
@@ -145,10 +147,11 @@ def blackboard(
 ) -> None:
     """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest sensing step.
 
-    ``nest``/``food`` are the raw estimates and the bearings those of their sources (``footbot_bt.cpp:389-392``:
-    a side holds when 0 < estimate < cap and the bearing is strictly on it). The nearest robot heard is left
-    at a bearing >= 0, right below 0 (``footbot_bt.cpp:358-369``); with nobody ``heard`` robot_left holds
-    under ``paper`` (the code reads a bearing of 0, A2) and neither under ``clean``.
+    ``nest``/``food`` are the raw estimates and the bearings those of their sources
+    (``footbot_bt.cpp:389-392``: a side holds when 0 < estimate < cap and the bearing is strictly on it). The
+    nearest robot heard is left at a bearing >= 0, right below 0 (``footbot_bt.cpp:358-369``); with nobody
+    ``heard`` robot_left holds under ``paper`` (the code reads a bearing of 0, A2) and neither under
+    ``clean``.
     """
     out[0] = on_food
     out[1] = in_nest

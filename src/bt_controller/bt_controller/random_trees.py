@@ -1,4 +1,8 @@
-"""Random trees and blackboards for tests and benchmarks (every function takes its own generator)."""
+"""Random trees and blackboards for tests, benchmarks and measurements (not the evolution's initialisation,
+which is DEAP's, in ``evolution_manager.primitives``). Every function takes its own generator or seed.
+
+``random_tree`` (exactly ``size`` nodes) and ``random_tree_grow`` (at most ``max_depth`` deep) build trees;
+``random_trees`` gives tree text for requests; ``random_blackboards`` gives blackboards to tick against."""
 
 from __future__ import annotations
 
@@ -51,3 +55,11 @@ def random_blackboards(rng: np.random.Generator, n_robots: int, n_ticks: int) ->
     """Blackboards (robots, ticks, 8) bool; each robot has its own probability of true per condition."""
     p_true = rng.random((n_robots, 1, len(CONDITIONS)))
     return rng.random((n_robots, n_ticks, len(CONDITIONS))) < p_true
+
+
+def random_trees(seed: int, count: int, min_size: int = 10, max_size: int = 60) -> list[str]:
+    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``), reproducible
+    from ``seed``."""
+    rng = np.random.default_rng(seed)
+    sizes = [int(rng.integers(min_size + 1, max_size + 1)) for _ in range(count)]
+    return [str(random_tree(rng, 3 if size == 2 else size)) for size in sizes]

@@ -16,8 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from bt_controller.agreement import check_random
-from bt_controller.compiled import N_COUNTS, new_memory, pack, run_ticks
-from bt_controller.compiled import _run_ticks as run_kernel
+from bt_controller.compiled import N_COUNTS, new_memory, pack, run_ticks, run_ticks_kernel
 from bt_controller.random_trees import random_blackboards, random_tree
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import parse
@@ -50,9 +49,7 @@ def _compiled_rates(seed: int, size: int, n_trees: int, n_robots: int, n_ticks: 
         counts = np.zeros((n_robots, N_COUNTS), np.int64)
         status = np.empty((n_robots, n_ticks), np.int8)
         action = np.empty((n_robots, n_ticks), np.int8)
-        arrays = (packed.op, packed.arg, packed.first, packed.nchild, packed.children, packed.node_offset,
-                  packed.child_offset)  # fmt: skip
-        wall, cpu = _timed(run_kernel, *arrays, robot_tree, memory, boards, keys, counts, status, action)
+        wall, cpu = _timed(run_ticks_kernel, packed, robot_tree, memory, boards, keys, counts, status, action)
         best_wall, best_cpu = min(best_wall, wall), min(best_cpu, cpu)
     return Rates(n_robots * n_ticks / best_wall, n_robots * n_ticks / max(best_cpu, 1e-9))
 

@@ -3,7 +3,8 @@
 A *chain* is one continuous simulation; its control steps are counted ``k = 1, 2, ...`` (the authors'
 ``m_count``, ``footbot_bt.cpp:491``). Under ``paper`` a chain holds ``chain_trials`` (5) trials of
 ``ticks * steps_per_tick`` (160) steps each, with teleports between them; under ``clean`` a chain is one trial
-of ``initial_step + ticks * steps_per_tick`` (176) steps. At step ``k`` a robot (``docs/model.md``, "One step"):
+of ``initial_step + ticks * steps_per_tick`` (176) steps. At step ``k`` a robot (``docs/model.md``, "One
+control step"):
 
 1. at a trial's first step does not sense (``senses``); at ``k = 1`` only, broadcasts its region values
    (``region_broadcast``);
@@ -85,7 +86,8 @@ def senses(t: Timeline, k: int) -> bool:
 
 @numba.njit(cache=True, inline="always")
 def region_broadcast(k: int) -> bool:
-    """Whether step ``k`` broadcasts the region values (0 inside a region, else the cap): the chain's first."""
+    """Whether step ``k`` broadcasts the region values (0 inside a region, else the cap): the chain's
+    first."""
     return k == 1
 
 
@@ -111,7 +113,8 @@ def ticks_at(t: Timeline, k: int) -> bool:
 
 @numba.njit(cache=True, inline="always")
 def tick_number(t: Timeline, k: int) -> int:
-    """The 0-based number within the chain of the tick at step ``k`` (a tick step): the tree's draw counter."""
+    """The 0-based number within the chain of the tick at step ``k`` (a tick step): the tree's draw
+    counter."""
     if t.profile == PAPER:
         return k // t.steps_per_tick - 1
     return (step_in_trial(t, k) - t.initial_step) // t.steps_per_tick - 1
@@ -130,7 +133,8 @@ def is_final(t: Timeline, k: int) -> bool:
 
 
 def chain_of_trial(t: Timeline, trial: int) -> tuple[int, int]:
-    """``(chain, position)``: the chain that trial ``trial`` of an evaluation belongs to, and its place in it."""
+    """``(chain, position)``: the chain that trial ``trial`` of an evaluation belongs to, and its place
+    in it."""
     length = t.chain_trials if t.profile == PAPER else 1
     return trial // length, trial % length
 

@@ -90,23 +90,23 @@ def test_tick_accepts_int_blackboards_and_leaves_other_rows_alone():
 
 
 @numba.njit
-def _simulator_like_kernel(op, arg, first, nchild, children, key, n_ticks):
+def _simulator_like_kernel(tree, key, n_ticks):
     """A kernel in another module calling ``tick`` as the simulator does: one robot, boards from a rule."""
-    memory = np.empty(len(op), np.int8)
-    start_memory(op, memory, PAPER)
+    memory = np.empty(len(tree.op), np.int8)
+    start_memory(tree.op, memory, PAPER)
     counts = np.zeros(N_COUNTS, np.int64)
     blackboard = np.zeros(8, np.bool_)
     actions = np.empty(n_ticks, np.int64)
     for k in range(n_ticks):
         blackboard[k % 8] = not blackboard[k % 8]
-        _, actions[k] = tick(op, arg, first, nchild, children, memory, blackboard, key, k, counts)
+        _, actions[k] = tick(tree, memory, blackboard, key, k, counts)
     return actions, counts
 
 
 def test_tick_is_callable_from_another_kernel():
     tree = random_tree(np.random.default_rng(5), 30)
     flat = flatten(tree)
-    actions, counts = _simulator_like_kernel(*flat.arrays(), np.uint64(99), 40)
+    actions, counts = _simulator_like_kernel(flat, np.uint64(99), 40)
     ref = semantics.ReferenceRobot(tree, 99)
     board = [False] * 8
     for k in range(40):

@@ -43,7 +43,7 @@ def test_pack_offsets_and_views():
     assert packed.n_trees == 3 and packed.max_nodes == 6
     for t, tree in enumerate(trees):
         view, flat = packed.tree(t), flatten(tree)
-        for a, b in zip(view.arrays(), flat.arrays(), strict=True):
+        for a, b in zip(view, flat, strict=True):
             assert a.tolist() == b.tolist()
     memory = new_memory(packed, np.array([2, 0, 1]), CLEAN)
     assert memory.tolist() == [[-1, 0, -1, 0, 0, 0], [0, 0, 0, 0, 0, 0], [-1, 0, 0, 0, 0, 0]]

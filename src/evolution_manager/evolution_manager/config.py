@@ -9,9 +9,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
-import numpy as np
-
-from bt_controller.draws import MAX_SEED, derive, root_key
+from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_EVALUATION, derive_seed
 
 from .errors import ConfigError
 from .parameters import GPParameters, QDParameters
@@ -28,9 +26,6 @@ ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
 DEFAULT_EVALUATIONS = {"gp": 25_000, "gp-fnd": 75_000, "qd": 25_000}
 
 LABELS = {"gp": "GP_o", "gp-fnd": "GP_fnd", "qd": "QD_o"}
-
-_SEED_PURPOSE_EVALUATION = 1
-_SEED_PURPOSE_ALGORITHM = 2
 
 
 @dataclass(frozen=True)
@@ -121,7 +116,7 @@ class RunConfig:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
         from .algorithms import GeneticProgramming, MapElites
 
-        algorithm_seed = derive_seed(self.seed, _SEED_PURPOSE_ALGORITHM) & MAX_SEED
+        algorithm_seed = derive_seed(self.seed, RUN_ALGORITHM)
         if self.algorithm == "qd":
             return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)
         objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
@@ -131,12 +126,4 @@ class RunConfig:
 def evaluation_seed(run_seed: int, index: int) -> int:
     """The simulator seed of evaluation number ``index`` (0-based) of a run: a pure function of the run
     seed and the index, so that a resumed or distributed run draws exactly the same trials."""
-    return derive_seed(run_seed, _SEED_PURPOSE_EVALUATION, index) & MAX_SEED
-
-
-def derive_seed(seed: int, *path: int) -> int:
-    """The stream key reached from the root key of ``seed`` by deriving along ``path``."""
-    key = np.uint64(root_key(seed))
-    for value in path:
-        key = np.uint64(derive(key, int(value)))
-    return int(key)
+    return derive_seed(run_seed, RUN_EVALUATION, index)

@@ -20,15 +20,14 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
 from pathlib import Path
 
-from bt_controller.draws import MAX_SEED
+from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
 
 from .cli import EXIT_INTERRUPTED, EXIT_USAGE, Parser, UsageError, positive_int, seed_int
-from .config import ALGORITHMS, RunConfig, derive_seed
+from .config import ALGORITHMS, RunConfig
 from .errors import EvolutionError
 from .files import read_json, write_json
 from .primitives import OBJECTIVES
 
-_SEED_PURPOSE_EXPERIMENT = 3
 PLAN_FILE = "experiment.json"
 
 
@@ -41,7 +40,7 @@ def plan(runs: int, evaluations: int, seed: int, trials: int = 10) -> list[tuple
         for objective in objectives:
             o = -1 if objective is None else OBJECTIVES.index(objective)
             for r in range(runs):
-                run_seed = derive_seed(seed, _SEED_PURPOSE_EXPERIMENT, a, o + 1, r) & MAX_SEED
+                run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
                 config = RunConfig.make(algorithm, objective, budget, run_seed, trials)
                 planned.append((config, f"runs/{config.label}/run{r:02d}"))
     return planned

@@ -2,11 +2,11 @@
 
     bench [--trees 200] [--reference-trees 4] [--trials 10] [--seed 0] [--parity N] [--threads K]
 
-Trees are ``randtrees.random_trees(seed, n)`` (10 to 60 nodes). The batch evaluator is timed after a warm-up
-batch (compilation excluded) on one batch of ``--trees`` requests, in wall-clock time and in CPU time of this
-process (the fairer figure on a shared machine); the reference road on the first ``--reference-trees`` of
-them. ``--parity N`` then evaluates N random trees by both roads and counts disagreements (any bit of any of
-the six values, or of any end pose); the exit status is 1 if there is one.
+Trees are ``bt_controller.random_trees.random_trees(seed, n)`` (11 to 60 nodes). The batch evaluator is
+timed after a warm-up batch (compilation excluded) on one batch of ``--trees`` requests, in wall-clock time
+and in CPU time of this process (the fairer figure on a shared machine); the reference road on the first
+``--reference-trees`` of them. ``--parity N`` then evaluates N random trees by both roads and counts
+disagreements (any bit of any of the six values, or of any end pose); the exit status is 1 if there is one.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from collections.abc import Sequence
 
 import numba
 
+from bt_controller.random_trees import random_trees
 from swarm_sim import reference_road
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
-from swarm_sim.randtrees import random_trees
 
 
 def _batch_rate(evaluator: BatchEvaluator, requests: list[EvaluationRequest]) -> tuple[float, float, float]:

@@ -1,11 +1,12 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
 
-    evaluate --tree TREE [--trials 10] [--seed S] [--engine compiled|reference] [--per-trial]
+    evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--engine compiled|reference]
+             [--per-trial]
 
-Prints ``{"tree", "seed", "trials", "fitness": {density, nest, food}, "descriptors": {movement, rotation,
-conditionality}}`` (``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start
-and end poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr,
-exit status 2.
+Prints ``{"tree", "seed", "trials", "profile", "fitness": {density, nest, food}, "descriptors": {movement,
+rotation, conditionality}}`` (``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the
+robots' start and end poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on
+stderr, exit status 2.
 """
 
 from __future__ import annotations
@@ -14,11 +15,14 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
+from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim import reference_road
+from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
@@ -40,6 +44,13 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--trials", type=int, default=10, help="number of trials (default 10)")
     parser.add_argument("--seed", type=int, default=0, help=f"seed in [0, {MAX_SEED}] (default 0)")
     parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default=DEFAULT.profile,
+        help=f"the model's profile (docs/model.md): the authors' experiment or without its artefacts "
+        f"(default {DEFAULT.profile})",
+    )
+    parser.add_argument(
         "--engine",
         choices=("compiled", "reference"),
         default="compiled",
@@ -50,7 +61,12 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def evaluation_json(
-    tree_text: str, seed: int, trials: int, values: Sequence[float], records: Sequence[TrialRecord] | None
+    tree_text: str,
+    seed: int,
+    trials: int,
+    values: Sequence[float],
+    records: Sequence[TrialRecord] | None,
+    profile: str = DEFAULT.profile,
 ) -> str:
     """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``)."""
     named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
@@ -58,6 +74,7 @@ def evaluation_json(
         "tree": tree_text,
         "seed": seed,
         "trials": trials,
+        "profile": profile,
         "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
         "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
     }
@@ -78,15 +95,18 @@ def run(argv: Sequence[str] | None = None) -> str:
         tree = check_request(request)
     except ValueError as error:
         raise UsageError(str(error)) from None
+    config = replace(DEFAULT, profile=args.profile)
     if args.engine == "reference":
-        values, records = reference_road.evaluate(tree, args.seed, args.trials)
+        values, records = reference_road.evaluate(tree, args.seed, args.trials, config)
     else:
-        result, records = BatchEvaluator().evaluate_trials([request])[0]
+        result, records = BatchEvaluator(config).evaluate_trials([request])[0]
         if result.error is not None:
             raise UsageError(result.error)
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
-    return evaluation_json(to_text(tree), args.seed, args.trials, values, records if args.per_trial else None)
+    return evaluation_json(
+        to_text(tree), args.seed, args.trials, values, records if args.per_trial else None, args.profile
+    )
 
 
 def evaluate_main(argv: Sequence[str] | None = None) -> int:

@@ -275,14 +275,16 @@ def _validate(c: Config) -> None:
     if c.initial_step >= c.ticks * c.steps_per_tick or c.initial_step % c.steps_per_tick:
         raise ConfigError(
             f"initial_step must be a multiple of steps_per_tick ({c.steps_per_tick}) inside a trial's "
-            f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), got {c.initial_step}"
+            f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), "
+            f"got {c.initial_step}"
         )
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:
         raise ConfigError(
             f"n_robots = {c.n_robots} robots of radius {c.robot_radius} do not fit easily within "
-            f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; at most 50%)"
+            f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; "
+            "at most 50%)"
         )
 
 

@@ -72,12 +72,10 @@ def from_values(values: Sequence[float]) -> EvaluationResult:
 
 def check_request(request: object, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
     """The parsed tree of a valid request; raise ValueError saying what is wrong otherwise."""
-    _check_fields(request)
-    assert isinstance(request, EvaluationRequest)
-    return _parse(request.tree, max_nodes, max_depth)
+    return _parse(_check_fields(request).tree, max_nodes, max_depth)
 
 
-def _check_fields(request: object) -> None:
+def _check_fields(request: object) -> EvaluationRequest:
     if not isinstance(request, EvaluationRequest):
         raise ValueError(f"expected an EvaluationRequest, got {type(request).__name__}")
     if not isinstance(request.tree, str):
@@ -86,6 +84,7 @@ def _check_fields(request: object) -> None:
     trials = request.trials
     if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or not 1 <= trials <= MAX_TRIALS:
         raise ValueError(f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}")
+    return request
 
 
 def _parse(text: str, max_nodes: int, max_depth: int) -> Node:
@@ -103,9 +102,13 @@ def _flat_tree(text: str, max_nodes: int, max_depth: int) -> FlatTree:
 
 
 @dataclass(frozen=True)
-class _Job:
-    request: int
+class _Request:
+    """A request checked and made ready for the kernels: its flat tree, seed key and trial count."""
+
+    index: int
     flat: FlatTree
+    seed_key: np.uint64
+    trials: int
 
 
 class BatchEvaluator:
@@ -147,73 +150,56 @@ class BatchEvaluator:
         """Evaluate every request; with each result, its trials' records (empty for an error)."""
         return self._evaluate(requests, keep_records=True)
 
+    def _prepare(self, index: int, request: object) -> _Request:
+        """Check, parse and flatten a request and derive its seed key: everything before the kernels, in one
+        place; raise ValueError or TreeError saying what is wrong."""
+        checked = _check_fields(request)
+        flat = _flat_tree(checked.tree, self.max_nodes, self.max_depth)
+        return _Request(index, flat, root_key(int(checked.seed)), int(checked.trials))
+
     def _evaluate(
         self, requests: Sequence[EvaluationRequest], keep_records: bool
     ) -> list[tuple[EvaluationResult, list[TrialRecord]]]:
         out: list[tuple[EvaluationResult, list[TrialRecord]] | None] = [None] * len(requests)
-        jobs: list[_Job] = []
+        ready: list[_Request] = []
         for index, request in enumerate(requests):
             try:
-                _check_fields(request)
-                jobs.append(_Job(index, _flat_tree(request.tree, self.max_nodes, self.max_depth)))
+                ready.append(self._prepare(index, request))
             except (ValueError, TreeError) as error:
                 out[index] = (failed(str(error)), [])
-        if jobs:
-            self._run(requests, jobs, out, keep_records)
+        if ready:
+            self._run(ready, out, keep_records)
         return [item for item in out if item is not None]
 
     def _run(
         self,
-        requests: Sequence[EvaluationRequest],
-        jobs: list[_Job],
+        ready: list[_Request],
         out: list[tuple[EvaluationResult, list[TrialRecord]] | None],
         keep_records: bool,
     ) -> None:
-        packed = pack([job.flat for job in jobs])
-        trials = [int(requests[job.request].trials) for job in jobs]
-        job_tree = np.repeat(np.arange(len(jobs), dtype=np.int64), trials)
-        job_trial = np.concatenate([np.arange(t, dtype=np.int64) for t in trials])
-        seed_keys = [root_key(int(requests[job.request].seed)) for job in jobs]
-        job_seed_key = np.repeat(np.array(seed_keys, dtype=np.uint64), trials)
-        gaps = np.array(self.config.gaps, dtype=np.float64)
-        job_gap = gaps[job_trial % len(gaps)]
-        n_jobs = job_tree.shape[0]
-        values = np.zeros((n_jobs, world.N_VALUES))
-        poses = np.zeros((n_jobs, 2, self._params.n_robots, 3))
+        trees = pack([r.flat for r in ready])
+        jobs = kernel.make_jobs([r.seed_key for r in ready], [r.trials for r in ready], self.config)
+        results = kernel.Outputs.zeros(jobs.n_rows, self._params.n_robots)
         if self.threads > 1:
             numba.set_num_threads(self.threads)
         run = kernel.run_jobs_parallel if self.threads > 1 else kernel.run_jobs
-        run(
-            packed.op,
-            packed.arg,
-            packed.first,
-            packed.nchild,
-            packed.children,
-            packed.node_offset,
-            packed.child_offset,
-            job_tree,
-            job_seed_key,
-            job_trial,
-            job_gap,
-            self._params,
-            values,
-            poses,
-        )
+        run(trees, self._params, jobs, results)
+        values, poses = results
         row = 0
-        for job, n_trials in zip(jobs, trials, strict=True):
+        for r in ready:
             if not keep_records:
-                out[job.request] = (from_values(world.mean_values(values[row : row + n_trials])), [])
-                row += n_trials
+                out[r.index] = (from_values(world.mean_values(values[row : row + r.trials])), [])
+                row += r.trials
                 continue
             records = [
                 TrialRecord(
                     trial=k,
-                    gap=float(job_gap[row + k]),
+                    gap=self.config.gap(k),
                     values=tuple(float(v) for v in values[row + k]),
                     start_poses=poses[row + k, 0].copy(),
                     end_poses=poses[row + k, 1].copy(),
                 )
-                for k in range(n_trials)
+                for k in range(r.trials)
             ]
-            out[job.request] = (from_values(combine(records)), records)
-            row += n_trials
+            out[r.index] = (from_values(combine(records)), records)
+            row += r.trials

@@ -1,12 +1,12 @@
 """The simulator's side of one chain, advanced one control step at a time by the robots' answers.
 
 This is what the simulator node and the reference road run: it owns the world (poses, wheel gains, the radio
-channel, the ground sensor) and nothing of the robots' minds. At each step ``k`` of the chain it first teleports
-the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at step
-``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k - 1``);
-then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and, at a
-tick, what the tick did. It scores each trial from those answers (``bt_controller.timeline`` says when), so
-the node graph, the reference road and the batch evaluator compute the same numbers.
+channel, the ground sensor) and nothing of the robots' minds. At each step ``k`` of the chain it first
+teleports the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at
+step ``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k -
+1``); then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and,
+at a tick, what the tick did. It scores each trial from those answers (``bt_controller.timeline`` says when),
+so the node graph, the reference road and the batch evaluator compute the same numbers.
 """
 
 from __future__ import annotations
@@ -186,9 +186,9 @@ def run_chain_with_controllers(
     on_step: Callable[[LockstepChain], None] | None = None,
 ) -> list[TrialRecord]:
     """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
-    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers. ``on_step(chain)``
-    is called after each step's readings are out (for example to collect the poses a simulator node would
-    publish)."""
+    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers.
+    ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
+    simulator node would publish)."""
     sim = LockstepChain(seed, chain, trials, config)
     controllers = []
     for key in sim.setup.tree_keys:

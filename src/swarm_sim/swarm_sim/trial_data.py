@@ -1,4 +1,5 @@
-"""What a chain starts from and what its trials leave; shared by the reference road, the batch road and the nodes.
+"""What a chain starts from and what its trials leave; shared by the reference road, the batch road and the
+nodes.
 
 A chain is one continuous simulation of one or more trials (``bt_controller.timeline``): the 5 trials of a
 block under ``paper``, a single trial under ``clean``. ``setup_chain`` draws what is fixed for the whole chain
@@ -13,11 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.draws import check_seed, root_key
+from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys, check_seed, root_key
 from bt_controller.timeline import chain_of_trial
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.streams import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from swarm_sim.world import VALUE_NAMES
 
 __all__ = ["VALUE_NAMES", "ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]

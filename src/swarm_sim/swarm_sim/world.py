@@ -1,4 +1,5 @@
-"""The world model as compiled pure functions, split the way the ROS 2 node graph splits it (``docs/model.md``).
+"""The world model as compiled pure functions, split the way the ROS 2 node graph splits it
+(``docs/model.md``).
 
 (a) physics: ``place_robots``, ``wheel_gains``, ``move_robot``, ``resolve_collisions``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
@@ -283,7 +284,7 @@ def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
         return False
     r2 = p.robot_radius * p.robot_radius
     for m in range(x.shape[0]):
-        if m == i or m == j:
+        if m in (i, j):
             continue
         mx = x[m] - x[i]
         my = y[m] - y[i]
@@ -395,9 +396,10 @@ def robot_descriptors(counts: np.ndarray, movement: int, rotation: int, p: Param
     """(movement, rotation, conditionality) of one robot in one trial, each in [0, 1].
 
     ``movement`` and ``rotation`` are sums over the trial's ticks of ``motors.movement_of`` and
-    ``motors.rotation_of`` (each in [-ticks, ticks]), mapped by (x + ticks) / (2 ticks). ``counts`` as the tree
-    interpreter keeps them: ``counts[0]`` condition ticks, ``counts[1 + a]`` starts of action ``a``;
-    conditionality = conditions / (conditions + starts), 1 when neither happened (``CBlackBoard.cpp:518-527``).
+    ``motors.rotation_of`` (each in [-ticks, ticks]), mapped by (x + ticks) / (2 ticks). ``counts`` as the
+    tree interpreter keeps them: ``counts[0]`` condition ticks, ``counts[1 + a]`` starts of action ``a``;
+    conditionality = conditions / (conditions + starts), 1 when neither happened
+    (``CBlackBoard.cpp:518-527``).
     """
     ticks = float(p.ticks)
     conditions = counts[0]

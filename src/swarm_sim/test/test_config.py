@@ -16,7 +16,12 @@ def test_defaults_follow_the_model():
     assert (c.gain_low, c.gain_step, c.gain_levels) == (0.9, 0.01, 20)
     assert (c.step_dt, c.steps_per_tick, c.ticks, c.initial_step, c.chain_trials) == (0.125, 4, 40, 16, 5)
     assert (c.trial_steps, c.chain_length) == (160, 5)
-    assert (c.message_range, c.delivery_probability, c.estimate_cap, c.occlusion) == (1000.0, 0.95, 5000.0, True)
+    assert (c.message_range, c.delivery_probability, c.estimate_cap, c.occlusion) == (
+        1000.0,
+        0.95,
+        5000.0,
+        True,
+    )
     assert (c.density_range, c.density_divisor, c.window, c.friction) == (10000.0, 6642.0, 7, 0.49)
     # Trials come in blocks of 5 per gap (one chain each under paper), under both profiles.
     assert [c.gap(k) for k in range(11)] == [500.0] * 5 + [700.0] * 5 + [500.0]

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from bt_controller.controller import FootbotController
+from bt_controller.draws import DROPS, stream_key
 from bt_controller.perception import PerceptionParams, Readings, blackboard
 from bt_controller.timeline import CLEAN, PAPER, Timeline
 from bt_controller.tree import parse
 from bt_controller.vocabulary import CONDITION_INDEX
 from swarm_sim import reference_road, world
 from swarm_sim.config import Config
-from swarm_sim.streams import DROPS, stream_key
 
 PAPER_CONFIG = Config(profile="paper")
 CLEAN_CONFIG = Config(profile="clean")

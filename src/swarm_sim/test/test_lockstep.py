@@ -32,7 +32,9 @@ def test_on_step_sees_every_step_of_the_chain_once():
     run_chain_with_controllers(parse("forward"), 1, 0, 2, on_step=lambda sim: steps.append(sim.step))
     assert steps == list(range(1, 321))
     steps.clear()
-    run_with_controllers(parse("forward"), 1, 0, Config(profile="clean"), on_step=lambda s: steps.append(s.step))
+    run_with_controllers(
+        parse("forward"), 1, 0, Config(profile="clean"), on_step=lambda s: steps.append(s.step)
+    )
     assert steps == list(range(1, 177))
 
 

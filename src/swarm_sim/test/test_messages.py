@@ -5,11 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from bt_controller.draws import uniform
+from bt_controller.draws import DROPS, stream_key, uniform
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.sensing import Readings, RobotView, sense_swarm
-from swarm_sim.streams import DROPS, stream_key
 from swarm_sim.trial_data import setup_chain
 
 P = DEFAULT.params()
@@ -130,7 +129,9 @@ def test_estimate_matches_brute_force_on_hand_built_readings():
     # nest: 700, 950, 900, 5170 -> 700 from message 0; food: 5400, 5250, 5400, 5070 -> all capped.
     assert got[0] == 700.0 and got[3] == 0
     assert got[1] == 5000.0 and got[4] == -1
-    assert got[2] == pytest.approx(sum(1.0 / (math.pi * (r / 10000.0) ** 2) for r in ranges) / 6642.0, rel=1e-14)
+    assert got[2] == pytest.approx(
+        sum(1.0 / (math.pi * (r / 10000.0) ** 2) for r in ranges) / 6642.0, rel=1e-14
+    )
     assert got[5] == 3
     inside = world.estimate(True, True, 4, ranges, nest, food, P)
     assert inside[:2] == (0.0, 0.0) and inside[3:5] == (-1, -1)
@@ -183,7 +184,9 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
     for i, v in enumerate(views):
         d = np.hypot(x - x[i], y - y[i])
         near = (d <= 1000.0) & (np.arange(n) != i)
-        assert v.density == pytest.approx(np.sum(1.0 / (np.pi * (d[near] / 10000.0) ** 2)) / 6642.0, rel=1e-12)
+        assert v.density == pytest.approx(
+            np.sum(1.0 / (np.pi * (d[near] / 10000.0) ** 2)) / 6642.0, rel=1e-12
+        )
 
 
 def test_smoothing_is_the_mean_of_the_last_seven_samples():

@@ -3,10 +3,9 @@ rule."""
 
 import numpy as np
 
-from bt_controller.draws import root_key
+from bt_controller.draws import DROPS, PURPOSES, TREE, chain_keys, root_key, stream_key
 from swarm_sim import world
 from swarm_sim.config import DEFAULT
-from swarm_sim.streams import DROPS, PURPOSES, TREE, chain_keys, stream_key
 from swarm_sim.trial_data import chain_plan, setup_chain
 
 

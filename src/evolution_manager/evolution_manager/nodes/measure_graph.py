@@ -18,9 +18,9 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from bt_controller.random_trees import random_trees
 from evolution_manager.nodes.trial import TrialGraph
 from swarm_sim.config import DEFAULT
-from swarm_sim.randtrees import random_trees
 
 SIMULATED_SECONDS = (DEFAULT.settle_steps + DEFAULT.ticks * DEFAULT.steps_per_tick) * DEFAULT.step_dt
 """Simulated time of one trial: the settling steps and the 40 ticks (22 s)."""
