@@ -254,6 +254,7 @@ def simulate_chain(
     (x, y, heading, x_before, y_before, gains, broadcast_nest, broadcast_food, raw_nest, raw_food, window,
      smooth, ground_now, sources, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
+    robot_arcs = world.arcs(gains, p)
     samples = 0
     board = np.zeros(8, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
@@ -266,7 +267,7 @@ def simulate_chain(
                 poses_out[position, 0, i, 0] = x[i]
                 poses_out[position, 0, i, 1] = y[i]
                 poses_out[position, 0, i, 2] = heading[i]
-        world.physics_step(x, y, heading, actions, gains, p, x_before, y_before)
+        world.physics_step(x, y, heading, actions, robot_arcs, p, x_before, y_before)
         if timeline.senses(p, k):
             # Every robot hears what the others broadcast at the step before.
             world.sense_step(

@@ -65,6 +65,7 @@ class LockstepChain:
             raise ValueError(f"a chain has 1 to {config.chain_length} trials, got {trials!r}")
         self.setup = setup_chain(seed, chain, config)
         self.trials = trials
+        self.arcs = world.arcs(self.setup.gains, self.p)
         n = self.p.n_robots
         self.x, self.y, self.heading = np.zeros(n), np.zeros(n), np.zeros(n)
         self._x_before, self._y_before = np.empty(n), np.empty(n)
@@ -159,7 +160,7 @@ class LockstepChain:
             self.y,
             self.heading,
             self.actions,
-            self.setup.gains,
+            self.arcs,
             self.p,
             self._x_before,
             self._y_before,

@@ -1,7 +1,8 @@
 """The world model as compiled pure functions, split the way the ROS 2 node graph splits it
 (``docs/model.md``).
 
-(a) physics: ``place_robots``, ``wheel_gains``, ``move_robot``, ``resolve_collisions``, ``physics_step``;
+(a) physics: ``place_robots``, ``wheel_gains``, ``arcs``, ``move_robot``, ``resolve_collisions``,
+``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``;
@@ -142,23 +143,50 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
 
 
 @numba.njit(cache=True, inline="always")
+def arc(action: int, gain_left: float, gain_right: float, p: Params) -> tuple:
+    """One step of ``action`` with these wheel gains as (chord, half turn, turn): the pose moves by the chord
+    along the heading plus the half turn, and turns by the turn (the exact arc, written as its chord)."""
+    v_left = WHEELS[action, 0] * p.wheel_speed * gain_left
+    v_right = WHEELS[action, 1] * p.wheel_speed * gain_right
+    if v_left == 0.0 and v_right == 0.0:
+        return 0.0, 0.0, 0.0
+    v = 0.5 * (v_left + v_right)
+    omega = (v_right - v_left) / p.wheel_separation
+    if omega == 0.0:
+        return v * p.step_dt, 0.0, 0.0
+    # Chord of the arc: length 2 (v / omega) sin(turn / 2), along the mean heading.
+    half_turn = 0.5 * omega * p.step_dt
+    return 2.0 * (v / omega) * math.sin(half_turn), half_turn, omega * p.step_dt
+
+
+@numba.njit(cache=True)
+def arcs(gains: np.ndarray, p: Params) -> np.ndarray:
+    """Every robot's ``arc`` of every action (n_robots x actions x 3), computed once per chain: the gains do
+    not change within one."""
+    n = gains.shape[0]
+    out = np.empty((n, WHEELS.shape[0], 3))
+    for i in range(n):
+        for action in range(WHEELS.shape[0]):
+            out[i, action, 0], out[i, action, 1], out[i, action, 2] = arc(action, gains[i, 0], gains[i, 1], p)
+    return out
+
+
+@numba.njit(cache=True, inline="always")
+def follow_arc(x: float, y: float, heading: float, chord: float, half_turn: float, turn: float) -> tuple:
+    """The pose after one step along an ``arc``."""
+    if chord == 0.0 and turn == 0.0:
+        return x, y, heading
+    middle = heading + half_turn
+    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + turn)
+
+
+@numba.njit(cache=True, inline="always")
 def move_robot(
     x: float, y: float, heading: float, action: int, gain_left: float, gain_right: float, p: Params
 ) -> tuple:
     """One robot's pose after one step of ``action``, by exact arc integration, ignoring obstacles."""
-    v_left = WHEELS[action, 0] * p.wheel_speed * gain_left
-    v_right = WHEELS[action, 1] * p.wheel_speed * gain_right
-    if v_left == 0.0 and v_right == 0.0:
-        return x, y, heading
-    v = 0.5 * (v_left + v_right)
-    omega = (v_right - v_left) / p.wheel_separation
-    if omega == 0.0:
-        return x + v * p.step_dt * math.cos(heading), y + v * p.step_dt * math.sin(heading), heading
-    # The exact arc, written as its chord: length 2 (v / omega) sin(turn / 2), along the mean heading.
-    half_turn = 0.5 * omega * p.step_dt
-    chord = 2.0 * (v / omega) * math.sin(half_turn)
-    middle = heading + half_turn
-    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + omega * p.step_dt)
+    chord, half_turn, turn = arc(action, gain_left, gain_right, p)
+    return follow_arc(x, y, heading, chord, half_turn, turn)
 
 
 @numba.njit(cache=True, inline="always")
@@ -246,19 +274,23 @@ def physics_step(
     y: np.ndarray,
     heading: np.ndarray,
     actions: np.ndarray,
-    gains: np.ndarray,
+    robot_arcs: np.ndarray,
     p: Params,
     x_before: np.ndarray,
     y_before: np.ndarray,
 ) -> None:
-    """Advance the swarm one step in place: every robot moves by its action, then collisions are resolved.
+    """Advance the swarm one step in place: every robot moves by its action along its arc (``arcs`` of its
+    gains), then collisions are resolved.
 
     ``x_before`` and ``y_before`` are workspace arrays (n_robots) that receive the positions before the move.
     """
     for i in range(x.shape[0]):
         x_before[i] = x[i]
         y_before[i] = y[i]
-        x[i], y[i], heading[i] = move_robot(x[i], y[i], heading[i], actions[i], gains[i, 0], gains[i, 1], p)
+        a = actions[i]
+        x[i], y[i], heading[i] = follow_arc(
+            x[i], y[i], heading[i], robot_arcs[i, a, 0], robot_arcs[i, a, 1], robot_arcs[i, a, 2]
+        )
     resolve_collisions(x, y, x_before, y_before, p)
 
 
@@ -276,23 +308,26 @@ def ground(x: float, y: float, gap: float, p: Params) -> tuple:
 
 @numba.njit(cache=True, inline="always")
 def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
-    """Whether a third robot's body cuts the segment between the centres of robots ``i`` and ``j``."""
+    """Whether a third robot's body cuts the segment between the centres of robots ``i`` and ``j``.
+
+    Robot ``m`` occludes when the foot of its centre on the segment's line falls strictly between the ends and
+    its distance from the line is below the body radius. (The ends themselves need no test: ``m``'s centre is
+    at least two radii from theirs, as robots do not overlap.) Written without divisions: the dot product
+    ``d`` against the squared length ``L2`` locates the foot, and the cross product ``c`` gives the distance
+    ``|c| / sqrt(L2)``.
+    """
     sx = x[j] - x[i]
     sy = y[j] - y[i]
     length2 = sx * sx + sy * sy
-    if length2 == 0.0:
-        return False
-    r2 = p.robot_radius * p.robot_radius
+    limit = p.robot_radius * p.robot_radius * length2
     for m in range(x.shape[0]):
-        if m in (i, j):
-            continue
         mx = x[m] - x[i]
         my = y[m] - y[i]
-        t = (mx * sx + my * sy) / length2
-        t = min(max(t, 0.0), 1.0)
-        cx = mx - t * sx
-        cy = my - t * sy
-        if cx * cx + cy * cy < r2:
+        c = mx * sy - my * sx
+        if c * c >= limit:
+            continue  # far from the line (i and j themselves lie on it, and fail the next test)
+        d = mx * sx + my * sy
+        if 0.0 < d < length2 and m != j:
             return True
     return False
 

@@ -85,7 +85,7 @@ def test_no_overlap_and_no_escape_over_thousands_of_random_steps(config):
         for step in range(1500):
             if step % 4 == 0:
                 actions = rng.choice(7, size=p.n_robots, p=weights).astype(np.int64)
-            world.physics_step(x, y, h, actions, s.gains, p, x_before, y_before)
+            world.physics_step(x, y, h, actions, world.arcs(s.gains, p), p, x_before, y_before)
             _assert_valid(x, y, p)
             checked += 1
     assert checked == 9000
@@ -102,7 +102,7 @@ def test_crowd_pushed_against_a_corner_stays_valid():
     actions = np.full(9, ACTION_INDEX["forward"], dtype=np.int64)
     xb, yb = np.empty(9), np.empty(9)
     for _ in range(400):
-        world.physics_step(x, y, h, actions, gains, p, xb, yb)
+        world.physics_step(x, y, h, actions, world.arcs(gains, p), p, xb, yb)
         _assert_valid(x, y, p)
 
 
@@ -110,7 +110,7 @@ def test_head_on_pair_is_pushed_apart_symmetrically():
     p = DEFAULT.params()
     x, y, h = np.array([-86.0, 86.0]), np.array([0.0, 0.0]), np.array([0.0, math.pi])
     actions = np.full(2, ACTION_INDEX["forward"], dtype=np.int64)
-    world.physics_step(x, y, h, actions, np.ones((2, 2)), p, np.empty(2), np.empty(2))
+    world.physics_step(x, y, h, actions, world.arcs(np.ones((2, 2)), p), p, np.empty(2), np.empty(2))
     assert x[0] == pytest.approx(-x[1]) and x[1] - x[0] >= 170.0
     assert np.abs(y).max() < 1e-9
 

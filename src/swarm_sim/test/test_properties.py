@@ -71,7 +71,7 @@ def test_physics_keeps_robots_apart_and_inside(swarm, steps):
     xb, yb = np.empty(n), np.empty(n)
     limit = P.arena_half - P.robot_radius
     for _ in range(steps):
-        world.physics_step(x, y, h, actions.astype(np.int64), gains, P, xb, yb)
+        world.physics_step(x, y, h, actions.astype(np.int64), world.arcs(gains, P), P, xb, yb)
         assert (np.abs(x) <= limit).all() and (np.abs(y) <= limit).all()
         assert ((-math.pi <= h) & (h < math.pi)).all()
         for i in range(n):
