@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
-from bt_controller.errors import TreeError
+from bt_controller.errors import TreeError, UsageError
 from bt_controller.formats import from_xml, to_ascii, to_dot, to_xml
 from bt_controller.render import RENDER_FORMATS, render
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse, to_text
@@ -29,13 +29,9 @@ _SUFFIX_FORMAT = {".txt": "tree", ".bt": "tree", ".xml": "xml", ".dot": "dot", "
 MAX_INPUT_BYTES = 10_000_000
 
 
-class _UsageError(Exception):
-    pass
-
-
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
-        raise _UsageError(f"{message} (see bt --help)")
+        raise UsageError(f"{message} (see bt --help)")
 
 
 def _load(source: str, max_nodes: int, max_depth: int) -> tuple[Node, str]:
@@ -47,20 +43,20 @@ def _load(source: str, max_nodes: int, max_depth: int) -> tuple[Node, str]:
         text, label = source, "argument"
     elif path.is_file():
         if path.stat().st_size > MAX_INPUT_BYTES:
-            raise _UsageError(f"{source}: larger than {MAX_INPUT_BYTES} bytes")
+            raise UsageError(f"{source}: larger than {MAX_INPUT_BYTES} bytes")
         text, label = path.read_text(encoding="utf-8"), source
     elif "/" in source or "." in source:
-        raise _UsageError(f"{source}: no such file")
+        raise UsageError(f"{source}: no such file")
     else:
         text, label = source, "argument"
     if len(text) > MAX_INPUT_BYTES:
-        raise _UsageError(f"{label}: larger than {MAX_INPUT_BYTES} bytes")
+        raise UsageError(f"{label}: larger than {MAX_INPUT_BYTES} bytes")
     try:
         if text.lstrip("\ufeff \t\r\n").startswith("<"):
             return from_xml(text, max_nodes=max_nodes, max_depth=max_depth), label
         return parse(text, max_nodes=max_nodes, max_depth=max_depth), label
     except TreeError as error:
-        raise _UsageError(f"{label}: {error}") from None
+        raise UsageError(f"{label}: {error}") from None
 
 
 def _formatted(tree: Node, fmt: str) -> str:
@@ -76,7 +72,7 @@ def _formatted(tree: Node, fmt: str) -> str:
 def _emit(tree: Node, fmt: str, output: str | None) -> None:
     if fmt in RENDER_FORMATS:
         if output is None or output == "-":
-            raise _UsageError(f"--format {fmt} draws into a file: give --output PATH")
+            raise UsageError(f"--format {fmt} draws into a file: give --output PATH")
         render(tree, output, fmt)
     elif output is None or output == "-":
         sys.stdout.write(_formatted(tree, fmt))
@@ -112,10 +108,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def run(argv: list[str]) -> int:
-    """Run ``bt`` with ``argv``; raise _UsageError for bad input."""
+    """Run ``bt`` with ``argv``; raise UsageError for bad input."""
     args = build_parser().parse_args(argv)
     if args.max_nodes < 1 or args.max_depth < 0:
-        raise _UsageError("--max-nodes must be at least 1 and --max-depth at least 0")
+        raise UsageError("--max-nodes must be at least 1 and --max-depth at least 0")
     tree, _ = _load(args.tree, args.max_nodes, args.max_depth)
     if args.command == "check":
         print(f"ok: {tree.size} nodes, depth {tree.depth}: {to_text(tree)}")
@@ -132,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     """Console entry point: exit 0 on success, 2 with one line on stderr for bad input."""
     try:
         return run(sys.argv[1:] if argv is None else argv)
-    except _UsageError as error:
+    except UsageError as error:
         print(f"bt: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -143,13 +143,13 @@ def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
 
 
 @intrinsic
-def _stack_slots(typingctx, n):  # noqa: ANN001 (numba intrinsic signature)
+def _stack_slots(typingctx: object, n: types.Type) -> tuple[object, object] | None:
     """A pointer to ``n`` int32 slots on the machine stack of the calling function (``n`` a literal)."""
     if not isinstance(n, types.IntegerLiteral):
         return None
     size = n.literal_value
 
-    def codegen(context, builder, signature, args):  # noqa: ANN001
+    def codegen(context: Any, builder: Any, signature: object, args: object) -> Any:  # numba's code generator
         return cgutils.alloca_once(builder, context.get_value_type(types.int32), size=size)
 
     return types.CPointer(types.int32)(n), codegen
@@ -197,7 +197,8 @@ def tick(
     Inlined into calling kernels (a call would cost more than the tick itself).
     """
     op, arg, first, nchild, children = tree  # locals: a field read inside the loop would cost a refcount
-    stack = numba.carray(_stack_slots(_STACK_SLOTS), _STACK_SLOTS)  # ancestors of ``node``
+    slots: Any = _stack_slots(_STACK_SLOTS)  # type: ignore[call-arg]  # an intrinsic: numba passes the typing context
+    stack = numba.carray(slots, _STACK_SLOTS)  # ancestors of ``node``
     depth = 0
     node = 0
     while True:

@@ -38,6 +38,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from bt_controller.validate import integer
+
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MUL1 = np.uint64(0xBF58476D1CE4E5B9)
 _MUL2 = np.uint64(0x94D049BB133111EB)
@@ -83,11 +85,7 @@ def root_key(seed: int) -> np.uint64:
 
 def check_seed(seed: object) -> int:
     """Return ``seed`` as an int, or raise ValueError saying what a seed must be."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
-    if not 0 <= int(seed) <= MAX_SEED:
-        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed}")
-    return int(seed)
+    return integer(seed, "seed", 0, MAX_SEED, numpy=True)
 
 
 # --------------------------------------------------------------------------------------- stream paths

@@ -1,4 +1,5 @@
-"""The errors of bt_controller: every refusal of a tree is a ValueError that says where and why.
+"""The errors of bt_controller: every refusal of a tree is a ValueError that says where and why; and the
+``UsageError`` of every command-line tool of the workspace.
 
 ``TreeSyntaxError`` is raised for text (or XML) that is not a tree: a malformed expression, an unknown node
 name, a wrong number of children. ``TreeLimitError`` is raised for a well-formed tree that is larger or deeper
@@ -26,3 +27,7 @@ class TreeSyntaxError(TreeError):
 
 class TreeLimitError(TreeError):
     """The tree is well formed but exceeds the node-count or depth limit."""
+
+
+class UsageError(Exception):
+    """Bad command-line input to any of the workspace's tools; printed as one line, exit status 2."""

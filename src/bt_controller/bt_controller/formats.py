@@ -17,7 +17,7 @@ import defusedxml.ElementTree as SafeET
 from defusedxml import DefusedXmlException
 
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Action, Composite, Condition, Node
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Action, Composite, Condition, Node, leaf_name
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
 
 BTCPP_CONTROL = {"seq": "Sequence", "sel": "Fallback", "prob": "Probabilistic"}
@@ -45,7 +45,7 @@ def to_xml(tree: Node, tree_id: str = "MainTree") -> str:
             element = SubElement(parent, BTCPP_CONTROL[node.kind])
             stack.extend((child, element) for child in reversed(node.children))
         else:
-            SubElement(parent, node.name)  # type: ignore[attr-defined]
+            SubElement(parent, leaf_name(node))
     model = SubElement(root, "TreeNodesModel")
     model.append(Comment(f" {PROBABILISTIC_DESCRIPTION} "))
     SubElement(model, "Control", {"ID": "Probabilistic"})
@@ -187,7 +187,7 @@ def to_dot(tree: Node, name: str = "behaviour_tree") -> str:
         elif isinstance(node, Condition):
             lines.append(f'  n{index} [shape=ellipse, label="{node.name}?"];')
         else:
-            lines.append(f'  n{index} [shape=box, label="{node.name}"];')  # type: ignore[attr-defined]
+            lines.append(f'  n{index} [shape=box, label="{leaf_name(node)}"];')
         while remaining and remaining[-1] == 0:
             parents.pop()
             remaining.pop()
@@ -212,5 +212,5 @@ def to_ascii(tree: Node) -> str:
                               child_lead + ("    " if last else "│   ")))  # fmt: skip
         else:
             suffix = "?" if isinstance(node, Condition) else ""
-            lines.append(f"{lead}{node.name}{suffix}")  # type: ignore[attr-defined]
+            lines.append(f"{lead}{leaf_name(node)}{suffix}")
     return "\n".join(lines) + "\n"

@@ -7,15 +7,15 @@ behaviour tree reads (``docs/model.md``, "One step of a robot" and "Blackboard")
 
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
 ``njit`` functions inline, and the controller node and the reference road call them from Python, so both roads
-compute every number with the same operations in the same order. Arguments ``p`` are any object with the
-fields of ``PerceptionParams`` (``swarm_sim.config.Params`` has them all).
+compute every number with the same operations in the same order. Arguments ``p`` are any named tuple with the
+fields of ``PerceptionParams`` (``PerceptionSettings``; ``swarm_sim.config.Params`` has them all).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numba
 import numpy as np
@@ -42,6 +42,19 @@ class PerceptionParams(NamedTuple):
     (A2)."""
 
 
+class PerceptionSettings(Protocol):
+    """What perception reads of its parameters: ``PerceptionParams`` or any named tuple with its fields."""
+
+    @property
+    def window(self) -> int: ...
+    @property
+    def estimate_cap(self) -> float: ...
+    @property
+    def density_range(self) -> float: ...
+    @property
+    def density_divisor(self) -> float: ...
+
+
 @numba.njit(cache=True)
 def estimate(
     in_nest: bool,
@@ -50,7 +63,7 @@ def estimate(
     ranges: np.ndarray,
     nest_values: np.ndarray,
     food_values: np.ndarray,
-    p: PerceptionParams,
+    p: PerceptionSettings,
 ) -> tuple:
     """A robot's raw estimates from one step's messages (one per sender, in sender order).
 
@@ -193,7 +206,7 @@ class RobotView:
     when); ``broadcast`` is what the robot sends. Nothing is reset between the trials of a chain (A1).
     """
 
-    def __init__(self, p: PerceptionParams) -> None:
+    def __init__(self, p: PerceptionSettings) -> None:
         self.p = p
         self.window = np.zeros((p.window, 3))
         self.samples = 0

@@ -12,7 +12,7 @@ behaviour of one robot reads the robot's ``PyTreesContext``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -82,7 +82,7 @@ class Probabilistic(py_trees.composites.Composite):
         self.pending_first = first_child
         """Under ``paper`` the first child is child 0, not drawn (A3)."""
 
-    def tick(self):  # noqa: ANN201 (a py_trees generator of behaviours)
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Tick the remembered child, or a newly drawn one."""
         if self.status != py_trees.common.Status.RUNNING:
             for child in self.children:
@@ -94,12 +94,13 @@ class Probabilistic(py_trees.composites.Composite):
                 draw_key = np.uint64(derive(np.uint64(self.context.key), self.context.tick_index))
                 self.current_child = self.children[int(choose(draw_key, self.node_index, len(self.children)))]
         self.pending_first = False
-        child = self.current_child
-        yield from child.tick()
-        if child.status == py_trees.common.Status.RUNNING:
+        chosen = self.current_child
+        assert chosen is not None, "a running probabilistic composite remembers its child"
+        yield from chosen.tick()
+        if chosen.status == py_trees.common.Status.RUNNING:
             self.status = py_trees.common.Status.RUNNING
         else:
-            self.stop(child.status)
+            self.stop(chosen.status)
         yield self
 
 
@@ -151,7 +152,8 @@ class PyTreesRobot:
             if isinstance(behaviour, Probabilistic) and behaviour.pending_first:
                 result.append(0)
             elif isinstance(behaviour, py_trees.composites.Composite):
-                result.append(behaviour.children.index(behaviour.current_child) if running else -1)
+                current = behaviour.current_child
+                result.append(behaviour.children.index(current) if running and current is not None else -1)
             else:
                 result.append(1 if isinstance(behaviour, ActionBehaviour) and running else 0)
         return result

@@ -29,7 +29,9 @@ def random_tree(rng: np.random.Generator, size: int, p_condition: float = 0.5) -
     while True:
         n = int(rng.integers(MIN_CHILDREN, min(MAX_CHILDREN, rest) + 1))
         # Split ``rest`` nodes among ``n`` children, none of them 2 nodes (no such tree).
-        cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False)) if n > 1 else []
+        cuts: np.ndarray | list[int] = []
+        if n > 1:
+            cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False))
         parts = np.diff(np.concatenate(([0], cuts, [rest]))).astype(int)
         if np.all(parts != 2):
             break

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bt_controller.tree import Composite, Condition, Node
+from bt_controller.tree import Composite, Condition, Node, leaf_name
 
 RENDER_FORMATS = ("svg", "png")
 _FILL = {"seq": "#cfe2f3", "sel": "#fce5cd", "prob": "#d9ead3"}
@@ -68,7 +68,7 @@ def render(tree: Node, path: str | Path, fmt: str | None = None) -> Path:
         elif isinstance(node, Condition):
             label, fill, style = node.name + "?", "#ffffff", "round,pad=0.02,rounding_size=0.18"
         else:
-            label, fill, style = node.name, "#eeeeee", "square,pad=0.02"  # type: ignore[attr-defined]
+            label, fill, style = leaf_name(node), "#eeeeee", "square,pad=0.02"
         axes.add_patch(
             FancyBboxPatch(
                 (x - 0.45, -depth - 0.18),

@@ -60,7 +60,7 @@ def new_counts() -> list[int]:
 def tick(
     tree: Node,
     memory: MutableSequence[int],
-    blackboard: Sequence[bool],
+    blackboard: Sequence[bool] | np.ndarray,
     key: int,
     tick_index: int,
     counts: MutableSequence[int],
@@ -137,7 +137,7 @@ class ReferenceRobot:
         self.counts = new_counts()
         self.tick_index = 0
 
-    def step(self, blackboard: Sequence[bool]) -> tuple[int, int]:
+    def step(self, blackboard: Sequence[bool] | np.ndarray) -> tuple[int, int]:
         """Tick once with ``blackboard`` and advance the tick counter; returns ``(status, action)``."""
         result = tick(self.tree, self.memory, blackboard, self.key, self.tick_index, self.counts)
         self.tick_index += 1

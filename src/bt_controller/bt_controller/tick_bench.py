@@ -2,7 +2,9 @@
 
 Measures robot-ticks per second of the compiled interpreter on random trees of 10, 30 and 100 nodes (one
 core: the kernel is serial), of the reference interpreter on a sample of the same robots, and their ratio.
-``--agreement N`` also checks the two interpreters tick for tick on N more random trees.
+``--agreement N`` also checks the two interpreters tick for tick on N more random trees. ``--parser`` instead
+times the parser and the XML importer on the pathological inputs of ``PATHOLOGICAL`` (which the fuzz tests
+check for a tree or a documented error, untimed): each should take well under a second.
 """
 
 from __future__ import annotations
@@ -17,9 +19,45 @@ import numpy as np
 
 from bt_controller.agreement import check_random
 from bt_controller.compiled import N_COUNTS, new_memory, pack, run_ticks, run_ticks_kernel
+from bt_controller.errors import TreeError
+from bt_controller.formats import from_xml
 from bt_controller.random_trees import random_blackboards, random_tree
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import parse
+
+PATHOLOGICAL: tuple[tuple[str, Callable[[str], object], str], ...] = (
+    ("1e6 open brackets", parse, "(" * 1_000_000),
+    ("200,000 nested seq(", parse, "seq(" * 200_000),
+    ("2e6 spaces then x", parse, " " * 2_000_000 + "x"),
+    ("a seq of 300,000 children", parse, "seq(stop," + " stop," * 300_000),
+    (
+        "XML nested 50,000 deep",
+        from_xml,
+        "<root><BehaviorTree>" + "<Sequence>" * 50_000 + "</Sequence>" * 50_000 + "</BehaviorTree></root>",
+    ),
+    (
+        "XML entity expansion",
+        from_xml,
+        '<?xml version="1.0"?><!DOCTYPE l [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;">]>'
+        "<root>&b;</root>",
+    ),
+    ("100,000 unclosed XML elements", from_xml, "<root>" * 100_000),
+)
+"""(what, function, input): inputs built to make a parser slow or deep."""
+
+
+def parser_times() -> list[tuple[str, float, float, str]]:
+    """(what, wall seconds, CPU seconds, outcome) of each ``PATHOLOGICAL`` input."""
+    rows = []
+    for what, function, text in PATHOLOGICAL:
+        wall, cpu = time.perf_counter(), time.process_time()
+        try:
+            function(text)
+            outcome = "a tree"
+        except TreeError as error:
+            outcome = type(error).__name__
+        rows.append((what, time.perf_counter() - wall, time.process_time() - cpu, outcome))
+    return rows
 
 
 class Rates(NamedTuple):
@@ -80,7 +118,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reference-robots", type=int, default=1000, help="robots ticked by the reference")
     parser.add_argument("--agreement", type=int, default=0, metavar="N", help="also check N random trees")
     parser.add_argument("--seed", type=int, default=1, help="seed of the random trees and blackboards")
+    parser.add_argument(
+        "--parser", action="store_true", help="time the parser on pathological inputs instead"
+    )
     args = parser.parse_args(argv)
+    if args.parser:
+        for what, wall, cpu, outcome in parser_times():
+            print(f"{what:32s} {cpu:6.3f} s CPU ({wall:6.3f} s wall): {outcome}")
+        return 0
     for size in args.sizes:
         if size == 2 or size < 1:
             parser.error(f"no tree has {size} nodes")

@@ -129,6 +129,13 @@ class Action(Node):
         return hash(("action", self.name))
 
 
+def leaf_name(node: Node) -> str:
+    """The name of a leaf (a condition or an action); TypeError for a composite."""
+    if isinstance(node, (Condition, Action)):
+        return node.name
+    raise TypeError(f"not a leaf: {node!r}")
+
+
 @dataclass(frozen=True, repr=False)
 class Composite(Node):
     """A composite with memory: ``kind`` is ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children."""
@@ -209,7 +216,7 @@ def to_text(tree: Node) -> str:
                 if i < len(item.children) - 1:
                     stack.append(", ")
         else:
-            parts.append(item.name)  # type: ignore[attr-defined]
+            parts.append(leaf_name(item))
     return "".join(parts)
 
 
@@ -226,7 +233,7 @@ def to_indented(tree: Node, indent: str = "    ") -> str:
                 visit(child, level + 1, i == len(node.children) - 1)
             lines.append(f"{pad}){tail}")
         else:
-            lines.append(f"{pad}{node.name}{tail}")  # type: ignore[attr-defined]
+            lines.append(f"{pad}{leaf_name(node)}{tail}")
 
     visit(tree, 0, True)
     return "\n".join(lines) + "\n"

@@ -3,19 +3,17 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
+import py_trees
 from bt_strategies import blackboards, keys, trees
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-py_trees = pytest.importorskip("py_trees")
-
-from bt_controller.agreement import random_forest  # noqa: E402
-from bt_controller.pytrees import PyTreesRobot  # noqa: E402
-from bt_controller.random_trees import random_blackboards  # noqa: E402
-from bt_controller.semantics import ReferenceRobot  # noqa: E402
-from bt_controller.timeline import CLEAN, PAPER  # noqa: E402
-from bt_controller.tree import parse  # noqa: E402
+from bt_controller.agreement import random_forest
+from bt_controller.pytrees import PyTreesRobot
+from bt_controller.random_trees import random_blackboards
+from bt_controller.semantics import ReferenceRobot
+from bt_controller.timeline import CLEAN, PAPER
+from bt_controller.tree import parse
 
 
 def _agree(tree, key, boards) -> None:

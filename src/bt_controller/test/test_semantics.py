@@ -148,10 +148,19 @@ def test_prob_remembers_running_child_and_draws_only_when_nothing_remembered(rob
 
 
 def test_prob_uses_the_local_preorder_index_of_the_node(robot):
-    key = _key_with_draws(1, 0, 2, node=3)
+    """The prob node is child 2 of the root but node 3 in pre-order, and is first reached at tick 1 (tick 0
+    ends on ``stop``). The key is chosen so that tick 1's draw picks reverse with counter 3 and forward with
+    counter 2: a tick that drew with the child position (or at tick 0) would pick forward."""
+    key = next(
+        k
+        for k in range(1, 10_000)
+        if choose(np.uint64(derive(np.uint64(k), 1)), 3, 2) == 1
+        and choose(np.uint64(derive(np.uint64(k), 1)), 2, 2) == 0
+        and choose(np.uint64(derive(np.uint64(k), 0)), 3, 2) == 0
+    )
     r = robot("seq(on_food, stop, prob(forward, reverse))", key)
-    assert r.step(board("on_food")) == (R, STOP)
-    assert r.step(board("on_food")) == (R, REV if choose(np.uint64(derive(np.uint64(key), 1)), 3, 2) else FWD)
+    assert r.step(board("on_food")) == (R, STOP)  # tick 0 ends on stop: the prob node is not reached
+    assert r.step(board("on_food")) == (R, REV)  # tick 1 reaches it: counter 3, its pre-order index
 
 
 def test_prob_starts_at_its_first_child_under_paper_then_draws(robot):

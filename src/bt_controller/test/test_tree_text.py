@@ -123,4 +123,4 @@ def test_model_refuses_bad_nodes():
     with pytest.raises(TreeSyntaxError):
         Condition("forward")
     with pytest.raises(TypeError):
-        parse(b"stop")  # type: ignore[arg-type]
+        parse(b"stop")  # type: ignore[arg-type]  # the point: bytes are refused at run time

@@ -18,6 +18,8 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from bt_controller.validate import integer
+
 from .archive import Entry, Repertoire
 from .errors import AskTellError, ConfigError
 from .operators import best_of, half_and_half, tournament, vary
@@ -38,13 +40,21 @@ FAILED = -1.0
 class Outcome:
     """What an algorithm needs to know of one evaluation (see ``swarm_sim.evaluation.EvaluationResult``)."""
 
-    fitness: tuple[float, float, float] | None
-    descriptors: tuple[float, float, float] | None
+    fitness: tuple[float, ...] | None
+    """(density, nest, food), or None for a failed evaluation."""
+    descriptors: tuple[float, ...] | None
+    """(movement, rotation, conditionality), or None for a failed evaluation."""
     error: str | None = None
 
     @property
     def ok(self) -> bool:
-        return self.error is None and self.fitness is not None and self.descriptors is not None
+        return self.measured() is not None
+
+    def measured(self) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
+        """``(fitness, descriptors)`` of a successful evaluation; None for a failed one."""
+        if self.error is None and self.fitness is not None and self.descriptors is not None:
+            return self.fitness, self.descriptors
+        return None
 
 
 def as_outcome(result: object) -> Outcome:
@@ -53,8 +63,8 @@ def as_outcome(result: object) -> Outcome:
     descriptors = getattr(result, "descriptors", None)
     error = getattr(result, "error", None)
     return Outcome(
-        tuple(float(v) for v in fitness) if fitness is not None else None,  # type: ignore[arg-type]
-        tuple(float(v) for v in descriptors) if descriptors is not None else None,  # type: ignore[arg-type]
+        tuple(float(v) for v in fitness) if fitness is not None else None,
+        tuple(float(v) for v in descriptors) if descriptors is not None else None,
         error,
     )
 
@@ -70,8 +80,7 @@ class AskTell:
     name = "base"
 
     def __init__(self, budget: int, seed: int) -> None:
-        if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
-            raise ConfigError(f"the budget must be a positive number of evaluations, got {budget!r}")
+        integer(budget, "the budget (evaluations)", 1, error=ConfigError)
         self.budget = budget
         self.seed = seed
         self.rng = random.Random(seed)
@@ -112,6 +121,10 @@ class AskTell:
         self._accept(batch, outcomes, self._asked_texts)
 
     # State -------------------------------------------------------------------------------------------
+    def restore(self, state: dict) -> None:
+        """Continue from ``to_state()``'s data (each algorithm restores its own)."""
+        raise NotImplementedError
+
     def to_state(self) -> dict:
         """Everything needed to continue, as JSON-able data (only between a tell and the next ask)."""
         if self._asked is not None:
@@ -312,7 +325,8 @@ class MapElites(AskTell):
     def _parent(self, entry: Entry) -> BehaviourTree:
         if entry.genome is None:
             entry.genome = tree_from_text(entry.tree, self.pset)
-        tree: BehaviourTree = entry.genome  # type: ignore[assignment]
+        tree = entry.genome
+        assert isinstance(tree, BehaviourTree), "MAP-Elites keeps its DEAP tree as an entry's genome"
         tree.fitness.values = (entry.value,) * len(OBJECTIVES)
         return tree
 
@@ -320,10 +334,10 @@ class MapElites(AskTell):
         self.batches += 1
         first = self.evaluations - len(batch)
         for offset, (tree, outcome) in enumerate(zip(batch, outcomes, strict=True)):
-            if outcome.ok:
-                fitness = outcome.fitness[self.objective]  # type: ignore[index]
-                descriptors = outcome.descriptors
-                self.archive.offer(texts[offset], fitness, descriptors, first + offset, tree)  # type: ignore[arg-type]
+            measured = outcome.measured()
+            if measured is not None:
+                fitness, descriptors = measured
+                self.archive.offer(texts[offset], fitness[self.objective], descriptors, first + offset, tree)
 
     def _state(self) -> dict:
         return {"objective": self.objective, "batches": self.batches, "archive": self.archive.to_state()}

@@ -34,8 +34,18 @@ class Entry:
     protocol), equal only to itself. ``genome`` may carry the algorithm's own form of the tree (MAP-Elites
     keeps its DEAP tree there, to vary it without parsing the text again)."""
 
-    __slots__ = ("descriptors", "elapsed", "evaluation", "features", "fitness", "genome", "name", "scores")
-    __slots__ += ("tree", "value")
+    __slots__ = (
+        "descriptors",
+        "elapsed",
+        "evaluation",
+        "features",
+        "fitness",
+        "genome",
+        "name",
+        "scores",
+        "tree",
+        "value",
+    )
 
     def __init__(
         self,
@@ -201,7 +211,7 @@ class Repertoire:
     def items(self) -> list[Item]:
         """The stored trees as plain records, in canonical order."""
         return [
-            Item(index, e.tree, e.value, e.descriptors, e.evaluation)  # type: ignore[arg-type]
+            Item(index, e.tree, e.value, e.descriptors, e.evaluation)  # type: ignore[arg-type]  # 3-d grid
             for index, entries in self.bins()
             for e in entries
         ]

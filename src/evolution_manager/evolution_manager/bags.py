@@ -22,11 +22,9 @@ from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+from .errors import BagError
+
 INTERFACE_PACKAGE = "swarm_msgs"
-
-
-class BagError(RuntimeError):
-    """A bag could not be written, read or recovered; the message says which and why."""
 
 
 def swarm_msgs_definitions() -> dict[str, str]:

@@ -13,20 +13,22 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
 
 from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
-from .errors import EvolutionError
+from .errors import EvolutionError, UsageError
+
+if TYPE_CHECKING:  # imported where used: tqdm and the simulator load slowly, and not every command needs them
+    from tqdm import tqdm
+
+    from swarm_sim.evaluation import Evaluator
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
 
-class UsageError(Exception):
-    """A command-line option that cannot be used; the message says why."""
-
-
 class Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # argparse prints usage and exits 2; we keep the 2, in one line
+    def error(self, message: str) -> NoReturn:  # argparse prints usage and exits 2; we keep 2, in one line
         raise UsageError(message)
 
 
@@ -117,7 +119,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
             )
 
 
-def _evaluator(workers: int) -> object:
+def _evaluator(workers: int) -> Evaluator:
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
@@ -126,7 +128,7 @@ def _evaluator(workers: int) -> object:
         raise UsageError(f"--workers: {error}") from None
 
 
-def progress_bar(config: RunConfig, initial: int, enabled: bool) -> object:
+def progress_bar(config: RunConfig, initial: int, enabled: bool) -> tqdm | None:
     if not enabled:
         return None
     from tqdm import tqdm
@@ -146,7 +148,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         config = None if args.resume else config_from_args(args)
-        from .files import read_json
+        from .files import read_json_object
         from .outputs import write_results
         from .run import Run, RunDirectory
 
@@ -154,7 +156,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
         if args.resume:
             if not directory.started():
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-            check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+            check_resume_options(args, RunConfig.from_json(read_json_object(directory.config)))
             run = Run.resume(args.out, _evaluator(args.workers))
         else:
             if directory.started():
@@ -162,6 +164,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
             evaluator = _evaluator(args.workers)
+            assert config is not None  # made from the options when not resuming
             run = Run.start(config, args.out, evaluator)
     except (UsageError, EvolutionError) as error:
         print(f"evolve: error: {error}", file=sys.stderr)

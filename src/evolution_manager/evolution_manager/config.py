@@ -10,6 +10,7 @@ from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_EVALUATION, derive_seed
+from bt_controller.validate import integer
 
 from .errors import ConfigError
 from .parameters import GPParameters, QDParameters
@@ -50,16 +51,9 @@ class RunConfig:
             raise ConfigError(
                 f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; got {self.objective!r}"
             )
-        if (
-            isinstance(self.evaluations, bool)
-            or not isinstance(self.evaluations, int)
-            or self.evaluations < 1
-        ):
-            raise ConfigError(f"evaluations must be a positive integer, got {self.evaluations!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
-            raise ConfigError(f"seed must be an integer in [0, {MAX_SEED}], got {self.seed!r}")
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 1:
-            raise ConfigError(f"trials must be a positive integer, got {self.trials!r}")
+        integer(self.evaluations, "evaluations", 1, error=ConfigError)
+        integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
+        integer(self.trials, "trials", 1, error=ConfigError)
 
     @classmethod
     def make(

@@ -27,11 +27,9 @@ from collections.abc import Hashable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
 
-from .errors import EvolutionError
+from bt_controller.validate import integer
 
-
-class DispatchError(EvolutionError, RuntimeError):
-    """The work cannot be finished (a request nobody answers); the message says which and why."""
+from .errors import DispatchError
 
 
 class WorkerState(Enum):
@@ -96,10 +94,8 @@ class Dispatcher:
     """The workers and the current batch; see the module docstring."""
 
     def __init__(self, max_chunk: int = 50, timeouts: Timeouts | None = None, max_attempts: int = 5) -> None:
-        if isinstance(max_chunk, bool) or not isinstance(max_chunk, int) or max_chunk < 1:
-            raise ValueError(f"max_chunk must be a positive integer, got {max_chunk!r}")
-        if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
-            raise ValueError(f"max_attempts must be a positive integer, got {max_attempts!r}")
+        integer(max_chunk, "max_chunk", 1)
+        integer(max_attempts, "max_attempts", 1)
         self.max_chunk = max_chunk
         self.timeouts = timeouts or Timeouts()
         self.max_attempts = max_attempts

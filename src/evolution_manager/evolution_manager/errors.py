@@ -2,13 +2,31 @@
 
 from __future__ import annotations
 
+from bt_controller.errors import UsageError
+from swarm_sim.errors import ConfigError as WorldConfigError
+
+__all__ = [
+    "AskTellError",
+    "BagError",
+    "ConfigError",
+    "DispatchError",
+    "EvolutionError",
+    "GraphError",
+    "NoEvaluatorError",
+    "RunDirectoryError",
+    "TreeTextError",
+    "TrialFailedError",
+    "UsageError",
+]
+
 
 class EvolutionError(Exception):
     """Base class of every error raised on purpose by this package."""
 
 
-class ConfigError(EvolutionError, ValueError):
-    """A run, experiment or command-line option has a value this package cannot use."""
+class ConfigError(EvolutionError, WorldConfigError):
+    """A run, experiment or command-line option has a value this package cannot use (a ``ConfigError`` of
+    ``swarm_sim`` too, so one ``except`` catches a bad configuration of either)."""
 
 
 class AskTellError(EvolutionError, RuntimeError):
@@ -21,3 +39,23 @@ class TreeTextError(EvolutionError, ValueError):
 
 class RunDirectoryError(EvolutionError):
     """A run directory is missing, damaged, or would be overwritten."""
+
+
+class DispatchError(EvolutionError, RuntimeError):
+    """The work cannot be finished (a request nobody answers); the message says which and why."""
+
+
+class NoEvaluatorError(DispatchError):
+    """No evaluator service answered within the wait; the message says how long it waited."""
+
+
+class BagError(RuntimeError):
+    """A bag could not be written, read or recovered; the message says which and why."""
+
+
+class GraphError(RuntimeError):
+    """A node of the graph could not be started or died; the message says which and why."""
+
+
+class TrialFailedError(RuntimeError):
+    """The trial could not be run through the graph; the message says why."""

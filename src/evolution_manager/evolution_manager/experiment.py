@@ -25,7 +25,7 @@ from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
 from .cli import EXIT_INTERRUPTED, EXIT_USAGE, Parser, UsageError, positive_int, seed_int
 from .config import ALGORITHMS, RunConfig
 from .errors import EvolutionError
-from .files import read_json, write_json
+from .files import read_json, read_json_object, write_json
 from .primitives import OBJECTIVES
 
 PLAN_FILE = "experiment.json"
@@ -58,7 +58,7 @@ def run_one(config_data: dict, root: str) -> str:
 
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
-    if directory.summary.exists() and read_json(directory.summary).get("finished"):  # type: ignore[union-attr]
+    if directory.summary.exists() and read_json_object(directory.summary).get("finished"):
         return root
     evaluator = BatchEvaluator(threads=1)
     if directory.started():

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -16,7 +17,7 @@ import numpy as np
 from .archive import Repertoire
 from .primitives import DESCRIPTORS, OBJECTIVES
 
-_SAVE = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Software": None}}
+_SAVE: dict[str, Any] = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Software": None}}
 
 
 def _save(figure: plt.Figure, path: Path) -> Path:
@@ -45,6 +46,7 @@ def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
             axis.set_xlabel(DESCRIPTORS[0], fontsize=8)
         if k % 4 == 0:
             axis.set_ylabel(DESCRIPTORS[1], fontsize=8)
+    assert image is not None  # eight panels were drawn
     figure.colorbar(image, ax=axes, shrink=0.8, label="best fitness in bin")
     figure.suptitle(f"{title}: coverage {repertoire.coverage:.3f}, QD score {repertoire.qd_score:.2f}")
     return _save(figure, path)
@@ -78,7 +80,7 @@ def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path
 
 
 def progress(
-    curves: Mapping[str, Sequence[Mapping[str, float]]], path: Path, objectives: Sequence[str]
+    curves: Mapping[str, Sequence[Mapping[str, str]]], path: Path, objectives: Sequence[str]
 ) -> Path:
     """Best fitness, coverage and QD score against evaluations, one line per curve label and objective.
     Each curve is a list of progress rows (``evaluations``, ``best_<o>``, ``coverage_<o>``,

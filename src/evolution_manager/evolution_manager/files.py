@@ -11,6 +11,7 @@ import os
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from .errors import RunDirectoryError
 
@@ -59,6 +60,14 @@ def read_json(path: Path) -> object:
         raise RunDirectoryError(f"{path} does not exist") from error
     except (OSError, ValueError) as error:
         raise RunDirectoryError(f"{path} is not a readable JSON file: {error}") from error
+
+
+def read_json_object(path: Path) -> dict[str, Any]:
+    """``read_json`` of a file whose top level must be a JSON object; say so, naming the file, if not."""
+    data = read_json(path)
+    if not isinstance(data, dict):
+        raise RunDirectoryError(f"{path} is not a JSON object (it holds a {type(data).__name__})")
+    return data
 
 
 def _reject_constant(name: str) -> float:

@@ -13,14 +13,12 @@ import signal
 import subprocess
 from collections.abc import Sequence
 from pathlib import Path
+from typing import IO
 
 from ament_index_python.packages import PackageNotFoundError, get_package_prefix
 
 from bt_controller.nodes.isolation import domain_environment
-
-
-class GraphError(RuntimeError):
-    """A node of the graph could not be started or died; the message says which and why."""
+from evolution_manager.errors import GraphError
 
 
 def executable(package: str, name: str) -> Path:
@@ -42,7 +40,7 @@ class Graph:
         self.domain = domain
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen] = {}
-        self._logs: list[object] = []
+        self._logs: list[IO[str]] = []
 
     def __enter__(self) -> Graph:
         return self
@@ -71,12 +69,11 @@ class Graph:
             command += ["-r", f"__node:={node_name}"]
         for key, value in (parameters or {}).items():
             command += ["-p", f"{key}:={value}"]
+        output: IO[str] | int = subprocess.DEVNULL
         if self.log_dir is not None:
             self.log_dir.mkdir(parents=True, exist_ok=True)
             output = (self.log_dir / f"{name}.log").open("w")
             self._logs.append(output)
-        else:
-            output = subprocess.DEVNULL
         process = subprocess.Popen(
             command,
             env=domain_environment(self.domain),

@@ -12,7 +12,7 @@ from __future__ import annotations
 from deap import base, gp
 
 from bt_controller.errors import TreeError
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, parse
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, leaf_name, parse
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
 
 from .errors import TreeTextError
@@ -108,6 +108,6 @@ def tree_from_text(
         raise TreeTextError(f"not a behaviour tree: {error}") from None
     nodes = []
     for node in root.preorder():
-        name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else node.name
+        name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else leaf_name(node)
         nodes.append(pset.mapping[name])
     return BehaviourTree(nodes)

@@ -21,7 +21,7 @@ from . import figures
 from .archive import Repertoire
 from .cli import EXIT_USAGE, Parser, UsageError
 from .errors import EvolutionError
-from .files import CsvLog, read_json, write_atomic
+from .files import CsvLog, read_json, read_json_object, write_atomic
 from .primitives import OBJECTIVES
 from .run import PROGRESS_HEADER
 from .statistics import ALPHA, Comparison, compare, holm, markdown_table
@@ -79,8 +79,8 @@ def _samples(runs: Sequence[FinishedRun], key: str) -> dict[str, dict[str, list[
 
 
 def _repertoire(run: FinishedRun, objective: str) -> Repertoire:
-    document = read_json(run.directory / f"repertoire_{objective}.json")
-    return Repertoire.from_items(document["items"])  # type: ignore[index]
+    document = read_json_object(run.directory / f"repertoire_{objective}.json")
+    return Repertoire.from_items(document["items"])
 
 
 def _comparisons(runs: Sequence[FinishedRun]) -> list[Comparison]:
@@ -128,12 +128,12 @@ def build_report(root: Path) -> Path:
     parts = [f"# Experiment report: {root.name}\n"]
     plan = root / "experiment.json"
     if plan.exists():
-        document = read_json(plan)
+        document = read_json_object(plan)
         parts.append(
-            f"{len(runs)} finished runs of {len(document['plan'])} planned: "  # type: ignore[index]
-            f"{document['runs']} runs per algorithm and objective, {document['evaluations']} evaluations "  # type: ignore[index]
-            f"per objective (GP_fnd {3 * document['evaluations']} on all three), {document['trials']} trials "  # type: ignore[index]
-            f"per evaluation, experiment seed {document['seed']}.\n"  # type: ignore[index]
+            f"{len(runs)} finished runs of {len(document['plan'])} planned: "
+            f"{document['runs']} runs per algorithm and objective, {document['evaluations']} evaluations "
+            f"per objective (GP_fnd {3 * document['evaluations']} on all three), {document['trials']} trials "
+            f"per evaluation, experiment seed {document['seed']}.\n"
         )
     parts.append("## Results\n\nMean ± standard deviation over runs.\n\n" + _summary_table(runs))
     for key, name, number in METRICS:
@@ -149,16 +149,16 @@ def build_report(root: Path) -> Path:
         f"second). p (Holm): Holm's correction over all {len(rows)} tests of the table; bold = significant "
         f"at {ALPHA} after correction.\n\n" + markdown_table(rows)
     )
-    first = {}
+    first: dict[tuple[str, str | None], FinishedRun] = {}
     for run in runs:
         first.setdefault((run.algorithm, run.objective), run)
     histogram_rows = {}
     for objective in OBJECTIVES:
         row = {}
         for algorithm in ("gp", "gp-fnd", "qd"):
-            run = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
-            if run is not None:
-                row[run.label(objective)] = _repertoire(run, objective)
+            one = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
+            if one is not None:
+                row[one.label(objective)] = _repertoire(one, objective)
         histogram_rows[objective] = row
     path = figures.histograms(histogram_rows, folder / "fig8_histograms.png")
     parts.append(
@@ -166,16 +166,16 @@ def build_report(root: Path) -> Path:
         f"![histograms](figures/{path.name})\n"
     )
     for objective in OBJECTIVES:
-        run = first.get(("qd", objective))
-        if run is None:
+        qd_run = first.get(("qd", objective))
+        if qd_run is None:
             continue
         path = figures.heatmaps(
-            _repertoire(run, objective),
-            f"QD_{objective} run {run.index}",
+            _repertoire(qd_run, objective),
+            f"QD_{objective} run {qd_run.index}",
             folder / f"fig7_grid_{objective}.png",
         )
         parts.append(
-            f"### Fig. 7-style: MAP-Elites grid, {objective} (run {run.index})\n\n"
+            f"### Fig. 7-style: MAP-Elites grid, {objective} (run {qd_run.index})\n\n"
             f"![grid](figures/{path.name})\n"
         )
     for objective in OBJECTIVES:

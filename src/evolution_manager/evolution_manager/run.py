@@ -32,8 +32,8 @@ from .algorithms import AskTell, GeneticProgramming, MapElites, as_outcome
 from .archive import Repertoire
 from .config import RunConfig, evaluation_seed
 from .errors import RunDirectoryError
-from .files import CsvLog, number, read_json, write_json
-from .primitives import DESCRIPTORS, OBJECTIVES
+from .files import CsvLog, number, read_json, read_json_object, write_json
+from .primitives import DESCRIPTORS, OBJECTIVES, tree_to_text
 
 CHECKPOINT_FORMAT = 1
 
@@ -130,7 +130,7 @@ class Run:
         directory = RunDirectory(root)
         if not directory.started():
             raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
-        config = RunConfig.from_json(read_json(directory.config))  # type: ignore[arg-type]
+        config = RunConfig.from_json(read_json_object(directory.config))
         state = read_json(directory.checkpoint)
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
             raise RunDirectoryError(
@@ -142,7 +142,7 @@ class Run:
             )
         run = cls(config, directory, evaluator)
         try:
-            run.algorithm.restore(state["algorithm"])  # type: ignore[attr-defined]
+            run.algorithm.restore(state["algorithm"])
             run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
             run.evaluations = int(state["evaluations"])
             run.offsets = {k: int(v) for k, v in state["offsets"].items()}
@@ -209,12 +209,12 @@ class Run:
         for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
             index = self.evaluations + offset
             outcome = as_outcome(result)
-            if outcome.ok:
+            measured = outcome.measured()
+            if measured is not None:
+                fitness, descriptors = measured
                 for k, objective in enumerate(OBJECTIVES):
-                    self.passive[objective].offer(
-                        request.tree, outcome.fitness[k], outcome.descriptors, index
-                    )  # type: ignore[index]
-                values = [number(v) for v in outcome.fitness + outcome.descriptors]  # type: ignore[operator]
+                    self.passive[objective].offer(request.tree, fitness[k], descriptors, index)
+                values = [number(v) for v in fitness + descriptors]
                 error = ""
             else:
                 values = [""] * (len(OBJECTIVES) + len(DESCRIPTORS))
@@ -257,7 +257,5 @@ class Run:
     def population(self) -> list[str]:
         """GP's current population as tree texts (empty for MAP-Elites)."""
         if isinstance(self.algorithm, GeneticProgramming):
-            from .primitives import tree_to_text
-
             return [tree_to_text(t) for t in self.algorithm.population]
         return []

@@ -112,7 +112,9 @@ TREE_B = "seq(on_food, sel(forward_left, nest_right))"
 
 @pytest.mark.parametrize("name", ["insert", "shrink", "replace", "crossover"])
 def test_operators_draw_from_deaps_distribution(pset, name):
-    """Each operator's outcome distribution equals DEAP's own operator's (total variation < 0.05)."""
+    """Each operator's outcome distribution equals DEAP's own operator's: a chi-square test of homogeneity
+    of 4000 outcomes each does not reject at p = 0.001 (and, but for insertion's summarised outcomes, both
+    produce the same set of outcomes)."""
     rng = random.Random(6)
     ours = {
         "insert": lambda t: mut_insert(t, pset, rng),

@@ -23,14 +23,11 @@ from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim import reference_road
 from swarm_sim.config import DEFAULT
+from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 EXIT_USAGE = 2
-
-
-class UsageError(Exception):
-    """Bad command-line input; the message is printed as one line."""
 
 
 class _Parser(argparse.ArgumentParser):

@@ -14,11 +14,8 @@ from typing import NamedTuple
 
 from bt_controller.perception import PerceptionParams
 from bt_controller.timeline import PROFILES, Timeline, arena_of_trial, profile_number
-
-
-class ConfigError(ValueError):
-    """A configuration value is out of its allowed range; the message names it and says why."""
-
+from bt_controller.validate import integer, number
+from swarm_sim.errors import ConfigError
 
 _PERCEPTION = PerceptionParams()
 _TIMELINE = Timeline()
@@ -175,15 +172,15 @@ class Config:
 
     def params(self) -> Params:
         """The configuration as a ``Params`` named tuple for compiled kernels."""
-        values: dict[str, object] = {}
-        for f in Params._fields:
-            if f == "profile":
-                values[f] = self.profile_number
-            elif f == "occlusion":
-                values[f] = bool(self.occlusion)
-            else:
-                values[f] = (int if f in _INT_PARAMS else float)(getattr(self, f))
-        return Params(**values)  # type: ignore[arg-type]
+
+        def field(name: str) -> int | float | bool:
+            if name == "profile":
+                return self.profile_number
+            if name == "occlusion":
+                return bool(self.occlusion)
+            return (int if name in _INT_PARAMS else float)(getattr(self, name))
+
+        return Params._make(field(f) for f in Params._fields)
 
     def as_dict(self) -> dict[str, object]:
         """Every parameter by name (gaps as a list), for writing next to results."""
@@ -195,28 +192,15 @@ class Config:
 
 
 def _number(config: Config, name: str) -> float:
-    value = getattr(config, name)
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{name} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ConfigError(f"{name} must be finite, got {value!r}")
-    return float(value)
+    return number(getattr(config, name), name, error=ConfigError)
 
 
 def _positive(config: Config, name: str) -> float:
-    value = _number(config, name)
-    if value <= 0:
-        raise ConfigError(f"{name} must be positive, got {value!r}")
-    return value
+    return number(getattr(config, name), name, positive=True, error=ConfigError)
 
 
 def _count(config: Config, name: str, minimum: int = 1) -> int:
-    value = getattr(config, name)
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(f"{name} must be an integer, got {value!r}")
-    if value < minimum:
-        raise ConfigError(f"{name} must be at least {minimum}, got {value}")
-    return value
+    return integer(getattr(config, name), name, minimum, error=ConfigError)
 
 
 def _validate(c: Config) -> None:
@@ -262,9 +246,8 @@ def _validate(c: Config) -> None:
         raise ConfigError(f"delivery_probability must be in [0, 1], got {p}")
     if not isinstance(c.gaps, tuple) or not c.gaps:
         raise ConfigError(f"gaps must be a non-empty tuple of positive numbers, got {c.gaps!r}")
-    for gap in c.gaps:
-        if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not math.isfinite(gap) or gap <= 0:
-            raise ConfigError(f"gaps must hold positive finite numbers, got {c.gaps!r}")
+    for k, gap in enumerate(c.gaps):
+        number(gap, f"gaps[{k}]", positive=True, error=ConfigError)
     if c.robot_radius >= c.arena_half:
         raise ConfigError(f"robot_radius must be below arena_half, got {c.robot_radius} >= {c.arena_half}")
     if c.start_half + c.robot_radius > c.arena_half:

@@ -19,6 +19,7 @@ from bt_controller.compiled import FlatTree, flatten, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.errors import TreeError
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
+from bt_controller.validate import integer
 from swarm_sim import kernel, world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.trial_data import TrialRecord, combine
@@ -64,7 +65,7 @@ def failed(reason: str) -> EvaluationResult:
     return EvaluationResult(fitness=None, descriptors=None, error=reason)
 
 
-def from_values(values: Sequence[float]) -> EvaluationResult:
+def from_values(values: Sequence[float] | np.ndarray) -> EvaluationResult:
     """A result from six values (``trial.VALUE_NAMES`` order)."""
     v = tuple(float(x) for x in values)
     return EvaluationResult(fitness=(v[0], v[1], v[2]), descriptors=(v[3], v[4], v[5]), error=None)
@@ -81,9 +82,7 @@ def _check_fields(request: object) -> EvaluationRequest:
     if not isinstance(request.tree, str):
         raise ValueError(f"tree must be tree text (str), got {type(request.tree).__name__}")
     check_seed(request.seed)
-    trials = request.trials
-    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or not 1 <= trials <= MAX_TRIALS:
-        raise ValueError(f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}")
+    integer(request.trials, "trials", 1, MAX_TRIALS, numpy=True)
     return request
 
 
@@ -126,14 +125,8 @@ class BatchEvaluator:
         max_depth: int = MAX_DEPTH,
         threads: int = 1,
     ) -> None:
-        if (
-            isinstance(threads, bool)
-            or not isinstance(threads, int)
-            or not 1 <= threads <= numba.config.NUMBA_NUM_THREADS
-        ):
-            raise ValueError(
-                f"threads must be an integer in [1, {numba.config.NUMBA_NUM_THREADS}], got {threads!r}"
-            )
+        most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set by numba at import
+        integer(threads, "threads", 1, most)
         self.threads = threads
         self.config = config
         self.max_nodes = max_nodes

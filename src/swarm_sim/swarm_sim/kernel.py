@@ -181,8 +181,10 @@ class Swarm(NamedTuple):
 class Inbox(NamedTuple):
     """The messages of one sensing step (``world.sense_step``'s outputs), per receiving robot."""
 
-    count: np.ndarray
+    n_heard: np.ndarray
+    """(n,) messages received."""
     sender: np.ndarray
+    """(n, n) their senders, in sender order; then their ranges, nest and food estimates."""
     range: np.ndarray
     nest: np.ndarray
     food: np.ndarray

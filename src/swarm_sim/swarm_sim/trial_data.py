@@ -16,6 +16,7 @@ import numpy as np
 
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys, check_seed, root_key
 from bt_controller.timeline import chain_of_trial
+from bt_controller.validate import integer
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.world import VALUE_NAMES
@@ -46,8 +47,7 @@ class ChainSetup:
 def setup_chain(seed: int, chain: int, config: Config = DEFAULT) -> ChainSetup:
     """Draw chain ``chain`` of ``seed``: wheel gains and the robots' stream keys."""
     seed = check_seed(seed)
-    if isinstance(chain, bool) or not isinstance(chain, int) or chain < 0:
-        raise ValueError(f"chain must be a non-negative integer, got {chain!r}")
+    integer(chain, "chain", 0)
     p = config.params()
     keys = chain_keys(np.uint64(root_key(seed)), chain, p.n_robots)
     first = chain * config.chain_length
@@ -65,8 +65,7 @@ def setup_chain(seed: int, chain: int, config: Config = DEFAULT) -> ChainSetup:
 
 def chain_plan(trials: int, config: Config = DEFAULT) -> list[tuple[int, int]]:
     """The chains that trials ``0 .. trials - 1`` of an evaluation take: ``(chain, trials to run)`` each."""
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials must be a positive integer, got {trials!r}")
+    integer(trials, "trials", 1)
     last_chain, last_position = chain_of_trial(config.timeline, trials - 1)
     return [(c, config.chain_length if c < last_chain else last_position + 1) for c in range(last_chain + 1)]
 

@@ -42,7 +42,7 @@ def test_params_carry_every_value_with_its_type():
 
 def test_config_is_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
-        DEFAULT.n_robots = 3  # type: ignore[misc]
+        DEFAULT.n_robots = 3  # type: ignore[misc]  # the point: assigning to a frozen config must fail
 
 
 @pytest.mark.parametrize(

@@ -49,10 +49,10 @@ class FootbotControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("footbot_controller")
-        self.robot = self.declare_parameter(
+        self.robot: int = self.declare_parameter(
             "robot", 0, ParameterDescriptor(description="index of this footbot", read_only=True)
         ).value
-        initial_tree = self.declare_parameter(
+        initial_tree: str = self.declare_parameter(
             "tree", "", ParameterDescriptor(description="tree to load at start", read_only=True)
         ).value
         self.controller = FootbotController()

@@ -41,11 +41,13 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.serialization import serialize_message
 from rclpy.utilities import remove_ros_args
 
@@ -54,10 +56,14 @@ from evolution_manager.bags import BagError, BagRecorder
 from evolution_manager.config import RunConfig
 from evolution_manager.dispatch import DispatchError, Timeouts
 from evolution_manager.errors import EvolutionError
+from evolution_manager.files import read_json_object
 from evolution_manager.graph import Graph, GraphError
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
+from evolution_manager.outputs import write_results
 from evolution_manager.primitives import OBJECTIVES
+from evolution_manager.run import Run, RunDirectory
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
+from swarm_sim.evaluation import Evaluator
 
 EXIT_FAILED = 1
 EVALUATIONS_TOPIC = "/evaluations"
@@ -116,7 +122,7 @@ class ManagerNode(Node):
     def __init__(self) -> None:
         super().__init__("manager")
 
-        def declare(name: str, default: object, description: str) -> object:
+        def declare(name: str, default: object, description: str) -> Any:  # a parameter's value, as declared
             descriptor = ParameterDescriptor(description=description, read_only=True)
             return self.declare_parameter(name, default, descriptor).value
 
@@ -157,11 +163,11 @@ class RunRecording:
         self._last_ns = max(self._last_ns + 1, self.node.get_clock().now().nanoseconds)
         return self._last_ns
 
-    def _emit(self, publisher: object, topic: str, msgtype: str, msg: object) -> None:
-        publisher.publish(msg)  # type: ignore[attr-defined]
+    def _emit(self, publisher: Publisher, topic: str, msgtype: str, msg: object) -> None:
+        publisher.publish(msg)
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
-    def batch(self, run: object, requests: Sequence, results: Sequence) -> None:
+    def batch(self, run: Run, requests: Sequence, results: Sequence) -> None:
         """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
@@ -175,11 +181,11 @@ class RunRecording:
                 msg.error = result.error or "no fitness or descriptors"
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
-            grid = run.passive[name]  # type: ignore[attr-defined]
+            grid = run.passive[name]
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
                 objective=name,
-                evaluations=run.evaluations,  # type: ignore[attr-defined]
+                evaluations=run.evaluations,
                 best=float("nan") if grid.best_value is None else grid.best_value,
                 coverage=grid.coverage,
                 qd_score=grid.qd_score,
@@ -197,15 +203,12 @@ def bag_path(out: Path) -> Path:
     return path
 
 
-def _open_run(args: argparse.Namespace, evaluator: object) -> object:
-    from evolution_manager.files import read_json
-    from evolution_manager.run import Run, RunDirectory
-
+def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
     directory = RunDirectory(args.out)
     if args.resume:
         if not directory.started():
             raise cli.UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-        cli.check_resume_options(args, RunConfig.from_json(read_json(directory.config)))  # type: ignore[arg-type]
+        cli.check_resume_options(args, RunConfig.from_json(read_json_object(directory.config)))
         return Run.resume(args.out, evaluator)
     if directory.started():
         raise cli.UsageError(
@@ -291,12 +294,10 @@ def manage(argv: Sequence[str]) -> int:
         rclpy.try_shutdown()
 
 
-def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator: _Remember) -> int:
-    from evolution_manager.outputs import write_results
-
-    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)  # type: ignore[attr-defined]
+def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
+    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)
     with BagRecorder(bag_path(Path(args.out))) as recorder:
-        recording = RunRecording(node, recorder, run.config)  # type: ignore[attr-defined]
+        recording = RunRecording(node, recorder, run.config)
 
         def on_batch(done: int, total: int) -> None:
             recording.batch(run, evaluator.requests, evaluator.results)
@@ -304,14 +305,14 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: object, evaluator
                 bar.update(done - bar.n)
 
         try:
-            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)  # type: ignore[attr-defined]
+            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures)  # type: ignore[arg-type]
+    write_results(run, with_figures=not args.no_figures)
     dispatcher = evaluator.evaluator.dispatcher
     node.get_logger().info(
-        f"{run.config.label}: {run.evaluations} evaluations in {args.out} "  # type: ignore[attr-defined]
+        f"{run.config.label}: {run.evaluations} evaluations in {args.out} "
         f"(requests re-sent: {dispatcher.resent}, duplicate results ignored: {dispatcher.duplicates})"
     )
     return 0

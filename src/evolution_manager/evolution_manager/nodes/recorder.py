@@ -15,8 +15,9 @@ import signal
 import sys
 import threading
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import PoseArray
@@ -64,7 +65,7 @@ def trial_topics(robots: int) -> list[tuple[str, type]]:
     return topics
 
 
-def stamp_ns(msg: object) -> int:
+def stamp_ns(msg: Any) -> int:  # any stamped ROS message (generated, untyped)
     """A message's time in nanoseconds: its header stamp, or the clock of a Clock message."""
     stamp = msg.clock if isinstance(msg, Clock) else msg.header.stamp
     return stamp.sec * 1_000_000_000 + stamp.nanosec
@@ -82,7 +83,7 @@ class GraphRecorder:
         for topic, msg_class in self.topics:
             node.create_subscription(msg_class, topic, self._writer(topic, msg_class), RELIABLE)
 
-    def _writer(self, topic: str, msg_class: type):
+    def _writer(self, topic: str, msg_class: type) -> Callable[[object], None]:
         msgtype = msgtype_name(msg_class)
 
         def write(msg: object) -> None:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import rclpy
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
@@ -46,7 +47,7 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
     clock = node.create_publisher(Clock, "/clock", RELIABLE)
-    publishers = {
+    publishers: dict[str, Publisher] = {
         topic: node.create_publisher(message_class(msgtype), topic, RELIABLE)
         for topic, msgtype in topics.items()
         if topic != "/clock"

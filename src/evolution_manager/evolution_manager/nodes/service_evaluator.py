@@ -16,24 +16,22 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
-import numpy as np
 from rclpy.client import Client
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
 
 from bt_controller.draws import check_seed
-from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
+from bt_controller.validate import integer
+from evolution_manager.dispatch import Chunk, Dispatcher, Timeouts, WorkerState
+from evolution_manager.errors import NoEvaluatorError
 from swarm_msgs.srv import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
 
 SERVICE_TYPE = "swarm_msgs/srv/EvaluateBatch"
 OBJECTIVES = ("density", "nest", "food")
-
-
-class NoEvaluatorError(DispatchError):
-    """No evaluator service answered within the wait; the message says how long it waited."""
 
 
 @dataclass(frozen=True)
@@ -62,22 +60,19 @@ def _check(request: object) -> str:
         return f"tree must be tree text (str), got {type(request.tree).__name__}"
     try:
         check_seed(request.seed)
+        integer(request.trials, "trials", 1, MAX_TRIALS, numpy=True)
     except ValueError as error:
         return str(error)
-    trials = request.trials
-    if isinstance(trials, bool) or not isinstance(trials, int | np.integer) or not 1 <= trials <= MAX_TRIALS:
-        return f"trials must be an integer in [1, {MAX_TRIALS}], got {trials!r}"
     return ""
 
 
-def result_from_message(msg: object) -> EvaluationResult:
+def result_from_message(msg: Any) -> EvaluationResult:  # a swarm_msgs message: generated, untyped
     """The contract's result from a ``swarm_msgs/msg/EvaluationResult`` (values copied bit for bit)."""
-    if not msg.ok:  # type: ignore[attr-defined]
-        return failed(msg.error)  # type: ignore[attr-defined]
-    m = msg
+    if not msg.ok:
+        return failed(msg.error)
     return EvaluationResult(
-        fitness=(m.density, m.nest, m.food),  # type: ignore[attr-defined]
-        descriptors=(m.movement, m.rotation, m.conditionality),  # type: ignore[attr-defined]
+        fitness=(msg.density, msg.nest, msg.food),
+        descriptors=(msg.movement, msg.rotation, msg.conditionality),
         error=None,
     )
 
@@ -164,7 +159,7 @@ class ServiceEvaluator:
             dispatched = self._dispatch()
             for index, result in zip(sendable, dispatched, strict=True):
                 results[index] = result
-        return results  # type: ignore[return-value]
+        return results  # type: ignore[return-value]  # every slot was filled above, none is left None
 
     def _dispatch(self) -> list[EvaluationResult]:
         dispatcher = self.dispatcher
@@ -198,13 +193,13 @@ class ServiceEvaluator:
                 wait = min(wait, max(deadline - now, 0.0) + 0.01)
             self.executor.spin_once(timeout_sec=wait)
             self._collect()
-        return dispatcher.results()  # type: ignore[return-value]
+        return dispatcher.results()  # type: ignore[return-value]  # the dispatcher holds what we gave it
 
     def _send(self, chunk: Chunk) -> None:
         request = EvaluateBatch.Request()
         request.trees = [self._requests[i].tree for i in chunk.indices]
         request.seeds = [int(self._requests[i].seed) for i in chunk.indices]
-        request.trials = int(chunk.key)  # type: ignore[call-overload]
+        request.trials = int(chunk.key)  # type: ignore[call-overload]  # a chunk key is its trial count (int)
         request.objective = self.settings.objective
         future = self._clients[chunk.worker].call_async(request)
         self._futures[chunk.id] = (future, chunk, request)
@@ -214,7 +209,7 @@ class ServiceEvaluator:
             future, chunk, request = self._futures.pop(chunk_id)
             response = future.result() if future.exception() is None else None
             problem = self._problem(response, request)
-            if problem:
+            if problem or response is None:
                 self._log(
                     "warn", f"evaluator {chunk.worker} answered wrongly ({problem}); not using it again"
                 )
@@ -230,12 +225,12 @@ class ServiceEvaluator:
                 self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
     @staticmethod
-    def _problem(response: object, request: EvaluateBatch.Request) -> str:
+    def _problem(response: Any, request: EvaluateBatch.Request) -> str:  # response: untyped ROS message
         if response is None:
             return "no response"
-        if response.message:  # type: ignore[attr-defined]
+        if response.message:
             return ""
-        results = response.results  # type: ignore[attr-defined]
+        results = response.results
         if len(results) != len(request.trees):
             return f"{len(results)} results for {len(request.trees)} trees"
         for msg, seed in zip(results, request.seeds, strict=True):

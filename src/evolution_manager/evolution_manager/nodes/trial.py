@@ -15,6 +15,7 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rclpy
@@ -26,6 +27,7 @@ from bt_controller.errors import TreeError
 from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.reproduce import RESULT_TOPIC
@@ -34,10 +36,6 @@ from swarm_msgs.srv import LoadTree, RunTrial
 from swarm_sim.cli import evaluation_json
 from swarm_sim.config import DEFAULT
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
-
-
-class TrialFailedError(RuntimeError):
-    """The trial could not be run through the graph; the message says why."""
 
 
 def expected_messages(robots: int) -> dict[str, int]:
@@ -58,10 +56,10 @@ class TrialRunner:
         self.node = Node("trial_runner", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
-        self.load_clients = [
+        self.load_clients: list[rclpy.client.Client] = [
             self.node.create_client(LoadTree, f"/footbot_{i}/load_tree") for i in range(robots)
         ]
-        self.run_client = self.node.create_client(RunTrial, "/simulator/run_trial")
+        self.run_client: rclpy.client.Client = self.node.create_client(RunTrial, "/simulator/run_trial")
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -82,7 +80,7 @@ class TrialRunner:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.05)
 
-    def call(self, client: rclpy.client.Client, request: object, what: str) -> object:
+    def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
         self.spin_until(client.service_is_ready, f"the {client.srv_name} service")
         future = client.call_async(request)
         self.spin_until(future.done, what)
@@ -136,7 +134,7 @@ class TrialGraph:
             raise
         return self
 
-    def __exit__(self, *exc_info: object) -> None:
+    def __exit__(self, *exc_info: Any) -> None:  # (type, value, traceback), passed on as received
         self._stack.__exit__(*exc_info)
 
     def run(self, tree_text: str, seed: int, trial: int, bag_path: Path | None = None) -> TrialRecord:

@@ -57,7 +57,7 @@ class EvaluatorNode(Node):
         ]
         for tree, seed, result in zip(request.trees, seeds, self.evaluator.evaluate(requests), strict=True):
             msg = EvaluationResult(tree=tree, seed=seed, trials=request.trials, ok=result.ok)
-            if result.ok:
+            if result.fitness is not None and result.descriptors is not None:  # result.ok
                 values = (*result.fitness, *result.descriptors)
                 for name, value in zip(VALUE_NAMES, values, strict=True):
                     setattr(msg, name, value)

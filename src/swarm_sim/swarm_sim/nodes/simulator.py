@@ -40,8 +40,10 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, PoseArray
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
@@ -59,14 +61,11 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-
-
-class TrialAbandonedError(RuntimeError):
-    """A trial could not go on; the message says which robot and step."""
 
 
 @dataclass
@@ -85,14 +84,14 @@ class SimulatorNode(Node):
     def __init__(self, config: Config = DEFAULT) -> None:
         super().__init__("simulator")
         self.config = config
-        self.robots = self.declare_parameter(
+        self.robots: int = self.declare_parameter(
             "robots",
             config.n_robots,
             ParameterDescriptor(description="number of footbots", read_only=True),
         ).value
         if self.robots != config.n_robots:
             self.config = replace(config, n_robots=self.robots)
-        self.answer_timeout = self.declare_parameter(
+        self.answer_timeout: float = self.declare_parameter(
             "answer_timeout",
             60.0,
             ParameterDescriptor(
@@ -106,11 +105,13 @@ class SimulatorNode(Node):
         self._lock = threading.Condition()
         self._inbox = _Inbox()
         listeners = ReentrantCallbackGroup()
-        self._clock = self.create_publisher(Clock, "/clock", RELIABLE)
+        self._clock_publisher = self.create_publisher(Clock, "/clock", RELIABLE)
         self._trial_start = self.create_publisher(TrialStart, "/trial_start", RELIABLE)
         self._state = self.create_publisher(SwarmState, "/swarm_state", RELIABLE)
         self._poses = self.create_publisher(PoseArray, "/poses", RELIABLE)
-        self._ground, self._readings, self._start_clients = [], [], []
+        self._ground: list[Publisher] = []
+        self._readings: list[Publisher] = []
+        self._start_clients: list[Client] = []
         for i in range(self.robots):
             ns = f"/footbot_{i}"
             self._ground.append(self.create_publisher(GroundSensor, f"{ns}/ground", RELIABLE))
@@ -235,15 +236,16 @@ class SimulatorNode(Node):
             futures.append(client.call_async(request))
         for i, future in enumerate(futures):
             done = threading.Event()
-            future.add_done_callback(lambda _f, done=done: done.set())
-            if not done.wait(self.answer_timeout):
+            future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # rclpy is untyped
+            response = future.result() if done.wait(self.answer_timeout) else None
+            if response is None:
                 raise TrialAbandonedError(f"footbot_{i} did not answer start_trial")
-            if not future.result().success:
-                raise TrialAbandonedError(f"footbot_{i} cannot run the trial: {future.result().message}")
+            if not response.success:
+                raise TrialAbandonedError(f"footbot_{i} cannot run the trial: {response.message}")
 
     def _publish_step(self, world: LockstepTrial, seed: int, trial: int) -> None:
         stamp = self._stamp()
-        self._clock.publish(Clock(clock=stamp))
+        self._clock_publisher.publish(Clock(clock=stamp))
         poses = world.poses()
         self._state.publish(
             SwarmState(
@@ -281,17 +283,20 @@ class SimulatorNode(Node):
 
     def _await_answers(self, step: int) -> list[WheelCommand]:
         with self._lock:
-            if not self._lock.wait_for(lambda: len(self._inbox.answers) == self.robots, self.answer_timeout):
-                missing = sorted(set(range(self.robots)) - set(self._inbox.answers))
+            answers = self._inbox.answers
+            assert answers is not None, "answers are awaited only during a step"
+            if not self._lock.wait_for(lambda: len(answers) == self.robots, self.answer_timeout):
+                missing = sorted(set(range(self.robots)) - set(answers))
                 raise TrialAbandonedError(
                     f"no answer to step {step} from footbot(s) {missing} in {self.answer_timeout} s"
                 )
-            return [self._inbox.answers[i] for i in range(self.robots)]
+            return [answers[i] for i in range(self.robots)]
 
     def _await_statuses(self, expected: int) -> np.ndarray:
         with self._lock:
             if not self._lock.wait_for(lambda: self._inbox.statuses >= expected, self.answer_timeout):
                 raise TrialAbandonedError(f"received {self._inbox.statuses} of {expected} tree statuses")
+            assert self._inbox.counts is not None, "statuses are awaited only during a trial"
             counts = self._inbox.counts.copy()
             self._inbox = _Inbox()
             return counts

@@ -1,0 +1,15 @@
+"""The errors of swarm_sim; each message names the bad value and says what was expected."""
+
+from __future__ import annotations
+
+from bt_controller.errors import UsageError
+
+__all__ = ["ConfigError", "TrialAbandonedError", "UsageError"]
+
+
+class ConfigError(ValueError):
+    """A configuration value is out of its allowed range; the message names it and says why."""
+
+
+class TrialAbandonedError(RuntimeError):
+    """A trial could not go on (the simulator node); the message says which robot and step."""
