@@ -53,6 +53,8 @@ class PerceptionSettings(Protocol):
     def density_range(self) -> float: ...
     @property
     def density_divisor(self) -> float: ...
+    @property
+    def profile(self) -> int: ...
 
 
 @numba.njit(cache=True)
@@ -139,7 +141,7 @@ def broadcast_value(smoothed_estimate: float) -> float:
 
 
 @numba.njit(cache=True)
-def region_value(inside: bool, p: PerceptionParams) -> float:
+def region_value(inside: bool, p: PerceptionSettings) -> float:
     """The value broadcast at a chain's first step: 0 inside the region, else the cap
     (``footbot_bt.cpp:144-145``)."""
     return 0.0 if inside else p.estimate_cap
@@ -155,7 +157,7 @@ def blackboard(
     food_bearing: float,
     heard: bool,
     nearest_bearing: float,
-    p: PerceptionParams,
+    p: PerceptionSettings,
     out: np.ndarray,
 ) -> None:
     """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest sensing step.

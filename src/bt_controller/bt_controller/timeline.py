@@ -22,7 +22,7 @@ reference road and the nodes all run this very code.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numba
 
@@ -53,33 +53,49 @@ class Timeline(NamedTuple):
     """Trials run as one simulation under ``paper`` (the authors' ``iterations``, ``params.py``)."""
 
 
+class TimelineSettings(Protocol):
+    """What the timeline reads of its parameters: ``Timeline`` or any named tuple with its fields
+    (``swarm_sim.config.Params``)."""
+
+    @property
+    def profile(self) -> int: ...
+    @property
+    def steps_per_tick(self) -> int: ...
+    @property
+    def ticks(self) -> int: ...
+    @property
+    def initial_step(self) -> int: ...
+    @property
+    def chain_trials(self) -> int: ...
+
+
 @numba.njit(cache=True, inline="always")
-def trial_steps(t: Timeline) -> int:
+def trial_steps(t: TimelineSettings) -> int:
     """Control steps in one trial: 160 under ``paper``, 176 under ``clean``."""
     controlled = t.ticks * t.steps_per_tick
     return controlled + t.initial_step if t.profile == CLEAN else controlled
 
 
 @numba.njit(cache=True, inline="always")
-def chain_length(t: Timeline) -> int:
+def chain_length(t: TimelineSettings) -> int:
     """Trials per chain: ``chain_trials`` under ``paper``, 1 under ``clean`` (every trial a fresh start)."""
     return t.chain_trials if t.profile == PAPER else 1
 
 
 @numba.njit(cache=True, inline="always")
-def step_in_trial(t: Timeline, k: int) -> int:
+def step_in_trial(t: TimelineSettings, k: int) -> int:
     """The 1-based step of chain step ``k`` within its trial."""
     return (k - 1) % trial_steps(t) + 1
 
 
 @numba.njit(cache=True, inline="always")
-def trial_in_chain(t: Timeline, k: int) -> int:
+def trial_in_chain(t: TimelineSettings, k: int) -> int:
     """The 0-based position within its chain of the trial that chain step ``k`` belongs to."""
     return (k - 1) // trial_steps(t)
 
 
 @numba.njit(cache=True, inline="always")
-def senses(t: Timeline, k: int) -> bool:
+def senses(t: TimelineSettings, k: int) -> bool:
     """Whether the robot reads its sensors at step ``k``: every step but a trial's first."""
     return step_in_trial(t, k) != 1
 
@@ -98,13 +114,13 @@ def broadcasts(k: int) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
-def refreshes(t: Timeline, k: int) -> bool:
+def refreshes(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` (a sensing step) refreshes the smoothed values."""
     return k == 2 or k % t.steps_per_tick == 0
 
 
 @numba.njit(cache=True, inline="always")
-def ticks_at(t: Timeline, k: int) -> bool:
+def ticks_at(t: TimelineSettings, k: int) -> bool:
     """Whether the robot ticks its tree at step ``k``."""
     if k % t.steps_per_tick != 0:
         return False
@@ -112,7 +128,7 @@ def ticks_at(t: Timeline, k: int) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
-def tick_number(t: Timeline, k: int) -> int:
+def tick_number(t: TimelineSettings, k: int) -> int:
     """The 0-based number within the chain of the tick at step ``k`` (a tick step): the tree's draw
     counter."""
     if t.profile == PAPER:
@@ -121,25 +137,25 @@ def tick_number(t: Timeline, k: int) -> int:
 
 
 @numba.njit(cache=True, inline="always")
-def is_initial(t: Timeline, k: int) -> bool:
+def is_initial(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` takes a trial's initial values."""
     return step_in_trial(t, k) == t.initial_step
 
 
 @numba.njit(cache=True, inline="always")
-def is_final(t: Timeline, k: int) -> bool:
+def is_final(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` is a trial's last: final values, descriptors, counters reset."""
     return step_in_trial(t, k) == trial_steps(t)
 
 
-def chain_of_trial(t: Timeline, trial: int) -> tuple[int, int]:
+def chain_of_trial(t: TimelineSettings, trial: int) -> tuple[int, int]:
     """``(chain, position)``: the chain that trial ``trial`` of an evaluation belongs to, and its place
     in it."""
     length = t.chain_trials if t.profile == PAPER else 1
     return trial // length, trial % length
 
 
-def arena_of_trial(t: Timeline, trial: int, n_arenas: int) -> int:
+def arena_of_trial(t: TimelineSettings, trial: int, n_arenas: int) -> int:
     """The arena configuration (gap) of trial ``trial``: trial k belongs to block k // chain_trials, and
     blocks alternate arenas (``utilities.py:59-71`` runs one chain per gap), under both profiles."""
     return (trial // t.chain_trials) % n_arenas
