@@ -10,13 +10,13 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from bt_controller.random_trees import random_trees
 from evolution_manager.bags import read_bag
 from evolution_manager.cli import evolve
 from evolution_manager.config import evaluation_seed
 from evolution_manager.graph import Graph, executable
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
+from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here

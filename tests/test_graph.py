@@ -130,6 +130,6 @@ def wait_until_recorded(graph, recorder):
 
 
 def graph_environment(graph):
-    from bt_controller.nodes.isolation import domain_environment
+    from swarm_ros.isolation import domain_environment
 
     return domain_environment(graph.graph.domain)

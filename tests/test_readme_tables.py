@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 SRC = Path(__file__).resolve().parent.parent / "src"
-PACKAGES = ("bt_controller", "swarm_sim", "evolution_manager")
+PACKAGES = ("bt_controller", "swarm_sim", "evolution_manager", "swarm_ros")
 
 
 def _modules(package: str) -> set[str]:

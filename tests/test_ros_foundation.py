@@ -10,9 +10,9 @@ import pytest
 import rclpy
 from rclpy.node import Node
 
-from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from swarm_msgs.msg import RangeAndBearing, RangeAndBearingReadings, WheelCommand
 from swarm_msgs.srv import LoadTree
+from swarm_ros.isolation import domain_environment, reserved_domain
 
 RELAY = Path(__file__).parent / "nodes" / "relay_node.py"
 
@@ -102,6 +102,6 @@ def test_other_domains_do_not_see_the_graph(relay, domain):
 
 def test_reserved_domains_are_exclusive_across_processes(domain):
     """A second process reserving a domain never gets the one this test holds."""
-    code = "from bt_controller.nodes.isolation import reserved_domain\nwith reserved_domain() as d: print(d)"
+    code = "from swarm_ros.isolation import reserved_domain\nwith reserved_domain() as d: print(d)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert int(out.stdout) != domain

@@ -14,6 +14,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + PACKAGE]),
         ("share/" + PACKAGE, ["package.xml"]),
+        ("share/" + PACKAGE + "/config", glob("config/*.yaml")),
         ("share/" + PACKAGE + "/launch", glob("launch/*.py")),
     ],
     install_requires=["setuptools"],
@@ -39,6 +40,9 @@ setup(
             "experiment = evolution_manager.experiment:main",
             "report = evolution_manager.report:main",
             "measure = evolution_manager.measure:main",
+            "snapshot = evolution_manager.snapshot:main",
+            "adapt = evolution_manager.adapt:main",
+            "adapt-benchmark = evolution_manager.adapt_benchmark:main",
         ],
     },
 )

@@ -2,7 +2,8 @@
 
 A full ROS 2 install would use ``ros2 launch`` (see the launch files in ``launch/``); the PyPI wheels have no
 ``launch``, so this module starts the installed executables itself, each in its own process, all in one ROS
-domain, and stops them with SIGINT, then SIGKILL for any that does not stop in time. Nothing here imports
+domain, and stops them with SIGINT, then SIGKILL for any that does not stop in time. Each node's output and
+its ROS log files (``ROS_LOG_DIR``) go to the graph's log directory when it has one. Nothing here imports
 ``rclpy``.
 """
 
@@ -12,13 +13,19 @@ import os
 import signal
 import subprocess
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-from ament_index_python.packages import PackageNotFoundError, get_package_prefix
+from ament_index_python.packages import (
+    PackageNotFoundError,
+    get_package_prefix,
+    get_package_share_directory,
+)
 
-from bt_controller.nodes.isolation import domain_environment
 from evolution_manager.errors import GraphError
+from swarm_ros.isolation import domain_environment
+from swarm_ros.names import robot_namespaces
 
 
 def executable(package: str, name: str) -> Path:
@@ -57,9 +64,11 @@ class Graph:
         namespace: str = "",
         node_name: str = "",
         parameters: dict[str, object] | None = None,
+        params_files: Sequence[Path] = (),
         arguments: Sequence[str] = (),
     ) -> subprocess.Popen:
-        """Start one node process, known in this graph as ``name``."""
+        """Start one node process, known in this graph as ``name``. Each parameter file overrides the ones
+        before it; ``parameters`` override them all."""
         if name in self.processes:
             raise GraphError(f"a process named {name} is already running")
         command = [str(executable(package, executable_name)), *arguments, "--ros-args"]
@@ -67,16 +76,20 @@ class Graph:
             command += ["-r", f"__ns:={namespace}"]
         if node_name:
             command += ["-r", f"__node:={node_name}"]
+        for params_file in params_files:
+            command += ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
             command += ["-p", f"{key}:={value}"]
         output: IO[str] | int = subprocess.DEVNULL
+        env = domain_environment(self.domain)
         if self.log_dir is not None:
             self.log_dir.mkdir(parents=True, exist_ok=True)
-            output = (self.log_dir / f"{name}.log").open("w")
+            output = (self.log_dir / f"{name.replace('/', '_')}.log").open("w")
             self._logs.append(output)
+            env["ROS_LOG_DIR"] = str(self.log_dir / "ros")
         process = subprocess.Popen(
             command,
-            env=domain_environment(self.domain),
+            env=env,
             stdout=output,
             stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL,
@@ -116,14 +129,83 @@ class Graph:
         self._logs.clear()
 
 
-def start_trial_graph(graph: Graph, robots: int = 9) -> None:
-    """Start the simulator and one footbot controller per robot, each in its own process."""
-    graph.start("simulator", "swarm_sim", "simulator", parameters={"robots": robots})
-    for i in range(robots):
+def package_config(package: str) -> Path:
+    """The installed parameter file of ``package`` (``share/<package>/config/<package>.yaml``)."""
+    try:
+        path = Path(get_package_share_directory(package)) / "config" / f"{package}.yaml"
+    except PackageNotFoundError:
+        raise GraphError(f"package {package} is not installed: source the workspace (ws/env.sh)") from None
+    if not path.is_file():
+        raise GraphError(f"package {package} has no parameter file (looked for {path})")
+    return path
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """One node of a graph: what ``ros2 launch`` and :func:`start_trial_graph` both start."""
+
+    name: str
+    """The process's name in the graph (and its log file's)."""
+    package: str
+    executable: str
+    namespace: str
+    """Absolute namespace ("" for the root)."""
+    parameters: dict[str, object] = field(default_factory=dict)
+    """Parameters that override the parameter files."""
+
+
+def trial_graph_nodes(
+    robots: int = 9,
+    namespace: str = "",
+    tree: str = "",
+    profile: str = "",
+    conditions: Sequence[str] = (),
+) -> list[NodeSpec]:
+    """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
+    in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
+    namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
+    profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
+    ``swarm_sim.conditions``) change the simulator's world."""
+    if robots < 1:
+        raise GraphError(f"a trial graph needs at least one robot, got {robots}")
+    prefix = namespace.rstrip("/")
+    simulator: dict[str, object] = {"n_robots": robots}
+    if profile:
+        simulator["profile"] = profile
+    if conditions:
+        simulator["conditions"] = " ".join(conditions)
+    nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator)]
+    for robot in robot_namespaces(robots):
+        nodes.append(
+            NodeSpec(
+                f"{prefix}/{robot}".lstrip("/"),
+                "bt_controller",
+                "footbot_controller",
+                f"{prefix}/{robot}",
+                {"tree": tree} if tree else {},
+            )
+        )
+    return nodes
+
+
+def start_trial_graph(
+    graph: Graph,
+    robots: int = 9,
+    conditions: Sequence[str] = (),
+    *,
+    namespace: str = "",
+    params_file: Path | None = None,
+) -> None:
+    """Start the nodes of ``trial_graph_nodes(robots, namespace, conditions=conditions)``, each in its own
+    process, with its package's parameter file and then ``params_file`` (every node's); ``robots`` overrides
+    ``n_robots``."""
+    for spec in trial_graph_nodes(robots, namespace, conditions=conditions):
+        files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
         graph.start(
-            f"footbot_{i}",
-            "bt_controller",
-            "footbot_controller",
-            namespace=f"/footbot_{i}",
-            parameters={"robot": i},
+            spec.name,
+            spec.package,
+            spec.executable,
+            namespace=spec.namespace,
+            parameters=spec.parameters,
+            params_files=files,
         )

@@ -1,7 +1,8 @@
 """Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
 
 A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed and trial index) and ends with
-``/trial_result`` (the tree and the six values); ``/swarm_state`` holds the exact poses of every step. The
+``/trial_result`` (the tree and the six values); ``/swarm_state`` holds the exact poses of every step. A graph
+run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
 trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``) and
 every recorded pose and value is compared with the re-run's, bit for bit.
 """
@@ -47,11 +48,12 @@ def verify_trial_bag(path: Path | str) -> Verification:
     """Re-run the trial recorded in the bag at ``path`` and compare it with the recording."""
     starts, results, states = [], [], []
     for message in read_bag(path):
-        if message.topic == "/trial_start":
+        name = "/" + message.topic.rsplit("/", 1)[-1]  # the topic's name below the graph's namespace
+        if name == "/trial_start":
             starts.append(message.message)
-        elif message.topic == RESULT_TOPIC:
+        elif name == RESULT_TOPIC:
             results.append(message.message)
-        elif message.topic == "/swarm_state":
+        elif name == "/swarm_state":
             states.append(message.message)
     if len(starts) != 1 or len(results) != 1:
         raise BagError(

@@ -1,36 +1,58 @@
 """Launch the trial graph on a full ROS 2 install: the simulator and one footbot controller per robot.
 
     ros2 launch evolution_manager trial_graph.launch.py tree:="sel(seq(in_nest, stop), forward)"
-    ros2 service call /simulator/run_trial swarm_msgs/srv/RunTrial "{seed: 1, trial: 0}"
+    ros2 action send_goal /simulator/run_trial swarm_msgs/action/RunTrial "{seed: 1, trial: 0}" --feedback
 
-On the PyPI-wheel workspace (no `launch` there) `ws/run evolution_manager trial` starts the same graph.
+Arguments: ``robots`` (default 9), ``namespace`` (e.g. ``/swarm_a``; default the root), ``tree`` (loaded into
+every controller), ``profile`` (the simulator's model profile; default: its parameter file's) and
+``params_file`` (a parameter file for every node, after the packages' own ``config/*.yaml``).
+
+The node set is ``evolution_manager.graph.trial_graph_nodes``, the same that
+``ws/run evolution_manager trial`` starts on the PyPI-wheel workspace (no ``launch`` there).
 """
 
-from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch import LaunchContext, LaunchDescription
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-ROBOTS = 9
+from evolution_manager.graph import package_config, trial_graph_nodes
+
+
+def nodes(context: LaunchContext) -> list[Node]:
+    def argument(name: str) -> str:
+        return LaunchConfiguration(name).perform(context)
+
+    user_file = argument("params_file")
+    specs = trial_graph_nodes(
+        int(argument("robots")), argument("namespace"), tree=argument("tree"), profile=argument("profile")
+    )
+    return [
+        Node(
+            package=spec.package,
+            executable=spec.executable,
+            namespace=spec.namespace or None,
+            parameters=[
+                str(package_config(spec.package)),
+                *([user_file] if user_file else []),
+                spec.parameters,
+            ],
+            output="screen",
+        )
+        for spec in specs
+    ]
 
 
 def generate_launch_description() -> LaunchDescription:
-    tree = LaunchConfiguration("tree")
-    nodes = [Node(package="swarm_sim", executable="simulator", name="simulator", output="screen")]
-    nodes += [
-        Node(
-            package="bt_controller",
-            executable="footbot_controller",
-            name="footbot_controller",
-            namespace=f"footbot_{i}",
-            parameters=[{"robot": i, "tree": tree}],
-            output="screen",
-        )
-        for i in range(ROBOTS)
-    ]
     return LaunchDescription(
         [
+            DeclareLaunchArgument("robots", default_value="9", description="number of footbots"),
+            DeclareLaunchArgument("namespace", default_value="", description="namespace of the whole graph"),
             DeclareLaunchArgument("tree", default_value="", description="tree loaded into every controller"),
-            *nodes,
+            DeclareLaunchArgument("profile", default_value="", description="model profile (paper or clean)"),
+            DeclareLaunchArgument(
+                "params_file", default_value="", description="parameter file for every node"
+            ),
+            OpaqueFunction(function=nodes),
         ]
     )

@@ -1,12 +1,12 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
 
     evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--engine compiled|reference]
-             [--per-trial]
+             [--per-trial] [--condition NAME=VALUE ...]
 
-Prints ``{"tree", "seed", "trials", "profile", "fitness": {density, nest, food}, "descriptors": {movement,
-rotation, conditionality}}`` (``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the
-robots' start and end poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on
-stderr, exit status 2.
+Prints ``{"tree", "seed", "trials", "profile", "conditions", "fitness": {density, nest, food}, "descriptors":
+{movement, rotation, conditionality}}`` (``conditions``: the world's changes, ``swarm_sim.conditions``, ``{}``
+for none; ``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start and end
+poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr, exit status 2.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from bt_controller.draws import MAX_SEED
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim import reference_road
+from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
@@ -54,6 +55,13 @@ def _parser() -> argparse.ArgumentParser:
         help="batch kernels (default) or the reference road",
     )
     parser.add_argument("--per-trial", action="store_true", help="add each trial's values and poses")
+    parser.add_argument(
+        "--condition",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help=f"change the world (repeatable): {', '.join(CONDITION_NAMES)}; e.g. dead-robots=2",
+    )
     return parser
 
 
@@ -64,6 +72,7 @@ def evaluation_json(
     values: Sequence[float],
     records: Sequence[TrialRecord] | None,
     profile: str = DEFAULT.profile,
+    conditions: dict[str, object] | None = None,
 ) -> str:
     """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``)."""
     named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
@@ -72,6 +81,7 @@ def evaluation_json(
         "seed": seed,
         "trials": trials,
         "profile": profile,
+        "conditions": dict(conditions or {}),
         "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
         "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
     }
@@ -87,12 +97,15 @@ def run(argv: Sequence[str] | None = None) -> str:
         raise UsageError(f"--trials must be in [1, {MAX_TRIALS}], got {args.trials}")
     if not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
+    try:
+        config, conditions = apply_conditions(args.condition, replace(DEFAULT, profile=args.profile))
+    except ConditionError as error:
+        raise UsageError(f"--condition: {error}") from None
     request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
     try:
         tree = check_request(request)
     except ValueError as error:
         raise UsageError(str(error)) from None
-    config = replace(DEFAULT, profile=args.profile)
     if args.engine == "reference":
         values, records = reference_road.evaluate(tree, args.seed, args.trials, config)
     else:
@@ -102,7 +115,13 @@ def run(argv: Sequence[str] | None = None) -> str:
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
     return evaluation_json(
-        to_text(tree), args.seed, args.trials, values, records if args.per_trial else None, args.profile
+        to_text(tree),
+        args.seed,
+        args.trials,
+        values,
+        records if args.per_trial else None,
+        args.profile,
+        conditions,
     )
 
 

@@ -51,6 +51,9 @@ class Params(NamedTuple):
     friction: float
     collision_iterations: int
     collision_slack: float
+    dead_robots: int
+    weak_robots: int
+    weak_gain: float
 
 
 _INT_PARAMS = frozenset(
@@ -64,6 +67,8 @@ _INT_PARAMS = frozenset(
         "chain_trials",
         "window",
         "collision_iterations",
+        "dead_robots",
+        "weak_robots",
     )
 )
 
@@ -132,6 +137,13 @@ class Config:
     """Passes of pairwise positional correction per step before the fallback (undo the step's move)."""
     collision_slack: float = 1e-6
     """Extra separation added when two robots are pushed apart, so they end strictly apart (mm)."""
+    dead_robots: int = 0
+    """Damage (``swarm_sim.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they never
+    drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
+    weak_robots: int = 0
+    """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
+    weak_gain: float = 1.0
+    """Factor on the weak robots' left wheel gain, in [0, 1]."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -241,6 +253,12 @@ def _validate(c: Config) -> None:
         raise ConfigError(f"friction must be in [0, 1], got {friction}")
     if not isinstance(c.occlusion, bool):
         raise ConfigError(f"occlusion must be true or false, got {c.occlusion!r}")
+    for name in ("dead_robots", "weak_robots"):
+        if _count(c, name, 0) > c.n_robots:
+            raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
+    weak_gain = _number(c, "weak_gain")
+    if not 0.0 <= weak_gain <= 1.0:
+        raise ConfigError(f"weak_gain must be in [0, 1], got {weak_gain}")
     p = _number(c, "delivery_probability")
     if not 0.0 <= p <= 1.0:
         raise ConfigError(f"delivery_probability must be in [0, 1], got {p}")

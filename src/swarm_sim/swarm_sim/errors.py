@@ -4,11 +4,16 @@ from __future__ import annotations
 
 from bt_controller.errors import UsageError
 
-__all__ = ["ConfigError", "TrialAbandonedError", "UsageError"]
+__all__ = ["ConditionError", "ConfigError", "TrialAbandonedError", "UsageError"]
 
 
 class ConfigError(ValueError):
     """A configuration value is out of its allowed range; the message names it and says why."""
+
+
+class ConditionError(ValueError):
+    """A condition (``swarm_sim.conditions``) that cannot be applied; the message names it and says what was
+    expected."""
 
 
 class TrialAbandonedError(RuntimeError):

@@ -131,7 +131,13 @@ def place_robots(
 def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     """Each robot's (left, right) wheel gains, drawn once per chain: gain_low + gain_step * U{0 ..
     gain_levels - 1} (``footbot_bt.cpp:73-80``: (90 + rand() % 20) / 100, the right wheel first: draw 0 of
-    the robot's gain stream is the right wheel's, draw 1 the left's) (n_robots x 2)."""
+    the robot's gain stream is the right wheel's, draw 1 the left's) (n_robots x 2).
+
+    Damage acts here, on what a trial starts from (``swarm_sim.conditions``): robots below ``dead_robots``
+    get gains 0 (they never drive or turn, though others can still push them), and the left wheel of the last
+    ``weak_robots`` robots is scaled by ``weak_gain``. Every draw is made either way, so the undamaged robots'
+    gains do not depend on the damage.
+    """
     n = p.n_robots
     gains = np.empty((n, 2))
     for i in range(n):
@@ -139,6 +145,11 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
         left = min(int(uniform(gain_keys[i], 1) * p.gain_levels), p.gain_levels - 1)
         gains[i, 0] = p.gain_low + p.gain_step * left
         gains[i, 1] = p.gain_low + p.gain_step * right
+        if i >= n - p.weak_robots:
+            gains[i, 0] *= p.weak_gain
+        if i < p.dead_robots:
+            gains[i, 0] = 0.0
+            gains[i, 1] = 0.0
     return gains
 
 

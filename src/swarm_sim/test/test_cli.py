@@ -27,7 +27,8 @@ def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
     assert first.returncode == 0, first.stderr
     assert first.stdout == second.stdout
     document = json.loads(first.stdout)
-    assert list(document) == ["tree", "seed", "trials", "profile", "fitness", "descriptors"]
+    assert list(document) == ["tree", "seed", "trials", "profile", "conditions", "fitness", "descriptors"]
+    assert document["conditions"] == {}
     assert document["tree"] == "sel(seq(in_nest, stop), forward)"
     assert (document["seed"], document["trials"]) == (5, 4)
     assert list(document["fitness"]) == ["density", "nest", "food"]

@@ -1,9 +1,12 @@
 """The footbot controller node: one footbot's perception and behaviour tree, in the robot's namespace.
 
-Node ``footbot_controller``, started as ``--ros-args -r __ns:=/footbot_<i> -p robot:=<i>``.
+Node ``footbot_controller``, started in the robot's namespace: ``--ros-args -r __ns:=/footbot_<i>`` (or
+``/<graph>/footbot_<i>``); every name it uses is relative to it.
 
-Parameters:
-    robot (int, read-only): the robot's index i (default 0).
+Parameters (``config/bt_controller.yaml``):
+    robot (int, read-only): the robot's index i, its position in the simulator's ``robot_namespaces``.
+        Default -1: taken from the namespace, whose last part must then be ``footbot_<i>``. When both are
+        given they must agree: ``__ns:=/footbot_4 -p robot:=0`` stops the node with an error saying so.
     tree (string, read-only): a tree to load at start (default: none; use the load_tree service).
 
 Subscriptions (relative names, in the robot's namespace):
@@ -11,8 +14,8 @@ Subscriptions (relative names, in the robot's namespace):
         simulator's readings; a step is answered once both of its messages have arrived.
 
 Publishers:
-    wheels (swarm_msgs/WheelCommand): the answer to every sensing step: wheels, broadcast and smoothed
-        estimates.
+    wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
+        name), its wheel speeds in m/s, the broadcast and smoothed estimates.
     tree_status (swarm_msgs/TreeStatus): the result of every tick (2 Hz in simulated time).
 
 Services:
@@ -29,19 +32,19 @@ import sys
 
 import numpy as np
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from bt_controller.controller import FootbotController, Schedule
 from bt_controller.errors import TreeError
-from bt_controller.nodes.spinning import spin_until_shutdown
 from bt_controller.perception import PerceptionParams, Readings, warm_up
 from bt_controller.tree import parse, to_text
+from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
-
-RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+from swarm_ros.names import NamespaceError, robot_index
+from swarm_ros.parameters import descriptor
+from swarm_ros.qos import RELIABLE
+from swarm_ros.spinning import spin_until_shutdown
 
 
 class FootbotControllerNode(Node):
@@ -49,13 +52,23 @@ class FootbotControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("footbot_controller")
-        self.robot: int = self.declare_parameter(
-            "robot", 0, ParameterDescriptor(description="index of this footbot", read_only=True)
+        declared: int = self.declare_parameter(
+            "robot",
+            -1,
+            descriptor(
+                "index of this footbot in the simulator's robot_namespaces; -1: from the namespace "
+                "(footbot_<i>)",
+                read_only=True,
+                value_range=(-1, 2**31 - 1),
+                integer=True,
+            ),
         ).value
+        self.robot = robot_index(self.get_namespace(), declared)
         initial_tree: str = self.declare_parameter(
-            "tree", "", ParameterDescriptor(description="tree to load at start", read_only=True)
+            "tree", "", descriptor("tree to load at start (tree text)", read_only=True)
         ).value
         self.controller = FootbotController()
+        self.wheel_speed = 0.0  # m/s, from each trial's StartTrial
         warm_up()  # compile before offering services, so no step waits for numba
         self._ground: dict[int, GroundSensor] = {}
         self._readings: dict[int, RangeAndBearingReadings] = {}
@@ -65,8 +78,15 @@ class FootbotControllerNode(Node):
         self.create_subscription(RangeAndBearingReadings, "range_and_bearing", self._on_readings, RELIABLE)
         self.create_service(LoadTree, "load_tree", self._on_load_tree)
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
+        loaded = ""
         if initial_tree:
-            self.controller.load(parse(initial_tree))
+            tree = parse(initial_tree)
+            self.controller.load(tree)
+            loaded = to_text(tree)
+        self.get_logger().info(
+            f"ready: robot {self.robot} in {self.get_namespace()}"
+            + (f" with tree {loaded}" if loaded else "; waiting for load_tree")
+        )
 
     def _on_load_tree(self, request: LoadTree.Request, response: LoadTree.Response) -> LoadTree.Response:
         try:
@@ -74,6 +94,7 @@ class FootbotControllerNode(Node):
         except TreeError as error:
             response.success = False
             response.message = str(error)
+            self.get_logger().error(f"refused a tree: {error}")
             return response
         self.controller.load(tree)
         response.success = True
@@ -92,7 +113,9 @@ class FootbotControllerNode(Node):
         except (ValueError, RuntimeError) as error:
             response.success = False
             response.message = str(error)
+            self.get_logger().error(f"cannot start trial {request.trial} of seed {request.seed}: {error}")
             return response
+        self.wheel_speed = float(request.wheel_speed)
         self._ground.clear()
         self._readings.clear()
         response.success = True
@@ -137,13 +160,17 @@ class FootbotControllerNode(Node):
                     )
                 )
             nest, food, density = outcome.smoothed
+            left, right = float(outcome.wheels[0]), float(outcome.wheels[1])
+            action = int(outcome.action)
             self._wheels.publish(
                 WheelCommand(
                     header=ground.header,
                     robot=self.robot,
                     step=outcome.step,
-                    left=float(outcome.wheels[0]),
-                    right=float(outcome.wheels[1]),
+                    action=action,
+                    action_name=ACTIONS[action],
+                    left=left * self.wheel_speed,
+                    right=right * self.wheel_speed,
                     nest_estimate=outcome.broadcast[0],
                     food_estimate=outcome.broadcast[1],
                     smoothed_nest=nest,
@@ -160,6 +187,10 @@ def main(args: list[str] | None = None) -> None:
         node = FootbotControllerNode()
     except TreeError as error:
         print(f"footbot_controller: the tree parameter is not a valid tree: {error}", file=sys.stderr)
+        rclpy.try_shutdown()
+        raise SystemExit(2) from None
+    except NamespaceError as error:
+        print(f"footbot_controller: {error}", file=sys.stderr)
         rclpy.try_shutdown()
         raise SystemExit(2) from None
     spin_until_shutdown(node)

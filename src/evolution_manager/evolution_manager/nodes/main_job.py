@@ -23,10 +23,10 @@ from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 
-from bt_controller.nodes.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import BagError
 from evolution_manager.graph import GraphError, executable
 from evolution_manager.nodes.trial import TrialFailedError, run_recorded_trial
+from swarm_ros.isolation import domain_environment, reserved_domain
 
 DEFAULT_EVALUATIONS = 25_000  # the paper's budget per run; about two minutes here
 DEFAULT_EVALUATORS = 2
@@ -95,7 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         flush=True,
     )
     try:
-        record = run_recorded_trial(best["best_tree"], args.seed, 0, bag)
+        record = run_recorded_trial(best["best_tree"], args.seed, 0, bag, log_dir=out / "logs" / "trial")
     except (GraphError, BagError, TrialFailedError) as error:
         print(f"main: the trial through the node graph failed: {error}", file=sys.stderr)
         return 1
@@ -115,7 +115,9 @@ Run directory      {out}/
   run bag (MCAP)   {out}/run.bag/  (every evaluation on /evaluations, archive progress on /progress)
 Best tree          {best["best_tree"]}
 Trial bag (MCAP)   {bag}/  (every topic of the graph; trial 0, food {values["food"]:.4f})
+Node logs          {out}/logs/
 
+Watch it in Foxglove:      open {bag}/ with the layout docs/foxglove_layout.json (docs/ros.md)
 Replay it for ROS tools:   ws/run evolution_manager replay {bag}
 Verify it reproduces:      ws/run evolution_manager replay {bag} --verify
 Evolve more:               ws/run evolution_manager evolve --help

@@ -5,7 +5,8 @@
     ws/run evolution_manager manager --out runs/qd --resume        # continue a killed or interrupted run
 
 Node ``manager``. It takes the options of ``evolve`` and writes the same run directory (bit for bit the same
-result files as ``evolve`` with the in-process evaluator), but evaluates over every ``EvaluateBatch`` service
+result files as ``evolve`` with the in-process evaluator), but evaluates over every ``EvaluateBatch`` action
+server
 of its ROS domain — on this machine or others — spreading each batch over them, re-sending the work of an
 evaluator that vanishes or times out, and counting each evaluation once (``ServiceEvaluator``). With
 ``--evaluators K`` it starts K evaluator nodes itself (logs in ``<out>/logs/``); otherwise it uses the ones
@@ -15,19 +16,20 @@ The run is recorded to ``<out>/run.bag/`` (rosbag2, MCAP storage; ``run.resume-<
 resume): every evaluation on ``/evaluations`` and the archive's progress on ``/progress`` after each batch.
 
 Parameters (ROS, read once at start; ``--ros-args -p timeout:=20``):
-    chunk_size (int, 50): most requests in one service call.
+    chunk_size (int, 50): most requests in one goal sent to an evaluator.
     timeout (float, 60): seconds a chunk may take before its work is re-sent to another evaluator (longer
         when the chunk's expected time is: 10 times it).
     first_timeout (float, 300): the same for an evaluator's first chunk (it compiles its kernels).
-    discovery_period (float, 1): seconds between looks for evaluate services.
+    discovery_period (float, 1): seconds between looks for evaluators.
 
 Publishers:
     /evaluations (swarm_msgs/EvaluationResult): every evaluation, in order (tree, seed, the six values).
     /progress (swarm_msgs/ArchiveProgress): after each batch, one per objective: evaluations, best fitness,
         coverage and QD score of that objective's grid.
 
-Service clients:
-    every service of type swarm_msgs/srv/EvaluateBatch in the domain (``/<evaluator>/evaluate``).
+Action clients:
+    every action server of type swarm_msgs/action/EvaluateBatch in the domain (``/<evaluator>/evaluate``);
+    the goals still running when the manager stops (interrupted, or failed) are cancelled.
 
 Exit status: 0 done; 1 no evaluator or an evaluation that could not be finished; 2 bad options; 130
 interrupted (continue with ``--resume``).
@@ -41,10 +43,8 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
@@ -63,7 +63,9 @@ from evolution_manager.outputs import write_results
 from evolution_manager.primitives import OBJECTIVES
 from evolution_manager.run import Run, RunDirectory
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
+from swarm_ros.parameters import declare_dataclass
 from swarm_sim.evaluation import Evaluator
+from swarm_sim.result_messages import evaluation_fields
 
 EXIT_FAILED = 1
 EVALUATIONS_TOPIC = "/evaluations"
@@ -108,12 +110,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 @dataclass(frozen=True)
 class ManagerParameters:
-    """The node's ROS parameters, read once."""
+    """The node's ROS parameters (read-only, read once at start; checked by ``ServiceSettings``)."""
 
-    chunk_size: int
-    timeout: float
-    first_timeout: float
-    discovery_period: float
+    chunk_size: int = 50
+    """Most requests in one goal sent to an evaluator."""
+    timeout: float = 60.0
+    """Seconds a chunk may take before its work is re-sent elsewhere (or 10 times its expected time)."""
+    first_timeout: float = 300.0
+    """The same for an evaluator's first chunk (it compiles its kernels)."""
+    discovery_period: float = 1.0
+    """Seconds between looks for evaluators."""
 
 
 class ManagerNode(Node):
@@ -121,19 +127,9 @@ class ManagerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("manager")
-
-        def declare(name: str, default: object, description: str) -> Any:  # a parameter's value, as declared
-            descriptor = ParameterDescriptor(description=description, read_only=True)
-            return self.declare_parameter(name, default, descriptor).value
-
-        self.parameters = ManagerParameters(
-            chunk_size=int(declare("chunk_size", 50, "most requests in one service call")),
-            timeout=float(declare("timeout", 60.0, "seconds before a chunk is re-sent elsewhere")),
-            first_timeout=float(declare("first_timeout", 300.0, "the same for an evaluator's first chunk")),
-            discovery_period=float(declare("discovery_period", 1.0, "seconds between service look-ups")),
-        )
-        self.evaluations = self.create_publisher(EvaluationResult, EVALUATIONS_TOPIC, 100)
-        self.progress = self.create_publisher(ArchiveProgress, PROGRESS_TOPIC, 10)
+        self.parameters = declare_dataclass(self, ManagerParameters(), read_only=True)
+        self.evaluations = self.create_publisher(EvaluationResult, EVALUATIONS_TOPIC.lstrip("/"), 100)
+        self.progress = self.create_publisher(ArchiveProgress, PROGRESS_TOPIC.lstrip("/"), 10)
 
 
 class _Remember:
@@ -171,14 +167,8 @@ class RunRecording:
         """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
-            msg = EvaluationResult(tree=request.tree, seed=request.seed, trials=request.trials)
-            msg.ok = result.error is None and result.fitness is not None
-            if msg.ok:
-                msg.density, msg.nest, msg.food = result.fitness
-                msg.movement, msg.rotation, msg.conditionality = result.descriptors
-                msg.fitness = getattr(msg, objective)
-            else:
-                msg.error = result.error or "no fitness or descriptors"
+            fields = evaluation_fields(request.tree, request.seed, request.trials, result, objective)
+            msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
             grid = run.passive[name]
@@ -275,7 +265,7 @@ def manage(argv: Sequence[str]) -> int:
                 f"no evaluator service found in ROS domain {graph.domain} within {args.wait:.0f} s: start "
                 "evaluator nodes (ws/run swarm_sim evaluator) or use --evaluators K"
             )
-        logger.info(f"{len(ready)} evaluator(s): {', '.join(ready)}; run directory {args.out}")
+        logger.info(f"ready: {len(ready)} evaluator(s): {', '.join(ready)}; run directory {args.out}")
         return _execute(args, node, run, evaluator)
     except (DispatchError, GraphError, BagError) as error:
         print(f"manager: error: {error}; continue with --resume --out {args.out}", file=sys.stderr)

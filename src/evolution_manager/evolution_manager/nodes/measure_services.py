@@ -33,11 +33,11 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from bt_controller.nodes.isolation import reserved_domain
 from evolution_manager.config import RunConfig, evaluation_seed
 from evolution_manager.dispatch import Timeouts
 from evolution_manager.graph import Graph
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
+from swarm_ros.isolation import reserved_domain
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 _TICKS = os.sysconf("SC_CLK_TCK")

@@ -1,8 +1,10 @@
 """Record the topics of a trial graph to a rosbag2 bag with MCAP storage.
 
-Executable ``record``: ``ws/run evolution_manager record --bag DIR [--robots 9]`` records every topic of the
-trial graph (the simulator's and each footbot's) until SIGINT or SIGTERM, then closes the bag so that it is
-whole. A recorder killed with SIGKILL leaves the chunks already flushed, which ``recover`` brings back.
+Executable ``record``: ``ws/run evolution_manager record --bag DIR [--robots 9] [--namespace /swarm_a]``
+records every topic of the trial graph (the simulator's and each footbot's, visualisation included) until
+SIGINT or SIGTERM, then closes the bag so that it is whole. A recorder killed with SIGKILL leaves the chunks
+already flushed, which ``recover`` brings back. Latched topics (``trial_start``, ``markers``) are subscribed
+transient-local, so the recorder also gets their last message from before it joined.
 
 Messages are stamped in the bag with their header stamp (simulated time), so a replay follows the trial's own
 clock. The ``GraphRecorder`` class is also used in-process by ``trial``.
@@ -20,13 +22,13 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
-from geometry_msgs.msg import PoseArray
+from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
+from visualization_msgs.msg import MarkerArray
 
 from evolution_manager.bags import BagError, BagRecorder
 from swarm_msgs.msg import (
@@ -37,8 +39,11 @@ from swarm_msgs.msg import (
     TrialStart,
     WheelCommand,
 )
+from swarm_ros.names import robot_namespaces
+from swarm_ros.qos import RECORDING, RECORDING_LATCHED
 
-RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED_TOPICS = ("trial_start", "markers")
+"""Topics the simulator publishes transient-local (their last message waits for late joiners)."""
 
 
 def msgtype_name(msg_class: type) -> str:
@@ -47,41 +52,77 @@ def msgtype_name(msg_class: type) -> str:
     return f"{module[0]}/{module[1]}/{msg_class.__name__}"
 
 
-def trial_topics(robots: int) -> list[tuple[str, type]]:
-    """Every topic of a trial graph with ``robots`` footbots, with its message class."""
+def trial_topics(robots: int, namespace: str = "") -> list[tuple[str, type]]:
+    """Every topic of a trial graph with ``robots`` footbots under ``namespace`` (e.g. ``/swarm_a``; the root
+    by default), as absolute names, with its message class."""
+    prefix = namespace.rstrip("/")
     topics: list[tuple[str, type]] = [
-        ("/clock", Clock),
-        ("/trial_start", TrialStart),
-        ("/swarm_state", SwarmState),
-        ("/poses", PoseArray),
+        (f"{prefix}/clock", Clock),
+        (f"{prefix}/trial_start", TrialStart),
+        (f"{prefix}/markers", MarkerArray),
+        (f"{prefix}/robot_markers", MarkerArray),
+        (f"{prefix}/swarm_state", SwarmState),
+        (f"{prefix}/poses", PoseArray),
     ]
-    for i in range(robots):
+    for robot in robot_namespaces(robots):
+        ns = f"{prefix}/{robot}"
         topics += [
-            (f"/footbot_{i}/ground", GroundSensor),
-            (f"/footbot_{i}/range_and_bearing", RangeAndBearingReadings),
-            (f"/footbot_{i}/wheels", WheelCommand),
-            (f"/footbot_{i}/tree_status", TreeStatus),
+            (f"{ns}/ground", GroundSensor),
+            (f"{ns}/range_and_bearing", RangeAndBearingReadings),
+            (f"{ns}/pose", PoseStamped),
+            (f"{ns}/wheels", WheelCommand),
+            (f"{ns}/tree_status", TreeStatus),
         ]
     return topics
 
 
+def is_latched(topic: str) -> bool:
+    """Whether ``topic`` (an absolute name) is one of the simulator's transient-local topics."""
+    return topic.rsplit("/", 1)[-1] in LATCHED_TOPICS
+
+
 def stamp_ns(msg: Any) -> int:  # any stamped ROS message (generated, untyped)
-    """A message's time in nanoseconds: its header stamp, or the clock of a Clock message."""
-    stamp = msg.clock if isinstance(msg, Clock) else msg.header.stamp
+    """A message's time in nanoseconds: its header stamp, the clock of a Clock message, or the first marker's
+    stamp of a MarkerArray (0 for an empty one)."""
+    if isinstance(msg, Clock):
+        stamp = msg.clock
+    elif isinstance(msg, MarkerArray):
+        if not msg.markers:
+            return 0
+        stamp = msg.markers[0].header.stamp
+    else:
+        stamp = msg.header.stamp
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 class GraphRecorder:
     """Subscribes to topics on ``node`` and writes every message to ``bag`` (thread-safe)."""
 
-    def __init__(self, node: Node, bag: BagRecorder, topics: Sequence[tuple[str, type]]) -> None:
+    def __init__(
+        self, node: Node, bag: BagRecorder, topics: Sequence[tuple[str, type]], *, armed: bool = True
+    ) -> None:
         self.bag = bag
         self.topics = list(topics)
         self.counts: Counter[str] = Counter()
+        self.received: Counter[str] = Counter()  # written or not (before ``arm``)
         self.last_stamp = 0
+        self.armed = armed
         self._lock = threading.Lock()
-        for topic, msg_class in self.topics:
-            node.create_subscription(msg_class, topic, self._writer(topic, msg_class), RELIABLE)
+        self.subscriptions = [
+            node.create_subscription(
+                msg_class,
+                topic,
+                self._writer(topic, msg_class),
+                RECORDING_LATCHED if is_latched(topic) else RECORDING,
+            )
+            for topic, msg_class in self.topics
+        ]
+
+    def arm(self) -> None:
+        """Write every message received from now on (a recorder made with ``armed=False`` drops the latched
+        messages it receives on joining, which belong to an earlier trial)."""
+        with self._lock:
+            self.armed = True
 
     def _writer(self, topic: str, msg_class: type) -> Callable[[object], None]:
         msgtype = msgtype_name(msg_class)
@@ -90,15 +131,18 @@ class GraphRecorder:
             data = serialize_message(msg)
             stamp = stamp_ns(msg)
             with self._lock:
+                self.received[topic] += 1
+                if not self.armed:
+                    return
                 self.bag.write_cdr(topic, msgtype, stamp, data)
                 self.counts[topic] += 1
                 self.last_stamp = max(self.last_stamp, stamp)
 
         return write
 
-    def all_publishers_seen(self, node: Node) -> bool:
-        """Whether every recorded topic has at least one publisher in the graph."""
-        return all(node.count_publishers(topic) > 0 for topic, _ in self.topics)
+    def all_publishers_matched(self) -> bool:
+        """Whether every subscription has matched at least one publisher."""
+        return all(subscription.get_publisher_count() > 0 for subscription in self.subscriptions)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -106,6 +150,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="record", description=__doc__.split("\n\n")[1])
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to write")
     parser.add_argument("--robots", type=int, default=9, help="footbots in the graph (default 9)")
+    parser.add_argument(
+        "--namespace", default="", help="the graph's namespace, e.g. /swarm_a (default: the root)"
+    )
     args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -117,8 +164,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             node = Node("recorder", context=context)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
-            GraphRecorder(node, bag, trial_topics(args.robots))
+            GraphRecorder(node, bag, trial_topics(args.robots, args.namespace))
             print(f"recording to {args.bag}; stop with Ctrl-C", flush=True)
+            node.get_logger().info(f"ready: recording {args.namespace or '/'} to {args.bag}")
             while not stop.is_set():
                 executor.spin_once(timeout_sec=0.1)
             executor.shutdown()

@@ -23,15 +23,16 @@ from pathlib import Path
 import rclpy
 from rclpy.node import Node
 from rclpy.publisher import Publisher
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
 from evolution_manager.bags import BagError, check_bag, read_bag, recover_bag
+from evolution_manager.nodes.recorder import is_latched
 from evolution_manager.reproduce import verify_trial_bag
+from swarm_ros.qos import RECORDING, RECORDING_LATCHED
 
-RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+RELIABLE = RECORDING
 
 
 def message_class(msgtype: str) -> type:
@@ -48,12 +49,15 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
     node = Node("replay", context=context)
     clock = node.create_publisher(Clock, "/clock", RELIABLE)
     publishers: dict[str, Publisher] = {
-        topic: node.create_publisher(message_class(msgtype), topic, RELIABLE)
+        topic: node.create_publisher(
+            message_class(msgtype), topic, RECORDING_LATCHED if is_latched(topic) else RELIABLE
+        )
         for topic, msgtype in topics.items()
         if topic != "/clock"
     }
     publishers["/clock"] = clock
     published = 0
+    node.get_logger().info(f"ready: {len(topics)} topics of {bag}; publishing in {delay} s")
     try:
         stop.wait(delay)  # let subscribers discover and match the publishers
         wall_start = time.monotonic()

@@ -1,13 +1,15 @@
-"""``ServiceEvaluator``: the evaluator contract over every ``EvaluateBatch`` service of the ROS domain.
+"""``ServiceEvaluator``: the evaluator contract over every ``EvaluateBatch`` action server of the ROS domain.
 
-It finds the services by type (``swarm_msgs/srv/EvaluateBatch``, whatever their node's name, on this machine
-or others in the domain), keeps looking during a run, and spreads each batch over them in chunks with
-``call_async`` (``Client.call`` would never learn that a server died). The bookkeeping — chunks, deadlines,
-re-sending the work of an evaluator that vanished, timed out or answered wrongly, accepting each result once —
-is :class:`evolution_manager.dispatch.Dispatcher`; this module only talks to ROS.
+It finds the evaluators by type (``swarm_msgs/action/EvaluateBatch``, whatever their node's name, on this
+machine or others in the domain), keeps looking during a run, and spreads each batch over them in chunks, each
+chunk one goal sent with ``send_goal_async`` (a blocking call would never learn that a server died). The
+bookkeeping — chunks, deadlines, re-sending the work of an evaluator that vanished, timed out or answered
+wrongly, accepting each result once — is :class:`evolution_manager.dispatch.Dispatcher`; this module only
+talks to ROS. :meth:`ServiceEvaluator.close` cancels the goals still running, so an interrupted manager
+leaves no evaluator busy.
 
-A service counts as present while ``Client.service_is_ready()``: Fast DDS forgets a killed process after its
-lease (about 20 s here) although its service name may stay listed, so a chunk's timeout is what usually
+An evaluator counts as present while ``ActionClient.server_is_ready()``: Fast DDS forgets a killed process
+after its lease (about 20 s here) although its name may stay listed, so a chunk's timeout is what usually
 notices a dead evaluator first.
 """
 
@@ -18,7 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from rclpy.client import Client
+from rclpy.action import ActionClient, get_action_names_and_types
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.task import Future
@@ -27,11 +29,12 @@ from bt_controller.draws import check_seed
 from bt_controller.validate import integer
 from evolution_manager.dispatch import Chunk, Dispatcher, Timeouts, WorkerState
 from evolution_manager.errors import NoEvaluatorError
-from swarm_msgs.srv import EvaluateBatch
+from swarm_msgs.action import EvaluateBatch
 from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
+from swarm_sim.result_messages import OBJECTIVES, evaluation_result_of
 
-SERVICE_TYPE = "swarm_msgs/srv/EvaluateBatch"
-OBJECTIVES = ("density", "nest", "food")
+SERVICE_TYPE = "swarm_msgs/action/EvaluateBatch"
+"""The type by which evaluators are found (their ``~/evaluate`` action; a service of that name wraps it)."""
 
 
 @dataclass(frozen=True)
@@ -66,15 +69,15 @@ def _check(request: object) -> str:
     return ""
 
 
-def result_from_message(msg: Any) -> EvaluationResult:  # a swarm_msgs message: generated, untyped
-    """The contract's result from a ``swarm_msgs/msg/EvaluationResult`` (values copied bit for bit)."""
-    if not msg.ok:
-        return failed(msg.error)
-    return EvaluationResult(
-        fitness=(msg.density, msg.nest, msg.food),
-        descriptors=(msg.movement, msg.rotation, msg.conditionality),
-        error=None,
-    )
+@dataclass
+class _Call:
+    """One chunk's goal: sent, then accepted (with a result to wait for), then answered."""
+
+    chunk: Chunk
+    request: EvaluateBatch.Goal
+    accepted: Future
+    result: Future | None = None
+    handle: object | None = None
 
 
 class ServiceEvaluator:
@@ -99,26 +102,26 @@ class ServiceEvaluator:
         self.settings = settings or ServiceSettings()
         self.dispatcher = Dispatcher(self.settings.max_chunk, self.settings.timeouts)
         self._log = log or (lambda level, text: None)
-        self._clients: dict[str, Client] = {}
-        self._futures: dict[int, tuple[Future, Chunk, EvaluateBatch.Request]] = {}
+        self._clients: dict[str, ActionClient] = {}
+        self._futures: dict[int, _Call] = {}
         self._requests: list[EvaluationRequest] = []
         self._next_discovery = 0.0
         self.calls = 0
 
     # Discovery ---------------------------------------------------------------------------------------
     def discover(self) -> list[str]:
-        """Look for evaluate services now; return the names of those ready."""
+        """Look for evaluators now; return the names of those ready."""
         listed = {
             name
-            for name, types in self.node.get_service_names_and_types()
+            for name, types in get_action_names_and_types(self.node)
             if SERVICE_TYPE in types and (self.only is None or name in self.only)
         }
         for name in sorted(listed - set(self._clients)):
-            self._clients[name] = self.node.create_client(EvaluateBatch, name)
+            self._clients[name] = ActionClient(self.node, EvaluateBatch, name)
         ready = []
         for name, client in self._clients.items():
             state = self.dispatcher.state(name)
-            if client.service_is_ready():
+            if client.server_is_ready():
                 ready.append(name)
                 if state is None or state is WorkerState.GONE:
                     self._log("info", f"evaluator {name} {'is back' if state else 'found'}")
@@ -196,18 +199,36 @@ class ServiceEvaluator:
         return dispatcher.results()  # type: ignore[return-value]  # the dispatcher holds what we gave it
 
     def _send(self, chunk: Chunk) -> None:
-        request = EvaluateBatch.Request()
+        request = EvaluateBatch.Goal()
         request.trees = [self._requests[i].tree for i in chunk.indices]
         request.seeds = [int(self._requests[i].seed) for i in chunk.indices]
         request.trials = int(chunk.key)  # type: ignore[call-overload]  # a chunk key is its trial count (int)
         request.objective = self.settings.objective
-        future = self._clients[chunk.worker].call_async(request)
-        self._futures[chunk.id] = (future, chunk, request)
+        accepted = self._clients[chunk.worker].send_goal_async(request)
+        self._futures[chunk.id] = _Call(chunk, request, accepted)
+
+    def _answer(self, call: _Call) -> tuple[bool, Any]:  # the result: an untyped ROS message, or None
+        """Whether the goal of ``call`` has come to an end, and its result (None when refused or failed)."""
+        if call.result is None:
+            if not call.accepted.done():
+                return False, None
+            handle = call.accepted.result() if call.accepted.exception() is None else None
+            if handle is None or not handle.accepted:
+                return True, None
+            call.handle = handle
+            call.result = handle.get_result_async()
+        if not call.result.done():
+            return False, None
+        answer = call.result.result() if call.result.exception() is None else None
+        return True, None if answer is None else answer.result
 
     def _collect(self) -> None:
-        for chunk_id in [k for k, (future, _, _) in self._futures.items() if future.done()]:
-            future, chunk, request = self._futures.pop(chunk_id)
-            response = future.result() if future.exception() is None else None
+        for chunk_id, call in list(self._futures.items()):
+            ended, response = self._answer(call)
+            if not ended:
+                continue
+            del self._futures[chunk_id]
+            chunk, request = call.chunk, call.request
             problem = self._problem(response, request)
             if problem or response is None:
                 self._log(
@@ -218,14 +239,14 @@ class ServiceEvaluator:
             if response.message:
                 results = [failed(response.message)] * len(chunk.indices)  # the whole request was refused
             else:
-                results = [result_from_message(m) for m in response.results]
+                results = [evaluation_result_of(m) for m in response.results]
             late = self.dispatcher.state(chunk.worker) is WorkerState.LATE
             self.dispatcher.answered(chunk, results, time.monotonic())
             if late:
                 self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
     @staticmethod
-    def _problem(response: Any, request: EvaluateBatch.Request) -> str:  # response: untyped ROS message
+    def _problem(response: Any, request: EvaluateBatch.Goal) -> str:  # response: untyped ROS message
         if response is None:
             return "no response"
         if response.message:
@@ -239,15 +260,17 @@ class ServiceEvaluator:
         return ""
 
     def _forget(self, chunk: Chunk) -> None:
-        """Drop the call of a vanished evaluator (its answer can no longer come)."""
-        entry = self._futures.pop(chunk.id, None)
-        client = self._clients.get(chunk.worker)
-        if entry is not None and client is not None:
-            client.remove_pending_request(entry[0])
+        """Drop the goal of a vanished evaluator (its answer can no longer come)."""
+        self._futures.pop(chunk.id, None)
 
-    def close(self) -> None:
-        """Destroy the clients."""
+    def close(self, cancel_wait: float = 2.0) -> None:
+        """Cancel the goals still running (waiting up to ``cancel_wait`` seconds for the evaluators to
+        acknowledge), then destroy the clients."""
+        cancels = [c.handle.cancel_goal_async() for c in self._futures.values() if c.handle is not None]  # type: ignore[attr-defined]
+        deadline = time.monotonic() + cancel_wait
+        while cancels and not all(f.done() for f in cancels) and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
         for client in self._clients.values():
-            self.node.destroy_client(client)
+            client.destroy()
         self._clients.clear()
         self._futures.clear()

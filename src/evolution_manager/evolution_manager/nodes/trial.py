@@ -1,67 +1,103 @@
 """Run one trial through the full node graph and record it.
 
 ``ws/run evolution_manager trial --tree TREE --seed S [--trial K] --bag DIR`` starts the simulator and one
-footbot controller per robot as separate processes in a ROS domain of their own, loads the tree into every
-controller, runs trial K of seed S in lockstep, records every topic of the graph to a rosbag2 bag with MCAP
-storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
+footbot controller per robot as separate processes, loads the tree into every controller, runs trial K of
+seed S in lockstep through the simulator's ``run_trial`` action, records every topic of the graph to a rosbag2
+bag with MCAP storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
+
+The graph runs in the caller's ROS domain (``ROS_DOMAIN_ID``, or ``--domain D``) so that a user can watch it
+live with their own tools (RViz2, Foxglove, ``ros2 topic echo``); ``--namespace /swarm_a`` keeps it apart
+from other graphs in the same domain. ``--params-file FILE`` hands a ROS parameter file to every node (for
+instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). Node logs are kept in
+``--logs DIR`` (default: ``<bag>.logs`` beside the bag).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import os
+import shutil
 import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from bt_controller.errors import TreeError
-from bt_controller.nodes.isolation import reserved_domain
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
 from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
-from evolution_manager.nodes.recorder import GraphRecorder, trial_topics
+from evolution_manager.nodes.recorder import GraphRecorder, is_latched, trial_topics
 from evolution_manager.reproduce import RESULT_TOPIC
+from swarm_msgs.action import RunTrial
 from swarm_msgs.msg import TreeStatus, TrialStart
-from swarm_msgs.srv import LoadTree, RunTrial
+from swarm_msgs.srv import LoadTree
+from swarm_ros.isolation import reserved_domain
+from swarm_ros.names import robot_namespaces
 from swarm_sim.cli import evaluation_json
+from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT
-from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.result_messages import result_fields, trial_record_of
+from swarm_sim.trial_data import TrialRecord
+
+MAX_DOMAIN = 232
+"""Largest ROS_DOMAIN_ID (Fast DDS's port arithmetic; 0-101 are safe on Linux)."""
+STARTUP_TIMEOUT = 600.0
+"""Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
+numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
+starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
-def expected_messages(robots: int) -> dict[str, int]:
+def expected_messages(robots: int, namespace: str = "") -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries in one trial."""
     p = DEFAULT.params()
     steps = p.settle_steps + p.ticks * p.steps_per_tick
     per_trial = {TrialStart: 1, TreeStatus: p.ticks}
-    return {topic: per_trial.get(msg_class, steps) for topic, msg_class in trial_topics(robots)}
+    return {
+        topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
+        for topic, msg_class in trial_topics(robots, namespace)
+    }
+
+
+def graph_namespace(namespace: str) -> str:
+    """``namespace`` as an absolute ROS namespace without a trailing slash ("" for the root)."""
+    if not namespace.strip("/"):
+        return ""
+    return "/" + namespace.strip("/")
 
 
 class TrialRunner:
-    """A client node that loads trees into the controllers and asks the simulator for trials."""
+    """A client node that loads trees into the controllers and sends trials to the simulator's action."""
 
-    def __init__(self, context: rclpy.Context, graph: Graph, robots: int, timeout: float) -> None:
+    def __init__(
+        self, context: rclpy.Context, graph: Graph, robots: int, timeout: float, namespace: str = ""
+    ) -> None:
         self.graph = graph
         self.robots = robots
         self.timeout = timeout
-        self.node = Node("trial_runner", context=context)
+        self.node = Node("trial_runner", namespace=namespace or "/", context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.load_clients: list[rclpy.client.Client] = [
-            self.node.create_client(LoadTree, f"/footbot_{i}/load_tree") for i in range(robots)
+            self.node.create_client(LoadTree, f"{robot}/load_tree") for robot in robot_namespaces(robots)
         ]
-        self.run_client: rclpy.client.Client = self.node.create_client(RunTrial, "/simulator/run_trial")
+        self.trial_client: ActionClient[Any, Any, Any] = ActionClient(
+            self.node, RunTrial, "simulator/run_trial"
+        )
+        self.feedback: list[int] = []  # the steps reported by the last trial's feedback
 
     def close(self) -> None:
+        self.trial_client.destroy()
         self.executor.shutdown()
         self.node.destroy_node()
 
@@ -81,53 +117,126 @@ class TrialRunner:
             self.executor.spin_once(timeout_sec=0.05)
 
     def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
-        self.spin_until(client.service_is_ready, f"the {client.srv_name} service")
+        self.spin_until(client.service_is_ready, f"the {client.srv_name} service", STARTUP_TIMEOUT)
         future = client.call_async(request)
         self.spin_until(future.done, what)
         return future.result()
 
     def load_tree(self, tree_text: str) -> None:
-        for i, client in enumerate(self.load_clients):
-            response = self.call(client, LoadTree.Request(tree=tree_text), f"footbot_{i} to load the tree")
+        for client in self.load_clients:
+            response = self.call(
+                client, LoadTree.Request(tree=tree_text), f"{client.srv_name} to load the tree"
+            )
             if not response.success:
-                raise TrialFailedError(f"footbot_{i} refused the tree: {response.message}")
+                raise TrialFailedError(f"{client.srv_name} refused the tree: {response.message}")
 
-    def run_trial(self, seed: int, trial: int) -> TrialRecord:
-        request = RunTrial.Request(seed=seed, trial=trial, arena_configuration=-1)
-        response = self.call(self.run_client, request, f"trial {trial} of seed {seed}")
+    def send_trial(self, seed: int, trial: int) -> object:
+        """Send trial ``trial`` of ``seed`` to the simulator's action; return the accepted goal's handle."""
+        self.spin_until(
+            self.trial_client.server_is_ready, "the simulator's run_trial action", STARTUP_TIMEOUT
+        )
+        self.feedback = []
+        goal = RunTrial.Goal(seed=seed, trial=trial, arena_configuration=-1)
+        future = self.trial_client.send_goal_async(
+            goal, feedback_callback=lambda msg: self.feedback.append(int(msg.feedback.step))
+        )
+        self.spin_until(future.done, f"the simulator to accept trial {trial} of seed {seed}")
+        handle = future.result()
+        if handle is None or not handle.accepted:
+            raise TrialFailedError(f"the simulator refused trial {trial} of seed {seed}")
+        return handle
+
+    def result(self, handle: object, seed: int, trial: int) -> TrialRecord:
+        """Wait for the goal ``handle``'s result; cancel it when the wait fails (freeing the simulator)."""
+        future = handle.get_result_async()  # type: ignore[attr-defined]
+        try:
+            # The answer timeout bounds every step, not the trial: wait as long as steps keep coming.
+            last = (-1, time.monotonic())
+
+            def done_or_stalled() -> bool:
+                nonlocal last
+                if self.feedback and self.feedback[-1] != last[0]:
+                    last = (self.feedback[-1], time.monotonic())
+                if time.monotonic() - last[1] > self.timeout:
+                    raise TrialFailedError(f"no step of trial {trial} of seed {seed} for {self.timeout} s")
+                return future.done()
+
+            self.spin_until(done_or_stalled, f"trial {trial} of seed {seed}", timeout=float("inf"))
+        except BaseException:
+            self.cancel(handle)
+            raise
+        response = future.result().result
         if not response.success:
             raise TrialFailedError(f"the simulator could not run the trial: {response.message}")
-        return TrialRecord(
-            trial=trial,
-            gap=DEFAULT.gap(trial),
-            values=tuple(getattr(response, name) for name in VALUE_NAMES),
-            start_poses=np.array([[p.x, p.y, p.theta] for p in response.start_poses]),
-            end_poses=np.array([[p.x, p.y, p.theta] for p in response.end_poses]),
-        )
+        return trial_record_of(response, trial)
+
+    def cancel(self, handle: object) -> None:
+        """Ask the simulator to cancel the goal; wait a little for its answer."""
+        with contextlib.suppress(Exception):
+            future = handle.cancel_goal_async()  # type: ignore[attr-defined]
+            deadline = time.monotonic() + 5.0
+            while not future.done() and time.monotonic() < deadline:
+                self.executor.spin_once(timeout_sec=0.05)
+
+    def run_trial(self, seed: int, trial: int) -> TrialRecord:
+        return self.result(self.send_trial(seed, trial), seed, trial)
 
 
 class TrialGraph:
-    """A running trial graph (simulator and one controller process per robot, in a ROS domain of their own)
-    that runs any number of trials, each optionally recorded to a bag of its own. A context manager."""
+    """A running trial graph (simulator and one controller process per robot) that runs any number of
+    trials, each optionally recorded to a bag of its own. A context manager.
 
-    def __init__(self, *, robots: int = 9, timeout: float = 60.0) -> None:
-        self.robots = robots
+    ``domain``: the ROS domain (default: one reserved for this graph alone, so tests run side by side);
+    ``namespace``: the graph's namespace (e.g. ``/swarm_a``); ``params_file``: a ROS parameter file for every
+    node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
+    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
+    ``robots=N`` among them sets the number of controllers."""
+
+    def __init__(
+        self,
+        *,
+        robots: int = 9,
+        timeout: float = 60.0,
+        domain: int | None = None,
+        namespace: str = "",
+        params_file: Path | None = None,
+        log_dir: Path | None = None,
+        conditions: Sequence[str] = (),
+    ) -> None:
+        self.conditions = list(conditions)
+        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots))
+        self.robots = self.config.n_robots
         self.timeout = timeout
+        self.domain = domain
+        self.namespace = graph_namespace(namespace)
+        self.params_file = params_file
+        self.log_dir = log_dir
         self._stack = contextlib.ExitStack()
         self.runner: TrialRunner | None = None
         self.graph: Graph | None = None
+        self.trials_run = 0
+        self._temporary_logs: Path | None = None
 
     def __enter__(self) -> TrialGraph:
         stack = self._stack.__enter__()
         try:
-            domain = stack.enter_context(reserved_domain())
-            logs = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="swarm-trial-logs-")))
+            domain = self.domain if self.domain is not None else stack.enter_context(reserved_domain())
+            logs = self.log_dir
+            if logs is None:  # kept when the graph fails, since the error points to it
+                logs = Path(tempfile.mkdtemp(prefix="swarm-trial-logs-"))
+                self._temporary_logs = logs
             self.graph = stack.enter_context(Graph(domain, log_dir=logs))
-            start_trial_graph(self.graph, self.robots)
+            start_trial_graph(
+                self.graph,
+                self.robots,
+                self.conditions,
+                namespace=self.namespace,
+                params_file=self.params_file,
+            )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
             stack.callback(rclpy.try_shutdown, context=context)
-            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout)
+            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout, self.namespace)
             stack.callback(self.runner.close)
         except BaseException:
             stack.close()
@@ -136,6 +245,8 @@ class TrialGraph:
 
     def __exit__(self, *exc_info: Any) -> None:  # (type, value, traceback), passed on as received
         self._stack.__exit__(*exc_info)
+        if self._temporary_logs is not None and exc_info[0] is None:
+            shutil.rmtree(self._temporary_logs, ignore_errors=True)
 
     def run(self, tree_text: str, seed: int, trial: int, bag_path: Path | None = None) -> TrialRecord:
         """Run trial ``trial`` of ``seed`` with ``tree_text`` on every robot; record it to ``bag_path`` when
@@ -145,22 +256,35 @@ class TrialGraph:
             raise RuntimeError("the trial graph is not started: use it as a context manager")
         runner.load_tree(tree_text)
         if bag_path is None:
-            return runner.run_trial(seed, trial)
+            record = runner.run_trial(seed, trial)
+            self.trials_run += 1
+            return record
         node = Node("trial_recorder", context=runner.node.context)
         runner.executor.add_node(node)
         try:
             with BagRecorder(bag_path) as bag:
-                recorder = GraphRecorder(node, bag, trial_topics(self.robots))
-                runner.spin_until(lambda: recorder.all_publishers_seen(node), "the graph's publishers")
-                runner.spin_for(0.5)  # let the publishers match the new subscriptions too
+                topics = trial_topics(self.robots, self.namespace)
+                recorder = GraphRecorder(node, bag, topics, armed=False)
+                runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
+                # The latched topics hand over their last message on joining: the arena of the simulator's
+                # start, and the start of any trial run before. Those belong to no trial of this bag.
+                stale = {
+                    f"{self.namespace}/markers": 1,
+                    f"{self.namespace}/trial_start": min(self.trials_run, 1),
+                }
+                runner.spin_until(
+                    lambda: all(recorder.received[t] >= n for t, n in stale.items()), "the latched topics"
+                )
+                recorder.arm()
                 record = runner.run_trial(seed, trial)
-                expected = expected_messages(self.robots)
+                self.trials_run += 1
+                expected = expected_messages(self.robots, self.namespace)
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
                     "the last messages",
                     10.0,
                 )
-                write_result(bag, tree_text, seed, record, recorder.last_stamp + 1)
+                write_result(bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace)
             return record
         finally:
             runner.executor.remove_node(node)
@@ -168,28 +292,57 @@ class TrialGraph:
 
 
 def run_recorded_trial(
-    tree_text: str, seed: int, trial: int, bag_path: Path, *, robots: int = 9, timeout: float = 60.0
+    tree_text: str,
+    seed: int,
+    trial: int,
+    bag_path: Path,
+    *,
+    robots: int = 9,
+    timeout: float = 60.0,
+    domain: int | None = None,
+    namespace: str = "",
+    params_file: Path | None = None,
+    log_dir: Path | None = None,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
-    ``bag_path``; return its record."""
-    with TrialGraph(robots=robots, timeout=timeout) as graph:
+    ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
+    with TrialGraph(
+        robots=robots,
+        timeout=timeout,
+        domain=domain,
+        namespace=namespace,
+        params_file=params_file,
+        log_dir=log_dir,
+    ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
 
-def write_result(bag: BagRecorder, tree_text: str, seed: int, record: TrialRecord, stamp_ns: int) -> None:
+def write_result(
+    bag: BagRecorder, tree_text: str, seed: int, record: TrialRecord, stamp_ns: int, namespace: str = ""
+) -> None:
     """Close the trial's bag with its result (tree, seed and the six values), stamped ``stamp_ns``."""
-    values = dict(zip(VALUE_NAMES, record.values, strict=True))
-    message = bag.message(
-        "swarm_msgs/msg/EvaluationResult",
-        tree=tree_text,
-        seed=seed,
-        trials=1,
-        ok=True,
-        error="",
-        fitness=values["food"],
-        **values,
-    )
-    bag.write(RESULT_TOPIC, message, stamp_ns)
+    fields = result_fields(tree_text, seed, 1, record.values, "food")
+    bag.write(namespace + RESULT_TOPIC, bag.message("swarm_msgs/msg/EvaluationResult", **fields), stamp_ns)
+
+
+def caller_domain() -> int:
+    """The caller's ROS domain: ``ROS_DOMAIN_ID``, 0 when unset (as every ROS 2 tool does)."""
+    text = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
+    try:
+        return domain_id(text)
+    except argparse.ArgumentTypeError as error:
+        raise ValueError(f"ROS_DOMAIN_ID: {error}") from None
+
+
+def domain_id(text: str) -> int:
+    """A ROS domain id from the command line: an integer in 0..232."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {text!r}") from None
+    if not 0 <= value <= MAX_DOMAIN:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {value}")
+    return value
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -202,6 +355,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
     )
+    parser.add_argument(
+        "--domain",
+        type=domain_id,
+        default=None,
+        help="ROS domain of the graph (default: $ROS_DOMAIN_ID or 0)",
+    )
+    parser.add_argument("--namespace", default="", help="namespace of the graph, e.g. /swarm_a (default: /)")
+    parser.add_argument(
+        "--params-file",
+        type=Path,
+        default=None,
+        help="a ROS parameter file (YAML) for every node of the graph",
+    )
+    parser.add_argument(
+        "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
+    )
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     text = Path(args.tree).read_text() if Path(args.tree).is_file() else args.tree
     try:
@@ -210,7 +379,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
         if args.bag.exists():
             raise BagError(f"refusing to overwrite {args.bag}: choose a new bag directory")
-        record = run_recorded_trial(to_text(tree), args.seed, args.trial, args.bag, timeout=args.timeout)
+        if args.params_file is not None and not args.params_file.is_file():
+            raise ValueError(f"--params-file {args.params_file}: no such file")
+        domain = caller_domain() if args.domain is None else args.domain
+        logs = args.logs or args.bag.with_name(args.bag.name + ".logs")
+        namespace = graph_namespace(args.namespace)
+        print(
+            f"trial: graph in ROS domain {domain}, namespace {namespace or '/'}; node logs in {logs}",
+            file=sys.stderr,
+        )
+        record = run_recorded_trial(
+            to_text(tree),
+            args.seed,
+            args.trial,
+            args.bag,
+            timeout=args.timeout,
+            domain=domain,
+            namespace=namespace,
+            params_file=args.params_file,
+            log_dir=logs,
+        )
     except (TreeError, ValueError, BagError, GraphError, TrialFailedError) as error:
         print(f"trial: {error}", file=sys.stderr)
         return 2

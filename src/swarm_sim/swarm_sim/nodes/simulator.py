@@ -1,28 +1,44 @@
 """The simulator node: owns the world and runs trials in lockstep with the footbot controller nodes.
 
-Node ``simulator``.
+Node ``simulator``. Every name is relative, so a whole graph can run under a namespace (``__ns:=/swarm_a``,
+its robots then in ``/swarm_a/footbot_<i>``).
 
-Parameters:
-    robots (int, read-only): number of footbots, footbot_0 .. footbot_<robots - 1> (default 9).
-    answer_timeout (float, seconds of wall time): how long to wait for the controllers at any step before the
-        trial is abandoned with an error (default 60): it detects dead nodes; it is no speed limit.
+Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``):
+    every field of ``swarm_sim.config.Config`` (read-only: world, timing and perception settings such as
+        ``arena_half``, ``gaps``, ``n_robots``, ``wheel_speed``, ``step_dt``, ``ticks``, ``window``), with the
+        model's defaults; a bad value stops the node with a one-line error naming it.
+    conditions (string, read-only): changes to the world, ``NAME=VALUE`` separated by spaces, e.g.
+        ``dead-robots=2 message-loss=0.5`` (``swarm_sim.conditions``; default none), applied after the
+        fields above. A ``robots=N`` among them must equal ``n_robots``.
+    robot_namespaces (string array, read-only): the robots' namespaces, relative to the node's; robot ``i``
+        is the i-th (default ``footbot_0`` .. ``footbot_<n_robots - 1>``).
+    answer_timeout (float, seconds of wall time, may be changed at run time): how long to wait for the
+        controllers at any step before the trial is abandoned with an error (default 60): it detects dead
+        nodes; it is no speed limit.
 
 Publishers:
-    /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step.
-    /trial_start (swarm_msgs/TrialStart): each trial's seed, index and the robots' stream
+    clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step.
+    trial_start (swarm_msgs/TrialStart, transient-local): each trial's seed, index and the robots' stream
         keys.
-    /footbot_<i>/ground (swarm_msgs/GroundSensor) and /footbot_<i>/range_and_bearing
+    markers (visualization_msgs/MarkerArray, transient-local): walls, nest and food region of the trial's
+        arena, frame ``arena``, metres.
+    robot_markers (visualization_msgs/MarkerArray): every step, each robot's body, heading and label (index,
+        namespace, current action).
+    <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
         (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
-    /swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step.
-    /poses (geometry_msgs/PoseArray): the same poses in metres, for visualisation tools.
+    <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
+    swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step.
+    poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
 
 Subscriptions:
-    /footbot_<i>/wheels (swarm_msgs/WheelCommand): each controller's answer to a step.
-    /footbot_<i>/tree_status (swarm_msgs/TreeStatus): each tick's status, action and condition ticks.
+    <robot>/wheels (swarm_msgs/WheelCommand): each controller's answer to a step.
+    <robot>/tree_status (swarm_msgs/TreeStatus): each tick's status, action and condition ticks.
 
-Services:
-    ~/run_trial (swarm_msgs/RunTrial): run one trial; before its first step the simulator calls each
-        controller's /footbot_<i>/start_trial (swarm_msgs/StartTrial).
+Actions and services:
+    ~/run_trial (swarm_msgs/action/RunTrial): run one trial, with the step as feedback; a cancel stops it
+        after the step under way. Before its first step the simulator calls each controller's
+        <robot>/start_trial (swarm_msgs/StartTrial).
+    ~/run_trial (swarm_msgs/srv/RunTrial): the same without feedback or cancel, a thin wrapper.
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
 step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.lockstep``.
@@ -30,25 +46,30 @@ step, so results do not depend on the machine's speed. The world itself is ``swa
 
 from __future__ import annotations
 
-import math
+import sys
 import threading
-from dataclasses import dataclass, replace
+import time
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
 
 import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Pose, PoseArray
-from rcl_interfaces.msg import ParameterDescriptor
+from geometry_msgs.msg import PoseArray, PoseStamped
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
+from visualization_msgs.msg import MarkerArray
 
-from bt_controller.nodes.spinning import spin_until_shutdown
+from bt_controller.vocabulary import ACTIONS
+from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
     GroundSensor,
     RangeAndBearing,
@@ -60,12 +81,27 @@ from swarm_msgs.msg import (
     WheelCommand,
 )
 from swarm_msgs.srv import RunTrial, StartTrial
-from swarm_sim.config import DEFAULT, Config
+from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
+from swarm_ros.parameters import declare_dataclass, descriptor
+from swarm_ros.qos import LATCHED, RELIABLE
+from swarm_ros.spinning import spin_until_shutdown
+from swarm_sim.conditions import ConditionError, apply_conditions
+from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.errors import TrialAbandonedError
-from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, warm_up
-from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.lockstep import LockstepTrial, RobotAnswer, warm_up
+from swarm_sim.nodes import visualisation
+from swarm_sim.result_messages import fill, trial_fields
+from swarm_sim.trial_data import TrialRecord
 
-RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_high": (0.0, 10.0)}
+"""Closed ranges of world parameters beyond what ``Config`` checks itself."""
+MATCH_WAIT = 2.0
+"""Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
+recorder that has just joined), so that none misses the trial's first messages."""
+
+
+class TrialCancelledError(RuntimeError):
+    """The trial's goal was cancelled; the trial stopped after the step under way."""
 
 
 @dataclass
@@ -83,103 +119,184 @@ class SimulatorNode(Node):
 
     def __init__(self, config: Config = DEFAULT) -> None:
         super().__init__("simulator")
-        self.config = config
-        self.robots: int = self.declare_parameter(
-            "robots",
-            config.n_robots,
-            ParameterDescriptor(description="number of footbots", read_only=True),
+        declared = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
+        conditions: str = self.declare_parameter(
+            "conditions",
+            "",
+            descriptor("changes to the world, NAME=VALUE separated by spaces", read_only=True),
         ).value
-        if self.robots != config.n_robots:
-            self.config = replace(config, n_robots=self.robots)
-        self.answer_timeout: float = self.declare_parameter(
+        self.config, self.conditions = apply_conditions(conditions.split(), declared)
+        if self.config.n_robots != declared.n_robots:
+            raise ConditionError(
+                f"condition robots={self.config.n_robots} differs from n_robots ({declared.n_robots})"
+            )
+        self.robots: int = self.config.n_robots
+        self.namespaces = check_robot_namespaces(
+            self.declare_parameter(
+                "robot_namespaces",
+                robot_namespaces(self.robots),
+                descriptor(
+                    "the robots' namespaces, relative to the simulator's; robot i is the i-th", read_only=True
+                ),
+            ).value
+        )
+        if len(self.namespaces) != self.robots:
+            raise NamespaceError(
+                f"robot_namespaces names {len(self.namespaces)} robots but n_robots is {self.robots}: "
+                "give one namespace per robot"
+            )
+        self.declare_parameter(
             "answer_timeout",
             60.0,
-            ParameterDescriptor(
-                description="seconds to wait for the controllers at any step (detects dead nodes)"
+            descriptor(
+                "seconds of wall time to wait for the controllers at any step (detects dead nodes)",
+                read_only=False,
+                value_range=(0.1, 86400.0),
             ),
-        ).value
+        )
         self.sim_time_ns = 0
         warm_up(self.config)  # compile before offering the service, so no step waits for numba
         self.step_ns = round(self.config.step_dt * 1e9)
 
         self._lock = threading.Condition()
+        self._busy = threading.Lock()  # one trial at a time, whether asked by the action or the service
         self._inbox = _Inbox()
         listeners = ReentrantCallbackGroup()
-        self._clock_publisher = self.create_publisher(Clock, "/clock", RELIABLE)
-        self._trial_start = self.create_publisher(TrialStart, "/trial_start", RELIABLE)
-        self._state = self.create_publisher(SwarmState, "/swarm_state", RELIABLE)
-        self._poses = self.create_publisher(PoseArray, "/poses", RELIABLE)
+        self._clock_publisher = self.create_publisher(Clock, "clock", RELIABLE)
+        self._trial_start = self.create_publisher(TrialStart, "trial_start", LATCHED)
+        self._markers = self.create_publisher(MarkerArray, "markers", LATCHED)
+        self._robot_markers = self.create_publisher(MarkerArray, "robot_markers", RELIABLE)
+        self._state = self.create_publisher(SwarmState, "swarm_state", RELIABLE)
+        self._poses = self.create_publisher(PoseArray, "poses", RELIABLE)
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
+        self._pose: list[Publisher] = []
         self._start_clients: list[Client] = []
-        for i in range(self.robots):
-            ns = f"/footbot_{i}"
+        for i, ns in enumerate(self.namespaces):
             self._ground.append(self.create_publisher(GroundSensor, f"{ns}/ground", RELIABLE))
             self._readings.append(
                 self.create_publisher(RangeAndBearingReadings, f"{ns}/range_and_bearing", RELIABLE)
             )
+            self._pose.append(self.create_publisher(PoseStamped, f"{ns}/pose", RELIABLE))
             self.create_subscription(
-                WheelCommand, f"{ns}/wheels", self._on_wheels, RELIABLE, callback_group=listeners
+                WheelCommand, f"{ns}/wheels", partial(self._on_wheels, i), RELIABLE, callback_group=listeners
             )
             self.create_subscription(
-                TreeStatus, f"{ns}/tree_status", self._on_status, RELIABLE, callback_group=listeners
+                TreeStatus,
+                f"{ns}/tree_status",
+                partial(self._on_status, i),
+                RELIABLE,
+                callback_group=listeners,
             )
             self._start_clients.append(
                 self.create_client(StartTrial, f"{ns}/start_trial", callback_group=listeners)
             )
-        self.create_service(
-            RunTrial, "~/run_trial", self._on_run_trial, callback_group=MutuallyExclusiveCallbackGroup()
+        self._actions = ["stop"] * self.robots
+        trials = MutuallyExclusiveCallbackGroup()
+        self.create_service(RunTrial, "~/run_trial", self._on_run_trial, callback_group=trials)
+        self._action_server = ActionServer(
+            self,
+            RunTrialAction,
+            "~/run_trial",
+            self._execute_trial,
+            callback_group=trials,
+            cancel_callback=lambda _request: CancelResponse.ACCEPT,
+        )
+        self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
+        self.get_logger().info(
+            f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
 
+    @property
+    def answer_timeout(self) -> float:
+        """The ``answer_timeout`` parameter as it is now (it may be set while the node runs)."""
+        return float(self.get_parameter("answer_timeout").value)
+
     # --- subscriptions
-    def _on_wheels(self, msg: WheelCommand) -> None:
+    def _on_wheels(self, robot: int, msg: WheelCommand) -> None:
+        if msg.robot != robot:
+            self._wrong_robot(robot, msg.robot)
+            return
         with self._lock:
             inbox = self._inbox
-            if inbox.answers is not None and msg.step == inbox.step and msg.robot < self.robots:
-                inbox.answers[msg.robot] = msg
+            if inbox.answers is not None and msg.step == inbox.step:
+                inbox.answers[robot] = msg
                 self._lock.notify_all()
 
-    def _on_status(self, msg: TreeStatus) -> None:
+    def _on_status(self, robot: int, msg: TreeStatus) -> None:
+        if msg.robot != robot:
+            self._wrong_robot(robot, msg.robot)
+            return
         with self._lock:
             inbox = self._inbox
-            if inbox.counts is not None and msg.robot < self.robots:
-                inbox.counts[msg.robot, 0] += msg.condition_ticks
+            if inbox.counts is not None:
+                inbox.counts[robot, 0] += msg.condition_ticks
                 if msg.action >= 0:
-                    inbox.counts[msg.robot, 1 + msg.action] += 1
+                    inbox.counts[robot, 1 + msg.action] += 1
                 inbox.statuses += 1
                 self._lock.notify_all()
 
-    # --- the service
-    def _on_run_trial(self, request: RunTrial.Request, response: RunTrial.Response) -> RunTrial.Response:
-        try:
-            arena = int(request.arena_configuration)
-            if arena not in (-1, *range(len(self.config.gaps))):
-                raise TrialAbandonedError(
-                    f"arena_configuration must be -1 or 0..{len(self.config.gaps) - 1}, got {arena}"
-                )
-            own = request.trial % len(self.config.gaps)
-            if arena >= 0 and arena != own:
-                raise TrialAbandonedError(
-                    f"trial {request.trial} uses arena configuration {own}, not {arena} (-1 means its own)"
-                )
-            record = self.run_trial(int(request.seed), int(request.trial))
-        except (TrialAbandonedError, ValueError) as error:
-            response.success = False
-            response.message = str(error)
-            self.get_logger().error(response.message)
-            return response
-        response.success = True
-        for name, value in zip(VALUE_NAMES, record.values, strict=True):
-            setattr(response, name, value)
-        response.start_poses = [RobotPose(x=p[0], y=p[1], theta=p[2]) for p in record.start_poses.tolist()]
-        response.end_poses = [RobotPose(x=p[0], y=p[1], theta=p[2]) for p in record.end_poses.tolist()]
-        return response
+    def _wrong_robot(self, robot: int, claimed: int) -> None:
+        self.get_logger().error(
+            f"the controller in {self.namespaces[robot]} says it is robot {claimed}, but robot_namespaces "
+            f"puts robot {robot} there: start it with -p robot:={robot} or in the namespace of robot "
+            f"{claimed}",
+            throttle_duration_sec=5.0,
+        )
 
-    def run_trial(self, seed: int, trial: int) -> TrialRecord:
-        """Run trial ``trial`` of ``seed`` through the controllers; return its record."""
+    # --- the action and the service
+    def _check_goal(self, seed: int, trial: int, arena: int) -> None:
+        if arena not in (-1, *range(len(self.config.gaps))):
+            raise TrialAbandonedError(
+                f"arena_configuration must be -1 or 0..{len(self.config.gaps) - 1}, got {arena}"
+            )
+        own = trial % len(self.config.gaps)
+        if arena >= 0 and arena != own:
+            raise TrialAbandonedError(
+                f"trial {trial} uses arena configuration {own}, not {arena} (-1 means its own)"
+            )
+
+    def _run(self, request: Any, result: Any, goal: ServerGoalHandle | None = None) -> Any:  # ROS messages
+        """Run the trial ``request`` asks for into ``result`` (the action's result or the service's
+        response), with feedback and cancel when ``goal`` is the action's goal."""
+        try:
+            seed, trial = int(request.seed), int(request.trial)
+            self._check_goal(seed, trial, int(request.arena_configuration))
+            with self._busy:
+                record = self.run_trial(seed, trial, goal)
+        except (TrialAbandonedError, TrialCancelledError, ValueError) as error:
+            result.success = False
+            result.message = str(error)
+            if isinstance(error, TrialCancelledError):
+                self.get_logger().info(result.message)
+            else:
+                self.get_logger().error(result.message)
+            return result
+        return fill(result, trial_fields(record, RobotPose))
+
+    def _on_run_trial(self, request: RunTrial.Request, response: RunTrial.Response) -> RunTrial.Response:
+        return self._run(request, response)
+
+    def _execute_trial(self, goal: ServerGoalHandle) -> RunTrialAction.Result:
+        result = self._run(goal.request, RunTrialAction.Result(), goal)
+        if goal.is_cancel_requested:
+            goal.canceled()
+        elif result.success:
+            goal.succeed()
+        else:
+            goal.abort()
+        return result
+
+    def run_trial(self, seed: int, trial: int, goal: ServerGoalHandle | None = None) -> TrialRecord:
+        """Run trial ``trial`` of ``seed`` through the controllers; return its record. With the action's
+        ``goal``, publish the step as feedback and stop with ``TrialCancelledError`` when it is cancelled."""
         world = LockstepTrial(seed, trial, self.config)
         p = world.p
+        steps = world.last_step + 1
         self._start_controllers(world, seed, trial)
+        self._actions = ["stop"] * self.robots
+        self._wait_for_subscribers()
+        self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
         with self._lock:
             self._inbox = _Inbox(step=0, answers={}, counts=np.zeros((self.robots, 8), np.int64))
         self._trial_start.publish(
@@ -193,12 +310,25 @@ class SimulatorNode(Node):
             )
         )
         while not world.done:
+            if goal is not None and goal.is_cancel_requested:
+                with self._lock:
+                    self._inbox = _Inbox()
+                raise TrialCancelledError(f"trial {trial} of seed {seed} cancelled at step {world.step}")
             self._publish_step(world, seed, trial)
+            if goal is not None:
+                goal.publish_feedback(RunTrialAction.Feedback(step=world.step, steps=steps))
             answers = self._await_answers(world.step)
+            for i, answer in enumerate(answers):
+                if answer.action >= len(ACTIONS):
+                    raise TrialAbandonedError(
+                        f"{self.namespaces[i]} answered step {world.step} with action {answer.action}; "
+                        f"expected 0..{len(ACTIONS) - 1}"
+                    )
+            self._actions = [ACTIONS[a.action] for a in answers]
             world.advance(
                 [
                     RobotAnswer(
-                        action=action_of_wheels(a.left, a.right),
+                        action=a.action,
                         broadcast=(a.nest_estimate, a.food_estimate),
                         smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
                     )
@@ -220,7 +350,10 @@ class SimulatorNode(Node):
         futures = []
         for i, client in enumerate(self._start_clients):
             if not client.wait_for_service(timeout_sec=self.answer_timeout):
-                raise TrialAbandonedError(f"footbot_{i}'s start_trial service is not available")
+                raise TrialAbandonedError(
+                    f"robot {i}'s start_trial service ({client.srv_name}) is not available: is its "
+                    "controller running in that namespace?"
+                )
             request = StartTrial.Request(
                 seed=seed,
                 trial=trial,
@@ -232,6 +365,7 @@ class SimulatorNode(Node):
                 estimate_cap=p.estimate_cap,
                 density_range=p.density_range,
                 density_divisor=p.density_divisor,
+                wheel_speed=p.wheel_speed * visualisation.MM,
             )
             futures.append(client.call_async(request))
         for i, future in enumerate(futures):
@@ -239,9 +373,19 @@ class SimulatorNode(Node):
             future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # rclpy is untyped
             response = future.result() if done.wait(self.answer_timeout) else None
             if response is None:
-                raise TrialAbandonedError(f"footbot_{i} did not answer start_trial")
+                raise TrialAbandonedError(f"{self.namespaces[i]} did not answer start_trial")
             if not response.success:
-                raise TrialAbandonedError(f"footbot_{i} cannot run the trial: {response.message}")
+                raise TrialAbandonedError(f"{self.namespaces[i]} cannot run the trial: {response.message}")
+
+    def _wait_for_subscribers(self) -> None:
+        """Wait (at most ``MATCH_WAIT`` s) until every publisher has matched each subscription the graph knows
+        of, so that a recorder that joined just before the trial gets its first messages."""
+        publishers = [self._clock_publisher, self._trial_start, self._state, *self._ground, *self._readings]
+        deadline = time.monotonic() + MATCH_WAIT
+        while time.monotonic() < deadline and any(
+            p.get_subscription_count() < self.count_subscribers(p.topic_name) for p in publishers
+        ):
+            time.sleep(0.01)
 
     def _publish_step(self, world: LockstepTrial, seed: int, trial: int) -> None:
         stamp = self._stamp()
@@ -256,11 +400,20 @@ class SimulatorNode(Node):
                 poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in poses.tolist()],
             )
         )
+        listed = poses.tolist()
         self._poses.publish(
-            PoseArray(header=Header(stamp=stamp, frame_id="arena"), poses=[_pose(q) for q in poses])
+            PoseArray(
+                header=Header(stamp=stamp, frame_id=visualisation.FRAME),
+                poses=[visualisation.pose_in_metres(*q) for q in listed],
+            )
+        )
+        for publisher, q in zip(self._pose, listed, strict=True):
+            publisher.publish(visualisation.pose_stamped(stamp, *q))
+        self._robot_markers.publish(
+            visualisation.robot_markers(self.config, stamp, listed, self.namespaces, self._actions)
         )
         for i, readings in enumerate(world.readings()):
-            header = Header(stamp=stamp, frame_id=f"footbot_{i}")
+            header = Header(stamp=stamp, frame_id=self.namespaces[i])
             self._ground[i].publish(
                 GroundSensor(
                     header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food
@@ -288,7 +441,8 @@ class SimulatorNode(Node):
             if not self._lock.wait_for(lambda: len(answers) == self.robots, self.answer_timeout):
                 missing = sorted(set(range(self.robots)) - set(answers))
                 raise TrialAbandonedError(
-                    f"no answer to step {step} from footbot(s) {missing} in {self.answer_timeout} s"
+                    f"no answer to step {step} from {', '.join(self.namespaces[i] for i in missing)} "
+                    f"in {self.answer_timeout} s"
                 )
             return [answers[i] for i in range(self.robots)]
 
@@ -308,17 +462,13 @@ class SimulatorNode(Node):
         return Header(stamp=self._stamp(), frame_id=frame)
 
 
-def _pose(pose: np.ndarray) -> Pose:
-    """A PoseArray entry in metres from (x mm, y mm, heading rad)."""
-    out = Pose()
-    out.position.x = float(pose[0]) / 1000.0
-    out.position.y = float(pose[1]) / 1000.0
-    out.orientation.z = math.sin(float(pose[2]) / 2.0)
-    out.orientation.w = math.cos(float(pose[2]) / 2.0)
-    return out
-
-
 def main(args: list[str] | None = None) -> None:
-    """Run the simulator node until shut down."""
+    """Run the simulator node until shut down; a bad parameter is a one-line error and exit status 2."""
     rclpy.init(args=args)
-    spin_until_shutdown(SimulatorNode(), MultiThreadedExecutor(num_threads=4))
+    try:
+        node = SimulatorNode()
+    except (ConfigError, ConditionError, NamespaceError) as error:
+        print(f"simulator: bad parameter: {error}", file=sys.stderr)
+        rclpy.try_shutdown()
+        raise SystemExit(2) from None
+    spin_until_shutdown(node, MultiThreadedExecutor(num_threads=4))

@@ -1,0 +1,49 @@
+"""Evaluations through the node graph, for ``adapt --graph``: each tree is loaded into every controller node
+(``load_tree``) and each of its trials run by the simulator node in the changed world, recorded to a bag of
+its own; the evaluation's values are the trials' mean, exactly as the batch evaluator computes them."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from evolution_manager.adaptation import ConditionEvaluation
+from evolution_manager.nodes.trial import TrialGraph
+from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
+from swarm_sim.trial_data import combine
+
+
+class GraphEvaluator:
+    """The evaluator contract over a running ``TrialGraph``; trials recorded under ``bags`` when given."""
+
+    def __init__(self, graph: TrialGraph, bags: Path | None) -> None:
+        self.graph = graph
+        self.bags = bags
+        self.evaluations = 0
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request, trial by trial, through the graph."""
+        out = []
+        for request in requests:
+            self.evaluations += 1
+            records = []
+            for trial in range(request.trials):
+                bag = None
+                if self.bags is not None:
+                    bag = self.bags / f"evaluation_{self.evaluations:03d}_trial_{trial:02d}"
+                records.append(self.graph.run(request.tree, request.seed, trial, bag))
+            out.append(from_values(combine(records)))
+        return out
+
+
+@contextlib.contextmanager
+def graph_evaluation(
+    conditions: Sequence[str], seed: int, trials: int, bags: Path | None, timeout: float = 120.0
+) -> Iterator[ConditionEvaluation]:
+    """A node graph in the changed world (``conditions``), started for the block, as a
+    ``ConditionEvaluation`` of scenario ``seed``."""
+    with TrialGraph(conditions=conditions, timeout=timeout) as graph:
+        if bags is not None:
+            bags.mkdir(parents=True, exist_ok=True)
+        yield ConditionEvaluation(GraphEvaluator(graph, bags), seed, trials)

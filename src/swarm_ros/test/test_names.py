@@ -1,0 +1,56 @@
+"""Robot namespaces: the default names, the index a namespace names, and the clear errors."""
+
+import pytest
+
+from swarm_ros.names import (
+    NamespaceError,
+    check_robot_namespaces,
+    index_from_namespace,
+    robot_index,
+    robot_namespaces,
+)
+
+
+def test_default_namespaces_count_from_zero():
+    assert robot_namespaces(3) == ["footbot_0", "footbot_1", "footbot_2"]
+
+
+@pytest.mark.parametrize(
+    ("namespace", "index"),
+    [
+        ("/footbot_4", 4),
+        ("/swarm_a/footbot_12", 12),
+        ("/footbot_0/", 0),
+        ("/robots/red", None),
+        ("/footbot_04", None),
+    ],
+)
+def test_the_index_comes_from_the_last_part_of_the_namespace(namespace, index):
+    assert index_from_namespace(namespace) == index
+
+
+def test_a_declared_index_must_agree_with_the_namespace():
+    assert robot_index("/swarm_b/footbot_4", -1) == 4
+    assert robot_index("/swarm_b/footbot_4", 4) == 4
+    with pytest.raises(NamespaceError, match=r"robot:=0 contradicts namespace '/footbot_4' \(robot 4\)"):
+        robot_index("/footbot_4", 0)
+
+
+def test_another_namespace_needs_the_index():
+    assert robot_index("/robots/red", 2) == 2
+    with pytest.raises(NamespaceError, match="give the robot index with -p robot:=<i>"):
+        robot_index("/robots/red", -1)
+
+
+@pytest.mark.parametrize(
+    ("namespaces", "problem"),
+    [
+        ([], "at least one"),
+        (["/footbot_0"], "relative ROS names"),
+        (["a", "a"], "twice"),
+        (["0a"], "relative"),
+    ],
+)
+def test_bad_robot_namespaces_are_refused(namespaces, problem):
+    with pytest.raises(NamespaceError, match=problem):
+        check_robot_namespaces(namespaces)

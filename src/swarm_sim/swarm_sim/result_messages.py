@@ -1,0 +1,94 @@
+"""The one conversion between the world's results and the graph's messages, written once for every node,
+the recorder and the bags.
+
+Nothing here imports ROS: a message is filled from (and read into) plain field values, so the same functions
+serve rclpy's message classes (``EvaluationResult(**result_fields(...))``), rosbags' (``bag.message(type,
+**result_fields(...))``) and any object with the fields. Fields follow ``swarm_msgs``: ``EvaluationResult``,
+the ``RunTrial`` action's result and service response (``success``, ``message``, ``gap``, the six values,
+``start_poses``, ``end_poses``) and ``RobotPose`` (``x``, ``y`` in mm, ``theta`` in rad).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from swarm_sim.evaluation import EvaluationResult, failed
+from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+
+OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
+"""The objectives a result's ``fitness`` field may report."""
+
+
+def result_fields(
+    tree: str,
+    seed: int,
+    trials: int,
+    values: Sequence[float] | None,
+    objective: str,
+    error: str = "",
+) -> dict[str, Any]:
+    """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (the six, ``VALUE_NAMES`` order) or
+    None with ``error`` saying why the tree could not be evaluated; ``fitness`` is the ``objective``'s
+    value."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
+    fields: dict[str, Any] = {"tree": tree, "seed": int(seed), "trials": int(trials)}
+    if values is None:
+        return {**fields, "ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
+    named = {name: float(v) for name, v in zip(VALUE_NAMES, values, strict=True)}
+    return {**fields, "ok": True, "error": "", "fitness": named[objective], **named}
+
+
+def evaluation_fields(
+    tree: str, seed: int, trials: int, result: EvaluationResult, objective: str
+) -> dict[str, Any]:
+    """``result_fields`` of an evaluator contract's result."""
+    if result.error is not None or result.fitness is None or result.descriptors is None:
+        return result_fields(tree, seed, trials, None, objective, result.error or "")
+    return result_fields(tree, seed, trials, (*result.fitness, *result.descriptors), objective)
+
+
+def values_of(msg: object) -> tuple[float, ...]:
+    """The six values of a message with the ``VALUE_NAMES`` fields, in order."""
+    return tuple(float(getattr(msg, name)) for name in VALUE_NAMES)
+
+
+def evaluation_result_of(msg: object) -> EvaluationResult:
+    """The evaluator contract's result from an ``EvaluationResult`` message (values copied bit for bit)."""
+    if not msg.ok:  # type: ignore[attr-defined]
+        return failed(msg.error)  # type: ignore[attr-defined]
+    d, n, f, m, r, c = values_of(msg)
+    return EvaluationResult(fitness=(d, n, f), descriptors=(m, r, c), error=None)
+
+
+def trial_fields(record: TrialRecord, pose: Callable[..., object]) -> dict[str, Any]:
+    """The fields of a successful ``RunTrial`` result; ``pose`` builds a ``RobotPose`` from x, y, theta."""
+    return {
+        "success": True,
+        "message": "",
+        "gap": float(record.gap),
+        **dict(zip(VALUE_NAMES, (float(v) for v in record.values), strict=True)),
+        "start_poses": [pose(x=x, y=y, theta=t) for x, y, t in record.start_poses.tolist()],
+        "end_poses": [pose(x=x, y=y, theta=t) for x, y, t in record.end_poses.tolist()],
+    }
+
+
+def fill(msg: object, fields: dict[str, Any]) -> object:
+    """Set ``fields`` on ``msg`` (a response or result, which cannot be built with keywords); return it."""
+    for name, value in fields.items():
+        setattr(msg, name, value)
+    return msg
+
+
+def trial_record_of(msg: object, trial: int) -> TrialRecord:
+    """The record of trial ``trial`` from a successful ``RunTrial`` result or response."""
+    return TrialRecord(
+        trial=trial,
+        gap=float(msg.gap),  # type: ignore[attr-defined]
+        values=values_of(msg),
+        start_poses=np.array([[p.x, p.y, p.theta] for p in msg.start_poses]),  # type: ignore[attr-defined]
+        end_poses=np.array([[p.x, p.y, p.theta] for p in msg.end_poses]),  # type: ignore[attr-defined]
+    )

@@ -1,0 +1,39 @@
+"""adapt --graph: every candidate loaded into the controller nodes and run by the simulator node in the
+changed world, recorded; it chooses the same tree with the same fitness as the batch road."""
+
+import json
+
+from evolution_manager.adapt import adapt
+from evolution_manager.bags import read_bag
+from evolution_manager.nodes.trial import RESULT_TOPIC
+
+ITEMS = [
+    {"bin": [2, 4, 7], "tree": "reverse", "fitness": 0.95, "descriptors": [0.3, 0.55, 0.9], "evaluation": 1},
+    {"bin": [4, 6, 2], "tree": "sel(on_food, forward_left)", "fitness": 0.9, "descriptors": [0.5, 0.8, 0.3]},
+    {"bin": [7, 0, 0], "tree": "seq(food_left, forward)", "fitness": 0.6, "descriptors": [0.9, 0.1, 0.0]},
+]
+
+
+def test_graph_and_batch_roads_choose_the_same_tree(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    items = [{"evaluation": k, **item} for k, item in enumerate(ITEMS)]
+    (run / "repertoire_food.json").write_text(json.dumps({"items": items}))
+    args = ["--repertoire", str(run), "--objective", "food", "--budget", "2", "--trials", "1", "--seed", "5"]
+    args += ["--condition", "robots=5", "--condition", "dead-robots=2", "--condition", "message-loss=0.4"]
+    args += ["--no-stop"]
+    assert adapt([*args, "--out", str(tmp_path / "batch")]) == 0
+    assert adapt([*args, "--graph", "--out", str(tmp_path / "graph")]) == 0
+    batch = json.loads((tmp_path / "batch" / "adaptation.json").read_text())
+    graph = json.loads((tmp_path / "graph" / "adaptation.json").read_text())
+    assert graph["road"] == "graph" and batch["road"] == "batch"
+    assert (graph["tree"], graph["fitness"]) == (batch["tree"], batch["fitness"])
+    assert graph["tried"] == batch["tried"]
+    assert len(graph["tried"]) == 2
+    bags = sorted((tmp_path / "graph" / "bags").iterdir())
+    assert [b.name for b in bags] == ["evaluation_001_trial_00", "evaluation_002_trial_00"]
+    for bag, tried in zip(bags, graph["tried"], strict=True):
+        results = [m for m in read_bag(bag) if m.topic == RESULT_TOPIC]
+        assert len(results) == 1
+        assert results[0].message.tree == tried["tree"]
+        assert results[0].message.food == tried["fitness"]  # one trial: the evaluation is that trial
