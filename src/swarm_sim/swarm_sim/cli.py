@@ -6,7 +6,8 @@
 Prints ``{"tree", "seed", "trials", "profile", "conditions", "fitness": {density, nest, food}, "descriptors":
 {movement, rotation, conditionality}}`` (``conditions``: the world's changes, ``swarm_sim.conditions``, ``{}``
 for none; ``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start and end
-poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr, exit status 2.
+poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr, exit
+status 2.
 """
 
 from __future__ import annotations

@@ -32,6 +32,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder
@@ -58,11 +59,14 @@ numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time,
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
-def expected_messages(robots: int, namespace: str = "") -> dict[str, int]:
-    """How many messages each topic of a trial graph (``trial_topics``) carries in one trial."""
-    p = DEFAULT.params()
-    steps = p.settle_steps + p.ticks * p.steps_per_tick
-    per_trial = {TrialStart: 1, TreeStatus: p.ticks}
+def expected_messages(robots: int, namespace: str = "", trial: int = 0) -> dict[str, int]:
+    """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
+    every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
+    from, ``swarm_sim.lockstep.run_with_controllers``)."""
+    line = DEFAULT.timeline
+    trials = timeline.chain_of_trial(line, trial)[1] + 1
+    steps = trials * timeline.trial_steps(line)
+    per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
         for topic, msg_class in trial_topics(robots, namespace)
@@ -278,7 +282,7 @@ class TrialGraph:
                 recorder.arm()
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
-                expected = expected_messages(self.robots, self.namespace)
+                expected = expected_messages(self.robots, self.namespace, trial)
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
                     "the last messages",
