@@ -110,8 +110,9 @@ def test_replay_republishes_the_bag_in_order(tmp_path):
             for _ in range(20):
                 executor.spin_once(timeout_sec=0.05)
             assert replay.wait(timeout=10) == 0
-            assert "replayed 178 messages" in replay.stdout.read()
-            assert received == list(range(176))
+            steps = (TRIAL + 1) * 160  # the chain's steps up to and including trial TRIAL
+            assert f"replayed {steps + 2} messages" in replay.stdout.read()
+            assert received == list(range(1, steps + 1))
         finally:
             executor.shutdown()
             rclpy.shutdown(context=context)
