@@ -4,7 +4,7 @@
 controller processes once (the start-up is timed apart), runs trials of a few trees through them, and reports
 wall time per trial and simulated seconds per wall second, with and without recording every topic to a bag.
 It is a measurement, not a test: the figures depend on the machine and its load. The lockstep is bound by
-latency (176 round trips through ten processes a trial), so anything that keeps the CPUs from idling, a busy
+latency (160 round trips through ten processes a trial), so anything that keeps the CPUs from idling, a busy
 recorder included, makes trials faster: measured here, recorded trials ran faster than plain ones.
 """
 

@@ -354,7 +354,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
     parser.add_argument("--tree", required=True, help="the tree as text, or a file holding it")
     parser.add_argument("--seed", type=int, default=0, help="seed of the evaluation (default 0)")
-    parser.add_argument("--trial", type=int, default=0, help="index of the trial (default 0)")
+    parser.add_argument(
+        "--trial",
+        type=int,
+        default=0,
+        help="index of the trial (default 0); the earlier trials of its chain run (and are recorded) first",
+    )
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
