@@ -41,6 +41,8 @@ setup(
             "report = evolution_manager.report:main",
             "measure = evolution_manager.measure:main",
             "snapshot = evolution_manager.snapshot:main",
+            "animate = evolution_manager.animation:main",
+            "explorer = evolution_manager.explorer:main",
             "adapt = evolution_manager.adapt:main",
             "adapt-benchmark = evolution_manager.adapt_benchmark:main",
         ],

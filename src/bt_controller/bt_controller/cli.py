@@ -3,10 +3,12 @@
     bt check TREE_OR_FILE                  parse; print the canonical text, size and depth
     bt show TREE_OR_FILE [--format F]      print the tree (text view by default) or draw it (--output)
     bt export TREE_OR_FILE --output PATH   write the tree in a format (default: from PATH's suffix)
+    bt simplify TREE_OR_FILE               print the simplified tree: one line of tree text (it pipes)
 
 TREE_OR_FILE is tree text such as "sel(seq(in_nest, stop), forward)", a file holding tree text or
 BehaviorTree.CPP XML (recognised by a leading '<'), or '-' for standard input. Formats: text (a view with
 branch lines), tree (the canonical one-line text), xml (BehaviorTree.CPP v4), dot (Graphviz), svg, png.
+A simplified tree drives the wheels exactly as the tree does, tick for tick (bt_controller.simplify).
 Bad input gives one line on standard error and exit status 2.
 """
 
@@ -20,6 +22,7 @@ from typing import NoReturn
 from bt_controller.errors import TreeError, UsageError
 from bt_controller.formats import from_xml, to_ascii, to_dot, to_xml
 from bt_controller.render import RENDER_FORMATS, render
+from bt_controller.simplify import simplify
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 
@@ -94,10 +97,11 @@ def build_parser() -> argparse.ArgumentParser:
         ("check", "parse a tree; print its canonical text, size and depth"),
         ("show", "print a tree (text view by default), or draw it with --output"),
         ("export", "write a tree to --output (format from the suffix unless --format)"),
+        ("simplify", "print the simplified tree as one line of tree text"),
     ):
         sub = commands.add_parser(name, help=help_text)
         sub.add_argument("tree", metavar="TREE_OR_FILE", help="tree text, a file of text or XML, or -")
-        if name != "check":
+        if name in ("show", "export"):
             sub.add_argument("--format", "-f", choices=FORMATS, help="output format")
             sub.add_argument("--output", "-o", required=name == "export", help="output file ('-': stdout)")
         sub.add_argument("--max-nodes", type=int, default=MAX_NODES, help=f"node limit (default {MAX_NODES})")
@@ -115,6 +119,9 @@ def run(argv: list[str]) -> int:
     tree, _ = _load(args.tree, args.max_nodes, args.max_depth)
     if args.command == "check":
         print(f"ok: {tree.size} nodes, depth {tree.depth}: {to_text(tree)}")
+        return 0
+    if args.command == "simplify":
+        print(to_text(simplify(tree)))
         return 0
     fmt = args.format
     if fmt is None:

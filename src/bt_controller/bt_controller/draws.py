@@ -24,7 +24,9 @@ below, so any chain, any robot and any step can be replayed alone, by any road, 
 Seeds of a run (``evolution_manager``), each ``derive_seed(run seed, purpose, ...)``:
 ``RUN_EVALUATION, i`` is the simulator seed of evaluation ``i``; ``RUN_ALGORITHM`` seeds the algorithm's own
 generator; ``RUN_EXPERIMENT, a, o, r`` is the run seed of repetition ``r`` of algorithm ``a`` and objective
-``o`` in an experiment (keyed by the experiment's seed).
+``o`` in an experiment (keyed by the experiment's seed); ``RUN_SCENARIO`` is the default scenario seed of a
+run under fixed scenarios, and ``RUN_HELDOUT, k`` (keyed by the scenario seed) the seed of held-out
+evaluation ``k`` at the end of a run.
 
 All draw functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
 slowly, from plain Python. From Python, pass keys as ``np.uint64`` (e.g. ``derive(np.uint64(key), 3)``): a
@@ -101,6 +103,8 @@ PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
 RUN_EVALUATION = 1
 RUN_ALGORITHM = 2
 RUN_EXPERIMENT = 3
+RUN_SCENARIO = 4
+RUN_HELDOUT = 5
 
 
 def key_path(seed: int, *path: int) -> np.uint64:

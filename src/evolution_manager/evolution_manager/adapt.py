@@ -187,7 +187,7 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         number = len(search.tried)
         print(
             f"adapt: trial {number}/{args.budget}: bin {list(t.bin)} prior {t.prior:.4f} -> "
-            f"{t.fitness:.4f} (best {search.best.fitness:.4f})",  # type: ignore[union-attr]
+            f"{t.fitness:.4f} (best {search.best.fitness:.4f})",  # type: ignore[union-attr]  # set after a trial
             file=sys.stderr,
             flush=True,
         )

@@ -63,7 +63,7 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
     try:
         document = read_json(path)
         best: dict[tuple[int, ...], Candidate] = {}
-        for item in document["items"]:  # type: ignore[index]
+        for item in document["items"]:  # type: ignore[index]  # a repertoire file is a JSON object
             index = tuple(int(v) for v in item["bin"])
             descriptors = tuple(float(v) for v in item["descriptors"])
             fitness = float(item["fitness"])
@@ -263,7 +263,7 @@ class ConditionEvaluation:
         new = [t for t in dict.fromkeys(trees) if t not in self._cache]
         if new:
             requests = [EvaluationRequest(t, self.seed, self.trials) for t in new]
-            results = self.evaluator.evaluate(requests)  # type: ignore[attr-defined]
+            results = self.evaluator.evaluate(requests)  # type: ignore[attr-defined]  # an Evaluator
             self.simulated += len(new)
             for tree, result in zip(new, results, strict=True):
                 outcome = as_outcome(result)
@@ -308,7 +308,7 @@ def reevolve(
         outcomes = evaluate(batch)
         search.tell(outcomes)
         trees.extend(batch)
-        fitness.extend(o.fitness[k] for o in outcomes)  # type: ignore[index]
+        fitness.extend(o.fitness[k] for o in outcomes)  # type: ignore[index]  # None only for a failed evaluation
     return trees, fitness
 
 

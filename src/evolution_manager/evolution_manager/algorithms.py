@@ -7,9 +7,13 @@ drives them. Each owns a ``random.Random`` seeded from its configuration (see :m
 :meth:`to_state` / :meth:`from_state` turn it into JSON-able data and back, between a ``tell`` and the next
 ``ask``, so that a resumed run continues exactly where it stopped.
 
-A budget of evaluations is part of every algorithm: :meth:`ask` never proposes more trees than remain and
-:attr:`done` says when the budget is spent. Trees whose evaluation failed (``result.error``) count against
-the budget, never enter an archive and lose every tournament.
+A budget is part of every algorithm: it counts the individuals produced by the generations (GP) or
+batches (MAP-Elites) after the initial population, as the authors' generations do (paper, table 5: 1000
+generations of 25 individuals, 500 batches of 50), whether or not an individual needs evaluating (an
+offspring no operator touched keeps its parent's fitness and is not asked for). The initial population
+(25, 75 or 100 trees) comes on top. :attr:`done` says when the budget is spent; the generation or batch
+that reaches it is completed. Trees whose evaluation failed (``result.error``) never enter an archive and
+lose every tournament.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from bt_controller.validate import integer
 
 from .archive import Entry, Repertoire
 from .errors import AskTellError, ConfigError
-from .operators import best_of, half_and_half, tournament, vary
+from .operators import best_of, full_tree, tournament, vary
 from .parameters import GPParameters, QDParameters
 from .primitives import (
     OBJECTIVES,
@@ -86,21 +90,23 @@ class AskTell:
         self.rng = random.Random(seed)
         self.pset = make_primitive_set()
         self.evaluations = 0
+        self.produced = 0
+        """Individuals produced after the initial population: what the budget counts."""
         self._asked: list[BehaviourTree] | None = None
         self._asked_texts: list[str] = []
 
     @property
     def done(self) -> bool:
         """Whether the budget is spent."""
-        return self.evaluations >= self.budget
+        return self.produced >= self.budget
 
     def ask(self) -> list[str]:
-        """The next batch of tree texts to evaluate (never more than the remaining budget)."""
+        """The next batch of tree texts to evaluate (possibly empty when the last generation needed none)."""
         if self._asked is not None:
             raise AskTellError("ask() called twice: tell() the results of the last batch first")
         if self.done:
-            raise AskTellError(f"the budget of {self.budget} evaluations is spent")
-        batch = self._propose()[: self.budget - self.evaluations]
+            raise AskTellError(f"the budget of {self.budget} individuals is spent")
+        batch = self._propose()
         self._asked = batch
         self._asked_texts = [tree_to_text(tree) for tree in batch]
         return list(self._asked_texts)
@@ -117,6 +123,7 @@ class AskTell:
         outcomes = [as_outcome(r) for r in results]
         for tree, outcome in zip(batch, outcomes, strict=True):
             tree.fitness.values = outcome.fitness if outcome.ok else (FAILED,) * len(OBJECTIVES)
+            tree.descriptors = outcome.descriptors if outcome.ok else None
         self.evaluations += len(batch)
         self._accept(batch, outcomes, self._asked_texts)
 
@@ -135,6 +142,7 @@ class AskTell:
             "budget": self.budget,
             "seed": self.seed,
             "evaluations": self.evaluations,
+            "produced": self.produced,
             "rng": [version, list(internal), gauss],
             **self._state(),
         }
@@ -144,18 +152,27 @@ class AskTell:
             raise ValueError(f"a state of {state.get('algorithm')!r} cannot restore {self.name!r}")
         self.budget = int(state["budget"])
         self.evaluations = int(state["evaluations"])
+        self.produced = int(state.get("produced", state["evaluations"]))
         version, internal, gauss = state["rng"]
         self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
 
-    def _tree(self, text: str, fitness: Sequence[float] | None) -> BehaviourTree:
+    def _tree(
+        self, text: str, fitness: Sequence[float] | None, descriptors: Sequence[float] | None = None
+    ) -> BehaviourTree:
         tree = tree_from_text(text, self.pset)
         if fitness is not None:
             tree.fitness.values = tuple(float(v) for v in fitness)
+        if descriptors is not None:
+            tree.descriptors = tuple(float(v) for v in descriptors)
         return tree
 
     @staticmethod
     def _record(tree: BehaviourTree) -> list:
-        return [tree_to_text(tree), list(tree.fitness.values) if tree.fitness.valid else None]
+        return [
+            tree_to_text(tree),
+            list(tree.fitness.values) if tree.fitness.valid else None,
+            list(tree.descriptors) if tree.descriptors is not None else None,
+        ]
 
     # For subclasses ----------------------------------------------------------------------------------
     def _propose(self) -> list[BehaviourTree]:
@@ -209,12 +226,13 @@ class GeneticProgramming(AskTell):
         self.elites: list[list[BehaviourTree]] = [[] for _ in objectives]  # per objective, best first
         self.generation = 0
         self._offspring: list[BehaviourTree] = []
+        self._completed: list[list[BehaviourTree]] = []
 
     def _propose(self) -> list[BehaviourTree]:
         p = self.parameters
         if not self.population:
             self._offspring = [
-                half_and_half(self.pset, self.rng, p.init_min_height, p.init_max_height)
+                full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height)
                 for _ in range(p.population)
             ]
             return list(self._offspring)
@@ -227,18 +245,27 @@ class GeneticProgramming(AskTell):
                 parents, self.pset, self.rng, p.crossover, p.mutations, p.max_height, p.max_nodes
             )
             self._offspring = kept + offspring
+            self.produced += len(self._offspring)
             batch = [tree for tree in offspring if not tree.fitness.valid]
             if batch:
                 return batch
             self._next_generation(self._offspring)  # nothing changed: the generation is complete as it is
+            if self.done:
+                return []
 
     def _accept(self, batch: list[BehaviourTree], outcomes: list[Outcome], texts: list[str]) -> None:
-        evaluated = {id(tree) for tree in batch}
-        # Trees left unevaluated because the budget ran out are dropped.
-        generation = [t for t in self._offspring if t.fitness.valid or id(t) in evaluated]
-        self._next_generation(generation)
+        self._next_generation(self._offspring)
+
+    def take_generations(self) -> list[list[BehaviourTree]]:
+        """The populations of the generations completed since the last call, generation 1 onwards (the
+        initial population is not included): the individuals the authors' analysis offers to the
+        repertoire grid (charts/analysis.py:96-121)."""
+        taken, self._completed = self._completed, []
+        return taken
 
     def _next_generation(self, population: list[BehaviourTree]) -> None:
+        if self.population:  # not the initial population
+            self._completed.append(population)
         self.population = population
         self._offspring = []
         self.generation += 1
@@ -271,18 +298,20 @@ class GeneticProgramming(AskTell):
                 f"the state is for objectives {state['objectives']}, not {list(self.objectives)}"
             )
         self.generation = int(state["generation"])
-        self.population = [self._tree(text, fitness) for text, fitness in state["population"]]
-        self.elites = [[self._tree(text, fitness) for text, fitness in trees] for trees in state["elites"]]
+        self.population = [self._tree(*record) for record in state["population"]]
+        self.elites = [[self._tree(*record) for record in trees] for trees in state["elites"]]
 
 
 class MapElites(AskTell):
     """MAP-Elites (QD_o): a qdpy grid of 8 x 8 x 8 bins, 3 trees per bin, as the population.
 
-    First ``init_batch`` random trees (half-and-half); then, batch after batch, ``batch`` parents drawn
-    uniformly with replacement from the archive are varied by the GP operators (qdpy's ``qdSimple`` with
-    DEAP's ``varAnd``) and every touched offspring is evaluated and offered to the archive on ``objective``.
-    Parents are drawn from the archive in its canonical order (bin index, then arrival), so the draw does
-    not depend on the order in which qdpy keeps its items.
+    First ``init_batch`` random full trees; then, batch after batch, ``batch`` parents, each the winner of a
+    tournament of ``tournament`` items drawn uniformly with replacement from the archive (derated fitness,
+    see :mod:`.operators`; the authors' qdpy/ea.py:536-555), are varied by the GP operators (qdpy's
+    ``qdSimple`` with DEAP's ``varAnd``) and every touched offspring is evaluated and offered to the
+    archive on ``objective``. A tree the archive already holds is not stored again (qdpy/ea.py:394). Items
+    are drawn in the archive's canonical order (bin index, then arrival), so the draw does not depend on
+    the order in which qdpy keeps its items.
     """
 
     name = "qd"
@@ -299,6 +328,8 @@ class MapElites(AskTell):
             _check_probability(probability, f"the {mutation} mutation probability")
         if not 1 <= p.init_min_height <= p.init_max_height <= p.max_height:
             raise ConfigError("heights must satisfy 1 <= init_min_height <= init_max_height <= max_height")
+        if p.tournament < 1:
+            raise ConfigError(f"the tournament size must be >= 1, got {p.tournament}")
         self.objective = objective
         self.parameters = p
         self.archive = Repertoire()
@@ -306,21 +337,30 @@ class MapElites(AskTell):
 
     def _random_batch(self, size: int) -> list[BehaviourTree]:
         p = self.parameters
-        return [half_and_half(self.pset, self.rng, p.init_min_height, p.init_max_height) for _ in range(size)]
+        return [full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height) for _ in range(size)]
 
     def _propose(self) -> list[BehaviourTree]:
         p = self.parameters
         entries = self.archive.entries()
         if not entries:
+            if self.batches:  # every tree so far failed: start again, counted
+                self.produced += p.batch
+                return self._random_batch(p.batch)
             return self._random_batch(p.init_batch)
         while True:
-            parents = [self._parent(entries[self.rng.randrange(len(entries))]) for _ in range(p.batch)]
+            parents = [self._tournament(entries) for _ in range(p.batch)]
             offspring = vary(
                 parents, self.pset, self.rng, p.crossover, p.mutations, p.max_height, p.max_nodes
             )
+            self.produced += len(offspring)
             batch = [tree for tree in offspring if not tree.fitness.valid]
-            if batch:
+            if batch or self.done:
                 return batch
+
+    def _tournament(self, entries: list[Entry]) -> BehaviourTree:
+        size = self.parameters.tournament
+        aspirants = [self._parent(entries[self.rng.randrange(len(entries))]) for _ in range(size)]
+        return best_of(aspirants, self.objective)
 
     def _parent(self, entry: Entry) -> BehaviourTree:
         if entry.genome is None:

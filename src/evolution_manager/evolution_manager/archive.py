@@ -1,4 +1,9 @@
-"""Repertoires: qdpy grids of 8 x 8 x 8 bins over the behaviour descriptors, 3 trees per bin.
+"""Repertoires: qdpy grids of 8 x 8 x 8 bins over the behaviour descriptors, 3 trees per bin (or 1).
+
+Metrics as the authors' analysis (charts/analysis.py:61-88): coverage = filled bins / 512; QD score = the sum
+over filled bins of the best fitness in the bin, divided by 512; repertoire size (paper, fig. 8) = filled
+bins. A tree text is stored at most once per grid (the authors' qdpy/ea.py:394 drops an offspring the
+container already holds): a tree offered again is refused, whatever its fitness.
 
 A :class:`Repertoire` wraps a ``qdpy.containers.Grid`` and keeps for every stored tree its text, its
 fitness on one objective, its descriptors and the index of the evaluation that produced it. The same
@@ -21,8 +26,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-from qdpy.containers import Grid
-from qdpy.phenotype import Features, Fitness, ScoresDict
+
+from .qdpy_grid import Features, Fitness, Grid, ScoresDict
 
 GRID_SHAPE: tuple[int, int, int] = (8, 8, 8)
 ITEMS_PER_BIN = 3
@@ -136,6 +141,7 @@ class Repertoire:
             fitness_weights=WEIGHTS,
         )
         self.offered = 0
+        self._held: set[str] = set()
 
     def offer(
         self,
@@ -151,11 +157,20 @@ class Repertoire:
         if len(descriptors) != len(self.shape):
             raise ValueError(f"expected {len(self.shape)} descriptors, got {len(descriptors)}")
         self.offered += 1
+        if tree in self._held:
+            return False
         # qdpy would refuse a tree no better than the worst of a full bin: say so without building an entry
-        held = self.grid.solutions[self.grid._index_grid_features(descriptors)]
+        index = self.grid._index_grid_features(descriptors)
+        held = self.grid.solutions[index]
         if len(held) >= self.items_per_bin and fitness <= min(e.value for e in held):
             return False
-        return self.grid.add(Entry(tree, fitness, descriptors, evaluation, genome)) is not None
+        before = [e.tree for e in held]
+        if self.grid.add(Entry(tree, fitness, descriptors, evaluation, genome)) is None:
+            return False
+        after = {e.tree for e in self.grid.solutions[index]}
+        self._held.difference_update(t for t in before if t not in after)
+        self._held.add(tree)
+        return True
 
     def bin_of(self, descriptors: tuple[float, ...]) -> tuple[int, ...]:
         """The bin index of a descriptor vector."""
@@ -179,17 +194,35 @@ class Repertoire:
 
     @property
     def filled_bins(self) -> int:
+        """Filled bins: the repertoire size of the paper's fig. 8."""
         return int(self.grid.filled_bins)
+
+    @property
+    def bin_count(self) -> int:
+        return math.prod(self.shape)
 
     @property
     def coverage(self) -> float:
         """Filled bins / all bins."""
-        return self.filled_bins / math.prod(self.shape)
+        return self.filled_bins / self.bin_count
 
     @property
     def qd_score(self) -> float:
-        """The sum over filled bins of the best fitness in the bin (from qdpy's per-bin quality array)."""
-        return math.fsum(float(v) for v in self.grid.quality_array[..., 0].ravel() if v == v)
+        """The sum over filled bins of the best fitness in the bin, divided by the number of bins (512), as
+        the authors' analysis (charts/analysis.py:83-86); from qdpy's per-bin quality array."""
+        total = math.fsum(float(v) for v in self.grid.quality_array[..., 0].ravel() if v == v)
+        return total / self.bin_count
+
+    def best_entries(self) -> list[tuple[tuple[int, ...], Entry]]:
+        """The best item of every filled bin (the first to arrive among equals), in bin order."""
+        chosen = []
+        for index, entries in self.bins():
+            best = entries[0]
+            for entry in entries[1:]:
+                if entry.value > best.value:
+                    best = entry
+            chosen.append((index, best))
+        return chosen
 
     @property
     def best_value(self) -> float | None:
@@ -255,17 +288,19 @@ class Repertoire:
                     raise ValueError(f"an item of bin {record['bin']} has descriptors of another bin")
                 if repertoire.grid.add(entry) is None:
                     raise ValueError(f"bin {record['bin']} holds more than {repertoire.items_per_bin} items")
+                repertoire._held.add(entry.tree)
         repertoire.offered = int(state["offered"])
         return repertoire
 
     @classmethod
-    def from_items(cls, items: list[dict]) -> Repertoire:
+    def from_items(cls, items: list[dict], items_per_bin: int = ITEMS_PER_BIN) -> Repertoire:
         """Rebuild a repertoire from the ``items`` of a repertoire file (bin by bin, in order of arrival)."""
-        repertoire = cls()
+        repertoire = cls(items_per_bin=items_per_bin)
         for item in items:
             descriptors = tuple(float(d) for d in item["descriptors"])
             entry = Entry(str(item["tree"]), float(item["fitness"]), descriptors, int(item["evaluation"]))
             if repertoire.grid.add(entry) is None:
                 raise ValueError(f"bin {item['bin']} holds more than {repertoire.items_per_bin} items")
+            repertoire._held.add(entry.tree)
         repertoire.offered = len(items)
         return repertoire

@@ -13,7 +13,10 @@ reads such a file as a stream and writes a whole bag holding every message of th
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+import shutil
+import struct
+import tempfile
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,8 +26,10 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .errors import BagError
+from .processes import Lock, exclusive_lock, is_locked, lock_holder
 
 INTERFACE_PACKAGE = "swarm_msgs"
+LOCK_NAME = ".lock"  # in a bag directory while a recorder writes it
 
 
 def swarm_msgs_definitions() -> dict[str, str]:
@@ -60,23 +65,51 @@ class BagRecorder:
 
     def __init__(self, path: Path | str, typestore: Typestore | None = None) -> None:
         self.path = Path(path)
-        if self.path.exists():
-            raise BagError(f"refusing to overwrite {self.path}: choose a new bag directory")
+        check_new_bag(self.path)
         self.typestore = typestore or swarm_typestore()
         self._writer: Writer | None = None
+        self._lock: Lock | None = None
         self._connections: dict[str, Any] = {}
         self.count = 0
 
     def __enter__(self) -> BagRecorder:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
-        self._writer.open()
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
+            self._writer.open()  # creates the directory, or fails if another writer did
+        except OSError as error:
+            self._writer = None
+            raise BagError(f"cannot write a bag at {self.path}: {error.strerror or error}") from None
+        except Exception as error:  # rosbags' WriterError: the directory appeared meanwhile
+            self._writer = None
+            check_new_bag(self.path)
+            raise BagError(f"cannot write a bag at {self.path}: {error}") from None
+        self._lock = exclusive_lock(self.path / LOCK_NAME, f"the bag {self.path}")
         return self
 
     def __exit__(self, *exc_info: object) -> None:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
+        if self._lock is not None:
+            (self.path / LOCK_NAME).unlink(missing_ok=True)  # our own directory: nobody else opens it
+            self._lock.release()
+            self._lock = None
+
+    def flush(self, sync: bool = False) -> None:
+        """Put every message written so far on disk as a whole MCAP chunk, so that a kill from now on loses
+        none of them (``recover`` reads them back); with ``sync``, also wait for the disk."""
+        # rosbags' MCAP writer (McapWriter) keeps the pending chunk and the file; its protocol type does not
+        # show them, hence Any.
+        storage: Any = None if self._writer is None else self._writer.storage
+        if storage is None:
+            return
+        # rosbags closes a chunk only at 1 MiB or at the end; close the pending one now.
+        if storage.chunk.bio.tell():
+            storage.close_chunk()
+        storage.bio.flush()
+        if sync:
+            os.fsync(storage.bio.fileno())
 
     def write_cdr(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes | memoryview) -> None:
         """Record one message given as CDR bytes (as an rclpy ``raw=True`` subscription delivers it)."""
@@ -121,6 +154,29 @@ def read_bag(path: Path | str, typestore: Typestore | None = None) -> Iterator[B
     return _messages(path, typestore or swarm_typestore())
 
 
+def check_new_bag(path: Path) -> None:
+    """Raise ``BagError`` when ``path`` cannot be a new bag: it exists (naming the process that is writing it,
+    if one is)."""
+    if not path.exists():
+        return
+    lock = path / LOCK_NAME
+    if is_locked(lock):
+        holder = lock_holder(lock)
+        raise BagError(f"{path} is being written by {f'process {holder}' if holder else 'another process'}")
+    raise BagError(f"refusing to overwrite {path}: choose a new bag directory")
+
+
+def check_not_being_written(path: Path) -> None:
+    """Raise ``BagError`` when a live recorder still writes the bag at ``path``."""
+    lock = Path(path) / LOCK_NAME
+    if is_locked(lock):
+        holder = lock_holder(lock)
+        raise BagError(
+            f"{path} is still being written by {f'process {holder}' if holder else 'another process'}: "
+            "wait for it to end"
+        )
+
+
 def check_bag(path: Path) -> None:
     """Raise ``BagError`` saying what is wrong when ``path`` is not a whole rosbag2 bag."""
     if not path.exists():
@@ -132,39 +188,117 @@ def check_bag(path: Path) -> None:
         )
 
 
+def topic_counts(path: Path) -> dict[str, int]:
+    """How many messages each topic of the whole bag at ``path`` holds (from its index, reading none)."""
+    check_bag(path)
+    try:
+        with Reader(path) as reader:
+            counts: dict[str, int] = {}
+            for connection in reader.connections:
+                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
+            return counts
+    except Exception as error:  # rosbags' ReaderError, a damaged metadata.yaml
+        raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
+
+
 def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:
-    with Reader(path) as reader:
-        for connection, timestamp, data in reader.messages():
-            message = store.deserialize_cdr(data, connection.msgtype)
-            yield BagMessage(connection.topic, connection.msgtype, timestamp, bytes(data), message)
+    try:
+        with Reader(path) as reader:
+            for connection, timestamp, data in reader.messages():
+                message = store.deserialize_cdr(data, connection.msgtype)
+                yield BagMessage(connection.topic, connection.msgtype, timestamp, bytes(data), message)
+    except BagError:
+        raise
+    except Exception as error:  # rosbags' ReaderError, a truncated MCAP file, a damaged metadata.yaml
+        raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
 
 
-def recover_bag(damaged: Path | str, recovered: Path | str) -> int:
-    """Write a whole bag at ``recovered`` from every message that reached the disk in the MCAP file(s) of a
-    bag whose writer was killed; return the number of messages recovered."""
+def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
+    """(topic, type, timestamp, CDR bytes) of every message that reached the disk in the MCAP file(s) of a bag
+    whose writer may have been killed, in file order; a truncated tail is skipped."""
     from mcap.exceptions import McapError
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
 
     damaged = Path(damaged)
     files = sorted(damaged.glob("*.mcap")) if damaged.is_dir() else [damaged]
+    for file in files:
+        schemas: dict[int, str] = {}
+        channels: dict[int, tuple[str, str]] = {}
+        with file.open("rb") as stream:
+            try:
+                for record in StreamReader(stream, emit_chunks=False).records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record.name
+                    elif isinstance(record, Channel):
+                        channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
+                    elif isinstance(record, Message) and record.channel_id in channels:
+                        topic, msgtype = channels[record.channel_id]
+                        yield topic, msgtype, record.log_time, bytes(record.data)
+            except (McapError, EOFError, ValueError, OSError, AssertionError, struct.error):
+                pass  # the truncated tail: everything before it is kept
+
+
+def recover_bag(damaged: Path | str, recovered: Path | str) -> int:
+    """Write a whole bag at ``recovered`` from every message that reached the disk in the MCAP file(s) of a
+    bag whose writer was killed; return the number of messages recovered. Raises ``BagError`` when nothing
+    could be recovered from a non-empty file (it is not an MCAP file, or no whole chunk reached the disk)."""
+    damaged = Path(damaged)
+    check_not_being_written(damaged)
+    files = sorted(damaged.glob("*.mcap")) if damaged.is_dir() else [damaged]
     if not files:
         raise BagError(f"no MCAP file found in {damaged}")
-    typestore = swarm_typestore()
-    with BagRecorder(recovered, typestore) as recorder:
-        for file in files:
-            schemas: dict[int, str] = {}
-            channels: dict[int, tuple[str, str]] = {}
-            with file.open("rb") as stream:
-                try:
-                    for record in StreamReader(stream, emit_chunks=False).records:
-                        if isinstance(record, Schema):
-                            schemas[record.id] = record.name
-                        elif isinstance(record, Channel):
-                            channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
-                        elif isinstance(record, Message) and record.channel_id in channels:
-                            topic, msgtype = channels[record.channel_id]
-                            recorder.write_cdr(topic, msgtype, record.log_time, record.data)
-                except (McapError, EOFError, ValueError, OSError):
-                    pass  # the truncated tail: everything before it is kept
+    check_new_bag(Path(recovered))
+    messages = list(stream_messages(damaged))
+    size = sum(f.stat().st_size for f in files)
+    if not messages and size > 0:
+        raise BagError(
+            f"nothing could be recovered from {damaged} ({size} bytes): not an MCAP file, or no whole chunk "
+            "of messages reached the disk"
+        )
+    with BagRecorder(recovered, swarm_typestore()) as recorder:
+        for topic, msgtype, timestamp, data in messages:
+            recorder.write_cdr(topic, msgtype, timestamp, data)
         return recorder.count
+
+
+def rewrite_bag(
+    path: Path, keep: Callable[[str, str, int, bytes], bool], typestore: Typestore | None = None
+) -> int:
+    """Replace the bag at ``path`` (whole, or left by a killed writer) by a whole bag of the messages for
+    which ``keep(topic, type, timestamp, data)`` is true; return how many were kept.
+
+    The new bag is written aside (``.<name>.rewrite-*/<name>``) and swapped in with two renames, the old one
+    kept as ``.<name>.old-*`` until the swap is done; :func:`finish_rewrites` completes or undoes a swap
+    interrupted by a kill."""
+    path = Path(path)
+    if (path / "metadata.yaml").exists():
+        messages = [(m.topic, m.msgtype, m.timestamp_ns, m.data) for m in read_bag(path, typestore)]
+    else:
+        messages = list(stream_messages(path))
+    aside = Path(tempfile.mkdtemp(prefix=f".{path.name}.rewrite-", dir=path.parent))
+    kept = 0
+    with BagRecorder(aside / path.name, typestore) as recorder:
+        for topic, msgtype, timestamp, data in messages:
+            if keep(topic, msgtype, timestamp, data):
+                recorder.write_cdr(topic, msgtype, timestamp, data)
+        kept = recorder.count
+    old = path.parent / f".{path.name}.old-{aside.name.rsplit('-', 1)[1]}"
+    os.rename(path, old)
+    os.rename(aside / path.name, path)
+    shutil.rmtree(old)
+    shutil.rmtree(aside)
+    return kept
+
+
+def finish_rewrites(folder: Path) -> None:
+    """Complete or undo what :func:`rewrite_bag` calls killed half-way left in ``folder``: a bag moved aside
+    whose replacement never arrived is put back; leftovers are removed."""
+    for old in sorted(Path(folder).glob(".*.old-*")):
+        name = old.name[1:].rsplit(".old-", 1)[0]
+        if not (old.parent / name).exists():
+            os.rename(old, old.parent / name)
+        else:
+            shutil.rmtree(old, ignore_errors=True)
+    for aside in Path(folder).glob(".*.rewrite-*"):
+        shutil.rmtree(aside, ignore_errors=True)

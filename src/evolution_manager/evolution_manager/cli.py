@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
+from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, SCENARIOS, RunConfig
 from .errors import EvolutionError, UsageError
 
 if TYPE_CHECKING:  # imported where used: tqdm and the simulator load slowly, and not every command needs them
@@ -60,6 +60,22 @@ def seconds(text: str) -> float:
     return value
 
 
+def add_scenario_options(parser: argparse.ArgumentParser) -> None:
+    """``--scenarios fixed|fresh`` and ``--scenario-seed S`` (shared by evolve, manager, experiment and the
+    main job)."""
+    parser.add_argument(
+        "--scenarios",
+        choices=SCENARIOS,
+        help="fixed: every evaluation on the run's scenario seed, repeats not simulated again (default); "
+        "fresh: a new scenario per evaluation",
+    )
+    parser.add_argument(
+        "--scenario-seed",
+        type=seed_int,
+        help="the scenario seed of fixed scenarios (default: derived from the run seed; in config.json)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``evolve`` command line."""
     parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
@@ -70,9 +86,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
     )
     budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
-    parser.add_argument("--evaluations", type=positive_int, help=f"evaluation budget (default: {budgets})")
+    parser.add_argument(
+        "--evaluations",
+        type=positive_int,
+        help=f"budget of individuals produced after the initial population (default: {budgets})",
+    )
     parser.add_argument("--seed", type=seed_int, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
+    add_scenario_options(parser)
     parser.add_argument(
         "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
     )
@@ -100,7 +121,20 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
     if args.algorithm == "gp-fnd" and args.objective is not None:
         raise UsageError("--algorithm gp-fnd evolves all three objectives at once: leave out --objective")
     seed = 0 if args.seed is None else args.seed
-    return RunConfig.make(args.algorithm, args.objective, args.evaluations, seed, args.trials or 10)
+    if args.scenario_seed is not None and args.scenarios == "fresh":
+        raise UsageError("--scenario-seed applies to --scenarios fixed; leave it out with fresh")
+    try:
+        return RunConfig.make(
+            args.algorithm,
+            args.objective,
+            args.evaluations,
+            seed,
+            args.trials or 10,
+            scenarios=args.scenarios or "fixed",
+            scenario_seed=args.scenario_seed,
+        )
+    except EvolutionError as error:
+        raise UsageError(str(error).replace("the scenario seed", "--scenario-seed")) from None
 
 
 def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
@@ -110,11 +144,14 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         "evaluations": args.evaluations,
         "seed": args.seed,
         "trials": args.trials,
+        "scenarios": getattr(args, "scenarios", None),
+        "scenario_seed": getattr(args, "scenario_seed", None),
     }
     for name, value in given.items():
         if value is not None and value != getattr(saved, name):
             raise UsageError(
-                f"--{name} {value} differs from the run being resumed ({getattr(saved, name)}); "
+                f"--{name.replace('_', '-')} {value} differs from the run being resumed "
+                f"({getattr(saved, name)}); "
                 "leave it out or start a new run in another --out"
             )
 
@@ -193,16 +230,36 @@ def evolve(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     if bar is not None:
         bar.close()
-    write_results(run, with_figures=not args.no_figures)
-    summary = run.passive
-    lines = [
-        f"{o}: best {summary[o].best_value:.4f}, coverage {summary[o].coverage:.4f}, "
-        f"QD score {summary[o].qd_score:.2f}"
-        for o in run.config.objectives
-        if summary[o].best_value is not None
-    ]
-    print(f"{run.config.label}: {run.evaluations} evaluations in {args.out}\n" + "\n".join(lines))
+    write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+    print(result_lines(run, args.out))
     return 0
+
+
+def result_lines(run: object, out: Path) -> str:
+    """What a finished run prints: evaluations, simulations saved, and per objective the in-run and
+    held-out scores (from its summary.json)."""
+    from .files import read_json
+
+    summary = read_json(Path(out) / "summary.json")
+    assert isinstance(summary, dict)
+    lines = [
+        f"{summary['run']}: {summary['individuals_produced']} individuals produced, "
+        f"{summary['evaluations']} evaluations, {summary['simulations']} simulated "
+        f"({summary['simulations_saved']} answered from the fixed scenario's cache) in {out}"
+    ]
+    for objective, m in summary["objectives"].items():
+        if not m["evolved"] or m["best_fitness"] is None:
+            continue
+        held = m["heldout_best_fitness"]
+        held_qd = m["heldout_qd_score"]
+        lines.append(
+            f"{objective}: best {m['best_fitness']:.4f}"
+            + (f" (held-out {held:.4f})" if held is not None else "")
+            + f", coverage {m['coverage']:.4f}, QD score {m['qd_score']:.4f}"
+            + (f" (held-out {held_qd:.4f})" if held_qd is not None else "")
+            + f", {m['repertoire_size']} filled bins"
+        )
+    return "\n".join(lines)
 
 
 def main() -> None:

@@ -1,7 +1,12 @@
 """The configuration of one run: algorithm, objective, budget, seed; and the per-evaluation seeds.
 
-Defaults follow ``shared/design/model.md`` ("Algorithms"): GP_o and QD_o spend 25,000 evaluations on one
-objective, GP_fnd 75,000 on all three at once.
+Defaults follow ``docs/model.md`` ("Algorithms"): GP_o and QD_o produce 25,000 individuals on one objective,
+GP_fnd 75,000 on all three at once (the budget counts individuals produced by the generations after the
+initial population, as the paper's table 5: 1000 generations of 25, 500 batches of 50).
+
+Scenarios: under ``fixed`` (the default, as the authors) every evaluation of a run uses the run's scenario
+seed, so a tree has one exact fitness and a tree seen before need not be simulated again; under ``fresh``
+evaluation ``i`` draws its own seed from the run seed and ``i`` (noisy fitness).
 """
 
 from __future__ import annotations
@@ -9,7 +14,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
-from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_EVALUATION, derive_seed
+from bt_controller.draws import (
+    MAX_SEED,
+    RUN_ALGORITHM,
+    RUN_EVALUATION,
+    RUN_HELDOUT,
+    RUN_SCENARIO,
+    derive_seed,
+)
 from bt_controller.validate import integer
 
 from .errors import ConfigError
@@ -28,6 +40,17 @@ DEFAULT_EVALUATIONS = {"gp": 25_000, "gp-fnd": 75_000, "qd": 25_000}
 
 LABELS = {"gp": "GP_o", "gp-fnd": "GP_fnd", "qd": "QD_o"}
 
+SCENARIOS: tuple[str, ...] = ("fixed", "fresh")
+"""``fixed``: every evaluation of a run on the run's scenario seed; ``fresh``: a new seed per evaluation."""
+
+HELDOUT_EVALUATIONS = 5
+"""Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
+
+
+def default_scenario_seed(run_seed: int) -> int:
+    """The scenario seed of a run when none is given: derived from the run seed."""
+    return derive_seed(run_seed, RUN_SCENARIO)
+
 
 @dataclass(frozen=True)
 class RunConfig:
@@ -40,6 +63,9 @@ class RunConfig:
     trials: int = 10
     gp: GPParameters = field(default_factory=GPParameters)
     qd: QDParameters = field(default_factory=QDParameters)
+    scenarios: str = "fixed"
+    scenario_seed: int = -1
+    """-1: derived from ``seed`` (see :func:`default_scenario_seed`); replaced by the value at creation."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -54,18 +80,50 @@ class RunConfig:
         integer(self.evaluations, "evaluations", 1, error=ConfigError)
         integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
         integer(self.trials, "trials", 1, error=ConfigError)
+        if self.scenarios not in SCENARIOS:
+            raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
+        if self.scenario_seed == -1:  # frozen: set once, at creation
+            object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
+        integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
 
     @classmethod
     def make(
-        cls, algorithm: str, objective: str | None, evaluations: int | None, seed: int, trials: int = 10
+        cls,
+        algorithm: str,
+        objective: str | None,
+        evaluations: int | None,
+        seed: int,
+        trials: int = 10,
+        scenarios: str = "fixed",
+        scenario_seed: int | None = None,
     ) -> RunConfig:
         """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
-        for gp-fnd) and its default budget when ``evaluations`` is None."""
+        for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
+        ``seed`` when ``scenario_seed`` is None."""
         if algorithm not in ALGORITHMS:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
         gp = GPParameters(population=75, tournament=5) if algorithm == "gp-fnd" else GPParameters()
         budget = DEFAULT_EVALUATIONS[algorithm] if evaluations is None else evaluations
-        return cls(algorithm, objective, budget, seed, trials, gp=gp)
+        return cls(
+            algorithm,
+            objective,
+            budget,
+            seed,
+            trials,
+            gp=gp,
+            scenarios=scenarios,
+            scenario_seed=-1 if scenario_seed is None else scenario_seed,
+        )
+
+    def request_seed(self, index: int) -> int:
+        """The simulator seed of evaluation ``index`` (0-based) of this run: the scenario seed under
+        ``fixed``; under ``fresh`` a seed of its own, a pure function of the run seed and the index."""
+        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+
+    def heldout_seed(self, repeat: int) -> int:
+        """The seed of held-out evaluation ``repeat`` (0 to ``HELDOUT_EVALUATIONS`` - 1), the same for every
+        tree re-scored at the end of the run: scenarios the run never used."""
+        return derive_seed(self.scenario_seed, RUN_HELDOUT, repeat)
 
     @property
     def objectives(self) -> tuple[str, ...]:
@@ -100,6 +158,9 @@ class RunConfig:
                 int(data["trials"]),
                 gp=GPParameters(**gp),
                 qd=QDParameters(**qd),
+                # run directories written before scenarios existed drew a fresh seed per evaluation
+                scenarios=str(data.get("scenarios", "fresh")),
+                scenario_seed=int(data.get("scenario_seed", -1)),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, ConfigError):

@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import signal
+
 from bt_controller.errors import UsageError
 from swarm_sim.errors import ConfigError as WorldConfigError
 
 __all__ = [
+    "AnimationError",
     "AskTellError",
     "BagError",
     "ConfigError",
     "DispatchError",
     "EvolutionError",
+    "ExplorerError",
     "GraphError",
+    "Interrupted",
+    "LockHeldError",
     "NoEvaluatorError",
     "RunDirectoryError",
     "TreeTextError",
@@ -59,3 +65,27 @@ class GraphError(RuntimeError):
 
 class TrialFailedError(RuntimeError):
     """The trial could not be run through the graph; the message says why."""
+
+
+class LockHeldError(EvolutionError):
+    """Another process holds a lock (of a run directory or a bag); the message names it and its PID."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived; ``exit_status`` is 128 + the signal number (130 or 143)."""
+
+    def __init__(self, signum: int = signal.SIGINT) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum
+
+
+class AnimationError(EvolutionError):
+    """A trial animation could not be made (a bag that is no trial bag, a format or encoder missing)."""
+
+
+class ExplorerError(EvolutionError):
+    """A run directory's explorer page could not be built (no repertoire files, a damaged file)."""

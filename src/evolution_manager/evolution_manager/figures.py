@@ -53,8 +53,9 @@ def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
 
 
 def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path:
-    """Fitness of every tree in each repertoire (fig. 8): one row per objective, one panel per algorithm
-    (in the order given), each titled with the repertoire's size. ``rows[objective][algorithm label]``."""
+    """The best fitness of every filled bin of each repertoire (fig. 8, as the authors' analysis): one row
+    per objective, one panel per algorithm (in the order given), each titled with the repertoire's size in
+    filled bins. ``rows[objective][algorithm label]``."""
     objectives = list(rows)
     columns = max(len(row) for row in rows.values())
     figure, axes = plt.subplots(
@@ -68,7 +69,7 @@ def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path
                 axis.axis("off")
                 continue
             label, repertoire = list(rows[objective].items())[j]
-            values = [e.value for e in repertoire.entries()]
+            values = list(repertoire.best_per_bin().values())
             axis.hist(values, bins=bins, color="tab:blue")
             axis.set_title(f"{objective}: {label}, {len(values)} solutions", fontsize=9)
             axis.set_xlim(0.0, 1.0)
@@ -80,11 +81,15 @@ def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path
 
 
 def progress(
-    curves: Mapping[str, Sequence[Mapping[str, str]]], path: Path, objectives: Sequence[str]
+    curves: Mapping[str, Sequence[Mapping[str, str]]],
+    path: Path,
+    objectives: Sequence[str],
+    heldout: Mapping[str, Mapping[str, tuple[float, float | None, float | None]]] | None = None,
 ) -> Path:
     """Best fitness, coverage and QD score against evaluations, one line per curve label and objective.
     Each curve is a list of progress rows (``evaluations``, ``best_<o>``, ``coverage_<o>``,
-    ``qd_score_<o>``)."""
+    ``qd_score_<o>``). ``heldout[label][objective]`` = (evaluations, held-out best fitness, held-out QD
+    score) adds the held-out scores as hollow markers in the curve's colour."""
     metrics = ("best", "coverage", "qd_score")
     figure, axes = plt.subplots(1, 3, figsize=(14, 3.8))
     for label, rows in curves.items():
@@ -96,7 +101,20 @@ def progress(
                     for r in rows
                 ]
                 name = label if len(objectives) == 1 else f"{label} {objective}"
-                axis.plot(x, y, label=name, linewidth=1.2)
+                (line,) = axis.plot(x, y, label=name, linewidth=1.2)
+                held = (heldout or {}).get(label, {}).get(objective)
+                value = None if held is None or metric == "coverage" else held[1 if metric == "best" else 2]
+                if held is not None and value is not None:
+                    axis.plot(
+                        [held[0]],
+                        [value],
+                        marker="o",
+                        markersize=7,
+                        markerfacecolor="none",
+                        color=line.get_color(),
+                        linestyle="none",
+                        label=f"{name} held-out",
+                    )
     for axis, metric in zip(axes, metrics, strict=True):
         axis.set_xlabel("evaluations")
         axis.set_title(metric.replace("_", " "))

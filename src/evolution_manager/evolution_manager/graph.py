@@ -4,7 +4,9 @@ A full ROS 2 install would use ``ros2 launch`` (see the launch files in ``launch
 ``launch``, so this module starts the installed executables itself, each in its own process, all in one ROS
 domain, and stops them with SIGINT, then SIGKILL for any that does not stop in time. Each node's output and
 its ROS log files (``ROS_LOG_DIR``) go to the graph's log directory when it has one. Nothing here imports
-``rclpy``.
+``rclpy``. Every
+process it starts dies with the process that started it, whatever kills that one
+(``processes.die_with_parent``).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from ament_index_python.packages import (
 )
 
 from evolution_manager.errors import GraphError
+from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
 
@@ -93,9 +96,19 @@ class Graph:
             stdout=output,
             stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL,
+            preexec_fn=die_with_parent,
         )
         self.processes[name] = process
         return process
+
+    def exited(self) -> list[str]:
+        """The names of the processes that have exited (they stay known until :meth:`forget`)."""
+        return [name for name, p in self.processes.items() if p.poll() is not None]
+
+    def forget(self, name: str) -> None:
+        """Forget an exited process (so that its name can be started again)."""
+        process = self.processes.pop(name)
+        process.wait()
 
     def check(self) -> None:
         """Raise ``GraphError`` naming every process that has exited."""

@@ -9,10 +9,20 @@ not change when another library draws from the global generator. Where DEAP choo
 common types of ``cxOnePoint``) we choose from a sorted list, so results do not depend on
 ``PYTHONHASHSEED``.
 
-Differences from DEAP, all deliberate: the tournament breaks exact ties in fitness by preferring the
-shorter tree (lower height, then fewer nodes) when one of them is deeper than ``PARSIMONY_HEIGHT`` (paper,
-section 3.3); and :func:`vary` applies each of the three mutations independently with its own probability
-(paper, table 5) where DEAP's ``varAnd`` has one mutation.
+Choices taken from the authors' code (KirstyMontague/big-mad-robot-repo at 6c65001), cited by file:line:
+
+- initial trees are DEAP ``genFull`` trees of height 1-4 (gp/ea.py:61, qdpy/main.py:150);
+- the insert mutation is DEAP's ``mutUniform`` with a full subtree of height 0-2 (gp/ea.py:74-75,
+  qdpy/main.py:163-164): a random node's subtree is replaced by a new full tree;
+- :func:`vary` applies each of the three mutations independently with its own probability, in the order
+  insert, shrink, replace (gp/ea.py:104-120; paper, table 5), where DEAP's ``varAnd`` has one mutation;
+- **bloat control**: every selection (tournaments, elites, MAP-Elites parents) compares the fitness
+  multiplied by a length derating, 1 - (nodes - 10) / 990 above 10 nodes (gp/ea.py:762-770, used at
+  gp/ea.py:784 and 815, qdpy/ea.py:599); stored fitness is never derated. Exact ties in derated fitness
+  go to the challenger when the holder is taller than ``PARSIMONY_HEIGHT`` and the challenger is shorter
+  (gp/ea.py:794; the paper's section 3.3 states only this tie-break). The paper's rule alone hardly acts
+  (exact ties are rare on continuous fitness), the derating acts on every comparison: we follow the code,
+  which produced the paper's numbers.
 """
 
 from __future__ import annotations
@@ -25,7 +35,10 @@ from deap import gp
 from .primitives import BehaviourTree
 
 PARSIMONY_HEIGHT = 3
-"""Exact ties in fitness prefer the shorter tree when either tree is deeper than this (paper, 3.3)."""
+"""Exact ties in derated fitness prefer a shorter challenger when the holder is taller than this."""
+
+DERATING_FREE_NODES = 10
+DERATING_SPAN = 990
 
 
 def generate(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_height: int, grow: bool) -> list:
@@ -45,12 +58,9 @@ def generate(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_hei
     return nodes
 
 
-def half_and_half(
-    pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_height: int
-) -> BehaviourTree:
-    """DEAP's ``genHalfAndHalf``: a grown or a full tree, each with probability 1/2."""
-    grow = rng.random() < 0.5
-    return BehaviourTree(generate(pset, rng, min_height, max_height, grow))
+def full_tree(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_height: int) -> BehaviourTree:
+    """DEAP's ``genFull``: every leaf at the same depth, drawn in [min_height, max_height]."""
+    return BehaviourTree(generate(pset, rng, min_height, max_height, grow=False))
 
 
 def cx_one_point(first: BehaviourTree, second: BehaviourTree, rng: random.Random) -> None:
@@ -64,20 +74,16 @@ def cx_one_point(first: BehaviourTree, second: BehaviourTree, rng: random.Random
     first[slice1], second[slice2] = second[slice2], first[slice1]
 
 
+INSERT_MIN_HEIGHT = 0
+INSERT_MAX_HEIGHT = 2
+
+
 def mut_insert(tree: BehaviourTree, pset: gp.PrimitiveSet, rng: random.Random) -> None:
-    """DEAP's ``mutInsert``, in place: a new composite takes the subtree at a random node as one child;
-    its other children are random terminals."""
+    """The insert mutation as the authors' ``mutUniform``, in place: the subtree at a random node (the root
+    included) is replaced by a new full tree of height 0-2."""
     index = rng.randrange(len(tree))
     subtree_slice = tree.searchSubtree(index)
-    composite = rng.choice(pset.primitives[pset.ret])
-    position = rng.randrange(composite.arity)
-    children: list = [
-        rng.choice(pset.terminals[pset.ret]) if i != position else None for i in range(composite.arity)
-    ]
-    new_subtree = [composite]
-    for i, child in enumerate(children):
-        new_subtree.extend(tree[subtree_slice] if i == position else [child])
-    tree[subtree_slice] = new_subtree
+    tree[subtree_slice] = generate(pset, rng, INSERT_MIN_HEIGHT, INSERT_MAX_HEIGHT, grow=False)
 
 
 def mut_shrink(tree: BehaviourTree, rng: random.Random) -> None:
@@ -158,21 +164,27 @@ def vary(
     return offspring
 
 
-def size_key(tree: BehaviourTree) -> tuple[int, int]:
-    """What "shorter" means in the parsimony tie-break: height first, then the number of nodes."""
-    return tree.height, len(tree)
+def derating(nodes: int) -> float:
+    """The selection weight of a tree of ``nodes`` nodes: 1 up to 10 nodes, falling linearly to 0 at 1000."""
+    if nodes > 1000:
+        return 0.0
+    return 1.0 - max(0, nodes - DERATING_FREE_NODES) / DERATING_SPAN
+
+
+def selection_fitness(fitness: float, nodes: int) -> float:
+    """The fitness that selection compares: the stored fitness times :func:`derating`."""
+    return fitness * derating(nodes)
 
 
 def preferred(challenger: BehaviourTree, holder: BehaviourTree, objective: int) -> bool:
-    """Whether ``challenger`` beats ``holder`` on ``objective``: higher fitness, or an exact tie broken by
-    the parsimony rule (shorter wins when either is deeper than ``PARSIMONY_HEIGHT``)."""
-    a = challenger.fitness.values[objective]
-    b = holder.fitness.values[objective]
+    """Whether ``challenger`` beats ``holder`` on ``objective``: higher derated fitness, or an exact tie
+    that the parsimony rule gives to a shorter challenger when the holder is taller than
+    ``PARSIMONY_HEIGHT``."""
+    a = selection_fitness(challenger.fitness.values[objective], len(challenger))
+    b = selection_fitness(holder.fitness.values[objective], len(holder))
     if a != b:
         return a > b
-    if max(challenger.height, holder.height) > PARSIMONY_HEIGHT:
-        return size_key(challenger) < size_key(holder)
-    return False
+    return holder.height > PARSIMONY_HEIGHT and challenger.height < holder.height
 
 
 def best_of(candidates: Sequence[BehaviourTree], objective: int) -> BehaviourTree:

@@ -48,12 +48,16 @@ class BehaviourTree(gp.PrimitiveTree):
     def __init__(self, content: list) -> None:
         super().__init__(content)
         self.fitness = TripleFitness()
+        self.descriptors: tuple[float, ...] | None = None
+        """The descriptors of the evaluation that gave the fitness (None until evaluated, or failed)."""
 
     def clone(self) -> BehaviourTree:
-        """A copy of the tree (nodes are shared, they are immutable) with a copy of its fitness."""
+        """A copy of the tree (nodes are shared, they are immutable) with a copy of its fitness and
+        descriptors."""
         twin = BehaviourTree(self)
         if self.fitness.valid:
             twin.fitness.values = self.fitness.values
+        twin.descriptors = self.descriptors
         return twin
 
 
@@ -109,5 +113,7 @@ def tree_from_text(
     nodes = []
     for node in root.preorder():
         name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else leaf_name(node)
+        if name not in pset.mapping:
+            raise TreeTextError(f"not a behaviour tree of this primitive set: unknown node {name!r}")
         nodes.append(pset.mapping[name])
     return BehaviourTree(nodes)

@@ -46,9 +46,14 @@ def test_ask_and_tell_out_of_order_raise(algorithm, objective):
 
 
 @pytest.mark.parametrize("algorithm,objective", [("gp", "density"), ("gp-fnd", None), ("qd", "food")])
-def test_the_budget_is_spent_exactly(algorithm, objective):
+def test_the_budget_counts_individuals_produced_in_whole_generations(algorithm, objective):
+    # generations of 25 (GP_o), 75 (GP_fnd) and batches of 50 (QD) after the initial population: 150
     algo = drive(RunConfig.make(algorithm, objective, 137, 4).make_algorithm(), ToyEvaluator())
-    assert algo.evaluations == 137 and algo.done
+    assert algo.produced == 150 and algo.done
+    initial = {"gp": 25, "gp-fnd": 75, "qd": 100}[algorithm]
+    assert initial <= algo.evaluations <= initial + 150  # untouched offspring are not asked for
+    exact = drive(RunConfig.make(algorithm, objective, 150, 4).make_algorithm(), ToyEvaluator())
+    assert exact.produced == 150 and exact.evaluations == algo.evaluations
 
 
 def test_gp_fnd_tournaments_use_all_three_objectives_and_gp_o_only_its_own(monkeypatch):
@@ -77,8 +82,7 @@ def test_gp_fnd_keeps_an_elite_per_objective():
             assert a.best(k).fitness.values[k] == best_so_far[k]
             # the elite is in the population it breeds from
             assert any(t.fitness.values[k] == best_so_far[k] for t in a.population)
-        # full generations, except the last one when the budget cuts it short
-        assert len(a.population) == 75 or (a.done and len(a.population) < 75)
+        assert len(a.population) == 75  # whole generations, the last one too
 
     drive(algo, ToyEvaluator(), after_tell=check)
 
@@ -107,11 +111,11 @@ def test_map_elites_archive_holds_at_most_three_per_bin_and_qd_score_never_decre
 def test_failed_evaluations_count_but_never_enter_the_archive():
     algo = MapElites(0, 600, 9, QDParameters())
     drive(algo, ToyEvaluator(fail_on="reverse_left"))
-    assert algo.evaluations == 600
+    assert algo.produced == 600
     assert all("reverse_left" not in e.tree for e in algo.archive.entries())
     gp = drive(GeneticProgramming([0], 200, 9, GPParameters()), ToyEvaluator(fail_on="reverse_left"))
     evaluated = [t for t in gp.population if t.fitness.values[0] >= 0]
-    assert all("reverse_left" not in t for t, _ in map(gp._record, evaluated))
+    assert all("reverse_left" not in t for t, *_ in map(gp._record, evaluated))
 
 
 @pytest.mark.parametrize("algorithm,objective", [("gp", "nest"), ("gp-fnd", None), ("qd", "density")])

@@ -18,7 +18,24 @@ def test_a_full_bin_replaces_its_worst_only_with_a_strictly_better_tree():
     assert not grid.offer("worse", 0.05, d, 4)
     assert grid.offer("better", 0.25, d, 5)
     assert [e.tree for e in grid.entries()] == ["t0", "t2", "better"]
-    assert len(grid) == 3 and grid.filled_bins == 1 and grid.qd_score == 0.3
+    assert len(grid) == 3 and grid.filled_bins == 1 and grid.qd_score == 0.3 / 512
+
+
+def test_a_tree_is_stored_once_per_grid_and_may_return_once_evicted():
+    grid = Repertoire()
+    d = (0.1, 0.1, 0.1)
+    assert grid.offer("a", 0.2, d, 0)
+    assert not grid.offer("a", 0.9, d, 1)  # held already: refused whatever its fitness
+    assert not grid.offer("a", 0.2, (0.9, 0.9, 0.9), 2)  # nor in another bin
+    assert grid.offer("b", 0.3, d, 3) and grid.offer("c", 0.4, d, 4) and grid.offer("d", 0.5, d, 5)
+    assert [e.tree for e in grid.entries()] == ["b", "c", "d"]  # "a" was the worst: evicted
+    assert grid.offer("a", 0.6, d, 6)  # no longer held
+    one = Repertoire(items_per_bin=1)
+    assert one.offer("x", 0.5, d, 0) and not one.offer("x", 0.7, d, 1)
+    assert one.qd_score == 0.5 / 512 and one.filled_bins == 1
+    copy = Repertoire.from_state(grid.to_state())
+    assert not copy.offer("a", 0.99, d, 7)  # the held set survives a round trip
+    assert grid.best_entries()[0][1].tree == "a"
 
 
 def test_bins_coverage_and_qd_score_agree_with_qdpy():
@@ -29,8 +46,8 @@ def test_bins_coverage_and_qd_score_agree_with_qdpy():
         grid.offer(f"t{i}", rng.random(), descriptors, i)
     assert grid.bin_of((1.0, 0.0, 0.999)) == (7, 0, 7)
     assert grid.coverage == grid.filled_bins / 512 == grid.grid.filled_bins / 512
-    # qdpy's normalised QD score is the sum of each bin's best on the fitness domain [0, 1]
-    assert grid.qd_score == pytest.approx(grid.grid.qd_score(normalized=True), abs=1e-9)
+    # qdpy's normalised QD score is the sum of each bin's best on the fitness domain [0, 1]; ours / 512
+    assert grid.qd_score == pytest.approx(grid.grid.qd_score(normalized=True) / 512, abs=1e-12)
     assert grid.best_value == max(e.value for e in grid.entries()) == grid.best().value
     assert all(len(entries) <= 3 for _, entries in grid.bins())
 

@@ -3,17 +3,29 @@
 from __future__ import annotations
 
 import json
+import os
 import re
+import signal
+import subprocess
+import sys
+import time
 
 from evolution_manager.experiment import experiment, plan
 from evolution_manager.report import report
 from evolution_manager.statistics import compare, holm
+
+RUNS_HEADER = (
+    "algorithm,objective,seed,best_fitness,heldout_best_fitness,coverage,qd_score,heldout_qd_score,"
+    "repertoire_size"
+)
 
 FIGURES = [
     "fig4_best_fitness.png",
     "fig5_coverage.png",
     "fig6_qd_score.png",
     "fig8_histograms.png",
+    "heldout_best_fitness.png",
+    "heldout_qd_score.png",
     *(f"fig7_grid_{o}.png" for o in ("density", "nest", "food")),
     *(f"progress_{o}.png" for o in ("density", "nest", "food")),
 ]
@@ -43,8 +55,15 @@ def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tm
         assert (out / "figures" / name).stat().st_size > 1000
         assert f"(figures/{name})" in text
     table = [line for line in text.splitlines() if re.match(r"\| (best fitness|coverage|QD score) \|", line)]
-    assert len(table) == 3 * 3 * 3  # metrics x objectives x pairs
+    assert len(table) == 3 * 3 * 3  # metrics x objectives x pairs: the paper's 18, then GP_fnd vs QD
+    assert all(line.endswith(("| same conclusion |", ")")) or "different:" in line for line in table[:18])
+    assert "| 0.0004 | T-test |" in text and "| 0.4406 | Mann-Whitney |" in text  # the paper's, beside ours
     assert "Mann-Whitney U" in text  # two runs cannot be shown normal
+    for size in ("| 290 |", "| 148 |", "| 305 |"):  # fig. 8's sizes beside ours
+        assert size in text
+    rows = (out / "runs.csv").read_text().splitlines()
+    assert rows[0] == RUNS_HEADER and len(rows) == 1 + 2 * (3 + 3 + 3)  # GP_fnd: a row per objective
+    assert "Reproduce: `ws/run evolution_manager experiment --runs 2 --evaluations 150" in text
     # the same command continues (nothing to do) and report rebuilds the same report
     before = text
     assert experiment(args) == 0
@@ -74,3 +93,29 @@ def test_report_on_a_folder_without_runs_says_so(tmp_path, capsys):
     assert report([str(tmp_path)]) == 2
     assert "neither an experiment folder nor a run directory" in capsys.readouterr().err
     assert report([]) == 2
+
+
+def _finished_runs(out):
+    return sum(1 for p in out.glob("runs/*/run*/summary.json") if json.loads(p.read_text()).get("heldout"))
+
+
+def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path):
+    args = ["--runs", "1", "--evaluations", "50", "--processes", "2", "--checkpoint-every", "0"]
+    straight = tmp_path / "straight"
+    assert experiment([*args, "--out", str(straight), "--no-progress"]) == 0
+    killed = tmp_path / "killed"
+    code = (
+        f"from evolution_manager.experiment import experiment; experiment({[*args, '--out', str(killed)]!r})"
+    )
+    process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    try:
+        deadline = time.monotonic() + 600
+        while _finished_runs(killed) < 2 and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.2)
+    finally:
+        os.killpg(process.pid, signal.SIGKILL)  # the command, its process pool and its manager
+        process.wait()
+    assert 2 <= _finished_runs(killed) < 7, "the kill came too late to interrupt the experiment"
+    assert not (killed / "runs.csv").exists()
+    assert experiment([*args, "--out", str(killed), "--no-progress"]) == 0
+    assert (killed / "runs.csv").read_bytes() == (straight / "runs.csv").read_bytes()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import random
 from collections import Counter
+from functools import partial
 
 import pytest
 from deap import gp
@@ -14,7 +15,8 @@ from evolution_manager import operators
 from evolution_manager.operators import (
     best_of,
     cx_one_point,
-    half_and_half,
+    derating,
+    full_tree,
     mut_insert,
     mut_node_replacement,
     mut_shrink,
@@ -22,46 +24,59 @@ from evolution_manager.operators import (
     tournament,
     vary,
 )
+from evolution_manager.parameters import MAX_TREE_HEIGHT
 from evolution_manager.primitives import BehaviourTree, tree_from_text, tree_to_text
 
 MUTATIONS = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
 
 
-def _valid(tree, max_height=8, max_nodes=1000):
+def _valid(tree, max_height=MAX_TREE_HEIGHT, max_nodes=1000):
     parsed = parse(tree_to_text(tree))
     assert parsed.size == len(tree) <= max_nodes
     assert parsed.depth == tree.height <= max_height
     return parsed
 
 
-def test_half_and_half_heights_and_roots(pset):
+def _leaf_depths(tree):
+    depths, stack = [], [0]
+    for node in tree:
+        depth = stack.pop()
+        if node.arity:
+            stack.extend([depth + 1] * node.arity)
+        else:
+            depths.append(depth)
+    return depths
+
+
+def test_initial_trees_are_full_of_height_one_to_four(pset):
     rng = random.Random(1)
     heights = Counter()
     for _ in range(500):
-        tree = half_and_half(pset, rng, 1, 4)
+        tree = full_tree(pset, rng, 1, 4)
         parsed = _valid(tree, max_height=4)
         assert isinstance(parsed, Composite)
+        assert set(_leaf_depths(tree)) == {tree.height}  # full: every leaf at the same depth
         heights[tree.height] += 1
     assert set(heights) == {1, 2, 3, 4}
 
 
 def test_operators_keep_trees_valid_and_within_limits(pset):
     rng = random.Random(2)
-    population = [half_and_half(pset, rng, 1, 4) for _ in range(30)]
+    population = [full_tree(pset, rng, 1, 2) for _ in range(30)]  # height 4 may exceed 120 nodes
     for tree in population:
         tree.fitness.values = (0.5, 0.5, 0.5)
     for _ in range(60):  # generations of heavy variation push against the limits
         heavy = (("insert", 0.9), ("shrink", 0.2), ("replace", 0.9))
         population = vary(population, pset, rng, 1.0, heavy, 6, 120)
         for tree in population:
-            assert isinstance(_valid(tree, max_height=6, max_nodes=120), Composite)
+            _valid(tree, max_height=6, max_nodes=120)  # the insert may replace the root by a leaf
             tree.fitness.values = (0.5, 0.5, 0.5)
     assert max(t.height for t in population) == 6  # the limit was reached, and held
 
 
 def test_untouched_offspring_keep_fitness_and_touched_ones_lose_it(pset):
     rng = random.Random(3)
-    parents = [half_and_half(pset, rng, 2, 3) for _ in range(10)]
+    parents = [full_tree(pset, rng, 2, 3) for _ in range(10)]
     for p in parents:
         p.fitness.values = (0.1, 0.2, 0.3)
     same = vary(parents, pset, rng, 0.0, (("insert", 0.0), ("shrink", 0.0), ("replace", 0.0)), 8, 1000)
@@ -76,7 +91,7 @@ def test_operators_use_only_the_generator_they_are_given(pset):
     random.seed(123)
     state = random.getstate()
     rng = random.Random(4)
-    trees = [half_and_half(pset, rng, 1, 4) for _ in range(20)]
+    trees = [full_tree(pset, rng, 1, 4) for _ in range(20)]
     for t in trees:
         t.fitness.values = (0.0, 0.0, 0.0)
     vary(trees, pset, rng, 0.8, MUTATIONS, 8, 1000)
@@ -122,7 +137,7 @@ def test_operators_draw_from_deaps_distribution(pset, name):
         "replace": lambda t: mut_node_replacement(t, pset, rng),
     }
     theirs = {
-        "insert": lambda t: gp.mutInsert(t, pset),
+        "insert": lambda t: gp.mutUniform(t, expr=partial(gp.genFull, min_=0, max_=2), pset=pset),
         "shrink": lambda t: gp.mutShrink(t),
         "replace": lambda t: gp.mutNodeReplacement(t, pset),
     }
@@ -182,6 +197,20 @@ def test_ties_prefer_the_shorter_tree_when_one_is_deeper_than_three(pset):
     # Both at most 3 deep: no preference, the first stays.
     small = _with_fitness(pset, "seq(in_nest, stop)", 0.5)
     assert best_of([shallow, small], 0) is shallow and best_of([small, shallow], 0) is small
+
+
+def test_selection_derates_long_trees_as_the_authors_code():
+    assert derating(1) == derating(10) == 1.0
+    assert derating(11) == pytest.approx(1 - 1 / 990)
+    assert derating(505) == pytest.approx(0.5) and derating(1000) == 0.0 and derating(1001) == 0.0
+
+
+def test_a_long_tree_loses_to_a_slightly_worse_short_one(pset):
+    long_text = "seq(" + ", ".join(["sel(in_nest, stop)"] * 4) + ")"  # 13 nodes: derated by 3/990
+    long, short = _with_fitness(pset, long_text, 0.5), _with_fitness(pset, SHALLOW, 0.4986)
+    assert len(long) == 13 and 0.5 * derating(13) < 0.4986
+    assert best_of([long, short], 0) is short
+    assert best_of([long, _with_fitness(pset, SHALLOW, 0.498)], 0) is long
 
 
 def test_tournaments_with_equal_fitness_choose_the_shorter_tree(pset):

@@ -10,7 +10,7 @@ import pytest
 from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import TreeTextError
-from evolution_manager.operators import half_and_half
+from evolution_manager.operators import full_tree
 from evolution_manager.primitives import BehaviourTree, make_primitive_set, tree_from_text, tree_to_text
 
 
@@ -26,7 +26,7 @@ def test_primitive_set_has_the_vocabulary_and_leaves_no_global_state(pset):
 def test_text_round_trip_matches_the_bt_engine(pset):
     rng = random.Random(5)
     for _ in range(200):
-        tree = half_and_half(pset, rng, 1, 4)
+        tree = full_tree(pset, rng, 1, 4)
         text = tree_to_text(tree)
         assert text == to_text(parse(text))
         again = tree_from_text(text, pset)

@@ -7,7 +7,7 @@ import itertools
 import json
 
 import pytest
-from recompute import check_repertoires
+from recompute import check_metrics, check_repertoires
 from toy import ToyEvaluator
 
 from evolution_manager.config import RunConfig, evaluation_seed
@@ -20,6 +20,7 @@ RESULT_FILES = [
     "evaluations.csv",
     "progress.csv",
     "summary.json",
+    "heldout.json",
     *(f"repertoire_{o}.json" for o in OBJECTIVES),
 ]
 
@@ -30,13 +31,13 @@ def _files(root, names=RESULT_FILES):
 
 def _finish(run):
     run.execute(checkpoint_interval=0)
-    write_results(run, with_figures=False)
+    write_results(run, with_figures=False, evaluator=run.evaluator)
     return run
 
 
 @pytest.mark.parametrize("algorithm,objective", [("gp", "food"), ("gp-fnd", None), ("qd", "nest")])
 def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorithm, objective):
-    config = RunConfig.make(algorithm, objective, 700, 11)
+    config = RunConfig.make(algorithm, objective, 750, 11)
     straight = _finish(Run.start(config, tmp_path / "straight", ToyEvaluator()))
     stopped = Run.start(config, tmp_path / "stopped", ToyEvaluator())
     for stop in (90, 260, 430):
@@ -51,7 +52,14 @@ def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorith
         assert (tmp_path / "stopped" / "archive.json").read_bytes() == (
             tmp_path / "straight" / "archive.json"
         ).read_bytes()
-    assert stopped.evaluations == straight.evaluations == 700
+    assert stopped.evaluations == straight.evaluations
+    assert stopped.algorithm.produced == straight.algorithm.produced == 750
+    # the fixed scenario's cache is rebuilt on resume: the same simulations saved (summary.json too)
+    assert (stopped.simulations, stopped.simulations_saved) == (
+        straight.simulations,
+        straight.simulations_saved,
+    )
+    assert straight.simulations_saved > 0
 
 
 def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_path):
@@ -60,8 +68,8 @@ def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_pa
     )
     with open(tmp_path / "r" / "evaluations.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
-    assert [int(r["evaluation"]) for r in rows] == list(range(900))
-    assert all(int(r["seed"]) == evaluation_seed(12, i) for i, r in enumerate(rows))
+    assert [int(r["evaluation"]) for r in rows] == list(range(len(rows)))
+    assert all(int(r["seed"]) == run.config.scenario_seed for r in rows)  # fixed scenarios
     assert any(r["error"] for r in rows)
     check_repertoires(tmp_path / "r")
     for objective in OBJECTIVES:
@@ -77,8 +85,8 @@ def test_progress_is_one_row_per_batch_and_never_loses_quality(tmp_path):
     with open(tmp_path / "r" / "progress.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
     counts = [int(r["evaluations"]) for r in rows]
-    # the initial batch, then batches of 50 varied parents of which the untouched ones are not evaluated
-    assert counts[0] == 100 and counts[-1] == 400
+    # the initial batch, then 8 batches of 50 varied parents of which the untouched ones are not evaluated
+    assert counts[0] == 100 and len(counts) == 1 + 400 // 50
     assert all(0 < b - a <= 50 for a, b in itertools.pairwise(counts))
     for objective in OBJECTIVES:
         for metric in ("best", "coverage", "qd_score"):
@@ -107,3 +115,58 @@ def test_a_damaged_checkpoint_is_refused_with_its_name(tmp_path):
     (tmp_path / "r" / "checkpoint.json").write_text('{"format": 1, "config": ')
     with pytest.raises(RunDirectoryError, match=r"checkpoint\.json"):
         Run.resume(tmp_path / "r", ToyEvaluator())
+
+
+@pytest.mark.parametrize("algorithm,objective", [("gp", "nest"), ("gp-fnd", None)])
+def test_gp_metrics_recomputed_from_the_run_files_equal_the_reported_ones(tmp_path, algorithm, objective):
+    run = _finish(Run.start(RunConfig.make(algorithm, objective, 600, 14), tmp_path / "r", ToyEvaluator()))
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    for o in OBJECTIVES:
+        check_metrics(tmp_path / "r", o, summary)
+    for o in run.config.objectives:
+        document = json.loads((tmp_path / "r" / f"repertoire_{o}.json").read_text())
+        assert (
+            document["items_per_bin"] == 1
+            and len(document["items"]) == summary["objectives"][o]["repertoire_size"]
+        )
+        # GP's best is its elite: the best of the final population, which is the best ever kept
+        assert summary["objectives"][o]["best_fitness"] == max(i["fitness"] for i in document["items"])
+        # the last progress row measures the final repertoire
+        last = run.directory.progress.read()[-1]
+        for key, metric in (("best", "best_fitness"), ("coverage", "coverage"), ("qd_score", "qd_score")):
+            assert float(last[f"{key}_{o}"]) == summary["objectives"][o][metric]
+
+
+def test_fixed_scenarios_give_one_fitness_per_tree_and_fresh_ones_a_seed_per_evaluation(tmp_path):
+    fixed = _finish(Run.start(RunConfig.make("gp", "food", 500, 15), tmp_path / "fixed", ToyEvaluator()))
+    rows = fixed.directory.evaluations.read()
+    values: dict[str, set] = {}
+    for row in rows:
+        values.setdefault(row["tree"], set()).add(tuple(row[k] for k in (*OBJECTIVES, "seed")))
+    assert all(len(v) == 1 for v in values.values())
+    assert fixed.simulations == len(values) and fixed.simulations_saved == len(rows) - len(values) > 0
+    fresh_config = RunConfig.make("gp", "food", 500, 15, scenarios="fresh")
+    fresh = _finish(Run.start(fresh_config, tmp_path / "fresh", ToyEvaluator()))
+    seeds = [int(r["seed"]) for r in fresh.directory.evaluations.read()]
+    assert seeds == [evaluation_seed(15, i) for i in range(len(seeds))]
+    assert fresh.simulations_saved == 0 and fresh.simulations == len(seeds)
+    config = json.loads((tmp_path / "fixed" / "config.json").read_text())
+    assert config["scenarios"] == "fixed" and config["scenario_seed"] == fixed.config.scenario_seed
+    assert RunConfig.make("gp", "food", 500, 15, scenario_seed=7).scenario_seed == 7
+
+
+def test_evaluate_with_the_runs_scenario_seed_reproduces_every_stored_fitness(tmp_path):
+    from swarm_sim.cli import run as evaluate_command
+    from swarm_sim.evaluation import BatchEvaluator
+
+    run = _finish(Run.start(RunConfig.make("qd", "food", 50, 16), tmp_path / "r", BatchEvaluator()))
+    rows = run.directory.evaluations.read()
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    best = summary["objectives"]["food"]
+    chosen = [r for r in rows if r["tree"] == best["best_tree"]][:1] + rows[:: max(1, len(rows) // 3)]
+    seed = json.loads((tmp_path / "r" / "config.json").read_text())["scenario_seed"]
+    for row in chosen:
+        document = json.loads(evaluate_command(["--tree", row["tree"], "--seed", str(seed)]))
+        stored = [float(row[k]) for k in (*OBJECTIVES, "movement", "rotation", "conditionality")]
+        assert [*document["fitness"].values(), *document["descriptors"].values()] == stored  # exactly
+    assert chosen[0][best["evolved"] and "food"] and float(chosen[0]["food"]) == best["best_fitness"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from bt_controller.errors import UsageError
 
-__all__ = ["ConditionError", "ConfigError", "TrialAbandonedError", "UsageError"]
+__all__ = ["ConditionError", "ConfigError", "ReferenceFileError", "TrialAbandonedError", "UsageError"]
 
 
 class ConfigError(ValueError):
@@ -18,3 +18,8 @@ class ConditionError(ValueError):
 
 class TrialAbandonedError(RuntimeError):
     """A trial could not go on (the simulator node); the message says which robot and step."""
+
+
+class ReferenceFileError(ValueError):
+    """A validation reference TSV that cannot be read; the message names the file, the row and what was
+    expected."""

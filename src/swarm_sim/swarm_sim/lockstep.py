@@ -185,11 +185,13 @@ def run_chain_with_controllers(
     trials: int,
     config: Config = DEFAULT,
     on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
 ) -> list[TrialRecord]:
     """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
     lockstep world and one ``FootbotController`` per robot, exchanging readings and answers.
     ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
-    simulator node would publish)."""
+    simulator node would publish); ``on_answers(chain, answers)`` with the robots' answers to the step,
+    before the world takes them."""
     sim = LockstepChain(seed, chain, trials, config)
     controllers = []
     for key in sim.setup.tree_keys:
@@ -213,6 +215,8 @@ def run_chain_with_controllers(
                     tick.started if tick is not None else -1,
                 )
             )
+        if on_answers is not None:
+            on_answers(sim, answers)
         sim.advance(answers)
     return sim.records
 
@@ -223,11 +227,12 @@ def run_with_controllers(
     trial: int,
     config: Config = DEFAULT,
     on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
 ) -> TrialRecord:
     """Trial ``trial`` of ``seed`` as the node graph runs it: its chain is run from its first trial up to
     ``trial`` (the earlier trials set the state ``trial`` starts from); the record of ``trial``."""
     chain, position = timeline.chain_of_trial(config.timeline, trial)
-    return run_chain_with_controllers(tree, seed, chain, position + 1, config, on_step)[-1]
+    return run_chain_with_controllers(tree, seed, chain, position + 1, config, on_step, on_answers)[-1]
 
 
 def warm_up(config: Config = DEFAULT) -> None:

@@ -14,10 +14,17 @@ it finds, waiting up to ``--wait`` seconds for ``--expect`` of them (default 1, 
 
 The run is recorded to ``<out>/run.bag/`` (rosbag2, MCAP storage; ``run.resume-<k>.bag/`` for the k-th
 resume): every evaluation on ``/evaluations`` and the archive's progress on ``/progress`` after each batch.
+The bag is flushed every second and before every checkpoint, so a killed manager loses at most the last
+second of it; a resume first cuts the bags back to the checkpoint (rewriting a killed segment as a whole
+bag), so that together they hold every evaluation exactly once.
+
+The run directory is locked (``<out>/.lock``) while a manager writes it: a second one exits at once naming
+the first one's PID. The evaluator processes it starts die with it, whatever kills it, and one that dies
+during the run is noticed at once, its work re-sent and a new one started in its place.
 
 Parameters (ROS, read once at start; ``--ros-args -p timeout:=20``):
     chunk_size (int, 50): most requests in one goal sent to an evaluator.
-    timeout (float, 60): seconds a chunk may take before its work is re-sent to another evaluator (longer
+    timeout (float, 3): seconds a chunk may take before its work is re-sent to another evaluator (longer
         when the chunk's expected time is: 10 times it).
     first_timeout (float, 300): the same for an evaluator's first chunk (it compiles its kernels).
     discovery_period (float, 1): seconds between looks for evaluators.
@@ -31,15 +38,18 @@ Action clients:
     every action server of type swarm_msgs/action/EvaluateBatch in the domain (``/<evaluator>/evaluate``);
     the goals still running when the manager stops (interrupted, or failed) are cancelled.
 
-Exit status: 0 done; 1 no evaluator or an evaluation that could not be finished; 2 bad options; 130
-interrupted (continue with ``--resume``).
+Exit status: 0 done; 1 no evaluator, an evaluation that could not be finished or a bag that could not be
+written; 2 bad options, a damaged run directory or one in use by another process; 130 interrupted (SIGINT),
+143 terminated (SIGTERM): continue with ``--resume``.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,11 +58,12 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from evolution_manager import cli
-from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.bags import BagError, BagRecorder, finish_rewrites, rewrite_bag, topic_counts
 from evolution_manager.config import RunConfig
 from evolution_manager.dispatch import DispatchError, Timeouts
 from evolution_manager.errors import EvolutionError
@@ -61,6 +72,7 @@ from evolution_manager.graph import Graph, GraphError
 from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.outputs import write_results
 from evolution_manager.primitives import OBJECTIVES
+from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.run import Run, RunDirectory
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
 from swarm_ros.parameters import declare_dataclass
@@ -68,6 +80,7 @@ from swarm_sim.evaluation import Evaluator
 from swarm_sim.result_messages import evaluation_fields
 
 EXIT_FAILED = 1
+FLUSH_PERIOD = 1.0  # seconds between flushes of the run bag
 EVALUATIONS_TOPIC = "/evaluations"
 PROGRESS_TOPIC = "/progress"
 EVALUATION_TYPE = "swarm_msgs/msg/EvaluationResult"
@@ -82,6 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=cli.positive_int, help="evaluation budget (default: as evolve)")
     parser.add_argument("--seed", type=cli.seed_int, help="run seed in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=cli.positive_int, help="trials per evaluation (default 10)")
+    cli.add_scenario_options(parser)
     parser.add_argument("--out", type=Path, required=True, help="run directory (new, unless --resume)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument(
@@ -114,7 +128,7 @@ class ManagerParameters:
 
     chunk_size: int = 50
     """Most requests in one goal sent to an evaluator."""
-    timeout: float = 60.0
+    timeout: float = 3.0
     """Seconds a chunk may take before its work is re-sent elsewhere (or 10 times its expected time)."""
     first_timeout: float = 300.0
     """The same for an evaluator's first chunk (it compiles its kernels)."""
@@ -164,14 +178,16 @@ class RunRecording:
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
     def batch(self, run: Run, requests: Sequence, results: Sequence) -> None:
-        """Record the batch just told to the algorithm (``run.evaluations`` already counts it)."""
+        """Record the batch just told to the algorithm (``run.evaluations`` already counts it): the
+        evaluations simulated for it (under fixed scenarios, trees answered from the run's cache are not
+        sent, so not recorded again) and the repertoires' progress."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
             fields = evaluation_fields(request.tree, request.seed, request.trials, result, objective)
             msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
-            grid = run.passive[name]
+            grid = run.repertoire(name)
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
                 objective=name,
@@ -184,13 +200,50 @@ class RunRecording:
             self._emit(self.node.progress, PROGRESS_TOPIC, PROGRESS_TYPE, msg)
 
 
-def bag_path(out: Path) -> Path:
-    """``run.bag`` for a new run; ``run.resume-<k>.bag`` for the k-th resume."""
-    path, k = out / "run.bag", 0
+def bag_segments(out: Path) -> list[Path]:
+    """The run's bags in order: ``run.bag``, then ``run.resume-<k>.bag`` for k = 1, 2, ..."""
+    segments, path, k = [], out / "run.bag", 0
     while path.exists():
+        segments.append(path)
         k += 1
         path = out / f"run.resume-{k}.bag"
-    return path
+    return segments
+
+
+def bag_path(out: Path) -> Path:
+    """``run.bag`` for a new run; ``run.resume-<k>.bag`` for the k-th resume."""
+    k = len(bag_segments(out))
+    return out / ("run.bag" if k == 0 else f"run.resume-{k}.bag")
+
+
+def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
+    """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only
+    simulated evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's
+    cache) and the progress of its first ``evaluations``. A segment left by a killed manager is rewritten as
+    a whole bag, and messages past the checkpoint (they will be recorded again) are dropped, so that the bags
+    hold each simulated evaluation once. Return how many evaluation messages the bags hold."""
+    finish_rewrites(out)
+    seen = 0
+    for segment in bag_segments(out):
+        start = seen
+        state = {"evaluations": start}
+
+        def keep(topic: str, msgtype: str, timestamp: int, data: bytes, state: dict = state) -> bool:
+            if topic == EVALUATIONS_TOPIC:
+                state["evaluations"] += 1
+                return state["evaluations"] <= simulations
+            if topic == PROGRESS_TOPIC:
+                return deserialize_message(data, ArchiveProgress).evaluations <= evaluations
+            return True
+
+        count: int | None = None  # unknown for a segment left by a killed manager
+        if (segment / "metadata.yaml").exists():
+            count = topic_counts(segment).get(EVALUATIONS_TOPIC, 0)
+        if count is None or start + count > simulations:
+            rewrite_bag(segment, keep)
+            count = min(state["evaluations"], simulations) - start
+        seen = start + count
+    return seen
 
 
 def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
@@ -207,6 +260,38 @@ def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
     return Run.start(cli.config_from_args(args), args.out, evaluator)
 
 
+class OwnedEvaluators:
+    """The evaluator processes this manager started: one that dies is replaced at once by a new process under
+    a new node name (``<name>_<life>``), and :meth:`dead` tells the service evaluator which services died."""
+
+    def __init__(self, graph: Graph, log: object) -> None:
+        self.graph = graph
+        self.log = log
+        self.lives: dict[str, int] = {}  # process name -> its base name
+        self.replaced = 0
+
+    def start(self, base: str, life: int = 1) -> None:
+        name = base if life == 1 else f"{base}_{life}"
+        self.graph.start(name, "swarm_sim", "evaluator", node_name=name)
+        self.lives[name] = life
+
+    def dead(self) -> list[str]:
+        """The services of the processes that died since the last call (each one replaced)."""
+        services = []
+        for name in self.graph.exited():
+            code = self.graph.processes[name].returncode
+            self.graph.forget(name)
+            life = self.lives.pop(name, None)
+            if life is None:
+                continue
+            base = name if life == 1 else name.rsplit("_", 1)[0]
+            self.start(base, life + 1)
+            self.replaced += 1
+            self.log("warn", f"evaluator process {name} exited (code {code}); started {base}_{life + 1}")  # type: ignore[operator]
+            services.append(f"/{name}/evaluate")
+        return services
+
+
 def manage(argv: Sequence[str]) -> int:
     """Run the manager with ``argv`` (ROS arguments included); return the exit status."""
     try:
@@ -218,7 +303,12 @@ def manage(argv: Sequence[str]) -> int:
     except (cli.UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return cli.EXIT_USAGE
-    rclpy.init(args=list(argv))
+    with signals_as_interrupts():
+        return _manage(args, argv)
+
+
+def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
+    rclpy.init(args=list(argv), signal_handler_options=SignalHandlerOptions.NO)
     node = ManagerNode()
     executor = SingleThreadedExecutor()
     executor.add_node(node)
@@ -246,8 +336,10 @@ def manage(argv: Sequence[str]) -> int:
         node.destroy_node()
         rclpy.try_shutdown()
         return cli.EXIT_USAGE
-    evaluator = _Remember(services)
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    owned = OwnedEvaluators(graph, log)
+    services.watch = owned.dead
+    evaluator = _Remember(services)
     try:
         try:
             run = _open_run(args, evaluator)
@@ -256,7 +348,8 @@ def manage(argv: Sequence[str]) -> int:
         if args.evaluators:
             graph.log_dir = Path(args.out) / "logs"
             for i in range(1, args.evaluators + 1):
-                graph.start(f"evaluator_{i}", "swarm_sim", "evaluator", node_name=f"manager_evaluator_{i}")
+                # names of this manager's own: a killed manager's evaluators may linger in DDS for seconds
+                owned.start(f"manager_{os.getpid()}_evaluator_{i}")
         expect = args.expect or max(args.evaluators, 1)
         ready = services.wait_for(expect, args.wait)
         graph.check()
@@ -273,9 +366,11 @@ def manage(argv: Sequence[str]) -> int:
     except (cli.UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return cli.EXIT_USAGE
-    except (KeyboardInterrupt, ExternalShutdownException):
+    except (KeyboardInterrupt, ExternalShutdownException) as error:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # stop the children cleanly, whatever comes now
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         print(f"manager: interrupted; continue with: manager --out {args.out} --resume", file=sys.stderr)
-        return cli.EXIT_INTERRUPTED
+        return exit_status(error)
     finally:
         graph.stop()
         services.close()
@@ -285,21 +380,38 @@ def manage(argv: Sequence[str]) -> int:
 
 
 def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
-    bar = cli.progress_bar(run.config, run.evaluations, not args.no_progress)
-    with BagRecorder(bag_path(Path(args.out))) as recorder:
+    out = Path(args.out)
+    recorded = settle_bags(out, run.simulations, run.evaluations)
+    if recorded < run.simulations:
+        node.get_logger().warning(
+            f"the run's bags hold {recorded} of the {run.simulations} simulated evaluations of the "
+            "checkpoint (a bag segment was removed or damaged)"
+        )
+    bar = cli.progress_bar(run.config, run.algorithm.produced, not args.no_progress)
+    with BagRecorder(bag_path(out)) as recorder:
         recording = RunRecording(node, recorder, run.config)
+        flushed = time.monotonic()
 
         def on_batch(done: int, total: int) -> None:
+            nonlocal flushed
             recording.batch(run, evaluator.requests, evaluator.results)
+            if time.monotonic() - flushed >= FLUSH_PERIOD:
+                recorder.flush()
+                flushed = time.monotonic()
+            evaluator.requests, evaluator.results = (), ()  # a batch answered from the cache sends none
             if bar is not None:
                 bar.update(done - bar.n)
 
         try:
-            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+            run.execute(
+                on_batch=on_batch,
+                checkpoint_interval=args.checkpoint_every,
+                before_checkpoint=lambda: recorder.flush(sync=True),
+            )
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures)
+    write_results(run, with_figures=not args.no_figures, evaluator=evaluator)
     dispatcher = evaluator.evaluator.dispatcher
     node.get_logger().info(
         f"{run.config.label}: {run.evaluations} evaluations in {args.out} "

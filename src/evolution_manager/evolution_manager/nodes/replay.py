@@ -83,8 +83,11 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
 def bag_topics(bag: Path) -> dict[str, str]:
     """Every topic of a whole bag with its message type."""
     check_bag(bag)
-    with Reader(bag) as reader:
-        return {connection.topic: connection.msgtype for connection in reader.connections}
+    try:
+        with Reader(bag) as reader:
+            return {connection.topic: connection.msgtype for connection in reader.connections}
+    except Exception as error:  # rosbags' ReaderError: a truncated or empty MCAP, a damaged metadata.yaml
+        raise BagError(f"{bag} is not a readable bag ({type(error).__name__}: {error})") from None
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,7 +10,9 @@ leaves no evaluator busy.
 
 An evaluator counts as present while ``ActionClient.server_is_ready()``: Fast DDS forgets a killed process
 after its lease (about 20 s here) although its name may stay listed, so a chunk's timeout is what usually
-notices a dead evaluator first.
+notices a dead evaluator first. For evaluators whose processes the
+caller started, ``watch`` reports a dead process at once: its evaluator is retired for good (a replacement
+comes under a new name), so its work is re-sent once and nothing is sent to the stale name again.
 """
 
 from __future__ import annotations
@@ -95,8 +97,11 @@ class ServiceEvaluator:
         settings: ServiceSettings | None = None,
         log: Callable[[str, str], None] | None = None,
         only: Sequence[str] | None = None,
+        watch: Callable[[], Sequence[str]] | None = None,
     ) -> None:
         self.only = None if only is None else frozenset(only)
+        self.watch = watch  # returns the services whose process is known to have died since the last call
+        self.retired: set[str] = set()
         self.node = node
         self.executor = executor
         self.settings = settings or ServiceSettings()
@@ -111,10 +116,11 @@ class ServiceEvaluator:
     # Discovery ---------------------------------------------------------------------------------------
     def discover(self) -> list[str]:
         """Look for evaluators now; return the names of those ready."""
+        self._retire_dead()
         listed = {
             name
             for name, types in get_action_names_and_types(self.node)
-            if SERVICE_TYPE in types and (self.only is None or name in self.only)
+            if SERVICE_TYPE in types and (self.only is None or name in self.only) and name not in self.retired
         }
         for name in sorted(listed - set(self._clients)):
             self._clients[name] = ActionClient(self.node, EvaluateBatch, name)
@@ -135,6 +141,24 @@ class ServiceEvaluator:
                 if chunk is not None:
                     self._forget(chunk)
         return ready
+
+    def _retire_dead(self) -> None:
+        """Retire the services ``watch`` reports dead: their chunk in flight is re-queued once."""
+        for name in self.watch() if self.watch is not None else ():
+            if name in self.retired:
+                continue
+            self.retired.add(name)
+            state = self.dispatcher.state(name)
+            chunk = self.dispatcher.vanished(name)
+            lost = ""
+            if chunk is not None and state is WorkerState.BUSY:
+                lost = f"; re-sending its {len(chunk.indices)} requests"
+            self._log("warn", f"evaluator {name} died{lost}")
+            if chunk is not None:
+                self._forget(chunk)
+            client = self._clients.pop(name, None)
+            if client is not None:
+                client.destroy()
 
     def wait_for(self, count: int, timeout: float) -> list[str]:
         """Spin until ``count`` evaluators are ready or ``timeout`` seconds passed; return those ready."""
@@ -170,6 +194,7 @@ class ServiceEvaluator:
         starved_since: float | None = None
         while not dispatcher.done:
             now = time.monotonic()
+            self._retire_dead()
             if now >= self._next_discovery:
                 self.discover()
                 self._next_discovery = now + self.settings.discovery_period
@@ -194,7 +219,7 @@ class ServiceEvaluator:
             deadline = dispatcher.next_deadline()
             if deadline is not None:
                 wait = min(wait, max(deadline - now, 0.0) + 0.01)
-            self.executor.spin_once(timeout_sec=wait)
+            self.executor.spin_once(timeout_sec=min(wait, 0.5))
             self._collect()
         return dispatcher.results()  # type: ignore[return-value]  # the dispatcher holds what we gave it
 

@@ -10,6 +10,10 @@ live with their own tools (RViz2, Foxglove, ``ros2 topic echo``); ``--namespace 
 from other graphs in the same domain. ``--params-file FILE`` hands a ROS parameter file to every node (for
 instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). Node logs are kept in
 ``--logs DIR`` (default: ``<bag>.logs`` beside the bag).
+
+``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
+this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
+graph that failed; 130 interrupted (SIGINT), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -35,10 +39,11 @@ from rclpy.signals import SignalHandlerOptions
 from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.tree import parse, to_text
-from evolution_manager.bags import BagError, BagRecorder
+from evolution_manager.bags import BagError, BagRecorder, check_new_bag
 from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph import Graph, GraphError, start_trial_graph
 from evolution_manager.nodes.recorder import GraphRecorder, is_latched, trial_topics
+from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
 from swarm_msgs.msg import TreeStatus, TrialStart
@@ -349,6 +354,20 @@ def domain_id(text: str) -> int:
     return value
 
 
+def tree_argument(argument: str) -> str:
+    """The tree text of ``--tree``: the text itself, unless it names an existing file (as ``bt`` reads it)."""
+    try:
+        is_file = len(argument) < 4096 and "\n" not in argument and Path(argument).is_file()
+    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
+        is_file = False
+    if not is_file:
+        return argument
+    try:
+        return Path(argument).read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read the tree file {argument}: {error}") from None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``trial``: one trial through the node graph, recorded; prints the trial's JSON."""
     parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
@@ -381,13 +400,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
     )
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
-    text = Path(args.tree).read_text() if Path(args.tree).is_file() else args.tree
     try:
-        tree = parse(text)
+        tree = parse(tree_argument(args.tree))
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
-        if args.bag.exists():
-            raise BagError(f"refusing to overwrite {args.bag}: choose a new bag directory")
+        check_new_bag(args.bag)
+        args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)  # an unusable place fails here, at once
         if args.params_file is not None and not args.params_file.is_file():
             raise ValueError(f"--params-file {args.params_file}: no such file")
         domain = caller_domain() if args.domain is None else args.domain
@@ -397,20 +415,24 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"trial: graph in ROS domain {domain}, namespace {namespace or '/'}; node logs in {logs}",
             file=sys.stderr,
         )
-        record = run_recorded_trial(
-            to_text(tree),
-            args.seed,
-            args.trial,
-            args.bag,
-            timeout=args.timeout,
-            domain=domain,
-            namespace=namespace,
-            params_file=args.params_file,
-            log_dir=logs,
-        )
-    except (TreeError, ValueError, BagError, GraphError, TrialFailedError) as error:
+        with signals_as_interrupts():
+            record = run_recorded_trial(
+                to_text(tree),
+                args.seed,
+                args.trial,
+                args.bag,
+                timeout=args.timeout,
+                domain=domain,
+                namespace=namespace,
+                params_file=args.params_file,
+                log_dir=logs,
+            )
+    except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as error:
+        print("trial: interrupted", file=sys.stderr)
+        return exit_status(error)
     print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record]))
     print(f"trial: recorded to {args.bag}", file=sys.stderr)
     return 0

@@ -1,0 +1,351 @@
+"""Simplification: a smaller tree that drives every robot's wheels identically, tick for tick, always.
+
+``simplify(tree)`` rewrites a tree until no rule below applies. The result is *observationally equivalent*
+to the original for the world: on every blackboard trace, with the same stream key, it sets the same motors
+after every tick, hence the same trajectories, fitness, movement and rotation. Only the count of condition
+ticks (conditionality) may change. It is sound under both readings of the model this project has had:
+
+- motors = the action started by the tick (stop when the root does not return running), and
+- motors = the last action ticked in the tick, on its running or its success tick (stop when none), with a
+  probabilistic node that keeps a current child between ticks (child 0 first, or drawn first), redrawn
+  whenever the child finishes (the ``paper`` and ``clean`` profiles).
+
+Three facts about the memory semantics carry every proof below (``semantics`` module docstring):
+
+1. *Only the running path has memory.* A sequence or selector clears its memory when it returns success or
+   failure, an action is "not running" after its success tick, and a child that returns running is resumed by
+   its parent at the next tick of the parent, which itself returned running, up to the root. So between ticks
+   every sequence, selector and action off the root's running path is in its initial state. (A probabilistic
+   node may keep a current child off the path; no rule moves, merges or copies one, except rule 6 which needs
+   prob-free children.)
+2. *A resumed node knows nothing of the blackboard.* A node ticked because its parent resumed at it follows
+   no condition evaluated in the same tick; a node entered afresh follows its earlier siblings in the same
+   tick (same blackboard), so what they established still holds ("knowledge", below).
+3. *The root's success and failure look the same to the world.* Both clear the memory on the path and neither
+   sets motors; so do a blind node's (the root; the last child of a blind sequence or selector; any child of
+   a blind probabilistic node).
+
+What each subtree shows its parent per tick is (status, last action ticked in it); under the first reading
+the started action is that action when the status is running and none otherwise, so keeping (status, last
+action) keeps both readings. Rules keep that pair exactly, except at blind positions, where success and
+failure may swap.
+
+Probabilistic nodes draw their picks from ``choose(derive(key, tick), node_index, n_children)``
+(``bt_controller.draws``): the pick depends on the node's pre-order index and its number of children. So
+every probabilistic node that survives keeps its **pre-order index, its number of children and their
+order**; a rewrite that would shift a surviving probabilistic node (by removing or flattening anything before
+it in pre-order) is not made. Nodes after the last surviving probabilistic node, and probabilistic nodes that
+are removed whole (dead, or rule 5/6), are free.
+
+Blackboard facts (``WORLD_FACTS``) hold in every profile: the two regions are disjoint (r < 500 mm against
+r >= 1000 mm), a direction is left or right but not both (``perception.is_left``/``is_right`` of one bearing;
+with no robot heard, robot_left is true under ``paper`` and both are false under ``clean``: never both), and
+inside a region there is no direction to it (the raw estimate is 0, no source: ``perception.estimate``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.vocabulary import CONDITIONS
+
+S, F, R = "S", "F", "R"
+
+Literal = tuple[int, bool]
+"""(condition index, value)."""
+
+Knowledge = frozenset[Literal] | None
+"""Literals true whenever a node is ticked afresh; None: the node is never ticked afresh (dead)."""
+
+_C = {name: i for i, name in enumerate(CONDITIONS)}
+
+WORLD_FACTS: tuple[tuple[str, str], ...] = (
+    ("in_nest", "on_food"),
+    ("food_left", "food_right"),
+    ("nest_left", "nest_right"),
+    ("robot_left", "robot_right"),
+    ("in_nest", "nest_left"),
+    ("in_nest", "nest_right"),
+    ("on_food", "food_left"),
+    ("on_food", "food_right"),
+)
+"""Pairs of conditions never true together on any blackboard, in either profile (module docstring)."""
+
+
+@dataclass(eq=False)
+class _N:
+    """A node under rewriting: ``orig`` is its pre-order index in the original tree (probabilistic nodes
+    must end at the same index)."""
+
+    kind: str  # "seq", "sel", "prob", "cond" or "act"
+    name: str
+    children: list[_N]
+    orig: int
+    # analysis, recomputed after every rewrite
+    status: frozenset[str] = frozenset()
+    pure: bool = True  # ticks no action
+    has_prob: bool = False
+    fresh: Knowledge = None
+    blind: bool = False
+    post_s: frozenset[Literal] = frozenset()
+    post_f: frozenset[Literal] = frozenset()
+    size: int = 1
+    position: int = 0
+    key: str = field(default="")
+
+
+def _from_node(tree: Node) -> _N:
+    counter = 0
+
+    def build(node: Node) -> _N:
+        nonlocal counter
+        index = counter
+        counter += 1
+        if isinstance(node, Composite):
+            return _N(node.kind, node.kind, [build(c) for c in node.children], index)
+        if isinstance(node, Condition):
+            return _N("cond", node.name, [], index)
+        assert isinstance(node, Action)
+        return _N("act", node.name, [], index)
+
+    return build(tree)
+
+
+def _to_node(n: _N) -> Node:
+    if n.kind == "cond":
+        return Condition(n.name)
+    if n.kind == "act":
+        return Action(n.name)
+    return Composite(n.kind, tuple(_to_node(c) for c in n.children))
+
+
+class _Facts:
+    def __init__(self, pairs: tuple[tuple[str, str], ...]) -> None:
+        self.excludes: dict[int, set[int]] = {}
+        for a, b in pairs:
+            self.excludes.setdefault(_C[a], set()).add(_C[b])
+            self.excludes.setdefault(_C[b], set()).add(_C[a])
+
+    def close(self, known: frozenset[Literal]) -> frozenset[Literal]:
+        """Add what the facts imply: a true condition makes every condition it excludes false."""
+        extra = {(other, False) for c, v in known if v for other in self.excludes.get(c, ())}
+        return known | extra if extra else known
+
+
+def _join(a: Knowledge, b: frozenset[Literal]) -> Knowledge:
+    return None if a is None else a | b
+
+
+def _analyse(root: _N, facts: _Facts) -> None:
+    """Fill in every node's statuses, purity, knowledge, blindness, post-conditions, size and position."""
+    position = 0
+
+    def visit(n: _N, fresh: Knowledge, blind: bool) -> None:
+        nonlocal position
+        n.position = position
+        position += 1
+        n.fresh = None if fresh is None else facts.close(fresh)
+        n.blind = blind
+        if n.kind == "cond":
+            c = _C[n.name]
+            n.post_s, n.post_f = frozenset({(c, True)}), frozenset({(c, False)})
+            n.pure, n.has_prob, n.size, n.key = True, False, 1, n.name
+            if n.fresh is None:
+                n.status = frozenset()
+            elif (c, True) in n.fresh:
+                n.status = frozenset({S})
+            elif (c, False) in n.fresh:
+                n.status = frozenset({F})
+            else:
+                n.status = frozenset({S, F})
+            return
+        if n.kind == "act":
+            # Entered afresh it starts and runs; resumed, it succeeds.
+            n.status = frozenset() if n.fresh is None else frozenset({R, S})
+            n.pure, n.has_prob, n.size, n.key = n.fresh is None, False, 1, n.name
+            n.post_s = n.post_f = frozenset()
+            return
+        kids = n.children
+        if n.kind == "prob":
+            for child in kids:
+                visit(child, n.fresh, blind)
+            n.status = frozenset().union(*(c.status for c in kids))
+            n.post_s = _meet([c.post_s for c in kids if S in c.status])
+            n.post_f = _meet([c.post_f for c in kids if F in c.status])
+        else:
+            go_on, stop = (S, F) if n.kind == "seq" else (F, S)
+            knowledge: Knowledge = n.fresh
+            status: set[str] = set()
+            for i, child in enumerate(kids):
+                visit(child, knowledge, blind and i == len(kids) - 1)
+                if child.fresh is not None:
+                    status |= child.status & {stop, R}
+                # The next child is entered afresh only after this one returned ``go_on`` in the same tick;
+                # this one was then afresh (knowledge holds) or resumed (nothing known, fact 2).
+                if go_on not in child.status:
+                    knowledge = None
+                else:
+                    before = child.fresh if R not in child.status else frozenset()
+                    knowledge = _join(before, child.post_s if go_on == S else child.post_f)
+            if go_on in kids[-1].status:
+                status.add(go_on)
+            n.status = frozenset(status)
+            chain = _chain([c.post_s if go_on == S else c.post_f for c in kids], kids)
+            ends = _meet([c.post_f if go_on == S else c.post_s for c in kids if stop in c.status])
+            n.post_s, n.post_f = (chain, ends) if go_on == S else (ends, chain)
+        n.pure = all(c.pure for c in kids)
+        n.has_prob = n.kind == "prob" or any(c.has_prob for c in kids)
+        n.size = 1 + sum(c.size for c in kids)
+        n.key = n.kind + "(" + ", ".join(c.key for c in kids) + ")"
+
+    visit(root, frozenset(), True)
+
+
+def _meet(sets: list[frozenset[Literal]]) -> frozenset[Literal]:
+    if not sets:
+        return frozenset()
+    out = sets[0]
+    for s in sets[1:]:
+        out = out & s
+    return out
+
+
+def _chain(posts: list[frozenset[Literal]], kids: list[_N]) -> frozenset[Literal]:
+    """What holds when every child returned ``go_on``: the last child's post-condition, and each earlier
+    one's as long as the later ones cannot run (then they were all entered in the same tick)."""
+    out = posts[-1]
+    for i in range(len(kids) - 1, 0, -1):
+        if R in kids[i].status:
+            break
+        out = out | posts[i - 1]
+    return out
+
+
+# ------------------------------------------------------------------------------------------------- rules
+
+
+def _rewrites(n: _N) -> list[tuple[int, str, _N]]:
+    """Candidate rewrites of the subtree ``n``: (priority, rule, replacement); lower priority first."""
+    out: list[tuple[int, str, _N]] = []
+    if n.kind in ("cond", "act") or n.fresh is None:  # a dead subtree goes whole (rule 1 at its parent)
+        return out
+    kids = n.children
+    if n.kind in ("seq", "sel"):
+        # Rule 1 (dead children). A sequence enters child i+1 only after child i returned success in the
+        # same tick, or resumes at it after it ran: both need it to have been entered once. A child never
+        # entered afresh is never ticked at all: its memory, motors and draws never matter (selector:
+        # the same with failure).
+        live = [c for c in kids if c.fresh is not None]
+        if len(live) < len(kids):
+            out.append((0, "dead children", _rebuild(n, live)))
+        # Rule 3 (neutral conditions). A child that ticks no action and always succeeds (sequence) or
+        # always fails (selector) when ticked only passes control to the next child in the same tick, or
+        # ends the composite with the status its last child would have given: removing it changes
+        # neither statuses nor motors (its draws, if any, are its own).
+        neutral = S if n.kind == "seq" else F
+        keep = [c for c in kids if not (c.pure and c.status == frozenset({neutral}))]
+        if len(keep) < len(kids):
+            out.append((2, "neutral condition", _rebuild(n, keep or kids[:1])))
+        # Rule 4 (blind tail). At a blind position the last child's success and failure look the same to
+        # the world (fact 3); a last child that ticks no action then only decides between them.
+        if n.blind and len(kids) > 1 and kids[-1].pure:
+            out.append((2, "blind tail", _rebuild(n, kids[:-1])))
+        # Rule 2 (flattening). seq(a, seq(b, c), d) == seq(a, b, c, d): the inner sequence resumes where its
+        # running child is and the outer one resumes at the inner one, so both remember the same child;
+        # a failure inside clears both; success of the inner one moves on in both. Only up to 4 children.
+        for i, c in enumerate(kids):
+            if c.kind == n.kind and len(kids) - 1 + len(c.children) <= 4:
+                flat = kids[:i] + c.children + kids[i + 1 :]
+                out.append((3, "flatten", _rebuild(n, flat)))
+    # Rule 6 (identical choices). prob(T, T, ...) with every child the same prob-free subtree: whichever
+    # is picked, it is in its initial state when entered (fact 1: a prob-free subtree returns to it when
+    # it finishes), so each behaves as T would; the picks no longer matter.
+    if n.kind == "prob" and not any(c.has_prob for c in kids) and len({c.key for c in kids}) == 1:
+        out.append((1, "identical choices", kids[0]))
+    # Rule 5 (blind condition-only subtree). A composite that ticks no action at a blind position shows the
+    # world nothing (fact 3 and no motors): its first condition does the same.
+    if n.blind and n.pure and n.fresh is not None:
+        first = n
+        while first.children:
+            first = first.children[0]
+        out.append((1, "blind condition subtree", first))
+    return out
+
+
+def _rebuild(n: _N, children: list[_N]) -> _N:
+    """``n`` with ``children``; a composite of one child is that child (same statuses, same memory)."""
+    if len(children) == 1:
+        return children[0]
+    return _N(n.kind, n.name, children, n.orig)
+
+
+def _replace(root: _N, target: _N, replacement: _N) -> _N:
+    if root is target:
+        return replacement
+    if not root.children:
+        return root
+    new = [_replace(c, target, replacement) for c in root.children]
+    if all(a is b for a, b in zip(new, root.children, strict=True)):
+        return root
+    return _N(root.kind, root.name, new, root.orig)
+
+
+def _keeps_draws(root: _N) -> bool:
+    """Every probabilistic node sits at its original pre-order index."""
+    position = 0
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        if n.kind == "prob" and n.orig != position:
+            return False
+        position += 1
+        stack.extend(reversed(n.children))
+    return True
+
+
+def _walk(root: _N) -> list[_N]:
+    out, stack = [], [root]
+    while stack:
+        n = stack.pop()
+        out.append(n)
+        stack.extend(reversed(n.children))
+    return out
+
+
+@dataclass(frozen=True)
+class Simplified:
+    """A simplification: the tree, and the rules applied in order."""
+
+    tree: Node
+    rules: tuple[str, ...]
+
+
+def simplify_with_rules(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS) -> Simplified:
+    """Simplify ``tree``; also say which rules were applied (see ``simplify``)."""
+    known = _Facts(facts)
+    root = _from_node(tree)
+    applied: list[str] = []
+    while True:
+        _analyse(root, known)
+        candidates = []
+        for n in _walk(root):
+            for priority, rule, replacement in _rewrites(n):
+                # Later positions first: they shift fewer probabilistic nodes.
+                candidates.append((priority, -n.position, rule, n, replacement))
+        candidates.sort(key=lambda c: (c[0], c[1]))
+        for _, _, rule, target, replacement in candidates:
+            new_root = _replace(root, target, replacement)
+            if _keeps_draws(new_root):
+                root = new_root
+                applied.append(rule)
+                break
+        else:
+            return Simplified(_to_node(root), tuple(applied))
+
+
+def simplify(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS) -> Node:
+    """The simplest tree this module's rules reach from ``tree``: same motors on every tick of every
+    blackboard trace, same probabilistic picks (module docstring), never larger. ``facts``: pairs of
+    conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards)."""
+    return simplify_with_rules(tree, facts).tree

@@ -1,0 +1,95 @@
+"""Trial animations from a tree: one frame per sensing step, the batch evaluator's start and end poses and
+trial values, robots drawn where the frames put them, a GIF that Pillow opens; clear errors."""
+
+from __future__ import annotations
+
+import math
+import shutil
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from evolution_manager.animation import (
+    ROBOT_COLOURS,
+    frames_from_tree,
+    main,
+    render_frame,
+    to_pixels,
+    write_animation,
+)
+from evolution_manager.errors import AnimationError
+from swarm_sim.config import DEFAULT
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+
+TREE = "sel(seq(on_food, stop), prob(forward, forward_left), reverse_right)"
+SEED, TRIAL = 5, 1
+
+
+@pytest.fixture(scope="module")
+def frames():
+    return frames_from_tree(TREE, SEED, TRIAL)
+
+
+def test_one_frame_per_sensing_step(frames):
+    p = DEFAULT.params()
+    steps = p.settle_steps + p.ticks * p.steps_per_tick
+    assert len(frames.steps) == steps and list(frames.steps) == list(range(steps))
+    assert frames.poses.shape == (steps, p.n_robots, 3)
+    assert sorted(set(frames.ticks.tolist())) == list(range(-1, p.ticks))
+
+
+def test_frames_agree_with_the_batch_evaluator(frames):
+    ((_, records),) = BatchEvaluator().evaluate_trials([EvaluationRequest(TREE, SEED, trials=TRIAL + 1)])
+    record = records[TRIAL]
+    np.testing.assert_allclose(frames.poses[0], record.start_poses, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(frames.poses[-1], record.end_poses, rtol=0, atol=1e-9)
+    # the fitness so far at the last step is the trial's fitness (density, nest, food)
+    np.testing.assert_allclose(frames.fitness[-1], record.values[:3], rtol=0, atol=1e-12)
+    assert np.isnan(frames.fitness[0]).all() and not np.isnan(frames.fitness[DEFAULT.settle_steps]).any()
+
+
+def test_robots_are_drawn_at_the_frame_poses(frames):
+    hits = total = 0
+    for k in (0, 60, 120, len(frames.steps) - 1):
+        image = render_frame(frames, k).convert("RGB")
+        for i, (x, y, heading) in enumerate(frames.poses[k]):
+            px, py = to_pixels(frames, x, y)
+            # a point inside the body, behind the centre (the heading line is drawn in front)
+            r = 0.5 * frames.robot_radius * image.width / (2 * frames.arena_half) * 0.7
+            sample = image.getpixel((round(px - r * math.cos(heading)), round(py + r * math.sin(heading))))
+            total += 1
+            hits += sum(abs(a - b) for a, b in zip(sample, ROBOT_COLOURS[i], strict=True)) < 30
+    assert hits >= 0.9 * total  # a neighbour's id label may cover a sample
+
+
+def test_gif_opens_with_pillow_with_every_frame(frames, tmp_path):
+    path = write_animation(frames, tmp_path / "trial.gif")
+    with Image.open(path) as gif:
+        assert gif.format == "GIF" and gif.n_frames == len(frames.steps)
+
+
+def test_mp4_needs_ffmpeg(frames, tmp_path):
+    if shutil.which("ffmpeg") is None:
+        with pytest.raises(AnimationError, match="needs ffmpeg"):
+            write_animation(frames, tmp_path / "trial.mp4")
+    else:
+        assert write_animation(frames, tmp_path / "trial.mp4").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--tree", "forward", "--out", "x.gif"], "needs --seed"),
+        (["--tree", "seq(forward", "--seed", "1", "--out", "x.gif"], "--tree"),
+        (["--tree", "forward", "--seed", "1", "--out", "x.png"], ".gif or .mp4"),
+        (["--bag", "no_such_bag", "--out", "x.gif"], "no bag at"),
+        (["--bag", "b", "--seed", "3", "--out", "x.gif"], "go with --tree"),
+    ],
+)
+def test_bad_input_is_one_line(args, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "x.gif").exists()

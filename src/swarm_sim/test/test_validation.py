@@ -1,0 +1,111 @@
+"""Validation report: statistics, the tolerance rule, reading reference TSVs and the validate command."""
+
+import math
+
+import pytest
+
+from swarm_sim import validation
+from swarm_sim.validate_cli import main as validate_main
+from swarm_sim.validation import AGREES, INDISTINGUISHABLE, OUTSIDE, Comparison, Estimate
+
+HEADER = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in validation.QUANTITIES) + "\tn_seeds\n"
+
+
+def _row(tree, values):
+    return tree + "\t" + "\t".join(f"{v}" for pair in values for v in pair) + "\t20\n"
+
+
+def test_estimate_is_mean_and_sample_standard_error():
+    e = validation.estimate([1.0, 2.0, 3.0, 4.0])
+    assert e.mean == 2.5
+    assert e.sem == pytest.approx(math.sqrt((1.5**2 + 0.5**2) * 2 / 3) / 2)  # sd (ddof 1) / sqrt(4)
+    assert e.n == 4
+    with pytest.raises(ValueError, match="at least 2"):
+        validation.estimate([1.0])
+
+
+def test_tolerance_and_verdicts_worked_by_hand():
+    theirs = Estimate(0.5, 0.01, 20)  # tolerance 3 sqrt(2) 0.01 + 0.03 = 0.0724
+    near = Comparison("t", "nest", Estimate(0.56, 0.01, 20), theirs)  # diff 0.06, z 0.06 / 0.01414 = 4.24
+    assert near.tolerance == pytest.approx(0.0724264, abs=1e-6)
+    assert near.agrees and near.z == pytest.approx(4.2426, abs=1e-4) and near.verdict == AGREES
+    close = Comparison("t", "nest", Estimate(0.55, 0.01, 20), theirs)  # z 3.54
+    assert close.verdict == INDISTINGUISHABLE
+    far = Comparison("t", "nest", Estimate(0.58, 0.05, 20), theirs)  # diff 0.08 > 0.0724, z 1.57
+    assert abs(far.z) < 4 and far.verdict == OUTSIDE
+    exact = Comparison("t", "movement", Estimate(1.0, 0.0, 20), Estimate(1.0, 0.0, 20))
+    assert exact.z == 0.0 and exact.verdict == INDISTINGUISHABLE
+    rounded = Comparison("t", "movement", Estimate(0.1675 + 1e-12, 0.0, 20), Estimate(0.1675, 0.0, 20))
+    assert rounded.diff != 0.0 and rounded.z == 0.0 and rounded.verdict == INDISTINGUISHABLE
+    off = Comparison("t", "movement", Estimate(0.99, 0.0, 20), Estimate(1.0, 0.0, 20))
+    assert off.z == -math.inf and off.verdict == AGREES  # within 0.03, but both exact and different
+
+
+def test_reference_descriptors_are_mapped_from_raw_units(tmp_path):
+    values = [(0.5, 0.001), (0.6, 0.01), (0.4, 0.02), (20.0, 0.8), (-40.0, 0.0), (0.25, 0.005)]
+    path = tmp_path / "ref.tsv"
+    path.write_text(HEADER + _row("seq(forward, reverse)", values))
+    ref = validation.read_reference(path)["seq(forward, reverse)"]
+    assert ref["movement"] == Estimate(0.75, 0.01, 20)  # (20 + 40) / 80, 0.8 / 80
+    assert ref["rotation"] == Estimate(0.0, 0.0, 20)
+    assert ref["nest"] == Estimate(0.6, 0.01, 20)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("tree\tdensity_mean\n", "missing column"),
+        (HEADER, "no trees"),
+        (HEADER + _row("stop", [(0.5, 0.1)] * 6) + _row("stop", [(0.5, 0.1)] * 6), "given twice"),
+        (HEADER + _row("stop", [(0.5, 0.1)] * 5 + [("x", 0.1)]), "must be a number"),
+        (HEADER + _row("stop", [(0.5, -0.1)] * 6), "standard error must be >= 0"),
+    ],
+)
+def test_bad_reference_files_are_refused_naming_the_problem(tmp_path, text, message):
+    path = tmp_path / "ref.tsv"
+    path.write_text(text)
+    with pytest.raises(validation.ReferenceFileError, match=message):
+        validation.read_reference(path)
+
+
+def test_report_counts_and_lists_what_is_not_indistinguishable():
+    theirs = {q: Estimate(0.5, 0.01, 20) for q in validation.QUANTITIES}
+    ours = dict(theirs, food=Estimate(0.7, 0.01, 20))
+    text = validation.render(validation.compare("forward", ours, theirs), ["# title"], "## Notes\nwhy")
+    assert "**5 of 6** quantities over 1 trees agree" in text
+    assert "- `forward` food: OUTSIDE, diff +0.2000" in text
+    assert text.rstrip().endswith("## Notes\nwhy")
+
+
+def test_validate_command_writes_the_report_and_our_statistics(tmp_path, capsys):
+    # stop: movement and rotation exactly 0.5 (raw 0) and conditionality 0 in every model; the rest is
+    # whatever the model gives
+    values = [(0.5, 0.01), (0.5, 0.01), (0.5, 0.01), (0.0, 0.0), (0.0, 0.0), (0.0, 0.0)]
+    ref = tmp_path / "ref.tsv"
+    ref.write_text(HEADER + _row("stop", values) + _row("seq(forward_left, forward_left)", values))
+    out, tsv = tmp_path / "validation.md", tmp_path / "ours.tsv"
+    args = ["--reference", str(ref), "--seeds", "3", "--trials", "2", "--out", str(out), "--tsv", str(tsv)]
+    assert validate_main(args) == 0
+    report = out.read_text()
+    assert (
+        "| movement | 0.5000 ± 0.0000 | 0.5000 ± 0.0000 | +0.0000 | 0.0300 | +0.0 | indistinguishable |"
+        in report
+    )
+    assert "### 2. `seq(forward_left, forward_left)`" in report
+    ours = validation.read_reference(tsv)
+    assert ours["stop"]["movement"] == ours["stop"]["rotation"] == Estimate(0.5, 0.0, 3)
+    assert ours["stop"]["conditionality"] == Estimate(0.0, 0.0, 3)  # an action only: no condition ticks
+    assert validate_main(args) == 0 and out.read_text() == report  # seeded: the same report again
+
+
+def test_validate_command_refuses_bad_input_in_one_line_and_writes_nothing(tmp_path, capsys):
+    ref = tmp_path / "ref.tsv"
+    ref.write_text(HEADER + _row("seq(forward, flying)", [(0.5, 0.1)] * 6))
+    out = tmp_path / "validation.md"
+    assert validate_main(["--reference", str(ref), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("validate: error:") and "flying" in err and "\n" not in err
+    assert not out.exists()
+    assert validate_main(["--reference", str(tmp_path / "none.tsv"), "--out", str(out)]) == 2
+    assert "cannot read" in capsys.readouterr().err
+    assert validate_main(["--reference", str(ref), "--seeds", "1", "--out", str(out)]) == 2

@@ -1,0 +1,167 @@
+"""Seeing a repertoire: the trial animation reads the poses the node graph recorded, and the explorer page of
+a small run, loaded in headless Chromium from file:// with a fragment, shows the chosen bin's trees, values
+and animation, and exactly the filled bins of the run's repertoire files."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from bt_controller.simplify import simplify
+from bt_controller.tree import parse, to_text
+from evolution_manager.animation import frames_from_bag, frames_from_tree
+from evolution_manager.bags import read_bag
+from evolution_manager.graph import executable
+from evolution_manager.nodes.trial import TrialGraph
+
+TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, in_nest, stop))"
+SEED, TRIAL = 13, 1
+
+
+def test_animation_frames_are_the_poses_the_graph_recorded(tmp_path):
+    bag = tmp_path / "trial.bag"
+    with TrialGraph(timeout=240) as graph:
+        graph.run(TREE, SEED, TRIAL, bag)
+    recorded = {m.message.step: m.message for m in read_bag(bag) if m.topic == "/swarm_state"}
+    frames = frames_from_bag(bag)
+    assert len(frames.steps) == len(recorded) == 176  # one frame per sensing step
+    for k, step in enumerate(frames.steps):
+        poses = [[p.x, p.y, p.theta] for p in recorded[int(step)].poses]
+        assert frames.poses[k].tolist() == poses
+    # the in-process road gives the same frames: poses, actions, messages and fitness so far
+    twin = frames_from_tree(TREE, SEED, TRIAL)
+    np.testing.assert_array_equal(twin.poses, frames.poses)
+    np.testing.assert_array_equal(twin.actions, frames.actions)
+    np.testing.assert_array_equal(twin.ticks, frames.ticks)
+    assert all(np.array_equal(a, b) for a, b in zip(twin.links, frames.links, strict=True))
+    np.testing.assert_allclose(twin.fitness, frames.fitness, rtol=0, atol=1e-12)
+
+    gif = tmp_path / "trial.gif"
+    done = subprocess.run(
+        [str(executable("evolution_manager", "animate")), "--bag", str(bag), "--out", str(gif)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    with Image.open(gif) as image:
+        assert image.n_frames == 176
+
+
+class _Elements(HTMLParser):
+    """Every element's tag and attributes, and the text inside #values."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.elements: list[tuple[str, dict[str, str]]] = []
+        self.values_text: list[str] = []
+        self._in_values = 0
+
+    def handle_starttag(self, tag: str, attrs: list) -> None:
+        attributes = {k: v or "" for k, v in attrs}
+        self.elements.append((tag, attributes))
+        if attributes.get("id") == "values" or self._in_values:
+            self._in_values += 1
+
+    def handle_endtag(self, tag: str) -> None:
+        if self._in_values:
+            self._in_values -= 1
+
+    def handle_data(self, data: str) -> None:
+        if self._in_values:
+            self.values_text.append(data)
+
+    def find(self, tag: str | None = None, **attrs: str) -> list[dict[str, str]]:
+        wanted = {k.rstrip("_").replace("_", "-"): v for k, v in attrs.items()}
+        return [
+            a
+            for t, a in self.elements
+            if (tag is None or t == tag) and all(a.get(k) == v for k, v in wanted.items())
+        ]
+
+
+def rendered(page: Path, fragment: str) -> _Elements:
+    chromium = shutil.which("chromium")
+    assert chromium, "chromium is not installed: ws/setup installs it (apt-get install chromium)"
+    done = subprocess.run(
+        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=4000", "--dump-dom",
+         f"{page.resolve().as_uri()}#{fragment}"],
+        capture_output=True, text=True, timeout=180,
+    )  # fmt: skip
+    assert done.returncode == 0 and "<body" in done.stdout, done.stderr[-2000:]
+    parser = _Elements()
+    parser.feed(done.stdout)
+    return parser
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("explorer") / "run"
+    done = subprocess.run(
+        [str(executable("evolution_manager", "evolve")), "--algorithm", "qd", "--objective", "food",
+         "--evaluations", "150", "--seed", "4", "--out", str(out), "--no-progress"],
+        capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    return out
+
+
+def filled_bins(repertoire: Path) -> set[str]:
+    return {",".join(map(str, item["bin"])) for item in json.loads(repertoire.read_text())["items"]}
+
+
+def test_the_run_shows_its_trees_simplified_with_the_originals_kept(small_run):
+    for objective in ("density", "nest", "food"):
+        for item in json.loads((small_run / f"repertoire_{objective}.json").read_text())["items"]:
+            assert item["simplified"] == to_text(simplify(parse(item["tree"])))
+    best = json.loads((small_run / "summary.json").read_text())["objectives"]["food"]
+    assert (small_run / "best/food.txt").read_text().strip() == best["best_tree_simplified"]
+    assert (small_run / "best/food.original.txt").read_text().strip() == best["best_tree"]
+    for suffix in ("xml", "dot", "svg"):
+        assert (small_run / f"best/food.{suffix}").stat().st_size > 0
+    with Image.open(small_run / "best/food.png") as png:
+        assert png.format == "PNG"
+
+
+def test_explorer_opens_the_bin_of_the_fragment(small_run):
+    page = small_run / "explorer.html"
+    assert page.stat().st_size < 5_000_000
+    document = json.loads((small_run / "repertoire_food.json").read_text())
+    best = max(document["items"], key=lambda item: item["fitness"])
+    bin_text = ",".join(map(str, best["bin"]))
+    dom = rendered(page, f"objective=food&bin={bin_text}")
+
+    cells = [a for a in dom.find("rect") if "cell" in a.get("class", "").split()]
+    assert len(cells) == 512
+    assert {a["data-bin"] for a in cells if "filled" in a["class"].split()} == filled_bins(
+        small_run / "repertoire_food.json"
+    )
+    assert next(a for a in cells if "selected" in a["class"].split())["data-bin"] == bin_text
+
+    assert dom.find("section", id="detail", data_objective="food", data_bin=bin_text)
+    in_bin = [item for item in document["items"] if item["bin"] == best["bin"]]
+    values = " ".join(dom.values_text)
+    for item in in_bin:
+        assert f"{item['fitness']:.4f}" in values
+        assert all(f"{d:.4f}" in values for d in item["descriptors"])
+    drawn = {a["data-tree"] for a in dom.find("div") if "tree" in a.get("class", "").split()}
+    assert best["simplified"] in drawn and best["tree"] in drawn
+    assert dom.find("svg", class_="tree-drawing")
+    (canvas,) = dom.find("canvas", id="animation")
+    assert int(canvas["data-frames"]) == 89  # every second sensing step of 176, and the last
+    assert canvas["data-tree"] == best["simplified"]
+
+
+def test_explorer_heatmaps_of_another_objective(small_run):
+    dom = rendered(small_run / "explorer.html", "objective=nest")
+    filled = {a["data-bin"] for a in dom.find("rect") if "filled" in a.get("class", "").split()}
+    assert filled == filled_bins(small_run / "repertoire_nest.json")
+    assert dom.find("div", id="heatmaps", data_objective="nest")
+    assert dom.find("section", id="detail", data_bin="")
