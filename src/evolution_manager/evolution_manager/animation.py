@@ -98,7 +98,8 @@ def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray
 
 
 def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
-    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it."""
+    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it (its
+    chain's earlier trials first); the frames are trial ``trial``'s steps."""
     from bt_controller.tree import parse
     from swarm_sim.config import DEFAULT
     from swarm_sim.lockstep import run_with_controllers
@@ -120,9 +121,11 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None
         if tick >= 0:
             current[:] = [a.action for a in answers]
             last_tick[0] = tick
+        if world.trial != trial:  # an earlier trial of the chain: it sets the state, it is not drawn
+            return
         readings = world.readings()
         smoothed = np.array([a.smoothed for a in answers], dtype=np.float64)
-        if timeline.is_initial(config.timeline, world.step):  # each trial of the chain from its own start
+        if timeline.is_initial(config.timeline, world.step):
             initial[:] = [smoothed]
         steps.append(world.step)
         poses.append(world.poses())
