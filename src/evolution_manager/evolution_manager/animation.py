@@ -199,6 +199,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if kind == "tree_status":
             tick_at[_stamp_step(msg, states)] = int(msg.tick)
             continue
+        if kind not in ("wheels", "ground", "range_and_bearing"):  # e.g. pose (PoseStamped): no step
+            continue
         k = index.get(int(msg.step))
         if k is None:
             continue
