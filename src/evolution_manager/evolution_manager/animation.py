@@ -169,7 +169,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     from evolution_manager.bags import BagError, read_bag
     from evolution_manager.reproduce import RESULT_TOPIC
     from swarm_sim.config import DEFAULT
-    from swarm_sim.lockstep import action_of_wheels
 
     try:
         messages = list(read_bag(path))
@@ -205,7 +204,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if k is None:
             continue
         if kind == "wheels":
-            wheels[k, robot] = action_of_wheels(msg.left, msg.right)
+            wheels[k, robot] = int(msg.action)  # the action's index (wheel speeds are in m/s since issue 13)
             smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density)
         elif kind == "ground":
             ground[k, robot] = (msg.in_nest, msg.on_food)
