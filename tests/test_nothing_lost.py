@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_controller.nodes.isolation import domain_environment, reserved_domain
+from swarm_ros.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import BagRecorder, read_bag, swarm_typestore
 from evolution_manager.config import evaluation_seed
 from evolution_manager.dispatch import Dispatcher, Timeouts

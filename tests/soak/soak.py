@@ -33,7 +33,7 @@ import sys
 import time
 from pathlib import Path
 
-from bt_controller.nodes.isolation import domain_environment, reserved_domain
+from swarm_ros.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import read_bag
 from evolution_manager.cli import evolve
 from evolution_manager.config import evaluation_seed
