@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swarm_ros.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import BagRecorder, read_bag, swarm_typestore
 from evolution_manager.config import evaluation_seed
 from evolution_manager.dispatch import Dispatcher, Timeouts
 from evolution_manager.graph import executable
+from swarm_ros.isolation import domain_environment, reserved_domain
 
 ROOT = Path(__file__).resolve().parents[1]
 QD = ["--algorithm", "qd", "--objective", "food"]

@@ -33,11 +33,11 @@ import sys
 import time
 from pathlib import Path
 
-from swarm_ros.isolation import domain_environment, reserved_domain
 from evolution_manager.bags import read_bag
 from evolution_manager.cli import evolve
 from evolution_manager.config import evaluation_seed
 from evolution_manager.graph import executable
+from swarm_ros.isolation import domain_environment, reserved_domain
 
 RESULT_FILES = [
     "config.json",
