@@ -133,14 +133,18 @@ class ServiceEvaluator:
                     self._log("info", f"evaluator {name} {'is back' if state else 'found'}")
                 self.dispatcher.appeared(name)
             elif state in (WorkerState.IDLE, WorkerState.BUSY, WorkerState.LATE):
-                chunk = self.dispatcher.vanished(name)
-                lost = ""
-                if chunk is not None and state is WorkerState.BUSY:
-                    lost = f"; re-sending its {len(chunk.indices)} requests"
-                self._log("warn", f"evaluator {name} vanished{lost}")
-                if chunk is not None:
-                    self._forget(chunk)
+                self._drop(name, state, "vanished")
         return ready
+
+    def _drop(self, name: str, state: WorkerState | None, how: str) -> None:
+        """Take evaluator ``name`` out of the dispatch; its chunk in flight, if any, is re-queued once."""
+        chunk = self.dispatcher.vanished(name)
+        lost = ""
+        if chunk is not None and state is WorkerState.BUSY:
+            lost = f"; re-sending its {len(chunk.indices)} requests"
+        self._log("warn", f"evaluator {name} {how}{lost}")
+        if chunk is not None:
+            self._forget(chunk)
 
     def _retire_dead(self) -> None:
         """Retire the services ``watch`` reports dead: their chunk in flight is re-queued once."""
@@ -148,14 +152,7 @@ class ServiceEvaluator:
             if name in self.retired:
                 continue
             self.retired.add(name)
-            state = self.dispatcher.state(name)
-            chunk = self.dispatcher.vanished(name)
-            lost = ""
-            if chunk is not None and state is WorkerState.BUSY:
-                lost = f"; re-sending its {len(chunk.indices)} requests"
-            self._log("warn", f"evaluator {name} died{lost}")
-            if chunk is not None:
-                self._forget(chunk)
+            self._drop(name, self.dispatcher.state(name), "died")
             client = self._clients.pop(name, None)
             if client is not None:
                 client.destroy()
