@@ -69,7 +69,7 @@ def test_verify_accepts_a_faithful_recording(tmp_path):
     steps = write_trial_bag(tmp_path / "faithful")
     verification = verify_trial_bag(tmp_path / "faithful")
     assert verification.reproduced, verification.summary()
-    assert verification.steps_compared == steps == 176
+    assert verification.steps_compared == steps == (TRIAL + 1) * 160  # trial 2 runs after trials 0 and 1
 
 
 def test_verify_names_the_first_step_that_differs(tmp_path):
@@ -110,8 +110,9 @@ def test_replay_republishes_the_bag_in_order(tmp_path):
             for _ in range(20):
                 executor.spin_once(timeout_sec=0.05)
             assert replay.wait(timeout=10) == 0
-            assert "replayed 178 messages" in replay.stdout.read()
-            assert received == list(range(176))
+            steps = (TRIAL + 1) * 160  # the chain's steps up to and including trial TRIAL
+            assert f"replayed {steps + 2} messages" in replay.stdout.read()
+            assert received == list(range(1, steps + 1))
         finally:
             executor.shutdown()
             rclpy.shutdown(context=context)

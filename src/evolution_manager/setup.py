@@ -23,7 +23,7 @@ setup(
     maintainer_email="maintainers@swarm-bt-qd.org",
     description=Path("package.xml").read_text().split("<description>")[1].split("</description>")[0],
     license="Apache-2.0",
-    # colcon runs pytest only when pytest is declared as the test extra (see shared/ros2 pitfall 3).
+    # colcon runs pytest only when pytest is declared as the test extra.
     extras_require={"test": ["pytest"]},
     entry_points={
         "console_scripts": [

@@ -32,6 +32,7 @@ from numba.extending import intrinsic
 
 from bt_controller.draws import choose, derive
 from bt_controller.errors import TreeLimitError
+from bt_controller.timeline import PAPER
 from bt_controller.tree import Action, Composite, Condition, Node
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, FAILURE, RUNNING, SUCCESS
 
@@ -169,6 +170,17 @@ def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
         memory[i] = -1 if op[i] <= OP_PROB else 0
 
 
+@numba.njit(cache=True)
+def start_memory(op: np.ndarray, memory: np.ndarray, profile: int) -> None:
+    """Set ``memory`` to the state a tree starts a chain with: ``reset_memory``, and under ``paper`` every
+    probabilistic composite at its first child (A3, as ``semantics.new_memory``)."""
+    reset_memory(op, memory)
+    if profile == PAPER:
+        for i in range(len(op)):
+            if op[i] == OP_PROB:
+                memory[i] = 0
+
+
 @numba.njit(cache=True, inline="always")
 def tick(
     tree: FlatTree,
@@ -287,21 +299,28 @@ class Run:
 
 
 @numba.njit(cache=True)
-def _reset_rows(trees: PackedTrees, robot_tree: np.ndarray, memory: np.ndarray) -> None:
+def _reset_rows(trees: PackedTrees, robot_tree: np.ndarray, memory: np.ndarray, profile: int) -> None:
     for r in range(len(robot_tree)):
         op = tree_at(trees, robot_tree[r]).op
-        reset_memory(op, memory[r, : op.shape[0]])
+        start_memory(op, memory[r, : op.shape[0]], profile)
 
 
-def new_memory(packed: PackedTrees, robot_tree: np.ndarray) -> np.ndarray:
-    """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed``."""
+def new_memory(packed: PackedTrees, robot_tree: np.ndarray, profile: int = PAPER) -> np.ndarray:
+    """Fresh memory rows (robots, max_nodes) for robots running ``robot_tree`` of ``packed``
+    (``start_memory``)."""
     robot_tree = np.asarray(robot_tree, np.int64)
     memory = np.zeros((len(robot_tree), max(packed.max_nodes, 1)), np.int8)
-    _reset_rows(packed, robot_tree, memory)
+    _reset_rows(packed, robot_tree, memory, profile)
     return memory
 
 
-def run_ticks(packed: PackedTrees, robot_tree: np.ndarray, keys: np.ndarray, blackboards: np.ndarray) -> Run:
+def run_ticks(
+    packed: PackedTrees,
+    robot_tree: np.ndarray,
+    keys: np.ndarray,
+    blackboards: np.ndarray,
+    profile: int = PAPER,
+) -> Run:
     """Tick robots from fresh memory for ``blackboards.shape[1]`` ticks (tick indices 0, 1, ...).
 
     ``robot_tree`` (robots,) picks each robot's tree in ``packed``; ``keys`` (robots,) uint64 stream keys;
@@ -317,7 +336,7 @@ def run_ticks(packed: PackedTrees, robot_tree: np.ndarray, keys: np.ndarray, bla
     n_ticks = blackboards.shape[1]
     if n_robots and (robot_tree.min() < 0 or robot_tree.max() >= packed.n_trees):
         raise ValueError(f"robot_tree must index the {packed.n_trees} packed trees")
-    memory = new_memory(packed, robot_tree)
+    memory = new_memory(packed, robot_tree, profile)
     counts = np.zeros((n_robots, N_COUNTS), np.int64)
     status = np.empty((n_robots, n_ticks), np.int8)
     action = np.empty((n_robots, n_ticks), np.int8)
@@ -328,11 +347,11 @@ def run_ticks(packed: PackedTrees, robot_tree: np.ndarray, keys: np.ndarray, bla
 class CompiledRobot:
     """One robot ticking a flat tree from Python (for tests and tools; kernels call ``tick`` directly)."""
 
-    def __init__(self, tree: Node | FlatTree, key: int) -> None:
+    def __init__(self, tree: Node | FlatTree, key: int, profile: int = PAPER) -> None:
         self.flat = tree if isinstance(tree, FlatTree) else flatten(tree)
         self.key = np.uint64(key)
         self.memory = np.empty(self.flat.n_nodes, np.int8)
-        reset_memory(self.flat.op, self.memory)
+        start_memory(self.flat.op, self.memory, profile)
         self.counts = np.zeros(N_COUNTS, np.int64)
         self.tick_index = 0
 

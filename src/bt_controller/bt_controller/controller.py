@@ -1,46 +1,24 @@
-"""A footbot's onboard software, one sensing step at a time: perception, then at each tick the behaviour tree.
+"""A footbot's onboard software, one control step at a time: the authors' ``ControlStep`` (``docs/model.md``).
 
 This is the core of the footbot controller node (``bt_controller.nodes.footbot_controller``), kept free of ROS
-so that it can be tested, and checked against the reference road, without a graph. It ticks the tree with the
-reference interpreter, the readable definition of a tick.
+so that it can be tested, and checked against the batch evaluator, without a graph; the reference road and the
+in-process lockstep run it too. It follows ``bt_controller.timeline`` step by step: sense, refresh the
+smoothed values, tick the tree with the reference interpreter, broadcast and drive. A chain's trials follow
+each other without a reset: the tree's memory, the smoothing window and the estimates carry over (A1 under
+``paper``; under ``clean`` a chain is one trial).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bt_controller import timeline
+from bt_controller.motors import motors_after_tick, running_action
 from bt_controller.perception import PerceptionParams, Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
+from bt_controller.timeline import Timeline
 from bt_controller.tree import Node
-from bt_controller.validate import integer
-from bt_controller.vocabulary import ACTION_WHEELS, RUNNING, STOP
-
-
-@dataclass(frozen=True)
-class Schedule:
-    """When a robot ticks: after reading step ``settle_steps - 1``, then every ``steps_per_tick`` steps,
-    ``ticks`` times in all."""
-
-    settle_steps: int = 16
-    steps_per_tick: int = 4
-    ticks: int = 40
-
-    def __post_init__(self) -> None:
-        for name in ("settle_steps", "steps_per_tick", "ticks"):
-            integer(getattr(self, name), name, 1)
-
-    @property
-    def last_step(self) -> int:
-        """The trial's last sensing step."""
-        return self.settle_steps + self.ticks * self.steps_per_tick - 1
-
-    def tick_at(self, step: int) -> int:
-        """The tick run after reading ``step``, or -1 when the robot does not tick then."""
-        since_first = step - (self.settle_steps - 1)
-        if since_first < 0 or since_first % self.steps_per_tick:
-            return -1
-        tick = since_first // self.steps_per_tick
-        return tick if tick < self.ticks else -1
+from bt_controller.vocabulary import ACTION_WHEELS, STOP
 
 
 @dataclass(frozen=True)
@@ -48,79 +26,104 @@ class TickOutcome:
     """What one tick did."""
 
     tick: int
+    """The tick's number within the chain."""
     status: int
     started: int
     """The action this tick started, or -1."""
     condition_ticks: int
     """Condition nodes ticked during this tick."""
+    motors: int
+    """The motors after the tick: the last action ticked (``motors.motors_after_tick``)."""
 
 
 @dataclass(frozen=True)
 class StepOutcome:
-    """A robot's answer to one sensing step."""
+    """A robot's answer to one control step."""
 
     step: int
     action: int
-    """The action driving the wheels until the next tick (``STOP`` when the last tick left none running)."""
+    """The motors driving the wheels from the next step on (``STOP`` before the first tick)."""
     wheels: tuple[int, int]
     broadcast: tuple[float, float]
+    """The (nest, food) values broadcast at this step, heard by the others at the next (mm)."""
     smoothed: tuple[float, float, float]
+    """The smoothed (nest, food, density) as last refreshed."""
     tick: TickOutcome | None
-    """The tick run after this step, if any."""
+    """The tick run at this step, if any."""
 
 
 class FootbotController:
-    """One footbot's perception and behaviour tree across trials."""
+    """One footbot's perception and behaviour tree across the steps of a chain."""
 
     def __init__(self) -> None:
         self.tree: Node | None = None
-        self.schedule = Schedule()
+        self.timeline = Timeline()
         self.view: RobotView | None = None
         self.robot: ReferenceRobot | None = None
         self.action = STOP
-        self.next_step = 0
+        self.resumed = -1
+        self.next_step = 1
+        self.last_step = 0
 
     def load(self, tree: Node) -> None:
-        """Run ``tree`` from the next trial on."""
+        """Run ``tree`` from the next chain on."""
         self.tree = tree
         self.view = None
         self.robot = None
 
-    def start_trial(self, tree_key: int, schedule: Schedule, perception: PerceptionParams) -> None:
-        """Reset for a new trial: fresh tree memory and counts, an empty smoothing window."""
+    def start_chain(self, tree_key: int, line: Timeline, perception: PerceptionParams, trials: int) -> None:
+        """Start a chain of ``trials`` trials: fresh tree memory, an empty window, the motors at stop."""
         if self.tree is None:
             raise RuntimeError("no tree is loaded: call load_tree first")
-        self.schedule = schedule
+        if (
+            isinstance(trials, bool)
+            or not isinstance(trials, int)
+            or not 1 <= trials <= timeline.chain_length(line)
+        ):
+            raise ValueError(f"a chain has 1 to {timeline.chain_length(line)} trials, got {trials!r}")
+        self.timeline = line
         self.view = RobotView(perception)
-        self.robot = ReferenceRobot(self.tree, tree_key)
+        self.robot = ReferenceRobot(self.tree, tree_key, line.profile)
         self.action = STOP
-        self.next_step = 0
+        self.resumed = -1
+        self.next_step = 1
+        self.last_step = trials * timeline.trial_steps(line)
 
     @property
     def in_trial(self) -> bool:
-        """Whether a trial is under way (started and its last step not yet answered)."""
-        return self.view is not None and self.next_step <= self.schedule.last_step
+        """Whether a chain is under way (started and its last step not yet answered)."""
+        return self.view is not None and self.next_step <= self.last_step
 
     def on_step(self, step: int, readings: Readings) -> StepOutcome:
-        """Take the readings of sensing step ``step`` (steps come in order from 0) and answer it."""
+        """Take the readings of control step ``step`` (steps come in order from 1) and answer it. At a
+        trial's first step only the ground sensor is read, and only at the chain's first step."""
         if self.view is None or self.robot is None:
-            raise RuntimeError("no trial is under way: call start_trial first")
+            raise RuntimeError("no chain is under way: call start_chain first")
         if step != self.next_step:
             raise ValueError(f"expected the readings of step {self.next_step}, got step {step}")
-        self.view.update(readings)
+        line = self.timeline
+        if timeline.senses(line, step):
+            self.view.sense(readings)
+            if timeline.refreshes(line, step):
+                self.view.refresh()
         tick = None
-        tick_index = self.schedule.tick_at(step)
-        if tick_index >= 0:
+        if timeline.ticks_at(line, step):
             conditions_before = self.robot.counts[0]
+            number = self.robot.tick_index
             status, started = self.robot.step(self.view.blackboard())
-            self.action = started if status == RUNNING else STOP
-            tick = TickOutcome(tick_index, status, started, self.robot.counts[0] - conditions_before)
+            self.action = motors_after_tick(status, started, self.resumed)
+            self.resumed = running_action(status, started)
+            tick = TickOutcome(number, status, started, self.robot.counts[0] - conditions_before, self.action)
+        if timeline.region_broadcast(step):
+            broadcast = self.view.region_broadcast(readings.in_nest, readings.on_food)
+        else:
+            broadcast = self.view.broadcast()
         self.next_step = step + 1
         return StepOutcome(
             step=step,
             action=self.action,
             wheels=ACTION_WHEELS[self.action],
-            broadcast=self.view.broadcast(),
+            broadcast=broadcast,
             smoothed=self.view.smoothed(),
             tick=tick,
         )

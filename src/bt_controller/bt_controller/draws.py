@@ -8,20 +8,18 @@ exactly the same numbers for the same (seed, trial, robot, step).
 The mixing function is SplitMix64's finaliser (Steele, Lea and Flood, 2014). Keys are derived by
 chaining from a seed's root key: ``key_path(seed, a, b, ...) = derive(derive(root_key(seed), a), b) ...``.
 
-Streams of a trial (``swarm_sim``): the key of a purpose is ``key_path(seed, trial, robot, purpose)`` and
-each draw is ``uniform(key, counter)`` with a counter fixed below, so any trial, any robot and any step can be
-replayed alone, by any road, in any process.
+Streams of a chain (``swarm_sim``; a chain is the 5 trials simulated as one under the ``paper`` profile, chain
+``k // 5`` for trial ``k``, or one trial under ``clean``, chain ``k``): the key of a purpose is
+``key_path(seed, chain, robot, purpose)`` and each draw is ``uniform(key, counter)`` with a counter fixed
+below, so any chain, any robot and any step can be replayed alone, by any road, in any process.
 
 | purpose | counters |
 |---|---|
-| ``POSITION`` | attempt ``a`` of placing the robot: ``2a`` (radius), ``2a + 1`` (angle) |
-| ``HEADING`` | ``0`` |
-| ``GAINS`` | ``0`` (left wheel), ``1`` (right wheel) |
-| ``DROPS`` | message from robot ``j`` to this robot at sensing step ``s``: ``s * n_robots + j`` |
-| ``TREE`` | the tree's stream key, passed to the tree interpreter (see ``docs/interfaces.md``) |
-
-Sensing steps are numbered from 0 within a trial, the settling steps first. Trial ``k`` uses arena
-configuration ``k % len(config.gaps)``.
+| ``POSITION`` | trial ``t`` of the chain, try ``a`` (of 10) to place the robot: ``2 (10 t + a)``, + 1 |
+| ``HEADING`` | trial ``t`` of the chain: ``t`` |
+| ``GAINS`` | ``0`` (right wheel), ``1`` (left wheel) |
+| ``DROPS`` | message from robot ``j`` to this robot at the chain's control step ``k``: ``k * n_robots + j`` |
+| ``TREE`` | the tree's stream key, passed to the tree interpreter with the chain's tick number |
 
 Seeds of a run (``evolution_manager``), each ``derive_seed(run seed, purpose, ...)``:
 ``RUN_EVALUATION, i`` is the simulator seed of evaluation ``i``; ``RUN_ALGORITHM`` seeds the algorithm's own
@@ -100,7 +98,7 @@ GAINS = 2
 DROPS = 3
 TREE = 4
 PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
-"""The purposes of a trial's per-robot streams, in index order."""
+"""The purposes of a chain's per-robot streams, in index order."""
 
 RUN_EVALUATION = 1
 RUN_ALGORITHM = 2
@@ -117,9 +115,9 @@ def key_path(seed: int, *path: int) -> np.uint64:
     return key
 
 
-def stream_key(seed: int, trial: int, robot: int, purpose: int) -> np.uint64:
-    """The stream key of ``(seed, trial, robot, purpose)``, from Python."""
-    return key_path(seed, trial, robot, purpose)
+def stream_key(seed: int, chain: int, robot: int, purpose: int) -> np.uint64:
+    """The stream key of ``(seed, chain, robot, purpose)``, from Python."""
+    return key_path(seed, chain, robot, purpose)
 
 
 def derive_seed(seed: int, *path: int) -> int:
@@ -128,9 +126,9 @@ def derive_seed(seed: int, *path: int) -> int:
 
 
 @numba.njit(cache=True)
-def trial_keys(seed_key: np.uint64, trial: int, n_robots: int) -> np.ndarray:
-    """Every stream key of one trial: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
-    tkey = derive(seed_key, trial)
+def chain_keys(seed_key: np.uint64, chain: int, n_robots: int) -> np.ndarray:
+    """Every stream key of one chain: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
+    tkey = derive(seed_key, chain)
     keys = np.empty((len(PURPOSES), n_robots), dtype=np.uint64)
     for robot in range(n_robots):
         rkey = derive(tkey, robot)

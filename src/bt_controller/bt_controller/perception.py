@@ -3,7 +3,7 @@
 From one sensing step's readings (the ground sensor and the range-and-bearing messages it received) a robot
 computes its raw nest and food distance estimates (hop gradients through its neighbours' broadcasts) and its
 neighbourhood density, keeps the last ``window`` samples for the smoothed values, and fills the blackboard its
-behaviour tree reads (``shared/design/model.md``, "Messages and estimates" and "Blackboard").
+behaviour tree reads (``docs/model.md``, "One step of a robot" and "Blackboard").
 
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
 ``njit`` functions inline, and the controller node and the reference road call them from Python, so both roads
@@ -20,18 +20,26 @@ from typing import NamedTuple, Protocol
 import numba
 import numpy as np
 
+from bt_controller.timeline import PAPER
+
 
 class PerceptionParams(NamedTuple):
-    """The parameters of a robot's perception, with the model's defaults."""
+    """The parameters of a robot's perception, with the model's defaults (``docs/model.md``, "One step")."""
 
     window: int = 7
-    """Raw samples averaged into a smoothed value (paper: seven)."""
+    """Raw samples averaged into a smoothed value (``CBlackBoard.cpp:45``: at most 7 kept)."""
     estimate_cap: float = 5000.0
-    """Largest nest/food distance estimate; also the estimate when nothing was heard (mm)."""
-    density_range: float = 170.0
-    """A neighbour at this range adds 1 to the density sum: two touching footbots (mm)."""
-    density_divisor: float = 6.0
-    """The density sum is divided by this."""
+    """Largest nest/food distance estimate, and the estimate when nothing better was heard: 500 cm
+    (``footbot_bt.cpp:281-282``) (mm)."""
+    density_range: float = 10_000.0
+    """A neighbour at range r adds 1 / (pi (r / density_range)^2) to the density sum: ARGoS's range in cm
+    divided by 1000 (``footbot_bt.cpp:334``) is the range in mm divided by 10000 (mm)."""
+    density_divisor: float = 1107.0 * 6.0
+    """The density sum is divided by this: 1107 per touching neighbour, 6 neighbours
+    (``CBlackBoard.cpp:295``)."""
+    profile: int = PAPER
+    """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard
+    (A2)."""
 
 
 class PerceptionSettings(Protocol):
@@ -45,6 +53,8 @@ class PerceptionSettings(Protocol):
     def density_range(self) -> float: ...
     @property
     def density_divisor(self) -> float: ...
+    @property
+    def profile(self) -> int: ...
 
 
 @numba.njit(cache=True)
@@ -57,11 +67,13 @@ def estimate(
     food_values: np.ndarray,
     p: PerceptionSettings,
 ) -> tuple:
-    """A robot's raw estimates from one step's readings.
+    """A robot's raw estimates from one step's messages (one per sender, in sender order).
 
-    Returns ``(nest, food, density, nest_source, food_source, nearest)``: the sources are positions in the
-    readings (-1 for none) of the message that gave the minimum nest / food estimate (first on ties; none
-    inside the region or when the estimate is capped) and of the nearest sender (first on ties).
+    Returns ``(nest, food, density, nest_source, food_source, nearest)``: the nest estimate is 0 in the nest,
+    else the least of the cap and every sender's broadcast value plus its range (``footbot_bt.cpp:281-331``);
+    food likewise. The sources are positions in the messages (-1 for none) of the message that gave the
+    minimum (first on ties; none inside the region or when nothing beat the cap) and of the nearest sender
+    (first on ties).
     """
     nest = 0.0
     nest_source = -1
@@ -84,8 +96,8 @@ def estimate(
     total = 0.0
     nearest = -1
     for k in range(count):
-        q = p.density_range / ranges[k]
-        total += q * q
+        q = ranges[k] / p.density_range
+        total += 1.0 / (math.pi * (q * q))
         if nearest < 0 or ranges[k] < ranges[nearest]:
             nearest = k
     return nest, food, total / p.density_divisor, nest_source, food_source, nearest
@@ -104,7 +116,8 @@ def push_sample(window: np.ndarray, count: int, nest: float, food: float, densit
 
 @numba.njit(cache=True)
 def smoothed(window: np.ndarray, count: int) -> tuple:
-    """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first."""
+    """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first (the mean
+    over the samples held, ``CBlackBoard.cpp:64-83``)."""
     w = window.shape[0]
     m = min(count, w)
     nest = 0.0
@@ -115,43 +128,60 @@ def smoothed(window: np.ndarray, count: int) -> tuple:
         nest += window[slot, 0]
         food += window[slot, 1]
         density += window[slot, 2]
+    if m == 0:
+        return 0.0, 0.0, 0.0
     return nest / m, food / m, density / m
 
 
 @numba.njit(cache=True)
-def is_left(b: float) -> bool:
-    """A bearing in [0, pi) is on the left (NaN, meaning no bearing, is on neither side)."""
-    return 0.0 <= b < math.pi
+def broadcast_value(smoothed_estimate: float) -> float:
+    """What a robot broadcasts for a smoothed estimate: whole centimetres, truncated (the code sends a
+    ``short int``, ``footbot_bt.cpp:444-445``), returned in mm."""
+    return 10.0 * math.floor(smoothed_estimate / 10.0)
 
 
 @numba.njit(cache=True)
-def is_right(b: float) -> bool:
-    """A bearing in (-pi, 0) is on the right."""
-    return -math.pi < b < 0.0
+def region_value(inside: bool, p: PerceptionSettings) -> float:
+    """The value broadcast at a chain's first step: 0 inside the region, else the cap
+    (``footbot_bt.cpp:144-145``)."""
+    return 0.0 if inside else p.estimate_cap
 
 
 @numba.njit(cache=True)
 def blackboard(
     in_nest: bool,
     on_food: bool,
+    nest: float,
+    food: float,
     nest_bearing: float,
     food_bearing: float,
+    heard: bool,
     nearest_bearing: float,
+    p: PerceptionSettings,
     out: np.ndarray,
 ) -> None:
-    """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest step.
+    """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest sensing step.
 
-    The bearings are those of the sources ``estimate`` returned (NaN for none): a side is true only when
-    the source exists and lies on it.
+    ``nest``/``food`` are the raw estimates and the bearings those of their sources
+    (``footbot_bt.cpp:389-392``: a side holds when 0 < estimate < cap and the bearing is strictly on it). The
+    nearest robot heard is left at a bearing >= 0, right below 0 (``footbot_bt.cpp:358-369``); with nobody
+    ``heard`` robot_left holds under ``paper`` (the code reads a bearing of 0, A2) and neither under
+    ``clean``.
     """
     out[0] = on_food
     out[1] = in_nest
-    out[2] = is_left(food_bearing)
-    out[3] = is_right(food_bearing)
-    out[4] = is_left(nest_bearing)
-    out[5] = is_right(nest_bearing)
-    out[6] = is_left(nearest_bearing)
-    out[7] = is_right(nearest_bearing)
+    food_known = 0.0 < food < p.estimate_cap
+    nest_known = 0.0 < nest < p.estimate_cap
+    out[2] = food_known and food_bearing > 0.0
+    out[3] = food_known and food_bearing < 0.0
+    out[4] = nest_known and nest_bearing > 0.0
+    out[5] = nest_known and nest_bearing < 0.0
+    if heard:
+        out[6] = nearest_bearing >= 0.0
+        out[7] = nearest_bearing < 0.0
+    else:
+        out[6] = p.profile == PAPER
+        out[7] = False
 
 
 @dataclass(frozen=True)
@@ -172,20 +202,25 @@ class Readings:
 
 
 class RobotView:
-    """One robot's estimates, smoothing window and blackboard, updated from its own readings."""
+    """One robot's perception across a chain: raw estimates, smoothing window, smoothed values, blackboard.
+
+    ``sense`` takes a sensing step's readings; ``refresh`` recomputes the smoothed values (the timeline says
+    when); ``broadcast`` is what the robot sends. Nothing is reset between the trials of a chain (A1).
+    """
 
     def __init__(self, p: PerceptionSettings) -> None:
         self.p = p
         self.window = np.zeros((p.window, 3))
         self.samples = 0
-        self.nest = math.nan
-        self.food = math.nan
-        self.density = math.nan
+        self.nest = p.estimate_cap
+        self.food = p.estimate_cap
+        self.density = 0.0
+        self.smooth = (0.0, 0.0, 0.0)
         self.latest: Readings | None = None
         self.sources = (-1, -1, -1)
 
-    def update(self, readings: Readings) -> None:
-        """Take one step's readings: raw estimates, the window and the sources of the blackboard."""
+    def sense(self, readings: Readings) -> None:
+        """Take one sensing step's readings: raw estimates, the window and the sources of the blackboard."""
         nest, food, density, nest_source, food_source, nearest = estimate(
             readings.in_nest,
             readings.on_food,
@@ -200,13 +235,21 @@ class RobotView:
         self.latest = readings
         self.sources = (nest_source, food_source, nearest)
 
-    def broadcast(self) -> tuple[float, float]:
-        """The (nest, food) estimates this robot broadcasts: its latest raw estimates."""
-        return self.nest, self.food
+    def refresh(self) -> None:
+        """Recompute the smoothed (nest, food, density) from the window."""
+        self.smooth = smoothed(self.window, self.samples)
 
     def smoothed(self) -> tuple[float, float, float]:
-        """The smoothed (nest, food, density): the mean of the last ``window`` raw samples."""
-        return smoothed(self.window, self.samples)
+        """The smoothed (nest, food, density) as last refreshed."""
+        return self.smooth
+
+    def broadcast(self) -> tuple[float, float]:
+        """The (nest, food) values this robot broadcasts: its smoothed estimates in whole centimetres (mm)."""
+        return broadcast_value(self.smooth[0]), broadcast_value(self.smooth[1])
+
+    def region_broadcast(self, in_nest: bool, on_food: bool) -> tuple[float, float]:
+        """The (nest, food) values broadcast at a chain's first step."""
+        return region_value(in_nest, self.p), region_value(on_food, self.p)
 
     def blackboard(self) -> np.ndarray:
         """The 8 conditions (``vocabulary.CONDITIONS`` order) from the latest readings."""
@@ -215,7 +258,18 @@ class RobotView:
         r = self.latest
         nest_b, food_b, near_b = (r.bearings[k] if k >= 0 else math.nan for k in self.sources)
         out = np.zeros(8, dtype=np.bool_)
-        blackboard(r.in_nest, r.on_food, nest_b, food_b, near_b, out)
+        blackboard(
+            r.in_nest,
+            r.on_food,
+            self.nest,
+            self.food,
+            nest_b,
+            food_b,
+            self.sources[2] >= 0,
+            near_b,
+            self.p,
+            out,
+        )
         return out
 
 
@@ -224,6 +278,8 @@ def warm_up() -> None:
     of a trial is not slowed down by compilation."""
     view = RobotView(PerceptionParams())
     one = np.ones(1)
-    view.update(Readings(False, False, np.zeros(1, dtype=np.int64), one * 300.0, one * 0.5, one, one))
-    view.smoothed()
+    view.sense(Readings(False, False, np.zeros(1, dtype=np.int64), one * 300.0, one * 0.5, one, one))
+    view.refresh()
+    view.broadcast()
+    view.region_broadcast(False, True)
     view.blackboard()

@@ -19,6 +19,7 @@ import numpy as np
 import py_trees
 
 from bt_controller.draws import choose, derive
+from bt_controller.timeline import PAPER
 from bt_controller.tree import Action, Composite, Condition, Node
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, FAILURE, RUNNING, SUCCESS
 
@@ -74,10 +75,12 @@ class Probabilistic(py_trees.composites.Composite):
     it runs; otherwise finish with its status."""
 
     def __init__(self, name: str, children: list[py_trees.behaviour.Behaviour], context: PyTreesContext,
-                 node_index: int) -> None:  # fmt: skip
+                 node_index: int, first_child: bool = False) -> None:  # fmt: skip
         super().__init__(name=name, children=children)
         self.context = context
         self.node_index = node_index
+        self.pending_first = first_child
+        """Under ``paper`` the first child is child 0, not drawn (A3)."""
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Tick the remembered child, or a newly drawn one."""
@@ -85,8 +88,12 @@ class Probabilistic(py_trees.composites.Composite):
             for child in self.children:
                 if child.status != py_trees.common.Status.INVALID:
                     child.stop(py_trees.common.Status.INVALID)
-            draw_key = np.uint64(derive(np.uint64(self.context.key), self.context.tick_index))
-            self.current_child = self.children[int(choose(draw_key, self.node_index, len(self.children)))]
+            if self.pending_first:
+                self.current_child = self.children[0]
+            else:
+                draw_key = np.uint64(derive(np.uint64(self.context.key), self.context.tick_index))
+                self.current_child = self.children[int(choose(draw_key, self.node_index, len(self.children)))]
+        self.pending_first = False
         chosen = self.current_child
         assert chosen is not None, "a running probabilistic composite remembers its child"
         yield from chosen.tick()
@@ -97,8 +104,8 @@ class Probabilistic(py_trees.composites.Composite):
         yield self
 
 
-def build(tree: Node, context: PyTreesContext) -> py_trees.behaviour.Behaviour:
-    """The py_trees behaviour tree of ``tree`` whose behaviours use ``context``."""
+def build(tree: Node, context: PyTreesContext, profile: int = PAPER) -> py_trees.behaviour.Behaviour:
+    """The py_trees behaviour tree of ``tree`` whose behaviours use ``context``, under ``profile``."""
     counter = 0
 
     def make(node: Node) -> py_trees.behaviour.Behaviour:
@@ -115,7 +122,7 @@ def build(tree: Node, context: PyTreesContext) -> py_trees.behaviour.Behaviour:
             return py_trees.composites.Sequence(name="seq", memory=True, children=children)
         if node.kind == "sel":
             return py_trees.composites.Selector(name="sel", memory=True, children=children)
-        return Probabilistic("prob", children, context, index)
+        return Probabilistic("prob", children, context, index, first_child=profile == PAPER)
 
     return make(tree)
 
@@ -123,9 +130,9 @@ def build(tree: Node, context: PyTreesContext) -> py_trees.behaviour.Behaviour:
 class PyTreesRobot:
     """One robot ticking its tree with py_trees; the same interface as ``reference.ReferenceRobot``."""
 
-    def __init__(self, tree: Node, key: int) -> None:
+    def __init__(self, tree: Node, key: int, profile: int = PAPER) -> None:
         self.context = PyTreesContext(key=int(key))
-        self.root = build(tree, self.context)
+        self.root = build(tree, self.context, profile)
         self.tick_index = 0
 
     @property
@@ -142,7 +149,9 @@ class PyTreesRobot:
             behaviour = stack.pop()
             stack.extend(reversed(behaviour.children))
             running = behaviour.status == py_trees.common.Status.RUNNING
-            if isinstance(behaviour, py_trees.composites.Composite):
+            if isinstance(behaviour, Probabilistic) and behaviour.pending_first:
+                result.append(0)
+            elif isinstance(behaviour, py_trees.composites.Composite):
                 current = behaviour.current_child
                 result.append(behaviour.children.index(current) if running and current is not None else -1)
             else:

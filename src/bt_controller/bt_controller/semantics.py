@@ -1,7 +1,7 @@
 """The reference interpreter: the readable definition of one tick of a tree for one robot.
 
-This module *is* the meaning of a behaviour tree in this project (``shared/design/model.md``, section
-"Behaviour-tree semantics"); the compiled interpreter (``bt_controller.compiled``) is tested against it tick
+This module *is* the meaning of a behaviour tree in this project (``docs/model.md``, section
+"Behaviour trees"); the compiled interpreter (``bt_controller.compiled``) is tested against it tick
 for tick. All state is explicit and laid out exactly as the compiled interpreter's: ``memory`` has one int
 entry per node in pre-order (root 0) -- for a composite the remembered child position (-1 for none), for an
 action 1 when it returned running on its last tick (else 0), for a condition always 0.
@@ -11,7 +11,8 @@ One tick (``tick``):
 - sequence: resume at the remembered child (the first if none); a failure clears memory and fails; running is
   remembered and returned; success moves on to the next child; all succeeded clears memory and succeeds.
 - selector: the same with success and failure swapped.
-- probabilistic: with no remembered child, pick one uniformly at random with the counter-based draw
+- probabilistic: its current child is remembered; under ``paper`` the first is child 0 (A3), under ``clean``
+  none; with no remembered child, pick one uniformly at random with the counter-based draw
   ``choose(derive(key, tick_index), node_index, n_children)`` (``docs/interfaces.md``); tick it; running is
   remembered and returned; otherwise clear memory and return the child's status.
 - condition: success if its blackboard entry is true, else failure; counted in ``counts[0]``.
@@ -34,6 +35,7 @@ from collections.abc import MutableSequence, Sequence
 import numpy as np
 
 from bt_controller.draws import choose, derive
+from bt_controller.timeline import PAPER
 from bt_controller.tree import Action, Composite, Condition, Node
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, FAILURE, RUNNING, STOP, SUCCESS
 
@@ -41,9 +43,13 @@ N_COUNTS = 1 + len(ACTIONS)
 """Length of a counts vector: condition-node ticks, then starts of each action."""
 
 
-def new_memory(tree: Node) -> list[int]:
-    """Fresh memory for ``tree``: -1 (nothing remembered) for composites, 0 for leaves."""
-    return [-1 if isinstance(node, Composite) else 0 for node in tree.preorder()]
+def new_memory(tree: Node, profile: int = PAPER) -> list[int]:
+    """Fresh memory for ``tree``: -1 (nothing remembered) for composites, 0 for leaves; under ``paper`` a
+    probabilistic composite starts at its first child (A3: ``CNode.cpp:108-113``)."""
+    return [
+        (0 if profile == PAPER and node.kind == "prob" else -1) if isinstance(node, Composite) else 0
+        for node in tree.preorder()
+    ]
 
 
 def new_counts() -> list[int]:
@@ -124,10 +130,10 @@ def wheels(status: int, action: int) -> tuple[int, int]:
 class ReferenceRobot:
     """One robot running a tree: its memory, counts, stream key and tick counter, ticked by ``step``."""
 
-    def __init__(self, tree: Node, key: int) -> None:
+    def __init__(self, tree: Node, key: int, profile: int = PAPER) -> None:
         self.tree = tree
         self.key = int(key)
-        self.memory = new_memory(tree)
+        self.memory = new_memory(tree, profile)
         self.counts = new_counts()
         self.tick_index = 0
 

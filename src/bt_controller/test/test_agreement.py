@@ -15,19 +15,25 @@ from bt_controller.compiled import (
     CompiledRobot,
     flatten,
     pack,
-    reset_memory,
     run_ticks,
+    start_memory,
     tick,
 )
 from bt_controller.random_trees import random_blackboards, random_tree
+from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 
 
 @settings(max_examples=600, derandomize=True, deadline=None)
-@given(tree=trees, key=keys, boards=st.lists(blackboards, min_size=1, max_size=30))
-def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards):
-    ref = semantics.ReferenceRobot(tree, key)
-    fast = CompiledRobot(tree, key)
+@given(
+    tree=trees,
+    key=keys,
+    boards=st.lists(blackboards, min_size=1, max_size=30),
+    profile=st.sampled_from((PAPER, CLEAN)),
+)
+def test_compiled_agrees_with_reference_on_hypothesis_trees(tree, key, boards, profile):
+    ref = semantics.ReferenceRobot(tree, key, profile)
+    fast = CompiledRobot(tree, key, profile)
     for board in boards:
         assert fast.step(board) == ref.step(board)
         assert list(fast.memory) == ref.memory
@@ -87,7 +93,7 @@ def test_tick_accepts_int_blackboards_and_leaves_other_rows_alone():
 def _simulator_like_kernel(tree, key, n_ticks):
     """A kernel in another module calling ``tick`` as the simulator does: one robot, boards from a rule."""
     memory = np.empty(len(tree.op), np.int8)
-    reset_memory(tree.op, memory)
+    start_memory(tree.op, memory, PAPER)
     counts = np.zeros(N_COUNTS, np.int64)
     blackboard = np.zeros(8, np.bool_)
     actions = np.empty(n_ticks, np.int64)

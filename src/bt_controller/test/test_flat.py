@@ -7,6 +7,7 @@ import pytest
 
 from bt_controller.compiled import MAX_COMPILED_DEPTH, CompiledRobot, flatten, new_memory, pack, reset_memory
 from bt_controller.errors import TreeLimitError
+from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 
 
@@ -44,8 +45,10 @@ def test_pack_offsets_and_views():
         view, flat = packed.tree(t), flatten(tree)
         for a, b in zip(view, flat, strict=True):
             assert a.tolist() == b.tolist()
-    memory = new_memory(packed, np.array([2, 0, 1]))
+    memory = new_memory(packed, np.array([2, 0, 1]), CLEAN)
     assert memory.tolist() == [[-1, 0, -1, 0, 0, 0], [0, 0, 0, 0, 0, 0], [-1, 0, 0, 0, 0, 0]]
+    # Under paper a probabilistic composite starts at its first child (A3).
+    assert new_memory(packed, np.array([2]), PAPER).tolist() == [[0, 0, -1, 0, 0, 0]]
 
 
 def test_flatten_refuses_trees_deeper_than_the_compiled_stack():

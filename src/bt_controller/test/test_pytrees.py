@@ -12,16 +12,18 @@ from bt_controller.agreement import random_forest
 from bt_controller.pytrees import PyTreesRobot
 from bt_controller.random_trees import random_blackboards
 from bt_controller.semantics import ReferenceRobot
+from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 
 
 def _agree(tree, key, boards) -> None:
-    ref = ReferenceRobot(tree, key)
-    pyt = PyTreesRobot(tree, key)
-    for k, board in enumerate(boards):
-        assert pyt.step(board) == ref.step(board), (str(tree), k)
-        assert pyt.memory == ref.memory, (str(tree), k)
-        assert pyt.counts == ref.counts, (str(tree), k)
+    for profile in (PAPER, CLEAN):
+        ref = ReferenceRobot(tree, key, profile)
+        pyt = PyTreesRobot(tree, key, profile)
+        for k, board in enumerate(boards):
+            assert pyt.step(board) == ref.step(board), (str(tree), k, profile)
+            assert pyt.memory == ref.memory, (str(tree), k, profile)
+            assert pyt.counts == ref.counts, (str(tree), k, profile)
 
 
 @settings(max_examples=300, derandomize=True, deadline=None)

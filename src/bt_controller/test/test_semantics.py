@@ -8,6 +8,7 @@ import pytest
 from bt_controller.compiled import CompiledRobot
 from bt_controller.draws import choose, derive
 from bt_controller.semantics import ReferenceRobot, wheels
+from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, FAILURE, RUNNING, SUCCESS
 
@@ -26,8 +27,8 @@ def board(*true: str) -> list[bool]:
 def robot(request):
     cls = ReferenceRobot if request.param == "reference" else CompiledRobot
 
-    def make(text: str, key: int = 7):
-        return cls(parse(text), key)
+    def make(text: str, key: int = 7, profile: int = CLEAN):
+        return cls(parse(text), key, profile)
 
     return make
 
@@ -162,10 +163,22 @@ def test_prob_uses_the_local_preorder_index_of_the_node(robot):
     assert r.step(board("on_food")) == (R, REV)  # tick 1 reaches it: counter 3, its pre-order index
 
 
+def test_prob_starts_at_its_first_child_under_paper_then_draws(robot):
+    # A3: the authors' probabilistic node starts at child 0 (CNode.cpp:108-113) and draws after each finish.
+    for key in range(10):
+        r = robot("prob(forward, reverse)", key, PAPER)
+        assert memory(r) == [0, 0, 0]
+        assert r.step(board()) == (R, FWD)
+        assert r.step(board()) == (S, -1)
+        assert memory(r) == [-1, 0, 0]
+        second = choose(np.uint64(derive(np.uint64(key), 2)), 0, 2)
+        assert r.step(board()) == (R, REV if second else FWD)
+
+
 def test_prob_draws_are_uniform_over_children():
     seen = np.zeros(4, int)
     for key in range(4000):
-        r = ReferenceRobot(parse("prob(stop, forward, forward_left, forward_right)"), key)
+        r = ReferenceRobot(parse("prob(stop, forward, forward_left, forward_right)"), key, CLEAN)
         _, action = r.step(board())
         seen[action] += 1
     assert seen.min() > 850

@@ -28,13 +28,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from PIL import Image, ImageDraw
 
+from bt_controller import timeline
 from bt_controller.vocabulary import ACTIONS
 
 from .errors import AnimationError
 
 if TYPE_CHECKING:
     from swarm_sim.config import Config, Params
-    from swarm_sim.lockstep import LockstepTrial, RobotAnswer
+    from swarm_sim.lockstep import LockstepChain, RobotAnswer
 
 OBJECTIVE_NAMES = ("density", "nest", "food")
 
@@ -97,7 +98,8 @@ def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray
 
 
 def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
-    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it."""
+    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it (its
+    chain's earlier trials first); the frames are trial ``trial``'s steps."""
     from bt_controller.tree import parse
     from swarm_sim.config import DEFAULT
     from swarm_sim.lockstep import run_with_controllers
@@ -114,15 +116,17 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None
     last_tick = [-1]
     initial: list[np.ndarray] = []
 
-    def on_answers(world: LockstepTrial, answers: Sequence[RobotAnswer]) -> None:
-        tick = world.tick_index()
+    def on_answers(world: LockstepChain, answers: Sequence[RobotAnswer]) -> None:
+        tick = timeline.tick_number(config.timeline, world.step) if world.ticks_now() else -1
         if tick >= 0:
             current[:] = [a.action for a in answers]
             last_tick[0] = tick
+        if world.trial != trial:  # an earlier trial of the chain: it sets the state, it is not drawn
+            return
         readings = world.readings()
         smoothed = np.array([a.smoothed for a in answers], dtype=np.float64)
-        if world.step == p.settle_steps - 1:
-            initial.append(smoothed)
+        if timeline.is_initial(config.timeline, world.step):
+            initial[:] = [smoothed]
         steps.append(world.step)
         poses.append(world.poses())
         actions.append(current.copy())
@@ -214,7 +218,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         ticks.append(tick)
         if tick >= 0:
             actions[k] = wheels[k]
-        if s == p.settle_steps - 1:
+        if timeline.is_initial(DEFAULT.timeline, s):
             initial = smoothed[k]
         if initial is not None:
             fitness[k] = _fitness_so_far(initial, smoothed[k], ground[k], p)

@@ -1,7 +1,8 @@
 """Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
 
 A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed and trial index) and ends with
-``/trial_result`` (the tree and the six values); ``/swarm_state`` holds the exact poses of every step. A graph
+``/trial_result`` (the tree and the six values); ``/swarm_state`` holds the exact poses of every step of the
+trial's chain up to the trial (the earlier trials of the chain are run, and recorded, first). A graph
 run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
 trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``) and
 every recorded pose and value is compared with the re-run's, bit for bit.
@@ -15,7 +16,7 @@ from pathlib import Path
 from bt_controller.errors import TreeError
 from bt_controller.tree import parse
 from evolution_manager.bags import BagError, read_bag
-from swarm_sim.lockstep import LockstepTrial, run_with_controllers
+from swarm_sim.lockstep import LockstepChain, run_with_controllers
 from swarm_sim.trial_data import VALUE_NAMES
 
 RESULT_TOPIC = "/trial_result"
@@ -71,7 +72,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
     divergences: list[str] = []
     visited: list[int] = []
 
-    def compare(world: LockstepTrial) -> None:
+    def compare(world: LockstepChain) -> None:
         visited.append(world.step)
         poses = [tuple(p) for p in world.poses().tolist()]
         if not divergences and recorded.get(world.step) != poses:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from bt_controller import timeline
 from evolution_manager.animation import (
     ROBOT_COLOURS,
     frames_from_tree,
@@ -33,20 +34,22 @@ def frames():
 
 def test_one_frame_per_sensing_step(frames):
     p = DEFAULT.params()
-    steps = p.settle_steps + p.ticks * p.steps_per_tick
-    assert len(frames.steps) == steps and list(frames.steps) == list(range(steps))
+    steps = timeline.trial_steps(DEFAULT.timeline)
+    first = TRIAL * steps  # trial 1 is the chain's second: its steps follow trial 0's
+    assert len(frames.steps) == steps and list(frames.steps) == list(range(first + 1, first + steps + 1))
     assert frames.poses.shape == (steps, p.n_robots, 3)
-    assert sorted(set(frames.ticks.tolist())) == list(range(-1, p.ticks))
+    # tick numbers count along the chain; the first frame still shows trial 0's last tick
+    assert sorted(set(frames.ticks.tolist())) == list(range(TRIAL * p.ticks - 1, (TRIAL + 1) * p.ticks))
 
 
 def test_frames_agree_with_the_batch_evaluator(frames):
     ((_, records),) = BatchEvaluator().evaluate_trials([EvaluationRequest(TREE, SEED, trials=TRIAL + 1)])
     record = records[TRIAL]
-    np.testing.assert_allclose(frames.poses[0], record.start_poses, rtol=0, atol=1e-9)
+    # (the first frame is after the first step's move, which under paper the last tick's motors drive)
     np.testing.assert_allclose(frames.poses[-1], record.end_poses, rtol=0, atol=1e-9)
     # the fitness so far at the last step is the trial's fitness (density, nest, food)
     np.testing.assert_allclose(frames.fitness[-1], record.values[:3], rtol=0, atol=1e-12)
-    assert np.isnan(frames.fitness[0]).all() and not np.isnan(frames.fitness[DEFAULT.settle_steps]).any()
+    assert np.isnan(frames.fitness[0]).all() and not np.isnan(frames.fitness[DEFAULT.initial_step]).any()
 
 
 def test_robots_are_drawn_at_the_frame_poses(frames):

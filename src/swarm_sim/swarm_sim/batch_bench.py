@@ -1,6 +1,7 @@
 """``ws/run swarm_sim bench``: evaluations per second of both roads, and (``--parity N``) their agreement.
 
     bench [--trees 200] [--reference-trees 4] [--trials 10] [--seed 0] [--parity N] [--threads K]
+          [--profile paper|clean]
 
 Trees are ``bt_controller.random_trees.random_trees(seed, n)`` (11 to 60 nodes). The batch evaluator is
 timed after a warm-up batch (compilation excluded) on one batch of ``--trees`` requests, in wall-clock time
@@ -15,11 +16,14 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numba
 
 from bt_controller.random_trees import random_trees
+from bt_controller.timeline import PROFILES
 from swarm_sim import reference_road
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 
 
@@ -35,25 +39,27 @@ def _batch_rate(evaluator: BatchEvaluator, requests: list[EvaluationRequest]) ->
     return len(requests) / elapsed, elapsed, len(requests) / cpu
 
 
-def _reference_rate(requests: list[EvaluationRequest]) -> tuple[float, float]:
+def _reference_rate(requests: list[EvaluationRequest], config: Config) -> tuple[float, float]:
     trees = [check_request(r) for r in requests]
-    reference_road.evaluate(trees[0], 0, 1)  # warm the compiled world functions
+    reference_road.evaluate(trees[0], 0, 1, config)  # warm the compiled world functions
     start = time.perf_counter()
     for tree, request in zip(trees, requests, strict=True):
-        reference_road.evaluate(tree, request.seed, request.trials)
+        reference_road.evaluate(tree, request.seed, request.trials, config)
     elapsed = time.perf_counter() - start
     return len(requests) / elapsed, elapsed
 
 
-def parity(n_trees: int, seed: int, trials: int) -> int:
+def parity(n_trees: int, seed: int, trials: int, config: Config = DEFAULT) -> int:
     """Evaluate ``n_trees`` random trees by both roads; print and return the number of disagreements."""
-    evaluator = BatchEvaluator()
+    evaluator = BatchEvaluator(config)
     texts = random_trees(seed + 1, n_trees)
     requests = [EvaluationRequest(t, seed + k, trials) for k, t in enumerate(texts)]
     batch = evaluator.evaluate_trials(requests)
     mismatches = 0
     for request, (result, records) in zip(requests, batch, strict=True):
-        values, ref_records = reference_road.evaluate(check_request(request), request.seed, request.trials)
+        values, ref_records = reference_road.evaluate(
+            check_request(request), request.seed, request.trials, config
+        )
         assert result.fitness is not None and result.descriptors is not None
         same = values == result.fitness + result.descriptors and all(
             a.values == b.values and (a.end_poses == b.end_poses).all()
@@ -62,7 +68,10 @@ def parity(n_trees: int, seed: int, trials: int) -> int:
         if not same:
             mismatches += 1
             print(f"parity: MISMATCH seed {request.seed} tree {request.tree}", file=sys.stderr)
-    print(f"parity: {n_trees - mismatches}/{n_trees} random trees identical on both roads ({trials} trials)")
+    print(
+        f"parity: {n_trees - mismatches}/{n_trees} random trees identical on both roads ({trials} trials, "
+        f"profile {config.profile})"
+    )
     return mismatches
 
 
@@ -75,7 +84,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="seed of the tree set and of the requests")
     parser.add_argument("--parity", type=int, default=0, metavar="N", help="also compare roads on N trees")
     parser.add_argument("--threads", type=int, default=1, help="numba threads (default 1)")
+    parser.add_argument("--profile", choices=PROFILES, default=DEFAULT.profile, help="the model's profile")
     args = parser.parse_args(argv)
+    config = replace(DEFAULT, profile=args.profile)
     numba.set_num_threads(args.threads)
 
     texts = random_trees(args.seed, args.trees)
@@ -83,19 +94,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     sizes = [check_request(r).size for r in requests]
     print(
         f"trees: {len(texts)} random, {min(sizes)}-{max(sizes)} nodes (mean {sum(sizes) / len(sizes):.1f}); "
-        f"{args.trials} trials per evaluation"
+        f"{args.trials} trials per evaluation; profile {config.profile}"
     )
-    batch_rate, batch_time, cpu_rate = _batch_rate(BatchEvaluator(threads=args.threads), requests)
+    batch_rate, batch_time, cpu_rate = _batch_rate(BatchEvaluator(config, threads=args.threads), requests)
     print(
         f"batch:     {batch_rate:8.1f} evaluations/s ({len(requests)} in {batch_time:.2f} s, {args.threads} "
         f"thread(s); {cpu_rate:.1f} per CPU-second)"
     )
     ref_requests = requests[: args.reference_trees]
-    ref_rate, ref_time = _reference_rate(ref_requests)
+    ref_rate, ref_time = _reference_rate(ref_requests, config)
     print(f"reference: {ref_rate:8.2f} evaluations/s ({len(ref_requests)} in {ref_time:.2f} s)")
     print(f"ratio:     {batch_rate / ref_rate:8.0f}x")
     if args.parity:
-        return 1 if parity(args.parity, args.seed, args.trials) else 0
+        return 1 if parity(args.parity, args.seed, args.trials, config) else 0
     return 0
 
 

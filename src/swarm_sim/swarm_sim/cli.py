@@ -1,13 +1,13 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
 
-    evaluate --tree TREE [--trials 10] [--seed S] [--engine compiled|reference] [--per-trial]
-             [--condition NAME=VALUE ...]
+    evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--engine compiled|reference]
+             [--per-trial] [--condition NAME=VALUE ...]
 
-Prints ``{"tree", "seed", "trials", "conditions", "fitness": {density, nest, food}, "descriptors": {movement,
-rotation, conditionality}}`` (``conditions``: the world's changes, ``swarm_sim.conditions``, ``{}`` for none;
-``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start
-and end poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr,
-exit status 2.
+Prints ``{"tree", "seed", "trials", "profile", "conditions", "fitness": {density, nest, food}, "descriptors":
+{movement, rotation, conditionality}}`` (``conditions``: the world's changes, ``swarm_sim.conditions``, ``{}``
+for none; ``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start and end
+poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr, exit
+status 2.
 """
 
 from __future__ import annotations
@@ -16,12 +16,15 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
+from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim import reference_road
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
+from swarm_sim.config import DEFAULT
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
@@ -39,6 +42,13 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--tree", required=True, help="tree text, e.g. 'sel(seq(in_nest, stop), forward)'")
     parser.add_argument("--trials", type=int, default=10, help="number of trials (default 10)")
     parser.add_argument("--seed", type=int, default=0, help=f"seed in [0, {MAX_SEED}] (default 0)")
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default=DEFAULT.profile,
+        help=f"the model's profile (docs/model.md): the authors' experiment or without its artefacts "
+        f"(default {DEFAULT.profile})",
+    )
     parser.add_argument(
         "--engine",
         choices=("compiled", "reference"),
@@ -62,6 +72,7 @@ def evaluation_json(
     trials: int,
     values: Sequence[float],
     records: Sequence[TrialRecord] | None,
+    profile: str = DEFAULT.profile,
     conditions: dict[str, object] | None = None,
 ) -> str:
     """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``)."""
@@ -70,6 +81,7 @@ def evaluation_json(
         "tree": tree_text,
         "seed": seed,
         "trials": trials,
+        "profile": profile,
         "conditions": dict(conditions or {}),
         "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
         "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
@@ -87,7 +99,7 @@ def run(argv: Sequence[str] | None = None) -> str:
     if not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
     try:
-        config, conditions = apply_conditions(args.condition)
+        config, conditions = apply_conditions(args.condition, replace(DEFAULT, profile=args.profile))
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
     request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
@@ -104,7 +116,13 @@ def run(argv: Sequence[str] | None = None) -> str:
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
     return evaluation_json(
-        to_text(tree), args.seed, args.trials, values, records if args.per_trial else None, conditions
+        to_text(tree),
+        args.seed,
+        args.trials,
+        values,
+        records if args.per_trial else None,
+        args.profile,
+        conditions,
     )
 
 

@@ -1,4 +1,4 @@
-"""Every parameter of the world model, named once, validated once (``shared/design/model.md``).
+"""Every parameter of the world model, named once, validated once (``docs/model.md``).
 
 ``Config`` is the frozen, validated object users and nodes see; ``Config.params()`` turns it into ``Params``,
 the plain named tuple that compiled kernels receive (numba reads its fields as typed constants).
@@ -8,36 +8,47 @@ Units: millimetres, seconds, radians.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from typing import NamedTuple
 
+from bt_controller.perception import PerceptionParams
+from bt_controller.timeline import PROFILES, Timeline, arena_of_trial, profile_number
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
 
+_PERCEPTION = PerceptionParams()
+_TIMELINE = Timeline()
+
 
 class Params(NamedTuple):
-    """The configuration as compiled kernels see it (all fields float or int)."""
+    """The configuration as compiled kernels see it (all fields float or int; ``profile`` a number)."""
 
+    profile: int
     arena_half: float
     nest_radius: float
     n_robots: int
     robot_radius: float
-    start_radius: float
+    start_half: float
     max_start_attempts: int
     wheel_separation: float
     wheel_speed: float
     gain_low: float
-    gain_high: float
+    gain_step: float
+    gain_levels: int
     step_dt: float
     steps_per_tick: int
     ticks: int
-    settle_steps: int
+    initial_step: int
+    chain_trials: int
     message_range: float
     delivery_probability: float
+    occlusion: bool
     estimate_cap: float
     density_range: float
     density_divisor: float
     window: int
+    friction: float
     collision_iterations: int
     collision_slack: float
     dead_robots: int
@@ -49,9 +60,11 @@ _INT_PARAMS = frozenset(
     (
         "n_robots",
         "max_start_attempts",
+        "gain_levels",
         "steps_per_tick",
         "ticks",
-        "settle_steps",
+        "initial_step",
+        "chain_trials",
         "window",
         "collision_iterations",
         "dead_robots",
@@ -62,53 +75,64 @@ _INT_PARAMS = frozenset(
 
 @dataclass(frozen=True)
 class Config:
-    """The world model's parameters (defaults from ``model.md``).
+    """The world model's parameters (defaults from ``docs/model.md``, which gives each one's source).
 
     Construction validates every value and raises ``ConfigError`` naming the first bad one.
     """
 
-    arena_half: float = 2500.0
-    """Half the side of the square arena: walls at +-arena_half (mm)."""
+    profile: str = PROFILES[_TIMELINE.profile]
+    """``paper`` (the authors' experiment, artefacts A1-A4 included) or ``clean`` (A1-A4 removed)."""
+    arena_half: float = 2450.0
+    """Half the side of the free square inside the walls (walls 100 mm thick centred at +-2500 mm) (mm)."""
     nest_radius: float = 500.0
-    """A robot is in the nest when its centre is within this distance of the arena centre (mm)."""
+    """A robot is in the nest when its centre is closer than this to the arena centre (mm)."""
     gaps: tuple[float, ...] = (500.0, 700.0)
-    """Gap between nest and food per arena configuration; trial k uses gaps[k % len(gaps)] (mm)."""
+    """Gap between nest and food per arena configuration (mm); see ``gap``."""
     n_robots: int = 9
-    """Footbots in the swarm."""
+    """Footbots in the swarm: the one place the robot count is defined."""
     robot_radius: float = 85.0
     """Footbot body radius (mm)."""
-    start_radius: float = 1000.0
-    """Start positions are uniform within this distance of the centre (mm)."""
-    max_start_attempts: int = 10_000
-    """Rejection-sampling attempts per robot when placing it without overlap."""
+    start_half: float = 1000.0
+    """Start positions are uniform in the square [-start_half, start_half]^2 (mm)."""
+    max_start_attempts: int = 10
+    """Tries per robot to find a free start position; after that it stays where it is."""
     wheel_separation: float = 140.0
     """Distance between the wheels (mm)."""
     wheel_speed: float = 50.0
     """Nominal wheel speed, one unit of an action's wheel setting (mm/s)."""
     gain_low: float = 0.9
-    """Lower bound of each wheel's gain, drawn uniformly per robot per trial."""
-    gain_high: float = 1.1
-    """Upper bound of each wheel's gain."""
+    """Each wheel's gain is gain_low + gain_step * U{0 .. gain_levels - 1}, drawn once per chain."""
+    gain_step: float = 0.01
+    """Step between the possible wheel gains."""
+    gain_levels: int = 20
+    """Number of possible wheel gains."""
     step_dt: float = 0.125
-    """Length of one sensing/physics step (s): 8 Hz."""
-    steps_per_tick: int = 4
-    """Steps between behaviour-tree ticks: 2 Hz."""
-    ticks: int = 40
+    """Length of one control step (s): 8 Hz."""
+    steps_per_tick: int = _TIMELINE.steps_per_tick
+    """Control steps per behaviour-tree tick: 2 Hz."""
+    ticks: int = _TIMELINE.ticks
     """Ticks per trial (20 s)."""
-    settle_steps: int = 16
-    """Sensing steps with the robots standing still before the first tick (2 s)."""
+    initial_step: int = _TIMELINE.initial_step
+    """A trial's step whose smoothed values are the objectives' initial values."""
+    chain_trials: int = _TIMELINE.chain_trials
+    """Trials per chain (``paper``: one simulation with teleports); also the block of trials sharing a gap."""
     message_range: float = 1000.0
     """Messages travel only between centres at most this far apart (mm)."""
     delivery_probability: float = 0.95
-    """Chance that a message within range arrives (per ordered pair, per step)."""
-    estimate_cap: float = 5000.0
+    """Chance that a message within range and not occluded arrives (per ordered pair, per step)."""
+    occlusion: bool = True
+    """Whether a third robot's body between two robots blocks their messages."""
+    estimate_cap: float = _PERCEPTION.estimate_cap
     """Largest nest/food distance estimate; also the estimate when nothing was heard (mm)."""
-    density_range: float = 170.0
-    """A neighbour at this range contributes 1 to the density sum (touching footbots) (mm)."""
-    density_divisor: float = 6.0
+    density_range: float = _PERCEPTION.density_range
+    """A neighbour at range r adds 1 / (pi (r / density_range)^2) to the density sum (mm)."""
+    density_divisor: float = _PERCEPTION.density_divisor
     """The density sum is divided by this."""
-    window: int = 7
+    window: int = _PERCEPTION.window
     """Raw samples averaged into a smoothed value."""
+    friction: float = 0.49
+    """At a robot-robot contact, relative tangential motion of the step is cancelled up to this fraction of
+    the normal correction (ARGoS: 0.7 x 0.7)."""
     collision_iterations: int = 10
     """Passes of pairwise positional correction per step before the fallback (undo the step's move)."""
     collision_slack: float = 1e-6
@@ -125,17 +149,50 @@ class Config:
         _validate(self)
 
     @property
-    def steps(self) -> int:
-        """Controlled (moving) steps per trial."""
-        return self.ticks * self.steps_per_tick
+    def profile_number(self) -> int:
+        """The profile as the number compiled code reads (``timeline.PAPER`` or ``timeline.CLEAN``)."""
+        return profile_number(self.profile)
+
+    @property
+    def timeline(self) -> Timeline:
+        """The timeline's parameters."""
+        return Timeline(
+            self.profile_number, self.steps_per_tick, self.ticks, self.initial_step, self.chain_trials
+        )
+
+    @property
+    def perception(self) -> PerceptionParams:
+        """The robots' perception parameters."""
+        return PerceptionParams(
+            self.window, self.estimate_cap, self.density_range, self.density_divisor, self.profile_number
+        )
+
+    @property
+    def trial_steps(self) -> int:
+        """Control steps per trial (160 under ``paper``, 176 under ``clean``)."""
+        return self.ticks * self.steps_per_tick + (self.initial_step if self.profile == "clean" else 0)
+
+    @property
+    def chain_length(self) -> int:
+        """Trials per simulated chain: ``chain_trials`` under ``paper``, 1 under ``clean``."""
+        return self.chain_trials if self.profile == "paper" else 1
 
     def gap(self, trial: int) -> float:
-        """The nest-food gap of trial ``trial``'s arena configuration."""
-        return self.gaps[trial % len(self.gaps)]
+        """The nest-food gap of trial ``trial``: trials come in blocks of ``chain_trials`` (one chain under
+        ``paper``), and the blocks alternate the gaps."""
+        return self.gaps[arena_of_trial(self.timeline, trial, len(self.gaps))]
 
     def params(self) -> Params:
         """The configuration as a ``Params`` named tuple for compiled kernels."""
-        return Params._make((int if f in _INT_PARAMS else float)(getattr(self, f)) for f in Params._fields)
+
+        def field(name: str) -> int | float | bool:
+            if name == "profile":
+                return self.profile_number
+            if name == "occlusion":
+                return bool(self.occlusion)
+            return (int if name in _INT_PARAMS else float)(getattr(self, name))
+
+        return Params._make(field(f) for f in Params._fields)
 
     def as_dict(self) -> dict[str, object]:
         """Every parameter by name (gaps as a list), for writing next to results."""
@@ -159,11 +216,13 @@ def _count(config: Config, name: str, minimum: int = 1) -> int:
 
 
 def _validate(c: Config) -> None:
+    if c.profile not in PROFILES:
+        raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {c.profile!r}")
     for name in (
         "arena_half",
         "nest_radius",
         "robot_radius",
-        "start_radius",
+        "start_half",
         "wheel_separation",
         "wheel_speed",
         "step_dt",
@@ -172,21 +231,34 @@ def _validate(c: Config) -> None:
         "density_range",
         "density_divisor",
         "collision_slack",
+        "gain_low",
     ):
         _positive(c, name)
-    for name in ("n_robots", "max_start_attempts", "steps_per_tick", "ticks", "window"):
+    for name in (
+        "n_robots",
+        "max_start_attempts",
+        "gain_levels",
+        "steps_per_tick",
+        "ticks",
+        "initial_step",
+        "chain_trials",
+        "window",
+    ):
         _count(c, name)
-    _count(c, "settle_steps", 1)
     _count(c, "collision_iterations", 0)
+    if _number(c, "gain_step") < 0:
+        raise ConfigError(f"gain_step must not be negative, got {c.gain_step!r}")
+    friction = _number(c, "friction")
+    if not 0.0 <= friction <= 1.0:
+        raise ConfigError(f"friction must be in [0, 1], got {friction}")
+    if not isinstance(c.occlusion, bool):
+        raise ConfigError(f"occlusion must be true or false, got {c.occlusion!r}")
     for name in ("dead_robots", "weak_robots"):
         if _count(c, name, 0) > c.n_robots:
             raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
     weak_gain = _number(c, "weak_gain")
     if not 0.0 <= weak_gain <= 1.0:
         raise ConfigError(f"weak_gain must be in [0, 1], got {weak_gain}")
-    low, high = _positive(c, "gain_low"), _positive(c, "gain_high")
-    if low > high:
-        raise ConfigError(f"gain_low must not exceed gain_high, got {low} > {high}")
     p = _number(c, "delivery_probability")
     if not 0.0 <= p <= 1.0:
         raise ConfigError(f"delivery_probability must be in [0, 1], got {p}")
@@ -196,18 +268,24 @@ def _validate(c: Config) -> None:
         number(gap, f"gaps[{k}]", positive=True, error=ConfigError)
     if c.robot_radius >= c.arena_half:
         raise ConfigError(f"robot_radius must be below arena_half, got {c.robot_radius} >= {c.arena_half}")
-    if c.start_radius + c.robot_radius > c.arena_half:
+    if c.start_half + c.robot_radius > c.arena_half:
         raise ConfigError(
-            f"start_radius must keep robots inside the walls: start_radius + robot_radius = "
-            f"{c.start_radius + c.robot_radius} > arena_half = {c.arena_half}"
+            f"start_half must keep robots inside the walls: start_half + robot_radius = "
+            f"{c.start_half + c.robot_radius} > arena_half = {c.arena_half}"
         )
-    # Packing n discs of radius r with centres in a disc of radius R is easy while their area is small.
-    area_ratio = c.n_robots * c.robot_radius**2 / (c.start_radius + c.robot_radius) ** 2
+    if c.initial_step >= c.ticks * c.steps_per_tick or c.initial_step % c.steps_per_tick:
+        raise ConfigError(
+            f"initial_step must be a multiple of steps_per_tick ({c.steps_per_tick}) inside a trial's "
+            f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), "
+            f"got {c.initial_step}"
+        )
+    # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
+    area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:
         raise ConfigError(
             f"n_robots = {c.n_robots} robots of radius {c.robot_radius} do not fit easily within "
-            f"start_radius = {c.start_radius} (they would cover "
-            f"{area_ratio:.0%} of the start disc; at most 50%)"
+            f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; "
+            "at most 50%)"
         )
 
 

@@ -171,8 +171,8 @@ class BatchEvaluator:
         keep_records: bool,
     ) -> None:
         trees = pack([r.flat for r in ready])
-        jobs = kernel.make_jobs([r.seed_key for r in ready], [r.trials for r in ready], self.config.gaps)
-        results = kernel.Outputs.zeros(jobs.n_jobs, self._params.n_robots)
+        jobs = kernel.make_jobs([r.seed_key for r in ready], [r.trials for r in ready], self.config)
+        results = kernel.Outputs.zeros(jobs.n_rows, self._params.n_robots)
         if self.threads > 1:
             numba.set_num_threads(self.threads)
         run = kernel.run_jobs_parallel if self.threads > 1 else kernel.run_jobs
@@ -187,7 +187,7 @@ class BatchEvaluator:
             records = [
                 TrialRecord(
                     trial=k,
-                    gap=float(jobs.gap[row + k]),
+                    gap=self.config.gap(k),
                     values=tuple(float(v) for v in values[row + k]),
                     start_poses=poses[row + k, 0].copy(),
                     end_poses=poses[row + k, 1].copy(),

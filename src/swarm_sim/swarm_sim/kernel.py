@@ -1,15 +1,18 @@
-"""The batch road: whole trials in compiled kernels, with the compiled tree interpreter.
+"""The batch road: whole chains of trials in compiled kernels, with the compiled tree interpreter.
 
-``simulate_trial`` runs one trial of one flat tree exactly as ``swarm_sim.reference_road.run_trial``
-does, with the same ``swarm_sim.world`` functions in the same order; it only skips work whose result is never
-read (a bearing is computed for the three senders the blackboard needs, at ticks, rather than for every
-message).
-``run_jobs(trees, params, jobs, out)`` runs many (tree, seed, trial) jobs; each job writes only its own
-output rows, so a job's result never depends on the others, their order or their number.
+``simulate_chain`` runs the trials of one chain (``bt_controller.timeline``: 5 trials as one simulation under
+``paper``, one trial under ``clean``) of one flat tree exactly as the reference road
+(``swarm_sim.reference_road``: the simulator of ``swarm_sim.lockstep`` with one
+``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.world``,
+``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
+order; it only skips work whose result is never read (a bearing is computed for the three senders the
+blackboard needs, at ticks, rather than for every message).
+``run_jobs(trees, params, jobs, out)`` runs many (tree, seed, chain) jobs; each job writes only its own
+output rows (one per trial), so a job's result never depends on the others, their order or their number.
 
 The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
-``Jobs`` (what to run), ``Outputs`` (where results go); inside a trial, ``Swarm`` holds every robot's state
-and ``Inbox`` the messages of one sensing step. ``make_jobs`` builds ``Jobs`` from Python.
+``Jobs`` (what to run), ``Outputs`` (where results go); inside a chain, ``Swarm`` holds every robot's state
+and ``Inbox`` the messages of one step. ``make_jobs`` builds ``Jobs`` from Python.
 """
 
 from __future__ import annotations
@@ -21,12 +24,15 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees, reset_memory, tick, tree_at
-from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, trial_keys
-from bt_controller.vocabulary import CONDITION_INDEX, RUNNING, STOP
+from bt_controller import timeline
+from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees, start_memory, tick, tree_at
+from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
+from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
+from bt_controller.vocabulary import CONDITION_INDEX, STOP
 from swarm_sim import world
 from swarm_sim._numba_cache import drop_stale_cache
-from swarm_sim.config import Params
+from swarm_sim.config import Config, Params
+from swarm_sim.trial_data import chain_plan
 
 FOOD_LEFT, FOOD_RIGHT = CONDITION_INDEX["food_left"], CONDITION_INDEX["food_right"]
 NEST_LEFT, NEST_RIGHT = CONDITION_INDEX["nest_left"], CONDITION_INDEX["nest_right"]
@@ -37,7 +43,9 @@ drop_stale_cache(
     (
         "bt_controller.compiled",
         "bt_controller.draws",
+        "bt_controller.motors",
         "bt_controller.perception",
+        "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.config",
         "swarm_sim.world",
@@ -71,73 +79,103 @@ def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
 
 
 class Jobs(NamedTuple):
-    """Many jobs; job ``j`` runs tree ``tree[j]`` of a pack with stream key ``seed_key[j]`` (``root_key`` of
-    its seed), trial number ``trial[j]`` and nest-food gap ``gap[j]``."""
+    """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]`` of tree ``tree[j]`` of a
+    pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) and nest-food gap ``gap[j]``, into output
+    rows ``row[j] .. row[j] + trials[j] - 1``."""
 
     tree: np.ndarray  # int64
     seed_key: np.ndarray  # uint64
-    trial: np.ndarray  # int64
+    chain: np.ndarray  # int64
+    trials: np.ndarray  # int64
     gap: np.ndarray  # float64
+    row: np.ndarray  # int64
 
     @property
     def n_jobs(self) -> int:
         """Number of jobs."""
         return len(self.tree)
 
+    @property
+    def n_rows(self) -> int:
+        """Number of output rows: trials over all jobs."""
+        return int(self.trials.sum())
 
-def make_jobs(seed_keys: Sequence[np.uint64], trials: Sequence[int], gaps: Sequence[float]) -> Jobs:
-    """Trials ``0 .. trials[t] - 1`` of tree ``t`` with seed key ``seed_keys[t]``, tree after tree; trial
-    ``k`` has gap ``gaps[k % len(gaps)]``."""
-    tree = np.repeat(np.arange(len(trials), dtype=np.int64), trials)
-    trial = np.concatenate([np.arange(t, dtype=np.int64) for t in trials] or [np.empty(0, np.int64)])
-    seed_key = np.repeat(np.array(seed_keys, dtype=np.uint64), trials)
-    gap = np.array(gaps, dtype=np.float64)[trial % len(gaps)]
-    return Jobs(tree, seed_key, trial, gap)
+
+def make_jobs(seed_keys: Sequence[np.uint64], trials: Sequence[int], config: Config) -> Jobs:
+    """Trials ``0 .. trials[t] - 1`` of tree ``t`` with seed key ``seed_keys[t]``, tree after tree, as the
+    chains of ``trial_data.chain_plan``; each tree's trials take consecutive output rows in trial order."""
+    tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
+    next_row = 0
+    for t, (key, n) in enumerate(zip(seed_keys, trials, strict=True)):
+        for c, count in chain_plan(int(n), config):
+            tree.append(t)
+            seed_key.append(key)
+            chain.append(c)
+            length.append(count)
+            gap.append(config.gap(c * config.chain_length))
+            row.append(next_row)
+            next_row += count
+    return Jobs(
+        np.array(tree, dtype=np.int64),
+        np.array(seed_key, dtype=np.uint64),
+        np.array(chain, dtype=np.int64),
+        np.array(length, dtype=np.int64),
+        np.array(gap, dtype=np.float64),
+        np.array(row, dtype=np.int64),
+    )
 
 
 class Outputs(NamedTuple):
-    """Where jobs write: row ``j`` of each array belongs to job ``j``."""
+    """Where jobs write: one row per trial, rows ``jobs.row[j] ..`` belonging to job ``j``."""
 
     values: np.ndarray
-    """jobs x ``world.N_VALUES``: the trial's six values."""
+    """rows x ``world.N_VALUES``: the trial's six values."""
     poses: np.ndarray
-    """jobs x 2 x n_robots x 3: start and end poses (x, y, heading)."""
+    """rows x 2 x n_robots x 3: start and end poses (x, y, heading)."""
 
     @staticmethod
-    def zeros(n_jobs: int, n_robots: int) -> Outputs:
-        """Zeroed outputs for ``n_jobs`` jobs."""
-        return Outputs(np.zeros((n_jobs, world.N_VALUES)), np.zeros((n_jobs, 2, n_robots, 3)))
+    def zeros(n_rows: int, n_robots: int) -> Outputs:
+        """Zeroed outputs for ``n_rows`` trials."""
+        return Outputs(np.zeros((n_rows, world.N_VALUES)), np.zeros((n_rows, 2, n_robots, 3)))
 
 
 class Swarm(NamedTuple):
-    """Every robot's state during a trial, one row per robot (the world arrays of ``simulate_trial``)."""
+    """Every robot's state during a chain, one row per robot (the world and the robots' minds)."""
 
     x: np.ndarray
     y: np.ndarray
     heading: np.ndarray
     x_before: np.ndarray
-    """Positions before the current physics step (collision fallback)."""
+    """Positions before the current physics step (collision fallback, friction)."""
     y_before: np.ndarray
     gains: np.ndarray
     """(left, right) wheel gains."""
     broadcast_nest: np.ndarray
-    """Estimates each robot broadcasts this step (its raw estimates of the previous step)."""
+    """Values each robot broadcast at the last step (heard by the others at this one)."""
     broadcast_food: np.ndarray
     raw_nest: np.ndarray
-    """Raw estimates computed this step."""
+    """Raw estimates of the latest sensing step."""
     raw_food: np.ndarray
     window: np.ndarray
     """(n, window, 3) raw samples (nest, food, density) for smoothing."""
+    smooth: np.ndarray
+    """(n, 3) smoothed (nest, food, density), as last refreshed."""
     ground: np.ndarray
-    """(n, 2) bool: in the nest, on food, at the latest step."""
+    """(n, 2) bool: in the nest, on food, at the latest sensing step."""
     sources: np.ndarray
     """(n, 3) sender ids of the nest source, food source and nearest robot (-1: none)."""
     actions: np.ndarray
-    """The action each robot is running."""
+    """The motors of each robot: the last action its last tick ticked."""
+    resumed: np.ndarray
+    """The action each robot's last tick left running, or -1."""
     memory: np.ndarray
     """(n, nodes) the tree interpreter's memory."""
     counts: np.ndarray
-    """(n, N_COUNTS) the tree interpreter's counts."""
+    """(n, N_COUNTS) the tree interpreter's counts in the current trial."""
+    motion: np.ndarray
+    """(n, 2) movement and rotation sums of the current trial."""
+    initial: np.ndarray
+    """(n, 3) the current trial's initial smoothed values."""
 
 
 class Inbox(NamedTuple):
@@ -153,28 +191,32 @@ class Inbox(NamedTuple):
 
 
 @numba.njit(cache=True)
-def _new_swarm(poses: np.ndarray, gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
+def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
     n = p.n_robots
     memory = np.empty((n, tree.op.shape[0]), dtype=np.int8)
     for i in range(n):
-        reset_memory(tree.op, memory[i])
+        start_memory(tree.op, memory[i], p.profile)
     return Swarm(
-        poses[:, 0].copy(),
-        poses[:, 1].copy(),
-        poses[:, 2].copy(),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
         np.empty(n),
         np.empty(n),
         gains,
-        np.empty(n),
-        np.empty(n),
-        np.empty(n),
-        np.empty(n),
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
         np.zeros((n, p.window, 3)),
+        np.zeros((n, 3)),
         np.zeros((n, 2), dtype=np.bool_),
         np.full((n, 3), -1, dtype=np.int64),
         np.full(n, STOP, dtype=np.int64),
+        np.full(n, -1, dtype=np.int64),
         memory,
         np.zeros((n, N_COUNTS), dtype=np.int64),
+        np.zeros((n, 2), dtype=np.int64),
+        np.zeros((n, 3)),
     )
 
 
@@ -190,122 +232,142 @@ def _new_inbox(n: int) -> Inbox:
 
 
 @numba.njit(cache=True)
-def simulate_trial(
+def simulate_chain(
     tree: FlatTree,
     seed_key: np.uint64,
-    trial: int,
+    chain: int,
+    trials: int,
     gap: float,
     p: Params,
     values_out: np.ndarray,
     poses_out: np.ndarray,
 ) -> None:
-    """Run one trial of one flat tree; write its ``world.N_VALUES`` values into ``values_out`` and the start
-    and end poses into ``poses_out`` (2 x n_robots x 3)."""
+    """Run the first ``trials`` trials of chain ``chain`` of one flat tree; write the chain's trial ``t``'s
+    ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]``
+    (2 x n_robots x 3)."""
     n = p.n_robots
-    keys = trial_keys(seed_key, trial, n)
+    keys = chain_keys(seed_key, chain, n)
+    position_keys = keys[POSITION]
+    heading_keys = keys[HEADING]
     drop_keys = keys[DROPS]
     tree_keys = keys[TREE]
-    poses = world.start_poses(keys[POSITION], keys[HEADING], p)
-    swarm = _new_swarm(poses, world.wheel_gains(keys[GAINS], p), tree, p)
+    swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), tree, p)
     # Locals for the loops below (a field read inside a loop would cost a reference count each time).
     (x, y, heading, x_before, y_before, gains, broadcast_nest, broadcast_food, raw_nest, raw_food, window,
-     ground_now, sources, actions, memory, counts) = swarm  # fmt: skip
+     smooth, ground_now, sources, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
-    for i in range(n):
-        in_nest, on_food = world.ground(x[i], y[i], gap, p)
-        broadcast_nest[i], broadcast_food[i] = world.initial_broadcast(in_nest, on_food, p)
-
+    robot_arcs = world.arcs(gains, p)
     samples = 0
     board = np.zeros(8, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
-    initial = np.empty((n, 3))
-    final = np.empty((n, 3))
 
-    total_steps = p.settle_steps + p.ticks * p.steps_per_tick
-    for step in range(total_steps):
-        controlled = step - p.settle_steps
-        if controlled >= 0:
-            if controlled % p.steps_per_tick == 0:
-                tick_index = controlled // p.steps_per_tick
-                for i in range(n):
-                    world.blackboard(
-                        ground_now[i, 0],
-                        ground_now[i, 1],
-                        _source_bearing(sides[0], i, sources[i, 0], x, y, heading),
-                        _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
-                        _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
-                        board,
-                    )
-                    status, action = tick(tree, memory[i], board, tree_keys[i], tick_index, counts[i])
-                    actions[i] = action if status == RUNNING else STOP
-            world.physics_step(x, y, heading, actions, gains, p, x_before, y_before)
-        # Sense: every robot hears the estimates broadcast from the previous step.
-        world.sense_step(
-            x,
-            y,
-            broadcast_nest,
-            broadcast_food,
-            drop_keys,
-            step,
-            p,
-            counts_in,
-            senders,
-            ranges,
-            nest_values,
-            food_values,
-        )
-        for i in range(n):
-            in_nest, on_food = world.ground(x[i], y[i], gap, p)
-            nest, food, density, nest_source, food_source, nearest = world.estimate(
-                in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
-            )
-            world.push_sample(window[i], samples, nest, food, density)
-            raw_nest[i] = nest
-            raw_food[i] = food
-            ground_now[i, 0] = in_nest
-            ground_now[i, 1] = on_food
-            sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
-            sources[i, 1] = senders[i, food_source] if food_source >= 0 else -1
-            sources[i, 2] = senders[i, nearest] if nearest >= 0 else -1
-        samples += 1
-        for i in range(n):
-            broadcast_nest[i] = raw_nest[i]
-            broadcast_food[i] = raw_food[i]
-        if step == p.settle_steps - 1:
+    for k in range(1, trials * timeline.trial_steps(p) + 1):
+        position = timeline.trial_in_chain(p, k)
+        if timeline.step_in_trial(p, k) == 1:
+            world.place_robots(x, y, heading, position_keys, heading_keys, position, p)
             for i in range(n):
-                initial[i, 0], initial[i, 1], initial[i, 2] = world.smoothed(window[i], samples)
-
-    for i in range(n):
-        final[i, 0], final[i, 1], final[i, 2] = world.smoothed(window[i], samples)
-    values = world.trial_values(initial, final, ground_now, counts, p)
-    for k in range(values.shape[0]):
-        values_out[k] = values[k]
-    for i in range(n):
-        for k in range(3):
-            poses_out[0, i, k] = poses[i, k]
-        poses_out[1, i, 0] = x[i]
-        poses_out[1, i, 1] = y[i]
-        poses_out[1, i, 2] = heading[i]
+                poses_out[position, 0, i, 0] = x[i]
+                poses_out[position, 0, i, 1] = y[i]
+                poses_out[position, 0, i, 2] = heading[i]
+        world.physics_step(x, y, heading, actions, robot_arcs, p, x_before, y_before)
+        if timeline.senses(p, k):
+            # Every robot hears what the others broadcast at the step before.
+            world.sense_step(
+                x,
+                y,
+                broadcast_nest,
+                broadcast_food,
+                drop_keys,
+                k,
+                p,
+                counts_in,
+                senders,
+                ranges,
+                nest_values,
+                food_values,
+            )
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                nest, food, density, nest_source, food_source, nearest = world.estimate(
+                    in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
+                )
+                world.push_sample(window[i], samples, nest, food, density)
+                raw_nest[i] = nest
+                raw_food[i] = food
+                ground_now[i, 0] = in_nest
+                ground_now[i, 1] = on_food
+                sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
+                sources[i, 1] = senders[i, food_source] if food_source >= 0 else -1
+                sources[i, 2] = senders[i, nearest] if nearest >= 0 else -1
+            samples += 1
+            if timeline.refreshes(p, k):
+                for i in range(n):
+                    smooth[i, 0], smooth[i, 1], smooth[i, 2] = world.smoothed(window[i], samples)
+        if timeline.ticks_at(p, k):
+            number = timeline.tick_number(p, k)
+            for i in range(n):
+                world.blackboard(
+                    ground_now[i, 0],
+                    ground_now[i, 1],
+                    raw_nest[i],
+                    raw_food[i],
+                    _source_bearing(sides[0], i, sources[i, 0], x, y, heading),
+                    _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
+                    sources[i, 2] >= 0,
+                    _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
+                    p,
+                    board,
+                )
+                status, started = tick(tree, memory[i], board, tree_keys[i], number, counts[i])
+                motors = motors_after_tick(status, started, resumed[i])
+                resumed[i] = running_action(status, started)
+                actions[i] = motors
+                motion[i, 0] += movement_of(motors)
+                motion[i, 1] += rotation_of(motors)
+        if timeline.region_broadcast(k):
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                broadcast_nest[i] = world.region_value(in_nest, p)
+                broadcast_food[i] = world.region_value(on_food, p)
+        else:
+            for i in range(n):
+                broadcast_nest[i] = world.broadcast_value(smooth[i, 0])
+                broadcast_food[i] = world.broadcast_value(smooth[i, 1])
+        if timeline.is_initial(p, k):
+            initial[:, :] = smooth
+        if timeline.is_final(p, k):
+            values = world.trial_values(initial, smooth, counts, motion, p)
+            for c in range(values.shape[0]):
+                values_out[position, c] = values[c]
+            for i in range(n):
+                poses_out[position, 1, i, 0] = x[i]
+                poses_out[position, 1, i, 1] = y[i]
+                poses_out[position, 1, i, 2] = heading[i]
+            counts[:, :] = 0
+            motion[:, :] = 0
 
 
 @numba.njit(cache=True, inline="always")
 def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
-    """Run job ``j`` into row ``j`` of the outputs."""
-    simulate_trial(
+    """Run job ``j`` into its rows of the outputs."""
+    a = jobs.row[j]
+    b = a + jobs.trials[j]
+    simulate_chain(
         tree_at(trees, jobs.tree[j]),
         jobs.seed_key[j],
-        jobs.trial[j],
+        jobs.chain[j],
+        jobs.trials[j],
         jobs.gap[j],
         params,
-        out.values[j],
-        out.poses[j],
+        out.values[a:b],
+        out.poses[a:b],
     )
 
 
 @numba.njit(cache=True)
 def run_jobs(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
-    """Run every job ``j`` of ``jobs`` (a tree of ``trees``, seed key, trial, gap) in world ``params`` into
-    row ``j`` of ``out``."""
+    """Run every job ``j`` of ``jobs`` (a tree of ``trees``, seed key, chain, trials, gap) in world ``params``
+    into its rows of ``out``."""
     for j in range(jobs.tree.shape[0]):
         _run_job(j, trees, params, jobs, out)
 

@@ -1,11 +1,12 @@
-"""The simulator's side of one trial, advanced one sensing step at a time by the robots' answers.
+"""The simulator's side of one chain, advanced one control step at a time by the robots' answers.
 
-This is what the simulator node runs: it owns the world (poses, wheel gains, the radio channel, the ground
-sensor) and nothing of the robots' minds. After each sensing step it hands every robot its readings and waits
-for every robot's answer: the estimates it will broadcast next, its smoothed values, and (when the robots
-have just ticked their trees) the action that drives its wheels until the next tick. The objectives are scored
-from the robots' smoothed values at the first tick and after the last step, as the reference road does
-(``swarm_sim.reference_road``), so the node graph reproduces the batch evaluator exactly.
+This is what the simulator node and the reference road run: it owns the world (poses, wheel gains, the radio
+channel, the ground sensor) and nothing of the robots' minds. At each step ``k`` of the chain it first
+teleports the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at
+step ``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k -
+1``); then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and,
+at a tick, what the tick did. It scores each trial from those answers (``bt_controller.timeline`` says when),
+so the node graph, the reference road and the batch evaluator compute the same numbers.
 """
 
 from __future__ import annotations
@@ -15,26 +16,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.controller import FootbotController, Schedule
-from bt_controller.perception import PerceptionParams
+from bt_controller import timeline
+from bt_controller.controller import FootbotController
+from bt_controller.motors import movement_of, rotation_of
 from bt_controller.tree import Node
-from bt_controller.vocabulary import ACTION_WHEELS, STOP
+from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.sensing import Readings, sense_swarm
-from swarm_sim.trial_data import TrialRecord, setup_trial
+from swarm_sim.trial_data import TrialRecord, setup_chain
 
 
 @dataclass(frozen=True)
 class RobotAnswer:
-    """One robot's answer to one sensing step."""
+    """One robot's answer to one control step."""
 
     action: int
-    """The action driving the wheels until the next tick (read only after a tick step; else ignored)."""
+    """The motors driving the wheels from the next step on."""
     broadcast: tuple[float, float]
-    """The (nest, food) raw estimates the robot broadcasts at the next step (mm)."""
+    """The (nest, food) values the robot broadcasts at this step (mm)."""
     smoothed: tuple[float, float, float]
-    """The robot's smoothed (nest, food, density) after this step."""
+    """The robot's smoothed (nest, food, density) as last refreshed."""
+    condition_ticks: int = 0
+    """Condition nodes ticked by this step's tick (0 without a tick)."""
+    started: int = -1
+    """The action this step's tick started, or -1."""
 
 
 def action_of_wheels(left: float, right: float) -> int:
@@ -47,103 +53,118 @@ def action_of_wheels(left: float, right: float) -> int:
         ) from None
 
 
-class LockstepTrial:
-    """Trial ``trial`` of ``seed`` with the world advanced only when every robot has answered."""
+class LockstepChain:
+    """The first ``trials`` trials of chain ``chain`` of ``seed``, the world advanced only when every robot
+    has answered."""
 
-    def __init__(self, seed: int, trial: int, config: Config = DEFAULT) -> None:
+    def __init__(self, seed: int, chain: int, trials: int, config: Config = DEFAULT) -> None:
         self.config = config
         self.p = config.params()
-        self.setup = setup_trial(seed, trial, config)
+        self.line = config.timeline
+        if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= config.chain_length:
+            raise ValueError(f"a chain has 1 to {config.chain_length} trials, got {trials!r}")
+        self.setup = setup_chain(seed, chain, config)
+        self.trials = trials
+        self.arcs = world.arcs(self.setup.gains, self.p)
         n = self.p.n_robots
-        self.x = self.setup.poses[:, 0].copy()
-        self.y = self.setup.poses[:, 1].copy()
-        self.heading = self.setup.poses[:, 2].copy()
+        self.x, self.y, self.heading = np.zeros(n), np.zeros(n), np.zeros(n)
         self._x_before, self._y_before = np.empty(n), np.empty(n)
         self.actions = np.full(n, STOP, dtype=np.int64)
-        self.broadcast_nest, self.broadcast_food = np.empty(n), np.empty(n)
-        for i in range(n):
-            in_nest, on_food = world.ground(self.x[i], self.y[i], self.setup.gap, self.p)
-            self.broadcast_nest[i], self.broadcast_food[i] = world.initial_broadcast(in_nest, on_food, self.p)
-        self.step = 0
-        self.initial: np.ndarray | None = None
-        self.final: np.ndarray | None = None
-        self._readings = self._sense()
-
-    @property
-    def last_step(self) -> int:
-        """Index of the trial's last sensing step (settling steps, then the controlled ones)."""
-        return self.p.settle_steps + self.p.ticks * self.p.steps_per_tick - 1
+        self.broadcast_nest = np.full(n, self.p.estimate_cap)
+        self.broadcast_food = np.full(n, self.p.estimate_cap)
+        self.counts = np.zeros((n, 1 + len(ACTIONS)), dtype=np.int64)
+        self.motion = np.zeros((n, 2), dtype=np.int64)
+        self.initial = np.zeros((n, 3))
+        self.start_poses = np.zeros((n, 3))
+        self.records: list[TrialRecord] = []
+        self.last_step = trials * timeline.trial_steps(self.line)
+        self.step = 1
+        self._readings = self._begin_step()
 
     @property
     def done(self) -> bool:
-        """Whether the answers to the last step have been taken."""
-        return self.final is not None
+        """Whether the answers to the chain's last step have been taken."""
+        return len(self.records) == self.trials
+
+    @property
+    def trial(self) -> int:
+        """The evaluation's index of the trial under way."""
+        return self.setup.first_trial + timeline.trial_in_chain(self.line, self.step)
 
     def readings(self) -> list[Readings]:
-        """Every robot's readings of the current sensing step."""
+        """Every robot's readings of the current step."""
         return self._readings
 
-    def tick_index(self) -> int:
-        """The tick the robots run after reading the current step, or -1 when they do not tick."""
-        since_first = self.step - (self.p.settle_steps - 1)
-        if since_first < 0 or since_first % self.p.steps_per_tick:
-            return -1
-        tick = since_first // self.p.steps_per_tick
-        return tick if tick < self.p.ticks else -1
+    def ticks_now(self) -> bool:
+        """Whether the robots tick their trees at the current step."""
+        return timeline.ticks_at(self.line, self.step)
 
     def poses(self) -> np.ndarray:
         """The robots' current poses, n x (x, y, heading)."""
         return np.stack([self.x, self.y, self.heading], axis=1)
 
-    def advance(self, answers: Sequence[RobotAnswer]) -> None:
-        """Take every robot's answer to the current step, then move and sense the next step (unless this was
-        the last one)."""
+    def advance(self, answers: Sequence[RobotAnswer]) -> TrialRecord | None:
+        """Take every robot's answer to the current step, then teleport, move and sense for the next step
+        (unless this was the last one). Returns the record of the trial this step finished, if any."""
         if self.done:
-            raise RuntimeError("the trial is over: no step is waiting for answers")
+            raise RuntimeError("the chain is over: no step is waiting for answers")
         if len(answers) != self.p.n_robots:
             raise ValueError(f"expected {self.p.n_robots} answers, got {len(answers)}")
+        k = self.step
         for i, answer in enumerate(answers):
             self.broadcast_nest[i], self.broadcast_food[i] = answer.broadcast
-        if self.tick_index() >= 0:
-            self.actions[:] = [answer.action for answer in answers]
+            self.actions[i] = answer.action
+        if timeline.ticks_at(self.line, k):
+            for i, answer in enumerate(answers):
+                self.counts[i, 0] += answer.condition_ticks
+                if answer.started >= 0:
+                    self.counts[i, 1 + answer.started] += 1
+                self.motion[i, 0] += movement_of(answer.action)
+                self.motion[i, 1] += rotation_of(answer.action)
         smoothed = np.array([answer.smoothed for answer in answers], dtype=np.float64)
-        if self.step == self.p.settle_steps - 1:
+        if timeline.is_initial(self.line, k):
             self.initial = smoothed
-        if self.step == self.last_step:
-            self.final = smoothed
-            return
-        if self.step >= self.p.settle_steps - 1:
-            world.physics_step(
+        record = None
+        if timeline.is_final(self.line, k):
+            values = world.trial_values(self.initial, smoothed, self.counts, self.motion, self.p)
+            record = TrialRecord(
+                trial=self.trial,
+                gap=self.setup.gap,
+                values=tuple(float(v) for v in values),
+                start_poses=self.start_poses.copy(),
+                end_poses=self.poses(),
+            )
+            self.records.append(record)
+            self.counts[:] = 0
+            self.motion[:] = 0
+        if k < self.last_step:
+            self.step = k + 1
+            self._readings = self._begin_step()
+        return record
+
+    def _begin_step(self) -> list[Readings]:
+        k = self.step
+        if timeline.step_in_trial(self.line, k) == 1:
+            world.place_robots(
                 self.x,
                 self.y,
                 self.heading,
-                self.actions,
-                self.setup.gains,
+                self.setup.position_keys,
+                self.setup.heading_keys,
+                timeline.trial_in_chain(self.line, k),
                 self.p,
-                self._x_before,
-                self._y_before,
             )
-        self.step += 1
-        self._readings = self._sense()
-
-    def record(self, counts: np.ndarray) -> TrialRecord:
-        """The finished trial's record, given each robot's tree counts (n x 8: condition ticks, then the
-        starts of each action)."""
-        if self.initial is None or self.final is None:
-            raise RuntimeError("the trial is not finished")
-        end_ground = np.array([[r.in_nest, r.on_food] for r in self._readings], dtype=np.bool_)
-        values = world.trial_values(
-            self.initial, self.final, end_ground, np.asarray(counts, np.int64), self.p
+            self.start_poses = self.poses()
+        world.physics_step(
+            self.x,
+            self.y,
+            self.heading,
+            self.actions,
+            self.arcs,
+            self.p,
+            self._x_before,
+            self._y_before,
         )
-        return TrialRecord(
-            trial=self.setup.trial,
-            gap=self.setup.gap,
-            values=tuple(float(v) for v in values),
-            start_poses=self.setup.poses.copy(),
-            end_poses=self.poses(),
-        )
-
-    def _sense(self) -> list[Readings]:
         return sense_swarm(
             self.x,
             self.y,
@@ -151,10 +172,53 @@ class LockstepTrial:
             self.broadcast_nest,
             self.broadcast_food,
             self.setup.drop_keys,
-            self.step,
+            k,
             self.setup.gap,
             self.p,
         )
+
+
+def run_chain_with_controllers(
+    tree: Node,
+    seed: int,
+    chain: int,
+    trials: int,
+    config: Config = DEFAULT,
+    on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
+) -> list[TrialRecord]:
+    """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
+    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers.
+    ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
+    simulator node would publish); ``on_answers(chain, answers)`` with the robots' answers to the step,
+    before the world takes them."""
+    sim = LockstepChain(seed, chain, trials, config)
+    controllers = []
+    for key in sim.setup.tree_keys:
+        controller = FootbotController()
+        controller.load(tree)
+        controller.start_chain(int(key), config.timeline, config.perception, trials)
+        controllers.append(controller)
+    while not sim.done:
+        if on_step is not None:
+            on_step(sim)
+        answers = []
+        for controller, readings in zip(controllers, sim.readings(), strict=True):
+            outcome = controller.on_step(sim.step, readings)
+            tick = outcome.tick
+            answers.append(
+                RobotAnswer(
+                    outcome.action,
+                    outcome.broadcast,
+                    outcome.smoothed,
+                    tick.condition_ticks if tick is not None else 0,
+                    tick.started if tick is not None else -1,
+                )
+            )
+        if on_answers is not None:
+            on_answers(sim, answers)
+        sim.advance(answers)
+    return sim.records
 
 
 def run_with_controllers(
@@ -162,49 +226,23 @@ def run_with_controllers(
     seed: int,
     trial: int,
     config: Config = DEFAULT,
-    on_step: Callable[[LockstepTrial], None] | None = None,
-    on_answers: Callable[[LockstepTrial, Sequence[RobotAnswer]], None] | None = None,
+    on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
 ) -> TrialRecord:
-    """Run a trial in-process exactly as the node graph runs it: the lockstep world and one
-    ``FootbotController`` per robot, exchanging readings and answers. ``on_step(trial)`` is called after
-    each step's readings are out (for example to collect the poses a simulator node would publish);
-    ``on_answers(trial, answers)`` with the robots' answers to the step, before the world takes them."""
-    world = LockstepTrial(seed, trial, config)
-    p = world.p
-    schedule = Schedule(p.settle_steps, p.steps_per_tick, p.ticks)
-    perception = PerceptionParams(p.window, p.estimate_cap, p.density_range, p.density_divisor)
-    controllers = []
-    for key in world.setup.tree_keys:
-        controller = FootbotController()
-        controller.load(tree)
-        controller.start_trial(int(key), schedule, perception)
-        controllers.append(controller)
-    counts = np.zeros((p.n_robots, 8), dtype=np.int64)
-    while not world.done:
-        if on_step is not None:
-            on_step(world)
-        answers = []
-        for i, (controller, readings) in enumerate(zip(controllers, world.readings(), strict=True)):
-            outcome = controller.on_step(world.step, readings)
-            if outcome.tick is not None:
-                counts[i, 0] += outcome.tick.condition_ticks
-                if outcome.tick.started >= 0:
-                    counts[i, 1 + outcome.tick.started] += 1
-            answers.append(RobotAnswer(outcome.action, outcome.broadcast, outcome.smoothed))
-        if on_answers is not None:
-            on_answers(world, answers)
-        world.advance(answers)
-    return world.record(counts)
+    """Trial ``trial`` of ``seed`` as the node graph runs it: its chain is run from its first trial up to
+    ``trial`` (the earlier trials set the state ``trial`` starts from); the record of ``trial``."""
+    chain, position = timeline.chain_of_trial(config.timeline, trial)
+    return run_chain_with_controllers(tree, seed, chain, position + 1, config, on_step, on_answers)[-1]
 
 
 def warm_up(config: Config = DEFAULT) -> None:
-    """Compile (or load from numba's cache) every world function a lockstep trial uses, by running the first
-    moving step of a trial with every robot stopped."""
-    trial = LockstepTrial(0, 0, config)
+    """Compile (or load from numba's cache) every world function a lockstep chain uses, by running the first
+    steps of a chain with every robot stopped, and scoring a trial."""
+    sim = LockstepChain(0, 0, 1, config)
     still = RobotAnswer(STOP, (config.estimate_cap, config.estimate_cap), (0.0, 0.0, 0.0))
-    for _ in range(config.settle_steps + 1):
-        trial.advance([still] * config.n_robots)
+    for _ in range(config.steps_per_tick + 1):
+        sim.advance([still] * config.n_robots)
     n = config.n_robots
     world.trial_values(
-        np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 2), np.bool_), np.zeros((n, 8), np.int64), trial.p
+        np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), sim.p
     )

@@ -1,8 +1,11 @@
-"""What a trial starts from and what it leaves; shared by the reference road, the batch road and the nodes.
+"""What a chain starts from and what its trials leave; shared by the reference road, the batch road and the
+nodes.
 
-A trial runs ``settle_steps`` sensing steps with the robots still, then ``ticks`` rounds of: tick the trees
-(from the latest readings), then ``steps_per_tick`` times move the robots and sense. Sensing steps are
-numbered from 0 over the whole trial. Trial ``k`` uses the gap ``config.gaps[k % len(gaps)]``.
+A chain is one continuous simulation of one or more trials (``bt_controller.timeline``): the 5 trials of a
+block under ``paper``, a single trial under ``clean``. ``setup_chain`` draws what is fixed for the whole chain
+(wheel gains, the robots' stream keys); start poses are drawn at each trial's first step by
+``world.place_robots``. Trial ``k`` of an evaluation is trial ``k % chain_length`` of chain
+``k // chain_length`` and uses the gap ``config.gap(k)``.
 """
 
 from __future__ import annotations
@@ -11,23 +14,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, check_seed, root_key, trial_keys
+from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys, check_seed, root_key
+from bt_controller.timeline import chain_of_trial
 from bt_controller.validate import integer
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.world import VALUE_NAMES
 
-VALUE_NAMES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
-"""The six values of a trial or an evaluation, in ``world.N_VALUES`` order."""
+__all__ = ["VALUE_NAMES", "ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]
 
 
 @dataclass(frozen=True)
-class TrialSetup:
-    """Everything random about one trial, drawn from its streams."""
+class ChainSetup:
+    """Everything random about one chain that is drawn at its start, from its streams."""
 
-    trial: int
+    chain: int
+    first_trial: int
+    """The evaluation's index of the chain's first trial."""
     gap: float
-    poses: np.ndarray
-    """Start poses, n_robots x (x, y, heading)."""
+    position_keys: np.ndarray
+    """Each robot's start-position stream key (uint64)."""
+    heading_keys: np.ndarray
+    """Each robot's start-heading stream key (uint64)."""
     gains: np.ndarray
     """Wheel gains, n_robots x (left, right)."""
     drop_keys: np.ndarray
@@ -36,20 +44,30 @@ class TrialSetup:
     """Each robot's tree stream key (uint64), for the tree interpreter's probabilistic choices."""
 
 
-def setup_trial(seed: int, trial: int, config: Config = DEFAULT) -> TrialSetup:
-    """Draw trial ``trial`` of ``seed``: start poses, wheel gains and the robots' stream keys."""
+def setup_chain(seed: int, chain: int, config: Config = DEFAULT) -> ChainSetup:
+    """Draw chain ``chain`` of ``seed``: wheel gains and the robots' stream keys."""
     seed = check_seed(seed)
-    integer(trial, "trial", 0)
+    integer(chain, "chain", 0)
     p = config.params()
-    keys = trial_keys(np.uint64(root_key(seed)), trial, p.n_robots)
-    return TrialSetup(
-        trial=trial,
-        gap=config.gap(trial),
-        poses=world.start_poses(keys[POSITION], keys[HEADING], p),
+    keys = chain_keys(np.uint64(root_key(seed)), chain, p.n_robots)
+    first = chain * config.chain_length
+    return ChainSetup(
+        chain=chain,
+        first_trial=first,
+        gap=config.gap(first),
+        position_keys=keys[POSITION].copy(),
+        heading_keys=keys[HEADING].copy(),
         gains=world.wheel_gains(keys[GAINS], p),
         drop_keys=keys[DROPS].copy(),
         tree_keys=keys[TREE].copy(),
     )
+
+
+def chain_plan(trials: int, config: Config = DEFAULT) -> list[tuple[int, int]]:
+    """The chains that trials ``0 .. trials - 1`` of an evaluation take: ``(chain, trials to run)`` each."""
+    integer(trials, "trials", 1)
+    last_chain, last_position = chain_of_trial(config.timeline, trials - 1)
+    return [(c, config.chain_length if c < last_chain else last_position + 1) for c in range(last_chain + 1)]
 
 
 @dataclass(frozen=True)

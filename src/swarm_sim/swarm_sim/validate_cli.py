@@ -54,7 +54,7 @@ def model_config(profile: str | None) -> Config:
     if "profile" not in {f.name for f in fields(Config)}:
         raise UsageError(f"--profile {profile}: this model has no profiles")
     try:
-        return Config(profile=profile)  # type: ignore[call-arg]
+        return Config(profile=profile)
     except ValueError as error:
         raise UsageError(f"--profile: {error}") from None
 

@@ -1,9 +1,11 @@
-"""The world model as compiled pure functions, split the way the ROS 2 node graph splits it.
+"""The world model as compiled pure functions, split the way the ROS 2 node graph splits it
+(``docs/model.md``).
 
-(a) physics: ``start_poses``, ``wheel_gains``, ``move_robot``, ``resolve_collisions``, ``physics_step``;
-(b) message delivery and ground sensing: ``ground``, ``sense_step``, ``bearing``, ``initial_broadcast``;
-(c) one robot's view from its own readings: ``estimate``, ``push_sample``, ``smoothed``, ``blackboard``
-(from ``bt_controller.perception``, inlined);
+(a) physics: ``place_robots``, ``wheel_gains``, ``arcs``, ``move_robot``, ``resolve_collisions``,
+``physics_step``;
+(b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
+(c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
+``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``;
 (d) objectives and descriptors: ``robot_objectives``, ``robot_descriptors``, ``trial_values``,
 ``mean_values``.
 
@@ -12,7 +14,7 @@ nodes call the very same compiled code from Python, robot by robot, so both road
 the same operations in the same order. Arguments ``p`` are ``config.Params``.
 
 Conventions: a robot's readings of one sensing step are the messages it received, ordered by sender id;
-estimates broadcast at step ``s`` are the raw estimates its sender computed at step ``s - 1``.
+what a robot broadcasts at step ``k`` reaches the others at step ``k + 1``.
 """
 
 from __future__ import annotations
@@ -24,25 +26,32 @@ import numpy as np
 
 from bt_controller import perception
 from bt_controller.draws import uniform
-from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
+from bt_controller.vocabulary import ACTION_WHEELS
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
 
 drop_stale_cache(
     __file__,
-    ("bt_controller.draws", "bt_controller.perception", "bt_controller.vocabulary", "swarm_sim.config"),
+    (
+        "bt_controller.draws",
+        "bt_controller.perception",
+        "bt_controller.timeline",
+        "bt_controller.vocabulary",
+        "swarm_sim.config",
+    ),
 )
 
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 """(left, right) wheel settings of each action, in units of the nominal wheel speed."""
 
-FORWARD = ACTIONS.index("forward")
-REVERSE = ACTIONS.index("reverse")
-ANTICLOCKWISE = np.array([ACTIONS.index("forward_left"), ACTIONS.index("reverse_right")], dtype=np.int64)
-CLOCKWISE = np.array([ACTIONS.index("forward_right"), ACTIONS.index("reverse_left")], dtype=np.int64)
-
-N_VALUES = 6
-"""Per-trial values: density, nest, food objectives, then movement, rotation, conditionality descriptors."""
+VALUE_NAMES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
+"""The six values of a trial or an evaluation: the objectives, then the descriptors (the one home of these
+names)."""
+OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
+"""The three objectives, in fitness order."""
+DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[3:]
+"""The three behaviour descriptors, in grid order."""
+N_VALUES = len(VALUE_NAMES)
 
 TWO_PI = 2.0 * math.pi
 
@@ -60,44 +69,69 @@ def wrap_angle(a: float) -> float:
     return a
 
 
-@numba.njit(cache=True)
-def start_poses(position_keys: np.ndarray, heading_keys: np.ndarray, p: Params) -> np.ndarray:
-    """Start poses (n_robots x 3: x, y, heading): uniform in the start disc, no overlaps, uniform headings.
-
-    Robots are placed in id order; robot ``i``'s attempt ``a`` draws counters ``2a`` and ``2a + 1`` of its
-    position stream and is rejected when it overlaps a robot already placed.
-    """
-    n = p.n_robots
-    poses = np.empty((n, 3))
+@numba.njit(cache=True, inline="always")
+def _free(x: np.ndarray, y: np.ndarray, i: int, cx: float, cy: float, present: np.ndarray, p: Params) -> bool:
+    """Whether robot ``i`` centred at (cx, cy) overlaps no other present robot where that one stands now."""
     min_d2 = (2.0 * p.robot_radius) ** 2
+    for j in range(x.shape[0]):
+        if j != i and present[j]:
+            dx = x[j] - cx
+            dy = y[j] - cy
+            if dx * dx + dy * dy < min_d2:
+                return False
+    return True
+
+
+@numba.njit(cache=True)
+def place_robots(
+    x: np.ndarray,
+    y: np.ndarray,
+    heading: np.ndarray,
+    position_keys: np.ndarray,
+    heading_keys: np.ndarray,
+    position: int,
+    p: Params,
+) -> None:
+    """Place every robot for the ``position``-th trial of a chain, in place (``bt_loop_functions.cpp:176-213``
+    at a chain's start, ``:254-287`` at a teleport).
+
+    Robots are placed one after another in id order: a heading uniform in [-pi, pi) (draw ``position`` of
+    the robot's heading stream), then up to ``max_start_attempts`` positions uniform in the start square
+    (attempt ``a``: draws ``2 (position * max_start_attempts + a)`` and the next of its position stream),
+    the first that overlaps no robot where it stands now being taken. At a chain's start (``position`` 0)
+    only robots already placed stand in the arena, and a robot that finds no place stays where it was
+    created: the origin, heading 0. At a teleport every robot stands somewhere, and one that finds no place
+    keeps its pose.
+    """
+    n = x.shape[0]
+    present = np.zeros(n, dtype=np.bool_)
+    if position == 0:
+        for i in range(n):
+            x[i] = 0.0
+            y[i] = 0.0
+            heading[i] = 0.0
+    else:
+        present[:] = True
+    side = 2.0 * p.start_half
     for i in range(n):
-        placed = False
+        h = TWO_PI * uniform(heading_keys[i], position) - math.pi
+        base = 2 * position * p.max_start_attempts
         for attempt in range(p.max_start_attempts):
-            r = p.start_radius * math.sqrt(uniform(position_keys[i], 2 * attempt))
-            phi = TWO_PI * uniform(position_keys[i], 2 * attempt + 1)
-            x = r * math.cos(phi)
-            y = r * math.sin(phi)
-            ok = True
-            for k in range(i):
-                dx = poses[k, 0] - x
-                dy = poses[k, 1] - y
-                if dx * dx + dy * dy < min_d2:
-                    ok = False
-                    break
-            if ok:
-                poses[i, 0] = x
-                poses[i, 1] = y
-                placed = True
+            cx = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt)
+            cy = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt + 1)
+            if _free(x, y, i, cx, cy, present, p):
+                x[i] = cx
+                y[i] = cy
+                heading[i] = h
                 break
-        if not placed:
-            raise ValueError("start_poses: could not place a robot without overlap")
-        poses[i, 2] = TWO_PI * uniform(heading_keys[i], 0) - math.pi
-    return poses
+        present[i] = True
 
 
 @numba.njit(cache=True)
 def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
-    """Each robot's (left, right) wheel gains, uniform in [gain_low, gain_high) (n_robots x 2).
+    """Each robot's (left, right) wheel gains, drawn once per chain: gain_low + gain_step * U{0 ..
+    gain_levels - 1} (``footbot_bt.cpp:73-80``: (90 + rand() % 20) / 100, the right wheel first: draw 0 of
+    the robot's gain stream is the right wheel's, draw 1 the left's) (n_robots x 2).
 
     Damage acts here, on what a trial starts from (``swarm_sim.conditions``): robots below ``dead_robots``
     get gains 0 (they never drive or turn, though others can still push them), and the left wheel of the last
@@ -106,10 +140,11 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     """
     n = p.n_robots
     gains = np.empty((n, 2))
-    span = p.gain_high - p.gain_low
     for i in range(n):
-        gains[i, 0] = p.gain_low + span * uniform(gain_keys[i], 0)
-        gains[i, 1] = p.gain_low + span * uniform(gain_keys[i], 1)
+        right = min(int(uniform(gain_keys[i], 0) * p.gain_levels), p.gain_levels - 1)
+        left = min(int(uniform(gain_keys[i], 1) * p.gain_levels), p.gain_levels - 1)
+        gains[i, 0] = p.gain_low + p.gain_step * left
+        gains[i, 1] = p.gain_low + p.gain_step * right
         if i >= n - p.weak_robots:
             gains[i, 0] *= p.weak_gain
         if i < p.dead_robots:
@@ -119,23 +154,50 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
 
 
 @numba.njit(cache=True, inline="always")
+def arc(action: int, gain_left: float, gain_right: float, p: Params) -> tuple:
+    """One step of ``action`` with these wheel gains as (chord, half turn, turn): the pose moves by the chord
+    along the heading plus the half turn, and turns by the turn (the exact arc, written as its chord)."""
+    v_left = WHEELS[action, 0] * p.wheel_speed * gain_left
+    v_right = WHEELS[action, 1] * p.wheel_speed * gain_right
+    if v_left == 0.0 and v_right == 0.0:
+        return 0.0, 0.0, 0.0
+    v = 0.5 * (v_left + v_right)
+    omega = (v_right - v_left) / p.wheel_separation
+    if omega == 0.0:
+        return v * p.step_dt, 0.0, 0.0
+    # Chord of the arc: length 2 (v / omega) sin(turn / 2), along the mean heading.
+    half_turn = 0.5 * omega * p.step_dt
+    return 2.0 * (v / omega) * math.sin(half_turn), half_turn, omega * p.step_dt
+
+
+@numba.njit(cache=True)
+def arcs(gains: np.ndarray, p: Params) -> np.ndarray:
+    """Every robot's ``arc`` of every action (n_robots x actions x 3), computed once per chain: the gains do
+    not change within one."""
+    n = gains.shape[0]
+    out = np.empty((n, WHEELS.shape[0], 3))
+    for i in range(n):
+        for action in range(WHEELS.shape[0]):
+            out[i, action, 0], out[i, action, 1], out[i, action, 2] = arc(action, gains[i, 0], gains[i, 1], p)
+    return out
+
+
+@numba.njit(cache=True, inline="always")
+def follow_arc(x: float, y: float, heading: float, chord: float, half_turn: float, turn: float) -> tuple:
+    """The pose after one step along an ``arc``."""
+    if chord == 0.0 and turn == 0.0:
+        return x, y, heading
+    middle = heading + half_turn
+    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + turn)
+
+
+@numba.njit(cache=True, inline="always")
 def move_robot(
     x: float, y: float, heading: float, action: int, gain_left: float, gain_right: float, p: Params
 ) -> tuple:
     """One robot's pose after one step of ``action``, by exact arc integration, ignoring obstacles."""
-    v_left = WHEELS[action, 0] * p.wheel_speed * gain_left
-    v_right = WHEELS[action, 1] * p.wheel_speed * gain_right
-    if v_left == 0.0 and v_right == 0.0:
-        return x, y, heading
-    v = 0.5 * (v_left + v_right)
-    omega = (v_right - v_left) / p.wheel_separation
-    if omega == 0.0:
-        return x + v * p.step_dt * math.cos(heading), y + v * p.step_dt * math.sin(heading), heading
-    # The exact arc, written as its chord: length 2 (v / omega) sin(turn / 2), along the mean heading.
-    half_turn = 0.5 * omega * p.step_dt
-    chord = 2.0 * (v / omega) * math.sin(half_turn)
-    middle = heading + half_turn
-    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + omega * p.step_dt)
+    chord, half_turn, turn = arc(action, gain_left, gain_right, p)
+    return follow_arc(x, y, heading, chord, half_turn, turn)
 
 
 @numba.njit(cache=True, inline="always")
@@ -153,9 +215,10 @@ def resolve_collisions(
     """Positional correction after a step, in place: no robot overlaps another or a wall afterwards.
 
     Robots are clamped inside the walls, then overlapping pairs (in (i, j) order) are pushed apart equally
-    along the line of their centres, up to ``collision_iterations`` passes. Should overlaps remain, robots
-    involved go back to their positions before the step (``x_before``, ``y_before``, assumed overlap-free)
-    until none remain.
+    along the line of their centres, and their relative tangential displacement since (``x_before``,
+    ``y_before``) is cancelled up to ``friction`` times the overlap, split equally (ARGoS: friction 0.7 per
+    footbot body, multiplied at a contact); up to ``collision_iterations`` passes. Should overlaps remain,
+    robots involved go back to their positions before the step (assumed overlap-free) until none remain.
     """
     n = x.shape[0]
     min_d = 2.0 * p.robot_radius
@@ -177,7 +240,22 @@ def resolve_collisions(
                     else:
                         ux = 1.0
                         uy = 0.0
-                    push = 0.5 * (min_d - d) + p.collision_slack
+                    overlap = min_d - d
+                    if p.friction > 0.0:
+                        # The tangential part of j's displacement relative to i's in this step.
+                        rx = (x[j] - x_before[j]) - (x[i] - x_before[i])
+                        ry = (y[j] - y_before[j]) - (y[i] - y_before[i])
+                        along = rx * ux + ry * uy
+                        tx = rx - along * ux
+                        ty = ry - along * uy
+                        slide = math.sqrt(tx * tx + ty * ty)
+                        if slide > 0.0:
+                            cancel = 0.5 * min(slide, p.friction * overlap) / slide
+                            x[i] += cancel * tx
+                            y[i] += cancel * ty
+                            x[j] -= cancel * tx
+                            y[j] -= cancel * ty
+                    push = 0.5 * overlap + p.collision_slack
                     x[i] -= ux * push
                     y[i] -= uy * push
                     x[j] += ux * push
@@ -207,19 +285,23 @@ def physics_step(
     y: np.ndarray,
     heading: np.ndarray,
     actions: np.ndarray,
-    gains: np.ndarray,
+    robot_arcs: np.ndarray,
     p: Params,
     x_before: np.ndarray,
     y_before: np.ndarray,
 ) -> None:
-    """Advance the swarm one step in place: every robot moves by its action, then collisions are resolved.
+    """Advance the swarm one step in place: every robot moves by its action along its arc (``arcs`` of its
+    gains), then collisions are resolved.
 
     ``x_before`` and ``y_before`` are workspace arrays (n_robots) that receive the positions before the move.
     """
     for i in range(x.shape[0]):
         x_before[i] = x[i]
         y_before[i] = y[i]
-        x[i], y[i], heading[i] = move_robot(x[i], y[i], heading[i], actions[i], gains[i, 0], gains[i, 1], p)
+        a = actions[i]
+        x[i], y[i], heading[i] = follow_arc(
+            x[i], y[i], heading[i], robot_arcs[i, a, 0], robot_arcs[i, a, 1], robot_arcs[i, a, 2]
+        )
     resolve_collisions(x, y, x_before, y_before, p)
 
 
@@ -228,17 +310,37 @@ def physics_step(
 
 @numba.njit(cache=True, inline="always")
 def ground(x: float, y: float, gap: float, p: Params) -> tuple:
-    """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) in an arena with ``gap``."""
+    """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) in an arena with ``gap``
+    (``footbot_bt.cpp:240-247``: r < 0.5 m, r >= 0.5 m + gap)."""
     d2 = x * x + y * y
     food_radius = p.nest_radius + gap
-    return d2 <= p.nest_radius * p.nest_radius, d2 >= food_radius * food_radius
+    return d2 < p.nest_radius * p.nest_radius, d2 >= food_radius * food_radius
 
 
 @numba.njit(cache=True, inline="always")
-def initial_broadcast(in_nest: bool, on_food: bool, p: Params) -> tuple:
-    """What a robot broadcasts before it has any estimate: (nest, food), 0 for a region it is in, else
-    the cap."""
-    return (0.0 if in_nest else p.estimate_cap), (0.0 if on_food else p.estimate_cap)
+def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
+    """Whether a third robot's body cuts the segment between the centres of robots ``i`` and ``j``.
+
+    Robot ``m`` occludes when the foot of its centre on the segment's line falls strictly between the ends and
+    its distance from the line is below the body radius. (The ends themselves need no test: ``m``'s centre is
+    at least two radii from theirs, as robots do not overlap.) Written without divisions: the dot product
+    ``d`` against the squared length ``L2`` locates the foot, and the cross product ``c`` gives the distance
+    ``|c| / sqrt(L2)``.
+    """
+    sx = x[j] - x[i]
+    sy = y[j] - y[i]
+    length2 = sx * sx + sy * sy
+    limit = p.robot_radius * p.robot_radius * length2
+    for m in range(x.shape[0]):
+        mx = x[m] - x[i]
+        my = y[m] - y[i]
+        c = mx * sy - my * sx
+        if c * c >= limit:
+            continue  # far from the line (i and j themselves lie on it, and fail the next test)
+        d = mx * sx + my * sy
+        if 0.0 < d < length2 and m != j:
+            return True
+    return False
 
 
 @numba.njit(cache=True, inline="always")
@@ -256,13 +358,14 @@ def sense_step(
     nest_values: np.ndarray,
     food_values: np.ndarray,
 ) -> None:
-    """The messages every robot receives at sensing step ``step``.
+    """The messages every robot receives at control step ``step`` of a chain.
 
-    Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range`` and draw
-    ``step * n + j`` of ``i``'s drop stream (``drop_keys[i]``) is below ``delivery_probability``. Robot
-    ``i``'s messages fill the first ``counts[i]`` entries of row ``i`` of ``senders``, ``ranges``,
-    ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range is computed once for both
-    directions (the same bits either way: ``(-d) * (-d) == d * d``).
+    Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range``, no third
+    robot's body cuts the segment between them (with ``occlusion``), and draw ``step * n + j`` of ``i``'s
+    drop stream (``drop_keys[i]``) is below ``delivery_probability``. It carries what ``j`` broadcast at the
+    step before (``broadcast_*``). Robot ``i``'s messages fill the first ``counts[i]`` entries of row ``i`` of
+    ``senders``, ``ranges``, ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range
+    is computed once for both directions (the same bits either way: ``(-d) * (-d) == d * d``).
     """
     n = x.shape[0]
     range2 = p.message_range * p.message_range
@@ -275,6 +378,8 @@ def sense_step(
             dy = y[j] - y[i]
             d2 = dx * dx + dy * dy
             if d2 > range2:
+                continue
+            if p.occlusion and occluded(x, y, i, j, p):
                 continue
             d = math.sqrt(d2)
             if uniform(drop_keys[i], step * n + j) < p.delivery_probability:
@@ -309,44 +414,40 @@ def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) 
 estimate = numba.njit(inline="always")(perception.estimate.py_func)
 push_sample = numba.njit(inline="always")(perception.push_sample.py_func)
 smoothed = numba.njit(inline="always")(perception.smoothed.py_func)
+broadcast_value = numba.njit(inline="always")(perception.broadcast_value.py_func)
+region_value = numba.njit(inline="always")(perception.region_value.py_func)
 blackboard = numba.njit(inline="always")(perception.blackboard.py_func)
-is_left = perception.is_left
-is_right = perception.is_right
 
 
 # ---------------------------------------------------------------------------------------------------- (d)
 
 
 @numba.njit(cache=True)
-def robot_objectives(
-    initial: np.ndarray, final: np.ndarray, in_nest_end: bool, on_food_end: bool, p: Params
-) -> tuple:
-    """(density, nest, food) objectives of one robot in one trial, each in [0, 1].
+def robot_objectives(initial: np.ndarray, final: np.ndarray, p: Params) -> tuple:
+    """(density, nest, food) objectives of one robot in one trial (``CBlackBoard.cpp:85-96, 224-235,
+    343-347``).
 
-    ``initial`` and ``final`` are smoothed (nest, food, density). Density: (final - initial + 1) / 2, clipped
-    to [0, 1]; nest and food: ((initial - final) / cap + 1) / 2, or 1 for a robot that ends in the region.
+    ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps.
+    Density: (final - initial + 1) / 2, clipped to [0, 1]; nest and food: distances normalised by the cap,
+    ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0.
     """
     density = min(max(0.5 * (final[2] - initial[2] + 1.0), 0.0), 1.0)
-    nest = 1.0 if in_nest_end else 0.5 * ((initial[0] - final[0]) / p.estimate_cap + 1.0)
-    food = 1.0 if on_food_end else 0.5 * ((initial[1] - final[1]) / p.estimate_cap + 1.0)
+    nest = 1.0 if final[0] == 0.0 else 0.5 * ((initial[0] - final[0]) / p.estimate_cap + 1.0)
+    food = 1.0 if final[1] == 0.0 else 0.5 * ((initial[1] - final[1]) / p.estimate_cap + 1.0)
     return density, nest, food
 
 
 @numba.njit(cache=True)
-def robot_descriptors(counts: np.ndarray, p: Params) -> tuple:
+def robot_descriptors(counts: np.ndarray, movement: int, rotation: int, p: Params) -> tuple:
     """(movement, rotation, conditionality) of one robot in one trial, each in [0, 1].
 
-    ``counts`` as the tree interpreter keeps them: ``counts[0]`` condition ticks, ``counts[1 + a]`` starts
-    of action ``a`` (at most one start per tick).
+    ``movement`` and ``rotation`` are sums over the trial's ticks of ``motors.movement_of`` and
+    ``motors.rotation_of`` (each in [-ticks, ticks]), mapped by (x + ticks) / (2 ticks). ``counts`` as the
+    tree interpreter keeps them: ``counts[0]`` condition ticks, ``counts[1 + a]`` starts of action ``a``;
+    conditionality = conditions / (conditions + starts), 1 when neither happened
+    (``CBlackBoard.cpp:518-527``).
     """
     ticks = float(p.ticks)
-    movement = float(counts[1 + FORWARD] - counts[1 + REVERSE])
-    rotation = float(
-        counts[1 + ANTICLOCKWISE[0]]
-        + counts[1 + ANTICLOCKWISE[1]]
-        - counts[1 + CLOCKWISE[0]]
-        - counts[1 + CLOCKWISE[1]]
-    )
     conditions = counts[0]
     starts = 0
     for a in range(1, counts.shape[0]):
@@ -357,16 +458,16 @@ def robot_descriptors(counts: np.ndarray, p: Params) -> tuple:
 
 @numba.njit(cache=True)
 def trial_values(
-    initial: np.ndarray, final: np.ndarray, end_ground: np.ndarray, counts: np.ndarray, p: Params
+    initial: np.ndarray, final: np.ndarray, counts: np.ndarray, motion: np.ndarray, p: Params
 ) -> np.ndarray:
     """A trial's six values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in
-    id order. ``initial``/``final``: n x 3 smoothed values; ``end_ground``: n x 2 (in_nest, on_food) at the
-    end; ``counts``: n x 8 tick counts."""
+    id order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x 8 tick counts; ``motion``: n x 2
+    (movement, rotation) sums."""
     n = initial.shape[0]
     out = np.zeros(N_VALUES)
     for i in range(n):
-        o = robot_objectives(initial[i], final[i], end_ground[i, 0], end_ground[i, 1], p)
-        d = robot_descriptors(counts[i], p)
+        o = robot_objectives(initial[i], final[i], p)
+        d = robot_descriptors(counts[i], motion[i, 0], motion[i, 1], p)
         out[0] += o[0]
         out[1] += o[1]
         out[2] += o[2]

@@ -27,7 +27,7 @@ def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
     assert first.returncode == 0, first.stderr
     assert first.stdout == second.stdout
     document = json.loads(first.stdout)
-    assert list(document) == ["tree", "seed", "trials", "conditions", "fitness", "descriptors"]
+    assert list(document) == ["tree", "seed", "trials", "profile", "conditions", "fitness", "descriptors"]
     assert document["conditions"] == {}
     assert document["tree"] == "sel(seq(in_nest, stop), forward)"
     assert (document["seed"], document["trials"]) == (5, 4)
@@ -51,7 +51,7 @@ def test_engines_print_the_same_document(capsys):
         documents.append(capsys.readouterr().out)
     assert documents[0] == documents[1]
     per_trial = json.loads(documents[0])["per_trial"]
-    assert [t["trial"] for t in per_trial] == [0, 1] and [t["gap"] for t in per_trial] == [500.0, 700.0]
+    assert [t["trial"] for t in per_trial] == [0, 1] and [t["gap"] for t in per_trial] == [500.0, 500.0]
     assert len(per_trial[0]["start_poses"]) == 9 and len(per_trial[0]["end_poses"][0]) == 3
 
 
@@ -63,6 +63,7 @@ def test_engines_print_the_same_document(capsys):
         (["--tree", "stop", "--trials", "0"], "--trials"),
         (["--tree", "stop", "--seed", "-3"], "--seed"),
         (["--tree", "stop", "--engine", "fast"], "--engine"),
+        (["--tree", "stop", "--profile", "argos"], "--profile"),
         (["--tree", "stop", "--trials", "many"], "--trials"),
         ([], "--tree"),
     ],
@@ -78,3 +79,14 @@ def test_bad_input_from_the_shell():
     done = _run("--tree", "seq(stop)")
     assert done.returncode == 2 and done.stdout == "" and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_the_profile_is_chosen_and_recorded(capsys):
+    documents = {}
+    for profile in ("paper", "clean"):
+        assert evaluate_main(["--tree", "seq(forward, reverse)", "--trials", "5", "--profile", profile]) == 0
+        documents[profile] = json.loads(capsys.readouterr().out)
+    assert documents["paper"]["profile"] == "paper" and documents["clean"]["profile"] == "clean"
+    # (13.4 - 26.6 + 40) / 80 over a paper chain; (14 - 26 + 40) / 80 in clean trials.
+    assert abs(documents["paper"]["descriptors"]["movement"] - (13.4 - 26.6 + 40) / 80) < 1e-12
+    assert abs(documents["clean"]["descriptors"]["movement"] - (14 - 26 + 40) / 80) < 1e-12

@@ -1,4 +1,4 @@
-"""The configuration: defaults from model.md, bad values refused by name."""
+"""The configuration: defaults from docs/model.md, bad values refused by name."""
 
 import dataclasses
 
@@ -9,20 +9,33 @@ from swarm_sim.config import DEFAULT, Config, ConfigError
 
 def test_defaults_follow_the_model():
     c = DEFAULT
-    assert (c.arena_half, c.nest_radius, c.gaps) == (2500.0, 500.0, (500.0, 700.0))
-    assert (c.n_robots, c.robot_radius, c.start_radius) == (9, 85.0, 1000.0)
-    assert (c.wheel_separation, c.wheel_speed, c.gain_low, c.gain_high) == (140.0, 50.0, 0.9, 1.1)
-    assert (c.step_dt, c.steps_per_tick, c.ticks, c.settle_steps) == (0.125, 4, 40, 16)
-    assert c.steps == 160
-    assert (c.message_range, c.delivery_probability, c.estimate_cap) == (1000.0, 0.95, 5000.0)
-    assert (c.density_range, c.density_divisor, c.window) == (170.0, 6.0, 7)
-    assert [c.gap(k) for k in range(4)] == [500.0, 700.0, 500.0, 700.0]
+    assert c.profile == "paper"
+    assert (c.arena_half, c.nest_radius, c.gaps) == (2450.0, 500.0, (500.0, 700.0))
+    assert (c.n_robots, c.robot_radius, c.start_half, c.max_start_attempts) == (9, 85.0, 1000.0, 10)
+    assert (c.wheel_separation, c.wheel_speed) == (140.0, 50.0)
+    assert (c.gain_low, c.gain_step, c.gain_levels) == (0.9, 0.01, 20)
+    assert (c.step_dt, c.steps_per_tick, c.ticks, c.initial_step, c.chain_trials) == (0.125, 4, 40, 16, 5)
+    assert (c.trial_steps, c.chain_length) == (160, 5)
+    assert (c.message_range, c.delivery_probability, c.estimate_cap, c.occlusion) == (
+        1000.0,
+        0.95,
+        5000.0,
+        True,
+    )
+    assert (c.density_range, c.density_divisor, c.window, c.friction) == (10000.0, 6642.0, 7, 0.49)
+    # Trials come in blocks of 5 per gap (one chain each under paper), under both profiles.
+    assert [c.gap(k) for k in range(11)] == [500.0] * 5 + [700.0] * 5 + [500.0]
+    clean = Config(profile="clean")
+    assert (clean.trial_steps, clean.chain_length) == (176, 1)
+    assert [clean.gap(k) for k in (0, 4, 5, 9)] == [500.0, 500.0, 700.0, 700.0]
 
 
 def test_params_carry_every_value_with_its_type():
     p = DEFAULT.params()
     for name in p._fields:
-        assert getattr(p, name) == getattr(DEFAULT, name)
+        if name != "profile":
+            assert getattr(p, name) == getattr(DEFAULT, name)
+    assert p.profile == 0 and Config(profile="clean").params().profile == 1
     assert isinstance(p.n_robots, int) and isinstance(p.arena_half, float)
     assert isinstance(Config(arena_half=3000).params().arena_half, float)
 
@@ -40,12 +53,15 @@ def test_config_is_frozen():
         ({"n_robots": 0}, "n_robots"),
         ({"n_robots": 2.5}, "n_robots"),
         ({"ticks": True}, "ticks"),
-        ({"settle_steps": 0}, "settle_steps"),
+        ({"initial_step": 0}, "initial_step"),
+        ({"initial_step": 18}, "initial_step"),
+        ({"profile": "argos"}, "profile"),
+        ({"friction": 2.0}, "friction"),
         ({"delivery_probability": 1.5}, "delivery_probability"),
-        ({"gain_low": 1.2}, "gain_low"),
+        ({"gain_low": -1.0}, "gain_low"),
         ({"gaps": ()}, "gaps"),
         ({"gaps": (500.0, -1.0)}, "gaps"),
-        ({"start_radius": 2450.0}, "start_radius"),
+        ({"start_half": 2450.0}, "start_half"),
         ({"n_robots": 200}, "n_robots"),
         ({"wheel_speed": "fast"}, "wheel_speed"),
     ],

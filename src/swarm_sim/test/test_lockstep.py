@@ -1,36 +1,51 @@
-"""The node graph's logic without ROS: the lockstep world driven by footbot controllers reproduces the
-reference road exactly, and refuses misuse clearly."""
+"""The node graph's logic without ROS: the lockstep chain driven by footbot controllers, its timeline, and
+clear refusals of misuse."""
 
 import numpy as np
 import pytest
 
-from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
-from swarm_sim.lockstep import LockstepTrial, RobotAnswer, action_of_wheels, run_with_controllers
-from swarm_sim.reference_road import run_trial
-
-TREES = [
-    "forward",
-    "sel(seq(in_nest, stop), forward)",
-    "prob(forward_left, seq(food_left, forward), reverse)",
-    *random_trees(seed=11, count=5),
-]
-
-
-@pytest.mark.parametrize("text", TREES)
-def test_controllers_in_lockstep_reproduce_the_reference_road(text):
-    tree = parse(text)
-    for trial in (0, 1):
-        graph_like = run_with_controllers(tree, 5, trial)
-        reference = run_trial(tree, 5, trial)
-        assert graph_like.values == reference.values
-        assert np.array_equal(graph_like.end_poses, reference.end_poses)
+from swarm_sim.config import Config
+from swarm_sim.lockstep import (
+    LockstepChain,
+    RobotAnswer,
+    action_of_wheels,
+    run_chain_with_controllers,
+    run_with_controllers,
+)
 
 
-def test_on_step_sees_every_sensing_step_once():
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_trial_k_alone_is_trial_k_of_its_chain(profile):
+    config = Config(profile=profile)
+    tree = parse("sel(seq(robot_left, forward_left), seq(nest_right, forward_right), forward)")
+    chain = run_chain_with_controllers(tree, 5, 1, config.chain_length, config)
+    position = config.chain_length - 1
+    alone = run_with_controllers(tree, 5, config.chain_length + position, config)
+    assert alone.trial == chain[-1].trial == config.chain_length + position
+    assert alone.values == chain[-1].values
+    assert np.array_equal(alone.end_poses, chain[-1].end_poses)
+
+
+def test_on_step_sees_every_step_of_the_chain_once():
     steps = []
-    run_with_controllers(parse("forward"), 1, 0, on_step=lambda world: steps.append(world.step))
-    assert steps == list(range(176))
+    run_chain_with_controllers(parse("forward"), 1, 0, 2, on_step=lambda sim: steps.append(sim.step))
+    assert steps == list(range(1, 321))
+    steps.clear()
+    run_with_controllers(
+        parse("forward"), 1, 0, Config(profile="clean"), on_step=lambda s: steps.append(s.step)
+    )
+    assert steps == list(range(1, 177))
+
+
+def test_a_teleport_moves_every_robot_at_a_trials_first_step():
+    starts = []
+    records = run_chain_with_controllers(parse("stop"), 2, 0, 2)
+    for record in records:
+        starts.append(record.start_poses)
+    # A stopped swarm ends a trial where it started; the next trial starts elsewhere.
+    assert np.array_equal(records[0].end_poses, records[0].start_poses)
+    assert not np.array_equal(records[1].start_poses, records[0].end_poses)
 
 
 def test_wheels_map_to_actions_and_others_are_refused():
@@ -41,8 +56,8 @@ def test_wheels_map_to_actions_and_others_are_refused():
 
 
 def test_advance_checks_its_answers():
-    world = LockstepTrial(0, 0)
+    sim = LockstepChain(0, 0, 1)
     with pytest.raises(ValueError, match="expected 9 answers"):
-        world.advance([RobotAnswer(0, (0.0, 0.0), (0.0, 0.0, 0.0))])
-    with pytest.raises(RuntimeError, match="not finished"):
-        world.record(np.zeros((9, 8), dtype=np.int64))
+        sim.advance([RobotAnswer(0, (0.0, 0.0), (0.0, 0.0, 0.0))])
+    with pytest.raises(ValueError, match="a chain has 1 to 5 trials"):
+        LockstepChain(0, 0, 6)

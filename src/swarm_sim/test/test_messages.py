@@ -9,9 +9,11 @@ from bt_controller.draws import DROPS, stream_key, uniform
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.sensing import Readings, RobotView, sense_swarm
-from swarm_sim.trial_data import setup_trial
+from swarm_sim.trial_data import setup_chain
 
 P = DEFAULT.params()
+OPEN = Config(occlusion=False).params()
+"""No occlusion: for tests of delivery and drops alone."""
 
 
 def _buffers(n):
@@ -46,7 +48,7 @@ def test_delivery_rate_within_range_is_095_and_nothing_comes_from_beyond():
     distance = np.array([[_range(x, y, i, j) for j in range(9)] for i in range(9)])
     steps = 4000
     for step in range(steps):
-        world.sense_step(x, y, nest, food, keys, step, P, counts, senders, r, nv, fv)
+        world.sense_step(x, y, nest, food, keys, step, OPEN, counts, senders, r, nv, fv)
         for i in range(9):
             heard[i, senders[i, : counts[i]]] += 1
             np.testing.assert_array_equal(r[i, : counts[i]], distance[i, senders[i, : counts[i]]])
@@ -68,9 +70,23 @@ def test_drops_are_independent_per_ordered_pair():
     keys = _keys(9, 2)
     both_dropped = 0
     for step in range(2000):
-        world.sense_step(x, y, z, z, keys, step, P, counts, senders, r, nv, fv)
+        world.sense_step(x, y, z, z, keys, step, OPEN, counts, senders, r, nv, fv)
         both_dropped += counts[0] == 0 and counts[1] == 0
     assert both_dropped / 2000 < 0.01  # independent: 0.0025 expected; one shared draw would give 0.05
+
+
+def _blocked(x, y, i, j) -> bool:
+    """Whether a third disc of radius 85, its centre projecting strictly inside the segment i-j, lies closer
+    than its radius to it (plain geometry; the rule of ``world.occluded``)."""
+    a, b = np.array([x[i], y[i]]), np.array([x[j], y[j]])
+    for m in range(len(x)):
+        if m in (i, j):
+            continue
+        c = np.array([x[m], y[m]])
+        t = np.dot(c - a, b - a) / np.dot(b - a, b - a)
+        if 0.0 < t < 1.0 and np.linalg.norm(a + t * (b - a) - c) < 85.0:
+            return True
+    return False
 
 
 def test_sense_step_matches_a_plain_per_pair_computation():
@@ -86,7 +102,10 @@ def test_sense_step_matches_a_plain_per_pair_computation():
             expected = [
                 j
                 for j in range(n)
-                if j != i and _range(x, y, i, j) <= 1000.0 and uniform(keys[i], step * n + j) < 0.95
+                if j != i
+                and _range(x, y, i, j) <= 1000.0
+                and not _blocked(x, y, i, j)
+                and uniform(keys[i], step * n + j) < 0.95
             ]
             assert senders[i, : counts[i]].tolist() == expected
             got = slice(0, counts[i])
@@ -95,8 +114,8 @@ def test_sense_step_matches_a_plain_per_pair_computation():
 
 
 def test_ground_sensor():
-    assert world.ground(0.0, 500.0, 500.0, P) == (True, False)
-    assert world.ground(0.0, 500.001, 500.0, P) == (False, False)
+    assert world.ground(0.0, 499.999, 500.0, P) == (True, False)
+    assert world.ground(0.0, 500.0, 500.0, P) == (False, False)  # strictly inside (footbot_bt.cpp:247)
     assert world.ground(999.999, 0.0, 500.0, P) == (False, False)
     assert world.ground(600.0, 800.0, 500.0, P) == (False, True)
     assert world.ground(600.0, 800.0, 700.0, P) == (False, False)
@@ -111,7 +130,9 @@ def test_estimate_matches_brute_force_on_hand_built_readings():
     # nest: 700, 950, 900, 5170 -> 700 from message 0; food: 5400, 5250, 5400, 5070 -> all capped.
     assert got[0] == 700.0 and got[3] == 0
     assert got[1] == 5000.0 and got[4] == -1
-    assert got[2] == pytest.approx(sum((170.0 / r) ** 2 for r in ranges) / 6.0, rel=1e-15)
+    assert got[2] == pytest.approx(
+        sum(1.0 / (math.pi * (r / 10000.0) ** 2) for r in ranges) / 6642.0, rel=1e-14
+    )
     assert got[5] == 3
     inside = world.estimate(True, True, 4, ranges, nest, food, P)
     assert inside[:2] == (0.0, 0.0) and inside[3:5] == (-1, -1)
@@ -139,7 +160,7 @@ def _shortest(x, y, sources, cap, max_range):
 
 @pytest.mark.parametrize("seed", range(8))
 def test_converged_estimates_equal_shortest_hop_paths(seed):
-    config = Config(delivery_probability=1.0)
+    config = Config(delivery_probability=1.0, occlusion=False)
     p = config.params()
     rng = np.random.default_rng(seed)
     n = 9
@@ -149,12 +170,12 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
     gap = 500.0
     views = [RobotView(p) for _ in range(n)]
     ground = [world.ground(x[i], y[i], gap, p) for i in range(n)]
-    bn = np.array([world.initial_broadcast(*g, p)[0] for g in ground])
-    bf = np.array([world.initial_broadcast(*g, p)[1] for g in ground])
+    bn = np.array([world.region_value(g[0], p) for g in ground])
+    bf = np.array([world.region_value(g[1], p) for g in ground])
     keys = np.array([stream_key(seed, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
     for step in range(n + 1):
         for i, reading in enumerate(sense_swarm(x, y, h, bn, bf, keys, step, gap, p)):
-            views[i].update(reading)
+            views[i].sense(reading)
         bn = np.array([v.nest for v in views])
         bf = np.array([v.food for v in views])
     in_nest = np.array([g[0] for g in ground])
@@ -164,7 +185,9 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
     for i, v in enumerate(views):
         d = np.hypot(x - x[i], y - y[i])
         near = (d <= 1000.0) & (np.arange(n) != i)
-        assert v.density == pytest.approx(np.sum((170.0 / d[near]) ** 2) / 6.0, rel=1e-12)
+        assert v.density == pytest.approx(
+            np.sum(1.0 / (np.pi * (d[near] / 10000.0) ** 2)) / 6642.0, rel=1e-12
+        )
 
 
 def test_smoothing_is_the_mean_of_the_last_seven_samples():
@@ -183,9 +206,9 @@ def test_blackboard_sides_from_bearings():
     left = world.bearing(0.0, 0.0, heading, -300.0, 10.0)
     right = world.bearing(0.0, 0.0, heading, 300.0, 10.0)
     assert 0 < left < math.pi and -math.pi < right < 0
-    assert world.bearing(0.0, 0.0, 0.0, 100.0, 0.0) == 0.0  # dead ahead counts as left ([0, pi))
+    assert world.bearing(0.0, 0.0, 0.0, 100.0, 0.0) == 0.0  # dead ahead: a robot there counts as left
     out = np.zeros(8, np.bool_)
-    world.blackboard(False, True, left, right, math.nan, out)
+    world.blackboard(False, True, 3000.0, 3000.0, left, right, True, math.nan, P, out)
     # on_food, in_nest, food_left, food_right, nest_left, nest_right, robot_left, robot_right
     assert out.tolist() == [True, False, False, True, True, False, False, False]
 
@@ -203,17 +226,18 @@ def test_robot_view_blackboard_uses_the_estimate_sources():
         nest=np.array([100.0, 900.0]),
         food=np.array([5000.0, 4900.0]),
     )
-    view.update(readings)
+    view.sense(readings)
     assert (view.nest, view.food) == (700.0, 5000.0)
     assert view.blackboard().tolist() == [False, False, False, False, True, False, False, True]
 
 
 def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
-    s = setup_trial(2, 0)
+    s = setup_chain(2, 0)
     p = DEFAULT.params()
-    x, y, h = s.poses.T.copy()
+    x, y, h = np.zeros(9), np.zeros(9), np.zeros(9)
+    world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p)
     z = np.full(9, 5000.0)
-    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 0, s.gap, p):
+    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 2, s.gap, p):
         assert (np.diff(reading.senders) > 0).all()
         assert len(reading.senders) == len(reading.ranges) == len(reading.bearings)
-    assert world.initial_broadcast(True, False, p) == (0.0, 5000.0)
+    assert (world.region_value(True, p), world.region_value(False, p)) == (0.0, 5000.0)

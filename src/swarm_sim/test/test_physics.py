@@ -8,7 +8,7 @@ import pytest
 from bt_controller.vocabulary import ACTION_INDEX
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.trial_data import setup_trial
+from swarm_sim.trial_data import setup_chain
 
 P = DEFAULT.params()
 STEPS_PER_SECOND = round(1 / DEFAULT.step_dt)
@@ -77,14 +77,15 @@ def test_no_overlap_and_no_escape_over_thousands_of_random_steps(config):
     x_before, y_before = np.empty(p.n_robots), np.empty(p.n_robots)
     checked = 0
     for trial in range(6):
-        s = setup_trial(trial, trial, config)
-        x, y, h = (s.poses[:, k].copy() for k in range(3))
+        s = setup_chain(trial, trial % 2, config)
+        x, y, h = np.zeros(p.n_robots), np.zeros(p.n_robots), np.zeros(p.n_robots)
+        world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p)
         # Some trials drive mostly forward so that robots pile into walls and each other.
         weights = np.full(7, 1 / 7) if trial % 2 else np.array([0.0, 0.7, 0.1, 0.1, 0.0, 0.05, 0.05])
         for step in range(1500):
             if step % 4 == 0:
                 actions = rng.choice(7, size=p.n_robots, p=weights).astype(np.int64)
-            world.physics_step(x, y, h, actions, s.gains, p, x_before, y_before)
+            world.physics_step(x, y, h, actions, world.arcs(s.gains, p), p, x_before, y_before)
             _assert_valid(x, y, p)
             checked += 1
     assert checked == 9000
@@ -101,7 +102,7 @@ def test_crowd_pushed_against_a_corner_stays_valid():
     actions = np.full(9, ACTION_INDEX["forward"], dtype=np.int64)
     xb, yb = np.empty(9), np.empty(9)
     for _ in range(400):
-        world.physics_step(x, y, h, actions, gains, p, xb, yb)
+        world.physics_step(x, y, h, actions, world.arcs(gains, p), p, xb, yb)
         _assert_valid(x, y, p)
 
 
@@ -109,6 +110,22 @@ def test_head_on_pair_is_pushed_apart_symmetrically():
     p = DEFAULT.params()
     x, y, h = np.array([-86.0, 86.0]), np.array([0.0, 0.0]), np.array([0.0, math.pi])
     actions = np.full(2, ACTION_INDEX["forward"], dtype=np.int64)
-    world.physics_step(x, y, h, actions, np.ones((2, 2)), p, np.empty(2), np.empty(2))
+    world.physics_step(x, y, h, actions, world.arcs(np.ones((2, 2)), p), p, np.empty(2), np.empty(2))
     assert x[0] == pytest.approx(-x[1]) and x[1] - x[0] >= 170.0
     assert np.abs(y).max() < 1e-9
+
+
+@pytest.mark.parametrize("friction", [0.0, 0.49])
+def test_friction_drags_a_touching_robot_along(friction):
+    # Robot 0 moves 6.25 mm along x and 1 mm towards robot 1, which stood still touching it: the overlap
+    # d = hypot(6.25, 169) < 170 is corrected along the centres, and with friction robot 1 is also dragged
+    # along robot 0's slide by half of 0.49 x the overlap (the slide, about 6.3 mm, is larger).
+    p = Config(friction=friction).params()._replace(collision_slack=0.0)
+    x_before, y_before = np.array([0.0, 0.0]), np.array([0.0, 170.0])
+    x, y = np.array([6.25, 0.0]), np.array([1.0, 170.0])
+    overlap = 170.0 - math.hypot(6.25, 169.0)
+    world.resolve_collisions(x, y, x_before, y_before, p)
+    normal_only = -0.5 * overlap * 6.25 / math.hypot(6.25, 169.0)  # robot 1's x from the normal push alone
+    drag = x[1] - normal_only
+    assert drag == pytest.approx(0.5 * friction * overlap, rel=0.05, abs=1e-12)
+    assert math.hypot(x[1] - x[0], y[1] - y[0]) >= 170.0 - 1e-9

@@ -38,7 +38,8 @@ def test_estimate_equals_brute_force(case):
 
     assert (got[0], got[3]) == best(nest, in_nest)
     assert (got[1], got[4]) == best(food, on_food)
-    assert math.isclose(got[2], sum((170.0 / x) ** 2 for x in ranges) / 6.0, rel_tol=1e-12, abs_tol=0.0)
+    expected = sum(1.0 / (math.pi * (x / 10000.0) ** 2) for x in ranges) / 6642.0
+    assert math.isclose(got[2], expected, rel_tol=1e-12, abs_tol=0.0)
     assert got[5] == (min(range(n), key=lambda k: (ranges[k], k)) if n else -1)
     assert 0.0 <= got[0] <= 5000.0 and 0.0 <= got[1] <= 5000.0
 
@@ -70,7 +71,7 @@ def test_physics_keeps_robots_apart_and_inside(swarm, steps):
     xb, yb = np.empty(n), np.empty(n)
     limit = P.arena_half - P.robot_radius
     for _ in range(steps):
-        world.physics_step(x, y, h, actions.astype(np.int64), gains, P, xb, yb)
+        world.physics_step(x, y, h, actions.astype(np.int64), world.arcs(gains, P), P, xb, yb)
         assert (np.abs(x) <= limit).all() and (np.abs(y) <= limit).all()
         assert ((-math.pi <= h) & (h < math.pi)).all()
         for i in range(n):

@@ -10,7 +10,7 @@ from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
 
 # CI size; `ws/run swarm_sim bench --parity 300` runs the large comparison.
-N_TREES = 24
+N_TREES = 16
 TRIALS = 3
 
 
@@ -21,7 +21,17 @@ def _records_equal(a, b):
     )
 
 
-@pytest.mark.parametrize("config", [Config(), Config(n_robots=5, ticks=12, delivery_probability=0.7)])
+@pytest.mark.parametrize(
+    "config",
+    [
+        Config(),
+        Config(profile="clean"),
+        # Short chains of 2 trials: 3 trials take a whole chain and the first trial of the next.
+        Config(n_robots=5, ticks=12, chain_trials=2, delivery_probability=0.7),
+        Config(profile="clean", n_robots=6, ticks=10, occlusion=False, friction=0.0),
+    ],
+    ids=["paper", "clean", "paper-small", "clean-small"],
+)
 def test_roads_agree_on_random_trees(config):
     texts = random_trees(99, N_TREES)
     requests = [EvaluationRequest(t, 1000 + k, TRIALS) for k, t in enumerate(texts)]

@@ -20,7 +20,7 @@ Publishers:
 
 Services:
     load_tree (swarm_msgs/LoadTree): parse, validate and load a tree (a clear error for a bad one).
-    start_trial (swarm_msgs/StartTrial): reset for a trial (called by the simulator).
+    start_trial (swarm_msgs/StartTrial): reset for a chain of trials (called by the simulator).
 
 The node keeps the 7-sample smoothing and the blackboard from its topics and ticks its tree with the reference
 interpreter; the logic is ``bt_controller.controller``.
@@ -34,9 +34,10 @@ import numpy as np
 import rclpy
 from rclpy.node import Node
 
-from bt_controller.controller import FootbotController, Schedule
+from bt_controller.controller import FootbotController
 from bt_controller.errors import TreeError
 from bt_controller.perception import PerceptionParams, Readings, warm_up
+from bt_controller.timeline import Timeline, profile_number
 from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
@@ -105,11 +106,17 @@ class FootbotControllerNode(Node):
         self, request: StartTrial.Request, response: StartTrial.Response
     ) -> StartTrial.Response:
         try:
-            schedule = Schedule(request.settle_steps, request.steps_per_tick, request.ticks)
+            line = Timeline(
+                profile_number(request.profile),
+                request.steps_per_tick,
+                request.ticks,
+                request.initial_step,
+                request.chain_trials,
+            )
             perception = PerceptionParams(
                 request.window, request.estimate_cap, request.density_range, request.density_divisor
             )
-            self.controller.start_trial(request.tree_key, schedule, perception)
+            self.controller.start_chain(request.tree_key, line, perception, request.trials)
         except (ValueError, RuntimeError) as error:
             response.success = False
             response.message = str(error)
@@ -153,6 +160,7 @@ class FootbotControllerNode(Node):
                     TreeStatus(
                         header=ground.header,
                         robot=self.robot,
+                        step=outcome.step,
                         tick=outcome.tick.tick,
                         status=outcome.tick.status,
                         action=outcome.tick.started,

@@ -36,6 +36,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder, check_new_bag
@@ -63,11 +64,14 @@ numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time,
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
-def expected_messages(robots: int, namespace: str = "") -> dict[str, int]:
-    """How many messages each topic of a trial graph (``trial_topics``) carries in one trial."""
-    p = DEFAULT.params()
-    steps = p.settle_steps + p.ticks * p.steps_per_tick
-    per_trial = {TrialStart: 1, TreeStatus: p.ticks}
+def expected_messages(robots: int, namespace: str = "", trial: int = 0) -> dict[str, int]:
+    """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
+    every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
+    from, ``swarm_sim.lockstep.run_with_controllers``)."""
+    line = DEFAULT.timeline
+    trials = timeline.chain_of_trial(line, trial)[1] + 1
+    steps = trials * timeline.trial_steps(line)
+    per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
         for topic, msg_class in trial_topics(robots, namespace)
@@ -283,7 +287,7 @@ class TrialGraph:
                 recorder.arm()
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
-                expected = expected_messages(self.robots, self.namespace)
+                expected = expected_messages(self.robots, self.namespace, trial)
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
                     "the last messages",
@@ -369,7 +373,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
     parser.add_argument("--tree", required=True, help="the tree as text, or a file holding it")
     parser.add_argument("--seed", type=int, default=0, help="seed of the evaluation (default 0)")
-    parser.add_argument("--trial", type=int, default=0, help="index of the trial (default 0)")
+    parser.add_argument(
+        "--trial",
+        type=int,
+        default=0,
+        help="index of the trial (default 0); the earlier trials of its chain run (and are recorded) first",
+    )
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"

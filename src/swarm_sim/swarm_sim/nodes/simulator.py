@@ -53,7 +53,6 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseArray, PoseStamped
@@ -68,6 +67,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
+from bt_controller import timeline
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
@@ -88,12 +88,12 @@ from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.errors import TrialAbandonedError
-from swarm_sim.lockstep import LockstepTrial, RobotAnswer, warm_up
+from swarm_sim.lockstep import LockstepChain, RobotAnswer, warm_up
 from swarm_sim.nodes import visualisation
 from swarm_sim.result_messages import fill, trial_fields
 from swarm_sim.trial_data import TrialRecord
 
-WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_high": (0.0, 10.0)}
+WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
@@ -106,12 +106,11 @@ class TrialCancelledError(RuntimeError):
 
 @dataclass
 class _Inbox:
-    """The answers and tick statuses received for the trial under way (filled by subscription callbacks)."""
+    """The answers and tick statuses received for the step under way (filled by subscription callbacks)."""
 
     step: int = -1
     answers: dict[int, WheelCommand] | None = None
-    counts: np.ndarray | None = None
-    statuses: int = 0
+    statuses: dict[int, TreeStatus] | None = None
 
 
 class SimulatorNode(Node):
@@ -229,11 +228,8 @@ class SimulatorNode(Node):
             return
         with self._lock:
             inbox = self._inbox
-            if inbox.counts is not None:
-                inbox.counts[robot, 0] += msg.condition_ticks
-                if msg.action >= 0:
-                    inbox.counts[robot, 1 + msg.action] += 1
-                inbox.statuses += 1
+            if inbox.statuses is not None and msg.step == inbox.step:
+                inbox.statuses[robot] = msg
                 self._lock.notify_all()
 
     def _wrong_robot(self, robot: int, claimed: int) -> None:
@@ -288,17 +284,19 @@ class SimulatorNode(Node):
         return result
 
     def run_trial(self, seed: int, trial: int, goal: ServerGoalHandle | None = None) -> TrialRecord:
-        """Run trial ``trial`` of ``seed`` through the controllers; return its record. With the action's
-        ``goal``, publish the step as feedback and stop with ``TrialCancelledError`` when it is cancelled."""
-        world = LockstepTrial(seed, trial, self.config)
-        p = world.p
-        steps = world.last_step + 1
-        self._start_controllers(world, seed, trial)
+        """Run trial ``trial`` of ``seed`` through the controllers; return its record. As
+        ``swarm_sim.lockstep.run_with_controllers`` does in-process, the trial's chain is run from its first
+        trial up to ``trial``, every step published. With the action's ``goal``, publish the step as feedback
+        and stop with ``TrialCancelledError`` when it is cancelled."""
+        chain, position = timeline.chain_of_trial(self.config.timeline, trial)
+        world = LockstepChain(seed, chain, position + 1, self.config)
+        steps = world.last_step
+        self._start_controllers(world, seed)
         self._actions = ["stop"] * self.robots
         self._wait_for_subscribers()
         self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
         with self._lock:
-            self._inbox = _Inbox(step=0, answers={}, counts=np.zeros((self.robots, 8), np.int64))
+            self._inbox = _Inbox(step=world.step, answers={}, statuses={})
         self._trial_start.publish(
             TrialStart(
                 header=self._header("arena"),
@@ -309,15 +307,17 @@ class SimulatorNode(Node):
                 tree_keys=[int(k) for k in world.setup.tree_keys],
             )
         )
+        record: TrialRecord | None = None
         while not world.done:
             if goal is not None and goal.is_cancel_requested:
                 with self._lock:
                     self._inbox = _Inbox()
                 raise TrialCancelledError(f"trial {trial} of seed {seed} cancelled at step {world.step}")
-            self._publish_step(world, seed, trial)
+            self._publish_step(world, seed)
             if goal is not None:
                 goal.publish_feedback(RunTrialAction.Feedback(step=world.step, steps=steps))
             answers = self._await_answers(world.step)
+            statuses = self._await_statuses(world.step) if world.ticks_now() else None
             for i, answer in enumerate(answers):
                 if answer.action >= len(ACTIONS):
                     raise TrialAbandonedError(
@@ -325,27 +325,26 @@ class SimulatorNode(Node):
                         f"expected 0..{len(ACTIONS) - 1}"
                     )
             self._actions = [ACTIONS[a.action] for a in answers]
-            world.advance(
+            record = world.advance(
                 [
                     RobotAnswer(
                         action=a.action,
                         broadcast=(a.nest_estimate, a.food_estimate),
                         smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
+                        condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
+                        started=statuses[i].action if statuses is not None else -1,
                     )
-                    for a in answers
+                    for i, a in enumerate(answers)
                 ]
             )
-            if not world.done:
-                self.sim_time_ns += self.step_ns
-                with self._lock:
-                    self._inbox.step = world.step
-                    self._inbox.answers = {}
-        counts = self._await_statuses(self.robots * p.ticks)
-        self.sim_time_ns += self.step_ns
-        return world.record(counts)
+            self.sim_time_ns += self.step_ns
+            with self._lock:
+                self._inbox = _Inbox(step=world.step, answers={}, statuses={}) if not world.done else _Inbox()
+        assert record is not None and record.trial == trial, "the chain's last record is the trial asked for"
+        return record
 
     # --- steps
-    def _start_controllers(self, world: LockstepTrial, seed: int, trial: int) -> None:
+    def _start_controllers(self, world: LockstepChain, seed: int) -> None:
         p = world.p
         futures = []
         for i, client in enumerate(self._start_clients):
@@ -356,11 +355,14 @@ class SimulatorNode(Node):
                 )
             request = StartTrial.Request(
                 seed=seed,
-                trial=trial,
+                trial=world.setup.first_trial,
                 tree_key=int(world.setup.tree_keys[i]),
-                settle_steps=p.settle_steps,
+                profile=self.config.profile,
                 steps_per_tick=p.steps_per_tick,
                 ticks=p.ticks,
+                initial_step=p.initial_step,
+                chain_trials=p.chain_trials,
+                trials=world.trials,
                 window=p.window,
                 estimate_cap=p.estimate_cap,
                 density_range=p.density_range,
@@ -387,7 +389,7 @@ class SimulatorNode(Node):
         ):
             time.sleep(0.01)
 
-    def _publish_step(self, world: LockstepTrial, seed: int, trial: int) -> None:
+    def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
         poses = world.poses()
@@ -395,7 +397,7 @@ class SimulatorNode(Node):
             SwarmState(
                 header=Header(stamp=stamp, frame_id="arena"),
                 seed=seed,
-                trial=trial,
+                trial=world.trial,
                 step=world.step,
                 poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in poses.tolist()],
             )
@@ -446,14 +448,19 @@ class SimulatorNode(Node):
                 )
             return [answers[i] for i in range(self.robots)]
 
-    def _await_statuses(self, expected: int) -> np.ndarray:
+    def _await_statuses(self, step: int) -> list[TreeStatus]:
+        """Every robot's tree status of the tick at ``step`` (published beside its answer, on another
+        topic, so it may come after it)."""
         with self._lock:
-            if not self._lock.wait_for(lambda: self._inbox.statuses >= expected, self.answer_timeout):
-                raise TrialAbandonedError(f"received {self._inbox.statuses} of {expected} tree statuses")
-            assert self._inbox.counts is not None, "statuses are awaited only during a trial"
-            counts = self._inbox.counts.copy()
-            self._inbox = _Inbox()
-            return counts
+            statuses = self._inbox.statuses
+            assert statuses is not None, "statuses are awaited only during a step"
+            if not self._lock.wait_for(lambda: len(statuses) == self.robots, self.answer_timeout):
+                missing = sorted(set(range(self.robots)) - set(statuses))
+                raise TrialAbandonedError(
+                    f"no tree status of the tick at step {step} from "
+                    f"{', '.join(self.namespaces[i] for i in missing)} in {self.answer_timeout} s"
+                )
+            return [statuses[i] for i in range(self.robots)]
 
     def _stamp(self) -> Time:
         return Time(sec=self.sim_time_ns // 1_000_000_000, nanosec=self.sim_time_ns % 1_000_000_000)

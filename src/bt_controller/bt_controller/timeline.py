@@ -1,0 +1,161 @@
+"""The one home of the trial timeline: what a footbot does at each control step, under each profile.
+
+A *chain* is one continuous simulation; its control steps are counted ``k = 1, 2, ...`` (the authors'
+``m_count``, ``footbot_bt.cpp:491``). Under ``paper`` a chain holds ``chain_trials`` (5) trials of
+``ticks * steps_per_tick`` (160) steps each, with teleports between them; under ``clean`` a chain is one trial
+of ``initial_step + ticks * steps_per_tick`` (176) steps. At step ``k`` a robot (``docs/model.md``, "One
+control step"):
+
+1. at a trial's first step does not sense (``senses``); at ``k = 1`` only, broadcasts its region values
+   (``region_broadcast``);
+2. otherwise senses, and refreshes its smoothed values at ``k = 2`` and whenever ``k % steps_per_tick == 0``
+   (``refreshes``);
+3. ticks its tree when ``ticks_at`` (``paper``: every ``k % 4 == 0``; ``clean``: only after the trial's
+   ``initial_step``);
+4. from ``k = 2`` on, broadcasts its smoothed values and drives its wheels (``broadcasts``).
+
+Objectives take their initial values at a trial's ``initial_step`` (``is_initial``) and their final values at
+its last step (``is_final``). Every function takes ``t``, any object with the fields of ``Timeline``
+(``swarm_sim.config.Params`` has them all), and is an ``njit`` function so that the batch kernels, the
+reference road and the nodes all run this very code.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple, Protocol
+
+import numba
+
+PAPER, CLEAN = 0, 1
+PROFILES: tuple[str, ...] = ("paper", "clean")
+"""Profile names, indexed by the profile number (``PAPER``, ``CLEAN``)."""
+
+
+def profile_number(name: str) -> int:
+    """The number of profile ``name``; ValueError naming the choices for anything else."""
+    if name not in PROFILES:
+        raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {name!r}")
+    return PROFILES.index(name)
+
+
+class Timeline(NamedTuple):
+    """The timeline's parameters with the model's defaults."""
+
+    profile: int = PAPER
+    """``PAPER`` (the authors' experiment) or ``CLEAN`` (artefacts A1-A4 removed)."""
+    steps_per_tick: int = 4
+    """Control steps per behaviour-tree tick: 8 Hz steps, 2 Hz ticks (paper, section 4)."""
+    ticks: int = 40
+    """Ticks per trial: a 20 s trial (paper, section 4)."""
+    initial_step: int = 16
+    """A trial's step at which the objectives' initial values are taken (``footbot_bt.cpp:539``)."""
+    chain_trials: int = 5
+    """Trials run as one simulation under ``paper`` (the authors' ``iterations``, ``params.py``)."""
+
+
+class TimelineSettings(Protocol):
+    """What the timeline reads of its parameters: ``Timeline`` or any named tuple with its fields
+    (``swarm_sim.config.Params``)."""
+
+    @property
+    def profile(self) -> int: ...
+    @property
+    def steps_per_tick(self) -> int: ...
+    @property
+    def ticks(self) -> int: ...
+    @property
+    def initial_step(self) -> int: ...
+    @property
+    def chain_trials(self) -> int: ...
+
+
+@numba.njit(cache=True, inline="always")
+def trial_steps(t: TimelineSettings) -> int:
+    """Control steps in one trial: 160 under ``paper``, 176 under ``clean``."""
+    controlled = t.ticks * t.steps_per_tick
+    return controlled + t.initial_step if t.profile == CLEAN else controlled
+
+
+@numba.njit(cache=True, inline="always")
+def chain_length(t: TimelineSettings) -> int:
+    """Trials per chain: ``chain_trials`` under ``paper``, 1 under ``clean`` (every trial a fresh start)."""
+    return t.chain_trials if t.profile == PAPER else 1
+
+
+@numba.njit(cache=True, inline="always")
+def step_in_trial(t: TimelineSettings, k: int) -> int:
+    """The 1-based step of chain step ``k`` within its trial."""
+    return (k - 1) % trial_steps(t) + 1
+
+
+@numba.njit(cache=True, inline="always")
+def trial_in_chain(t: TimelineSettings, k: int) -> int:
+    """The 0-based position within its chain of the trial that chain step ``k`` belongs to."""
+    return (k - 1) // trial_steps(t)
+
+
+@numba.njit(cache=True, inline="always")
+def senses(t: TimelineSettings, k: int) -> bool:
+    """Whether the robot reads its sensors at step ``k``: every step but a trial's first."""
+    return step_in_trial(t, k) != 1
+
+
+@numba.njit(cache=True, inline="always")
+def region_broadcast(k: int) -> bool:
+    """Whether step ``k`` broadcasts the region values (0 inside a region, else the cap): the chain's
+    first."""
+    return k == 1
+
+
+@numba.njit(cache=True, inline="always")
+def broadcasts(k: int) -> bool:
+    """Whether step ``k`` broadcasts the smoothed values and sets the wheels: every step after the first."""
+    return k > 1
+
+
+@numba.njit(cache=True, inline="always")
+def refreshes(t: TimelineSettings, k: int) -> bool:
+    """Whether step ``k`` (a sensing step) refreshes the smoothed values."""
+    return k == 2 or k % t.steps_per_tick == 0
+
+
+@numba.njit(cache=True, inline="always")
+def ticks_at(t: TimelineSettings, k: int) -> bool:
+    """Whether the robot ticks its tree at step ``k``."""
+    if k % t.steps_per_tick != 0:
+        return False
+    return t.profile == PAPER or step_in_trial(t, k) > t.initial_step
+
+
+@numba.njit(cache=True, inline="always")
+def tick_number(t: TimelineSettings, k: int) -> int:
+    """The 0-based number within the chain of the tick at step ``k`` (a tick step): the tree's draw
+    counter."""
+    if t.profile == PAPER:
+        return k // t.steps_per_tick - 1
+    return (step_in_trial(t, k) - t.initial_step) // t.steps_per_tick - 1
+
+
+@numba.njit(cache=True, inline="always")
+def is_initial(t: TimelineSettings, k: int) -> bool:
+    """Whether step ``k`` takes a trial's initial values."""
+    return step_in_trial(t, k) == t.initial_step
+
+
+@numba.njit(cache=True, inline="always")
+def is_final(t: TimelineSettings, k: int) -> bool:
+    """Whether step ``k`` is a trial's last: final values, descriptors, counters reset."""
+    return step_in_trial(t, k) == trial_steps(t)
+
+
+def chain_of_trial(t: TimelineSettings, trial: int) -> tuple[int, int]:
+    """``(chain, position)``: the chain that trial ``trial`` of an evaluation belongs to, and its place
+    in it."""
+    length = t.chain_trials if t.profile == PAPER else 1
+    return trial // length, trial % length
+
+
+def arena_of_trial(t: TimelineSettings, trial: int, n_arenas: int) -> int:
+    """The arena configuration (gap) of trial ``trial``: trial k belongs to block k // chain_trials, and
+    blocks alternate arenas (``utilities.py:59-71`` runs one chain per gap), under both profiles."""
+    return (trial // t.chain_trials) % n_arenas
