@@ -5,6 +5,7 @@ bag."""
 
 import signal
 import subprocess
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,9 +16,11 @@ from bt_controller.tree import parse, to_text
 from evolution_manager.bags import read_bag
 from evolution_manager.graph import executable
 from evolution_manager.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
+from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 PARITY_TREES = 10
+CLEAN_PARITY_TREES = 5
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +40,24 @@ def test_trials_through_the_graph_equal_the_batch_evaluator(graph):
         assert record.values == expected.values, f"tree {index}: {text}"
         assert np.array_equal(record.end_poses, expected.end_poses), f"tree {index}: {text}"
         assert np.array_equal(record.start_poses, expected.start_poses)
+
+
+def test_under_the_clean_profile_the_graph_equals_the_batch_evaluator_too(tmp_path):
+    trees = ["seq(forward, reverse)", *random_trees(seed=2024, count=CLEAN_PARITY_TREES - 1)]
+    evaluator = BatchEvaluator(replace(DEFAULT, profile="clean"))
+    with TrialGraph(timeout=120.0, profile="clean") as clean:
+        for index, text in enumerate(trees):
+            seed, trial = 2000 + index, index % 3  # a chain is one trial under clean
+            bag = tmp_path / f"trial{index}" if index == 0 else None
+            record = clean.run(to_text(parse(text)), seed, trial, bag)
+            _, trial_records = evaluator.evaluate_trials([EvaluationRequest(text, seed, trial + 1)])[0]
+            assert record.values == trial_records[trial].values, f"tree {index}: {text}"
+            assert np.array_equal(record.end_poses, trial_records[trial].end_poses), f"tree {index}: {text}"
+    messages = list(read_bag(tmp_path / "trial0"))
+    (result,) = [m.message for m in messages if m.topic == RESULT_TOPIC]
+    assert result.profile == "clean"
+    assert result.movement == pytest.approx((14 - 26 + 40) / 80, abs=1e-12)  # docs/model.md, by hand
+    assert len([m for m in messages if m.topic == "/swarm_state"]) == 176  # 16 settling steps, then 160
 
 
 def test_a_recorded_trial_reads_back_whole_and_in_order(graph, tmp_path):
@@ -62,6 +83,7 @@ def test_a_recorded_trial_reads_back_whole_and_in_order(graph, tmp_path):
     assert (start.seed, start.trial) == (7, 3)
     result = per_topic[RESULT_TOPIC][0].message
     assert (result.density, result.nest, result.food) == record.values[:3]
+    assert result.profile == "paper"
     final_poses = [[p.x, p.y, p.theta] for p in per_topic["/swarm_state"][-1].message.poses]
     assert final_poses == record.end_poses.tolist()
 

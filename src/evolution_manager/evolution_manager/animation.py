@@ -16,6 +16,7 @@ ffmpeg when it is installed). No ROS here: bags are read with ``evolution_manage
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import subprocess
@@ -36,8 +37,6 @@ from .errors import AnimationError
 if TYPE_CHECKING:
     from swarm_sim.config import Config, Params
     from swarm_sim.lockstep import LockstepChain, RobotAnswer
-
-OBJECTIVE_NAMES = ("density", "nest", "food")
 
 
 @dataclass(frozen=True)
@@ -178,6 +177,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     if start is None:
         raise AnimationError(f"{path} holds no /trial_start: not a trial bag (record one with `trial --bag`)")
     result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
+    profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
+    config = dataclasses.replace(DEFAULT, profile=profile)
     states = {m.message.step: m.message for m in messages if m.topic == "/swarm_state"}
     if not states:
         raise AnimationError(f"{path} holds no /swarm_state messages: nothing to animate")
@@ -210,7 +211,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             ground[k, robot] = (msg.in_nest, msg.on_food)
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
-    p = DEFAULT.params()
+    p = config.params()
     ticks, actions, fitness = [], np.full((len(steps), n), -1, np.int64), np.full((len(steps), 3), np.nan)
     tick, initial = -1, None
     for k, s in enumerate(steps):
@@ -218,7 +219,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         ticks.append(tick)
         if tick >= 0:
             actions[k] = wheels[k]
-        if timeline.is_initial(DEFAULT.timeline, s):
+        if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
             fitness[k] = _fitness_so_far(initial, smoothed[k], ground[k], p)
@@ -227,10 +228,10 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         tree=result.tree if result is not None else "",
         seed=int(start.seed),
         trial=trial,
-        gap=DEFAULT.gap(trial),
-        arena_half=DEFAULT.arena_half,
-        nest_radius=DEFAULT.nest_radius,
-        robot_radius=DEFAULT.robot_radius,
+        gap=config.gap(trial),
+        arena_half=config.arena_half,
+        nest_radius=config.nest_radius,
+        robot_radius=config.robot_radius,
         steps=np.array(steps),
         poses=poses,
         actions=actions,
@@ -307,7 +308,9 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         f"tick {tick if tick >= 0 else '-'}",
         "fitness so far:",
     ]
-    for name, value in zip(OBJECTIVE_NAMES, frames.fitness[k], strict=True):
+    from swarm_sim.world import OBJECTIVES
+
+    for name, value in zip(OBJECTIVES, frames.fitness[k], strict=True):
         lines.append(f"  {name:8s} {'-' if math.isnan(value) else f'{value:.3f}'}")
     lines.append("actions:")
     y = 10
@@ -359,7 +362,6 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16) -> Path
 
 def _config_for(profile: str | None) -> Config:
     """The model configuration of ``profile`` (None: the default)."""
-    import dataclasses
 
     from swarm_sim.config import DEFAULT, Config
 

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, SCENARIOS, RunConfig
+from .config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, PROFILES, SCENARIOS, RunConfig
 from .errors import EvolutionError, UsageError
 
 if TYPE_CHECKING:  # imported where used: tqdm and the simulator load slowly, and not every command needs them
@@ -61,8 +61,14 @@ def seconds(text: str) -> float:
 
 
 def add_scenario_options(parser: argparse.ArgumentParser) -> None:
-    """``--scenarios fixed|fresh`` and ``--scenario-seed S`` (shared by evolve, manager, experiment and the
-    main job)."""
+    """``--profile paper|clean``, ``--scenarios fixed|fresh`` and ``--scenario-seed S``: the model and the
+    scenarios a run is evaluated on (shared by evolve, manager, experiment and the main job)."""
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        help=f"the model's profile (docs/model.md): {PROFILES[0]}, the authors' experiment (default), or "
+        f"{PROFILES[1]}, without its artefacts; in config.json",
+    )
     parser.add_argument(
         "--scenarios",
         choices=SCENARIOS,
@@ -132,6 +138,7 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
             args.trials or 10,
             scenarios=args.scenarios or "fixed",
             scenario_seed=args.scenario_seed,
+            profile=args.profile,
         )
     except EvolutionError as error:
         raise UsageError(str(error).replace("the scenario seed", "--scenario-seed")) from None
@@ -146,6 +153,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         "trials": args.trials,
         "scenarios": getattr(args, "scenarios", None),
         "scenario_seed": getattr(args, "scenario_seed", None),
+        "profile": getattr(args, "profile", None),
     }
     for name, value in given.items():
         if value is not None and value != getattr(saved, name):
@@ -156,11 +164,14 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
             )
 
 
-def _evaluator(workers: int) -> Evaluator:
+def _evaluator(workers: int, profile: str) -> Evaluator:
+    from dataclasses import replace
+
+    from swarm_sim.config import DEFAULT
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
-        return BatchEvaluator(threads=workers)
+        return BatchEvaluator(replace(DEFAULT, profile=profile), threads=workers)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
 
@@ -193,15 +204,16 @@ def evolve(argv: Sequence[str] | None = None) -> int:
         if args.resume:
             if not directory.started():
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-            check_resume_options(args, RunConfig.from_json(read_json_object(directory.config)))
-            run = Run.resume(args.out, _evaluator(args.workers))
+            saved = RunConfig.from_json(read_json_object(directory.config))
+            check_resume_options(args, saved)
+            run = Run.resume(args.out, _evaluator(args.workers, saved.profile))
         else:
             if directory.started():
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
-            evaluator = _evaluator(args.workers)
             assert config is not None  # made from the options when not resuming
+            evaluator = _evaluator(args.workers, config.profile)
             run = Run.start(config, args.out, evaluator)
     except (UsageError, EvolutionError) as error:
         print(f"evolve: error: {error}", file=sys.stderr)

@@ -1,12 +1,15 @@
 """The configuration of one run: algorithm, objective, budget, seed; and the per-evaluation seeds.
 
-Defaults follow ``docs/model.md`` ("Algorithms"): GP_o and QD_o produce 25,000 individuals on one objective,
+Defaults follow ``docs/algorithms.md``: GP_o and QD_o produce 25,000 individuals on one objective,
 GP_fnd 75,000 on all three at once (the budget counts individuals produced by the generations after the
 initial population, as the paper's table 5: 1000 generations of 25, 500 batches of 50).
 
 Scenarios: under ``fixed`` (the default, as the authors) every evaluation of a run uses the run's scenario
 seed, so a tree has one exact fitness and a tree seen before need not be simulated again; under ``fresh``
 evaluation ``i`` draws its own seed from the run seed and ``i`` (noisy fitness).
+
+Profile: the model's profile every evaluation of the run uses (``docs/model.md``: ``paper``, the authors'
+experiment, or ``clean``), recorded in ``config.json``.
 """
 
 from __future__ import annotations
@@ -22,7 +25,9 @@ from bt_controller.draws import (
     RUN_SCENARIO,
     derive_seed,
 )
+from bt_controller.timeline import PROFILES, Timeline
 from bt_controller.validate import integer
+from swarm_sim.world import OBJECTIVES
 
 from .errors import ConfigError
 from .parameters import GPParameters, QDParameters
@@ -30,8 +35,8 @@ from .parameters import GPParameters, QDParameters
 if TYPE_CHECKING:
     from .algorithms import AskTell
 
-OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
-"""Objective names in the order of ``EvaluationResult.fitness`` (also ``primitives.OBJECTIVES``)."""
+DEFAULT_PROFILE: str = PROFILES[Timeline().profile]
+"""The model's default profile (``bt_controller.timeline``): runs that name none use it."""
 
 ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
 """Command-line names: GP_o, GP_fnd, QD_o (MAP-Elites)."""
@@ -66,6 +71,8 @@ class RunConfig:
     scenarios: str = "fixed"
     scenario_seed: int = -1
     """-1: derived from ``seed`` (see :func:`default_scenario_seed`); replaced by the value at creation."""
+    profile: str = DEFAULT_PROFILE
+    """The model's profile (``docs/model.md``), the same for every evaluation of the run."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -85,6 +92,8 @@ class RunConfig:
         if self.scenario_seed == -1:  # frozen: set once, at creation
             object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
+        if self.profile not in PROFILES:
+            raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {self.profile!r}")
 
     @classmethod
     def make(
@@ -96,10 +105,11 @@ class RunConfig:
         trials: int = 10,
         scenarios: str = "fixed",
         scenario_seed: int | None = None,
+        profile: str | None = None,
     ) -> RunConfig:
         """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
         for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
-        ``seed`` when ``scenario_seed`` is None."""
+        ``seed`` when ``scenario_seed`` is None; the model's default profile when ``profile`` is None."""
         if algorithm not in ALGORITHMS:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
         gp = GPParameters(population=75, tournament=5) if algorithm == "gp-fnd" else GPParameters()
@@ -113,6 +123,7 @@ class RunConfig:
             gp=gp,
             scenarios=scenarios,
             scenario_seed=-1 if scenario_seed is None else scenario_seed,
+            profile=DEFAULT_PROFILE if profile is None else profile,
         )
 
     def request_seed(self, index: int) -> int:
@@ -161,6 +172,8 @@ class RunConfig:
                 # run directories written before scenarios existed drew a fresh seed per evaluation
                 scenarios=str(data.get("scenarios", "fresh")),
                 scenario_seed=int(data.get("scenario_seed", -1)),
+                # run directories written before profiles existed ran the model's default
+                profile=str(data.get("profile", DEFAULT_PROFILE)),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, ConfigError):

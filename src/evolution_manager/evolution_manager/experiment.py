@@ -58,6 +58,7 @@ def plan(
     trials: int = 10,
     scenarios: str = "fixed",
     scenario_seed: int | None = None,
+    profile: str | None = None,
 ) -> list[tuple[RunConfig, str]]:
     """Every run of the experiment with its directory relative to the experiment's folder."""
     planned = []
@@ -69,7 +70,7 @@ def plan(
             for r in range(runs):
                 run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
                 config = RunConfig.make(
-                    algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed
+                    algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed, profile
                 )
                 planned.append((config, f"runs/{config.label}/run{r:02d}"))
     return planned
@@ -104,6 +105,9 @@ def run_one(config_data: dict, root: str, progress: object = None, checkpoint_in
     A top-level function so that a process pool can call it; each process evaluates on one thread.
     ``progress`` (a queue) receives ``(root, individuals produced)`` after every batch.
     """
+    from dataclasses import replace
+
+    from swarm_sim.config import DEFAULT
     from swarm_sim.evaluation import BatchEvaluator
 
     from .outputs import write_results
@@ -113,7 +117,7 @@ def run_one(config_data: dict, root: str, progress: object = None, checkpoint_in
     directory = RunDirectory(Path(root))
     if finished(directory.root):
         return root
-    evaluator = BatchEvaluator(threads=1)
+    evaluator = BatchEvaluator(replace(DEFAULT, profile=config.profile), threads=1)
     if directory.started():
         run = Run.resume(directory.root, evaluator)
         if run.config != config:
@@ -214,8 +218,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if args.scenario_seed is not None and not 0 <= args.scenario_seed <= MAX_SEED:
             raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {args.scenario_seed}")
         scenarios = args.scenarios or "fixed"
-        planned = plan(args.runs, args.evaluations, args.seed, args.trials, scenarios, args.scenario_seed)
+        planned = plan(
+            args.runs, args.evaluations, args.seed, args.trials, scenarios, args.scenario_seed, args.profile
+        )
         document = {
+            "profile": planned[0][0].profile,
             "runs": args.runs,
             "evaluations": args.evaluations,
             "seed": args.seed,

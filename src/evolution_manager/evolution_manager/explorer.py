@@ -39,7 +39,6 @@ from .files import write_atomic
 
 STRIDE = 2
 """One animation frame per this many sensing steps."""
-OBJECTIVES = ("density", "nest", "food")
 HELD_OUT_KEYS = ("held_out", "held_out_fitness", "heldout")
 
 
@@ -122,6 +121,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     run_seed = int(config.get("seed", 0) or 0)
     objectives: dict[str, dict] = {}
     simplified: dict[str, str] = {}
+    from swarm_sim.world import OBJECTIVES
+
     for objective in OBJECTIVES:
         path = root / f"repertoire_{objective}.json"
         if not path.exists():

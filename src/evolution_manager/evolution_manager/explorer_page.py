@@ -264,7 +264,7 @@ function drawFrame(canvas, anim, frames, k) {
   });
   const status = document.getElementById("frame-status");
   status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; fitness so far: ` +
-    ["density", "nest", "food"].map((n, i) => `${n} ${f.fitness[i] === null ? "-" : f.fitness[i].toFixed(3)}`).join(", ") +
+    Object.keys(DATA.objectives).map((n, i) => `${n} ${f.fitness[i] === null ? "-" : f.fitness[i].toFixed(3)}`).join(", ") +
     "; actions: " + f.actions.map((a, i) => `${i}:${a === 255 ? "(still)" : DATA.actions[a]}`).join(" ");
   document.getElementById("frame-slider").value = k;
 }

@@ -208,11 +208,12 @@ def start_trial_graph(
     *,
     namespace: str = "",
     params_file: Path | None = None,
+    profile: str = "",
 ) -> None:
-    """Start the nodes of ``trial_graph_nodes(robots, namespace, conditions=conditions)``, each in its own
-    process, with its package's parameter file and then ``params_file`` (every node's); ``robots`` overrides
-    ``n_robots``."""
-    for spec in trial_graph_nodes(robots, namespace, conditions=conditions):
+    """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions)``,
+    each in its own process, with its package's parameter file and then ``params_file`` (every node's);
+    ``robots`` overrides ``n_robots``, ``profile`` (when given) the simulator's model profile."""
+    for spec in trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions):
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
         graph.start(
             spec.name,

@@ -14,6 +14,7 @@ from deap import base, gp
 from bt_controller.errors import TreeError
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, leaf_name, parse
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
 from .errors import TreeTextError
 from .parameters import MAX_TREE_NODES
@@ -28,12 +29,6 @@ __all__ = [
     "tree_from_text",
     "tree_to_text",
 ]
-
-OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
-"""Objective names in the order of ``EvaluationResult.fitness``."""
-
-DESCRIPTORS: tuple[str, ...] = ("movement", "rotation", "conditionality")
-"""Behaviour descriptor names in the order of ``EvaluationResult.descriptors``."""
 
 
 class TripleFitness(base.Fitness):

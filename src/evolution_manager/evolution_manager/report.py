@@ -24,6 +24,7 @@ from pathlib import Path
 from . import figures
 from .archive import Repertoire
 from .cli import EXIT_USAGE, Parser, UsageError
+from .config import DEFAULT_PROFILE
 from .errors import EvolutionError
 from .files import CsvLog, number, read_json, read_json_object, write_atomic
 from .primitives import OBJECTIVES
@@ -275,17 +276,18 @@ def _header(root: Path, runs: Sequence[FinishedRun]) -> list[str]:
     document = read_json(plan)
     assert isinstance(document, dict)
     scenarios = document.get("scenarios", "fresh")
+    profile = document.get("profile", DEFAULT_PROFILE)  # experiments planned before profiles: the default
     parts.append(
         f"{len(runs)} finished runs of {len(document['plan'])} planned: "
         f"{document['runs']} runs per algorithm and objective, a budget of {document['evaluations']} "
         f"individuals produced per objective (GP_fnd {3 * document['evaluations']} on all three), "
-        f"{document['trials']} trials per evaluation, {scenarios} scenarios, experiment seed "
-        f"{document['seed']}.\n"
+        f"{document['trials']} trials per evaluation, {scenarios} scenarios, the model's `{profile}` profile "
+        f"(docs/model.md), experiment seed {document['seed']}.\n"
     )
     command = (
         f"ws/run evolution_manager experiment --runs {document['runs']} --evaluations "
         f"{document['evaluations']} --seed {document['seed']} --trials {document['trials']} "
-        f"--scenarios {scenarios}"
+        f"--scenarios {scenarios} --profile {profile}"
     )
     if document.get("scenario_seed") is not None:
         command += f" --scenario-seed {document['scenario_seed']}"

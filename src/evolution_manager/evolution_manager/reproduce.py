@@ -1,21 +1,23 @@
 """Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
 
 A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed and trial index) and ends with
-``/trial_result`` (the tree and the six values); ``/swarm_state`` holds the exact poses of every step of the
-trial's chain up to the trial (the earlier trials of the chain are run, and recorded, first). A graph
-run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
-trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``) and
-every recorded pose and value is compared with the re-run's, bit for bit.
+``/trial_result`` (the tree, the model's profile and the six values); ``/swarm_state`` holds the exact
+poses of every step of the trial's chain up to the trial (the earlier trials of the chain are run, and
+recorded, first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
+trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``),
+under the recorded profile, and every recorded pose and value is compared with the re-run's, bit for bit.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from bt_controller.errors import TreeError
+from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse
 from evolution_manager.bags import BagError, read_bag
+from swarm_sim.config import DEFAULT
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
 from swarm_sim.trial_data import VALUE_NAMES
 
@@ -67,6 +69,9 @@ def verify_trial_bag(path: Path | str) -> Verification:
     except TreeError as error:
         raise BagError(f"the recorded tree does not parse: {error}") from None
     seed, trial = int(start.seed), int(start.trial)
+    profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
+    if profile not in PROFILES:
+        raise BagError(f"the recorded profile {profile!r} is not one of {', '.join(PROFILES)}")
 
     recorded = {state.step: [(p.x, p.y, p.theta) for p in state.poses] for state in states}
     divergences: list[str] = []
@@ -78,7 +83,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         if not divergences and recorded.get(world.step) != poses:
             divergences.append(f"the poses differ at step {world.step}")
 
-    record = run_with_controllers(tree, seed, trial, on_step=compare)
+    record = run_with_controllers(tree, seed, trial, replace(DEFAULT, profile=profile), on_step=compare)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
     for name, value in zip(VALUE_NAMES, record.values, strict=True):

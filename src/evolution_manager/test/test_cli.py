@@ -113,6 +113,37 @@ def test_nothing_saved_is_overwritten_and_resume_refuses_other_options(tmp_path)
     assert (out / "figures" / "heatmap_food.png").exists() and (out / "best" / "food.txt").exists()
 
 
+def test_the_profile_is_the_runs_recorded_and_reproduced_by_evaluate(tmp_path, capsys):
+    import csv
+    import json
+
+    from swarm_sim.cli import run as evaluate_command
+
+    out = tmp_path / "clean"
+    common = ["--algorithm", "qd", "--objective", "food", "--evaluations", "20", "--seed", "4"]
+    assert evolve([*common, "--profile", "clean", "--out", str(out), "--no-progress", "--no-figures"]) == 0
+    config = json.loads((out / "config.json").read_text())
+    assert config["profile"] == "clean"
+    assert json.loads((out / "summary.json").read_text())["config"]["profile"] == "clean"
+    with (out / "evaluations.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    names = ("density", "nest", "food", "movement", "rotation", "conditionality")
+    differs = 0
+    for row in rows[:6]:
+        stored = [float(row[k]) for k in names]
+        seed = str(config["scenario_seed"])
+        clean = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed, "--profile", "clean"]))
+        assert [*clean["fitness"].values(), *clean["descriptors"].values()] == stored  # exactly
+        paper = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed]))
+        differs += [*paper["fitness"].values(), *paper["descriptors"].values()] != stored
+    assert differs > 0  # the run did not run the default profile
+    capsys.readouterr()
+    assert evolve(["--out", str(out), "--resume", "--profile", "paper"]) == 2
+    assert "--profile paper differs from the run being resumed (clean)" in capsys.readouterr().err
+    assert evolve(["--out", str(tmp_path / "x"), *common, "--profile", "noisy"]) == 2
+    assert "invalid choice: 'noisy'" in capsys.readouterr().err
+
+
 def test_same_seed_same_files_under_another_pythonhashseed(tmp_path):
     common = [
         "--algorithm",

@@ -29,13 +29,15 @@ def result_fields(
     values: Sequence[float] | None,
     objective: str,
     error: str = "",
+    *,
+    profile: str,
 ) -> dict[str, Any]:
     """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (the six, ``VALUE_NAMES`` order) or
     None with ``error`` saying why the tree could not be evaluated; ``fitness`` is the ``objective``'s
-    value."""
+    value; ``profile`` the model's profile it was evaluated under."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    fields: dict[str, Any] = {"tree": tree, "seed": int(seed), "trials": int(trials)}
+    fields: dict[str, Any] = {"tree": tree, "seed": int(seed), "trials": int(trials), "profile": profile}
     if values is None:
         return {**fields, "ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
     named = {name: float(v) for name, v in zip(VALUE_NAMES, values, strict=True)}
@@ -43,12 +45,13 @@ def result_fields(
 
 
 def evaluation_fields(
-    tree: str, seed: int, trials: int, result: EvaluationResult, objective: str
+    tree: str, seed: int, trials: int, result: EvaluationResult, objective: str, *, profile: str
 ) -> dict[str, Any]:
     """``result_fields`` of an evaluator contract's result."""
     if result.error is not None or result.fitness is None or result.descriptors is None:
-        return result_fields(tree, seed, trials, None, objective, result.error or "")
-    return result_fields(tree, seed, trials, (*result.fitness, *result.descriptors), objective)
+        return result_fields(tree, seed, trials, None, objective, result.error or "", profile=profile)
+    values = (*result.fitness, *result.descriptors)
+    return result_fields(tree, seed, trials, values, objective, profile=profile)
 
 
 def values_of(msg: object) -> tuple[float, ...]:

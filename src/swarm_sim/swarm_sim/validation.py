@@ -20,8 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from swarm_sim.errors import ReferenceFileError
+from swarm_sim.world import VALUE_NAMES
 
-QUANTITIES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
+QUANTITIES: tuple[str, ...] = VALUE_NAMES
 """The six quantities of an evaluation, in the evaluator's order (three objectives, three descriptors)."""
 RAW_DESCRIPTOR_HALF_RANGE = 40.0
 """Movement and rotation per trial lie in [-40, 40] in the authors' code: one count per tick, 40 ticks."""

@@ -114,7 +114,11 @@ class FootbotControllerNode(Node):
                 request.chain_trials,
             )
             perception = PerceptionParams(
-                request.window, request.estimate_cap, request.density_range, request.density_divisor
+                request.window,
+                request.estimate_cap,
+                request.density_range,
+                request.density_divisor,
+                line.profile,  # robot_left with nobody heard differs between the profiles
             )
             self.controller.start_chain(request.tree_key, line, perception, request.trials)
         except (ValueError, RuntimeError) as error:

@@ -31,11 +31,12 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from evolution_manager.bags import BagError
-from evolution_manager.config import SCENARIOS
+from evolution_manager.config import DEFAULT_PROFILE, PROFILES, SCENARIOS
 from evolution_manager.graph import GraphError, executable
 from evolution_manager.nodes.trial import TrialFailedError, run_recorded_trial
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from swarm_ros.isolation import domain_environment, reserved_domain
+from swarm_sim.world import OBJECTIVES
 
 DEFAULT_EVALUATIONS = 25_000  # the paper's budget per run; about two minutes here
 DEFAULT_EVALUATORS = 2
@@ -60,6 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--scenario-seed", type=int, default=None, help="scenario seed (default: derived from --seed)"
+    )
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default=DEFAULT_PROFILE,
+        help=f"the model's profile (docs/model.md; default {DEFAULT_PROFILE})",
     )
     parser.add_argument("--out", type=Path, default=None, help="new run directory (default runs/main-<time>)")
     parser.add_argument(
@@ -127,6 +134,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "--out", str(out),
             "--evaluators", str(args.evaluators),
             "--scenarios", args.scenarios,
+            "--profile", args.profile,
         ]  # fmt: skip
         if args.scenario_seed is not None:
             command += ["--scenario-seed", str(args.scenario_seed)]
@@ -156,7 +164,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         # under fixed scenarios, trial 0 of the scenario the run scored the tree on
         trial_seed = config["scenario_seed"] if config.get("scenarios") == "fixed" else summary["seed"]
         with signals_as_interrupts():
-            record = run_recorded_trial(best["best_tree"], trial_seed, 0, bag, log_dir=out / "logs" / "trial")
+            record = run_recorded_trial(
+                best["best_tree"],
+                trial_seed,
+                0,
+                bag,
+                log_dir=out / "logs" / "trial",
+                profile=config.get("profile", DEFAULT_PROFILE),
+            )
     except (GraphError, BagError, TrialFailedError) as error:
         print(f"main: the trial through the node graph failed: {error}", file=sys.stderr)
         return 1
@@ -174,7 +189,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finished = time.monotonic()
 
-    values = dict(zip(("density", "nest", "food"), record.values[:3], strict=True))
+    values = dict(zip(OBJECTIVES, record.values[:3], strict=True))
     print(
         f"""
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).

@@ -183,7 +183,9 @@ class RunRecording:
         sent, so not recorded again) and the repertoires' progress."""
         objective = self.config.objective or OBJECTIVES[0]
         for request, result in zip(requests, results, strict=True):
-            fields = evaluation_fields(request.tree, request.seed, request.trials, result, objective)
+            fields = evaluation_fields(
+                request.tree, request.seed, request.trials, result, objective, profile=self.config.profile
+            )
             msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
         for name in OBJECTIVES:
@@ -264,15 +266,16 @@ class OwnedEvaluators:
     """The evaluator processes this manager started: one that dies is replaced at once by a new process under
     a new node name (``<name>_<life>``), and :meth:`dead` tells the service evaluator which services died."""
 
-    def __init__(self, graph: Graph, log: object) -> None:
+    def __init__(self, graph: Graph, log: object, profile: str) -> None:
         self.graph = graph
         self.log = log
+        self.profile = profile
         self.lives: dict[str, int] = {}  # process name -> its base name
         self.replaced = 0
 
     def start(self, base: str, life: int = 1) -> None:
         name = base if life == 1 else f"{base}_{life}"
-        self.graph.start(name, "swarm_sim", "evaluator", node_name=name)
+        self.graph.start(name, "swarm_sim", "evaluator", node_name=name, parameters={"profile": self.profile})
         self.lives[name] = life
 
     def dead(self) -> list[str]:
@@ -337,14 +340,15 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
         rclpy.try_shutdown()
         return cli.EXIT_USAGE
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
-    owned = OwnedEvaluators(graph, log)
-    services.watch = owned.dead
     evaluator = _Remember(services)
     try:
         try:
             run = _open_run(args, evaluator)
         except OSError as error:  # an --out that cannot be created or written
             raise cli.UsageError(f"{args.out}: {error.strerror or error}") from None
+        services.profile = run.config.profile
+        owned = OwnedEvaluators(graph, log, run.config.profile)
+        services.watch = owned.dead
         if args.evaluators:
             graph.log_dir = Path(args.out) / "logs"
             for i in range(1, args.evaluators + 1):

@@ -101,6 +101,9 @@ class ServiceEvaluator:
     ) -> None:
         self.only = None if only is None else frozenset(only)
         self.watch = watch  # returns the services whose process is known to have died since the last call
+        # the model profile every result must have been evaluated under (None: any); an evaluator of another
+        # profile is not used again
+        self.profile: str | None = None
         self.retired: set[str] = set()
         self.node = node
         self.executor = executor
@@ -267,8 +270,7 @@ class ServiceEvaluator:
             if late:
                 self._log("info", f"evaluator {chunk.worker} answered late; it gets work again")
 
-    @staticmethod
-    def _problem(response: Any, request: EvaluateBatch.Goal) -> str:  # response: untyped ROS message
+    def _problem(self, response: Any, request: EvaluateBatch.Goal) -> str:  # response: untyped ROS message
         if response is None:
             return "no response"
         if response.message:
@@ -279,6 +281,8 @@ class ServiceEvaluator:
         for msg, seed in zip(results, request.seeds, strict=True):
             if msg.seed != seed or msg.trials != request.trials:
                 return f"a result for seed {msg.seed} and {msg.trials} trials where {seed} was sent"
+            if self.profile is not None and msg.profile != self.profile:
+                return f"evaluated under the model profile {msg.profile!r}, the run's is {self.profile!r}"
         return ""
 
     def _forget(self, chunk: Chunk) -> None:

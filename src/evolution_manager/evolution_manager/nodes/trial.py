@@ -38,6 +38,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from bt_controller import timeline
 from bt_controller.errors import TreeError
+from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse, to_text
 from evolution_manager.bags import BagError, BagRecorder, check_new_bag
 from evolution_manager.errors import TrialFailedError
@@ -52,7 +53,7 @@ from swarm_ros.isolation import reserved_domain
 from swarm_ros.names import robot_namespaces
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.trial_data import TrialRecord
 
@@ -64,11 +65,13 @@ numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time,
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
-def expected_messages(robots: int, namespace: str = "", trial: int = 0) -> dict[str, int]:
+def expected_messages(
+    robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT
+) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
-    from, ``swarm_sim.lockstep.run_with_controllers``)."""
-    line = DEFAULT.timeline
+    from, ``swarm_sim.lockstep.run_with_controllers``) under ``config``'s timeline."""
+    line = config.timeline
     trials = timeline.chain_of_trial(line, trial)[1] + 1
     steps = trials * timeline.trial_steps(line)
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
@@ -199,7 +202,8 @@ class TrialGraph:
     ``namespace``: the graph's namespace (e.g. ``/swarm_a``); ``params_file``: a ROS parameter file for every
     node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
     ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
-    ``robots=N`` among them sets the number of controllers."""
+    ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
+    (``docs/model.md``)."""
 
     def __init__(
         self,
@@ -211,9 +215,10 @@ class TrialGraph:
         params_file: Path | None = None,
         log_dir: Path | None = None,
         conditions: Sequence[str] = (),
+        profile: str = DEFAULT.profile,
     ) -> None:
         self.conditions = list(conditions)
-        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots))
+        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots, profile=profile))
         self.robots = self.config.n_robots
         self.timeout = timeout
         self.domain = domain
@@ -241,6 +246,7 @@ class TrialGraph:
                 self.conditions,
                 namespace=self.namespace,
                 params_file=self.params_file,
+                profile=self.config.profile,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -287,13 +293,15 @@ class TrialGraph:
                 recorder.arm()
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
-                expected = expected_messages(self.robots, self.namespace, trial)
+                expected = expected_messages(self.robots, self.namespace, trial, self.config)
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
                     "the last messages",
                     10.0,
                 )
-                write_result(bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace)
+                write_result(
+                    bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
+                )
             return record
         finally:
             runner.executor.remove_node(node)
@@ -312,6 +320,7 @@ def run_recorded_trial(
     namespace: str = "",
     params_file: Path | None = None,
     log_dir: Path | None = None,
+    profile: str = DEFAULT.profile,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
     ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
@@ -322,15 +331,22 @@ def run_recorded_trial(
         namespace=namespace,
         params_file=params_file,
         log_dir=log_dir,
+        profile=profile,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
 
 def write_result(
-    bag: BagRecorder, tree_text: str, seed: int, record: TrialRecord, stamp_ns: int, namespace: str = ""
+    bag: BagRecorder,
+    tree_text: str,
+    seed: int,
+    record: TrialRecord,
+    stamp_ns: int,
+    namespace: str = "",
+    profile: str = DEFAULT.profile,
 ) -> None:
-    """Close the trial's bag with its result (tree, seed and the six values), stamped ``stamp_ns``."""
-    fields = result_fields(tree_text, seed, 1, record.values, "food")
+    """Close the trial's bag with its result (tree, seed, profile, six values), stamped ``stamp_ns``."""
+    fields = result_fields(tree_text, seed, 1, record.values, "food", profile=profile)
     bag.write(namespace + RESULT_TOPIC, bag.message("swarm_msgs/msg/EvaluationResult", **fields), stamp_ns)
 
 
@@ -379,6 +395,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=0,
         help="index of the trial (default 0); the earlier trials of its chain run (and are recorded) first",
     )
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default=DEFAULT.profile,
+        help=f"the model's profile (docs/model.md; default {DEFAULT.profile})",
+    )
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
@@ -426,6 +448,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 namespace=namespace,
                 params_file=args.params_file,
                 log_dir=logs,
+                profile=args.profile,
             )
     except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
@@ -433,6 +456,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as error:
         print("trial: interrupted", file=sys.stderr)
         return exit_status(error)
-    print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record]))
+    print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record], args.profile))
     print(f"trial: recorded to {args.bag}", file=sys.stderr)
     return 0

@@ -74,6 +74,7 @@ class EvaluatorNode(Node):
             ).value
         )
         self.evaluator = BatchEvaluator(config)
+        self.profile = config.profile
         self._busy = threading.Lock()  # one batch at a time: the evaluator uses one core
         group = MutuallyExclusiveCallbackGroup()
         self.create_service(EvaluateBatch, "~/evaluate", self._on_evaluate, callback_group=group)
@@ -104,7 +105,9 @@ class EvaluatorNode(Node):
                     )
                 ]
                 for request_, result in zip(part, self.evaluator.evaluate(part), strict=True):
-                    fields = evaluation_fields(request_.tree, request_.seed, trials, result, objective)
+                    fields = evaluation_fields(
+                        request_.tree, request_.seed, trials, result, objective, profile=self.profile
+                    )
                     results.append(EvaluationResult(**fields))
                 if goal is not None:
                     goal.publish_feedback(EvaluateBatchAction.Feedback(done=len(results), total=len(trees)))
