@@ -1,10 +1,12 @@
 """adapt --graph: every candidate loaded into the controller nodes and run by the simulator node in the
-changed world, recorded; it chooses the same tree with the same fitness as the batch road."""
+changed world, recorded, under the repertoire's model profile (here ``clean``); it chooses the same tree with
+the same fitness as the batch road."""
 
 import json
 
 from evolution_manager.adapt import adapt
 from evolution_manager.bags import read_bag
+from evolution_manager.config import RunConfig
 from evolution_manager.nodes.trial import RESULT_TOPIC
 
 ITEMS = [
@@ -19,6 +21,8 @@ def test_graph_and_batch_roads_choose_the_same_tree(tmp_path):
     run.mkdir()
     items = [{"evaluation": k, **item} for k, item in enumerate(ITEMS)]
     (run / "repertoire_food.json").write_text(json.dumps({"items": items}))
+    config = RunConfig.make("qd", "food", 50, 0, profile="clean")
+    (run / "config.json").write_text(json.dumps(config.to_json()))
     args = ["--repertoire", str(run), "--objective", "food", "--budget", "2", "--trials", "1", "--seed", "5"]
     args += ["--condition", "robots=5", "--condition", "dead-robots=2", "--condition", "message-loss=0.4"]
     args += ["--no-stop"]
@@ -27,6 +31,7 @@ def test_graph_and_batch_roads_choose_the_same_tree(tmp_path):
     batch = json.loads((tmp_path / "batch" / "adaptation.json").read_text())
     graph = json.loads((tmp_path / "graph" / "adaptation.json").read_text())
     assert graph["road"] == "graph" and batch["road"] == "batch"
+    assert graph["profile"] == batch["profile"] == "clean"
     assert (graph["tree"], graph["fitness"]) == (batch["tree"], batch["fitness"])
     assert graph["tried"] == batch["tried"]
     assert len(graph["tried"]) == 2
@@ -37,3 +42,4 @@ def test_graph_and_batch_roads_choose_the_same_tree(tmp_path):
         assert len(results) == 1
         assert results[0].message.tree == tried["tree"]
         assert results[0].message.food == tried["fitness"]  # one trial: the evaluation is that trial
+        assert results[0].message.profile == "clean"

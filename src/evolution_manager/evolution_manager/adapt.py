@@ -22,6 +22,7 @@ import argparse
 import math
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from .adaptation import (
@@ -32,6 +33,7 @@ from .adaptation import (
     ITEParameters,
     Tried,
     load_candidates,
+    repertoire_profile,
     run_picker,
 )
 from .cli import EXIT_USAGE, Parser, positive_int, seed_int
@@ -102,6 +104,7 @@ def adaptation_document(
     repertoire: Path,
     objective: str,
     conditions: dict[str, object],
+    profile: str,
     seed: int,
     trials: int,
     road: str,
@@ -116,6 +119,7 @@ def adaptation_document(
         "bin": list(best.bin),
         "objective": objective,
         "conditions": conditions,
+        "profile": profile,
         "seed": seed,
         "trials_per_evaluation": trials,
         "road": road,
@@ -156,11 +160,13 @@ def adaptation_figure(document: dict, path: Path) -> Path:
 def adapt(argv: Sequence[str] | None = None) -> int:
     """Run ``adapt``; return the exit status."""
     from swarm_sim.conditions import ConditionError, apply_conditions
+    from swarm_sim.config import DEFAULT
 
     try:
         args = build_parser().parse_args(argv)
+        profile = repertoire_profile(args.repertoire)
         try:
-            config, conditions = apply_conditions(args.condition)
+            config, conditions = apply_conditions(args.condition, replace(DEFAULT, profile=profile))
         except ConditionError as error:
             raise UsageError(f"--condition: {error}") from None
         stop = None if args.no_stop else args.stop_fraction
@@ -195,7 +201,8 @@ def adapt(argv: Sequence[str] | None = None) -> int:
     if args.graph:
         from .nodes.graph_evaluator import graph_evaluation
 
-        with graph_evaluation(args.condition, args.seed, args.trials, args.out / "bags") as evaluate:
+        bags = args.out / "bags"
+        with graph_evaluation(args.condition, args.seed, args.trials, bags, profile=profile) as evaluate:
             run_picker(search, evaluate, args.objective, show)
     else:
         from swarm_sim.evaluation import BatchEvaluator
@@ -208,6 +215,7 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         repertoire=args.repertoire,
         objective=args.objective,
         conditions=conditions,
+        profile=profile,
         seed=args.seed,
         trials=args.trials,
         road="graph" if args.graph else "batch",

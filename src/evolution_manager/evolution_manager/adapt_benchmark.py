@@ -32,6 +32,7 @@ import math
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +48,7 @@ from .adaptation import (
     best_so_far,
     load_candidates,
     reevolve,
+    repertoire_profile,
     run_picker,
 )
 from .cli import EXIT_USAGE, Parser, positive_int
@@ -65,7 +67,16 @@ LABELS = {
 TARGET = 0.9
 """The goal: reach this fraction of the ceiling."""
 RUN_HEADER = ["condition", "method", "repertoire", "seed", "trial", "tree", "fitness", "best_so_far"]
-CEILING_HEADER = ["condition", "seed", "algorithm", "evaluations", "simulated", "best_fitness", "tree"]
+CEILING_HEADER = [
+    "condition",
+    "seed",
+    "algorithm",
+    "evaluations",
+    "simulated",
+    "best_fitness",
+    "tree",
+    "profile",
+]
 _PURPOSE_RANDOM = 71
 _PURPOSE_SCRATCH = 72
 
@@ -99,7 +110,8 @@ def _csv_text(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     return buffer.getvalue()
 
 
-def _read_ceilings(path: Path) -> dict[tuple[str, int, str], list[str]]:
+def _read_ceilings(path: Path, profile: str) -> dict[tuple[str, int, str], list[str]]:
+    """The ceilings already found (under the model's ``profile``: a file of another refused)."""
     if not path.is_file():
         return {}
     with path.open(newline="") as handle:
@@ -107,6 +119,12 @@ def _read_ceilings(path: Path) -> dict[tuple[str, int, str], list[str]]:
     if not rows or rows[0] != CEILING_HEADER:
         raise UsageError(
             f"{path} is not a ceilings file of this benchmark: remove it or choose another --out"
+        )
+    other = {r[-1] for r in rows[1:]} - {profile}
+    if other:
+        raise UsageError(
+            f"{path} holds ceilings of the model profile {sorted(other)[0]}, the repertoires' is {profile}: "
+            "remove it or choose another --out"
         )
     return {(r[0], int(r[1]), r[2]): r for r in rows[1:]}
 
@@ -122,18 +140,29 @@ def trials_to_target(curve: Sequence[float], bar: float) -> float:
 def benchmark(args: argparse.Namespace) -> dict:
     """Run every method; write the files; return the summary."""
     from swarm_sim.conditions import ConditionError, apply_conditions
+    from swarm_sim.config import DEFAULT
     from swarm_sim.evaluation import BatchEvaluator
 
+    profiles = {str(path): repertoire_profile(path) for path in args.repertoires}
+    profile = profiles[str(args.repertoires[0])]
+    if len(set(profiles.values())) > 1:
+        raise UsageError(
+            "the repertoires were evolved under different model profiles "
+            f"({', '.join(f'{p}: {r}' for r, p in profiles.items())}): give repertoires of one profile"
+        )
+    args.profile = profile
     worlds = {}
     for text in args.condition_set:
         try:
-            worlds[text] = apply_conditions([t for t in text.split(",") if t])
+            worlds[text] = apply_conditions(
+                [t for t in text.split(",") if t], replace(DEFAULT, profile=profile)
+            )
         except ConditionError as error:
             raise UsageError(f"--condition-set {text}: {error}") from None
     repertoires = {str(path): load_candidates(path, args.objective) for path in args.repertoires}
     args.out.mkdir(parents=True, exist_ok=True)
     ceilings_path = args.out / "ceilings.csv"
-    ceilings = _read_ceilings(ceilings_path)
+    ceilings = _read_ceilings(ceilings_path, profile)
     k = OBJECTIVES.index(args.objective)
     seeds = range(1, args.seeds + 1)
     rows: list[list[object]] = []
@@ -179,7 +208,7 @@ def benchmark(args: argparse.Namespace) -> dict:
                         str(len(fitness)),
                         str(run_eval.simulated),
                     ]
-                    ceilings[key] += [f"{fitness[best]:.6f}", trees[best]]
+                    ceilings[key] += [f"{fitness[best]:.6f}", trees[best], profile]
                     write_atomic(ceilings_path, _csv_text(CEILING_HEADER, list(ceilings.values())))
                 best_ceiling = max(best_ceiling, float(ceilings[key][5]))
             ceiling_of[(condition, seed)] = best_ceiling
@@ -243,6 +272,7 @@ def summarise(
     there, and the best at the budget as a fraction of the ceiling."""
     out: dict[str, object] = {
         "objective": args.objective,
+        "profile": args.profile,
         "budget": args.budget,
         "ceiling_evaluations": args.ceiling,
     }
@@ -354,7 +384,8 @@ def report_text(summary: dict, args: argparse.Namespace) -> str:
     lines = [
         "# Adaptation: Intelligent Trial and Error against its baselines",
         "",
-        f"Objective {summary['objective']}; budget {summary['budget']} trials (one trial = one evaluation of "
+        f"Model profile `{summary['profile']}` (the repertoires'); objective {summary['objective']}; "
+        f"budget {summary['budget']} trials (one trial = one evaluation of "
         f"{args.trials} simulated trials in the changed world, every evaluation of a seed on the same "
         f"scenario); {len(args.repertoires)} repertoires x {args.seeds} seeds per condition. The ceiling: "
         f"the best fitness found by MAP-Elites or GP_o from scratch with {summary['ceiling_evaluations']} "

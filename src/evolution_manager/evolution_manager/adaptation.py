@@ -35,7 +35,7 @@ from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 from .algorithms import Outcome, as_outcome
 from .config import OBJECTIVES, RunConfig
 from .errors import AskTellError, ConfigError, EvolutionError
-from .files import read_json
+from .files import read_json, read_json_object
 
 
 class AdaptationError(EvolutionError, ValueError):
@@ -80,6 +80,15 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
     if not best:
         raise AdaptationError(f"the repertoire {path} is empty: nothing to adapt from")
     return [best[index] for index in sorted(best)]
+
+
+def repertoire_profile(run_dir: Path) -> str:
+    """The model profile the repertoire in ``run_dir`` was evolved under (its ``config.json``): adaptation
+    runs the changed world on the same model."""
+    try:
+        return RunConfig.from_json(read_json_object(Path(run_dir) / "config.json")).profile
+    except EvolutionError as error:
+        raise AdaptationError(f"{run_dir} is not a run directory: {error}") from None
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from evolution_manager.errors import GraphError
 from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
+from swarm_sim.config import DEFAULT
 
 
 def executable(package: str, name: str) -> Path:
@@ -168,7 +169,7 @@ class NodeSpec:
 
 
 def trial_graph_nodes(
-    robots: int = 9,
+    robots: int = DEFAULT.n_robots,
     namespace: str = "",
     tree: str = "",
     profile: str = "",
@@ -203,7 +204,7 @@ def trial_graph_nodes(
 
 def start_trial_graph(
     graph: Graph,
-    robots: int = 9,
+    robots: int = DEFAULT.n_robots,
     conditions: Sequence[str] = (),
     *,
     namespace: str = "",

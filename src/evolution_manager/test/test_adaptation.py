@@ -4,6 +4,7 @@ bad input in one line."""
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -19,9 +20,11 @@ from evolution_manager.adaptation import (
     load_candidates,
     reevolve,
 )
+from evolution_manager.config import RunConfig
 from evolution_manager.errors import AskTellError
 from evolution_manager.primitives import ACTIONS
 from swarm_sim.conditions import apply_conditions
+from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator
 
 
@@ -126,10 +129,13 @@ def test_ask_and_tell_out_of_order_and_bad_options_are_refused():
         ITEParameters(stop_fraction=1.5)
 
 
-def _repertoire_file(directory, items):
+def _repertoire_file(directory, items, profile="paper"):
+    """A run directory holding only a food repertoire of ``items`` and the configuration of its run."""
     directory.mkdir(parents=True, exist_ok=True)
     document = {"objective": "food", "items": items}
     (directory / "repertoire_food.json").write_text(json.dumps(document))
+    config = RunConfig.make("qd", "food", 50, 0, profile=profile)
+    (directory / "config.json").write_text(json.dumps(config.to_json()))
     return directory
 
 
@@ -171,8 +177,11 @@ def test_load_candidates_keeps_each_bins_best_and_refuses_bad_files(tmp_path):
         load_candidates(tmp_path / "bad", "food")
 
 
-def test_real_adaptation_with_the_batch_evaluator_stays_in_budget_and_records_everything(tmp_path, capsys):
-    run = _repertoire_file(tmp_path / "run", SMALL)
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_real_adaptation_with_the_batch_evaluator_stays_in_budget_and_records_everything(
+    tmp_path, capsys, profile
+):
+    run = _repertoire_file(tmp_path / "run", SMALL, profile)
     args = ["--repertoire", str(run), "--objective", "food", "--condition", "dead-robots=4"]
     args += ["--condition", "message-loss=0.5", "--budget", "2", "--trials", "2", "--seed", "3", "--no-stop"]
     assert adapt([*args, "--out", str(tmp_path / "a")]) == 0
@@ -181,12 +190,13 @@ def test_real_adaptation_with_the_batch_evaluator_stays_in_budget_and_records_ev
     second = json.loads((tmp_path / "b" / "adaptation.json").read_text())
     assert first == second
     assert first["conditions"] == {"dead-robots": 4, "message-loss": 0.5} and first["seed"] == 3
+    assert first["profile"] == profile  # the repertoire's, from its config.json
     assert [t["tree"] for t in first["tried"]] == ["reverse", "sel(on_food, forward_left)"]
     assert first["fitness"] == max(t["fitness"] for t in first["tried"])
     assert first["tree"] in {item["tree"] for item in SMALL}
     assert (tmp_path / "a" / "adaptation.png").stat().st_size > 1000
     # Each trial is one evaluation in the changed world, which the evaluate command reproduces.
-    config, _ = apply_conditions(["dead-robots=4", "message-loss=0.5"])
+    config, _ = apply_conditions(["dead-robots=4", "message-loss=0.5"], replace(DEFAULT, profile=profile))
     evaluation = ConditionEvaluation(BatchEvaluator(config), 3, 2)
     assert [o.fitness[2] for o in evaluation(["reverse", "sel(on_food, forward_left)"])] == [
         t["fitness"] for t in first["tried"]

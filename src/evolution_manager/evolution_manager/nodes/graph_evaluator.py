@@ -10,6 +10,7 @@ from pathlib import Path
 
 from evolution_manager.adaptation import ConditionEvaluation
 from evolution_manager.nodes.trial import TrialGraph
+from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
 from swarm_sim.trial_data import combine
 
@@ -39,11 +40,16 @@ class GraphEvaluator:
 
 @contextlib.contextmanager
 def graph_evaluation(
-    conditions: Sequence[str], seed: int, trials: int, bags: Path | None, timeout: float = 120.0
+    conditions: Sequence[str],
+    seed: int,
+    trials: int,
+    bags: Path | None,
+    timeout: float = 120.0,
+    profile: str = DEFAULT.profile,
 ) -> Iterator[ConditionEvaluation]:
-    """A node graph in the changed world (``conditions``), started for the block, as a
-    ``ConditionEvaluation`` of scenario ``seed``."""
-    with TrialGraph(conditions=conditions, timeout=timeout) as graph:
+    """A node graph of the model's ``profile`` in the changed world (``conditions``), started for the block,
+    as a ``ConditionEvaluation`` of scenario ``seed``."""
+    with TrialGraph(conditions=conditions, timeout=timeout, profile=profile) as graph:
         if bags is not None:
             bags.mkdir(parents=True, exist_ok=True)
         yield ConditionEvaluation(GraphEvaluator(graph, bags), seed, trials)

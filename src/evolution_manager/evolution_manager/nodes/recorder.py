@@ -41,6 +41,7 @@ from swarm_msgs.msg import (
 )
 from swarm_ros.names import robot_namespaces
 from swarm_ros.qos import RECORDING, RECORDING_LATCHED
+from swarm_sim.config import DEFAULT
 
 LATCHED_TOPICS = ("trial_start", "markers")
 """Topics the simulator publishes transient-local (their last message waits for late joiners)."""
@@ -149,7 +150,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``record``: record a trial graph's topics until SIGINT or SIGTERM."""
     parser = argparse.ArgumentParser(prog="record", description=__doc__.split("\n\n")[1])
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to write")
-    parser.add_argument("--robots", type=int, default=9, help="footbots in the graph (default 9)")
+    parser.add_argument(
+        "--robots",
+        type=int,
+        default=DEFAULT.n_robots,
+        help=f"footbots in the graph (default {DEFAULT.n_robots})",
+    )
     parser.add_argument(
         "--namespace", default="", help="the graph's namespace, e.g. /swarm_a (default: the root)"
     )

@@ -208,7 +208,7 @@ class TrialGraph:
     def __init__(
         self,
         *,
-        robots: int = 9,
+        robots: int = DEFAULT.n_robots,
         timeout: float = 60.0,
         domain: int | None = None,
         namespace: str = "",
@@ -314,7 +314,7 @@ def run_recorded_trial(
     trial: int,
     bag_path: Path,
     *,
-    robots: int = 9,
+    robots: int = DEFAULT.n_robots,
     timeout: float = 60.0,
     domain: int | None = None,
     namespace: str = "",
