@@ -44,11 +44,11 @@ def graph():
 # --- visualisation ------------------------------------------------------------------------------------------
 def test_a_trial_bag_shows_the_arena_and_labelled_robots_in_si_units(graph, tmp_path):
     bag = tmp_path / "trial"
-    graph.run(TREE, 7, 1, bag)
+    graph.run(TREE, 7, 5, bag)  # trial 5: the first of the second chain, in the second arena configuration
     per_topic = {}
     for message in read_bag(bag):
         per_topic.setdefault(message.topic, []).append(message)
-    assert {t: len(m) for t, m in per_topic.items()} == {**expected_messages(9), RESULT_TOPIC: 1}
+    assert {t: len(m) for t, m in per_topic.items()} == {**expected_messages(9, trial=5), RESULT_TOPIC: 1}
 
     (markers,) = per_topic["/markers"]
     by_ns = {m.ns: m for m in markers.message.markers}
@@ -56,7 +56,7 @@ def test_a_trial_bag_shows_the_arena_and_labelled_robots_in_si_units(graph, tmp_
     assert all(m.header.frame_id == "arena" for m in markers.message.markers)
     assert max(abs(p.x) for p in by_ns["walls"].points) == DEFAULT.arena_half / 1000
     assert by_ns["nest"].scale.x == 2 * DEFAULT.nest_radius / 1000
-    gap = DEFAULT.gap(1)  # trial 1: the second arena configuration
+    gap = DEFAULT.gap(5)
     inner = min((p.x**2 + p.y**2) ** 0.5 for p in by_ns["food"].points)
     assert inner == pytest.approx((DEFAULT.nest_radius + gap) / 1000)
 
@@ -110,7 +110,8 @@ def test_run_trial_reports_steps_and_a_cancel_leaves_the_graph_ready(graph):
     runner.spin_until(result.done, "the cancelled goal's result")
     assert result.result().status == 5  # action_msgs/GoalStatus STATUS_CANCELED
     assert "cancelled at step" in result.result().result.message
-    assert runner.feedback == list(range(len(runner.feedback)))  # every step, in order, none after the cancel
+    # every step of the chain (counted from 1), in order, none after the cancel
+    assert runner.feedback == list(range(1, len(runner.feedback) + 1))
     assert len(runner.feedback) < 176
 
     record = graph.run(TREE, 6, 2)  # the next trial runs whole and right
@@ -193,7 +194,7 @@ def test_two_graphs_run_side_by_side_in_one_domain_under_two_namespaces(tmp_path
     for namespace, text in trees.items():
         assert records[namespace].values == batch_trial(text, 11, 1).values
         topics = {m.topic for m in read_bag(tmp_path / namespace.strip("/"))}
-        assert topics == set(expected_messages(9, namespace)) | {namespace + RESULT_TOPIC}
+        assert topics == set(expected_messages(9, namespace, trial=1)) | {namespace + RESULT_TOPIC}
 
 
 def test_a_controller_whose_robot_parameter_contradicts_its_namespace_stops_with_a_clear_error():
@@ -223,9 +224,9 @@ def test_a_params_file_changes_the_world_and_the_result(tmp_path):
     params.write_text("/**:\n  ros__parameters:\n    wheel_speed: 80.0\n    gaps: [400.0, 900.0]\n")
     faster = Config(wheel_speed=80.0, gaps=(400.0, 900.0))
     with TrialGraph(params_file=params, timeout=120.0, log_dir=tmp_path / "logs") as graph:
-        record = graph.run(TREE, 9, 1, tmp_path / "bag")
-    assert record.values == batch_trial(TREE, 9, 1, faster).values
-    assert record.values != batch_trial(TREE, 9, 1).values
+        record = graph.run(TREE, 9, 5, tmp_path / "bag")  # trial 5: the second arena configuration
+    assert record.values == batch_trial(TREE, 9, 5, faster).values
+    assert record.values != batch_trial(TREE, 9, 5).values
     assert record.gap == 900.0
     wheels = [m.message for m in read_bag(tmp_path / "bag") if m.topic == "/footbot_0/wheels"]
     assert {abs(w.left) for w in wheels} <= {0.0, 0.08}

@@ -294,10 +294,10 @@ class TrialGraph:
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
                 expected = expected_messages(self.robots, self.namespace, trial, self.config)
+                # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
+                # trials are recorded too): wait as long as for any step of the graph
                 runner.spin_until(
-                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
-                    "the last messages",
-                    10.0,
+                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()), "the last messages"
                 )
                 write_result(
                     bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
