@@ -195,7 +195,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).
 
 Run directory      {out}/
-  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.4f}, held-out {best["heldout_qd_score"]})
+  summary          {out}/summary.json  (best fitness {best["best_fitness"]:.4f}, coverage {best["coverage"]:.4f}, QD score {best["qd_score"]:.4f}, held-out QD score {best["heldout_qd_score"]:.4f})
   repertoire       {out}/repertoire_food.json  (and one per objective: every tree was scored on all three)
   progress         {out}/progress.csv
   figures          {out}/figures/
