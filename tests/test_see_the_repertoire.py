@@ -14,24 +14,30 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from bt_controller import timeline
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
 from evolution_manager.animation import frames_from_bag, frames_from_tree
 from evolution_manager.bags import read_bag
 from evolution_manager.graph import executable
 from evolution_manager.nodes.trial import TrialGraph
+from swarm_sim.config import DEFAULT
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, in_nest, stop))"
 SEED, TRIAL = 13, 1
+STEPS = timeline.trial_steps(DEFAULT.timeline)
+"""Control steps of one trial (160 under the paper profile)."""
 
 
 def test_animation_frames_are_the_poses_the_graph_recorded(tmp_path):
     bag = tmp_path / "trial.bag"
     with TrialGraph(timeout=240) as graph:
         graph.run(TREE, SEED, TRIAL, bag)
-    recorded = {m.message.step: m.message for m in read_bag(bag) if m.topic == "/swarm_state"}
+    states = [m.message for m in read_bag(bag) if m.topic == "/swarm_state"]
+    recorded = {state.step: state for state in states if state.trial == TRIAL}
+    assert len(states) == (TRIAL + 1) * len(recorded)  # the chain's earlier trial is in the bag, not drawn
     frames = frames_from_bag(bag)
-    assert len(frames.steps) == len(recorded) == 176  # one frame per sensing step
+    assert len(frames.steps) == len(recorded) == STEPS  # one frame per step of trial TRIAL
     for k, step in enumerate(frames.steps):
         poses = [[p.x, p.y, p.theta] for p in recorded[int(step)].poses]
         assert frames.poses[k].tolist() == poses
@@ -52,7 +58,7 @@ def test_animation_frames_are_the_poses_the_graph_recorded(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     with Image.open(gif) as image:
-        assert image.n_frames == 176
+        assert image.n_frames == STEPS
 
 
 class _Elements(HTMLParser):
@@ -155,7 +161,7 @@ def test_explorer_opens_the_bin_of_the_fragment(small_run):
     assert best["simplified"] in drawn and best["tree"] in drawn
     assert dom.find("svg", class_="tree-drawing")
     (canvas,) = dom.find("canvas", id="animation")
-    assert int(canvas["data-frames"]) == 89  # every second sensing step of 176, and the last
+    assert int(canvas["data-frames"]) == STEPS // 2 + 1  # every second step of the trial, and the last
     assert canvas["data-tree"] == best["simplified"]
 
 

@@ -164,7 +164,8 @@ def _links_shape(links: np.ndarray) -> np.ndarray:
 
 
 def frames_from_bag(path: Path | str) -> TrialFrames:
-    """The frames of the trial recorded in the bag at ``path`` (``trial --bag``)."""
+    """The frames of the trial recorded in the bag at ``path`` (``trial --bag``): trial K's steps only (the
+    bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
     from evolution_manager.bags import BagError, read_bag
     from evolution_manager.reproduce import RESULT_TOPIC
     from swarm_sim.config import DEFAULT
@@ -179,7 +180,12 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
     profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
     config = dataclasses.replace(DEFAULT, profile=profile)
-    states = {m.message.step: m.message for m in messages if m.topic == "/swarm_state"}
+    trial = int(start.trial)
+    states = {
+        m.message.step: m.message
+        for m in messages
+        if m.topic == "/swarm_state" and int(m.message.trial) == trial
+    }
     if not states:
         raise AnimationError(f"{path} holds no /swarm_state messages: nothing to animate")
     n = int(start.robots)
@@ -197,7 +203,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             continue
         robot, kind, msg = int(parts[1].split("_")[1]), parts[2], m.message
         if kind == "tree_status":
-            tick_at[_stamp_step(msg, states)] = int(msg.tick)
+            tick_at[int(msg.step)] = int(msg.tick)
             continue
         if kind not in ("wheels", "ground", "range_and_bearing"):  # e.g. pose (PoseStamped): no step
             continue
@@ -213,7 +219,9 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
     p = config.params()
     ticks, actions, fitness = [], np.full((len(steps), n), -1, np.int64), np.full((len(steps), 3), np.nan)
-    tick, initial = -1, None
+    # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
+    earlier = [s for s in tick_at if s < steps[0]]
+    tick, initial = (tick_at[max(earlier)] if earlier else -1), None
     for k, s in enumerate(steps):
         tick = tick_at.get(s, tick)
         ticks.append(tick)
@@ -223,7 +231,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             initial = smoothed[k]
         if initial is not None:
             fitness[k] = _fitness_so_far(initial, smoothed[k], ground[k], p)
-    trial = int(start.trial)
     return TrialFrames(
         tree=result.tree if result is not None else "",
         seed=int(start.seed),
@@ -239,15 +246,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         links=tuple(_links_shape(np.array(h, np.int64)) for h in heard),
         fitness=fitness,
     )
-
-
-def _stamp_step(msg: Any, states: dict[int, Any]) -> int:
-    """The step whose /swarm_state carries the same stamp as ``msg`` (tree statuses carry no step)."""
-    stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
-    for step, state in states.items():
-        if (state.header.stamp.sec, state.header.stamp.nanosec) == stamp:
-            return step
-    return -1
 
 
 # ----------------------------------------------------------------------------------------------- drawing
