@@ -63,6 +63,8 @@ STARTUP_TIMEOUT = 600.0
 """Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
 numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
+RESEND_AFTER = 10.0
+"""Seconds without an answer after which an idempotent service request is sent again (see ``call``)."""
 
 
 def expected_messages(
@@ -129,10 +131,20 @@ class TrialRunner:
             self.executor.spin_once(timeout_sec=0.05)
 
     def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
+        """Call an idempotent service; the request is sent again every ``RESEND_AFTER`` seconds without an
+        answer (a service is "ready" once it sees our requests, which can be before our client sees its
+        responses: on a loaded machine the first response can be lost), up to the runner's timeout."""
         self.spin_until(client.service_is_ready, f"the {client.srv_name} service", STARTUP_TIMEOUT)
-        future = client.call_async(request)
-        self.spin_until(future.done, what)
-        return future.result()
+        deadline = time.monotonic() + self.timeout
+        while True:
+            future = client.call_async(request)
+            try:
+                self.spin_until(future.done, what, min(RESEND_AFTER, max(0.0, deadline - time.monotonic())))
+                return future.result()
+            except TrialFailedError:
+                client.remove_pending_request(future)
+                if time.monotonic() >= deadline:
+                    raise
 
     def load_tree(self, tree_text: str) -> None:
         for client in self.load_clients:
