@@ -95,6 +95,8 @@ from swarm_sim.trial_data import TrialRecord
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
+RESEND_AFTER = 10.0
+"""Seconds without an answer after which a start_trial request is sent again (see ``_start_controllers``)."""
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
 recorder that has just joined), so that none misses the trial's first messages."""
@@ -369,11 +371,22 @@ class SimulatorNode(Node):
                 density_divisor=p.density_divisor,
                 wheel_speed=p.wheel_speed * visualisation.MM,
             )
-            futures.append(client.call_async(request))
-        for i, future in enumerate(futures):
-            done = threading.Event()
-            future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # rclpy is untyped
-            response = future.result() if done.wait(self.answer_timeout) else None
+            futures.append((client, request, client.call_async(request)))
+        deadline = time.monotonic() + self.answer_timeout
+        for i, (client, request, future) in enumerate(futures):
+            # start_trial may be repeated: a request without an answer is sent again every RESEND_AFTER s (a
+            # response right after discovery can be lost), until the answer timeout
+            while True:
+                done = threading.Event()
+                future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # untyped rclpy
+                if done.wait(min(RESEND_AFTER, max(0.0, deadline - time.monotonic()))):
+                    response = future.result()
+                    break
+                client.remove_pending_request(future)
+                if time.monotonic() >= deadline:
+                    response = None
+                    break
+                future = client.call_async(request)
             if response is None:
                 raise TrialAbandonedError(f"{self.namespaces[i]} did not answer start_trial")
             if not response.success:
