@@ -118,7 +118,9 @@ def test_a_recorder_stopped_by_a_signal_leaves_a_whole_bag(graph, tmp_path, stop
 def test_a_killed_recorder_leaves_a_recoverable_bag(graph, tmp_path):
     bag = tmp_path / "killed"
     recorder = start_recorder(graph, bag)
-    for trial in range(0, 20, 5):  # the first trials of four chains: enough messages to flush chunks
+    # The first trials of four chains: enough messages to flush chunks. The first lets discovery settle (on a
+    # loaded machine the simulator may match the new recorder a few steps late); the second must come whole.
+    for trial in range(0, 20, 5):
         graph.run("prob(forward, reverse_left, seq(nest_right, forward_right))", 12, trial)
     recorder.send_signal(signal.SIGKILL)
     recorder.wait(timeout=30)
@@ -132,7 +134,8 @@ def test_a_killed_recorder_leaves_a_recoverable_bag(graph, tmp_path):
     recovered = int(done.stdout.split()[1])
     assert recovered > 1000
     steps = [m.message.step for m in read_bag(tmp_path / "recovered") if m.topic == "/swarm_state"]
-    assert steps[:160] == list(range(1, 161))  # the first trial came through whole, in order
+    second = next(i for i, step in enumerate(steps) if step == 1 and i > 0)
+    assert steps[second : second + 160] == list(range(1, 161))  # the second trial came whole, in order
 
 
 def start_recorder(graph, bag):
@@ -144,7 +147,9 @@ def start_recorder(graph, bag):
         text=True,
     )
     assert process.stdout.readline().startswith("recording to")
-    # Wait until the recorder's subscriptions are known to the graph, then a little for matching.
+    # The recorder has matched the graph's publishers (its side of discovery); wait until the graph knows the
+    # recorder too (the publishers' side), then a little longer for matching on a loaded machine.
+    assert process.stdout.readline().startswith("matched a publisher on all")
     runner.spin_until(lambda: runner.node.count_subscribers("/swarm_state") >= 1, "the recorder")
     runner.spin_for(1.0)
     return process

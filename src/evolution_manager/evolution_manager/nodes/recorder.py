@@ -2,9 +2,11 @@
 
 Executable ``record``: ``ws/run evolution_manager record --bag DIR [--robots 9] [--namespace /swarm_a]``
 records every topic of the trial graph (the simulator's and each footbot's, visualisation included) until
-SIGINT or SIGTERM, then closes the bag so that it is whole. A recorder killed with SIGKILL leaves the chunks
-already flushed, which ``recover`` brings back. Latched topics (``trial_start``, ``markers``) are subscribed
-transient-local, so the recorder also gets their last message from before it joined.
+SIGINT or SIGTERM, then closes the bag so that it is whole. It prints a line once every topic has a matched
+publisher: a trial started after that line is recorded from its first step. A recorder killed with SIGKILL
+leaves the chunks already flushed, which ``recover`` brings back. Latched topics (``trial_start``,
+``markers``) are subscribed transient-local, so the recorder also gets their last message from before it
+joined.
 
 Messages are stamped in the bag with their header stamp (simulated time), so a replay follows the trial's own
 clock. The ``GraphRecorder`` class is also used in-process by ``trial``.
@@ -170,11 +172,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             node = Node("recorder", context=context)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
-            GraphRecorder(node, bag, trial_topics(args.robots, args.namespace))
+            recorder = GraphRecorder(node, bag, trial_topics(args.robots, args.namespace))
             print(f"recording to {args.bag}; stop with Ctrl-C", flush=True)
             node.get_logger().info(f"ready: recording {args.namespace or '/'} to {args.bag}")
+            matched = False
             while not stop.is_set():
                 executor.spin_once(timeout_sec=0.1)
+                if not matched and recorder.all_publishers_matched():
+                    # Discovery takes a moment: a trial started before this line may lose its first steps.
+                    matched = True
+                    print(f"matched a publisher on all {len(recorder.topics)} topics", flush=True)
             executor.shutdown()
             node.destroy_node()
         print(f"recorded {bag.count} messages to {args.bag}", flush=True)
