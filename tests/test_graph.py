@@ -19,8 +19,8 @@ from evolution_manager.nodes.trial import RESULT_TOPIC, TrialGraph, expected_mes
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
-PARITY_TREES = 10
-CLEAN_PARITY_TREES = 5
+PARITY_TREES = 20
+CLEAN_PARITY_TREES = 20
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def test_trials_through_the_graph_equal_the_batch_evaluator(graph):
     trees = ["forward", "sel(seq(in_nest, stop), forward)", *random_trees(seed=2023, count=PARITY_TREES - 2)]
     evaluator = BatchEvaluator()
     for index, text in enumerate(trees):
-        seed, trial = 1000 + index, index % 7  # trials 0-4 of chain 0 and 0-1 of chain 1
+        seed, trial = 1000 + index, index % 7  # trials 0-6: all of chain 0, the first two of chain 1
         record = graph.run(to_text(parse(text)), seed, trial)
         _, trial_records = evaluator.evaluate_trials([EvaluationRequest(text, seed, trial + 1)])[0]
         expected = trial_records[trial]

@@ -42,7 +42,7 @@ from swarm_msgs.msg import (
     WheelCommand,
 )
 from swarm_ros.names import robot_namespaces
-from swarm_ros.qos import RECORDING, RECORDING_LATCHED
+from swarm_ros.qos import NO_SUBSCRIPTION_EVENTS, RECORDING, RECORDING_LATCHED
 from swarm_sim.config import DEFAULT
 
 LATCHED_TOPICS = ("trial_start", "markers")
@@ -117,6 +117,7 @@ class GraphRecorder:
                 topic,
                 self._writer(topic, msg_class),
                 RECORDING_LATCHED if is_latched(topic) else RECORDING,
+                event_callbacks=NO_SUBSCRIPTION_EVENTS,
             )
             for topic, msg_class in self.topics
         ]

@@ -30,7 +30,7 @@ from rosgraph_msgs.msg import Clock
 from evolution_manager.bags import BagError, check_bag, read_bag, recover_bag
 from evolution_manager.nodes.recorder import is_latched
 from evolution_manager.reproduce import verify_trial_bag
-from swarm_ros.qos import RECORDING, RECORDING_LATCHED
+from swarm_ros.qos import NO_PUBLISHER_EVENTS, RECORDING, RECORDING_LATCHED
 
 RELIABLE = RECORDING
 
@@ -47,10 +47,13 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
     context = rclpy.Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
-    clock = node.create_publisher(Clock, "/clock", RELIABLE)
+    clock = node.create_publisher(Clock, "/clock", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS)
     publishers: dict[str, Publisher] = {
         topic: node.create_publisher(
-            message_class(msgtype), topic, RECORDING_LATCHED if is_latched(topic) else RELIABLE
+            message_class(msgtype),
+            topic,
+            RECORDING_LATCHED if is_latched(topic) else RELIABLE,
+            event_callbacks=NO_PUBLISHER_EVENTS,
         )
         for topic, msgtype in topics.items()
         if topic != "/clock"

@@ -83,7 +83,7 @@ from swarm_msgs.msg import (
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
 from swarm_ros.parameters import declare_dataclass, descriptor
-from swarm_ros.qos import LATCHED, RELIABLE
+from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config, ConfigError
@@ -163,24 +163,52 @@ class SimulatorNode(Node):
         self._busy = threading.Lock()  # one trial at a time, whether asked by the action or the service
         self._inbox = _Inbox()
         listeners = ReentrantCallbackGroup()
-        self._clock_publisher = self.create_publisher(Clock, "clock", RELIABLE)
-        self._trial_start = self.create_publisher(TrialStart, "trial_start", LATCHED)
-        self._markers = self.create_publisher(MarkerArray, "markers", LATCHED)
-        self._robot_markers = self.create_publisher(MarkerArray, "robot_markers", RELIABLE)
-        self._state = self.create_publisher(SwarmState, "swarm_state", RELIABLE)
-        self._poses = self.create_publisher(PoseArray, "poses", RELIABLE)
+        self._clock_publisher = self.create_publisher(
+            Clock, "clock", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._trial_start = self.create_publisher(
+            TrialStart, "trial_start", LATCHED, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._markers = self.create_publisher(
+            MarkerArray, "markers", LATCHED, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._robot_markers = self.create_publisher(
+            MarkerArray, "robot_markers", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._state = self.create_publisher(
+            SwarmState, "swarm_state", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._poses = self.create_publisher(PoseArray, "poses", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS)
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
         self._pose: list[Publisher] = []
         self._start_clients: list[Client] = []
         for i, ns in enumerate(self.namespaces):
-            self._ground.append(self.create_publisher(GroundSensor, f"{ns}/ground", RELIABLE))
-            self._readings.append(
-                self.create_publisher(RangeAndBearingReadings, f"{ns}/range_and_bearing", RELIABLE)
+            self._ground.append(
+                self.create_publisher(
+                    GroundSensor, f"{ns}/ground", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
+                )
             )
-            self._pose.append(self.create_publisher(PoseStamped, f"{ns}/pose", RELIABLE))
+            self._readings.append(
+                self.create_publisher(
+                    RangeAndBearingReadings,
+                    f"{ns}/range_and_bearing",
+                    RELIABLE,
+                    event_callbacks=NO_PUBLISHER_EVENTS,
+                )
+            )
+            self._pose.append(
+                self.create_publisher(
+                    PoseStamped, f"{ns}/pose", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
+                )
+            )
             self.create_subscription(
-                WheelCommand, f"{ns}/wheels", partial(self._on_wheels, i), RELIABLE, callback_group=listeners
+                WheelCommand,
+                f"{ns}/wheels",
+                partial(self._on_wheels, i),
+                RELIABLE,
+                callback_group=listeners,
+                event_callbacks=NO_SUBSCRIPTION_EVENTS,
             )
             self.create_subscription(
                 TreeStatus,
@@ -188,6 +216,7 @@ class SimulatorNode(Node):
                 partial(self._on_status, i),
                 RELIABLE,
                 callback_group=listeners,
+                event_callbacks=NO_SUBSCRIPTION_EVENTS,
             )
             self._start_clients.append(
                 self.create_client(StartTrial, f"{ns}/start_trial", callback_group=listeners)
