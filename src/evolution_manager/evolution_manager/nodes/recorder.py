@@ -16,18 +16,17 @@ from __future__ import annotations
 
 import argparse
 import signal
+import struct
 import sys
 import threading
 from collections import Counter
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
 
 import rclpy
 from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.serialization import serialize_message
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from visualization_msgs.msg import MarkerArray
@@ -84,18 +83,20 @@ def is_latched(topic: str) -> bool:
     return topic.rsplit("/", 1)[-1] in LATCHED_TOPICS
 
 
-def stamp_ns(msg: Any) -> int:  # any stamped ROS message (generated, untyped)
-    """A message's time in nanoseconds: its header stamp, the clock of a Clock message, or the first marker's
-    stamp of a MarkerArray (0 for an empty one)."""
-    if isinstance(msg, Clock):
-        stamp = msg.clock
-    elif isinstance(msg, MarkerArray):
-        if not msg.markers:
+def cdr_stamp_ns(data: bytes, msg_class: type) -> int:
+    """The time in nanoseconds of a message of ``msg_class`` serialized as CDR, read without deserializing it:
+    its header stamp, the clock of a Clock message, or the first marker's stamp of a MarkerArray (0 for an
+    empty one). Each of these is the message's first field (a MarkerArray's after its marker count), so it
+    lies at a fixed offset behind the 4-byte encapsulation header, whose second byte gives the byte order."""
+    order = "<" if data[1] == 1 else ">"
+    offset = 4
+    if msg_class is MarkerArray:
+        (count,) = struct.unpack_from(f"{order}I", data, offset)
+        if count == 0:
             return 0
-        stamp = msg.markers[0].header.stamp
-    else:
-        stamp = msg.header.stamp
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
+        offset += 4
+    seconds, nanoseconds = struct.unpack_from(f"{order}iI", data, offset)
+    return seconds * 1_000_000_000 + nanoseconds
 
 
 class GraphRecorder:
@@ -118,6 +119,7 @@ class GraphRecorder:
                 self._writer(topic, msg_class),
                 RECORDING_LATCHED if is_latched(topic) else RECORDING,
                 event_callbacks=NO_SUBSCRIPTION_EVENTS,
+                raw=True,  # the serialized bytes go to the bag as they came
             )
             for topic, msg_class in self.topics
         ]
@@ -128,12 +130,11 @@ class GraphRecorder:
         with self._lock:
             self.armed = True
 
-    def _writer(self, topic: str, msg_class: type) -> Callable[[object], None]:
+    def _writer(self, topic: str, msg_class: type) -> Callable[[bytes], None]:
         msgtype = msgtype_name(msg_class)
 
-        def write(msg: object) -> None:
-            data = serialize_message(msg)
-            stamp = stamp_ns(msg)
+        def write(data: bytes) -> None:
+            stamp = cdr_stamp_ns(data, msg_class)
             with self._lock:
                 self.received[topic] += 1
                 if not self.armed:
