@@ -22,7 +22,6 @@ import argparse
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 
 from .adaptation import (
@@ -160,13 +159,13 @@ def adaptation_figure(document: dict, path: Path) -> Path:
 def adapt(argv: Sequence[str] | None = None) -> int:
     """Run ``adapt``; return the exit status."""
     from swarm_sim.conditions import ConditionError, apply_conditions
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.config import default_config
 
     try:
         args = build_parser().parse_args(argv)
         profile = repertoire_profile(args.repertoire)
         try:
-            config, conditions = apply_conditions(args.condition, replace(DEFAULT, profile=profile))
+            config, conditions = apply_conditions(args.condition, default_config(profile))
         except ConditionError as error:
             raise UsageError(f"--condition: {error}") from None
         stop = None if args.no_stop else args.stop_fraction

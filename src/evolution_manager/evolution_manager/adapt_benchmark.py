@@ -32,7 +32,6 @@ import math
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -140,7 +139,7 @@ def trials_to_target(curve: Sequence[float], bar: float) -> float:
 def benchmark(args: argparse.Namespace) -> dict:
     """Run every method; write the files; return the summary."""
     from swarm_sim.conditions import ConditionError, apply_conditions
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     profiles = {str(path): repertoire_profile(path) for path in args.repertoires}
@@ -154,9 +153,7 @@ def benchmark(args: argparse.Namespace) -> dict:
     worlds = {}
     for text in args.condition_set:
         try:
-            worlds[text] = apply_conditions(
-                [t for t in text.split(",") if t], replace(DEFAULT, profile=profile)
-            )
+            worlds[text] = apply_conditions([t for t in text.split(",") if t], default_config(profile))
         except ConditionError as error:
             raise UsageError(f"--condition-set {text}: {error}") from None
     repertoires = {str(path): load_candidates(path, args.objective) for path in args.repertoires}

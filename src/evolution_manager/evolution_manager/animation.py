@@ -89,6 +89,17 @@ class TrialFrames:
         }
 
 
+def arena_fields(config: Config, trial: int) -> dict[str, float]:
+    """The arena of ``trial`` as ``TrialFrames`` draws it: the gap between nest and food, the arena's and the
+    nest's size and the robots' radius (mm)."""
+    return {
+        "gap": config.gap(trial),
+        "arena_half": config.arena_half,
+        "nest_radius": config.nest_radius,
+        "robot_radius": config.robot_radius,
+    }
+
+
 def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray, p: Params) -> np.ndarray:
     from swarm_sim import world
 
@@ -142,10 +153,7 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None
         tree=tree,
         seed=seed,
         trial=trial,
-        gap=config.gap(trial),
-        arena_half=config.arena_half,
-        nest_radius=config.nest_radius,
-        robot_radius=config.robot_radius,
+        **arena_fields(config, trial),
         steps=np.array(steps),
         poses=np.array(poses),
         actions=np.array(actions),
@@ -168,7 +176,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
     from evolution_manager.bags import BagError, read_bag
     from evolution_manager.reproduce import RESULT_TOPIC
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.config import DEFAULT, default_config
 
     try:
         messages = list(read_bag(path))
@@ -179,7 +187,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         raise AnimationError(f"{path} holds no /trial_start: not a trial bag (record one with `trial --bag`)")
     result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
     profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
-    config = dataclasses.replace(DEFAULT, profile=profile)
+    config = default_config(profile)
     trial = int(start.trial)
     states = {
         m.message.step: m.message
@@ -235,10 +243,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         tree=result.tree if result is not None else "",
         seed=int(start.seed),
         trial=trial,
-        gap=config.gap(trial),
-        arena_half=config.arena_half,
-        nest_radius=config.nest_radius,
-        robot_radius=config.robot_radius,
+        **arena_fields(config, trial),
         steps=np.array(steps),
         poses=poses,
         actions=actions,

@@ -165,13 +165,12 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
 
 
 def _evaluator(workers: int, profile: str) -> Evaluator:
-    from dataclasses import replace
 
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
-        return BatchEvaluator(replace(DEFAULT, profile=profile), threads=workers)
+        return BatchEvaluator(default_config(profile), threads=workers)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
 

@@ -105,9 +105,8 @@ def run_one(config_data: dict, root: str, progress: object = None, checkpoint_in
     A top-level function so that a process pool can call it; each process evaluates on one thread.
     ``progress`` (a queue) receives ``(root, individuals produced)`` after every batch.
     """
-    from dataclasses import replace
 
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     from .outputs import write_results
@@ -117,7 +116,7 @@ def run_one(config_data: dict, root: str, progress: object = None, checkpoint_in
     directory = RunDirectory(Path(root))
     if finished(directory.root):
         return root
-    evaluator = BatchEvaluator(replace(DEFAULT, profile=config.profile), threads=1)
+    evaluator = BatchEvaluator(default_config(config.profile), threads=1)
     if directory.started():
         run = Run.resume(directory.root, evaluator)
         if run.config != config:

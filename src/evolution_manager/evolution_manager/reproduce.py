@@ -10,14 +10,14 @@ under the recorded profile, and every recorded pose and value is compared with t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 from bt_controller.errors import TreeError
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse
 from evolution_manager.bags import BagError, read_bag
-from swarm_sim.config import DEFAULT
+from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
 from swarm_sim.trial_data import VALUE_NAMES
 
@@ -83,7 +83,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         if not divergences and recorded.get(world.step) != poses:
             divergences.append(f"the poses differ at step {world.step}")
 
-    record = run_with_controllers(tree, seed, trial, replace(DEFAULT, profile=profile), on_step=compare)
+    record = run_with_controllers(tree, seed, trial, default_config(profile), on_step=compare)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
     for name, value in zip(VALUE_NAMES, record.values, strict=True):

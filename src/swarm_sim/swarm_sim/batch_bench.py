@@ -16,14 +16,13 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numba
 
 from bt_controller.random_trees import random_trees
 from bt_controller.timeline import PROFILES
 from swarm_sim import reference_road
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.config import DEFAULT, Config, default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 
 
@@ -86,7 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=1, help="numba threads (default 1)")
     parser.add_argument("--profile", choices=PROFILES, default=DEFAULT.profile, help="the model's profile")
     args = parser.parse_args(argv)
-    config = replace(DEFAULT, profile=args.profile)
+    config = default_config(args.profile)
     numba.set_num_threads(args.threads)
 
     texts = random_trees(args.seed, args.trees)

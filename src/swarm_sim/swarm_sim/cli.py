@@ -16,7 +16,6 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
-from dataclasses import replace
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
@@ -24,7 +23,7 @@ from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim import reference_road
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
-from swarm_sim.config import DEFAULT
+from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
@@ -99,7 +98,7 @@ def run(argv: Sequence[str] | None = None) -> str:
     if not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
     try:
-        config, conditions = apply_conditions(args.condition, replace(DEFAULT, profile=args.profile))
+        config, conditions = apply_conditions(args.condition, default_config(args.profile))
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
     request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)

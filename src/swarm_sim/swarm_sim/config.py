@@ -9,7 +9,7 @@ Units: millimetres, seconds, radians.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import NamedTuple
 
 from bt_controller.perception import PerceptionParams
@@ -290,4 +290,9 @@ def _validate(c: Config) -> None:
 
 
 DEFAULT = Config()
-"""The model of ``model.md``."""
+"""The model of docs/model.md, under its default profile."""
+
+
+def default_config(profile: str) -> Config:
+    """The model's default configuration under ``profile`` (``paper`` or ``clean``, docs/model.md)."""
+    return replace(DEFAULT, profile=profile)
