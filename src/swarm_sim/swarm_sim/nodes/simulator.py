@@ -63,6 +63,7 @@ from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
+from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
@@ -163,61 +164,33 @@ class SimulatorNode(Node):
         self._busy = threading.Lock()  # one trial at a time, whether asked by the action or the service
         self._inbox = _Inbox()
         listeners = ReentrantCallbackGroup()
-        self._clock_publisher = self.create_publisher(
-            Clock, "clock", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
-        )
-        self._trial_start = self.create_publisher(
-            TrialStart, "trial_start", LATCHED, event_callbacks=NO_PUBLISHER_EVENTS
-        )
-        self._markers = self.create_publisher(
-            MarkerArray, "markers", LATCHED, event_callbacks=NO_PUBLISHER_EVENTS
-        )
-        self._robot_markers = self.create_publisher(
-            MarkerArray, "robot_markers", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
-        )
-        self._state = self.create_publisher(
-            SwarmState, "swarm_state", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
-        )
-        self._poses = self.create_publisher(PoseArray, "poses", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS)
+        publisher = self._publisher
+        self._clock_publisher = publisher(Clock, "clock")
+        self._trial_start = publisher(TrialStart, "trial_start", LATCHED)
+        self._markers = publisher(MarkerArray, "markers", LATCHED)
+        self._robot_markers = publisher(MarkerArray, "robot_markers")
+        self._state = publisher(SwarmState, "swarm_state")
+        self._poses = publisher(PoseArray, "poses")
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
         self._pose: list[Publisher] = []
         self._start_clients: list[Client] = []
         for i, ns in enumerate(self.namespaces):
-            self._ground.append(
-                self.create_publisher(
-                    GroundSensor, f"{ns}/ground", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
-                )
-            )
-            self._readings.append(
-                self.create_publisher(
-                    RangeAndBearingReadings,
-                    f"{ns}/range_and_bearing",
+            self._ground.append(publisher(GroundSensor, f"{ns}/ground"))
+            self._readings.append(publisher(RangeAndBearingReadings, f"{ns}/range_and_bearing"))
+            self._pose.append(publisher(PoseStamped, f"{ns}/pose"))
+            for msg_class, topic, callback in (
+                (WheelCommand, f"{ns}/wheels", self._on_wheels),
+                (TreeStatus, f"{ns}/tree_status", self._on_status),
+            ):
+                self.create_subscription(
+                    msg_class,
+                    topic,
+                    partial(callback, i),
                     RELIABLE,
-                    event_callbacks=NO_PUBLISHER_EVENTS,
+                    callback_group=listeners,
+                    event_callbacks=NO_SUBSCRIPTION_EVENTS,
                 )
-            )
-            self._pose.append(
-                self.create_publisher(
-                    PoseStamped, f"{ns}/pose", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS
-                )
-            )
-            self.create_subscription(
-                WheelCommand,
-                f"{ns}/wheels",
-                partial(self._on_wheels, i),
-                RELIABLE,
-                callback_group=listeners,
-                event_callbacks=NO_SUBSCRIPTION_EVENTS,
-            )
-            self.create_subscription(
-                TreeStatus,
-                f"{ns}/tree_status",
-                partial(self._on_status, i),
-                RELIABLE,
-                callback_group=listeners,
-                event_callbacks=NO_SUBSCRIPTION_EVENTS,
-            )
             self._start_clients.append(
                 self.create_client(StartTrial, f"{ns}/start_trial", callback_group=listeners)
             )
@@ -236,6 +209,10 @@ class SimulatorNode(Node):
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
+
+    def _publisher(self, msg_class: type, topic: str, qos: QoSProfile = RELIABLE) -> Publisher:
+        # no rclpy default event handlers: they cost this many-topic node most of its CPU (swarm_ros.qos)
+        return self.create_publisher(msg_class, topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
 
     @property
     def answer_timeout(self) -> float:
