@@ -35,6 +35,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 
 from bt_controller import timeline
 from bt_controller.errors import TreeError
@@ -51,6 +52,7 @@ from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.names import robot_namespaces
+from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT, Config
@@ -63,8 +65,6 @@ STARTUP_TIMEOUT = 600.0
 """Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
 numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
-RESEND_AFTER = 10.0
-"""Seconds without an answer after which an idempotent service request is sent again (see ``call``)."""
 
 
 def expected_messages(
@@ -131,20 +131,21 @@ class TrialRunner:
             self.executor.spin_once(timeout_sec=0.05)
 
     def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
-        """Call an idempotent service; the request is sent again every ``RESEND_AFTER`` seconds without an
-        answer (a service is "ready" once it sees our requests, which can be before our client sees its
-        responses: on a loaded machine the first response can be lost), up to the runner's timeout."""
+        """Call an idempotent service, sending the request again while no answer comes
+        (``swarm_ros.services``), up to the runner's timeout; raise ``TrialFailedError`` naming ``what``."""
         self.spin_until(client.service_is_ready, f"the {client.srv_name} service", STARTUP_TIMEOUT)
-        deadline = time.monotonic() + self.timeout
-        while True:
-            future = client.call_async(request)
+
+        def wait(future: Future, seconds: float) -> bool:
             try:
-                self.spin_until(future.done, what, min(RESEND_AFTER, max(0.0, deadline - time.monotonic())))
-                return future.result()
+                self.spin_until(future.done, what, seconds)
             except TrialFailedError:
-                client.remove_pending_request(future)
-                if time.monotonic() >= deadline:
-                    raise
+                return False
+            return True
+
+        response = call_until_answered(client, request, wait, self.timeout)
+        if response is None:
+            raise TrialFailedError(f"timed out waiting for {what}")
+        return response
 
     def load_tree(self, tree_text: str) -> None:
         for client in self.load_clients:

@@ -64,6 +64,7 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
+from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
@@ -85,6 +86,7 @@ from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
 from swarm_ros.parameters import declare_dataclass, descriptor
 from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
+from swarm_ros.services import call_until_answered
 from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config, ConfigError
@@ -96,8 +98,6 @@ from swarm_sim.trial_data import TrialRecord
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
-RESEND_AFTER = 10.0
-"""Seconds without an answer after which a start_trial request is sent again (see ``_start_controllers``)."""
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
 recorder that has just joined), so that none misses the trial's first messages."""
@@ -114,6 +114,13 @@ class _Inbox:
     step: int = -1
     answers: dict[int, WheelCommand] | None = None
     statuses: dict[int, TreeStatus] | None = None
+
+
+def _wait_for_future(future: Future, seconds: float) -> bool:
+    """Wait up to ``seconds`` for ``future`` (another executor thread completes it); whether it is done."""
+    done = threading.Event()
+    future.add_done_callback(lambda _f: done.set())
+    return done.wait(seconds)
 
 
 class SimulatorNode(Node):
@@ -379,20 +386,10 @@ class SimulatorNode(Node):
             )
             futures.append((client, request, client.call_async(request)))
         deadline = time.monotonic() + self.answer_timeout
-        for i, (client, request, future) in enumerate(futures):
-            # start_trial may be repeated: a request without an answer is sent again every RESEND_AFTER s (a
-            # response right after discovery can be lost), until the answer timeout
-            while True:
-                done = threading.Event()
-                future.add_done_callback(lambda _f, done=done: done.set())  # type: ignore[misc]  # untyped rclpy
-                if done.wait(min(RESEND_AFTER, max(0.0, deadline - time.monotonic()))):
-                    response = future.result()
-                    break
-                client.remove_pending_request(future)
-                if time.monotonic() >= deadline:
-                    response = None
-                    break
-                future = client.call_async(request)
+        for i, (client, request, sent) in enumerate(futures):
+            # start_trial may be repeated: a request without an answer is sent again (swarm_ros.services)
+            timeout = max(0.0, deadline - time.monotonic())
+            response = call_until_answered(client, request, _wait_for_future, timeout, sent=sent)
             if response is None:
                 raise TrialAbandonedError(f"{self.namespaces[i]} did not answer start_trial")
             if not response.success:
