@@ -1,0 +1,211 @@
+"""A Dask client for :class:`~.settings.ClusterSettings`: connected to a running scheduler, or to workers that
+dask-jobqueue starts as SLURM jobs; checked before any work is sent.
+
+``open_client`` is a context manager: it yields ``None`` for ``local`` (the caller keeps its own processes),
+else a ``distributed.Client``, and closes what it opened (the SLURM jobs included) on the way out.
+
+Under ``slurm`` a :class:`JobKeeper` keeps the number of jobs: a job that left SLURM's queue (cancelled, out
+of walltime, its node failed) is replaced by a new one. dask-jobqueue does not do that by itself for jobs of
+several worker processes, and a long experiment outlives any walltime.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import logging
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any
+from urllib.parse import urlsplit
+
+from .settings import ClusterError, ClusterSettings, SlurmSettings
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+CONNECT_TIMEOUT = 10.0
+"""Seconds to wait for a scheduler to answer (``dask://``)."""
+
+SLURM_COMMANDS = ("sbatch", "squeue", "scancel")
+"""What dask-jobqueue calls: SLURM is installed where these are on PATH."""
+
+JOB_NAME = "swarm-bt-qd"
+"""The name of the worker jobs in ``squeue``."""
+
+LOST_JOB_CHECK = 5.0
+"""Seconds between two counts of the SLURM jobs (a cancelled or expired one is then replaced)."""
+
+ALLOWED_FAILURES = 10
+"""Worker deaths a task may see before it counts as failed, where this process runs the scheduler (slurm):
+a whole run may outlive several jobs' walltimes (Dask's default is 3)."""
+
+
+def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """Raise :class:`ClusterError` unless something accepts connections at ``address`` (``tcp://HOST:PORT``)."""
+    parts = urlsplit(address)
+    try:
+        with socket.create_connection((parts.hostname, parts.port), timeout=timeout):
+            pass
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise ClusterError(
+            f"--cluster dask://{parts.netloc}: no Dask scheduler answers there ({reason}); start one "
+            "(dask scheduler) or give its address"
+        ) from None
+
+
+def check_slurm() -> None:
+    """Raise :class:`ClusterError` unless SLURM's commands are on PATH."""
+    missing = [name for name in SLURM_COMMANDS if shutil.which(name) is None]
+    if missing:
+        raise ClusterError(
+            f"--cluster slurm: SLURM is not installed here (no {', '.join(missing)} on PATH); run on a login "
+            "node of a SLURM cluster, or use --cluster local or dask://HOST:PORT"
+        )
+
+
+def slurm_cluster_options(settings: SlurmSettings, python: str = sys.executable) -> dict[str, Any]:
+    """The arguments of dask-jobqueue's ``SLURMCluster`` for ``settings``: one Dask worker process of one
+    thread per core (the kernels run on one thread each), the container command before the worker's Python."""
+    return {
+        "cores": settings.cores,
+        "processes": settings.cores,
+        "memory": settings.memory,
+        "walltime": settings.walltime,
+        "queue": settings.partition,
+        "account": settings.account,
+        "python": settings.worker_python(python),
+        "interface": settings.interface,
+        "log_directory": settings.log_directory,
+        "job_name": JOB_NAME,
+        "death_timeout": 120,
+    }
+
+
+def dashboard_link(client: Client, local_scheduler: bool) -> str | None:
+    """The scheduler's dashboard address, or None when it has none (a scheduler in this process serves
+    its dashboard only where bokeh is installed)."""
+    services = client.scheduler_info().get("services", {})
+    if "dashboard" not in services or (local_scheduler and importlib.util.find_spec("bokeh") is None):
+        return None
+    return client.dashboard_link
+
+
+def queued_jobs() -> set[str] | None:
+    """The ids of this user's jobs named :data:`JOB_NAME` in SLURM's queue (pending, running, completing);
+    None when squeue does not answer."""
+    try:
+        out = subprocess.run(
+            ["squeue", "--noheader", "--format=%i", f"--name={JOB_NAME}", f"--user={_user()}"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if out.returncode != 0:
+        return None
+    return {line.strip() for line in out.stdout.splitlines() if line.strip()}
+
+
+def _user() -> str:
+    import getpass
+
+    return getpass.getuser()
+
+
+class JobKeeper(threading.Thread):
+    """Keeps ``jobs`` SLURM jobs for ``cluster`` (a dask-jobqueue ``SLURMCluster``): every ``interval``
+    seconds, a job that is no longer in SLURM's queue is dropped and a new one submitted. Its tasks were
+    already sent elsewhere by the scheduler when its workers vanished. Stop with :meth:`stop`."""
+
+    def __init__(self, cluster: Any, jobs: int, interval: float = LOST_JOB_CHECK) -> None:
+        super().__init__(name="swarm-bt-qd-job-keeper", daemon=True)
+        self.cluster = cluster
+        self.jobs = jobs
+        self.interval = interval
+        self.replaced = 0
+        """Jobs replaced so far."""
+        self._stopping = threading.Event()
+
+    def run(self) -> None:
+        while not self._stopping.wait(self.interval):
+            submitted = {name: job.job_id for name, job in list(self.cluster.workers.items()) if job.job_id}
+            queued = queued_jobs()
+            if queued is None:
+                continue  # SLURM's controller is busy or restarting: look again later
+            lost = [name for name, job_id in submitted.items() if job_id not in queued]
+            missing = len(self.cluster.worker_spec) - len(self.cluster.workers)
+            if lost or missing > 0:
+                self.replaced += len(lost)
+                self.cluster.loop.add_callback(self._replace, lost)
+
+    def _replace(self, lost: list[str]) -> None:  # on the cluster's event loop
+        for name in lost:
+            self.cluster.workers.pop(name, None)
+        self.cluster.scale(jobs=self.jobs)  # submits a job for every planned one without a job
+
+    def stop(self) -> None:
+        self._stopping.set()
+        self.join()
+
+
+@contextmanager
+def open_client(
+    settings: ClusterSettings, say: Callable[[str], None] | None = None, timeout: float = CONNECT_TIMEOUT
+) -> Iterator[Client | None]:
+    """A client for ``settings`` (None for ``local``), checked and closed at the end; ``say`` gets a line or
+    two for the terminal (where the work goes, the dashboard). Raise :class:`ClusterError` when the scheduler
+    does not answer or SLURM is missing."""
+    if settings.kind == "local":
+        yield None
+        return
+    if settings.kind == "dask":
+        assert settings.address is not None  # set by parse_cluster
+        check_scheduler(settings.address, timeout)
+    else:
+        check_slurm()
+    import dask
+    from distributed import Client
+
+    logging.getLogger("distributed").setLevel(logging.WARNING)  # its INFO lines are not for a terminal
+    cluster = None
+    keeper = None
+    with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+        try:
+            if settings.kind == "dask":
+                client = Client(settings.address, timeout=timeout)
+            else:
+                from dask_jobqueue import SLURMCluster
+
+                assert settings.slurm is not None  # set by parse_cluster
+                cluster = SLURMCluster(**slurm_cluster_options(settings.slurm))
+                cluster.scale(jobs=settings.slurm.jobs)
+                keeper = JobKeeper(cluster, settings.slurm.jobs)
+                keeper.start()
+                client = Client(cluster)
+        except (OSError, TimeoutError) as error:
+            if keeper is not None:
+                keeper.stop()
+            if cluster is not None:
+                cluster.close()
+            where = settings.describe()
+            raise ClusterError(f"--cluster: cannot reach the Dask scheduler of {where}: {error}") from None
+        try:
+            if say is not None:
+                say(f"cluster: work goes to {settings.describe()}")
+                link = dashboard_link(client, local_scheduler=cluster is not None)
+                if link:
+                    say(f"cluster: Dask dashboard at {link}")
+            yield client
+        finally:
+            if keeper is not None:
+                keeper.stop()
+            client.close()
+            if cluster is not None:
+                cluster.close()

@@ -1,0 +1,140 @@
+"""One run's batches on Dask workers: :class:`DaskEvaluator`, an evaluator of the run loop's contract.
+
+A batch is cut into chunks of at most ``chunk`` evaluations (nearly equal, in order), each chunk one Dask
+task: tens of evaluations, so that the scheduler's cost per task (about a millisecond) is lost in the
+chunk's hundreds. Requests travel as plain text and numbers (tree text, seed, trials), results as numbers;
+no DEAP object is ever pickled. Each worker process builds one in-process evaluator per model profile and
+keeps it (:func:`worker_evaluator`), so numba's kernels are loaded or compiled once per process, not per
+task; :class:`CompileKernels`, a worker plugin, does that when a worker starts, before its first chunk.
+
+A chunk whose worker dies mid-task (killed, its SLURM job cancelled) is run again by the scheduler on
+another worker; since a result depends only on its request, the run's files are the same bytes as an
+in-process run's.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from distributed import WorkerPlugin, wait
+from distributed.client import FutureCancelledError
+from distributed.scheduler import KilledWorker
+
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, failed
+
+from ..errors import DispatchError
+from .settings import CHUNK
+
+if TYPE_CHECKING:
+    from distributed import Client, Worker
+
+Payload = tuple[str, int, int]
+"""A request as it travels: tree text, seed, trials."""
+
+Answer = tuple[tuple[float, ...] | None, tuple[float, ...] | None, str | None]
+"""A result as it travels: fitness, descriptors, error."""
+
+WARM_UP_TREE = "sel(on_food, forward)"
+"""A small tree evaluated once per worker process to load the kernels."""
+
+
+@functools.lru_cache(maxsize=4)
+def worker_evaluator(profile: str) -> BatchEvaluator:
+    """This process's evaluator of ``profile`` (one per process, kept: its kernels load once)."""
+    from swarm_sim.config import default_config
+
+    return BatchEvaluator(default_config(profile), threads=1)
+
+
+def evaluate_chunk(profile: str, payloads: Sequence[Payload]) -> list[Answer]:
+    """A Dask task: the answers to ``payloads`` from this worker's evaluator of ``profile``."""
+    requests = [EvaluationRequest(tree=tree, seed=seed, trials=trials) for tree, seed, trials in payloads]
+    return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(profile).evaluate(requests)]
+
+
+def chunks(count: int, most: int) -> list[range]:
+    """``range(count)`` cut, in order, into the fewest nearly equal pieces of at most ``most`` items."""
+    if count == 0:
+        return []
+    pieces = math.ceil(count / most)
+    size, extra = divmod(count, pieces)
+    out, start = [], 0
+    for k in range(pieces):
+        end = start + size + (1 if k < extra else 0)
+        out.append(range(start, end))
+        start = end
+    return out
+
+
+class CompileKernels(WorkerPlugin):
+    """A worker plugin: on every worker (those running now and those that join later), build the evaluator
+    of ``profile`` and evaluate one small tree, off the worker's event loop, before the first chunk."""
+
+    def __init__(self, profile: str) -> None:
+        self.profile = profile
+        self.name = f"swarm-bt-qd-kernels-{profile}"
+
+    async def setup(self, worker: Worker) -> None:
+        await asyncio.to_thread(_warm_up, self.profile)
+
+
+def _warm_up(profile: str) -> None:
+    worker_evaluator(profile).evaluate([EvaluationRequest(tree=WARM_UP_TREE, seed=0, trials=1)])
+
+
+class DaskEvaluator:
+    """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``: every batch
+    cut into chunks of at most ``chunk`` evaluations of the model profile ``profile``.
+
+    A request that is not an ``EvaluationRequest`` is answered with an error result here, as the in-process
+    evaluator does; everything else is answered by the workers. A chunk that fails on every worker it is
+    given to (the scheduler's allowed failures spent) raises :class:`DispatchError`."""
+
+    def __init__(self, client: Client, profile: str, chunk: int = CHUNK) -> None:
+        if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
+            raise ValueError(f"chunk must be a positive integer, got {chunk!r}")
+        self.client = client
+        self.profile = profile
+        self.chunk = chunk
+        self.tasks = 0
+        """Chunks sent so far."""
+        client.register_plugin(CompileKernels(profile))
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request (see ``Evaluator``): one result per request, in order."""
+        results: list[EvaluationResult | None] = [None] * len(requests)
+        sent: list[int] = []
+        payloads: list[Payload] = []
+        for i, request in enumerate(requests):
+            if not isinstance(request, EvaluationRequest):
+                results[i] = failed(f"expected an EvaluationRequest, got {type(request).__name__}")
+                continue
+            sent.append(i)
+            payloads.append((str(request.tree), int(request.seed), int(request.trials)))
+        pieces = chunks(len(payloads), self.chunk)
+        futures = [
+            self.client.submit(evaluate_chunk, self.profile, [payloads[k] for k in piece], pure=False)
+            for piece in pieces
+        ]
+        self.tasks += len(futures)
+        try:
+            wait(futures)
+            answers = self.client.gather(futures)
+        except FutureCancelledError as error:
+            raise DispatchError(f"a chunk of evaluations was cancelled: {error}") from None
+        except KilledWorker as error:  # the chunk's workers died more often than the scheduler allows
+            raise DispatchError(f"a chunk of evaluations killed each worker it went to: {error}") from None
+        for piece, answer in zip(pieces, answers, strict=True):
+            if len(answer) != len(piece):
+                raise DispatchError(f"a worker answered {len(answer)} of {len(piece)} requests")
+            for k, (fitness, descriptors, reason) in zip(piece, answer, strict=True):
+                results[sent[k]] = EvaluationResult(_triple(fitness), _triple(descriptors), reason)
+        return results  # type: ignore[return-value]  # every position filled above
+
+
+def _triple(values: tuple[float, ...] | None) -> tuple[float, float, float] | None:
+    return None if values is None else (values[0], values[1], values[2])

@@ -1,0 +1,258 @@
+"""Where the work runs: ``--cluster local|dask://HOST:PORT|slurm`` and ``--cluster-config FILE``, checked.
+
+Reading the options imports no Dask: a command that runs locally pays nothing for the cluster support. Every
+problem is a :class:`ClusterError` whose message is one line naming the option, the value and what was
+expected (the commands print it and exit with status 2).
+
+The YAML file of ``--cluster slurm`` (every key optional; ``docs/cluster.md`` says what each one costs)::
+
+    cores: 4                  # cores of each SLURM job: that many Dask worker processes, one thread each
+    memory: 8GB               # memory of each job, shared by its worker processes (at least 0.5 GiB each)
+    walltime: "04:00:00"      # each job's time limit, [D-]HH:MM:SS
+    partition: compute        # the SLURM partition (sbatch -p); default: the cluster's default partition
+    account: my-project       # the account charged (sbatch -A); default: yours
+    jobs: 8                   # jobs kept running (a cancelled or expired job is replaced)
+    container: apptainer exec --bind /scratch swarm-bt-qd.sif   # put before the worker's Python
+    python: /workspace/ws/python   # the worker's Python (default: this one; in a container the image's)
+    interface: ib0            # the network interface of workers and scheduler (default: the hostname's)
+    log_directory: logs/dask  # the jobs' output files (default: sbatch's, in the working directory)
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from urllib.parse import urlsplit
+
+from ..errors import EvolutionError
+
+KINDS = ("local", "dask", "slurm")
+
+CHUNK = 25
+"""Most evaluations of a single run sent as one Dask task (see :class:`~.evaluator.DaskEvaluator`)."""
+
+IMAGE_PYTHON = "/workspace/ws/python"
+"""The Python of the project's image (``docker/Dockerfile``): a worker's Python in a container by default."""
+
+MIN_MEMORY_PER_WORKER = 512 * 2**20
+"""Least memory a worker process gets (bytes): the interpreter, numba's kernels and a run's work."""
+
+_UNITS = {"kb": 10**3, "mb": 10**6, "gb": 10**9, "tb": 10**12, "kib": 2**10, "mib": 2**20, "gib": 2**30}
+_UNITS["tib"] = 2**40
+_MEMORY = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([kmgt]i?b)\s*$", re.IGNORECASE)
+_WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,3}):([0-5]\d):([0-5]\d)$")
+_NAME = re.compile(r"^[A-Za-z0-9_.@+-]+$")  # a partition, account or interface name: no spaces, no quotes
+
+
+class ClusterError(EvolutionError):
+    """A cluster setting that cannot be used: bad syntax, an unknown key, no scheduler, no SLURM."""
+
+
+@dataclass(frozen=True)
+class SlurmSettings:
+    """The SLURM jobs that run the Dask workers (dask-jobqueue's ``SLURMCluster``); keys: the module's doc."""
+
+    cores: int = 1
+    memory: str = "2GB"
+    walltime: str = "01:00:00"
+    partition: str | None = None
+    account: str | None = None
+    jobs: int = 1
+    container: str | None = None
+    python: str | None = None
+    interface: str | None = None
+    log_directory: str | None = None
+
+    def worker_python(self, default: str) -> str:
+        """The command that starts the worker's Python in a job: the container's command, then the Python
+        (``python`` when given, else the image's inside a container, else ``default``)."""
+        python = self.python or (IMAGE_PYTHON if self.container else default)
+        return f"{self.container} {python}" if self.container else python
+
+
+@dataclass(frozen=True)
+class ClusterSettings:
+    """Where the work runs: ``local`` (this machine's processes), ``dask`` (the scheduler at ``address``) or
+    ``slurm`` (workers started as SLURM jobs, as ``slurm`` says). Results never depend on it."""
+
+    kind: str = "local"
+    address: str | None = None
+    """``tcp://HOST:PORT`` of the scheduler, for ``dask``."""
+    slurm: SlurmSettings | None = None
+
+    @property
+    def is_local(self) -> bool:
+        return self.kind == "local"
+
+    def to_json(self) -> dict:
+        """The settings as recorded beside the results (a session's record, not the run's configuration)."""
+        slurm = asdict(self.slurm) if self.slurm else None
+        return {"kind": self.kind, "address": self.address, "slurm": slurm}
+
+    def describe(self) -> str:
+        """One line for the terminal: where the work goes."""
+        if self.kind == "dask":
+            return f"the Dask scheduler at {self.address}"
+        if self.kind == "slurm" and self.slurm is not None:
+            s = self.slurm
+            return (
+                f"{s.jobs} SLURM job(s) of {s.cores} core(s), {s.memory}, {s.walltime}"
+                + (f" on partition {s.partition}" if s.partition else "")
+                + (f" in '{s.container}'" if s.container else "")
+            )
+        return "this machine's processes"
+
+
+def parse_cluster(option: str, config_file: Path | None = None) -> ClusterSettings:
+    """The settings of ``--cluster OPTION`` and ``--cluster-config FILE``; raise :class:`ClusterError`."""
+    if option == "slurm":
+        slurm = read_slurm_settings(config_file) if config_file is not None else SlurmSettings()
+        return ClusterSettings("slurm", slurm=slurm)
+    if option != "local" and not option.startswith("dask://"):
+        raise ClusterError(f"--cluster must be local, dask://HOST:PORT or slurm, got {option!r}")
+    if config_file is not None:
+        raise ClusterError(f"--cluster-config applies to --cluster slurm only, not to --cluster {option}")
+    if option == "local":
+        return ClusterSettings()
+    return ClusterSettings("dask", address=scheduler_address(option))
+
+
+def scheduler_address(option: str) -> str:
+    """``tcp://HOST:PORT`` of ``dask://HOST:PORT`` (an IPv6 host in brackets); raise :class:`ClusterError`."""
+    expected = "expected dask://HOST:PORT, the address of a running Dask scheduler"
+    try:
+        parts = urlsplit(option)
+        port = parts.port
+    except ValueError as error:
+        raise ClusterError(f"--cluster {option!r}: {error}; {expected}") from None
+    if parts.scheme != "dask" or not parts.hostname or port is None or port == 0:
+        raise ClusterError(f"--cluster {option!r}: {expected}")
+    if parts.path not in ("", "/") or parts.query or parts.fragment or parts.username or parts.password:
+        raise ClusterError(f"--cluster {option!r}: {expected}, with nothing after the port")
+    host = f"[{parts.hostname}]" if ":" in parts.hostname else parts.hostname
+    return f"tcp://{host}:{port}"
+
+
+def read_slurm_settings(path: Path) -> SlurmSettings:
+    """The settings of a ``--cluster-config`` YAML file, every key checked; raise :class:`ClusterError`."""
+    import yaml
+
+    where = f"--cluster-config {path}"
+    try:
+        text = Path(path).read_text()
+    except OSError as error:
+        raise ClusterError(f"{where}: cannot read it ({error.strerror or error})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        at = f" at line {mark.line + 1}" if mark is not None else ""
+        raise ClusterError(f"{where}: not valid YAML{at}") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ClusterError(f"{where}: expected a mapping of settings (key: value), got {type(data).__name__}")
+    return slurm_settings(data, where)
+
+
+def slurm_settings(data: dict, where: str = "--cluster-config") -> SlurmSettings:
+    """:class:`SlurmSettings` from a mapping, every key and value checked; raise :class:`ClusterError`."""
+    known = [f.name for f in fields(SlurmSettings)]
+    for key in data:
+        if key not in known:
+            raise ClusterError(f"{where}: unknown key {key!r}; the keys are {', '.join(known)}")
+    values = dict(data)
+    for key in ("cores", "jobs"):
+        if key in values:
+            values[key] = _count(values[key], f"{where}: {key}")
+    if "memory" in values:
+        values["memory"] = _memory(values["memory"], f"{where}: memory")
+    if "walltime" in values:
+        values["walltime"] = _walltime(values["walltime"], f"{where}: walltime")
+    for key in ("partition", "account", "interface"):
+        if values.get(key) is not None:
+            values[key] = _name(values[key], f"{where}: {key}")
+    for key in ("container", "python"):
+        if values.get(key) is not None:
+            values[key] = _command(values[key], f"{where}: {key}")
+    log_directory = values.get("log_directory")
+    if log_directory is not None and (not isinstance(log_directory, str) or not log_directory.strip()):
+        raise ClusterError(f"{where}: log_directory must be a directory path, got {log_directory!r}")
+    settings = SlurmSettings(**values)
+    per_worker = _bytes(settings.memory) / settings.cores
+    if per_worker < MIN_MEMORY_PER_WORKER:
+        raise ClusterError(
+            f"{where}: memory {settings.memory} shared by {settings.cores} worker process(es) leaves "
+            f"{per_worker / 2**20:.0f} MiB each; give at least 512 MiB per core"
+        )
+    return settings
+
+
+def _count(value: object, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ClusterError(f"{what} must be a positive integer, got {value!r}")
+    return value
+
+
+def _memory(value: object, what: str) -> str:
+    if not isinstance(value, str) or not _MEMORY.match(value):
+        raise ClusterError(f"{what} must be an amount with its unit such as 4GB or 3500MiB, got {value!r}")
+    return value.strip()
+
+
+def _bytes(memory: str) -> float:
+    match = _MEMORY.match(memory)
+    assert match is not None  # checked by _memory
+    return float(match.group(1)) * _UNITS[match.group(2).lower()]
+
+
+def _walltime(value: object, what: str) -> str:
+    if not isinstance(value, str) or not _WALLTIME.match(value) or set(value) <= set("0:-"):
+        raise ClusterError(
+            f'{what} must be a time limit [D-]HH:MM:SS such as "04:00:00" (quoted in YAML), got {value!r}'
+        )
+    return value
+
+
+def _name(value: object, what: str) -> str:
+    if not isinstance(value, str) or not _NAME.match(value):
+        raise ClusterError(f"{what} must be a name without spaces or quotes, got {value!r}")
+    return value
+
+
+def _command(value: object, what: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ClusterError(f"{what} must be a command (text), got {value!r}")
+    try:
+        shlex.split(value)
+    except ValueError as error:
+        raise ClusterError(f"{what}: cannot split {value!r} into words ({error})") from None
+    return value.strip()
+
+
+# The command line ---------------------------------------------------------------------------------------
+def add_cluster_options(parser: argparse.ArgumentParser) -> None:
+    """``--cluster`` and ``--cluster-config`` (for ``experiment``, ``evolve``, ``adapt-benchmark`` and the
+    main job); :func:`settings_from_args` reads them."""
+    parser.add_argument(
+        "--cluster",
+        default="local",
+        metavar="local|dask://HOST:PORT|slurm",
+        help="where the work runs: this machine's processes (default), the Dask scheduler at HOST:PORT, or "
+        "Dask workers started as SLURM jobs (docs/cluster.md); results never depend on it",
+    )
+    parser.add_argument(
+        "--cluster-config",
+        type=Path,
+        metavar="FILE",
+        help="with --cluster slurm: a YAML file of cores, memory, walltime, partition, account, jobs, "
+        "container, python, interface, log_directory (docs/cluster.md)",
+    )
+
+
+def settings_from_args(args: argparse.Namespace) -> ClusterSettings:
+    """The :class:`ClusterSettings` of parsed ``--cluster`` and ``--cluster-config``."""
+    return parse_cluster(args.cluster, args.cluster_config)
