@@ -72,8 +72,9 @@ def map_runs(
     events: queue.Queue = queue.Queue()
     client.subscribe_topic(topic, lambda event: events.put(event[1]))
 
-    def submit(config_data: dict, root: str) -> Future:
-        return client.submit(run_task, config_data, root, topic, checkpoint_interval, pure=False)
+    def submit(config_data: dict, root: str, attempt: int) -> Future:
+        key = f"run {root} (attempt {attempt}, {topic})"  # what the dashboard shows; unique per submission
+        return client.submit(run_task, config_data, root, topic, checkpoint_interval, key=key)
 
     def report() -> None:
         while on_progress is not None:
@@ -83,7 +84,7 @@ def map_runs(
                 return
             on_progress(str(root), int(produced))
 
-    futures = {submit(config, root): (config, root, 1) for config, root in runs}
+    futures = {submit(config, root, 1): (config, root, 1) for config, root in runs}
     try:
         while futures:
             try:
@@ -98,7 +99,7 @@ def map_runs(
                     continue
                 error = future.exception()
                 if isinstance(error, KilledWorker) and attempt < attempts:
-                    futures[submit(config, root)] = (config, root, attempt + 1)
+                    futures[submit(config, root, attempt + 1)] = (config, root, attempt + 1)
                     continue
                 yield root, error
     finally:

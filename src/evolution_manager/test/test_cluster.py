@@ -1,0 +1,352 @@
+"""The cluster subpackage: its options checked whole, and real Dask (a LocalCluster of worker processes,
+reached as ``dask://HOST:PORT``) running chunks of a batch and whole runs, with the same bytes as a local run,
+a worker SIGKILLed mid-task included. The SLURM side, with real daemons and jobs: tests/test_slurm.py."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from distributed import Client, LocalCluster
+
+from bt_controller.random_trees import random_trees
+from evolution_manager.cluster import (
+    ClusterError,
+    ClusterSettings,
+    DaskEvaluator,
+    SlurmSettings,
+    map_runs,
+    open_client,
+    parse_cluster,
+    read_slurm_settings,
+)
+from evolution_manager.cluster.client import slurm_cluster_options
+from evolution_manager.cluster.evaluator import chunks, evaluate_chunk
+from evolution_manager.config import RunConfig
+from evolution_manager.experiment import run_one
+from evolution_manager.outputs import write_results
+from evolution_manager.run import Run
+from swarm_sim.config import default_config
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+
+VARYING = {"timing.json", "checkpoint.json", ".lock"}
+"""Files of a run directory that hold wall-clock times (or nothing): every other file is the same bytes."""
+
+
+def run_files(root: Path) -> dict[str, bytes]:
+    """Every file of a run directory by relative path, but those that hold wall-clock times and the SVG
+    drawings (matplotlib names their clip paths from a fresh random salt: two local runs differ there too)."""
+    return {
+        str(p.relative_to(root)): p.read_bytes()
+        for p in sorted(root.rglob("*"))
+        if p.is_file() and p.name not in VARYING and p.suffix != ".svg"
+    }
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """Two worker processes of one thread each, with nannies (a killed worker is restarted)."""
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as local:
+        yield local
+
+
+@pytest.fixture(scope="module")
+def client(cluster):
+    with Client(cluster) as connected:
+        yield connected
+
+
+# The options ----------------------------------------------------------------------------------------------
+def test_the_three_kinds_of_cluster_option_are_read():
+    assert parse_cluster("local") == ClusterSettings()
+    assert parse_cluster("dask://scheduler.example:8786") == ClusterSettings(
+        "dask", address="tcp://scheduler.example:8786"
+    )
+    assert parse_cluster("dask://[::1]:8786").address == "tcp://[::1]:8786"
+    assert parse_cluster("slurm") == ClusterSettings("slurm", slurm=SlurmSettings())
+
+
+@pytest.mark.parametrize(
+    "option,expected",
+    [
+        ("remote", "--cluster must be local, dask://HOST:PORT or slurm, got 'remote'"),
+        ("dask://host", "expected dask://HOST:PORT"),
+        ("dask://:8786", "expected dask://HOST:PORT"),
+        ("dask://host:port", "Port could not be cast"),
+        ("dask://host:99999", "out of range"),
+        ("dask://host:8786/path", "with nothing after the port"),
+        ("tcp://host:8786", "--cluster must be local, dask://HOST:PORT or slurm"),
+    ],
+)
+def test_a_bad_cluster_option_is_one_line_naming_it(option, expected):
+    with pytest.raises(ClusterError) as caught:
+        parse_cluster(option)
+    message = str(caught.value)
+    assert message.startswith("--cluster") and expected in message and "\n" not in message
+
+
+def test_a_cluster_config_goes_with_slurm_only(tmp_path):
+    config = tmp_path / "cluster.yaml"
+    config.write_text("cores: 2\n")
+    for option in ("local", "dask://host:8786"):
+        with pytest.raises(ClusterError, match="--cluster-config applies to --cluster slurm only"):
+            parse_cluster(option, config)
+    assert parse_cluster("slurm", config).slurm == SlurmSettings(cores=2)
+
+
+def test_a_cluster_config_file_gives_every_setting(tmp_path):
+    config = tmp_path / "cluster.yaml"
+    config.write_text(
+        "cores: 4\nmemory: 8GB\nwalltime: '1-02:00:00'\npartition: compute\naccount: proj-1\njobs: 8\n"
+        "container: apptainer exec --bind /scratch swarm.sif\npython: /opt/venv/bin/python\n"
+        "interface: ib0\nlog_directory: logs/dask\n"
+    )
+    assert read_slurm_settings(config) == SlurmSettings(
+        cores=4,
+        memory="8GB",
+        walltime="1-02:00:00",
+        partition="compute",
+        account="proj-1",
+        jobs=8,
+        container="apptainer exec --bind /scratch swarm.sif",
+        python="/opt/venv/bin/python",
+        interface="ib0",
+        log_directory="logs/dask",
+    )
+    config.write_text("")  # an empty file: every default
+    assert read_slurm_settings(config) == SlurmSettings()
+
+
+@pytest.mark.parametrize(
+    "text,expected",
+    [
+        ("nodes: 4\n", "unknown key 'nodes'; the keys are cores, memory, walltime"),
+        ("cores: 0\n", "cores must be a positive integer, got 0"),
+        ("cores: true\n", "cores must be a positive integer, got True"),
+        ("jobs: '3'\n", "jobs must be a positive integer, got '3'"),
+        ("memory: 8\n", "memory must be an amount with its unit such as 4GB"),
+        ("memory: 8 bananas\n", "memory must be an amount with its unit"),
+        ("cores: 4\nmemory: 1GB\n", "leaves 238 MiB each; give at least 512 MiB per core"),
+        ("walltime: 3600\n", "walltime must be a time limit [D-]HH:MM:SS"),
+        ("walltime: '01:61:00'\n", "walltime must be a time limit"),
+        ("walltime: '00:00:00'\n", "walltime must be a time limit"),
+        ("partition: two words\n", "partition must be a name without spaces or quotes"),
+        ('container: "apptainer exec \'unclosed"\n', "container: cannot split"),
+        ("python: ''\n", "python must be a command (text)"),
+        ("log_directory: 5\n", "log_directory must be a directory path"),
+        ("- cores\n", "expected a mapping of settings (key: value), got list"),
+        ("cores: [\n", "not valid YAML at line"),
+    ],
+)
+def test_a_bad_cluster_config_is_one_line_naming_the_file_and_key(tmp_path, text, expected):
+    config = tmp_path / "cluster.yaml"
+    config.write_text(text)
+    with pytest.raises(ClusterError) as caught:
+        parse_cluster("slurm", config)
+    message = str(caught.value)
+    assert message.startswith(f"--cluster-config {config}: ") and expected in message and "\n" not in message
+
+
+def test_a_missing_cluster_config_is_one_line(tmp_path):
+    with pytest.raises(ClusterError, match=r"cannot read it \(No such file or directory\)"):
+        parse_cluster("slurm", tmp_path / "absent.yaml")
+
+
+def test_the_job_script_starts_one_worker_process_per_core_inside_the_container():
+    from dask_jobqueue import SLURMCluster
+
+    settings = SlurmSettings(
+        cores=2,
+        memory="4GB",
+        walltime="02:00:00",
+        partition="compute",
+        account="proj",
+        container="apptainer exec --bind /scratch swarm.sif",
+    )
+    options = slurm_cluster_options(settings)
+    with SLURMCluster(**options, scheduler_options={"dashboard_address": None}) as slurm:
+        script = slurm.job_script()
+    for line in ("#SBATCH -p compute", "#SBATCH -A proj", "#SBATCH -t 02:00:00", "#SBATCH --cpus-per-task=2"):
+        assert line in script
+    worker = next(line for line in script.splitlines() if "distributed.cli.dask_worker" in line)
+    assert worker.startswith("apptainer exec --bind /scratch swarm.sif /workspace/ws/python -m ")
+    assert "--nthreads 1" in worker and "--nworkers 2" in worker
+    without = slurm_cluster_options(SlurmSettings(), python="/venv/bin/python")
+    assert without["python"] == "/venv/bin/python" and without["processes"] == 1
+
+
+# Checks before any work is sent -------------------------------------------------------------------------
+def test_no_scheduler_at_the_address_is_one_clear_error():
+    with socket.socket() as s:  # a port that nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    settings = parse_cluster(f"dask://127.0.0.1:{port}")
+    with pytest.raises(ClusterError) as caught, open_client(settings, timeout=3):
+        pass
+    assert str(caught.value).startswith(f"--cluster dask://127.0.0.1:{port}: no Dask scheduler answers there")
+
+
+def test_slurm_not_installed_is_one_clear_error(monkeypatch, tmp_path):
+    monkeypatch.setenv("PATH", str(tmp_path))  # a PATH without sbatch, squeue or scancel
+    with pytest.raises(ClusterError) as caught, open_client(parse_cluster("slurm")):
+        pass
+    assert str(caught.value) == (
+        "--cluster slurm: SLURM is not installed here (no sbatch, squeue, scancel on PATH); run on a login "
+        "node of a SLURM cluster, or use --cluster local or dask://HOST:PORT"
+    )
+
+
+def test_local_opens_no_client():
+    with open_client(parse_cluster("local")) as opened:
+        assert opened is None
+
+
+# Chunks of a batch ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("count,most", [(0, 5), (1, 5), (5, 5), (6, 5), (50, 25), (51, 25), (99, 7)])
+def test_a_batch_is_cut_in_order_into_the_fewest_nearly_equal_chunks(count, most):
+    pieces = chunks(count, most)
+    assert [i for piece in pieces for i in piece] == list(range(count))
+    assert all(len(piece) <= most for piece in pieces)
+    assert len(pieces) == -(-count // most)
+    assert not pieces or max(map(len, pieces)) - min(map(len, pieces)) <= 1
+
+
+def test_a_chunk_travels_as_text_and_numbers():
+    answer = evaluate_chunk("paper", [("sel(on_food, forward)", 3, 2), ("nonsense(", 3, 2)])
+    local = BatchEvaluator(default_config("paper")).evaluate(
+        [EvaluationRequest("sel(on_food, forward)", 3, 2), EvaluationRequest("nonsense(", 3, 2)]
+    )
+    assert answer == [(r.fitness, r.descriptors, r.error) for r in local]
+    assert all(type(v) is float for v in answer[0][0] + answer[0][1])
+
+
+def test_the_dask_evaluator_answers_exactly_as_the_in_process_one(client):
+    requests = [EvaluationRequest(tree, 100 + i, 3) for i, tree in enumerate(random_trees(7, 30))]
+    requests += [EvaluationRequest("sel(on_food", 1, 1), EvaluationRequest(requests[0].tree, 5, 0)]
+    evaluator = DaskEvaluator(client, "clean", chunk=4)
+    results = evaluator.evaluate([*requests, "not a request"])
+    assert results[:-1] == BatchEvaluator(default_config("clean")).evaluate(requests)
+    assert results[-1].error == "expected an EvaluationRequest, got str"
+    assert results[-3].error.startswith("bad tree") and results[-2].error.startswith("trials must be")
+    assert evaluator.tasks == 8  # 32 requests in chunks of at most 4
+    assert evaluator.evaluate([]) == []
+
+
+def test_every_worker_builds_its_evaluator_once_when_it_joins(client):
+    DaskEvaluator(client, "paper")
+
+    def evaluators_built() -> int:
+        from evolution_manager.cluster.evaluator import worker_evaluator
+
+        return worker_evaluator.cache_info().currsize
+
+    built = client.run(evaluators_built)
+    assert len(built) == 2 and all(n >= 1 for n in built.values())
+
+
+def test_a_run_through_dask_writes_the_bytes_of_a_local_run(client, tmp_path):
+    config = RunConfig.make("qd", "food", 120, seed=5, trials=3, profile="paper")
+    roots = {"local": tmp_path / "local", "dask": tmp_path / "dask"}
+    evaluators = {
+        "local": BatchEvaluator(default_config("paper")),
+        "dask": DaskEvaluator(client, "paper", chunk=9),
+    }
+    for name, root in roots.items():
+        run = Run.start(config, root, evaluators[name])
+        run.execute(checkpoint_interval=0)
+        write_results(run, with_figures=False, evaluator=evaluators[name])
+        run.lock.release()
+    local, dask = run_files(roots["local"]), run_files(roots["dask"])
+    assert "evaluations.csv" in local and "heldout.json" in local and "best/food.png" in local
+    assert dask == local
+    assert evaluators["dask"].tasks > 15  # the batches (and the held-out scores) went as several chunks each
+
+
+# Nothing lost when a worker dies --------------------------------------------------------------------------
+def worker_pids(client: Client) -> dict[str, int]:
+    return client.run(os.getpid)
+
+
+def wait_for(condition, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        time.sleep(0.05)
+    pytest.fail(f"no {what} within {timeout} s")
+
+
+def test_a_chunk_whose_worker_is_killed_mid_task_runs_again_elsewhere(client):
+    requests = [EvaluationRequest(tree, 7, 200) for tree in random_trees(11, 12)]  # seconds of work
+    evaluator = DaskEvaluator(client, "paper", chunk=len(requests))  # one chunk, on one worker
+    client.wait_for_workers(2)
+    pids = worker_pids(client)
+    with ThreadPoolExecutor(1) as pool:
+        answer = pool.submit(evaluator.evaluate, requests)
+        wait_for(lambda: any(client.processing().values()), 30, "chunk on a worker")
+        time.sleep(1.0)  # well inside the chunk's seconds
+        (address, keys), *_ = [(a, k) for a, k in client.processing().items() if k]
+        os.kill(pids[address], signal.SIGKILL)
+        results = answer.result(timeout=300)
+    story = client.story(keys[0])  # the chunk's transitions, on the scheduler and the workers
+    on_scheduler = [(e[2], e[3], e[5]) for e in story if e[0] == "scheduler"]
+    assert any(
+        (a, b) == ("processing", "released") and why.startswith("handle-worker-cleanup")
+        for a, b, why in on_scheduler
+    )  # taken back from the killed worker while it ran ...
+    assert on_scheduler[-1][:2] == ("processing", "memory")  # ... and computed again
+    ran_on = {e[0] for e in story if e[0] != "scheduler" and e[2:4] == ("ready", "executing")}
+    assert ran_on and address not in ran_on
+    assert results == BatchEvaluator(default_config("paper")).evaluate(requests)
+    client.wait_for_workers(2)  # the nanny restarted the killed worker
+
+
+def test_runs_on_a_dask_scheduler_equal_local_runs_even_when_a_worker_dies(cluster, tmp_path):
+    configs = [
+        RunConfig.make("qd", "nest", 200, seed=21, trials=3),  # the one whose worker is killed
+        RunConfig.make("gp", "food", 50, seed=22, trials=3, scenarios="fresh"),
+    ]
+    planned = [(config.to_json(), str(tmp_path / "dask" / f"run{k}")) for k, config in enumerate(configs)]
+    for k, config in enumerate(configs):
+        run_one(config.to_json(), str(tmp_path / "local" / f"run{k}"), checkpoint_interval=0)
+    progress: dict[str, int] = {}
+    finished = []
+    killed = threading.Event()
+    settings = parse_cluster(cluster.scheduler_address.replace("tcp://", "dask://"))
+    with open_client(settings) as client:
+        assert client is not None
+        client.wait_for_workers(2)
+        pids = worker_pids(client)
+        victim = planned[0][1]
+
+        def on_progress(root: str, produced: int) -> None:
+            progress[root] = max(progress.get(root, 0), produced)
+            if root == victim and produced > 0 and not killed.is_set():  # mid-run: checkpointed, not done
+                address = next(a for a, keys in client.processing().items() if any(root in k for k in keys))
+                killed.set()
+                os.kill(pids[address], signal.SIGKILL)
+
+        for root, error in map_runs(client, planned, checkpoint_interval=0, on_progress=on_progress):
+            assert error is None, f"{root}: {error}"
+            finished.append(root)
+    assert killed.is_set()
+    assert sorted(finished) == sorted(root for _, root in planned)
+    assert set(progress) == set(finished) and all(n > 0 for n in progress.values())
+    for k in range(len(configs)):
+        local = run_files(tmp_path / "local" / f"run{k}")
+        assert run_files(tmp_path / "dask" / f"run{k}") == local and "summary.json" in local
+
+
+def test_finished_runs_are_left_alone(client, tmp_path):
+    config = RunConfig.make("qd", "food", 50, seed=3, trials=2)
+    root = str(tmp_path / "run")
+    run_one(config.to_json(), root, checkpoint_interval=0)
+    before = {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()}
+    assert list(map_runs(client, [(config.to_json(), root)])) == [(root, None)]
+    assert {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()} == before
