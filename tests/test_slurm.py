@@ -50,3 +50,80 @@ def test_scancel_ends_a_running_job_and_its_processes(slurm: OneNodeSlurm, tmp_p
     wait_for(lambda: job_id not in slurm.jobs(), 30, "end of the cancelled job")
     wait_for(lambda: not sleeper.exists(), 10, "end of the job's process")
     wait_for(lambda: slurm.node_state() == "idle", 30, "the node idle again")
+
+
+# Dask workers as SLURM jobs (dask-jobqueue) ---------------------------------------------------------------
+def run_files(root: Path) -> dict[str, bytes]:
+    """A run directory's files but those holding wall-clock times (timing.json, checkpoint.json), its lock,
+    and its SVG drawings (matplotlib salts their clip-path names at random: two local runs differ there)."""
+    return {
+        str(p.relative_to(root)): p.read_bytes()
+        for p in sorted(root.rglob("*"))
+        if p.is_file() and p.name not in {"timing.json", "checkpoint.json", ".lock"} and p.suffix != ".svg"
+    }
+
+
+def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(slurm, tmp_path, monkeypatch):
+    import os
+
+    from evolution_manager.cluster import DaskEvaluator, SlurmSettings, map_runs, open_client
+    from evolution_manager.cluster.settings import ClusterSettings
+    from evolution_manager.config import RunConfig
+    from evolution_manager.experiment import run_one
+    from evolution_manager.outputs import write_results
+    from evolution_manager.run import Run
+    from swarm_sim.config import default_config
+    from swarm_sim.evaluation import BatchEvaluator
+
+    monkeypatch.setenv("SLURM_CONF", str(slurm.conf))  # the client commands and the jobs find this cluster
+    configs = [
+        RunConfig.make("qd", "food", 200, seed=31, trials=3),  # its job is cancelled mid-run
+        RunConfig.make("gp-fnd", None, 50, seed=32, trials=3),
+    ]
+    planned = [(c.to_json(), str(tmp_path / "slurm" / f"run{k}")) for k, c in enumerate(configs)]
+    for k, config in enumerate(configs):
+        run_one(config.to_json(), str(tmp_path / "local" / f"run{k}"), checkpoint_interval=0)
+    single = RunConfig.make("qd", "nest", 60, seed=33, trials=3)
+    in_process = BatchEvaluator(default_config(single.profile))
+    local_run = Run.start(single, tmp_path / "local" / "single", in_process)
+    local_run.execute(checkpoint_interval=0)
+    write_results(local_run, with_figures=False, evaluator=local_run.evaluator)
+    local_run.lock.release()
+
+    settings = ClusterSettings(
+        "slurm",
+        slurm=SlurmSettings(
+            cores=1, memory="1GB", walltime="00:30:00", jobs=2, log_directory=str(tmp_path / "jobs")
+        ),
+    )
+    said: list[str] = []
+    cancelled: list[str] = []
+    with open_client(settings, say=said.append) as client:
+        assert said[0] == "cluster: work goes to 2 SLURM job(s) of 1 core(s), 1GB, 00:30:00"
+        client.wait_for_workers(2, timeout=120)
+        first_jobs = set(slurm.jobs())
+        assert len(first_jobs) == 2 and set(slurm.jobs().values()) == {"RUNNING"}
+        job_of = client.run(lambda: os.environ["SLURM_JOB_ID"])  # worker address -> its SLURM job
+        assert set(job_of.values()) == first_jobs
+
+        def on_progress(root: str, produced: int) -> None:
+            if root == planned[0][1] and produced > 0 and not cancelled:  # checkpointed, not finished
+                address = next(a for a, keys in client.processing().items() if any(root in k for k in keys))
+                cancelled.append(job_of[address])
+                slurm.run(["scancel", job_of[address]])
+
+        results = dict(map_runs(client, planned, checkpoint_interval=0, on_progress=on_progress))
+        assert results == {root: None for _, root in planned}
+        assert cancelled and cancelled[0] not in slurm.jobs()
+        wait_for(lambda: set(slurm.jobs()) - first_jobs, 60, "a job submitted in place of the cancelled one")
+
+        evaluator = DaskEvaluator(client, single.profile, chunk=10)
+        run = Run.start(single, tmp_path / "slurm" / "single", evaluator)
+        run.execute(checkpoint_interval=0)
+        write_results(run, with_figures=False, evaluator=evaluator)
+        run.lock.release()
+    for k in range(len(configs)):
+        local = run_files(tmp_path / "local" / f"run{k}")
+        assert "summary.json" in local and run_files(tmp_path / "slurm" / f"run{k}") == local
+    assert run_files(tmp_path / "slurm" / "single") == run_files(tmp_path / "local" / "single")
+    wait_for(lambda: not slurm.jobs(), 60, "the worker jobs ended with the client")
