@@ -29,6 +29,9 @@ ROSDEP_KEYS = {
     "setuptools": "python3-setuptools",
     "sklearn": "python3-sklearn",
     "PIL": "python3-pil",
+    "dask": "python3-dask",
+    "distributed": "python3-distributed",
+    "dask_jobqueue": "python3-dask-jobqueue",
 }
 """Python libraries by import name, with the key their package.xml dependency uses."""
 RUN_DEPENDENCIES = ("depend", "exec_depend")
