@@ -20,7 +20,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from distributed import WorkerPlugin, wait
+from distributed import WorkerPlugin
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
@@ -122,8 +122,7 @@ class DaskEvaluator:
         ]
         self.tasks += len(futures)
         try:
-            wait(futures)
-            answers = self.client.gather(futures)
+            answers = self.client.gather(futures)  # waits: one round trip per chunk
         except FutureCancelledError as error:
             raise DispatchError(f"a chunk of evaluations was cancelled: {error}") from None
         except KilledWorker as error:  # the chunk's workers died more often than the scheduler allows
