@@ -238,16 +238,32 @@ def test_the_dask_evaluator_answers_exactly_as_the_in_process_one(client):
     assert evaluator.evaluate([]) == []
 
 
-def test_every_worker_builds_its_evaluator_once_when_it_joins(client):
-    DaskEvaluator(client, "paper")
+def test_a_changed_world_travels_whole_to_the_workers(client):
+    from swarm_sim.conditions import apply_conditions
 
-    def evaluators_built() -> int:
+    world, _ = apply_conditions(["dead-robots=3", "weak-wheel=2:0.5"], default_config("paper"))
+    requests = [EvaluationRequest(tree, 9, 4) for tree in random_trees(8, 6)]
+    results = DaskEvaluator(client, world, chunk=4).evaluate(requests)
+    assert results == BatchEvaluator(world).evaluate(requests)
+    assert results != BatchEvaluator(default_config("paper")).evaluate(requests)
+
+
+def test_every_worker_builds_the_evaluator_of_a_world_once(client):
+    from swarm_sim.conditions import apply_conditions
+
+    def built() -> int:  # evaluators built so far in this worker process
         from evolution_manager.cluster.evaluator import worker_evaluator
 
-        return worker_evaluator.cache_info().currsize
+        return worker_evaluator.cache_info().misses
 
-    built = client.run(evaluators_built)
-    assert len(built) == 2 and all(n >= 1 for n in built.values())
+    world, _ = apply_conditions(["message-loss=0.25"], default_config("clean"))  # a world no other test uses
+    before = client.run(built)
+    evaluator = DaskEvaluator(client, world, chunk=2)  # its plugin builds the evaluator on every worker
+    assert client.run(built) == {worker: n + 1 for worker, n in before.items()}
+    for seed in range(3):
+        evaluator.evaluate([EvaluationRequest(tree, seed, 2) for tree in random_trees(seed, 8)])
+    assert client.run(built) == {worker: n + 1 for worker, n in before.items()}  # 12 chunks, nothing new
+    assert evaluator.tasks == 12
 
 
 def test_a_run_through_dask_writes_the_bytes_of_a_local_run(client, tmp_path):

@@ -3,9 +3,11 @@
 A batch is cut into chunks of at most ``chunk`` evaluations (nearly equal, in order), each chunk one Dask
 task: tens of evaluations, so that the scheduler's cost per task (about a millisecond) is lost in the
 chunk's hundreds. Requests travel as plain text and numbers (tree text, seed, trials), results as numbers;
-no DEAP object is ever pickled. Each worker process builds one in-process evaluator per model profile and
-keeps it (:func:`worker_evaluator`), so numba's kernels are loaded or compiled once per process, not per
-task; :class:`CompileKernels`, a worker plugin, does that when a worker starts, before its first chunk.
+no DEAP object is ever pickled. The world is a model profile's name, or a whole ``swarm_sim`` ``Config`` (a
+changed world, as ``adapt-benchmark`` uses: a small frozen record). Each worker process builds one
+in-process evaluator per world and keeps it (:func:`worker_evaluator`), so numba's kernels are loaded or
+compiled once per process, not per task; :class:`CompileKernels`, a worker plugin, does that when a worker
+starts, before its first chunk.
 
 A chunk whose worker dies mid-task (killed, its SLURM job cancelled) is run again by the scheduler on
 another worker; since a result depends only on its request, the run's files are the same bytes as an
@@ -24,6 +26,7 @@ from distributed import WorkerPlugin
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
+from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, failed
 
 from ..errors import DispatchError
@@ -38,22 +41,27 @@ Payload = tuple[str, int, int]
 Answer = tuple[tuple[float, ...] | None, tuple[float, ...] | None, str | None]
 """A result as it travels: fitness, descriptors, error."""
 
+World = str | Config
+"""What the evaluations simulate: a model profile's name (its default configuration), or a configuration."""
+
+PLUGIN = "swarm-bt-qd-kernels"
+
 WARM_UP_TREE = "sel(on_food, forward)"
 """A small tree evaluated once per worker process to load the kernels."""
 
 
-@functools.lru_cache(maxsize=4)
-def worker_evaluator(profile: str) -> BatchEvaluator:
-    """This process's evaluator of ``profile`` (one per process, kept: its kernels load once)."""
+@functools.lru_cache(maxsize=8)
+def worker_evaluator(world: World) -> BatchEvaluator:
+    """This process's evaluator of ``world`` (one per process and world, kept: the kernels load once)."""
     from swarm_sim.config import default_config
 
-    return BatchEvaluator(default_config(profile), threads=1)
+    return BatchEvaluator(default_config(world) if isinstance(world, str) else world, threads=1)
 
 
-def evaluate_chunk(profile: str, payloads: Sequence[Payload]) -> list[Answer]:
-    """A Dask task: the answers to ``payloads`` from this worker's evaluator of ``profile``."""
+def evaluate_chunk(world: World, payloads: Sequence[Payload]) -> list[Answer]:
+    """A Dask task: the answers to ``payloads`` from this worker's evaluator of ``world``."""
     requests = [EvaluationRequest(tree=tree, seed=seed, trials=trials) for tree, seed, trials in payloads]
-    return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(profile).evaluate(requests)]
+    return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(world).evaluate(requests)]
 
 
 def chunks(count: int, most: int) -> list[range]:
@@ -72,37 +80,39 @@ def chunks(count: int, most: int) -> list[range]:
 
 class CompileKernels(WorkerPlugin):
     """A worker plugin: on every worker (those running now and those that join later), build the evaluator
-    of ``profile`` and evaluate one small tree, off the worker's event loop, before the first chunk."""
+    of ``world`` and evaluate one small tree, off the worker's event loop, before the first chunk. (The
+    kernels are the same for every world: once loaded in a process, they serve them all.)"""
 
-    def __init__(self, profile: str) -> None:
-        self.profile = profile
-        self.name = f"swarm-bt-qd-kernels-{profile}"
+    name = PLUGIN
+
+    def __init__(self, world: World) -> None:
+        self.world = world
 
     async def setup(self, worker: Worker) -> None:
-        await asyncio.to_thread(_warm_up, self.profile)
+        await asyncio.to_thread(_warm_up, self.world)
 
 
-def _warm_up(profile: str) -> None:
-    worker_evaluator(profile).evaluate([EvaluationRequest(tree=WARM_UP_TREE, seed=0, trials=1)])
+def _warm_up(world: World) -> None:
+    worker_evaluator(world).evaluate([EvaluationRequest(tree=WARM_UP_TREE, seed=0, trials=1)])
 
 
 class DaskEvaluator:
     """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``: every batch
-    cut into chunks of at most ``chunk`` evaluations of the model profile ``profile``.
+    cut into chunks of at most ``chunk`` evaluations in ``world`` (a model profile's name, or a Config).
 
     A request that is not an ``EvaluationRequest`` is answered with an error result here, as the in-process
     evaluator does; everything else is answered by the workers. A chunk that fails on every worker it is
     given to (the scheduler's allowed failures spent) raises :class:`DispatchError`."""
 
-    def __init__(self, client: Client, profile: str, chunk: int = CHUNK) -> None:
+    def __init__(self, client: Client, world: World, chunk: int = CHUNK) -> None:
         if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
             raise ValueError(f"chunk must be a positive integer, got {chunk!r}")
         self.client = client
-        self.profile = profile
+        self.world = world
         self.chunk = chunk
         self.tasks = 0
         """Chunks sent so far."""
-        client.register_plugin(CompileKernels(profile))
+        client.register_plugin(CompileKernels(world))
 
     def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
         """Evaluate every request (see ``Evaluator``): one result per request, in order."""
@@ -117,7 +127,7 @@ class DaskEvaluator:
             payloads.append((str(request.tree), int(request.seed), int(request.trials)))
         pieces = chunks(len(payloads), self.chunk)
         futures = [
-            self.client.submit(evaluate_chunk, self.profile, [payloads[k] for k in piece], pure=False)
+            self.client.submit(evaluate_chunk, self.world, [payloads[k] for k in piece], pure=False)
             for piece in pieces
         ]
         self.tasks += len(futures)
