@@ -192,6 +192,19 @@ def test_no_scheduler_at_the_address_is_one_clear_error():
     assert str(caught.value).startswith(f"--cluster dask://127.0.0.1:{port}: no Dask scheduler answers there")
 
 
+def test_a_port_that_is_not_a_dask_scheduler_is_one_clear_error():
+    with socket.socket() as server:  # listens, never speaks Dask's protocol
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        port = server.getsockname()[1]
+        settings = parse_cluster(f"dask://127.0.0.1:{port}")
+        with pytest.raises(ClusterError) as caught, open_client(settings, timeout=2):
+            pass
+    message = str(caught.value)
+    assert message.startswith(f"--cluster dask://127.0.0.1:{port}: something answers there, but not as")
+    assert "\n" not in message
+
+
 def test_slurm_not_installed_is_one_clear_error(monkeypatch, tmp_path):
     monkeypatch.setenv("PATH", str(tmp_path))  # a PATH without sbatch, squeue or scancel
     with pytest.raises(ClusterError) as caught, open_client(parse_cluster("slurm")):

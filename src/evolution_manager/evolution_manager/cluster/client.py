@@ -11,6 +11,7 @@ several worker processes, and a long experiment outlives any walltime.
 
 from __future__ import annotations
 
+import asyncio
 import importlib.util
 import logging
 import shutil
@@ -46,17 +47,37 @@ a whole run may outlive several jobs' walltimes (Dask's default is 3)."""
 
 
 def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
-    """Raise :class:`ClusterError` unless something accepts connections at ``address`` (``tcp://HOST:PORT``)."""
+    """Raise :class:`ClusterError` unless a Dask scheduler answers at ``address`` (``tcp://HOST:PORT``) within
+    ``timeout`` seconds: first a TCP connection, then Dask's ``identity`` request (a port that accepts but
+    never speaks Dask would otherwise keep a client waiting for ever)."""
     parts = urlsplit(address)
+    option = f"--cluster dask://{parts.netloc}"
     try:
         with socket.create_connection((parts.hostname, parts.port), timeout=timeout):
             pass
     except OSError as error:
         reason = error.strerror or type(error).__name__
         raise ClusterError(
-            f"--cluster dask://{parts.netloc}: no Dask scheduler answers there ({reason}); start one "
-            "(dask scheduler) or give its address"
+            f"{option}: no Dask scheduler answers there ({reason}); start one (dask scheduler) or give its "
+            "address"
         ) from None
+    from distributed.comm import connect  # imported before the clock starts
+
+    try:
+        identity = asyncio.run(asyncio.wait_for(_identity(connect, address), timeout))
+    except (OSError, TimeoutError, ValueError, TypeError) as error:
+        identity = {"error": str(error) or type(error).__name__}
+    if not isinstance(identity, dict) or identity.get("type") != "Scheduler":
+        raise ClusterError(f"{option}: something answers there, but not as a Dask scheduler")
+
+
+async def _identity(connect: Callable, address: str) -> object:
+    comm = await connect(address)
+    try:
+        await comm.write({"op": "identity"})
+        return await comm.read()
+    finally:
+        comm.abort()
 
 
 def check_slurm() -> None:
@@ -194,8 +215,10 @@ def open_client(
                 keeper.stop()
             if cluster is not None:
                 cluster.close()
-            where = settings.describe()
-            raise ClusterError(f"--cluster: cannot reach the Dask scheduler of {where}: {error}") from None
+            if settings.kind == "dask":
+                where = str(settings.address).replace("tcp://", "dask://")
+                raise ClusterError(f"--cluster {where}: the scheduler does not answer ({error})") from None
+            raise ClusterError(f"--cluster slurm: the jobs' Dask scheduler did not start ({error})") from None
         try:
             if say is not None:
                 say(f"cluster: work goes to {settings.describe()}")
