@@ -6,8 +6,9 @@
    at a time (the round trip) and many at once (the scheduler's throughput), and a chunk of ``--chunk``
    evaluations through Dask against the same chunk in-process.
 2. One run (MAP-Elites on food, the paper's batches) stopped after ``--evaluations`` evaluations, in-process
-   against through that one-worker Dask: wall time and throughput ratio (the goal: Dask at >= 95 % of
-   in-process), and a check that the two runs' evaluation logs are the same bytes.
+   against through that one-worker Dask, ``--pairs`` times each way in the order ABBA: wall time and
+   throughput ratio (the goal: Dask at >= 95 % of in-process), and a check that every run's evaluation log is
+   the same bytes.
 3. With ``--slurm-runs N`` and a SLURM reachable (``SLURM_CONF``; tests/slurm_cluster.py starts a one-node
    one): an experiment of N small runs through SLURM jobs of one core each (as many jobs as this machine has
    cores, started by dask-jobqueue) against the same runs in local processes; wall times, cluster start
@@ -93,8 +94,9 @@ def one_run(evaluator: object, root: Path, evaluations: int) -> float:
     return wall
 
 
-def run_comparison(client: object, evaluations: int, chunk: int, work: Path) -> dict[str, float]:
-    """In-process against one-worker Dask for the same run; raise if their evaluation logs differ."""
+def run_comparison(client: object, evaluations: int, chunk: int, work: Path, pairs: int) -> dict[str, float]:
+    """In-process against one-worker Dask for the same run, ``pairs`` times in the order ABBA... (so that a
+    load that drifts weighs on both alike); raise if any two runs' evaluation logs differ."""
     from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
@@ -103,12 +105,17 @@ def run_comparison(client: object, evaluations: int, chunk: int, work: Path) -> 
     local = BatchEvaluator(default_config(PROFILE))
     local.evaluate([EvaluationRequest(WARM_UP_TREE, 0, 1)])  # kernels loaded before the clock, as ...
     dask = DaskEvaluator(client, PROFILE, chunk)  # type: ignore[arg-type]  # ... on the worker (its plugin)
-    t_local = one_run(local, work / "local", evaluations)
-    t_dask = one_run(dask, work / "dask", evaluations)
-    logs = [(work / name / "evaluations.csv").read_bytes() for name in ("local", "dask")]
-    if logs[0] != logs[1]:
-        raise RuntimeError("the run through Dask logged other evaluations than the run in-process")
-    return {"local_s": t_local, "dask_s": t_dask, "tasks": dask.tasks}
+    evaluators = {"local": local, "dask": dask}
+    seconds: dict[str, list[float]] = {"local": [], "dask": []}
+    order = [("local", "dask"), ("dask", "local")]
+    for k in range(pairs):
+        for name in order[k % 2]:
+            seconds[name].append(one_run(evaluators[name], work / f"{name}{k}", evaluations))
+            print(f"  {name}: {seconds[name][-1]:.1f} s ({_load()})", flush=True)
+    logs = {(work / f"{name}{k}" / "evaluations.csv").read_bytes() for name in seconds for k in range(pairs)}
+    if len(logs) != 1:
+        raise RuntimeError("the runs through Dask logged other evaluations than the runs in-process")
+    return {"local_s": sum(seconds["local"]), "dask_s": sum(seconds["dask"]), "tasks": dask.tasks / pairs}
 
 
 def slurm_comparison(runs: int, evaluations: int, work: Path) -> dict[str, float]:
@@ -149,6 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--evaluations", type=positive_int, default=6000, help="of the run (default 6000)")
     parser.add_argument("--chunk", type=positive_int, default=25, help="evaluations per task (default 25)")
     parser.add_argument("--tasks", type=positive_int, default=300, help="empty tasks timed (default 300)")
+    parser.add_argument("--pairs", type=positive_int, default=2, help="runs each way, ABBA (default 2)")
     parser.add_argument("--slurm-runs", type=int, default=0, help="runs compared on SLURM (default: none)")
     parser.add_argument("--slurm-evaluations", type=positive_int, default=300, help="each (default 300)")
     return parser
@@ -178,10 +186,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{o['chunk_dask_ms']:.1f} ms through Dask (+{o['chunk_dask_ms'] - o['chunk_local_ms']:.1f} ms)",
             flush=True,
         )
-        r = run_comparison(client, args.evaluations, args.chunk, Path(tmp))
+        r = run_comparison(client, args.evaluations, args.chunk, Path(tmp), args.pairs)
         print(
-            f"one run of {args.evaluations} evaluations: {r['local_s']:.1f} s in-process, "
-            f"{r['dask_s']:.1f} s through Dask with one worker ({r['tasks']} tasks of <= {args.chunk}); "
+            f"one run of {args.evaluations} evaluations, {args.pairs} times each way: {r['local_s']:.1f} s "
+            f"in-process, {r['dask_s']:.1f} s through Dask with one worker ({r['tasks']:.0f} tasks per "
+            "run); "
             f"throughput through Dask {100 * r['local_s'] / r['dask_s']:.1f} % of in-process (goal >= 95 %); "
             "same evaluations.csv",
             flush=True,

@@ -1,13 +1,14 @@
 """One run's batches on Dask workers: :class:`DaskEvaluator`, an evaluator of the run loop's contract.
 
-A batch is cut into chunks of at most ``chunk`` evaluations (nearly equal, in order), each chunk one Dask
-task: tens of evaluations, so that the scheduler's cost per task (about a millisecond) is lost in the
-chunk's hundreds. Requests travel as plain text and numbers (tree text, seed, trials), results as numbers;
-no DEAP object is ever pickled. The world is a model profile's name, or a whole ``swarm_sim`` ``Config`` (a
-changed world, as ``adapt-benchmark`` uses: a small frozen record). Each worker process builds one
-in-process evaluator per world and keeps it (:func:`worker_evaluator`), so numba's kernels are loaded or
-compiled once per process, not per task; :class:`CompileKernels`, a worker plugin, does that when a worker
-starts, before its first chunk.
+A batch is cut into nearly equal chunks, in order, each one Dask task: as many chunks as the cluster has
+worker threads, but none smaller than ``chunk`` evaluations (25), so that the cost of a task (about a
+millisecond on an idle machine, tens under load) is lost in the chunk's hundreds, and a worker gets one task
+per batch rather than several in a row. Requests travel as plain text and numbers (tree text, seed, trials),
+results as numbers; no DEAP object is ever pickled. The world is a model profile's name, or a whole
+``swarm_sim`` ``Config`` (a changed world, as ``adapt-benchmark`` uses: a small frozen record). Each worker
+process builds one in-process evaluator per world and keeps it (:func:`worker_evaluator`), so numba's
+kernels are loaded or compiled once per process, not per task; :class:`CompileKernels`, a worker plugin,
+does that when a worker starts, before its first chunk.
 
 A chunk whose worker dies mid-task (killed, its SLURM job cancelled) is run again by the scheduler on
 another worker; since a result depends only on its request, the run's files are the same bytes as an
@@ -19,6 +20,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import math
+import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -46,6 +48,9 @@ World = str | Config
 
 PLUGIN = "swarm-bt-qd-kernels"
 
+RECOUNT = 10.0
+"""Seconds between two counts of the cluster's worker threads (workers come and go)."""
+
 WARM_UP_TREE = "sel(on_food, forward)"
 """A small tree evaluated once per worker process to load the kernels."""
 
@@ -64,11 +69,13 @@ def evaluate_chunk(world: World, payloads: Sequence[Payload]) -> list[Answer]:
     return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(world).evaluate(requests)]
 
 
-def chunks(count: int, most: int) -> list[range]:
-    """``range(count)`` cut, in order, into the fewest nearly equal pieces of at most ``most`` items."""
+def chunks(count: int, least: int, threads: int) -> list[range]:
+    """``range(count)`` cut, in order, into nearly equal pieces: one per thread (``threads`` <= 0: unknown, as
+    many as can be), but none smaller than ``least`` items (unless the whole is)."""
     if count == 0:
         return []
-    pieces = math.ceil(count / most)
+    most = max(1, count // least)
+    pieces = most if threads <= 0 else min(threads, most)
     size, extra = divmod(count, pieces)
     out, start = [], 0
     for k in range(pieces):
@@ -97,22 +104,33 @@ def _warm_up(world: World) -> None:
 
 
 class DaskEvaluator:
-    """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``: every batch
-    cut into chunks of at most ``chunk`` evaluations in ``world`` (a model profile's name, or a Config).
+    """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``, in
+    ``world`` (a model profile's name, or a Config): every batch cut into one chunk per worker thread, of
+    at least ``chunk`` evaluations; the threads are counted by the scheduler at most every ``recount`` s.
 
     A request that is not an ``EvaluationRequest`` is answered with an error result here, as the in-process
     evaluator does; everything else is answered by the workers. A chunk that fails on every worker it is
     given to (the scheduler's allowed failures spent) raises :class:`DispatchError`."""
 
-    def __init__(self, client: Client, world: World, chunk: int = CHUNK) -> None:
+    def __init__(self, client: Client, world: World, chunk: int = CHUNK, recount: float = RECOUNT) -> None:
         if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
             raise ValueError(f"chunk must be a positive integer, got {chunk!r}")
         self.client = client
         self.world = world
         self.chunk = chunk
+        self.recount = recount
         self.tasks = 0
         """Chunks sent so far."""
+        self._threads = 0
+        self._counted = -math.inf
         client.register_plugin(CompileKernels(world))
+
+    def threads(self) -> int:
+        """Worker threads of the cluster (0 while it has none), asked at most every ``recount`` seconds."""
+        if time.monotonic() - self._counted >= self.recount:
+            self._threads = sum(self.client.nthreads().values())
+            self._counted = time.monotonic()
+        return self._threads
 
     def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
         """Evaluate every request (see ``Evaluator``): one result per request, in order."""
@@ -125,11 +143,10 @@ class DaskEvaluator:
                 continue
             sent.append(i)
             payloads.append((str(request.tree), int(request.seed), int(request.trials)))
-        pieces = chunks(len(payloads), self.chunk)
-        futures = [
-            self.client.submit(evaluate_chunk, self.world, [payloads[k] for k in piece], pure=False)
-            for piece in pieces
-        ]
+        pieces = chunks(len(payloads), self.chunk, self.threads() if payloads else 0)
+        futures = self.client.map(
+            evaluate_chunk, [self.world] * len(pieces), [[payloads[k] for k in p] for p in pieces], pure=False
+        )
         self.tasks += len(futures)
         try:
             answers = self.client.gather(futures)  # waits: one round trip per chunk

@@ -32,7 +32,7 @@ from ..errors import EvolutionError
 KINDS = ("local", "dask", "slurm")
 
 CHUNK = 25
-"""Most evaluations of a single run sent as one Dask task (see :class:`~.evaluator.DaskEvaluator`)."""
+"""Fewest evaluations of a single run sent as one Dask task (see :class:`~.evaluator.DaskEvaluator`)."""
 
 IMAGE_PYTHON = "/workspace/ws/python"
 """The Python of the project's image (``docker/Dockerfile``): a worker's Python in a container by default."""
