@@ -2,7 +2,7 @@
 
 A batch is cut into nearly equal chunks, in order, each one Dask task: as many chunks as the cluster has
 worker threads, but none smaller than ``chunk`` evaluations (25), so that the cost of a task (about a
-millisecond on an idle machine, tens under load) is lost in the chunk's hundreds, and a worker gets one task
+millisecond by Dask's own figure, tens under load) is lost in the chunk's hundreds, and a worker gets one task
 per batch rather than several in a row. Requests travel as plain text and numbers (tree text, seed, trials),
 results as numbers; no DEAP object is ever pickled. The world is a model profile's name, or a whole
 ``swarm_sim`` ``Config`` (a changed world, as ``adapt-benchmark`` uses: a small frozen record). Each worker
