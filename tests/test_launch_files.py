@@ -10,8 +10,8 @@ import pytest
 import yaml
 from ament_index_python.packages import get_package_share_directory
 
-from evolution_manager.graph import GraphError, executable, package_config, trial_graph_nodes
-from evolution_manager.nodes.manager import ManagerParameters
+from evolution_manager.graph.nodes.manager import ManagerParameters
+from evolution_manager.graph.startup import GraphError, executable, package_config, trial_graph_nodes
 from swarm_sim.config import DEFAULT
 
 LAUNCH_DIR = Path(get_package_share_directory("evolution_manager")) / "launch"

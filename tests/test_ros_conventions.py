@@ -16,10 +16,10 @@ from visualization_msgs.msg import MarkerArray
 
 from bt_controller.random_trees import random_trees
 from bt_controller.vocabulary import ACTIONS
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import Graph, executable
-from evolution_manager.nodes.trial import TrialGraph, expected_messages
-from evolution_manager.reproduce import RESULT_TOPIC
+from evolution_manager.graph.nodes.trial import TrialGraph, expected_messages
+from evolution_manager.graph.startup import Graph, executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED

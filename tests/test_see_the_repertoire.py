@@ -17,10 +17,10 @@ from PIL import Image
 from bt_controller import timeline
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
-from evolution_manager.animation import frames_from_bag, frames_from_tree
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import executable
-from evolution_manager.nodes.trial import TrialGraph
+from evolution_manager.graph.nodes.trial import TrialGraph
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.config import DEFAULT
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, in_nest, stop))"

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import RunDirectoryError
+from evolution_manager.errors import RunDirectoryError
 
 
 def write_atomic(path: Path, data: str | bytes) -> None:

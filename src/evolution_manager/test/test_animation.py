@@ -11,15 +11,15 @@ import pytest
 from PIL import Image
 
 from bt_controller import timeline
-from evolution_manager.animation import (
+from evolution_manager.errors import AnimationError
+from evolution_manager.viewing.animate import (
     ROBOT_COLOURS,
-    frames_from_tree,
     main,
     render_frame,
     to_pixels,
     write_animation,
 )
-from evolution_manager.errors import AnimationError
+from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
