@@ -10,6 +10,8 @@ from evolution_manager.errors import UsageError
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+EXIT_IO = 74
+"""A result or checkpoint could not be written (sysexits' EX_IOERR): a full disk, a read-only folder."""
 
 
 class Parser(argparse.ArgumentParser):

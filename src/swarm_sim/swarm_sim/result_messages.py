@@ -22,6 +22,17 @@ OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
 """The objectives a result's ``fitness`` field may report."""
 
 
+class ResultValues(Protocol):
+    """What a result of the evaluator contract holds (``EvaluationResult``, a run's ``Outcome``)."""
+
+    @property
+    def fitness(self) -> tuple[float, ...] | None: ...
+    @property
+    def descriptors(self) -> tuple[float, ...] | None: ...
+    @property
+    def error(self) -> str | None: ...
+
+
 class PoseMessage(Protocol):
     """The fields read from a ``swarm_msgs/msg/RobotPose``."""
 
@@ -62,13 +73,21 @@ def result_fields(
     error: str = "",
     *,
     profile: str,
+    cached: bool = False,
 ) -> dict[str, Any]:
     """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (the six, ``VALUE_NAMES`` order) or
     None with ``error`` saying why the tree could not be evaluated; ``fitness`` is the ``objective``'s
-    value; ``profile`` the model's profile it was evaluated under."""
+    value; ``profile`` the model's profile it was evaluated under; ``cached`` when a run answered it from
+    its cache instead of simulating it again."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    fields: dict[str, Any] = {"tree": tree, "seed": int(seed), "trials": int(trials), "profile": profile}
+    fields: dict[str, Any] = {
+        "tree": tree,
+        "seed": int(seed),
+        "trials": int(trials),
+        "profile": profile,
+        "cached": cached,
+    }
     if values is None:
         return {**fields, "ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
     named = {name: float(v) for name, v in zip(VALUE_NAMES, values, strict=True)}
@@ -76,13 +95,21 @@ def result_fields(
 
 
 def evaluation_fields(
-    tree: str, seed: int, trials: int, result: EvaluationResult, objective: str, *, profile: str
+    tree: str,
+    seed: int,
+    trials: int,
+    result: ResultValues,
+    objective: str,
+    *,
+    profile: str,
+    cached: bool = False,
 ) -> dict[str, Any]:
-    """``result_fields`` of an evaluator contract's result."""
+    """``result_fields`` of an evaluator contract's result (or anything with its three fields)."""
     if result.error is not None or result.fitness is None or result.descriptors is None:
-        return result_fields(tree, seed, trials, None, objective, result.error or "", profile=profile)
+        error = result.error or ""
+        return result_fields(tree, seed, trials, None, objective, error, profile=profile, cached=cached)
     values = (*result.fitness, *result.descriptors)
-    return result_fields(tree, seed, trials, values, objective, profile=profile)
+    return result_fields(tree, seed, trials, values, objective, profile=profile, cached=cached)
 
 
 def values_of(msg: object) -> tuple[float, ...]:

@@ -32,10 +32,12 @@ import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
+from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.algorithms import Outcome, as_outcome
+from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
-from evolution_manager.files import read_json, read_json_object
+from evolution_manager.files import read_json_object
 
 
 class AdaptationError(EvolutionError, ValueError):
@@ -60,15 +62,21 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
     path = Path(run_dir) / f"repertoire_{objective}.json"
     if not path.is_file():
         raise AdaptationError(f"{run_dir} holds no repertoire of {objective} (no {path.name})")
+    grid = Repertoire()
     try:
-        document = read_json(path)
+        document = read_json_object(path)
         best: dict[tuple[int, ...], Candidate] = {}
-        for item in document["items"]:  # type: ignore[index]  # a repertoire file is a JSON object
-            index = tuple(int(v) for v in item["bin"])
+        for item in document["items"]:
+            index = tuple(integer(v, "a bin index") for v in item["bin"])
             descriptors = tuple(float(v) for v in item["descriptors"])
             fitness = float(item["fitness"])
             if len(descriptors) != 3 or not all(0.0 <= d <= 1.0 for d in descriptors):
                 raise ValueError(f"descriptors of bin {list(index)} are not three values in [0, 1]")
+            if index != grid.bin_of(descriptors):
+                raise ValueError(
+                    f"bin {list(index)} is not the bin {list(grid.bin_of(descriptors))} of its descriptors "
+                    f"{list(descriptors)} in the {'x'.join(map(str, grid.shape))} grid"
+                )
             if not math.isfinite(fitness):
                 raise ValueError(f"fitness of bin {list(index)} is not finite")
             if index not in best or fitness > best[index].prior:

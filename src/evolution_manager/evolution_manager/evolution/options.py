@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
-from evolution_manager.evolution.config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
+from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
 
 if TYPE_CHECKING:  # imported where used: tqdm loads slowly, and not every command needs it
     from tqdm import tqdm

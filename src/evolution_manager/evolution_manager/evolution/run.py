@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bt_controller.validate import integer
 from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire
@@ -54,6 +55,9 @@ if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluate
 LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
 
 CHECKPOINT_FORMAT = 1
+
+_DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
+"""What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
 
 EVALUATION_HEADER = ["evaluation", "seed", "tree", *OBJECTIVES, *DESCRIPTORS, "error"]
 PROGRESS_HEADER = ["evaluations"] + [f"{m}_{o}" for o in OBJECTIVES for m in ("best", "coverage", "qd_score")]
@@ -70,6 +74,16 @@ def _request_type() -> type[EvaluationRequest]:
     from swarm_sim.evaluation import EvaluationRequest
 
     return EvaluationRequest
+
+
+@dataclass(frozen=True)
+class Evaluated:
+    """One evaluation of a batch as the run recorded it: the request, its outcome, and whether it was
+    answered from the run's cache (under fixed scenarios, a tree seen before is not simulated again)."""
+
+    request: EvaluationRequest
+    outcome: Outcome
+    cached: bool
 
 
 @dataclass
@@ -131,6 +145,8 @@ class Run:
         self.known: dict[str, Outcome] = {}
         """Every tree text evaluated in this run with its outcome (answers repeats under ``fixed``)."""
         self.simulations = 0
+        self.last_batch: list[Evaluated] = []
+        """The batch evaluated last, every evaluation of it (for whoever records the run, e.g. a bag)."""
         self.simulations_saved = 0
         self._first: dict[str, int] = {}
         self.evaluations = 0
@@ -214,7 +230,7 @@ class Run:
         """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
         try:
             config = RunConfig.from_json(read_json_object(directory.config))
-        except (KeyError, TypeError, ValueError) as error:
+        except _DAMAGE as error:
             raise RunDirectoryError(f"{directory.config} is damaged: {error}") from error
         state = read_json(directory.checkpoint)
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
@@ -229,8 +245,13 @@ class Run:
                 )
             run.algorithm.restore(state["algorithm"])
             run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
-            run.evaluations = int(state["evaluations"])
-            run.offsets = {k: int(state["offsets"][k]) for k in ("evaluations", "progress")}
+            run.evaluations = integer(state["evaluations"], "evaluations", 0)
+            logs = {"evaluations": directory.evaluations, "progress": directory.progress}
+            for name, log in logs.items():
+                offset = integer(state["offsets"][name], f"offsets.{name}", 0)
+                if offset > log.size():
+                    raise ValueError(f"offsets.{name} {offset} is beyond the end of {log.path.name}")
+                run.offsets[name] = offset
             run.timing = Timing(**state["timing"])
             for objective, grid in state.get("generations", {}).items():
                 run.generations[objective] = Repertoire.from_state(grid)
@@ -243,7 +264,15 @@ class Run:
                 raise ValueError(
                     f"the algorithm counts {run.algorithm.evaluations} evaluations, the run {run.evaluations}"
                 )
-        except (KeyError, TypeError, ValueError, AttributeError, IndexError, EvolutionError) as error:
+        except (
+            KeyError,
+            TypeError,
+            ValueError,
+            AttributeError,
+            IndexError,
+            OverflowError,
+            EvolutionError,
+        ) as error:
             if isinstance(error, RunDirectoryError):
                 raise
             raise RunDirectoryError(f"{directory.checkpoint} is damaged: {error}") from error
@@ -299,7 +328,8 @@ class Run:
                 for i, tree in enumerate(trees)
             ]
             asked = time.perf_counter()
-            results = self._evaluate(requests)
+            self.last_batch = self._evaluate(requests)
+            results = [e.outcome for e in self.last_batch]
             evaluated = time.perf_counter()
             self.algorithm.tell(results)
             self._record(requests, results)
@@ -317,35 +347,37 @@ class Run:
             before_checkpoint()
         self._timed_checkpoint()
 
-    def _evaluate(self, requests: Sequence[EvaluationRequest]) -> list[Outcome]:
-        """Outcomes of ``requests``: under ``fixed`` scenarios a tree seen before in the run (or earlier in
+    def _evaluate(self, requests: Sequence[EvaluationRequest]) -> list[Evaluated]:
+        """Every request evaluated: under ``fixed`` scenarios a tree seen before in the run (or earlier in
         the batch) is answered from the cache; the others go to the evaluator in one batch."""
         if self.evaluator is None:
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
-        outcomes: list[Outcome | None] = [None] * len(requests)
         fresh: list[EvaluationRequest] = []
         fresh_at: list[int] = []  # the position in ``requests`` of each fresh request
-        first_of: dict[str, int] = {}
+        fresh_trees: set[str] = set()
         for i, request in enumerate(requests):
-            if self._cached(request.tree):
-                outcomes[i] = self.known[request.tree]
+            # a tree seen before, or earlier in this batch (answered from its first copy below)
+            if self._cached(request.tree) or (
+                self.config.scenarios == "fixed" and request.tree in fresh_trees
+            ):
                 self.simulations_saved += 1
-            elif self.config.scenarios == "fixed" and request.tree in first_of:
-                self.simulations_saved += 1  # filled from the batch's first copy below
             else:
-                first_of[request.tree] = len(fresh)
                 fresh.append(request)
                 fresh_at.append(i)
+                fresh_trees.add(request.tree)
         results = list(self.evaluator.evaluate(fresh)) if fresh else []
         if len(results) != len(fresh):
             raise RunDirectoryError(f"the evaluator answered {len(results)} of {len(fresh)} requests")
         self.simulations += len(fresh)
+        simulated: dict[int, Outcome] = {}
         for i, request, result in zip(fresh_at, fresh, results, strict=True):
             # Under fresh scenarios a tree asked twice is simulated twice, on two seeds: each request keeps
             # its own result (the cache serves fixed scenarios only).
-            outcomes[i] = self.known[request.tree] = as_outcome(result)
-        # the rest are copies of a tree answered earlier (in the run or in this batch)
-        return [self.known[r.tree] if o is None else o for o, r in zip(outcomes, requests, strict=True)]
+            simulated[i] = self.known[request.tree] = as_outcome(result)
+        return [
+            Evaluated(r, simulated[i], False) if i in simulated else Evaluated(r, self.known[r.tree], True)
+            for i, r in enumerate(requests)
+        ]
 
     def _offer_generations(self) -> None:
         """GP: every individual of each generation completed, to the one-per-bin grids."""

@@ -163,18 +163,18 @@ class RunConfig:
             return cls(
                 str(data["algorithm"]),
                 None if data["objective"] is None else str(data["objective"]),
-                int(data["evaluations"]),
-                int(data["seed"]),
-                int(data["trials"]),
+                integer(data["evaluations"], "evaluations"),
+                integer(data["seed"], "seed"),
+                integer(data["trials"], "trials"),
                 gp=GPParameters(**gp),
                 qd=QDParameters(**qd),
                 # run directories written before scenarios existed drew a fresh seed per evaluation
                 scenarios=str(data.get("scenarios", "fresh")),
-                scenario_seed=int(data.get("scenario_seed", -1)),
+                scenario_seed=integer(data.get("scenario_seed", -1), "scenario_seed"),
                 # run directories written before profiles existed ran the model's default
                 profile=str(data.get("profile", DEFAULT_PROFILE)),
             )
-        except (KeyError, TypeError, ValueError) as error:
+        except (KeyError, TypeError, ValueError, OverflowError) as error:
             if isinstance(error, ConfigError):
                 raise
             raise ConfigError(f"not a run configuration: {error}") from error

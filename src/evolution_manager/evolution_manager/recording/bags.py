@@ -26,10 +26,16 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 from evolution_manager.errors import BagError
-from evolution_manager.processes import Lock, exclusive_lock, is_locked, lock_holder
+from evolution_manager.processes import Lock, exclusive_lock, is_locked, lock_holder, lock_path_for
 
 INTERFACE_PACKAGE = "swarm_msgs"
-LOCK_NAME = ".lock"  # in a bag directory while a recorder writes it
+
+
+def bag_lock(path: Path) -> Path:
+    """The lock a recorder holds while it writes the bag at ``path``. It lives outside the bag folder (in
+    the machine's temporary folder, named by the bag's full path), so that a killed recorder leaves nothing
+    in the folder but the bag; lock files are never deleted (see ``exclusive_lock``)."""
+    return lock_path_for(Path(path), "bag")
 
 
 def swarm_msgs_definitions() -> dict[str, str]:
@@ -84,7 +90,7 @@ class BagRecorder:
             self._writer = None
             check_new_bag(self.path)
             raise BagError(f"cannot write a bag at {self.path}: {error}") from None
-        self._lock = exclusive_lock(self.path / LOCK_NAME, f"the bag {self.path}")
+        self._lock = exclusive_lock(bag_lock(self.path), f"the bag {self.path}")
         return self
 
     def __exit__(self, *exc_info: object) -> None:
@@ -92,7 +98,6 @@ class BagRecorder:
             self._writer.close()
             self._writer = None
         if self._lock is not None:
-            (self.path / LOCK_NAME).unlink(missing_ok=True)  # our own directory: nobody else opens it
             self._lock.release()
             self._lock = None
 
@@ -159,7 +164,7 @@ def check_new_bag(path: Path) -> None:
     if one is)."""
     if not path.exists():
         return
-    lock = path / LOCK_NAME
+    lock = bag_lock(path)
     if is_locked(lock):
         holder = lock_holder(lock)
         raise BagError(f"{path} is being written by {f'process {holder}' if holder else 'another process'}")
@@ -168,7 +173,7 @@ def check_new_bag(path: Path) -> None:
 
 def check_not_being_written(path: Path) -> None:
     """Raise ``BagError`` when a live recorder still writes the bag at ``path``."""
-    lock = Path(path) / LOCK_NAME
+    lock = bag_lock(path)
     if is_locked(lock):
         holder = lock_holder(lock)
         raise BagError(

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from evolution_manager.arguments import EXIT_INTERRUPTED, EXIT_USAGE, Parser, positive_int, seconds, seed_int
-from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import (
     add_scenario_options,
     check_resume_options,
@@ -24,6 +24,7 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
+from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from swarm_sim.evaluation import Evaluator
@@ -101,6 +102,9 @@ def evolve(argv: Sequence[str] | None = None) -> int:
             assert config is not None  # made from the options when not resuming
             evaluator = _evaluator(args.workers, config.profile)
             run = Run.start(config, args.out, evaluator)
+    except WriteError as error:  # the new run directory could not be written
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_IO
     except (UsageError, EvolutionError) as error:
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_USAGE
@@ -119,16 +123,23 @@ def evolve(argv: Sequence[str] | None = None) -> int:
                 )
             )
 
+    resume = f"continue with: evolve --out {args.out} --resume"
     try:
-        run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
-    except KeyboardInterrupt:
+        with signals_as_interrupts():
+            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+            if bar is not None:
+                bar.close()
+            write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+    except KeyboardInterrupt as interruption:  # Ctrl-C or SIGTERM: the last checkpoint holds the run
         if bar is not None:
             bar.close()
-        print(f"evolve: interrupted; continue with: evolve --out {args.out} --resume", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    if bar is not None:
-        bar.close()
-    write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+        print(f"evolve: interrupted; {resume}", file=sys.stderr)
+        return exit_status(interruption)
+    except WriteError as error:  # a full disk: what was saved is whole (atomic files, logs cut on resume)
+        if bar is not None:
+            bar.close()
+        print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
+        return EXIT_IO
     print(result_lines(run, args.out))
     return 0
 

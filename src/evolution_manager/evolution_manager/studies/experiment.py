@@ -31,8 +31,16 @@ from multiprocessing import Manager, get_context
 from pathlib import Path
 
 from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
-from evolution_manager.arguments import EXIT_INTERRUPTED, EXIT_USAGE, Parser, positive_int, seconds, seed_int
-from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.arguments import (
+    EXIT_INTERRUPTED,
+    EXIT_IO,
+    EXIT_USAGE,
+    Parser,
+    positive_int,
+    seconds,
+    seed_int,
+)
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
@@ -263,6 +271,7 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             disable=None,
         )
     failures = []
+    full_disk = False  # a run could not write its files: what each saved is whole, the command continues it
     finished_now = 0
     try:
         with (
@@ -289,6 +298,7 @@ def experiment(argv: Sequence[str] | None = None) -> int:
                         record_session(args.out, started, command, finished_now)
                     except Exception as error:  # a failed run is reported, the others go on
                         failures.append(f"{futures[future]}: {error}")
+                        full_disk = full_disk or isinstance(error, WriteError)
                 if bar is not None:
                     bar.n = sum(done.values())
                     bar.set_description(
@@ -305,6 +315,12 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             bar.close()
     if failures:
         print("experiment: some runs failed:\n  " + "\n  ".join(failures), file=sys.stderr)
+        if full_disk:
+            print(
+                f"experiment: make room, then run the same command again to continue ({args.out})",
+                file=sys.stderr,
+            )
+            return EXIT_IO
         return 1
     report = build_report(args.out)
     print(f"experiment: {len(planned)} runs in {args.out}; report: {report}")

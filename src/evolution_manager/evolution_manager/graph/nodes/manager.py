@@ -62,8 +62,8 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int, seconds, seed_int
-from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.options import (
     add_scenario_options,
@@ -152,20 +152,6 @@ class ManagerNode(Node):
         self.progress = self.create_publisher(ArchiveProgress, PROGRESS_TOPIC.lstrip("/"), 10)
 
 
-class _Remember:
-    """An evaluator that keeps the last batch it evaluated, for the recording after each batch."""
-
-    def __init__(self, evaluator: ServiceEvaluator) -> None:
-        self.evaluator = evaluator
-        self.requests: Sequence = ()
-        self.results: Sequence = ()
-
-    def evaluate(self, requests: Sequence) -> list:
-        self.requests = requests
-        self.results = self.evaluator.evaluate(requests)
-        return list(self.results)
-
-
 class RunRecording:
     """Publishes and records, after each batch, its evaluations and the grids' progress."""
 
@@ -183,14 +169,21 @@ class RunRecording:
         publisher.publish(msg)
         self.recorder.write_cdr(topic, msgtype, self._stamp(), serialize_message(msg))
 
-    def batch(self, run: Run, requests: Sequence, results: Sequence) -> None:
-        """Record the batch just told to the algorithm (``run.evaluations`` already counts it): the
-        evaluations simulated for it (under fixed scenarios, trees answered from the run's cache are not
-        sent, so not recorded again) and the repertoires' progress."""
+    def batch(self, run: Run) -> None:
+        """Record the batch just told to the algorithm (``run.evaluations`` already counts it): every
+        evaluation of it, in order, those answered from the run's cache marked ``cached``, and the
+        repertoires' progress."""
         objective = self.config.objective or OBJECTIVES[0]
-        for request, result in zip(requests, results, strict=True):
+        for e in run.last_batch:
+            request = e.request
             fields = evaluation_fields(
-                request.tree, request.seed, request.trials, result, objective, profile=self.config.profile
+                request.tree,
+                request.seed,
+                request.trials,
+                e.outcome,
+                objective,
+                profile=self.config.profile,
+                cached=e.cached,
             )
             msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
@@ -224,12 +217,11 @@ def bag_path(out: Path) -> Path:
     return out / ("run.bag" if k == 0 else f"run.resume-{k}.bag")
 
 
-def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
-    """Cut the run's bags back to the checkpoint: its first ``simulations`` evaluation messages (only
-    simulated evaluations are recorded: under fixed scenarios a repeated tree is answered from the run's
-    cache) and the progress of its first ``evaluations``. A segment left by a killed manager is rewritten as
-    a whole bag, and messages past the checkpoint (they will be recorded again) are dropped, so that the bags
-    hold each simulated evaluation once. Return how many evaluation messages the bags hold."""
+def settle_bags(out: Path, evaluations: int) -> int:
+    """Cut the run's bags back to the checkpoint: the messages of its first ``evaluations`` evaluations and
+    the progress after them. A segment left by a killed manager is rewritten as a whole bag, and messages
+    past the checkpoint (they will be recorded again) are dropped, so that the bags hold each evaluation
+    once. Return how many evaluation messages the bags hold."""
     finish_rewrites(out)
     seen = 0
     for segment in bag_segments(out):
@@ -239,7 +231,7 @@ def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
         def keep(topic: str, msgtype: str, timestamp: int, data: bytes, state: dict = state) -> bool:
             if topic == EVALUATIONS_TOPIC:
                 state["evaluations"] += 1
-                return state["evaluations"] <= simulations
+                return state["evaluations"] <= evaluations
             if topic == PROGRESS_TOPIC:
                 return deserialize_message(data, ArchiveProgress).evaluations <= evaluations
             return True
@@ -247,9 +239,9 @@ def settle_bags(out: Path, simulations: int, evaluations: int) -> int:
         count: int | None = None  # unknown for a segment left by a killed manager
         if (segment / "metadata.yaml").exists():
             count = topic_counts(segment).get(EVALUATIONS_TOPIC, 0)
-        if count is None or start + count > simulations:
+        if count is None or start + count > evaluations:
             rewrite_bag(segment, keep)
-            count = min(state["evaluations"], simulations) - start
+            count = min(state["evaluations"], evaluations) - start
         seen = start + count
     return seen
 
@@ -344,10 +336,9 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
         rclpy.try_shutdown()
         return EXIT_USAGE
     graph = Graph(int(os.environ.get("ROS_DOMAIN_ID", "0")))
-    evaluator = _Remember(services)
     try:
         try:
-            run = _open_run(args, evaluator)
+            run = _open_run(args, services)
         except OSError as error:  # an --out that cannot be created or written
             raise UsageError(f"{args.out}: {error.strerror or error}") from None
         services.profile = run.config.profile
@@ -367,10 +358,16 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
                 "evaluator nodes (ws/run swarm_sim evaluator) or use --evaluators K"
             )
         logger.info(f"ready: {len(ready)} evaluator(s): {', '.join(ready)}; run directory {args.out}")
-        return _execute(args, node, run, evaluator)
+        return _execute(args, node, run, services)
     except (DispatchError, GraphError, BagError) as error:
         print(f"manager: error: {error}; continue with --resume --out {args.out}", file=sys.stderr)
         return EXIT_FAILED
+    except WriteError as error:  # a full disk: what was saved is whole
+        print(
+            f"manager: error: {error}; make room, then continue with --resume --out {args.out}",
+            file=sys.stderr,
+        )
+        return EXIT_IO
     except (UsageError, EvolutionError) as error:
         print(f"manager: error: {error}", file=sys.stderr)
         return EXIT_USAGE
@@ -387,13 +384,13 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
         rclpy.try_shutdown()
 
 
-def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _Remember) -> int:
+def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, services: ServiceEvaluator) -> int:
     out = Path(args.out)
-    recorded = settle_bags(out, run.simulations, run.evaluations)
-    if recorded < run.simulations:
+    recorded = settle_bags(out, run.evaluations)
+    if recorded < run.evaluations:
         node.get_logger().warning(
-            f"the run's bags hold {recorded} of the {run.simulations} simulated evaluations of the "
-            "checkpoint (a bag segment was removed or damaged)"
+            f"the run's bags hold {recorded} of the {run.evaluations} evaluations of the checkpoint (a bag "
+            "segment was removed or damaged, or was written before cached evaluations were recorded)"
         )
     bar = progress_bar(run.config, run.algorithm.produced, not args.no_progress)
     with BagRecorder(bag_path(out)) as recorder:
@@ -402,11 +399,10 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _
 
         def on_batch(done: int, total: int) -> None:
             nonlocal flushed
-            recording.batch(run, evaluator.requests, evaluator.results)
+            recording.batch(run)
             if time.monotonic() - flushed >= FLUSH_PERIOD:
                 recorder.flush()
                 flushed = time.monotonic()
-            evaluator.requests, evaluator.results = (), ()  # a batch answered from the cache sends none
             if bar is not None:
                 bar.update(done - bar.n)
 
@@ -419,8 +415,8 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, evaluator: _
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures, evaluator=evaluator)
-    dispatcher = evaluator.evaluator.dispatcher
+    write_results(run, with_figures=not args.no_figures, evaluator=services)
+    dispatcher = services.dispatcher
     node.get_logger().info(
         f"{run.config.label}: {run.evaluations} evaluations in {args.out} "
         f"(requests re-sent: {dispatcher.resent}, duplicate results ignored: {dispatcher.duplicates})"
