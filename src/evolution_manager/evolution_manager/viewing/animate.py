@@ -10,6 +10,7 @@ ffmpeg when it is installed).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import shutil
 import subprocess
@@ -18,7 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.errors import AnimationError
@@ -42,6 +43,30 @@ FOOD_COLOUR = (196, 230, 180)
 GAP_COLOUR = (250, 250, 250)
 
 
+DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
+"""DejaVu Sans from Debian's fonts-dejavu-core (ws/setup installs it); matplotlib ships the same file."""
+
+
+@functools.cache
+def text_font(size: int = 12) -> ImageFont.FreeTypeFont:
+    """DejaVu Sans at ``size`` pixels for the pictures' text (Pillow's built-in bitmap font drops spaces at
+    small sizes): Debian's file, else the copy inside matplotlib."""
+    path = DEJAVU
+    if not path.is_file():
+        import importlib.util
+
+        spec = importlib.util.find_spec("matplotlib")
+        locations = spec.submodule_search_locations if spec else None
+        path = Path(next(iter(locations or []), "")) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"
+    try:
+        return ImageFont.truetype(str(path), size)
+    except OSError:
+        raise AnimationError(
+            f"no DejaVu Sans font for the pictures' text (looked for {DEJAVU} and matplotlib's copy): "
+            "install Debian's fonts-dejavu-core (ws/setup does)"
+        ) from None
+
+
 def to_pixels(frames: TrialFrames, x: float, y: float) -> tuple[float, float]:
     """Image coordinates of arena point (x, y) mm (y up in the arena, down in the image)."""
     scale = ARENA_PX / (2 * frames.arena_half)
@@ -52,6 +77,7 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     """Frame ``k`` as a Pillow RGB image (arena on the left, values on the right)."""
     image = Image.new("RGB", (ARENA_PX + PANEL_PX, ARENA_PX), (255, 255, 255))
     draw = ImageDraw.Draw(image)
+    font = text_font()
     scale = ARENA_PX / (2 * frames.arena_half)
     cx, cy = to_pixels(frames, 0.0, 0.0)
     draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=FOOD_COLOUR, outline=(60, 60, 60), width=3)
@@ -59,8 +85,8 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     draw.ellipse((cx - r_gap, cy - r_gap, cx + r_gap, cy + r_gap), fill=GAP_COLOUR)
     r_nest = frames.nest_radius * scale
     draw.ellipse((cx - r_nest, cy - r_nest, cx + r_nest, cy + r_nest), fill=NEST_COLOUR)
-    draw.text((cx - 12, cy - 5), "nest", fill=(120, 80, 20))
-    draw.text((8, 8), f"food (gap {frames.gap:.0f} mm)", fill=(40, 100, 40))
+    draw.text((cx - 12, cy - 5), "nest", font=font, fill=(120, 80, 20))
+    draw.text((8, 8), f"food (gap {frames.gap:.0f} mm)", font=font, fill=(40, 100, 40))
     poses = frames.poses
     for i in range(frames.n_robots):
         trail = [to_pixels(frames, px, py) for px, py in poses[max(0, k - TRAIL) : k + 1, i, :2]]
@@ -77,7 +103,7 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
         tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))
         draw.line(((x, y), tip), fill=(0, 0, 0), width=2)
-        draw.text((x + radius + 1, y - radius - 9), str(i), fill=(0, 0, 0))
+        draw.text((x + radius + 1, y - radius - 9), str(i), font=font, fill=(0, 0, 0))
     panel = ARENA_PX + 10
     tick = int(frames.ticks[k])
     lines = [
@@ -93,12 +119,17 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     lines.append("actions:")
     y = 10
     for line in lines:
-        draw.text((panel, y), line, fill=(0, 0, 0))
+        draw.text((panel, y), line, font=font, fill=(0, 0, 0))
         y += 15
     for i in range(frames.n_robots):
         action = int(frames.actions[k, i])
         draw.rectangle((panel, y + 2, panel + 9, y + 11), fill=ROBOT_COLOURS[i % 9])
-        draw.text((panel + 14, y), f"{i}: {ACTIONS[action] if action >= 0 else '(still)'}", fill=(0, 0, 0))
+        draw.text(
+            (panel + 14, y),
+            f"{i}: {ACTIONS[action] if action >= 0 else '(still)'}",
+            font=font,
+            fill=(0, 0, 0),
+        )
         y += 15
     return image
 

@@ -7,11 +7,11 @@ hold them, by held-out fitness. Clicking a bin (or opening ``explorer.html#objec
 its trees drawn, simplified and original, their fitness and descriptors, and the trial animation of the bin's
 best tree, drawn on a canvas from poses stored in the page.
 
-Animations: trial 0 of the evaluation's own seed, run in-process exactly as the node graph runs it
-(``animation.frames_from_tree``), every ``STRIDE``-th sensing step, for the best tree of every filled bin of
-the objectives the run evolved (other objectives' bins show the one of the same evaluation when there is one,
-else the command that renders it). Poses are packed as bytes (``_pack``) so that a 25,000-evaluation run's
-page stays well under 5 MB.
+Animations: trial 0 of the evaluation's own seed under the run's model profile, run in-process exactly as the
+node graph runs it (``frames.frames_from_tree``, through the compiled kernels), every ``STRIDE``-th sensing
+step, for the best tree of every filled bin of the objectives the run evolved (other objectives' bins show the
+one of the same evaluation when there is one, else the command that renders it). Poses are packed as bytes
+(``_pack``) so that a 25,000-evaluation run's page stays well under 5 MB.
 
 ``ws/run evolution_manager explorer RUN_DIR`` (re)builds it; the run writer builds it for every run.
 """
@@ -38,17 +38,38 @@ from evolution_manager.viewing.frames import TrialFrames
 
 STRIDE = 2
 """One animation frame per this many sensing steps."""
-HELD_OUT_KEYS = ("held_out", "held_out_fitness", "heldout")
 
 
-def _held_out(item: dict) -> float | None:
-    for key in HELD_OUT_KEYS:
-        value = item.get(key)
-        if isinstance(value, dict):
-            value = value.get("fitness", value.get("mean"))
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
-            return float(value)
-    return None
+def _held_out_scores(root: Path, config: dict) -> dict[tuple[str, str, str], float]:
+    """The held-out fitness of each bin's best tree from the run's ``heldout.json`` (written at the end of a
+    run, ``evolution.heldout``), by (objective, bin, tree); empty when the run has none or the file belongs
+    to another configuration."""
+    path = root / "heldout.json"
+    if not path.exists():
+        return {}
+    document = _read(path)
+    if document.get("config") != config:
+        return {}
+    scores = {}
+    for objective, metrics in document.get("objectives", {}).items():
+        for row in metrics.get("bins", []):
+            held = row.get("heldout_fitness")
+            if isinstance(held, (int, float)) and math.isfinite(held):
+                scores[(objective, ",".join(str(b) for b in row["bin"]), row["tree"])] = float(held)
+    return scores
+
+
+def _group_copies(items: list[dict]) -> list[dict]:
+    """A bin's trees with those that simplify to the same tree shown once: the first (fittest) stands for the
+    group, with ``copies`` (how many trees of the bin it stands for) and ``copy_trees`` (the others, as
+    evolved)."""
+    groups: dict[str, dict] = {}
+    for entry in items:
+        first = groups.setdefault(entry["simplified"], {**entry, "copies": 0, "copy_trees": []})
+        first["copies"] += 1
+        if first is not entry and entry["tree"] != first["tree"]:
+            first["copy_trees"].append(entry["tree"])
+    return list(groups.values())
 
 
 def _evaluation_seeds(root: Path) -> dict[int, int]:
@@ -120,6 +141,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     run_seed = int(config.get("seed", 0) or 0)
     objectives: dict[str, dict] = {}
     simplified: dict[str, str] = {}
+    held_out = _held_out_scores(root, config)
     from swarm_sim.world import OBJECTIVES
 
     for objective in OBJECTIVES:
@@ -139,12 +161,14 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
                 "descriptors": item["descriptors"],
                 "evaluation": item.get("evaluation"),
             }
-            held = _held_out(item)
+            key = ",".join(str(b) for b in item["bin"])
+            held = held_out.get((objective, key, tree))
             if held is not None:
                 entry["held_out"] = held
-            bins.setdefault(",".join(str(b) for b in item["bin"]), []).append(entry)
-        for items in bins.values():
+            bins.setdefault(key, []).append(entry)
+        for key, items in bins.items():
             items.sort(key=lambda e: -e["fitness"])
+            bins[key] = _group_copies(items)
         objectives[objective] = {
             "evolved": objective in evolved,
             "shape": document.get("shape", [8, 8, 8]),
@@ -158,7 +182,9 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     animations: dict[str, dict] = {}
     if animate:
         from evolution_manager.viewing.frames import frames_from_tree
+        from swarm_sim.config import DEFAULT, default_config
 
+        model = default_config(config.get("profile") or DEFAULT.profile)  # the run's model
         seeds = _evaluation_seeds(root)
         wanted = []
         for grid in objectives.values():
@@ -170,7 +196,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
             key = f"{entry['simplified']}|{seed}"
             if key not in animations:
                 # The simplified tree sets the same motors: the same trial, a little faster to run.
-                animations[key] = _pack(frames_from_tree(entry["simplified"], seed, 0), STRIDE)
+                animations[key] = _pack(frames_from_tree(entry["simplified"], seed, 0, model), STRIDE)
             entry["animation"] = key
             if progress is not None:
                 progress(done, len(wanted))

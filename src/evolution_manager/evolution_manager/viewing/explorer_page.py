@@ -96,7 +96,7 @@ function drawControls() {
   if (!options.includes(state.colour)) state.colour = "in-run";
   for (const name of options) {
     const b = el("button", { class: "colour" + (name === state.colour ? " active" : "") }, name + " fitness");
-    b.onclick = () => { state.colour = name; render(); };
+    b.onclick = () => { state.colour = name; select(state.objective, state.bin); };
     cols.appendChild(b);
   }
   if (options.length === 1) cols.appendChild(el("span", { class: "note" }, " (no held-out scores in this run)"));
@@ -110,6 +110,7 @@ function drawHeatmaps() {
   const box = document.getElementById("heatmaps");
   box.textContent = "";
   box.setAttribute("data-objective", state.objective);
+  box.setAttribute("data-colour", state.colour);
   const grid = DATA.objectives[state.objective];
   const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22;
   for (let k = 0; k < nz; k++) {
@@ -123,6 +124,7 @@ function drawHeatmaps() {
       if (items) {
         const v = binValue(items);
         rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v));
+        rect.setAttribute("data-value", v === null ? "" : v.toFixed(4));
         rect.onclick = () => select(state.objective, key);
         rect.onmousemove = ev => tooltip(ev, key, items);
         rect.onmouseleave = () => { document.getElementById("tooltip").style.display = "none"; };
@@ -285,7 +287,8 @@ function drawDetail() {
   table.appendChild(head);
   items.forEach((it, n) => {
     const row = el("tr", { class: "item", "data-fitness": it.fitness });
-    [`tree ${n + 1}`, fmt(it.fitness), fmt(it.held_out), ...it.descriptors.map(fmt), it.evaluation ?? "-", it.seed ?? "-"]
+    const name = `tree ${n + 1}` + (it.copies > 1 ? ` (${it.copies} copies)` : "");
+    [name, fmt(it.fitness), fmt(it.held_out), ...it.descriptors.map(fmt), it.evaluation ?? "-", it.seed ?? "-"]
       .forEach(v => row.appendChild(el("td", {}, String(v))));
     table.appendChild(row);
   });
@@ -332,13 +335,21 @@ function drawTrees(box, items) {
       div.appendChild(el("code", {}, text));
       box.appendChild(div);
     }
+    if (it.copies > 1) {
+      const note = el("div", { class: "tree copies", "data-copies": it.copies });
+      note.appendChild(el("h4", {}, `tree ${n + 1} stands for ${it.copies} trees of this bin that simplify to the ` +
+        "same tree" + (it.copy_trees.length ? "; the others as evolved:" : " (evolved identically)")));
+      it.copy_trees.forEach(t => note.appendChild(el("code", {}, t)));
+      box.appendChild(note);
+    }
   });
 }
 
 function render() { drawControls(); drawHeatmaps(); drawDetail(); }
 function select(objective, bin) {
   state.objective = objective; state.bin = bin;
-  const hash = `#objective=${objective}` + (bin ? `&bin=${bin}` : "");
+  const hash = `#objective=${objective}` + (bin ? `&bin=${bin}` : "") +
+    (state.colour === "held-out" ? "&colour=held-out" : "");
   if (location.hash !== hash) history.replaceState(null, "", hash);
   render();
 }
@@ -350,6 +361,7 @@ function fromHash() {
   const bin = params.get("bin");
   state.objective = objective;
   state.bin = bin && /^\d+,\d+,\d+$/.test(bin) ? bin : null;
+  state.colour = params.get("colour") === "held-out" ? "held-out" : "in-run";
   render();
 }
 window.addEventListener("hashchange", fromHash);

@@ -1,18 +1,18 @@
 """A trial as frames (poses, actions, messages, fitness so far), from a tree or from a bag.
 
-``frames_from_tree`` runs the trial in-process exactly as the node graph runs it
-(``swarm_sim.lockstep.run_with_controllers``); ``frames_from_bag`` reads a trial bag written by
-``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``: **one frame per sensing
-step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at that step, the action
-driving each robot's wheels after it, the messages heard at it, the last tick and the fitness so far (each
-objective scored with the robots' smoothed values of that step as if the trial ended there; undefined before
-the initial values are taken). No ROS here: bags are read with ``evolution_manager.recording.bags``.
+``frames_from_tree`` runs the trial in-process through the compiled kernels, recorded step by step
+(``swarm_sim.recording``, equal frame for frame to the node graph's trial); ``frames_from_bag`` reads a trial
+bag written by ``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``: **one
+frame per sensing step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at that
+step, the action driving each robot's wheels after it, the messages heard at it, the last tick and the fitness
+so far (each objective scored with the robots' smoothed values of that step as if the trial ended there;
+undefined before the initial values are taken). No ROS here: bags are read with
+``evolution_manager.recording.bags``.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,7 +24,6 @@ from evolution_manager.errors import AnimationError
 
 if TYPE_CHECKING:
     from swarm_sim.config import Config, Params
-    from swarm_sim.lockstep import LockstepChain, RobotAnswer
 
 
 @dataclass(frozen=True)
@@ -88,66 +87,34 @@ def arena_fields(config: Config, trial: int) -> dict[str, float]:
     }
 
 
-def _fitness_so_far(initial: np.ndarray, current: np.ndarray, ground: np.ndarray, p: Params) -> np.ndarray:
+def _fitness_so_far(initial: np.ndarray, current: np.ndarray, p: Params) -> np.ndarray:
+    """The three objectives as if the trial ended now (they depend on the smoothed values only)."""
     from swarm_sim import world
 
-    counts = np.zeros((initial.shape[0], 8), dtype=np.int64)
-    return world.trial_values(initial, current, ground, counts, p)[:3]
+    n = initial.shape[0]
+    return world.trial_values(initial, current, np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), p)[:3]
 
 
 def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
-    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot, in-process as the node graph runs it (its
-    chain's earlier trials first); the frames are trial ``trial``'s steps."""
-    from bt_controller.tree import parse
+    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot through the compiled kernels, recorded
+    step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
+    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps."""
     from swarm_sim.config import DEFAULT
-    from swarm_sim.lockstep import run_with_controllers
+    from swarm_sim.recording import record_trial
 
     config = config or DEFAULT
-    p = config.params()
-    steps: list[int] = []
-    ticks: list[int] = []
-    poses: list[np.ndarray] = []
-    actions: list[np.ndarray] = []
-    links: list[np.ndarray] = []
-    fitness: list[np.ndarray] = []
-    current = np.full(p.n_robots, -1, dtype=np.int64)
-    last_tick = [-1]
-    initial: list[np.ndarray] = []
-
-    def on_answers(world: LockstepChain, answers: Sequence[RobotAnswer]) -> None:
-        tick = timeline.tick_number(config.timeline, world.step) if world.ticks_now() else -1
-        if tick >= 0:
-            current[:] = [a.action for a in answers]
-            last_tick[0] = tick
-        if world.trial != trial:  # an earlier trial of the chain: it sets the state, it is not drawn
-            return
-        readings = world.readings()
-        smoothed = np.array([a.smoothed for a in answers], dtype=np.float64)
-        if timeline.is_initial(config.timeline, world.step):
-            initial[:] = [smoothed]
-        steps.append(world.step)
-        poses.append(world.poses())
-        actions.append(current.copy())
-        ticks.append(last_tick[0])
-        links.append(np.array([(i, int(s)) for i, r in enumerate(readings) for s in r.senders], np.int64))
-        if not initial:
-            fitness.append(np.full(3, np.nan))
-        else:
-            ground = np.array([[r.in_nest, r.on_food] for r in readings], dtype=np.bool_)
-            fitness.append(_fitness_so_far(initial[0], smoothed, ground, p))
-
-    run_with_controllers(parse(tree), seed, trial, config, on_answers=on_answers)
+    recorded = record_trial(tree, seed, trial, config)
     return TrialFrames(
         tree=tree,
         seed=seed,
         trial=trial,
         **arena_fields(config, trial),
-        steps=np.array(steps),
-        poses=np.array(poses),
-        actions=np.array(actions),
-        ticks=np.array(ticks),
-        links=tuple(_links_shape(lk) for lk in links),
-        fitness=np.array(fitness),
+        steps=recorded.steps,
+        poses=recorded.poses,
+        actions=recorded.actions,
+        ticks=recorded.ticks,
+        links=tuple(recorded.links),
+        fitness=recorded.fitness,
     )
 
 
@@ -190,7 +157,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     poses = np.array([[[q.x, q.y, q.theta] for q in states[s].poses] for s in steps], dtype=np.float64)
     wheels = np.full((len(steps), n), -1, dtype=np.int64)
     smoothed = np.full((len(steps), n, 3), np.nan)
-    ground = np.zeros((len(steps), n, 2), dtype=np.bool_)
     heard: list[list[tuple[int, int]]] = [[] for _ in steps]
     tick_at: dict[int, int] = {}
     for m in messages:
@@ -201,7 +167,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if kind == "tree_status":
             tick_at[int(msg.step)] = int(msg.tick)
             continue
-        if kind not in ("wheels", "ground", "range_and_bearing"):  # e.g. pose (PoseStamped): no step
+        if kind not in ("wheels", "range_and_bearing"):  # e.g. pose (PoseStamped): no step
             continue
         k = index.get(int(msg.step))
         if k is None:
@@ -209,8 +175,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if kind == "wheels":
             wheels[k, robot] = int(msg.action)  # the action's index (wheel speeds are in m/s since issue 13)
             smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density)
-        elif kind == "ground":
-            ground[k, robot] = (msg.in_nest, msg.on_food)
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
     p = config.params()
@@ -226,7 +190,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
-            fitness[k] = _fitness_so_far(initial, smoothed[k], ground[k], p)
+            fitness[k] = _fitness_so_far(initial, smoothed[k], p)
     return TrialFrames(
         tree=result.tree if result is not None else "",
         seed=int(start.seed),
