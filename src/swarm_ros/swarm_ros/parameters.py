@@ -218,8 +218,8 @@ class FileSection:
 
     @property
     def wildcard(self) -> bool:
-        """Whether the section is for nodes of any name (``/**``, ``/swarm_a/*``), rather than for the nodes of
-        one name (``simulator``, ``/**/simulator``)."""
+        """Whether the section is for nodes of any name (``/**``, ``/swarm_a/*``), rather than for the nodes
+        of one name (``simulator``, ``/**/simulator``)."""
         return "*" in self.node.rsplit("/", 1)[-1]
 
     def names(self, fully_qualified_name: str) -> bool:
@@ -287,8 +287,9 @@ def check_overrides(node: Node, files: Sequence[Path], shared: Collection[str] |
     file section for this node, and a parameter the node does not declare.
 
     A section for nodes of this node's name (``simulator``, ``/**/simulator``) must hold only its parameters.
-    A section for nodes of any name (``/**``), which every node of a graph reads, may also hold the names in ``shared`` (parameters of the workspace's other
-    nodes, which this node leaves to them); ``shared=ANY``: any name (a node that cannot know the others').
+    A section for nodes of any name (``/**``), which every node of a graph reads, may also hold the names in
+    ``shared`` (parameters of the workspace's other nodes, which this node leaves to them); ``shared=ANY``:
+    any name (a node that cannot know the others').
     A name given with ``-p`` that the node does not declare is refused."""
     fqn = node.get_fully_qualified_name()
     in_files: set[str] = set()
