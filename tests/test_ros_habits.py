@@ -93,7 +93,7 @@ def ros(tmp_path):
 
 
 def test_the_evaluator_is_driven_through_its_lifecycle_and_reports_it_on_diagnostics(ros):
-    ros.nodes.start("evaluator", "swarm_sim", "evaluator", parameters={"autostart": "false"})
+    ros.nodes.start("evaluator", "swarm_sim", "evaluator", parameters={"autostart": "false", "slice": 5})
     statuses = ros.diagnostics("/evaluator")
     life = LifecycleClient(ros.node, "/evaluator")
     action = ActionClient(ros.node, EvaluateBatch, "/evaluator/evaluate")
@@ -127,7 +127,21 @@ def test_the_evaluator_is_driven_through_its_lifecycle_and_reports_it_on_diagnos
         kv.key for kv in statuses[-1].values
     }
 
+    # deactivate stops a batch under way after its slice, with what it finished
+    feedback = []
+    trees = ["sel(seq(robot_left, forward_left), prob(forward, reverse_right))"] * 60
+    big = EvaluateBatch.Goal(trees=trees, seeds=list(range(60)), trials=10, objective="food")
+    handle = ros.answer(
+        action.send_goal_async(big, feedback_callback=lambda m: feedback.append(m.feedback.done)),
+        "acceptance",
+    )
+    ros.spin_until(lambda: feedback, "the big batch's first slice")
     life.transition("deactivate", ros.wait, LONG)
+    stopped = ros.answer(handle.get_result_async(), "the deactivated batch's result")
+    finished = len(stopped.result.results)
+    assert stopped.status == 6  # action_msgs/GoalStatus STATUS_ABORTED
+    assert stopped.result.message == f"deactivated after {finished} of 60 evaluations"
+    assert feedback[0] <= finished < 60 and finished % 5 == 0  # slice 5
     assert not ros.send(action, goal).accepted
     ros.spin_until(lambda: value(statuses[-1], "state") == "inactive", "diagnostics saying inactive")
     life.transition("cleanup", ros.wait, LONG)
