@@ -37,6 +37,7 @@ def nodes(context: LaunchContext) -> list[Node]:
                 *([user_file] if user_file else []),
                 spec.parameters,
             ],
+            remappings=list(spec.remaps.items()),
             output="screen",
         )
         for spec in specs

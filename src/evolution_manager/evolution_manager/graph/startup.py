@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
@@ -70,9 +70,10 @@ class Graph:
         parameters: dict[str, object] | None = None,
         params_files: Sequence[Path] = (),
         arguments: Sequence[str] = (),
+        remaps: Mapping[str, str] | None = None,
     ) -> subprocess.Popen:
         """Start one node process, known in this graph as ``name``. Each parameter file overrides the ones
-        before it; ``parameters`` override them all."""
+        before it; ``parameters`` override them all; ``remaps``: topic name -> the name it is remapped to."""
         if name in self.processes:
             raise GraphError(f"a process named {name} is already running")
         command = [str(executable(package, executable_name)), *arguments, "--ros-args"]
@@ -80,6 +81,8 @@ class Graph:
             command += ["-r", f"__ns:={namespace}"]
         if node_name:
             command += ["-r", f"__node:={node_name}"]
+        for topic, remapped in (remaps or {}).items():
+            command += ["-r", f"{topic}:={remapped}"]
         for params_file in params_files:
             command += ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
@@ -166,6 +169,8 @@ class NodeSpec:
     """Absolute namespace ("" for the root)."""
     parameters: dict[str, object] = field(default_factory=dict)
     """Parameters that override the parameter files."""
+    remaps: dict[str, str] = field(default_factory=dict)
+    """Topic remappings (name -> new name)."""
 
 
 def trial_graph_nodes(
@@ -174,12 +179,14 @@ def trial_graph_nodes(
     tree: str = "",
     profile: str = "",
     conditions: Sequence[str] = (),
+    clock: str = "/clock",
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
     namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
     profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
-    ``swarm_sim.conditions``) change the simulator's world."""
+    ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
+    (``/clock``, at the root whatever the namespace, unless two graphs share a domain)."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
     prefix = namespace.rstrip("/")
@@ -188,7 +195,8 @@ def trial_graph_nodes(
         simulator["profile"] = profile
     if conditions:
         simulator["conditions"] = " ".join(conditions)
-    nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator)]
+    remaps = {"/clock": clock} if clock != "/clock" else {}
+    nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
     for robot in robot_namespaces(robots):
         nodes.append(
             NodeSpec(
@@ -210,17 +218,22 @@ def start_trial_graph(
     namespace: str = "",
     params_file: Path | None = None,
     profile: str = "",
+    clock: str = "/clock",
 ) -> None:
-    """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions)``,
-    each in its own process, with its package's parameter file and then ``params_file`` (every node's);
-    ``robots`` overrides ``n_robots``, ``profile`` (when given) the simulator's model profile."""
-    for spec in trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions):
+    """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
+    clock=clock)``, each in its own process, with its package's parameter file and then ``params_file`` (every
+    node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the simulator's model profile. The
+    simulator, a managed node, is started unconfigured (``autostart:=false``): the caller drives it through
+    configure and activate (``TrialRunner.activate``)."""
+    for spec in trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions, clock=clock):
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
+        managed = {"autostart": "false"} if spec.executable == "simulator" else {}
         graph.start(
             spec.name,
             spec.package,
             spec.executable,
             namespace=spec.namespace,
-            parameters=spec.parameters,
+            parameters={**spec.parameters, **managed},
             params_files=files,
+            remaps=spec.remaps,
         )

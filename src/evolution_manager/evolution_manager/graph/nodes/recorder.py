@@ -54,12 +54,13 @@ def msgtype_name(msg_class: type) -> str:
     return f"{module[0]}/{module[1]}/{msg_class.__name__}"
 
 
-def trial_topics(robots: int, namespace: str = "") -> list[tuple[str, type]]:
+def trial_topics(robots: int, namespace: str = "", clock: str = "/clock") -> list[tuple[str, type]]:
     """Every topic of a trial graph with ``robots`` footbots under ``namespace`` (e.g. ``/swarm_a``; the root
-    by default), as absolute names, with its message class."""
+    by default), as absolute names, with its message class. The simulator's clock is ``clock`` (``/clock``
+    unless remapped: a graph in a namespace keeps it at the root)."""
     prefix = namespace.rstrip("/")
     topics: list[tuple[str, type]] = [
-        (f"{prefix}/clock", Clock),
+        (clock, Clock),
         (f"{prefix}/trial_start", TrialStart),
         (f"{prefix}/markers", MarkerArray),
         (f"{prefix}/robot_markers", MarkerArray),
@@ -163,6 +164,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--namespace", default="", help="the graph's namespace, e.g. /swarm_a (default: the root)"
     )
+    parser.add_argument("--clock", default="/clock", help="the graph's clock topic (default /clock)")
     args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -174,7 +176,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             node = Node("recorder", context=context)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
-            recorder = GraphRecorder(node, bag, trial_topics(args.robots, args.namespace))
+            recorder = GraphRecorder(node, bag, trial_topics(args.robots, args.namespace, args.clock))
             print(f"recording to {args.bag}; stop with Ctrl-C", flush=True)
             node.get_logger().info(f"ready: recording {args.namespace or '/'} to {args.bag}")
             matched = False

@@ -52,6 +52,7 @@ from swarm_msgs.action import RunTrial
 from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
+from swarm_ros.lifecycle import LifecycleClient, LifecycleError
 from swarm_ros.names import robot_namespaces
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
@@ -69,7 +70,7 @@ starting is noticed at once (``Graph.check``), so this only bounds a node that h
 
 
 def expected_messages(
-    robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT
+    robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT, clock: str = "/clock"
 ) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
@@ -80,7 +81,7 @@ def expected_messages(
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
-        for topic, msg_class in trial_topics(robots, namespace)
+        for topic, msg_class in trial_topics(robots, namespace, clock)
     }
 
 
@@ -109,9 +110,27 @@ class TrialRunner:
         self.trial_client: ActionClient[Any, Any, Any] = ActionClient(
             self.node, RunTrial, "simulator/run_trial"
         )
+        self.simulator = LifecycleClient(self.node, "simulator")
         self.feedback: list[int] = []  # the steps reported by the last trial's feedback
 
+    def activate(self) -> None:
+        """Drive the simulator (a managed node started unconfigured) through configure and activate."""
+        self.spin_until(self.simulator.ready, "the simulator's lifecycle services", STARTUP_TIMEOUT)
+
+        def wait(future: Future, seconds: float) -> bool:
+            try:
+                self.spin_until(future.done, "the simulator's lifecycle", seconds)
+            except TrialFailedError:
+                return False
+            return True
+
+        try:
+            self.simulator.drive(["configure", "activate"], wait, STARTUP_TIMEOUT)
+        except LifecycleError as error:
+            raise TrialFailedError(str(error)) from None
+
     def close(self) -> None:
+        self.simulator.destroy()
         self.trial_client.destroy()
         self.executor.shutdown()
         self.node.destroy_node()
@@ -220,7 +239,8 @@ class TrialGraph:
     node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
     ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
     ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
-    (``docs/model.md``)."""
+    (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
+    one each)."""
 
     def __init__(
         self,
@@ -233,8 +253,10 @@ class TrialGraph:
         log_dir: Path | None = None,
         conditions: Sequence[str] = (),
         profile: str = DEFAULT.profile,
+        clock: str = "/clock",
     ) -> None:
         self.conditions = list(conditions)
+        self.clock = clock
         self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots, profile=profile))
         self.robots = self.config.n_robots
         self.timeout = timeout
@@ -264,12 +286,14 @@ class TrialGraph:
                 namespace=self.namespace,
                 params_file=self.params_file,
                 profile=self.config.profile,
+                clock=self.clock,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
             stack.callback(rclpy.try_shutdown, context=context)
             self.runner = TrialRunner(context, self.graph, self.robots, self.timeout, self.namespace)
             stack.callback(self.runner.close)
+            self.runner.activate()
         except BaseException:
             stack.close()
             raise
@@ -295,7 +319,7 @@ class TrialGraph:
         runner.executor.add_node(node)
         try:
             with BagRecorder(bag_path) as bag:
-                topics = trial_topics(self.robots, self.namespace)
+                topics = trial_topics(self.robots, self.namespace, self.clock)
                 recorder = GraphRecorder(node, bag, topics, armed=False)
                 runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
                 # The latched topics hand over their last message on joining: the arena of the simulator's
@@ -310,7 +334,7 @@ class TrialGraph:
                 recorder.arm()
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
-                expected = expected_messages(self.robots, self.namespace, trial, self.config)
+                expected = expected_messages(self.robots, self.namespace, trial, self.config, self.clock)
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
                 runner.spin_until(
@@ -338,6 +362,7 @@ def run_recorded_trial(
     params_file: Path | None = None,
     log_dir: Path | None = None,
     profile: str = DEFAULT.profile,
+    clock: str = "/clock",
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
     ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
@@ -349,6 +374,7 @@ def run_recorded_trial(
         params_file=params_file,
         log_dir=log_dir,
         profile=profile,
+        clock=clock,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
@@ -430,6 +456,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--namespace", default="", help="namespace of the graph, e.g. /swarm_a (default: /)")
     parser.add_argument(
+        "--clock",
+        default="/clock",
+        help="topic of the simulator's clock (default /clock; give each graph its own, e.g. /swarm_a/clock, "
+        "to run two in one domain)",
+    )
+    parser.add_argument(
         "--params-file",
         type=Path,
         default=None,
@@ -466,6 +498,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 params_file=args.params_file,
                 log_dir=logs,
                 profile=args.profile,
+                clock=args.clock,
             )
     except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
