@@ -36,6 +36,7 @@ from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.algorithms import Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire
+from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
 from evolution_manager.files import read_json_object
 
@@ -94,7 +95,7 @@ def repertoire_profile(run_dir: Path) -> str:
     """The model profile the repertoire in ``run_dir`` was evolved under (its ``config.json``): adaptation
     runs the changed world on the same model."""
     try:
-        return RunConfig.from_json(read_json_object(Path(run_dir) / "config.json")).profile
+        return RunDirectory(Path(run_dir)).read_config().profile
     except EvolutionError as error:
         raise AdaptationError(f"{run_dir} is not a run directory: {error}") from None
 

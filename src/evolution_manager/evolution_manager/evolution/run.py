@@ -122,6 +122,15 @@ class RunDirectory:
         """Whether a run was ever started here."""
         return self.config.exists()
 
+    def read_config(self) -> RunConfig:
+        """The run's configuration from ``config.json``; a damaged file is named in the error."""
+        try:
+            return RunConfig.from_json(read_json_object(self.config))
+        except RunDirectoryError:
+            raise
+        except (*_DAMAGE, EvolutionError) as error:
+            raise RunDirectoryError(f"{self.config} is damaged: {error}") from error
+
     def temporary_files(self) -> list[Path]:
         """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
         if not self.root.is_dir():
@@ -228,10 +237,7 @@ class Run:
     @classmethod
     def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:
         """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
-        try:
-            config = RunConfig.from_json(read_json_object(directory.config))
-        except _DAMAGE as error:
-            raise RunDirectoryError(f"{directory.config} is damaged: {error}") from error
+        config = directory.read_config()
         state = read_json(directory.checkpoint)
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
             raise RunDirectoryError(

@@ -23,7 +23,7 @@ from evolution_manager.evolution.options import (
     config_from_args,
     progress_bar,
 )
-from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
+from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
@@ -84,14 +84,13 @@ def evolve(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         config = None if args.resume else config_from_args(args)
         from evolution_manager.evolution.run import Run, RunDirectory
-        from evolution_manager.files import read_json_object
         from evolution_manager.viewing.results import write_results
 
         directory = RunDirectory(args.out)
         if args.resume:
             if not directory.started():
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-            saved = RunConfig.from_json(read_json_object(directory.config))
+            saved = directory.read_config()
             check_resume_options(args, saved)
             run = Run.resume(args.out, _evaluator(args.workers, saved.profile))
         else:

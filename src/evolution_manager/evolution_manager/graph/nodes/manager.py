@@ -73,7 +73,6 @@ from evolution_manager.evolution.options import (
 )
 from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
-from evolution_manager.files import read_json_object
 from evolution_manager.graph.dispatch import DispatchError, Timeouts
 from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.graph.startup import Graph, GraphError
@@ -251,7 +250,7 @@ def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
     if args.resume:
         if not directory.started():
             raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
-        check_resume_options(args, RunConfig.from_json(read_json_object(directory.config)))
+        check_resume_options(args, directory.read_config())
         return Run.resume(args.out, evaluator)
     if directory.started():
         raise UsageError(f"{args.out} already holds a run: add --resume to continue it, or use another --out")
