@@ -1,4 +1,5 @@
-"""Shared fixtures of the system tests: ``slurm``, a real one-node SLURM on this machine (slurm_cluster)."""
+"""Fixtures of the system tests: ``workspace`` (tests that start processes) and ``slurm``, a real one-node
+SLURM on this machine (slurm_cluster)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,10 @@ from pathlib import Path
 
 import pytest
 from slurm_cluster import OneNodeSlurm
+
+from swarm_ros import isolation
+
+workspace = pytest.fixture(isolation.workspace)  # the shared fixture of tests that start processes
 
 
 @pytest.fixture(scope="session")

@@ -4,10 +4,10 @@ the same fitness as the batch road."""
 
 import json
 
-from evolution_manager.adapt import adapt
-from evolution_manager.bags import read_bag
-from evolution_manager.config import RunConfig
-from evolution_manager.nodes.trial import RESULT_TOPIC
+from evolution_manager.adaptation.adapt import adapt
+from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.graph.nodes.trial import RESULT_TOPIC
+from evolution_manager.recording.bags import read_bag
 
 ITEMS = [
     {"bin": [2, 4, 7], "tree": "reverse", "fitness": 0.95, "descriptors": [0.3, 0.55, 0.9], "evaluation": 1},

@@ -9,7 +9,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from evolution_manager.bags import BagError, BagRecorder, read_bag, recover_bag, swarm_typestore
+from evolution_manager.recording.bags import BagError, BagRecorder, read_bag, recover_bag, swarm_typestore
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,7 @@ def test_recorder_refuses_to_overwrite(tmp_path, typestore):
 def test_killed_recorder_leaves_a_recoverable_bag(tmp_path):
     code = """
 import sys
-from evolution_manager.bags import BagRecorder
+from evolution_manager.recording.bags import BagRecorder
 with BagRecorder(sys.argv[1]) as recorder:
     step = 0
     while True:

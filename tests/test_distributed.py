@@ -11,12 +11,11 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from bt_controller.random_trees import random_trees
-from evolution_manager.bags import read_bag
-from evolution_manager.cli import evolve
-from evolution_manager.config import evaluation_seed
-from evolution_manager.graph import Graph, executable
-from evolution_manager.nodes.service_evaluator import ServiceEvaluator, ServiceSettings
-from swarm_ros.isolation import domain_environment, reserved_domain
+from evolution_manager.evolution.run_config import evaluation_seed
+from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceSettings
+from evolution_manager.graph.startup import Graph, executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.studies.evolve import evolve
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here
@@ -52,16 +51,16 @@ def batches_done(out):
     return max(0, len(progress.read_text().splitlines()) - 1) if progress.exists() else 0
 
 
-def test_a_killed_evaluator_loses_nothing_and_counts_nothing_twice(tmp_path):
+def test_a_killed_evaluator_loses_nothing_and_counts_nothing_twice(tmp_path, workspace):
     out = tmp_path / "distributed"
-    with reserved_domain() as domain, Graph(domain, log_dir=tmp_path / "logs") as graph:
+    with Graph(workspace.domain, log_dir=tmp_path / "logs") as graph:
         for i in (1, 2, 3):
             graph.start(f"evaluator_{i}", "swarm_sim", "evaluator", node_name=f"evaluator_{i}")
         # A dead evaluator's chunk is re-sent after 10 s (first calls, which compile, get 300 s).
         command = manager_command(out, "--expect", "3", "--wait", "120", "--ros-args", "-p", "timeout:=10.0")
         manager = subprocess.Popen(
             command,
-            env=domain_environment(domain),
+            env=workspace.env,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
             text=True,
@@ -103,20 +102,19 @@ def test_a_killed_evaluator_loses_nothing_and_counts_nothing_twice(tmp_path):
         assert (out / name).read_bytes() == (reference / name).read_bytes(), name
 
 
-def test_a_manager_with_no_evaluator_says_so(tmp_path):
-    with reserved_domain() as domain:
-        done = subprocess.run(
-            manager_command(tmp_path / "lonely", "--wait", "3"),
-            env=domain_environment(domain),
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
+def test_a_manager_with_no_evaluator_says_so(tmp_path, workspace):
+    done = subprocess.run(
+        manager_command(tmp_path / "lonely", "--wait", "3"),
+        env=workspace.env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 1
     assert "no evaluator service found" in done.stderr
 
 
-def test_the_service_evaluator_finds_evaluators_started_later_and_answers_as_in_process(tmp_path):
+def test_the_service_evaluator_finds_evaluators_started_later_and_answers_as_in_process(tmp_path, workspace):
     requests = [EvaluationRequest(t, 100 + i, 2) for i, t in enumerate(random_trees(seed=3, count=20))]
     requests += [
         EvaluationRequest("sel(forward", 1, 2),  # not a tree
@@ -126,10 +124,10 @@ def test_the_service_evaluator_finds_evaluators_started_later_and_answers_as_in_
     ]
     expected = BatchEvaluator().evaluate(requests)
     assert sum(r.error is not None for r in expected) == 3
-    with reserved_domain() as domain, Graph(domain, log_dir=tmp_path / "logs") as graph:
+    with Graph(workspace.domain, log_dir=tmp_path / "logs") as graph:
         graph.start("evaluator_1", "swarm_sim", "evaluator", node_name="evaluator_1")
         context = rclpy.Context()
-        rclpy.init(context=context, domain_id=domain)
+        rclpy.init(context=context, domain_id=workspace.domain)
         node = Node("service_evaluator_test", context=context)
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)

@@ -13,9 +13,9 @@ from mcap.reader import make_reader
 
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse, to_text
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import executable
-from evolution_manager.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
+from evolution_manager.graph.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import read_bag
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 

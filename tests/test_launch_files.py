@@ -10,9 +10,11 @@ import pytest
 import yaml
 from ament_index_python.packages import get_package_share_directory
 
-from evolution_manager.graph import GraphError, executable, package_config, trial_graph_nodes
-from evolution_manager.nodes.manager import ManagerParameters
+from bt_controller.nodes.footbot_controller import ControllerSettings
+from evolution_manager.graph.nodes.manager import ManagerParameters
+from evolution_manager.graph.startup import GraphError, executable, package_config, trial_graph_nodes
 from swarm_sim.config import DEFAULT
+from swarm_sim.nodes.settings import SIMULATOR_PARAMETERS, EvaluatorSettings
 
 LAUNCH_DIR = Path(get_package_share_directory("evolution_manager")) / "launch"
 ARGUMENTS = {
@@ -49,6 +51,10 @@ def test_the_trial_graph_launch_file_starts_the_nodes_trial_starts():
     for node in nodes:
         assert executable(node.package, node.executable).exists()
     assert trial_graph_nodes(9)[0].parameters == {"n_robots": 9}  # no profile given: the parameter file's
+    assert all(n.remaps == {} for n in nodes)  # the clock stays /clock, at the root, in a namespaced graph
+    assert trial_graph_nodes(2, "/swarm_b", clock="/swarm_b/clock")[0].remaps == {"/clock": "/swarm_b/clock"}
+    (node,) = calls(path, "Node")
+    assert "remappings" in {k.arg for k in node.keywords}, "the launch file does not hand the remappings over"
     with pytest.raises(GraphError, match="at least one robot"):
         trial_graph_nodes(0)
 
@@ -67,6 +73,10 @@ def test_the_parameter_files_hold_the_defaults():
     assert {k: v for k, v in world.items() if k in expected} == expected
     assert world["answer_timeout"] == 60.0
     controller = yaml.safe_load(package_config("bt_controller").read_text())["/**"]["ros__parameters"]
-    assert controller == {"robot": -1, "tree": ""}
+    assert controller == asdict(ControllerSettings())
+    # every name of the shared world file is declared by the simulator or the evaluator
+    assert set(world) <= set(expected) | SIMULATOR_PARAMETERS | set(asdict(EvaluatorSettings())) | {
+        "autostart"
+    }
     manager = yaml.safe_load(package_config("evolution_manager").read_text())["/**"]["ros__parameters"]
     assert manager == asdict(ManagerParameters())

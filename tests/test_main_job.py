@@ -4,9 +4,9 @@ tree runs through the full node graph, and every promised file is there and open
 import json
 import subprocess
 
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import executable
-from evolution_manager.reproduce import verify_trial_bag
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.recording.reproduce import verify_trial_bag
 
 
 def test_main_job_writes_the_run_and_the_recorded_best_trial(tmp_path):

@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evolution_manager.bags import BagRecorder, read_bag, swarm_typestore
-from evolution_manager.config import evaluation_seed
-from evolution_manager.dispatch import Dispatcher, Timeouts
-from evolution_manager.graph import executable
+from evolution_manager.evolution.run_config import evaluation_seed
+from evolution_manager.graph.dispatch import Dispatcher, Timeouts
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import BagRecorder, read_bag, swarm_typestore
 from swarm_ros.isolation import domain_environment, reserved_domain
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,8 +125,8 @@ def progress_rows(out: Path) -> int:
 START_AND_HOLD = """
     import sys, time
     from pathlib import Path
-    from evolution_manager.config import RunConfig
-    from evolution_manager.run import Run
+    from evolution_manager.evolution.run_config import RunConfig
+    from evolution_manager.evolution.run import Run
     run = Run.start(RunConfig.make("qd", "food", 100, 3), Path(sys.argv[0]).parent / "run", None)
     print("ready", flush=True)
     time.sleep(600)
@@ -155,7 +155,7 @@ def test_a_second_process_on_a_run_directory_or_a_bag_is_refused_naming_the_firs
         tmp_path,
         f"""
         import time
-        from evolution_manager.bags import BagRecorder
+        from evolution_manager.recording.bags import BagRecorder
         with BagRecorder({str(tmp_path / "bag")!r}) as bag:
             print("ready", flush=True)
             time.sleep(600)
@@ -222,8 +222,8 @@ def test_a_start_killed_before_its_first_checkpoint_leaves_nothing_in_the_way(tm
         f"""
         import os, signal
         from pathlib import Path
-        from evolution_manager.config import RunConfig
-        from evolution_manager.run import Run
+        from evolution_manager.evolution.run_config import RunConfig
+        from evolution_manager.evolution.run import Run
         Run.checkpoint = lambda self: os.kill(os.getpid(), signal.SIGKILL)  # die just before the checkpoint
         Run.start(RunConfig.make("qd", "food", 100, 3), Path({str(out)!r}), None)
         """,
@@ -309,8 +309,8 @@ def small_run(tmp_path_factory):
     script.write_text(
         textwrap.dedent(f"""
         from pathlib import Path
-        from evolution_manager.config import RunConfig
-        from evolution_manager.run import Run
+        from evolution_manager.evolution.run_config import RunConfig
+        from evolution_manager.evolution.run import Run
         from swarm_sim.evaluation import BatchEvaluator
         run = Run.start(RunConfig.make("qd", "food", 400, 2), Path({str(out)!r}), BatchEvaluator())
         run.execute(checkpoint_interval=0, stop_after=200)
@@ -407,8 +407,8 @@ def test_a_checkpoint_write_killed_half_way_leaves_no_temporary_file_after_resum
         f"""
         import os, signal
         from pathlib import Path
-        from evolution_manager.config import RunConfig
-        from evolution_manager.run import Run
+        from evolution_manager.evolution.run_config import RunConfig
+        from evolution_manager.evolution.run import Run
         run = Run.start(RunConfig.make("qd", "food", 100, 3), Path({str(out)!r}), None)
         os.replace = lambda *args: os.kill(os.getpid(), signal.SIGKILL)  # die before the rename
         run.checkpoint()

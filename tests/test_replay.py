@@ -11,10 +11,10 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from bt_controller.tree import parse
-from evolution_manager.bags import BagRecorder
-from evolution_manager.graph import executable
-from evolution_manager.nodes.trial import write_result
-from evolution_manager.reproduce import verify_trial_bag
+from evolution_manager.graph.nodes.trial import write_result
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import BagRecorder
+from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_msgs.msg import SwarmState
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_sim.lockstep import run_with_controllers

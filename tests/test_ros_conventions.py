@@ -16,10 +16,10 @@ from visualization_msgs.msg import MarkerArray
 
 from bt_controller.random_trees import random_trees
 from bt_controller.vocabulary import ACTIONS
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import Graph, executable
-from evolution_manager.nodes.trial import TrialGraph, expected_messages
-from evolution_manager.reproduce import RESULT_TOPIC
+from evolution_manager.graph.nodes.trial import TrialGraph, expected_messages
+from evolution_manager.graph.startup import Graph, executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED
@@ -118,7 +118,7 @@ def test_run_trial_reports_steps_and_a_cancel_leaves_the_graph_ready(graph):
     assert record.values == batch_trial(TREE, 6, 2).values
 
 
-def test_evaluate_reports_evaluations_done_and_a_cancel_frees_the_evaluator(tmp_path):
+def test_evaluate_reports_evaluations_done_and_a_cancel_returns_what_it_finished(tmp_path):
     trees = random_trees(seed=4, count=60)
     with reserved_domain() as domain, Graph(domain, log_dir=tmp_path / "logs") as nodes:
         nodes.start("evaluator", "swarm_sim", "evaluator", parameters={"slice": 5})
@@ -149,7 +149,15 @@ def test_evaluate_reports_evaluations_done_and_a_cancel_frees_the_evaluator(tmp_
             spin_until(result.done)
             assert result.result().status == 5  # STATUS_CANCELED
             assert feedback[:2] == [5, 10] and all(b - a == 5 for a, b in pairwise(feedback))
-            assert len(result.result().result.results) == 0
+            finished = result.result().result.results  # every slice done before the cancel was seen
+            assert feedback[-1] <= len(finished) < 60 and len(finished) % 5 == 0
+            assert result.result().result.message == f"cancelled after {len(finished)} of 60 evaluations"
+            again = BatchEvaluator().evaluate(
+                [EvaluationRequest(t, s, 10) for t, s in zip(trees[: len(finished)], range(60), strict=False)]
+            )
+            assert [(r.seed, r.nest, r.movement) for r in finished] == [
+                (s, r.fitness[1], r.descriptors[0]) for s, r in enumerate(again)
+            ]
 
             small = EvaluateBatch.Goal(trees=trees[:3], seeds=[1, 2, 3], trials=2, objective="food")
             sent = client.send_goal_async(small)
@@ -173,8 +181,9 @@ def test_two_graphs_run_side_by_side_in_one_domain_under_two_namespaces(tmp_path
     records, errors = {}, []
     with (
         reserved_domain() as domain,
-        TrialGraph(domain=domain, namespace="/swarm_a", timeout=120.0) as a,
-        TrialGraph(domain=domain, namespace="/swarm_b", timeout=120.0) as b,
+        # /clock is at the root, where use_sim_time looks: two graphs in one domain need a clock each
+        TrialGraph(domain=domain, namespace="/swarm_a", timeout=120.0, clock="/swarm_a/clock") as a,
+        TrialGraph(domain=domain, namespace="/swarm_b", timeout=120.0, clock="/swarm_b/clock") as b,
     ):
 
         def run(graph, namespace):
@@ -194,7 +203,8 @@ def test_two_graphs_run_side_by_side_in_one_domain_under_two_namespaces(tmp_path
     for namespace, text in trees.items():
         assert records[namespace].values == batch_trial(text, 11, 1).values
         topics = {m.topic for m in read_bag(tmp_path / namespace.strip("/"))}
-        assert topics == set(expected_messages(9, namespace, trial=1)) | {namespace + RESULT_TOPIC}
+        expected = expected_messages(9, namespace, trial=1, clock=f"{namespace}/clock")
+        assert topics == set(expected) | {namespace + RESULT_TOPIC}
 
 
 def test_a_controller_whose_robot_parameter_contradicts_its_namespace_stops_with_a_clear_error():

@@ -17,10 +17,10 @@ from PIL import Image
 from bt_controller import timeline
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
-from evolution_manager.animation import frames_from_bag, frames_from_tree
-from evolution_manager.bags import read_bag
-from evolution_manager.graph import executable
-from evolution_manager.nodes.trial import TrialGraph
+from evolution_manager.graph.nodes.trial import TrialGraph
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.config import DEFAULT
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, in_nest, stop))"
@@ -152,9 +152,12 @@ def test_explorer_opens_the_bin_of_the_fragment(small_run):
     assert next(a for a in cells if "selected" in a["class"].split())["data-bin"] == bin_text
 
     assert dom.find("section", id="detail", data_objective="food", data_bin=bin_text)
-    in_bin = [item for item in document["items"] if item["bin"] == best["bin"]]
+    in_bin = sorted((i for i in document["items"] if i["bin"] == best["bin"]), key=lambda i: -i["fitness"])
+    shown = {
+        i["simplified"]: i for i in reversed(in_bin)
+    }  # the fittest of each simplified tree stands for it
     values = " ".join(dom.values_text)
-    for item in in_bin:
+    for item in shown.values():
         assert f"{item['fitness']:.4f}" in values
         assert all(f"{d:.4f}" in values for d in item["descriptors"])
     drawn = {a["data-tree"] for a in dom.find("div") if "tree" in a.get("class", "").split()}
@@ -171,3 +174,46 @@ def test_explorer_heatmaps_of_another_objective(small_run):
     assert filled == filled_bins(small_run / "repertoire_nest.json")
     assert dom.find("div", id="heatmaps", data_objective="nest")
     assert dom.find("section", id="detail", data_bin="")
+
+
+def test_explorer_colours_by_held_out_fitness_from_the_runs_heldout_json(small_run):
+    heldout = json.loads((small_run / "heldout.json").read_text())["objectives"]["food"]["bins"]
+    scored = {",".join(map(str, row["bin"])): row["heldout_fitness"] for row in heldout}
+    assert scored, "the run wrote no held-out scores"
+    best_bin = max(scored, key=lambda b: scored[b])
+    dom = rendered(small_run / "explorer.html", f"objective=food&bin={best_bin}&colour=held-out")
+    assert dom.find("div", id="heatmaps", data_colour="held-out")
+    cells = {a["data-bin"]: a for a in dom.find("rect") if "filled" in a.get("class", "").split()}
+    assert {b: float(a["data-value"]) for b, a in cells.items() if a["data-value"]} == pytest.approx(
+        scored, abs=5e-5
+    )
+    values = " ".join(dom.values_text)
+    assert f"{scored[best_bin]:.4f}" in values  # held-out beside in-run fitness in the bin's table
+    in_run = rendered(small_run / "explorer.html", f"objective=food&bin={best_bin}")
+    assert in_run.find("div", id="heatmaps", data_colour="in-run")
+    food = json.loads((small_run / "repertoire_food.json").read_text())["items"]
+    best_in_run = {}
+    for item in food:
+        key = ",".join(map(str, item["bin"]))
+        best_in_run[key] = max(best_in_run.get(key, 0.0), item["fitness"])
+    shown = {a["data-bin"]: float(a["data-value"]) for a in in_run.find("rect") if a.get("data-value")}
+    assert shown == pytest.approx(best_in_run, abs=5e-5)
+
+
+def test_explorer_shows_trees_that_simplify_alike_once_with_their_count(small_run):
+    food = json.loads((small_run / "repertoire_food.json").read_text())["items"]
+    by_bin: dict[str, list[str]] = {}
+    for item in food:
+        by_bin.setdefault(",".join(map(str, item["bin"])), []).append(item["simplified"])
+    clones = {b: s for b, s in by_bin.items() if len(set(s)) < len(s)}
+    page = (small_run / "explorer.html").read_text()
+    payload = page.split('<script type="application/json" id="data">', 1)[1].split("</script>", 1)[0]
+    data = json.loads(payload.replace("<\\/", "</"))
+    for key, simplified in by_bin.items():
+        items = data["objectives"]["food"]["bins"][key]
+        assert sorted(i["simplified"] for i in items) == sorted(set(simplified))  # each simplified tree once
+        assert sum(i["copies"] for i in items) == len(simplified)
+    if clones:  # a bin with copies says how many in the browser
+        key = next(iter(clones))
+        dom = rendered(small_run / "explorer.html", f"objective=food&bin={key}")
+        assert dom.find("div", class_="tree copies")

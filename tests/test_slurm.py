@@ -66,12 +66,14 @@ def run_files(root: Path) -> dict[str, bytes]:
 def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(slurm, tmp_path, monkeypatch):
     import os
 
-    from evolution_manager.cluster import DaskEvaluator, SlurmSettings, map_runs, open_client
-    from evolution_manager.cluster.settings import ClusterSettings
-    from evolution_manager.config import RunConfig
-    from evolution_manager.experiment import run_one
-    from evolution_manager.outputs import write_results
-    from evolution_manager.run import Run
+    from evolution_manager.cluster.client import open_client
+    from evolution_manager.cluster.evaluator import DaskEvaluator
+    from evolution_manager.cluster.runs import map_runs
+    from evolution_manager.cluster.settings import ClusterSettings, SlurmSettings
+    from evolution_manager.evolution.run import Run
+    from evolution_manager.evolution.run_config import RunConfig
+    from evolution_manager.studies.experiment import run_one
+    from evolution_manager.viewing.results import write_results
     from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
@@ -112,7 +114,7 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
                 cancelled.append(job_of[address])
                 slurm.run(["scancel", job_of[address]])
 
-        results = dict(map_runs(client, planned, checkpoint_interval=0, on_progress=on_progress))
+        results = dict(map_runs(client, run_one, planned, checkpoint_interval=0, on_progress=on_progress))
         assert results == {root: None for _, root in planned}
         assert cancelled and cancelled[0] not in slurm.jobs()
         wait_for(lambda: set(slurm.jobs()) - first_jobs, 60, "a job submitted in place of the cancelled one")

@@ -30,6 +30,7 @@ setup(
             # "EXECUTABLE = swarm_sim.MODULE:main": run with `ws/run swarm_sim EXECUTABLE`.
             "evaluate = swarm_sim.cli:evaluate_main",
             "bench = swarm_sim.batch_bench:main",
+            "record-bench = swarm_sim.recording_bench:main",
             "validate = swarm_sim.validate_cli:main",
             "simulator = swarm_sim.nodes.simulator:main",
             "evaluator = swarm_sim.nodes.evaluator:main",

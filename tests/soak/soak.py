@@ -33,10 +33,10 @@ import sys
 import time
 from pathlib import Path
 
-from evolution_manager.bags import read_bag
-from evolution_manager.cli import evolve
-from evolution_manager.config import evaluation_seed
-from evolution_manager.graph import executable
+from evolution_manager.evolution.run_config import evaluation_seed
+from evolution_manager.graph.startup import executable
+from evolution_manager.recording.bags import read_bag
+from evolution_manager.studies.evolve import evolve
 from swarm_ros.isolation import domain_environment, reserved_domain
 
 RESULT_FILES = [

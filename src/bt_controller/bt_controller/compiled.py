@@ -30,6 +30,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.draws import choose, derive
 from bt_controller.errors import TreeLimitError
 from bt_controller.timeline import PAPER

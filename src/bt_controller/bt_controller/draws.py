@@ -40,6 +40,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.validate import integer
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)

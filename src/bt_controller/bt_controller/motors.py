@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numba
 
+import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.vocabulary import ACTION_INDEX, RUNNING, STOP
 
 _FORWARD = ACTION_INDEX["forward"]

@@ -20,6 +20,7 @@ from typing import NamedTuple, Protocol
 import numba
 import numpy as np
 
+import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.timeline import PAPER
 
 

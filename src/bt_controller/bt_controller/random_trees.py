@@ -1,5 +1,6 @@
 """Random trees and blackboards for tests, benchmarks and measurements (not the evolution's initialisation,
-which is DEAP's, in ``evolution_manager.primitives``). Every function takes its own generator or seed.
+which is DEAP's, in ``evolution_manager.evolution.deap_trees``). Every function takes its own generator or
+seed.
 
 ``random_tree`` (exactly ``size`` nodes) and ``random_tree_grow`` (at most ``max_depth`` deep) build trees;
 ``random_trees`` gives tree text for requests; ``random_blackboards`` gives blackboards to tick against."""

@@ -26,6 +26,8 @@ from typing import NamedTuple, Protocol
 
 import numba
 
+import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
+
 PAPER, CLEAN = 0, 1
 PROFILES: tuple[str, ...] = ("paper", "clean")
 """Profile names, indexed by the profile number (``PAPER``, ``CLEAN``)."""

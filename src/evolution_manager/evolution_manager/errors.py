@@ -23,6 +23,7 @@ __all__ = [
     "TreeTextError",
     "TrialFailedError",
     "UsageError",
+    "WriteError",
 ]
 
 
@@ -65,6 +66,17 @@ class GraphError(RuntimeError):
 
 class TrialFailedError(RuntimeError):
     """The trial could not be run through the graph; the message says why."""
+
+
+class WriteError(EvolutionError):
+    """A result or checkpoint could not be written (a full disk, a read-only folder); the message names the
+    file and the system's error. What was saved before stays whole: files are replaced atomically and the
+    logs are cut back to the last checkpoint on resume."""
+
+    @classmethod
+    def of(cls, path: object, error: OSError) -> WriteError:
+        """The error of writing ``path`` (its message survives pickling, e.g. from a worker process)."""
+        return cls(f"cannot write {path}: {error.strerror or error}")
 
 
 class LockHeldError(EvolutionError):

@@ -9,18 +9,36 @@ import json
 import math
 import os
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import RunDirectoryError
+from evolution_manager.errors import RunDirectoryError, WriteError
+
+
+@contextlib.contextmanager
+def writing(path: Path) -> Iterator[None]:
+    """Turn an ``OSError`` while writing ``path`` (a full disk, a read-only folder) into a ``WriteError``
+    that names the file."""
+    try:
+        yield
+    except WriteError:
+        raise
+    except OSError as error:
+        raise WriteError.of(path, error) from error
 
 
 def write_atomic(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` so that a reader (or a killed writer) sees the old file or the new one,
-    never a mixture: a temporary file in the same folder, flushed to disk, then renamed over ``path``."""
+    never a mixture: a temporary file in the same folder, flushed to disk, then renamed over ``path``. A
+    failed write (``WriteError``, naming the file) leaves the old file as it was."""
     path = Path(path)
     raw = data.encode() if isinstance(data, str) else data
+    with writing(path):
+        _write_atomic(path, raw)
+
+
+def _write_atomic(path: Path, raw: bytes) -> None:
     descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         os.fchmod(descriptor, 0o666 & ~_umask())  # mkstemp makes 0600; results are for people to open
@@ -55,7 +73,7 @@ def write_json(path: Path, data: object, indent: int | None = 1) -> None:
 def read_json(path: Path) -> object:
     """Read a JSON file, saying which file is damaged when it cannot be read."""
     try:
-        return json.loads(Path(path).read_text(), parse_constant=_reject_constant)
+        return json.loads(Path(path).read_text(), parse_constant=_reject_constant, parse_float=_finite_float)
     except FileNotFoundError as error:
         raise RunDirectoryError(f"{path} does not exist") from error
     except (OSError, ValueError) as error:
@@ -72,6 +90,13 @@ def read_json_object(path: Path) -> dict[str, Any]:
 
 def _reject_constant(name: str) -> float:
     raise ValueError(f"{name} is not allowed in our JSON files")
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):  # JSON allows 1e400; no value of ours is that large
+        raise ValueError(f"the number {text} is out of range")
+    return value
 
 
 def number(value: float | None) -> str:
@@ -97,18 +122,23 @@ class CsvLog:
         return self.path.stat().st_size
 
     def append(self, rows: Sequence[Sequence[str]]) -> int:
-        """Append rows; return the new length in bytes."""
-        with open(self.path, "ab") as handle:
+        """Append rows; return the new length in bytes. A failed write (``WriteError``) may leave part of a
+        row at the end: a resume cuts the file back to its checkpoint."""
+        with writing(self.path), open(self.path, "ab") as handle:
             handle.write(self._rows(rows).encode())
             handle.flush()
             return handle.tell()
 
+    def size(self) -> int:
+        """The file's length in bytes (-1 when it is missing)."""
+        return self.path.stat().st_size if self.path.exists() else -1
+
     def cut(self, size: int) -> None:
         """Cut the file back to ``size`` bytes (the length recorded in a checkpoint)."""
-        actual = self.path.stat().st_size if self.path.exists() else -1
-        if actual < size:
+        actual = self.size()
+        if not 0 <= size <= actual:
             raise RunDirectoryError(
-                f"{self.path} is shorter ({actual} bytes) than its checkpoint says ({size})"
+                f"{self.path} ({actual} bytes) cannot be cut back to the {size} bytes its checkpoint says"
             )
         with open(self.path, "r+b") as handle:
             handle.truncate(size)

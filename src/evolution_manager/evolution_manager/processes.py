@@ -16,14 +16,16 @@ import contextlib
 import ctypes
 import errno
 import fcntl
+import hashlib
 import os
 import signal
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from types import FrameType
 from typing import IO
 
-from .errors import Interrupted, LockHeldError
+from evolution_manager.errors import Interrupted, LockHeldError
 
 _PR_SET_PDEATHSIG = 1
 _libc = ctypes.CDLL(None, use_errno=True)  # loaded before any fork: preexec_fn only calls into it
@@ -98,6 +100,15 @@ def exclusive_lock(path: Path, what: str) -> Lock:
     lock = Lock(path, handle)
     _held[_key(path)] = lock
     return lock
+
+
+def lock_path_for(thing: Path, kind: str) -> Path:
+    """A lock file for ``thing`` kept outside it, in a folder of this user's under the machine's temporary
+    folder, named by ``thing``'s full path: for things that must hold nothing but their own files."""
+    folder = Path(tempfile.gettempdir()) / f"swarm-bt-qd-locks-{os.getuid()}"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    digest = hashlib.sha256(str(thing.resolve()).encode()).hexdigest()[:32]
+    return folder / f"{kind}-{digest}.lock"
 
 
 def lock_holder(path: Path) -> int | None:

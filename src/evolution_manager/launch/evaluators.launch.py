@@ -12,7 +12,7 @@ from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-from evolution_manager.graph import package_config
+from evolution_manager.graph.startup import package_config
 
 
 def evaluators(context: LaunchContext) -> list[Node]:

@@ -7,7 +7,7 @@ Arguments: ``robots`` (default 9), ``namespace`` (e.g. ``/swarm_a``; default the
 every controller), ``profile`` (the simulator's model profile; default: its parameter file's) and
 ``params_file`` (a parameter file for every node, after the packages' own ``config/*.yaml``).
 
-The node set is ``evolution_manager.graph.trial_graph_nodes``, the same that
+The node set is ``evolution_manager.graph.startup.trial_graph_nodes``, the same that
 ``ws/run evolution_manager trial`` starts on the PyPI-wheel workspace (no ``launch`` there).
 """
 
@@ -16,7 +16,7 @@ from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-from evolution_manager.graph import package_config, trial_graph_nodes
+from evolution_manager.graph.startup import package_config, trial_graph_nodes
 
 
 def nodes(context: LaunchContext) -> list[Node]:
@@ -37,6 +37,7 @@ def nodes(context: LaunchContext) -> list[Node]:
                 *([user_file] if user_file else []),
                 spec.parameters,
             ],
+            remappings=list(spec.remaps.items()),
             output="screen",
         )
         for spec in specs

@@ -7,11 +7,16 @@ from pathlib import Path
 
 import pytest
 
+from swarm_ros import isolation
+
 sys.path.insert(0, str(Path(__file__).parent))
 
 
 @pytest.fixture
 def pset():
-    from evolution_manager.primitives import make_primitive_set
+    from evolution_manager.evolution.deap_trees import make_primitive_set
 
     return make_primitive_set()
+
+
+workspace = pytest.fixture(isolation.workspace)  # the shared fixture of tests that start processes

@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from evolution_manager.adapt import adapt
-from evolution_manager.adaptation import (
+from evolution_manager.adaptation.adapt import adapt
+from evolution_manager.adaptation.search import (
     AdaptationError,
     Candidate,
     ConditionEvaluation,
@@ -20,9 +20,9 @@ from evolution_manager.adaptation import (
     load_candidates,
     reevolve,
 )
-from evolution_manager.config import RunConfig
 from evolution_manager.errors import AskTellError
-from evolution_manager.primitives import ACTIONS
+from evolution_manager.evolution.deap_trees import ACTIONS
+from evolution_manager.evolution.run_config import RunConfig
 from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator

@@ -8,11 +8,11 @@ from collections import Counter
 import pytest
 from toy import ToyEvaluator
 
-from evolution_manager import operators
-from evolution_manager.algorithms import GeneticProgramming, GPParameters, MapElites, QDParameters
-from evolution_manager.config import RunConfig, evaluation_seed
 from evolution_manager.errors import AskTellError, ConfigError
-from evolution_manager.primitives import OBJECTIVES
+from evolution_manager.evolution import operators
+from evolution_manager.evolution.algorithms import GeneticProgramming, GPParameters, MapElites, QDParameters
+from evolution_manager.evolution.deap_trees import OBJECTIVES
+from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
 from swarm_sim.evaluation import EvaluationRequest
 
 

@@ -11,15 +11,17 @@ import pytest
 from PIL import Image
 
 from bt_controller import timeline
-from evolution_manager.animation import (
+from evolution_manager.errors import AnimationError
+from evolution_manager.viewing.animate import (
+    ARENA_PX,
     ROBOT_COLOURS,
-    frames_from_tree,
     main,
     render_frame,
+    text_font,
     to_pixels,
     write_animation,
 )
-from evolution_manager.errors import AnimationError
+from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
@@ -96,3 +98,14 @@ def test_bad_input_is_one_line(args, message, capsys, tmp_path, monkeypatch):
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
     assert not (tmp_path / "x.gif").exists()
+
+
+def test_the_pictures_text_is_dejavu_and_keeps_its_spaces(frames):
+    font = text_font()
+    assert font.getname()[0] == "DejaVu Sans"
+    assert font.getlength("fitness so far:") > font.getlength("fitnesssofar:") + font.getlength(" ")
+    image = np.asarray(render_frame(frames, 0).convert("L"))
+    row = image[10 + 3 * 15 : 10 + 4 * 15, ARENA_PX + 10 :]  # the panel's fourth line: "fitness so far:"
+    inked = np.flatnonzero((row < 128).any(axis=0))
+    left, _, right, _ = font.getbbox("fitness so far:")
+    assert abs((inked[-1] - inked[0] + 1) - (right - left)) <= 2  # drawn as wide as the text with its spaces

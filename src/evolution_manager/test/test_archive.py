@@ -6,7 +6,7 @@ import random
 
 import pytest
 
-from evolution_manager.archive import Repertoire
+from evolution_manager.evolution.archive import Repertoire
 
 
 def test_a_full_bin_replaces_its_worst_only_with_a_strictly_better_tree():

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import random
 import signal
 import subprocess
@@ -12,10 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from evolution_manager.cli import evolve
+from evolution_manager.studies.evolve import evolve
+from swarm_ros.isolation import Workspace
 
-PACKAGES = Path(__file__).resolve().parents[2]
-PYTHONPATH = os.pathsep.join(str(PACKAGES / p) for p in ("bt_controller", "swarm_sim", "evolution_manager"))
 COMPARED = [
     "config.json",
     "evaluations.csv",
@@ -30,20 +28,12 @@ COMPARED = [
 
 
 def command(tool: str, *args: str) -> list[str]:
-    module = {"evolve": "cli", "experiment": "experiment", "report": "report"}[tool]
-    return [sys.executable, "-c", f"from evolution_manager.{module} import main; main()", *args]
+    return [sys.executable, "-c", f"from evolution_manager.studies.{tool} import main; main()", *args]
 
 
-def environment(**extra: str) -> dict[str, str]:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = PYTHONPATH + os.pathsep + env.get("PYTHONPATH", "")
-    env.update(extra)
-    return env
-
-
-def run(tool: str, *args: str, **env: str) -> subprocess.CompletedProcess:
+def run(workspace: Workspace, tool: str, *args: str, **env: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        command(tool, *args), env=environment(**env), capture_output=True, text=True, timeout=300
+        command(tool, *args), env=workspace.with_env(**env), capture_output=True, text=True, timeout=300
     )
 
 
@@ -83,33 +73,61 @@ def test_an_out_that_is_a_file_or_cannot_be_made_is_refused(tmp_path, capsys):
     assert (tmp_path / "file").read_text() == "keep me\n"
 
 
-def test_a_bad_option_exits_2_without_a_traceback_from_the_command_line(tmp_path):
+def test_a_bad_option_exits_2_without_a_traceback_from_the_command_line(tmp_path, workspace):
     result = run(
-        "evolve", "--algorithm", "qd", "--objective", "food", "--evaluations", "many", "--out", str(tmp_path)
+        workspace,
+        "evolve",
+        "--algorithm",
+        "qd",
+        "--objective",
+        "food",
+        "--evaluations",
+        "many",
+        "--out",
+        str(tmp_path),
     )
     assert result.returncode == 2
     assert "expected a positive integer, got 'many'" in result.stderr and "Traceback" not in result.stderr
 
 
-def test_nothing_saved_is_overwritten_and_resume_refuses_other_options(tmp_path):
+def test_nothing_saved_is_overwritten_and_resume_refuses_other_options(tmp_path, workspace):
     out = tmp_path / "run"
     assert (
         run(
-            "evolve", "--algorithm", "qd", "--objective", "food", "--evaluations", "150", "--out", str(out)
+            workspace,
+            "evolve",
+            "--algorithm",
+            "qd",
+            "--objective",
+            "food",
+            "--evaluations",
+            "150",
+            "--out",
+            str(out),
         ).returncode
         == 0
     )
     before = files(out)
     again = run(
-        "evolve", "--algorithm", "gp", "--objective", "nest", "--evaluations", "150", "--out", str(out)
+        workspace,
+        "evolve",
+        "--algorithm",
+        "gp",
+        "--objective",
+        "nest",
+        "--evaluations",
+        "150",
+        "--out",
+        str(out),
     )
     assert again.returncode == 2 and "already holds a run" in again.stderr
-    other = run("evolve", "--out", str(out), "--resume", "--seed", "5")
+    other = run(workspace, "evolve", "--out", str(out), "--resume", "--seed", "5")
     assert other.returncode == 2 and "differs from the run being resumed" in other.stderr
     assert files(out) == before
-    finished = run("evolve", "--out", str(out), "--resume")  # a finished run: results rewritten, unchanged
+    # a finished run: results rewritten, unchanged
+    finished = run(workspace, "evolve", "--out", str(out), "--resume")
     assert finished.returncode == 0 and files(out) == before
-    assert run("report", str(out)).returncode == 0 and files(out) == before
+    assert run(workspace, "report", str(out)).returncode == 0 and files(out) == before
     assert (out / "figures" / "heatmap_food.png").exists() and (out / "best" / "food.txt").exists()
 
 
@@ -144,7 +162,7 @@ def test_the_profile_is_the_runs_recorded_and_reproduced_by_evaluate(tmp_path, c
     assert "invalid choice: 'noisy'" in capsys.readouterr().err
 
 
-def test_same_seed_same_files_under_another_pythonhashseed(tmp_path):
+def test_same_seed_same_files_under_another_pythonhashseed(tmp_path, workspace):
     common = [
         "--algorithm",
         "gp",
@@ -156,14 +174,14 @@ def test_same_seed_same_files_under_another_pythonhashseed(tmp_path):
         "21",
         "--no-figures",
     ]
-    a = run("evolve", *common, "--out", str(tmp_path / "a"), PYTHONHASHSEED="1")
-    b = run("evolve", *common, "--out", str(tmp_path / "b"), PYTHONHASHSEED="2")
+    a = run(workspace, "evolve", *common, "--out", str(tmp_path / "a"), PYTHONHASHSEED="1")
+    b = run(workspace, "evolve", *common, "--out", str(tmp_path / "b"), PYTHONHASHSEED="2")
     assert a.returncode == b.returncode == 0, a.stderr + b.stderr
     assert files(tmp_path / "a") == files(tmp_path / "b")
     assert len(files(tmp_path / "a")) == len(COMPARED) - 1  # all but archive.json (GP has none)
 
 
-def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_path):
+def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_path, workspace):
     common = ["--evaluations", "700", "--seed", "8", "--checkpoint-every", "0", "--no-figures"]
     straight = tmp_path / "straight"
     assert evolve(["--algorithm", "qd", "--objective", "food", *common, "--out", str(straight)]) == 0
@@ -173,7 +191,7 @@ def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_p
     args = ["--algorithm", "qd", "--objective", "food", *common, "--out", str(killed)]
     while True:
         process = subprocess.Popen(
-            command("evolve", *args), env=environment(), stderr=subprocess.PIPE, text=True
+            command("evolve", *args), env=workspace.env, stderr=subprocess.PIPE, text=True
         )
         args = ["--out", str(killed), "--resume"]
         if kills == 3:

@@ -16,22 +16,20 @@ import pytest
 from distributed import Client, LocalCluster
 
 from bt_controller.random_trees import random_trees
-from evolution_manager.cluster import (
+from evolution_manager.cluster.client import open_client, slurm_cluster_options
+from evolution_manager.cluster.evaluator import DaskEvaluator, chunks, evaluate_chunk
+from evolution_manager.cluster.runs import map_runs
+from evolution_manager.cluster.settings import (
     ClusterError,
     ClusterSettings,
-    DaskEvaluator,
     SlurmSettings,
-    map_runs,
-    open_client,
     parse_cluster,
     read_slurm_settings,
 )
-from evolution_manager.cluster.client import slurm_cluster_options
-from evolution_manager.cluster.evaluator import chunks, evaluate_chunk
-from evolution_manager.config import RunConfig
-from evolution_manager.experiment import run_one
-from evolution_manager.outputs import write_results
-from evolution_manager.run import Run
+from evolution_manager.evolution.run import Run
+from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.studies.experiment import run_one
+from evolution_manager.viewing.results import write_results
 from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
@@ -374,7 +372,7 @@ def test_runs_on_a_dask_scheduler_equal_local_runs_even_when_a_worker_dies(clust
                 killed.set()
                 os.kill(pids[address], signal.SIGKILL)
 
-        for root, error in map_runs(client, planned, checkpoint_interval=0, on_progress=on_progress):
+        for root, error in map_runs(client, run_one, planned, checkpoint_interval=0, on_progress=on_progress):
             assert error is None, f"{root}: {error}"
             finished.append(root)
     assert killed.is_set()
@@ -390,5 +388,5 @@ def test_finished_runs_are_left_alone(client, tmp_path):
     root = str(tmp_path / "run")
     run_one(config.to_json(), root, checkpoint_interval=0)
     before = {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()}
-    assert list(map_runs(client, [(config.to_json(), root)])) == [(root, None)]
+    assert list(map_runs(client, run_one, [(config.to_json(), root)])) == [(root, None)]
     assert {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()} == before

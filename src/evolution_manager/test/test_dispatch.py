@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from evolution_manager.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
+from evolution_manager.graph.dispatch import Chunk, Dispatcher, DispatchError, Timeouts, WorkerState
 
 FAST = Timeouts(timeout=10.0, first_timeout=10.0, factor=10.0)
 

@@ -10,9 +10,9 @@ import subprocess
 import sys
 import time
 
-from evolution_manager.experiment import experiment, plan
-from evolution_manager.report import report
-from evolution_manager.statistics import compare, holm
+from evolution_manager.studies.experiment import experiment, plan
+from evolution_manager.studies.report import report
+from evolution_manager.studies.significance import compare, holm
 
 RUNS_HEADER = (
     "algorithm,objective,seed,best_fitness,heldout_best_fitness,coverage,qd_score,heldout_qd_score,"
@@ -104,9 +104,8 @@ def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path):
     straight = tmp_path / "straight"
     assert experiment([*args, "--out", str(straight), "--no-progress"]) == 0
     killed = tmp_path / "killed"
-    code = (
-        f"from evolution_manager.experiment import experiment; experiment({[*args, '--out', str(killed)]!r})"
-    )
+    call = f"experiment({[*args, '--out', str(killed)]!r})"
+    code = f"from evolution_manager.studies.experiment import experiment; {call}"
     process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
     try:
         deadline = time.monotonic() + 600

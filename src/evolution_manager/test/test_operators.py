@@ -11,8 +11,9 @@ from deap import gp
 from scipy.stats import chi2_contingency
 
 from bt_controller.tree import Composite, parse
-from evolution_manager import operators
-from evolution_manager.operators import (
+from evolution_manager.evolution import operators
+from evolution_manager.evolution.deap_trees import BehaviourTree, tree_from_text, tree_to_text
+from evolution_manager.evolution.operators import (
     best_of,
     cx_one_point,
     derating,
@@ -24,8 +25,7 @@ from evolution_manager.operators import (
     tournament,
     vary,
 )
-from evolution_manager.parameters import MAX_TREE_HEIGHT
-from evolution_manager.primitives import BehaviourTree, tree_from_text, tree_to_text
+from evolution_manager.evolution.parameters import MAX_TREE_HEIGHT
 
 MUTATIONS = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
 

@@ -5,10 +5,10 @@ import sys
 
 SCRIPT = """
 import sys
-import evolution_manager.archive
+import evolution_manager.evolution.archive
 print("sklearn" in sys.modules, "sklearn.cluster" in sys.modules)
 import qdpy.containers.grids as grids
-from evolution_manager.qdpy_grid import DeferredClass, Grid
+from evolution_manager.evolution.qdpy_grid import DeferredClass, Grid
 print(isinstance(grids.KMeans, DeferredClass), Grid is grids.Grid)
 import sklearn.cluster
 print(grids.KMeans.real() is sklearn.cluster.KMeans, type(sklearn.cluster).__name__)

@@ -6,7 +6,7 @@ from builtin_interfaces.msg import Time
 from rclpy.serialization import serialize_message
 from visualization_msgs.msg import Marker, MarkerArray
 
-from evolution_manager.nodes.recorder import cdr_stamp_ns, trial_topics
+from evolution_manager.graph.nodes.recorder import cdr_stamp_ns, trial_topics
 
 
 def stamped(msg_class: type, stamp: Time):

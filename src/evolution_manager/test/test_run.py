@@ -10,11 +10,11 @@ import pytest
 from recompute import check_metrics, check_repertoires
 from toy import ToyEvaluator
 
-from evolution_manager.config import RunConfig, evaluation_seed
 from evolution_manager.errors import RunDirectoryError
-from evolution_manager.outputs import write_results
-from evolution_manager.primitives import OBJECTIVES
-from evolution_manager.run import Run
+from evolution_manager.evolution.deap_trees import OBJECTIVES
+from evolution_manager.evolution.run import Run
+from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
+from evolution_manager.viewing.results import write_results
 
 RESULT_FILES = [
     "evaluations.csv",

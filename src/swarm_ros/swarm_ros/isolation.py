@@ -12,6 +12,7 @@ import fcntl
 import os
 import tempfile
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 FIRST_DOMAIN = 1
@@ -49,3 +50,24 @@ def domain_environment(domain: int) -> dict[str, str]:
     env.pop("ROS_LOCALHOST_ONLY", None)
     env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     return env
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """A ROS domain reserved for one test or command, and the environment to start the workspace's
+    processes in it."""
+
+    domain: int
+    env: dict[str, str]
+
+    def with_env(self, **extra: str) -> dict[str, str]:
+        """The environment with ``extra`` variables set (e.g. ``PYTHONHASHSEED``)."""
+        return {**self.env, **extra}
+
+
+def workspace() -> Iterator[Workspace]:
+    """A ROS domain of the caller's own (no other test or graph on the machine uses it) and the environment
+    in which the commands and nodes it starts see the workspace and that domain, for as long as the generator
+    is open: the tests' one fixture (``workspace = pytest.fixture(isolation.workspace)`` in a conftest)."""
+    with reserved_domain() as domain:
+        yield Workspace(domain, domain_environment(domain))

@@ -21,7 +21,6 @@ from typing import NoReturn
 from bt_controller.draws import MAX_SEED
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
-from swarm_sim import reference_road
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.errors import UsageError
@@ -107,6 +106,8 @@ def run(argv: Sequence[str] | None = None) -> str:
     except ValueError as error:
         raise UsageError(str(error)) from None
     if args.engine == "reference":
+        from swarm_sim import reference_road  # (the controllers' modules: only for this engine)
+
         values, records = reference_road.evaluate(tree, args.seed, args.trials, config)
     else:
         result, records = BatchEvaluator(config).evaluate_trials([request])[0]

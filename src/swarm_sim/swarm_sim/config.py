@@ -56,21 +56,20 @@ class Params(NamedTuple):
     weak_gain: float
 
 
-_INT_PARAMS = frozenset(
-    (
-        "n_robots",
-        "max_start_attempts",
-        "gain_levels",
-        "steps_per_tick",
-        "ticks",
-        "initial_step",
-        "chain_trials",
-        "window",
-        "collision_iterations",
-        "dead_robots",
-        "weak_robots",
-    )
-)
+_INT_MINIMUM = {
+    "n_robots": 1,
+    "max_start_attempts": 1,
+    "gain_levels": 1,
+    "steps_per_tick": 1,
+    "ticks": 1,
+    "initial_step": 1,
+    "chain_trials": 1,
+    "window": 1,
+    "collision_iterations": 0,
+    "dead_robots": 0,
+    "weak_robots": 0,
+}
+"""The integer parameters and the least value each may take (the one list of them)."""
 
 
 @dataclass(frozen=True)
@@ -190,7 +189,7 @@ class Config:
                 return self.profile_number
             if name == "occlusion":
                 return bool(self.occlusion)
-            return (int if name in _INT_PARAMS else float)(getattr(self, name))
+            return (int if name in _INT_MINIMUM else float)(getattr(self, name))
 
         return Params._make(field(f) for f in Params._fields)
 
@@ -234,18 +233,8 @@ def _validate(c: Config) -> None:
         "gain_low",
     ):
         _positive(c, name)
-    for name in (
-        "n_robots",
-        "max_start_attempts",
-        "gain_levels",
-        "steps_per_tick",
-        "ticks",
-        "initial_step",
-        "chain_trials",
-        "window",
-    ):
-        _count(c, name)
-    _count(c, "collision_iterations", 0)
+    for name, least in _INT_MINIMUM.items():
+        _count(c, name, least)
     if _number(c, "gain_step") < 0:
         raise ConfigError(f"gain_step must not be negative, got {c.gain_step!r}")
     friction = _number(c, "friction")
@@ -254,7 +243,7 @@ def _validate(c: Config) -> None:
     if not isinstance(c.occlusion, bool):
         raise ConfigError(f"occlusion must be true or false, got {c.occlusion!r}")
     for name in ("dead_robots", "weak_robots"):
-        if _count(c, name, 0) > c.n_robots:
+        if getattr(c, name) > c.n_robots:
             raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
     weak_gain = _number(c, "weak_gain")
     if not 0.0 <= weak_gain <= 1.0:

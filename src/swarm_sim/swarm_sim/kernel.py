@@ -9,10 +9,14 @@ order; it only skips work whose result is never read (a bearing is computed for 
 blackboard needs, at ticks, rather than for every message).
 ``run_jobs(trees, params, jobs, out)`` runs many (tree, seed, chain) jobs; each job writes only its own
 output rows (one per trial), so a job's result never depends on the others, their order or their number.
+``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
+one of its trials looks like (``Recording``: poses, actions, messages, smoothed values, fitness so far), for
+animations (``swarm_sim.recording``); the batch road asks for none and pays two comparisons a step.
 
 The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
-``Jobs`` (what to run), ``Outputs`` (where results go); inside a chain, ``Swarm`` holds every robot's state
-and ``Inbox`` the messages of one step. ``make_jobs`` builds ``Jobs`` from Python.
+``Jobs`` (what to run), ``Outputs`` (where results go), ``Recording`` (one trial, step by step); inside a
+chain, ``Swarm`` holds every robot's state and ``Inbox`` the messages of one step. ``make_jobs`` builds
+``Jobs`` from Python.
 """
 
 from __future__ import annotations
@@ -190,6 +194,104 @@ class Inbox(NamedTuple):
     food: np.ndarray
 
 
+class Recording(NamedTuple):
+    """One trial of a chain, step by step (row ``r``: the trial's step ``r + 1``), as the simulator and the
+    robots' answers show it (``swarm_sim.lockstep``): what ``simulate_chain`` writes when asked to record.
+    ``new_recording`` makes one."""
+
+    poses: np.ndarray
+    """(steps, n, 3): x, y, heading after the step's teleport and move."""
+    actions: np.ndarray
+    """(steps, n) int64: the motors the last tick at or before the step set (-1 before the chain's first)."""
+    ticks: np.ndarray
+    """(steps,) int64: the number of that tick within the chain (-1 before the first)."""
+    heard: np.ndarray
+    """(steps, n) int64: messages each robot received at the step (the first ``heard`` entries of its row of
+    ``senders``); at a trial's first step the robots ignore them, as the timeline says."""
+    senders: np.ndarray
+    """(steps, n, n) int64: their senders, in sender order."""
+    smoothed: np.ndarray
+    """(steps, n, 3): each robot's smoothed (nest, food, density) as last refreshed."""
+    ground: np.ndarray
+    """(steps, n, 2) bool: in the nest, on food (the ground sensor at the step)."""
+    fitness: np.ndarray
+    """(steps, 3): (density, nest, food) scored as if the trial ended at the step; NaN before the initial
+    step."""
+    initial: np.ndarray
+    """(n, 3): the trial's initial smoothed values (taken at its initial step)."""
+
+
+@numba.njit(cache=True)
+def new_recording(steps: int, n: int) -> Recording:
+    """A zeroed recording of ``steps`` steps of ``n`` robots (0 steps: the batch road's, which records
+    nothing)."""
+    return Recording(
+        np.zeros((steps, n, 3)),
+        np.zeros((steps, n), dtype=np.int64),
+        np.zeros(steps, dtype=np.int64),
+        np.zeros((steps, n), dtype=np.int64),
+        np.zeros((steps, n, n), dtype=np.int64),
+        np.zeros((steps, n, 3)),
+        np.zeros((steps, n, 2), dtype=np.bool_),
+        np.zeros((steps, 3)),
+        np.zeros((n, 3)),
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def _last_tick(p: Params, k: int) -> int:
+    """The number of the last tick at or before chain step ``k``, or -1 if there was none."""
+    for s in range(k, 0, -1):
+        if timeline.ticks_at(p, s):
+            return timeline.tick_number(p, s)
+    return -1
+
+
+@numba.njit(cache=True)
+def _record_step(
+    rec: Recording,
+    k: int,
+    gap: float,
+    p: Params,
+    x: np.ndarray,
+    y: np.ndarray,
+    heading: np.ndarray,
+    actions: np.ndarray,
+    smooth: np.ndarray,
+    initial: np.ndarray,
+    heard: np.ndarray,
+    senders: np.ndarray,
+) -> None:
+    """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
+    what the simulator publishes and what the robots answered to it."""
+    n = x.shape[0]
+    row = timeline.step_in_trial(p, k) - 1
+    last = _last_tick(p, k)
+    rec.ticks[row] = last
+    for i in range(n):
+        rec.poses[row, i, 0] = x[i]
+        rec.poses[row, i, 1] = y[i]
+        rec.poses[row, i, 2] = heading[i]
+        rec.actions[row, i] = actions[i] if last >= 0 else -1
+        rec.ground[row, i, 0], rec.ground[row, i, 1] = world.ground(x[i], y[i], gap, p)
+        rec.heard[row, i] = heard[i]
+        for c in range(heard[i]):
+            rec.senders[row, i, c] = senders[i, c]
+        for c in range(3):
+            rec.smoothed[row, i, c] = smooth[i, c]
+    if timeline.is_initial(p, k):
+        rec.initial[:, :] = initial
+    if row + 1 >= p.initial_step:
+        # The objectives only (counts and motion feed the descriptors), from this trial's initial values.
+        values = world.trial_values(
+            initial, smooth, np.zeros((n, N_COUNTS), dtype=np.int64), np.zeros((n, 2), dtype=np.int64), p
+        )
+        for c in range(3):
+            rec.fitness[row, c] = values[c]
+    else:
+        rec.fitness[row, :] = np.nan
+
+
 @numba.njit(cache=True)
 def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
     n = p.n_robots
@@ -241,10 +343,12 @@ def simulate_chain(
     p: Params,
     values_out: np.ndarray,
     poses_out: np.ndarray,
+    recorded: int,
+    rec: Recording,
 ) -> None:
     """Run the first ``trials`` trials of chain ``chain`` of one flat tree; write the chain's trial ``t``'s
     ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]``
-    (2 x n_robots x 3)."""
+    (2 x n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
     position_keys = keys[POSITION]
@@ -270,8 +374,10 @@ def simulate_chain(
                 poses_out[position, 0, i, 1] = y[i]
                 poses_out[position, 0, i, 2] = heading[i]
         world.physics_step(x, y, heading, actions, robot_arcs, p, x_before, y_before)
-        if timeline.senses(p, k):
-            # Every robot hears what the others broadcast at the step before.
+        sensing = timeline.senses(p, k)
+        if sensing or position == recorded:
+            # Every robot hears what the others broadcast at the step before (at a trial's first step the
+            # robots ignore it, and only a recording looks).
             world.sense_step(
                 x,
                 y,
@@ -286,6 +392,7 @@ def simulate_chain(
                 nest_values,
                 food_values,
             )
+        if sensing:
             for i in range(n):
                 in_nest, on_food = world.ground(x[i], y[i], gap, p)
                 nest, food, density, nest_source, food_source, nearest = world.estimate(
@@ -335,6 +442,8 @@ def simulate_chain(
                 broadcast_food[i] = world.broadcast_value(smooth[i, 1])
         if timeline.is_initial(p, k):
             initial[:, :] = smooth
+        if position == recorded:
+            _record_step(rec, k, gap, p, x, y, heading, actions, smooth, initial, counts_in, senders)
         if timeline.is_final(p, k):
             values = world.trial_values(initial, smooth, counts, motion, p)
             for c in range(values.shape[0]):
@@ -361,6 +470,8 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
         params,
         out.values[a:b],
         out.poses[a:b],
+        -1,
+        new_recording(0, params.n_robots),
     )
 
 
@@ -377,3 +488,15 @@ def run_jobs_parallel(trees: PackedTrees, params: Params, jobs: Jobs, out: Outpu
     """``run_jobs`` with the jobs spread over numba's threads; every job still writes only its own rows."""
     for j in numba.prange(jobs.tree.shape[0]):
         _run_job(j, trees, params, jobs, out)
+
+
+@numba.njit(cache=True)
+def record_chain(
+    tree: FlatTree, seed_key: np.uint64, chain: int, recorded: int, gap: float, p: Params, rec: Recording
+) -> np.ndarray:
+    """Run trials 0 .. ``recorded`` of chain ``chain`` of one flat tree (``simulate_chain``), recording trial
+    ``recorded`` into ``rec`` (``new_recording(trial_steps, n_robots)``); its ``world.N_VALUES`` values."""
+    values = np.zeros((recorded + 1, world.N_VALUES))
+    poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
+    simulate_chain(tree, seed_key, chain, recorded + 1, gap, p, values, poses, recorded, rec)
+    return values[recorded]

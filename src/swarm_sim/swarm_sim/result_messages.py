@@ -11,7 +11,7 @@ the ``RunTrial`` action's result and service response (``success``, ``message``,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -20,6 +20,48 @@ from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
 """The objectives a result's ``fitness`` field may report."""
+
+
+class ResultValues(Protocol):
+    """What a result of the evaluator contract holds (``EvaluationResult``, a run's ``Outcome``)."""
+
+    @property
+    def fitness(self) -> tuple[float, ...] | None: ...
+    @property
+    def descriptors(self) -> tuple[float, ...] | None: ...
+    @property
+    def error(self) -> str | None: ...
+
+
+class PoseMessage(Protocol):
+    """The fields read from a ``swarm_msgs/msg/RobotPose``."""
+
+    @property
+    def x(self) -> float: ...
+    @property
+    def y(self) -> float: ...
+    @property
+    def theta(self) -> float: ...
+
+
+class EvaluationMessage(Protocol):
+    """The fields read from a ``swarm_msgs/msg/EvaluationResult`` besides the six values."""
+
+    @property
+    def ok(self) -> bool: ...
+    @property
+    def error(self) -> str: ...
+
+
+class TrialMessage(Protocol):
+    """The fields read from a ``RunTrial`` result or response besides the six values."""
+
+    @property
+    def gap(self) -> float: ...
+    @property
+    def start_poses(self) -> Sequence[PoseMessage]: ...
+    @property
+    def end_poses(self) -> Sequence[PoseMessage]: ...
 
 
 def result_fields(
@@ -31,13 +73,21 @@ def result_fields(
     error: str = "",
     *,
     profile: str,
+    cached: bool = False,
 ) -> dict[str, Any]:
     """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (the six, ``VALUE_NAMES`` order) or
     None with ``error`` saying why the tree could not be evaluated; ``fitness`` is the ``objective``'s
-    value; ``profile`` the model's profile it was evaluated under."""
+    value; ``profile`` the model's profile it was evaluated under; ``cached`` when a run answered it from
+    its cache instead of simulating it again."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    fields: dict[str, Any] = {"tree": tree, "seed": int(seed), "trials": int(trials), "profile": profile}
+    fields: dict[str, Any] = {
+        "tree": tree,
+        "seed": int(seed),
+        "trials": int(trials),
+        "profile": profile,
+        "cached": cached,
+    }
     if values is None:
         return {**fields, "ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
     named = {name: float(v) for name, v in zip(VALUE_NAMES, values, strict=True)}
@@ -45,13 +95,21 @@ def result_fields(
 
 
 def evaluation_fields(
-    tree: str, seed: int, trials: int, result: EvaluationResult, objective: str, *, profile: str
+    tree: str,
+    seed: int,
+    trials: int,
+    result: ResultValues,
+    objective: str,
+    *,
+    profile: str,
+    cached: bool = False,
 ) -> dict[str, Any]:
-    """``result_fields`` of an evaluator contract's result."""
+    """``result_fields`` of an evaluator contract's result (or anything with its three fields)."""
     if result.error is not None or result.fitness is None or result.descriptors is None:
-        return result_fields(tree, seed, trials, None, objective, result.error or "", profile=profile)
+        error = result.error or ""
+        return result_fields(tree, seed, trials, None, objective, error, profile=profile, cached=cached)
     values = (*result.fitness, *result.descriptors)
-    return result_fields(tree, seed, trials, values, objective, profile=profile)
+    return result_fields(tree, seed, trials, values, objective, profile=profile, cached=cached)
 
 
 def values_of(msg: object) -> tuple[float, ...]:
@@ -59,10 +117,10 @@ def values_of(msg: object) -> tuple[float, ...]:
     return tuple(float(getattr(msg, name)) for name in VALUE_NAMES)
 
 
-def evaluation_result_of(msg: object) -> EvaluationResult:
+def evaluation_result_of(msg: EvaluationMessage) -> EvaluationResult:
     """The evaluator contract's result from an ``EvaluationResult`` message (values copied bit for bit)."""
-    if not msg.ok:  # type: ignore[attr-defined]
-        return failed(msg.error)  # type: ignore[attr-defined]
+    if not msg.ok:
+        return failed(msg.error)
     d, n, f, m, r, c = values_of(msg)
     return EvaluationResult(fitness=(d, n, f), descriptors=(m, r, c), error=None)
 
@@ -86,12 +144,12 @@ def fill(msg: object, fields: dict[str, Any]) -> object:
     return msg
 
 
-def trial_record_of(msg: object, trial: int) -> TrialRecord:
+def trial_record_of(msg: TrialMessage, trial: int) -> TrialRecord:
     """The record of trial ``trial`` from a successful ``RunTrial`` result or response."""
     return TrialRecord(
         trial=trial,
-        gap=float(msg.gap),  # type: ignore[attr-defined]
+        gap=float(msg.gap),
         values=values_of(msg),
-        start_poses=np.array([[p.x, p.y, p.theta] for p in msg.start_poses]),  # type: ignore[attr-defined]
-        end_poses=np.array([[p.x, p.y, p.theta] for p in msg.end_poses]),  # type: ignore[attr-defined]
+        start_poses=np.array([[p.x, p.y, p.theta] for p in msg.start_poses]),
+        end_poses=np.array([[p.x, p.y, p.theta] for p in msg.end_poses]),
     )

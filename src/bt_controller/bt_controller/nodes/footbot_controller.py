@@ -3,11 +3,14 @@
 Node ``footbot_controller``, started in the robot's namespace: ``--ros-args -r __ns:=/footbot_<i>`` (or
 ``/<graph>/footbot_<i>``); every name it uses is relative to it.
 
-Parameters (``config/bt_controller.yaml``):
+Parameters (``config/bt_controller.yaml``; ``ControllerSettings``; a bad value, type or name stops the node
+with one line, exit status 2):
     robot (int, read-only): the robot's index i, its position in the simulator's ``robot_namespaces``.
         Default -1: taken from the namespace, whose last part must then be ``footbot_<i>``. When both are
         given they must agree: ``__ns:=/footbot_4 -p robot:=0`` stops the node with an error saying so.
     tree (string, read-only): a tree to load at start (default: none; use the load_tree service).
+    commands (string, read-only): what each step's answer is published as: ``wheels`` (default; what the
+        simulator waits for), ``cmd_vel``, or ``both``.
 
 Subscriptions (relative names, in the robot's namespace):
     ground (swarm_msgs/GroundSensor) and range_and_bearing (swarm_msgs/RangeAndBearingReadings): the
@@ -16,6 +19,10 @@ Subscriptions (relative names, in the robot's namespace):
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
         name), its wheel speeds in m/s, the broadcast and smoothed estimates.
+    cmd_vel (geometry_msgs/Twist, with ``commands`` cmd_vel or both): the same step's wheel speeds as a
+        velocity of the robot's base (REP 103): ``linear.x = (left + right) / 2`` in m/s and
+        ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise positive, with the wheel
+        separation the trial's ``start_trial`` gives; a differential-drive robot can be driven by it.
     tree_status (swarm_msgs/TreeStatus): the result of every tick (2 Hz in simulated time).
 
 Services:
@@ -28,10 +35,10 @@ interpreter; the logic is ``bt_controller.controller``.
 
 from __future__ import annotations
 
-import sys
+from dataclasses import dataclass
 
 import numpy as np
-import rclpy
+from geometry_msgs.msg import Twist, Vector3
 from rclpy.node import Node
 
 from bt_controller.controller import FootbotController
@@ -43,9 +50,41 @@ from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
 from swarm_ros.names import NamespaceError, robot_index
-from swarm_ros.parameters import descriptor
+from swarm_ros.parameters import ANY, ParameterError, declare_dataclass, start_node
 from swarm_ros.qos import RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
+
+COMMANDS = ("wheels", "cmd_vel", "both")
+"""What a controller can publish each step's answer as (its ``commands`` parameter)."""
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """The footbot controller's parameters."""
+
+    robot: int = -1
+    """Index of this footbot in the simulator's robot_namespaces; -1: from the namespace (footbot_<i>)."""
+    tree: str = ""
+    """Tree to load at start (tree text); empty: wait for the load_tree service."""
+    commands: str = "wheels"
+    """What each step's answer is published as: wheels (swarm_msgs/WheelCommand, what the simulator waits
+    for), cmd_vel (geometry_msgs/Twist, REP 103 units, to drive a differential-drive robot) or both."""
+
+    def __post_init__(self) -> None:
+        if self.commands not in COMMANDS:
+            raise ParameterError(
+                f"parameter commands := {self.commands!r}: expected one of {', '.join(COMMANDS)}"
+            )
+
+
+CONTROLLER_RANGES = {"robot": (-1, 2**31 - 1)}
+"""Closed ranges of the controller's parameters."""
+
+
+def twist(left: float, right: float, separation: float) -> Twist:
+    """The base velocity of a differential drive whose wheels run at ``left`` and ``right`` m/s,
+    ``separation`` metres apart (REP 103: x forward, z up, so a positive ``angular.z`` turns left)."""
+    return Twist(linear=Vector3(x=(left + right) / 2.0), angular=Vector3(z=(right - left) / separation))
 
 
 class FootbotControllerNode(Node):
@@ -53,40 +92,38 @@ class FootbotControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("footbot_controller")
-        declared: int = self.declare_parameter(
-            "robot",
-            -1,
-            descriptor(
-                "index of this footbot in the simulator's robot_namespaces; -1: from the namespace "
-                "(footbot_<i>)",
-                read_only=True,
-                value_range=(-1, 2**31 - 1),
-                integer=True,
-            ),
-        ).value
-        self.robot = robot_index(self.get_namespace(), declared)
-        initial_tree: str = self.declare_parameter(
-            "tree", "", descriptor("tree to load at start (tree text)", read_only=True)
-        ).value
+        self.settings = declare_dataclass(
+            self, ControllerSettings(), read_only=True, ranges=CONTROLLER_RANGES
+        )
+        self.robot = robot_index(self.get_namespace(), self.settings.robot)
+        initial_tree = self.settings.tree
         self.controller = FootbotController()
         self.wheel_speed = 0.0  # m/s, from each trial's StartTrial
+        self.wheel_separation = 0.0  # m, from each trial's StartTrial
         warm_up()  # compile before offering services, so no step waits for numba
         self._ground: dict[int, GroundSensor] = {}
         self._readings: dict[int, RangeAndBearingReadings] = {}
-        self._wheels = self.create_publisher(WheelCommand, "wheels", RELIABLE)
+        commands = self.settings.commands
+        self._wheels = (
+            self.create_publisher(WheelCommand, "wheels", RELIABLE) if commands != "cmd_vel" else None
+        )
+        self._cmd_vel = self.create_publisher(Twist, "cmd_vel", RELIABLE) if commands != "wheels" else None
         self._status = self.create_publisher(TreeStatus, "tree_status", RELIABLE)
         self.create_subscription(GroundSensor, "ground", self._on_ground, RELIABLE)
         self.create_subscription(RangeAndBearingReadings, "range_and_bearing", self._on_readings, RELIABLE)
         self.create_service(LoadTree, "load_tree", self._on_load_tree)
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
-        loaded = ""
+        self.loaded = ""
         if initial_tree:
             tree = parse(initial_tree)
             self.controller.load(tree)
-            loaded = to_text(tree)
+            self.loaded = to_text(tree)
+
+    def announce(self) -> None:
+        """Log that the node is ready (once its parameters are checked)."""
         self.get_logger().info(
             f"ready: robot {self.robot} in {self.get_namespace()}"
-            + (f" with tree {loaded}" if loaded else "; waiting for load_tree")
+            + (f" with tree {self.loaded}" if self.loaded else "; waiting for load_tree")
         )
 
     def _on_load_tree(self, request: LoadTree.Request, response: LoadTree.Response) -> LoadTree.Response:
@@ -127,6 +164,7 @@ class FootbotControllerNode(Node):
             self.get_logger().error(f"cannot start trial {request.trial} of seed {request.seed}: {error}")
             return response
         self.wheel_speed = float(request.wheel_speed)
+        self.wheel_separation = float(request.wheel_separation)
         self._ground.clear()
         self._readings.clear()
         response.success = True
@@ -174,6 +212,11 @@ class FootbotControllerNode(Node):
             nest, food, density = outcome.smoothed
             left, right = float(outcome.wheels[0]), float(outcome.wheels[1])
             action = int(outcome.action)
+            left, right = left * self.wheel_speed, right * self.wheel_speed
+            if self._cmd_vel is not None:
+                self._cmd_vel.publish(twist(left, right, self.wheel_separation))
+            if self._wheels is None:
+                continue
             self._wheels.publish(
                 WheelCommand(
                     header=ground.header,
@@ -181,8 +224,8 @@ class FootbotControllerNode(Node):
                     step=outcome.step,
                     action=action,
                     action_name=ACTIONS[action],
-                    left=left * self.wheel_speed,
-                    right=right * self.wheel_speed,
+                    left=left,
+                    right=right,
                     nest_estimate=outcome.broadcast[0],
                     food_estimate=outcome.broadcast[1],
                     smoothed_nest=nest,
@@ -192,17 +235,24 @@ class FootbotControllerNode(Node):
             )
 
 
-def main(args: list[str] | None = None) -> None:
-    """Run one footbot controller node until shut down."""
-    rclpy.init(args=args)
+class InitialTreeError(ValueError):
+    """The ``tree`` parameter is not a valid tree."""
+
+
+def make_node() -> FootbotControllerNode:
+    """A controller node; a ``tree`` parameter that does not parse raises ``InitialTreeError``."""
     try:
-        node = FootbotControllerNode()
+        return FootbotControllerNode()
     except TreeError as error:
-        print(f"footbot_controller: the tree parameter is not a valid tree: {error}", file=sys.stderr)
-        rclpy.try_shutdown()
-        raise SystemExit(2) from None
-    except NamespaceError as error:
-        print(f"footbot_controller: {error}", file=sys.stderr)
-        rclpy.try_shutdown()
-        raise SystemExit(2) from None
+        raise InitialTreeError(f"the tree parameter is not a valid tree: {error}") from None
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run one footbot controller node until shut down; a bad parameter is a one-line error and exit status 2.
+    A ``/**`` section of a parameter file may hold any name (the world's, for the simulator): the controller
+    takes its own and leaves the others to the graph's other nodes, which refuse a name none declares."""
+    node = start_node(
+        "footbot_controller", make_node, args, shared=ANY, errors=(InitialTreeError, NamespaceError)
+    )
+    node.announce()
     spin_until_shutdown(node)

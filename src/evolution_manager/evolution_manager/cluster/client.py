@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
-from .settings import ClusterError, ClusterSettings, SlurmSettings
+from evolution_manager.cluster.settings import ClusterError, ClusterSettings, SlurmSettings
 
 if TYPE_CHECKING:
     from distributed import Client

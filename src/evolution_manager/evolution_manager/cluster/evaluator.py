@@ -28,11 +28,10 @@ from distributed import WorkerPlugin
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
+from evolution_manager.cluster.settings import CHUNK
+from evolution_manager.errors import DispatchError
 from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, failed
-
-from ..errors import DispatchError
-from .settings import CHUNK
 
 if TYPE_CHECKING:
     from distributed import Client, Worker

@@ -1,7 +1,8 @@
 """Whole runs of an experiment as Dask tasks: :func:`map_runs`.
 
 Each task runs (or continues from its checkpoint, or leaves alone when finished) one planned run in its run
-directory, exactly as ``experiment`` does in a local process (``experiment.run_one``); the directories must
+directory, exactly as ``experiment`` does in a local process: with the function the caller hands over
+(``studies.experiment.run_one``, which this wing, below ``studies``, does not import); the directories must
 lie on a filesystem that the client and every worker share, as a cluster's home or scratch does. A task whose
 worker dies (killed, its SLURM job cancelled or out of walltime) is run again on another worker, which
 continues the run from its last checkpoint: a run's files do not depend on how often it was interrupted.
@@ -46,23 +47,29 @@ class WorkerProgress:
         get_worker().log_event(self.topic, [str(root), int(produced)])
 
 
-def run_task(config_data: dict, root: str, topic: str, checkpoint_interval: float) -> str:
-    """A Dask task: run, continue or leave alone the planned run ``config_data`` in ``root``; return it."""
-    from ..experiment import run_one
+RunOne = Callable[..., str]
+"""``run_one(config_data, root, progress, checkpoint_interval)``: run, continue or leave alone one planned run
+in ``root`` (a top-level function, sent to the workers by name); it calls ``progress.put((root, produced))``
+after every batch, with a :class:`WorkerProgress` here."""
 
+
+def run_task(run_one: RunOne, config_data: dict, root: str, topic: str, checkpoint_interval: float) -> str:
+    """A Dask task: ``run_one`` of the planned run ``config_data`` in ``root``, with progress as events."""
     return run_one(config_data, root, WorkerProgress(topic), checkpoint_interval)
 
 
 def map_runs(
     client: Client,
+    run_one: RunOne,
     runs: Sequence[tuple[dict, str]],
     checkpoint_interval: float = 30.0,
     on_progress: Callable[[str, int], None] | None = None,
     attempts: int = ATTEMPTS,
     poll: float = 0.5,
 ) -> Iterator[tuple[str, BaseException | None]]:
-    """Run every ``(config_data, root)`` of ``runs`` on the workers of ``client``; yield ``(root, None)`` for
-    each run as it finishes, ``(root, error)`` for one that failed (the others go on).
+    """Run every ``(config_data, root)`` of ``runs`` with ``run_one`` on the workers of ``client``; yield
+    ``(root, None)`` for each run as it finishes, ``(root, error)`` for one that failed (the others go on).
+    The roots must be absolute paths on the filesystem the workers share.
 
     ``on_progress(root, produced)`` is called in the caller's thread, between results, with the individuals
     produced by a run so far. A run whose workers kept dying (``KilledWorker``) is submitted again, up to
@@ -74,7 +81,7 @@ def map_runs(
 
     def submit(config_data: dict, root: str, attempt: int) -> Future:
         key = f"run {root} (attempt {attempt}, {topic})"  # what the dashboard shows; unique per submission
-        return client.submit(run_task, config_data, root, topic, checkpoint_interval, key=key)
+        return client.submit(run_task, run_one, config_data, root, topic, checkpoint_interval, key=key)
 
     def report() -> None:
         while on_progress is not None:

@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from urllib.parse import urlsplit
 
-from ..errors import EvolutionError
+from evolution_manager.errors import EvolutionError
 
 KINDS = ("local", "dask", "slurm")
 

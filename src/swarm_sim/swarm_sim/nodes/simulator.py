@@ -1,9 +1,15 @@
 """The simulator node: owns the world and runs trials in lockstep with the footbot controller nodes.
 
-Node ``simulator``. Every name is relative, so a whole graph can run under a namespace (``__ns:=/swarm_a``,
-its robots then in ``/swarm_a/footbot_<i>``).
+Node ``simulator``. Every name but ``/clock`` and ``/diagnostics`` is relative, so a whole graph can run under
+a namespace (``__ns:=/swarm_a``, its robots then in ``/swarm_a/footbot_<i>``).
 
-Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``):
+A managed (lifecycle) node (``swarm_ros.lifecycle``): ``configure`` compiles the world and makes its topics,
+services and actions, ``activate`` lets it take trials, ``deactivate`` abandons the trial under way after
+its step and refuses trials, ``cleanup`` and ``shutdown`` withdraw everything. It configures and activates
+itself at start unless ``-p autostart:=false`` (the trial graph drives it).
+
+Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``; a bad value, type or name
+stops the node with one line, exit status 2):
     every field of ``swarm_sim.config.Config`` (read-only: world, timing and perception settings such as
         ``arena_half``, ``gaps``, ``n_robots``, ``wheel_speed``, ``step_dt``, ``ticks``, ``window``), with the
         model's defaults; a bad value stops the node with a one-line error naming it.
@@ -15,9 +21,13 @@ Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``)
     answer_timeout (float, seconds of wall time, may be changed at run time): how long to wait for the
         controllers at any step before the trial is abandoned with an error (default 60): it detects dead
         nodes; it is no speed limit.
+    autostart (bool, read-only, default true): configure and activate at start.
 
 Publishers:
-    clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step.
+    /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
+        ``use_sim_time`` looks (remap it with ``-r /clock:=/swarm_a/clock`` to run two graphs in one domain).
+    /diagnostics (diagnostic_msgs/DiagnosticArray): every second, the lifecycle state, the trial under way,
+        steps per second (over the last second), trials run and goals waiting.
     trial_start (swarm_msgs/TrialStart, transient-local): each trial's seed, index and the robots' stream
         keys.
     markers (visualization_msgs/MarkerArray, transient-local): walls, nest and food region of the trial's
@@ -35,9 +45,10 @@ Subscriptions:
     <robot>/tree_status (swarm_msgs/TreeStatus): each tick's status, action and condition ticks.
 
 Actions and services:
-    ~/run_trial (swarm_msgs/action/RunTrial): run one trial, with the step as feedback; a cancel stops it
-        after the step under way. Before its first step the simulator calls each controller's
-        <robot>/start_trial (swarm_msgs/StartTrial).
+    ~/run_trial (swarm_msgs/action/RunTrial): run one trial, with the step as feedback; a goal with an arena
+        configuration other than the trial's, or sent while the node is not active, is rejected at once. A
+        cancel stops the trial after the step under way. Before its first step the simulator calls each
+        controller's <robot>/start_trial (swarm_msgs/StartTrial).
     ~/run_trial (swarm_msgs/srv/RunTrial): the same without feedback or cancel, a thin wrapper.
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
@@ -46,30 +57,30 @@ step, so results do not depend on the machine's speed. The world itself is ``swa
 
 from __future__ import annotations
 
-import sys
 import threading
 import time
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseArray, PoseStamped
-from rclpy.action import ActionServer, CancelResponse
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleState, TransitionCallbackReturn
 from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
+from rclpy.subscription import Subscription
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 from bt_controller import timeline
+from bt_controller.nodes.footbot_controller import ControllerSettings
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
@@ -83,8 +94,9 @@ from swarm_msgs.msg import (
     WheelCommand,
 )
 from swarm_msgs.srv import RunTrial, StartTrial
+from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
-from swarm_ros.parameters import declare_dataclass, descriptor
+from swarm_ros.parameters import declare, declare_dataclass, descriptor, field_names, start_node
 from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
 from swarm_ros.services import call_until_answered
 from swarm_ros.spinning import spin_until_shutdown
@@ -93,6 +105,7 @@ from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.errors import TrialAbandonedError
 from swarm_sim.lockstep import LockstepChain, RobotAnswer, warm_up
 from swarm_sim.nodes import visualisation
+from swarm_sim.nodes.settings import EvaluatorSettings
 from swarm_sim.result_messages import fill, trial_fields
 from swarm_sim.trial_data import TrialRecord
 
@@ -123,17 +136,18 @@ def _wait_for_future(future: Future, seconds: float) -> bool:
     return done.wait(seconds)
 
 
-class SimulatorNode(Node):
+class SimulatorNode(ManagedNode):
     """Owns the world; runs trials through the controllers over topics and services."""
 
     def __init__(self, config: Config = DEFAULT) -> None:
-        super().__init__("simulator")
+        super().__init__("simulator", "swarm_sim simulator")
         declared = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
-        conditions: str = self.declare_parameter(
+        conditions: str = declare(
+            self,
             "conditions",
             "",
             descriptor("changes to the world, NAME=VALUE separated by spaces", read_only=True),
-        ).value
+        )
         self.config, self.conditions = apply_conditions(conditions.split(), declared)
         if self.config.n_robots != declared.n_robots:
             raise ConditionError(
@@ -141,20 +155,22 @@ class SimulatorNode(Node):
             )
         self.robots: int = self.config.n_robots
         self.namespaces = check_robot_namespaces(
-            self.declare_parameter(
+            declare(
+                self,
                 "robot_namespaces",
                 robot_namespaces(self.robots),
                 descriptor(
                     "the robots' namespaces, relative to the simulator's; robot i is the i-th", read_only=True
                 ),
-            ).value
+            )
         )
         if len(self.namespaces) != self.robots:
             raise NamespaceError(
                 f"robot_namespaces names {len(self.namespaces)} robots but n_robots is {self.robots}: "
                 "give one namespace per robot"
             )
-        self.declare_parameter(
+        declare(
+            self,
             "answer_timeout",
             60.0,
             descriptor(
@@ -164,15 +180,26 @@ class SimulatorNode(Node):
             ),
         )
         self.sim_time_ns = 0
-        warm_up(self.config)  # compile before offering the service, so no step waits for numba
         self.step_ns = round(self.config.step_dt * 1e9)
-
         self._lock = threading.Condition()
         self._busy = threading.Lock()  # one trial at a time, whether asked by the action or the service
         self._inbox = _Inbox()
+        self._actions = ["stop"] * self.robots
+        self._figures = threading.Lock()
+        self.steps = 0
+        self.trials = 0
+        self.goals_waiting = 0
+        self.trial_under_way = ""
+        self._last = (time.monotonic(), 0)
+        self._made: list[Any] = []  # what on_configure made, for release
+        self._action_server: ActionServer | None = None
+
+    # --- lifecycle
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        warm_up(self.config)  # compile before offering the service, so no step waits for numba
         listeners = ReentrantCallbackGroup()
         publisher = self._publisher
-        self._clock_publisher = publisher(Clock, "clock")
+        self._clock_publisher = publisher(Clock, "/clock")
         self._trial_start = publisher(TrialStart, "trial_start", LATCHED)
         self._markers = publisher(MarkerArray, "markers", LATCHED)
         self._robot_markers = publisher(MarkerArray, "robot_markers")
@@ -190,7 +217,7 @@ class SimulatorNode(Node):
                 (WheelCommand, f"{ns}/wheels", self._on_wheels),
                 (TreeStatus, f"{ns}/tree_status", self._on_status),
             ):
-                self.create_subscription(
+                subscription = self.create_subscription(
                     msg_class,
                     topic,
                     partial(callback, i),
@@ -198,28 +225,65 @@ class SimulatorNode(Node):
                     callback_group=listeners,
                     event_callbacks=NO_SUBSCRIPTION_EVENTS,
                 )
+                self._made.append(subscription)
             self._start_clients.append(
                 self.create_client(StartTrial, f"{ns}/start_trial", callback_group=listeners)
             )
-        self._actions = ["stop"] * self.robots
+        self._made += self._start_clients
         trials = MutuallyExclusiveCallbackGroup()
-        self.create_service(RunTrial, "~/run_trial", self._on_run_trial, callback_group=trials)
+        self._made.append(
+            self.create_service(RunTrial, "~/run_trial", self._on_run_trial, callback_group=trials)
+        )
         self._action_server = ActionServer(
             self,
             RunTrialAction,
             "~/run_trial",
             self._execute_trial,
             callback_group=trials,
+            goal_callback=self._on_goal,
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
         self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
+        return TransitionCallbackReturn.SUCCESS
+
+    def release(self) -> None:
+        if self._action_server is not None:
+            self._action_server.destroy()
+            self._action_server = None
+        for entity in reversed(self._made):
+            if isinstance(entity, Publisher):
+                self.destroy_publisher(entity)
+            elif isinstance(entity, Subscription):
+                self.destroy_subscription(entity)
+            elif isinstance(entity, Client):
+                self.destroy_client(entity)
+            else:
+                self.destroy_service(entity)
+        self._made.clear()
+
+    def diagnostic_values(self) -> dict[str, str]:
+        now = time.monotonic()
+        with self._figures:
+            (then, before), steps = self._last, self.steps
+            self._last = (now, steps)
+            values = {
+                "trial": self.trial_under_way or "none",
+                "trials run": str(self.trials),
+                "goals waiting": str(self.goals_waiting),
+            }
+        rate = (steps - before) / (now - then) if now > then else 0.0
+        return {**values, "steps per second": f"{rate:.1f}"}
 
     def _publisher(self, msg_class: type, topic: str, qos: QoSProfile = RELIABLE) -> Publisher:
         # no rclpy default event handlers: they cost this many-topic node most of its CPU (swarm_ros.qos)
-        return self.create_publisher(msg_class, topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
+        publisher: Publisher = self.create_publisher(
+            msg_class, topic, qos, event_callbacks=NO_PUBLISHER_EVENTS
+        )
+        self._made.append(publisher)
+        return publisher
 
     @property
     def answer_timeout(self) -> float:
@@ -256,23 +320,39 @@ class SimulatorNode(Node):
         )
 
     # --- the action and the service
-    def _check_goal(self, seed: int, trial: int, arena: int) -> None:
+    def arena_of(self, trial: int) -> int:
+        """The arena configuration of trial ``trial`` (``docs/model.md``: blocks of ``chain_trials``)."""
+        return timeline.arena_of_trial(self.config.timeline, trial, len(self.config.gaps))
+
+    def goal_problem(self, request: Any) -> str:  # a RunTrial goal or request (generated, untyped)
+        """Why the trial ``request`` asks for cannot be run, or ""."""
+        if not self.active:
+            return f"{self.get_name()} is not active ({self.state})"
+        arena, trial = int(request.arena_configuration), int(request.trial)
         if arena not in (-1, *range(len(self.config.gaps))):
-            raise TrialAbandonedError(
-                f"arena_configuration must be -1 or 0..{len(self.config.gaps) - 1}, got {arena}"
-            )
-        own = trial % len(self.config.gaps)
-        if arena >= 0 and arena != own:
-            raise TrialAbandonedError(
-                f"trial {trial} uses arena configuration {own}, not {arena} (-1 means its own)"
-            )
+            return f"arena_configuration must be -1 or 0..{len(self.config.gaps) - 1}, got {arena}"
+        if arena >= 0 and arena != self.arena_of(trial):
+            own = self.arena_of(trial)
+            return f"trial {trial} uses arena configuration {own}, not {arena} (-1 means its own)"
+        return ""
+
+    def _on_goal(self, request: Any) -> GoalResponse:  # a RunTrial goal (generated, untyped)
+        problem = self.goal_problem(request)
+        if problem:
+            self.get_logger().error(f"rejected a goal: {problem}")
+            return GoalResponse.REJECT
+        with self._figures:
+            self.goals_waiting += 1
+        return GoalResponse.ACCEPT
 
     def _run(self, request: Any, result: Any, goal: ServerGoalHandle | None = None) -> Any:  # ROS messages
         """Run the trial ``request`` asks for into ``result`` (the action's result or the service's
         response), with feedback and cancel when ``goal`` is the action's goal."""
         try:
             seed, trial = int(request.seed), int(request.trial)
-            self._check_goal(seed, trial, int(request.arena_configuration))
+            problem = self.goal_problem(request)
+            if problem:
+                raise TrialAbandonedError(problem)
             with self._busy:
                 record = self.run_trial(seed, trial, goal)
         except (TrialAbandonedError, TrialCancelledError, ValueError) as error:
@@ -289,6 +369,8 @@ class SimulatorNode(Node):
         return self._run(request, response)
 
     def _execute_trial(self, goal: ServerGoalHandle) -> RunTrialAction.Result:
+        with self._figures:
+            self.goals_waiting -= 1
         result = self._run(goal.request, RunTrialAction.Result(), goal)
         if goal.is_cancel_requested:
             goal.canceled()
@@ -305,6 +387,18 @@ class SimulatorNode(Node):
         and stop with ``TrialCancelledError`` when it is cancelled."""
         chain, position = timeline.chain_of_trial(self.config.timeline, trial)
         world = LockstepChain(seed, chain, position + 1, self.config)
+        with self._figures:
+            self.trial_under_way = f"trial {trial} of seed {seed}"
+        try:
+            return self._run_chain(world, seed, trial, goal)
+        finally:
+            with self._figures:
+                self.trial_under_way = ""
+                self.trials += 1
+
+    def _run_chain(
+        self, world: LockstepChain, seed: int, trial: int, goal: ServerGoalHandle | None
+    ) -> TrialRecord:
         steps = world.last_step
         self._start_controllers(world, seed)
         self._actions = ["stop"] * self.robots
@@ -317,7 +411,7 @@ class SimulatorNode(Node):
                 header=self._header("arena"),
                 seed=seed,
                 trial=trial,
-                arena_configuration=trial % len(self.config.gaps),
+                arena_configuration=self.arena_of(trial),
                 robots=self.robots,
                 tree_keys=[int(k) for k in world.setup.tree_keys],
             )
@@ -328,6 +422,13 @@ class SimulatorNode(Node):
                 with self._lock:
                     self._inbox = _Inbox()
                 raise TrialCancelledError(f"trial {trial} of seed {seed} cancelled at step {world.step}")
+            if not self.active:
+                with self._lock:
+                    self._inbox = _Inbox()
+                raise TrialAbandonedError(
+                    f"trial {trial} of seed {seed} abandoned at step {world.step}: the simulator was "
+                    "deactivated"
+                )
             self._publish_step(world, seed)
             if goal is not None:
                 goal.publish_feedback(RunTrialAction.Feedback(step=world.step, steps=steps))
@@ -353,6 +454,8 @@ class SimulatorNode(Node):
                 ]
             )
             self.sim_time_ns += self.step_ns
+            with self._figures:
+                self.steps += 1
             with self._lock:
                 self._inbox = _Inbox(step=world.step, answers={}, statuses={}) if not world.done else _Inbox()
         assert record is not None and record.trial == trial, "the chain's last record is the trial asked for"
@@ -383,6 +486,7 @@ class SimulatorNode(Node):
                 density_range=p.density_range,
                 density_divisor=p.density_divisor,
                 wheel_speed=p.wheel_speed * visualisation.MM,
+                wheel_separation=self.config.wheel_separation * visualisation.MM,
             )
             futures.append((client, request, client.call_async(request)))
         deadline = time.monotonic() + self.answer_timeout
@@ -485,13 +589,13 @@ class SimulatorNode(Node):
         return Header(stamp=self._stamp(), frame_id=frame)
 
 
+SHARED = field_names(EvaluatorSettings) | field_names(ControllerSettings)
+"""Parameters of the graph's other nodes that a ``/**`` section of a shared parameter file may hold."""
+
+
 def main(args: list[str] | None = None) -> None:
     """Run the simulator node until shut down; a bad parameter is a one-line error and exit status 2."""
-    rclpy.init(args=args)
-    try:
-        node = SimulatorNode()
-    except (ConfigError, ConditionError, NamespaceError) as error:
-        print(f"simulator: bad parameter: {error}", file=sys.stderr)
-        rclpy.try_shutdown()
-        raise SystemExit(2) from None
+    errors = (ConfigError, ConditionError, NamespaceError)
+    node = start_node("simulator", SimulatorNode, args, shared=SHARED, errors=errors)
+    node.start()
     spin_until_shutdown(node, MultiThreadedExecutor(num_threads=4))

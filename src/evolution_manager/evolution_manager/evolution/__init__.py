@@ -1,0 +1,11 @@
+"""The evolutionary algorithms and everything a run is made of, with no ROS and no drawing.
+
+The paper's parameters (``parameters``), DEAP's primitive set and the conversion between DEAP trees and tree
+text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and MAP-Elites as ask/tell
+algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
+configuration and command-line options (``run_config``, ``options``), the run loop with its checkpoints
+(``run``) and the held-out scores (``heldout``). Imports: the base modules, bt_controller, swarm_sim, DEAP
+and qdpy; no other wing.
+"""
+
+__all__ = ["algorithms", "archive", "deap_trees", "heldout", "operators", "options", "run", "run_config"]

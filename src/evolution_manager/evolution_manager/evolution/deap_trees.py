@@ -1,0 +1,113 @@
+"""Behaviour trees as DEAP genetic-programming trees.
+
+The primitive set is built by :func:`make_primitive_set` (no global ``creator`` classes): one primitive per
+composite and number of children (``seq2`` ... ``prob4``, DEAP needs a fixed arity) and one terminal per
+condition and action, all named as in :mod:`bt_controller.vocabulary`. Primitives are never compiled: a tree
+is data, turned into text with :func:`tree_to_text` and read back with :func:`tree_from_text` through
+``bt_controller``'s parser (DEAP's ``PrimitiveTree.from_string`` falls back to ``eval`` on unknown tokens).
+"""
+
+from __future__ import annotations
+
+from deap import base, gp
+
+from bt_controller.errors import TreeError
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, leaf_name, parse
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from evolution_manager.errors import TreeTextError
+from evolution_manager.evolution.parameters import MAX_TREE_NODES
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES
+
+__all__ = [
+    "DESCRIPTORS",
+    "MAX_TREE_NODES",
+    "OBJECTIVES",
+    "BehaviourTree",
+    "TripleFitness",
+    "make_primitive_set",
+    "tree_from_text",
+    "tree_to_text",
+]
+
+
+class TripleFitness(base.Fitness):
+    """The three objectives (density, nest, food) of one evaluation, all maximised."""
+
+    weights = (1.0, 1.0, 1.0)
+
+
+class BehaviourTree(gp.PrimitiveTree):
+    """A DEAP tree with a :class:`TripleFitness`; invalid (empty) until it has been evaluated."""
+
+    def __init__(self, content: list) -> None:
+        super().__init__(content)
+        self.fitness = TripleFitness()
+        self.descriptors: tuple[float, ...] | None = None
+        """The descriptors of the evaluation that gave the fitness (None until evaluated, or failed)."""
+
+    def clone(self) -> BehaviourTree:
+        """A copy of the tree (nodes are shared, they are immutable) with a copy of its fitness and
+        descriptors."""
+        twin = BehaviourTree(self)
+        if self.fitness.valid:
+            twin.fitness.values = self.fitness.values
+        twin.descriptors = self.descriptors
+        return twin
+
+
+def _never_called(*_children: object) -> None:  # pragma: no cover - trees are interpreted, never compiled
+    raise TypeError("behaviour-tree primitives are data; interpret trees with bt_controller")
+
+
+def make_primitive_set() -> gp.PrimitiveSet:
+    """A fresh primitive set: composites with 2-4 children (``seq2`` ... ``prob4``), conditions and actions.
+
+    Primitives are added composite by composite, arity by arity, and terminals as conditions then actions,
+    so the lists DEAP keeps (and the operators choose from) have a fixed order.
+    """
+    pset = gp.PrimitiveSet("behaviour_tree", 0)
+    for composite in COMPOSITES:
+        for arity in range(MIN_CHILDREN, MAX_CHILDREN + 1):
+            pset.addPrimitive(_never_called, arity, name=f"{composite}{arity}")
+    for name in CONDITIONS + ACTIONS:
+        pset.addTerminal(name, name=name)
+    return pset
+
+
+def tree_to_text(tree: gp.PrimitiveTree) -> str:
+    """The canonical text of a tree: composite names without the arity suffix, ``", "`` between children."""
+    parts: list[str] = []
+    open_frames: list[list[int]] = []  # per open composite: [number of children, children printed]
+    for node in tree:
+        if open_frames and open_frames[-1][1]:
+            parts.append(", ")
+        if node.arity:
+            parts.append(node.name[:-1] + "(")
+            open_frames.append([node.arity, 0])
+            continue
+        parts.append(node.name)
+        while open_frames:
+            open_frames[-1][1] += 1
+            if open_frames[-1][1] < open_frames[-1][0]:
+                break
+            open_frames.pop()
+            parts.append(")")
+    return "".join(parts)
+
+
+def tree_from_text(
+    text: str, pset: gp.PrimitiveSet, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH
+) -> BehaviourTree:
+    """Parse a tree text with ``bt_controller``'s parser (limits on size and depth, no ``eval``) into a
+    :class:`BehaviourTree` of ``pset``; raise :class:`TreeTextError` saying what is wrong."""
+    try:
+        root = parse(text, max_nodes=max_nodes, max_depth=max_depth)
+    except (TreeError, TypeError) as error:
+        raise TreeTextError(f"not a behaviour tree: {error}") from None
+    nodes = []
+    for node in root.preorder():
+        name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else leaf_name(node)
+        if name not in pset.mapping:
+            raise TreeTextError(f"not a behaviour tree of this primitive set: unknown node {name!r}")
+        nodes.append(pset.mapping[name])
+    return BehaviourTree(nodes)

@@ -1,0 +1,488 @@
+"""The run loop: an algorithm, an evaluator, passive grids, a run directory and checkpoints.
+
+A run directory holds (all written by this module, all plain text):
+
+``config.json``
+    the configuration and seed (never changed after the run starts);
+``evaluations.csv``
+    one row per evaluation: index, simulator seed, tree text, the three objectives, the three descriptors,
+    error;
+``progress.csv``
+    one row per batch: evaluations so far, then for each objective the best fitness, the coverage and the QD
+    score of its repertoire (:meth:`Run.repertoire`);
+``checkpoint.json``
+    the algorithm's state, the passive grids and the lengths of the two CSV files, written atomically;
+``repertoire_<objective>.json``, ``archive.json`` (MAP-Elites), ``summary.json``, ``figures/``, ``best/``
+    written when the run ends (see ``evolution_manager.viewing.results``).
+
+Every evaluated tree is offered to a passive grid per objective (3 per bin). The repertoire of an objective
+that the run evolves is what the authors' analysis measures: MAP-Elites' own archive; for GP a grid of one
+tree per bin offered every individual of generations 1 onwards (charts/analysis.py:96-121).
+
+Scenarios (``RunConfig.scenarios``): under ``fixed`` every evaluation uses the run's scenario seed, so a tree
+asked for again is answered from the run's cache of results (keyed by the canonical tree text) without
+simulating it; :attr:`Run.simulations` and :attr:`Run.simulations_saved` count both. Its rows in
+``evaluations.csv`` are the same as a simulation's, so the cache is rebuilt from that file on resume.
+
+A resumed run cuts the CSV files back to the lengths in the checkpoint and continues from its state; since
+per-evaluation seeds depend only on the run's seeds and the evaluation's index, it ends with exactly the
+files of an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from bt_controller.validate import integer
+from evolution_manager.errors import EvolutionError, RunDirectoryError
+from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
+from evolution_manager.evolution.archive import Repertoire
+from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
+from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
+from evolution_manager.processes import Lock, exclusive_lock, is_locked
+
+if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates, not to read a run
+    from swarm_sim.evaluation import EvaluationRequest, Evaluator
+
+LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
+
+CHECKPOINT_FORMAT = 1
+
+_DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
+"""What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
+
+EVALUATION_HEADER = ["evaluation", "seed", "tree", *OBJECTIVES, *DESCRIPTORS, "error"]
+PROGRESS_HEADER = ["evaluations"] + [f"{m}_{o}" for o in OBJECTIVES for m in ("best", "coverage", "qd_score")]
+
+
+def _remove_abandoned_starts(parent: Path, name: str) -> None:
+    """Remove what starts of a run at ``parent/name`` killed before their first checkpoint left behind."""
+    for leftover in parent.glob(f".{name}.new-*"):
+        if leftover.is_dir() and not is_locked(leftover / LOCK_NAME):
+            shutil.rmtree(leftover, ignore_errors=True)
+
+
+def _request_type() -> type[EvaluationRequest]:
+    from swarm_sim.evaluation import EvaluationRequest
+
+    return EvaluationRequest
+
+
+@dataclass(frozen=True)
+class Evaluated:
+    """One evaluation of a batch as the run recorded it: the request, its outcome, and whether it was
+    answered from the run's cache (under fixed scenarios, a tree seen before is not simulated again)."""
+
+    request: EvaluationRequest
+    outcome: Outcome
+    cached: bool
+
+
+@dataclass
+class Timing:
+    """Wall-clock seconds spent in the evaluator and in everything else (algorithm, grids, files)."""
+
+    evaluator: float = 0.0
+    manager: float = 0.0
+
+    @property
+    def total(self) -> float:
+        return self.evaluator + self.manager
+
+
+class RunDirectory:
+    """The paths of a run directory."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = Path(root)
+        self.config = self.root / "config.json"
+        self.checkpoint = self.root / "checkpoint.json"
+        self.summary = self.root / "summary.json"
+        self.evaluations = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
+        self.progress = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
+        self.figures = self.root / "figures"
+        self.best = self.root / "best"
+
+    def repertoire(self, objective: str) -> Path:
+        return self.root / f"repertoire_{objective}.json"
+
+    @property
+    def archive(self) -> Path:
+        return self.root / "archive.json"
+
+    def started(self) -> bool:
+        """Whether a run was ever started here."""
+        return self.config.exists()
+
+    def read_config(self) -> RunConfig:
+        """The run's configuration from ``config.json``; a damaged file is named in the error."""
+        try:
+            return RunConfig.from_json(read_json_object(self.config))
+        except RunDirectoryError:
+            raise
+        except (*_DAMAGE, EvolutionError) as error:
+            raise RunDirectoryError(f"{self.config} is damaged: {error}") from error
+
+    def temporary_files(self) -> list[Path]:
+        """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
+        if not self.root.is_dir():
+            return []
+        return [p for p in self.root.rglob(".*.tmp") if p.is_file()]
+
+
+class Run:
+    """One run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
+
+    def __init__(self, config: RunConfig, directory: RunDirectory, evaluator: Evaluator | None) -> None:
+        self.config = config
+        self.directory = directory
+        self.evaluator = evaluator
+        self.algorithm: AskTell = config.make_algorithm()
+        self.passive = {objective: Repertoire() for objective in OBJECTIVES}
+        self.generations: dict[str, Repertoire] = {}
+        """GP only: per evolved objective, the grid of one tree per bin of generations 1 onwards."""
+        if isinstance(self.algorithm, GeneticProgramming):
+            self.generations = {o: Repertoire(items_per_bin=1) for o in config.objectives}
+        self.known: dict[str, Outcome] = {}
+        """Every tree text evaluated in this run with its outcome (answers repeats under ``fixed``)."""
+        self.simulations = 0
+        self.last_batch: list[Evaluated] = []
+        """The batch evaluated last, every evaluation of it (for whoever records the run, e.g. a bag)."""
+        self.simulations_saved = 0
+        self._first: dict[str, int] = {}
+        self.evaluations = 0
+        self.timing = Timing()
+        self.offsets = {"evaluations": 0, "progress": 0}
+        self.lock: Lock | None = None  # the run directory's lock, held by a run that writes
+
+    # Construction ------------------------------------------------------------------------------------
+    @classmethod
+    def start(cls, config: RunConfig, root: Path, evaluator: Evaluator) -> Run:
+        """A new run in ``root``, which must not hold a run already (nothing saved is ever overwritten).
+
+        The directory appears whole or not at all: it is built as a hidden sibling (``.<name>.new-*``) with
+        its configuration, empty logs and first checkpoint, then renamed into place. The run holds the
+        directory's lock (``.lock``) until the process ends."""
+        directory = RunDirectory(root)
+        if directory.started():
+            raise RunDirectoryError(
+                f"{root} already holds a run: continue it with --resume, or choose another --out"
+            )
+        if directory.root.exists() and not directory.root.is_dir():
+            raise RunDirectoryError(f"{root} is a file, not a directory: choose another --out")
+        if directory.root.exists() and any(directory.root.iterdir()):
+            raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
+        parent = directory.root.absolute().parent
+        parent.mkdir(parents=True, exist_ok=True)
+        _remove_abandoned_starts(parent, directory.root.name)
+        building = Path(tempfile.mkdtemp(prefix=f".{directory.root.name}.new-", dir=parent))
+        try:
+            os.chmod(building, 0o777 & ~_umask())
+            lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+            run = cls(config, RunDirectory(building), evaluator)
+            write_json(run.directory.config, config.to_json())
+            run.offsets = {
+                "evaluations": run.directory.evaluations.create(),
+                "progress": run.directory.progress.create(),
+            }
+            run.checkpoint()
+            try:
+                os.rename(building, directory.root)  # replaces an empty directory, never a full one
+            except OSError as error:
+                raise RunDirectoryError(
+                    f"{root} was created by another process meanwhile: choose another --out"
+                ) from error
+        except BaseException:
+            shutil.rmtree(building, ignore_errors=True)
+            raise
+        run.directory = directory
+        lock.moved(directory.root / LOCK_NAME)
+        run.lock = lock
+        return run
+
+    @classmethod
+    def resume(cls, root: Path, evaluator: Evaluator | None, cut: bool = True) -> Run:
+        """The run in ``root`` as it was at its last checkpoint, its CSV files cut back to match (with
+        ``cut=False``, for reading only, the files are left as they are and no lock is taken).
+
+        The checkpoint is checked whole (format, configuration, algorithm state, every tree in it) before
+        anything is changed; a writer's lock is taken first, and the temporary files of a killed writer are
+        removed."""
+        directory = RunDirectory(root)
+        if not directory.started():
+            raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
+        lock = exclusive_lock(directory.root / LOCK_NAME, f"the run directory {root}") if cut else None
+        try:
+            run = cls._load(directory, evaluator)
+        except BaseException:
+            if lock is not None:
+                lock.release()
+            raise
+        run.lock = lock
+        if cut:
+            for temporary in directory.temporary_files():
+                temporary.unlink(missing_ok=True)
+            directory.evaluations.cut(run.offsets["evaluations"])
+            directory.progress.cut(run.offsets["progress"])
+        return run
+
+    @classmethod
+    def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:
+        """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
+        config = directory.read_config()
+        state = read_json(directory.checkpoint)
+        if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
+            raise RunDirectoryError(
+                f"{directory.checkpoint} is not a checkpoint of format {CHECKPOINT_FORMAT}"
+            )
+        run = cls(config, directory, evaluator)
+        try:
+            if RunConfig.from_json(state["config"]) != config:
+                raise RunDirectoryError(
+                    f"{directory.checkpoint} belongs to another configuration than config.json"
+                )
+            run.algorithm.restore(state["algorithm"])
+            run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in OBJECTIVES}
+            run.evaluations = integer(state["evaluations"], "evaluations", 0)
+            logs = {"evaluations": directory.evaluations, "progress": directory.progress}
+            for name, log in logs.items():
+                offset = integer(state["offsets"][name], f"offsets.{name}", 0)
+                if offset > log.size():
+                    raise ValueError(f"offsets.{name} {offset} is beyond the end of {log.path.name}")
+                run.offsets[name] = offset
+            run.timing = Timing(**state["timing"])
+            for objective, grid in state.get("generations", {}).items():
+                run.generations[objective] = Repertoire.from_state(grid)
+            archive = run.archive()
+            grids = [*run.passive.values(), *([archive] if archive is not None else [])]
+            for grid in grids:
+                for entry in grid.entries():
+                    tree_from_text(entry.tree, run.algorithm.pset)
+            if run.algorithm.evaluations != run.evaluations or run.evaluations < 0:
+                raise ValueError(
+                    f"the algorithm counts {run.algorithm.evaluations} evaluations, the run {run.evaluations}"
+                )
+        except (
+            KeyError,
+            TypeError,
+            ValueError,
+            AttributeError,
+            IndexError,
+            OverflowError,
+            EvolutionError,
+        ) as error:
+            if isinstance(error, RunDirectoryError):
+                raise
+            raise RunDirectoryError(f"{directory.checkpoint} is damaged: {error}") from error
+        run._rebuild_cache()
+        return run
+
+    def _rebuild_cache(self) -> None:
+        """The cache and the simulation counts from ``evaluations.csv`` (as far as the checkpoint)."""
+        for row in self.directory.evaluations.read()[: self.evaluations]:
+            tree = row["tree"]
+            self._first.setdefault(tree, int(row["evaluation"]))
+            if self._cached(tree):
+                self.simulations_saved += 1
+                continue
+            self.simulations += 1
+            if row["error"]:
+                self.known[tree] = Outcome(None, None, row["error"])
+            else:
+                values = [float(row[name]) for name in (*OBJECTIVES, *DESCRIPTORS)]
+                self.known[tree] = Outcome(
+                    (values[0], values[1], values[2]), (values[3], values[4], values[5])
+                )
+
+    def _cached(self, tree: str) -> bool:
+        return self.config.scenarios == "fixed" and tree in self.known
+
+    # Execution ---------------------------------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        return self.algorithm.done
+
+    def execute(
+        self,
+        on_batch: Callable[[int, int], None] | None = None,
+        checkpoint_interval: float = 30.0,
+        stop_after: int | None = None,
+        before_checkpoint: Callable[[], None] | None = None,
+    ) -> None:
+        """Run batches until the budget is spent (or ``stop_after`` evaluations, for tests and benchmarks).
+
+        A checkpoint is written when ``checkpoint_interval`` seconds have passed since the last one, and
+        always at the end. ``on_batch(evaluations, budget)`` is called after every batch, and
+        ``before_checkpoint()`` before every checkpoint (to put what else records the run on disk first).
+        """
+        last_checkpoint = time.monotonic()
+        make_request = _request_type()
+        while not self.algorithm.done and (stop_after is None or self.evaluations < stop_after):
+            started = time.perf_counter()
+            trees = self.algorithm.ask()
+            first = self.evaluations
+            requests = [
+                make_request(tree=tree, seed=self.config.request_seed(first + i), trials=self.config.trials)
+                for i, tree in enumerate(trees)
+            ]
+            asked = time.perf_counter()
+            self.last_batch = self._evaluate(requests)
+            results = [e.outcome for e in self.last_batch]
+            evaluated = time.perf_counter()
+            self.algorithm.tell(results)
+            self._record(requests, results)
+            finished = time.perf_counter()
+            self.timing.evaluator += evaluated - asked
+            self.timing.manager += (asked - started) + (finished - evaluated)
+            if on_batch is not None:
+                on_batch(self.algorithm.produced, self.config.evaluations)
+            if time.monotonic() - last_checkpoint >= checkpoint_interval:
+                if before_checkpoint is not None:
+                    before_checkpoint()
+                self._timed_checkpoint()
+                last_checkpoint = time.monotonic()
+        if before_checkpoint is not None:
+            before_checkpoint()
+        self._timed_checkpoint()
+
+    def _evaluate(self, requests: Sequence[EvaluationRequest]) -> list[Evaluated]:
+        """Every request evaluated: under ``fixed`` scenarios a tree seen before in the run (or earlier in
+        the batch) is answered from the cache; the others go to the evaluator in one batch."""
+        if self.evaluator is None:
+            raise RunDirectoryError("this run was opened for reading: it has no evaluator")
+        fresh: list[EvaluationRequest] = []
+        fresh_at: list[int] = []  # the position in ``requests`` of each fresh request
+        fresh_trees: set[str] = set()
+        for i, request in enumerate(requests):
+            # a tree seen before, or earlier in this batch (answered from its first copy below)
+            if self._cached(request.tree) or (
+                self.config.scenarios == "fixed" and request.tree in fresh_trees
+            ):
+                self.simulations_saved += 1
+            else:
+                fresh.append(request)
+                fresh_at.append(i)
+                fresh_trees.add(request.tree)
+        results = list(self.evaluator.evaluate(fresh)) if fresh else []
+        if len(results) != len(fresh):
+            raise RunDirectoryError(f"the evaluator answered {len(results)} of {len(fresh)} requests")
+        self.simulations += len(fresh)
+        simulated: dict[int, Outcome] = {}
+        for i, request, result in zip(fresh_at, fresh, results, strict=True):
+            # Under fresh scenarios a tree asked twice is simulated twice, on two seeds: each request keeps
+            # its own result (the cache serves fixed scenarios only).
+            simulated[i] = self.known[request.tree] = as_outcome(result)
+        return [
+            Evaluated(r, simulated[i], False) if i in simulated else Evaluated(r, self.known[r.tree], True)
+            for i, r in enumerate(requests)
+        ]
+
+    def _offer_generations(self) -> None:
+        """GP: every individual of each generation completed, to the one-per-bin grids."""
+        if not isinstance(self.algorithm, GeneticProgramming):
+            return
+        from evolution_manager.evolution.deap_trees import tree_to_text
+
+        for population in self.algorithm.take_generations():
+            for tree in population:
+                if tree.descriptors is None or not tree.fitness.valid:
+                    continue  # a failed evaluation
+                text = tree_to_text(tree)
+                for objective, grid in self.generations.items():
+                    k = OBJECTIVES.index(objective)
+                    grid.offer(text, tree.fitness.values[k], tree.descriptors, self.first_evaluation(text))
+
+    def first_evaluation(self, text: str) -> int:
+        """The index of the first evaluation of ``text`` in this run (-1 if never evaluated)."""
+        return self._first.get(text, -1)
+
+    def repertoire(self, objective: str) -> Repertoire:
+        """The repertoire the metrics measure: MAP-Elites' archive for its objective, GP's one-per-bin grid
+        of generations 1 onwards for an objective it evolves, else the passive grid (every evaluated tree)."""
+        if objective in self.generations:
+            return self.generations[objective]
+        return self.passive[objective]
+
+    def best(self, objective: str) -> tuple[str, float, tuple[float, ...]] | None:
+        """The best tree on ``objective`` as the authors report it: GP's elite (chosen with the derated
+        selection rule, reported with its stored fitness), else the repertoire's fittest item."""
+        if isinstance(self.algorithm, GeneticProgramming) and objective in self.config.objectives:
+            from evolution_manager.evolution.deap_trees import tree_to_text
+
+            tree = self.algorithm.best(OBJECTIVES.index(objective))
+            if tree is not None and tree.descriptors is not None:
+                return tree_to_text(tree), tree.fitness.values[OBJECTIVES.index(objective)], tree.descriptors
+        entry = self.repertoire(objective).best()
+        return None if entry is None else (entry.tree, entry.value, entry.descriptors)
+
+    def _timed_checkpoint(self) -> None:
+        started = time.perf_counter()
+        self.checkpoint()
+        self.timing.manager += time.perf_counter() - started
+
+    def _record(self, requests: Sequence, results: Sequence) -> None:
+        rows = []
+        for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
+            index = self.evaluations + offset
+            outcome = as_outcome(result)
+            measured = outcome.measured()
+            if measured is not None:
+                fitness, descriptors = measured
+                for k, objective in enumerate(OBJECTIVES):
+                    self.passive[objective].offer(request.tree, fitness[k], descriptors, index)
+                values = [number(v) for v in fitness + descriptors]
+                error = ""
+            else:
+                values = [""] * (len(OBJECTIVES) + len(DESCRIPTORS))
+                error = outcome.error or "no fitness or descriptors"
+            rows.append([str(index), str(request.seed), request.tree, *values, error])
+            self._first.setdefault(request.tree, index)
+        self.evaluations += len(requests)
+        self._offer_generations()  # before the progress row, which measures the repertoires
+        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
+        self.offsets["progress"] = self.directory.progress.append([self.progress_row()])
+
+    def progress_row(self) -> list[str]:
+        """Evaluations so far, then best, coverage and QD score of each objective's passive grid."""
+        row = [str(self.evaluations)]
+        for objective in OBJECTIVES:
+            grid = self.repertoire(objective)
+            row += [number(grid.best_value), number(grid.coverage), number(grid.qd_score)]
+        return row
+
+    def checkpoint(self) -> None:
+        """Write the checkpoint atomically (only between batches)."""
+        write_json(
+            self.directory.checkpoint,
+            {
+                "format": CHECKPOINT_FORMAT,
+                "config": self.config.to_json(),
+                "evaluations": self.evaluations,
+                "done": self.algorithm.done,
+                "offsets": self.offsets,
+                "timing": {"evaluator": self.timing.evaluator, "manager": self.timing.manager},
+                "algorithm": self.algorithm.to_state(),
+                "passive": {o: self.passive[o].to_state() for o in OBJECTIVES},
+                "generations": {o: grid.to_state() for o, grid in self.generations.items()},
+            },
+            indent=None,
+        )
+
+    # Results -----------------------------------------------------------------------------------------
+    def archive(self) -> Repertoire | None:
+        """MAP-Elites' own archive (equal to the passive grid of its objective), or None for GP."""
+        return self.algorithm.archive if isinstance(self.algorithm, MapElites) else None
+
+    def population(self) -> list[str]:
+        """GP's current population as tree texts (empty for MAP-Elites)."""
+        if isinstance(self.algorithm, GeneticProgramming):
+            return [tree_to_text(t) for t in self.algorithm.population]
+        return []

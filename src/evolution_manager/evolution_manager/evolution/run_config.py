@@ -1,0 +1,196 @@
+"""The configuration of one run: algorithm, objective, budget, seed; and the per-evaluation seeds.
+
+Defaults follow ``docs/algorithms.md``: GP_o and QD_o produce 25,000 individuals on one objective,
+GP_fnd 75,000 on all three at once (the budget counts individuals produced by the generations after the
+initial population, as the paper's table 5: 1000 generations of 25, 500 batches of 50).
+
+Scenarios: under ``fixed`` (the default, as the authors) every evaluation of a run uses the run's scenario
+seed, so a tree has one exact fitness and a tree seen before need not be simulated again; under ``fresh``
+evaluation ``i`` draws its own seed from the run seed and ``i`` (noisy fitness).
+
+Profile: the model's profile every evaluation of the run uses (``docs/model.md``: ``paper``, the authors'
+experiment, or ``clean``), recorded in ``config.json``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
+
+from bt_controller.draws import (
+    MAX_SEED,
+    RUN_ALGORITHM,
+    RUN_EVALUATION,
+    RUN_HELDOUT,
+    RUN_SCENARIO,
+    derive_seed,
+)
+from bt_controller.timeline import PROFILES, Timeline
+from bt_controller.validate import integer
+from evolution_manager.errors import ConfigError
+from evolution_manager.evolution.parameters import GPParameters, QDParameters
+from swarm_sim.world import OBJECTIVES
+
+if TYPE_CHECKING:
+    from evolution_manager.evolution.algorithms import AskTell
+
+DEFAULT_PROFILE: str = PROFILES[Timeline().profile]
+"""The model's default profile (``bt_controller.timeline``): runs that name none use it."""
+
+ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
+"""Command-line names: GP_o, GP_fnd, QD_o (MAP-Elites)."""
+
+DEFAULT_EVALUATIONS = {"gp": 25_000, "gp-fnd": 75_000, "qd": 25_000}
+
+LABELS = {"gp": "GP_o", "gp-fnd": "GP_fnd", "qd": "QD_o"}
+
+SCENARIOS: tuple[str, ...] = ("fixed", "fresh")
+"""``fixed``: every evaluation of a run on the run's scenario seed; ``fresh``: a new seed per evaluation."""
+
+HELDOUT_EVALUATIONS = 5
+"""Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
+
+
+def default_scenario_seed(run_seed: int) -> int:
+    """The scenario seed of a run when none is given: derived from the run seed."""
+    return derive_seed(run_seed, RUN_SCENARIO)
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One run. ``objective`` is None for ``gp-fnd``, which evolves all three objectives."""
+
+    algorithm: str
+    objective: str | None
+    evaluations: int
+    seed: int
+    trials: int = 10
+    gp: GPParameters = field(default_factory=GPParameters)
+    qd: QDParameters = field(default_factory=QDParameters)
+    scenarios: str = "fixed"
+    scenario_seed: int = -1
+    """-1: derived from ``seed`` (see :func:`default_scenario_seed`); replaced by the value at creation."""
+    profile: str = DEFAULT_PROFILE
+    """The model's profile (``docs/model.md``), the same for every evaluation of the run."""
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
+        if self.algorithm == "gp-fnd":
+            if self.objective is not None:
+                raise ConfigError("gp-fnd evolves all three objectives at once: leave out the objective")
+        elif self.objective not in OBJECTIVES:
+            raise ConfigError(
+                f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; got {self.objective!r}"
+            )
+        integer(self.evaluations, "evaluations", 1, error=ConfigError)
+        integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
+        integer(self.trials, "trials", 1, error=ConfigError)
+        if self.scenarios not in SCENARIOS:
+            raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
+        if self.scenario_seed == -1:  # frozen: set once, at creation
+            object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
+        integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
+        if self.profile not in PROFILES:
+            raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {self.profile!r}")
+
+    @classmethod
+    def make(
+        cls,
+        algorithm: str,
+        objective: str | None,
+        evaluations: int | None,
+        seed: int,
+        trials: int = 10,
+        scenarios: str = "fixed",
+        scenario_seed: int | None = None,
+        profile: str | None = None,
+    ) -> RunConfig:
+        """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
+        for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
+        ``seed`` when ``scenario_seed`` is None; the model's default profile when ``profile`` is None."""
+        if algorithm not in ALGORITHMS:
+            raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
+        gp = GPParameters(population=75, tournament=5) if algorithm == "gp-fnd" else GPParameters()
+        budget = DEFAULT_EVALUATIONS[algorithm] if evaluations is None else evaluations
+        return cls(
+            algorithm,
+            objective,
+            budget,
+            seed,
+            trials,
+            gp=gp,
+            scenarios=scenarios,
+            scenario_seed=-1 if scenario_seed is None else scenario_seed,
+            profile=DEFAULT_PROFILE if profile is None else profile,
+        )
+
+    def request_seed(self, index: int) -> int:
+        """The simulator seed of evaluation ``index`` (0-based) of this run: the scenario seed under
+        ``fixed``; under ``fresh`` a seed of its own, a pure function of the run seed and the index."""
+        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+
+    def heldout_seed(self, repeat: int) -> int:
+        """The seed of held-out evaluation ``repeat`` (0 to ``HELDOUT_EVALUATIONS`` - 1), the same for every
+        tree re-scored at the end of the run: scenarios the run never used."""
+        return derive_seed(self.scenario_seed, RUN_HELDOUT, repeat)
+
+    @property
+    def objectives(self) -> tuple[str, ...]:
+        """The objectives this run evolves."""
+        return OBJECTIVES if self.objective is None else (self.objective,)
+
+    @property
+    def label(self) -> str:
+        """``GP_o``-style label: GP_food, GP_fnd, QD_nest."""
+        if self.algorithm == "gp-fnd":
+            return "GP_fnd"
+        return f"{LABELS[self.algorithm][:-2]}_{self.objective}"
+
+    def to_json(self) -> dict:
+        data = asdict(self)
+        data["gp"]["mutations"] = [list(m) for m in self.gp.mutations]
+        data["qd"]["mutations"] = [list(m) for m in self.qd.mutations]
+        return data
+
+    @classmethod
+    def from_json(cls, data: dict) -> RunConfig:
+        try:
+            gp = dict(data["gp"])
+            qd = dict(data["qd"])
+            gp["mutations"] = tuple((str(n), float(p)) for n, p in gp["mutations"])
+            qd["mutations"] = tuple((str(n), float(p)) for n, p in qd["mutations"])
+            return cls(
+                str(data["algorithm"]),
+                None if data["objective"] is None else str(data["objective"]),
+                integer(data["evaluations"], "evaluations"),
+                integer(data["seed"], "seed"),
+                integer(data["trials"], "trials"),
+                gp=GPParameters(**gp),
+                qd=QDParameters(**qd),
+                # run directories written before scenarios existed drew a fresh seed per evaluation
+                scenarios=str(data.get("scenarios", "fresh")),
+                scenario_seed=integer(data.get("scenario_seed", -1), "scenario_seed"),
+                # run directories written before profiles existed ran the model's default
+                profile=str(data.get("profile", DEFAULT_PROFILE)),
+            )
+        except (KeyError, TypeError, ValueError, OverflowError) as error:
+            if isinstance(error, ConfigError):
+                raise
+            raise ConfigError(f"not a run configuration: {error}") from error
+
+    def make_algorithm(self) -> AskTell:
+        """A fresh algorithm for this configuration, with its own generator seeded from the run seed."""
+        from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites
+
+        algorithm_seed = derive_seed(self.seed, RUN_ALGORITHM)
+        if self.algorithm == "qd":
+            return MapElites(OBJECTIVES.index(self.objective), self.evaluations, algorithm_seed, self.qd)
+        objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
+        return GeneticProgramming(list(objectives), self.evaluations, algorithm_seed, self.gp)
+
+
+def evaluation_seed(run_seed: int, index: int) -> int:
+    """The simulator seed of evaluation number ``index`` (0-based) of a run: a pure function of the run
+    seed and the index, so that a resumed or distributed run draws exactly the same trials."""
+    return derive_seed(run_seed, RUN_EVALUATION, index)

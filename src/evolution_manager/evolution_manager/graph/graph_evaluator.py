@@ -1,0 +1,52 @@
+"""Evaluations through the node graph, for ``adapt --graph``: each tree is loaded into every controller node
+(``load_tree``) and each of its trials run by the simulator node in the changed world, recorded to a bag of
+its own; the evaluation's values are the trials' mean, exactly as the batch evaluator computes them."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from evolution_manager.graph.nodes.trial import TrialGraph
+from swarm_sim.config import DEFAULT
+from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
+from swarm_sim.trial_data import combine
+
+
+class GraphEvaluator:
+    """The evaluator contract over a running ``TrialGraph``; trials recorded under ``bags`` when given."""
+
+    def __init__(self, graph: TrialGraph, bags: Path | None) -> None:
+        self.graph = graph
+        self.bags = bags
+        self.evaluations = 0
+
+    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
+        """Evaluate every request, trial by trial, through the graph."""
+        out = []
+        for request in requests:
+            self.evaluations += 1
+            records = []
+            for trial in range(request.trials):
+                bag = None
+                if self.bags is not None:
+                    bag = self.bags / f"evaluation_{self.evaluations:03d}_trial_{trial:02d}"
+                records.append(self.graph.run(request.tree, request.seed, trial, bag))
+            out.append(from_values(combine(records)))
+        return out
+
+
+@contextlib.contextmanager
+def graph_evaluator(
+    conditions: Sequence[str],
+    bags: Path | None,
+    timeout: float = 120.0,
+    profile: str = DEFAULT.profile,
+) -> Iterator[GraphEvaluator]:
+    """A node graph of the model's ``profile`` in the changed world (``conditions``), started for the block,
+    as an evaluator whose trials are recorded under ``bags`` when given."""
+    with TrialGraph(conditions=conditions, timeout=timeout, profile=profile) as graph:
+        if bags is not None:
+            bags.mkdir(parents=True, exist_ok=True)
+        yield GraphEvaluator(graph, bags)

@@ -1,0 +1,141 @@
+"""Replay a bag, or verify that a recorded trial reproduces.
+
+``ws/run evolution_manager replay BAG [--rate X]`` republishes every message of the bag on its topic, paced
+by the recorded timestamps (``--rate 2`` twice as fast, ``--rate 0`` as fast as possible) after ``--delay``
+seconds for discovery, with ``/clock`` following the bag's time, so any ROS tool (``ros2 topic echo``, RViz,
+Foxglove) can watch the trial again.
+
+``ws/run evolution_manager replay BAG --verify`` publishes nothing: it re-runs the recorded trial from its
+seed and reports whether it reproduces the recording bit for bit (exit code 0) or where it first differs (1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import signal
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import rclpy
+from rclpy.node import Node
+from rclpy.publisher import Publisher
+from rclpy.signals import SignalHandlerOptions
+from rosbags.rosbag2 import Reader
+from rosgraph_msgs.msg import Clock
+
+from evolution_manager.graph.nodes.recorder import is_latched
+from evolution_manager.recording.bags import BagError, check_bag, read_bag, recover_bag
+from evolution_manager.recording.reproduce import verify_trial_bag
+from swarm_ros.qos import NO_PUBLISHER_EVENTS, RECORDING, RECORDING_LATCHED
+
+RELIABLE = RECORDING
+
+
+def message_class(msgtype: str) -> type:
+    """The rclpy message class of a type name such as ``swarm_msgs/msg/WheelCommand``."""
+    package, kind, name = msgtype.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+
+
+def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
+    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many."""
+    topics = bag_topics(bag)
+    context = rclpy.Context()
+    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    node = Node("replay", context=context)
+    clock = node.create_publisher(Clock, "/clock", RELIABLE, event_callbacks=NO_PUBLISHER_EVENTS)
+    publishers: dict[str, Publisher] = {
+        topic: node.create_publisher(
+            message_class(msgtype),
+            topic,
+            RECORDING_LATCHED if is_latched(topic) else RELIABLE,
+            event_callbacks=NO_PUBLISHER_EVENTS,
+        )
+        for topic, msgtype in topics.items()
+        if topic != "/clock"
+    }
+    publishers["/clock"] = clock
+    published = 0
+    node.get_logger().info(f"ready: {len(topics)} topics of {bag}; publishing in {delay} s")
+    try:
+        stop.wait(delay)  # let subscribers discover and match the publishers
+        wall_start = time.monotonic()
+        bag_start: int | None = None
+        for message in read_bag(bag):
+            if stop.is_set():
+                break
+            bag_start = message.timestamp_ns if bag_start is None else bag_start
+            if rate > 0:
+                due = wall_start + (message.timestamp_ns - bag_start) / 1e9 / rate
+                time.sleep(max(0.0, due - time.monotonic()))
+            if "/clock" not in topics:
+                seconds, nanoseconds = divmod(message.timestamp_ns, 1_000_000_000)
+                clock.publish(Clock(clock=rclpy.time.Time(seconds=seconds, nanoseconds=nanoseconds).to_msg()))
+            publishers[message.topic].publish(message.data)
+            published += 1
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    return published
+
+
+def bag_topics(bag: Path) -> dict[str, str]:
+    """Every topic of a whole bag with its message type."""
+    check_bag(bag)
+    try:
+        with Reader(bag) as reader:
+            return {connection.topic: connection.msgtype for connection in reader.connections}
+    except Exception as error:  # rosbags' ReaderError: a truncated or empty MCAP, a damaged metadata.yaml
+        raise BagError(f"{bag} is not a readable bag ({type(error).__name__}: {error})") from None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``replay``: republish a bag, or ``--verify`` a recorded trial."""
+    parser = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[1])
+    parser.add_argument("bag", type=Path, help="the bag directory")
+    parser.add_argument("--rate", type=float, default=1.0, help="playback speed; 0 = as fast as possible")
+    parser.add_argument("--delay", type=float, default=1.0, help="seconds to wait for discovery first")
+    parser.add_argument("--verify", action="store_true", help="re-run the recorded trial and compare")
+    args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
+    if args.rate < 0 or args.delay < 0:
+        print(f"replay: --rate and --delay must not be negative: {args.rate}, {args.delay}", file=sys.stderr)
+        return 2
+    try:
+        if args.verify:
+            verification = verify_trial_bag(args.bag)
+            print(verification.summary())
+            return 0 if verification.reproduced else 1
+        stop = threading.Event()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, lambda *_: stop.set())
+        count = replay(args.bag, args.rate, args.delay, stop)
+    except BagError as error:
+        print(f"replay: {error}", file=sys.stderr)
+        return 2
+    print(f"replayed {count} messages from {args.bag}")
+    return 0
+
+
+def recover_main(argv: Sequence[str] | None = None) -> int:
+    """``recover DAMAGED NEW_BAG``: write a whole bag from what a killed recorder left."""
+    parser = argparse.ArgumentParser(
+        prog="recover",
+        description="Write a whole bag at NEW_BAG from every message that reached the disk in DAMAGED, a bag "
+        "whose recorder was killed (no metadata.yaml, no MCAP summary).",
+    )
+    parser.add_argument("damaged", type=Path, help="the damaged bag directory (or its .mcap file)")
+    parser.add_argument("recovered", type=Path, help="the new bag directory to write")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        if not args.damaged.exists():
+            raise BagError(f"no bag at {args.damaged}")
+        count = recover_bag(args.damaged, args.recovered)
+    except BagError as error:
+        print(f"recover: {error}", file=sys.stderr)
+        return 2
+    print(f"recovered {count} messages into {args.recovered}")
+    return 0

@@ -1,0 +1,511 @@
+"""Run one trial through the full node graph and record it.
+
+``ws/run evolution_manager trial --tree TREE --seed S [--trial K] --bag DIR`` starts the simulator and one
+footbot controller per robot as separate processes, loads the tree into every controller, runs trial K of
+seed S in lockstep through the simulator's ``run_trial`` action, records every topic of the graph to a rosbag2
+bag with MCAP storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
+
+The graph runs in the caller's ROS domain (``ROS_DOMAIN_ID``, or ``--domain D``) so that a user can watch it
+live with their own tools (RViz2, Foxglove, ``ros2 topic echo``); ``--namespace /swarm_a`` keeps it apart
+from other graphs in the same domain. ``--params-file FILE`` hands a ROS parameter file to every node (for
+instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). Node logs are kept in
+``--logs DIR`` (default: ``<bag>.logs`` beside the bag).
+
+``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
+this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
+graph that failed; 130 interrupted (SIGINT), 143 terminated (SIGTERM).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.action import ActionClient
+from rclpy.action.client import ClientGoalHandle
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
+
+from bt_controller import timeline
+from bt_controller.errors import TreeError
+from bt_controller.timeline import PROFILES
+from bt_controller.tree import parse, to_text
+from evolution_manager.errors import TrialFailedError
+from evolution_manager.graph.nodes.recorder import GraphRecorder, is_latched, trial_topics
+from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
+from evolution_manager.processes import exit_status, signals_as_interrupts
+from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag
+from evolution_manager.recording.reproduce import RESULT_TOPIC
+from swarm_msgs.action import RunTrial
+from swarm_msgs.msg import TreeStatus, TrialStart
+from swarm_msgs.srv import LoadTree
+from swarm_ros.isolation import reserved_domain
+from swarm_ros.lifecycle import LifecycleClient, LifecycleError
+from swarm_ros.names import robot_namespaces
+from swarm_ros.services import call_until_answered
+from swarm_sim.cli import evaluation_json
+from swarm_sim.conditions import apply_conditions
+from swarm_sim.config import DEFAULT, Config
+from swarm_sim.result_messages import result_fields, trial_record_of
+from swarm_sim.trial_data import TrialRecord
+
+MAX_DOMAIN = 232
+"""Largest ROS_DOMAIN_ID (Fast DDS's port arithmetic; 0-101 are safe on Linux)."""
+STARTUP_TIMEOUT = 600.0
+"""Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
+numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
+starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
+
+
+def expected_messages(
+    robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT, clock: str = "/clock"
+) -> dict[str, int]:
+    """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
+    every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
+    from, ``swarm_sim.lockstep.run_with_controllers``) under ``config``'s timeline."""
+    line = config.timeline
+    trials = timeline.chain_of_trial(line, trial)[1] + 1
+    steps = trials * timeline.trial_steps(line)
+    per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
+    return {
+        topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
+        for topic, msg_class in trial_topics(robots, namespace, clock)
+    }
+
+
+def graph_namespace(namespace: str) -> str:
+    """``namespace`` as an absolute ROS namespace without a trailing slash ("" for the root)."""
+    if not namespace.strip("/"):
+        return ""
+    return "/" + namespace.strip("/")
+
+
+class TrialRunner:
+    """A client node that loads trees into the controllers and sends trials to the simulator's action."""
+
+    def __init__(
+        self, context: rclpy.Context, graph: Graph, robots: int, timeout: float, namespace: str = ""
+    ) -> None:
+        self.graph = graph
+        self.robots = robots
+        self.timeout = timeout
+        self.node = Node("trial_runner", namespace=namespace or "/", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.load_clients: list[rclpy.client.Client] = [
+            self.node.create_client(LoadTree, f"{robot}/load_tree") for robot in robot_namespaces(robots)
+        ]
+        self.trial_client: ActionClient[Any, Any, Any] = ActionClient(
+            self.node, RunTrial, "simulator/run_trial"
+        )
+        self.simulator = LifecycleClient(self.node, "simulator")
+        self.feedback: list[int] = []  # the steps reported by the last trial's feedback
+
+    def activate(self) -> None:
+        """Drive the simulator (a managed node started unconfigured) through configure and activate."""
+        self.spin_until(self.simulator.ready, "the simulator's lifecycle services", STARTUP_TIMEOUT)
+
+        def wait(future: Future, seconds: float) -> bool:
+            try:
+                self.spin_until(future.done, "the simulator's lifecycle", seconds)
+            except TrialFailedError:
+                return False
+            return True
+
+        try:
+            self.simulator.drive(["configure", "activate"], wait, STARTUP_TIMEOUT)
+        except LifecycleError as error:
+            raise TrialFailedError(str(error)) from None
+
+    def close(self) -> None:
+        self.simulator.destroy()
+        self.trial_client.destroy()
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+    def spin_until(self, done: Callable[[], bool], what: str, timeout: float | None = None) -> None:
+        """Spin until ``done()``; raise ``TrialFailedError`` naming ``what`` on timeout or a dead node."""
+        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        while not done():
+            self.graph.check()
+            if time.monotonic() > deadline:
+                raise TrialFailedError(f"timed out waiting for {what}")
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin for ``seconds``."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def call(self, client: rclpy.client.Client, request: object, what: str) -> Any:  # an untyped ROS response
+        """Call an idempotent service, sending the request again while no answer comes
+        (``swarm_ros.services``), up to the runner's timeout; raise ``TrialFailedError`` naming ``what``."""
+        self.spin_until(client.service_is_ready, f"the {client.srv_name} service", STARTUP_TIMEOUT)
+
+        def wait(future: Future, seconds: float) -> bool:
+            try:
+                self.spin_until(future.done, what, seconds)
+            except TrialFailedError:
+                return False
+            return True
+
+        response = call_until_answered(client, request, wait, self.timeout)
+        if response is None:
+            raise TrialFailedError(f"timed out waiting for {what}")
+        return response
+
+    def load_tree(self, tree_text: str) -> None:
+        for client in self.load_clients:
+            response = self.call(
+                client, LoadTree.Request(tree=tree_text), f"{client.srv_name} to load the tree"
+            )
+            if not response.success:
+                raise TrialFailedError(f"{client.srv_name} refused the tree: {response.message}")
+
+    def send_trial(self, seed: int, trial: int) -> ClientGoalHandle:
+        """Send trial ``trial`` of ``seed`` to the simulator's action; return the accepted goal's handle."""
+        self.spin_until(
+            self.trial_client.server_is_ready, "the simulator's run_trial action", STARTUP_TIMEOUT
+        )
+        self.feedback = []
+        goal = RunTrial.Goal(seed=seed, trial=trial, arena_configuration=-1)
+        future = self.trial_client.send_goal_async(
+            goal, feedback_callback=lambda msg: self.feedback.append(int(msg.feedback.step))
+        )
+        self.spin_until(future.done, f"the simulator to accept trial {trial} of seed {seed}")
+        handle = future.result()
+        if handle is None or not handle.accepted:
+            raise TrialFailedError(f"the simulator refused trial {trial} of seed {seed}")
+        return handle
+
+    def result(self, handle: ClientGoalHandle, seed: int, trial: int) -> TrialRecord:
+        """Wait for the goal ``handle``'s result; cancel it when the wait fails (freeing the simulator)."""
+        future = handle.get_result_async()
+        try:
+            # The answer timeout bounds every step, not the trial: wait as long as steps keep coming.
+            last = (-1, time.monotonic())
+
+            def done_or_stalled() -> bool:
+                nonlocal last
+                if self.feedback and self.feedback[-1] != last[0]:
+                    last = (self.feedback[-1], time.monotonic())
+                if time.monotonic() - last[1] > self.timeout:
+                    raise TrialFailedError(f"no step of trial {trial} of seed {seed} for {self.timeout} s")
+                return future.done()
+
+            self.spin_until(done_or_stalled, f"trial {trial} of seed {seed}", timeout=float("inf"))
+        except BaseException:
+            self.cancel(handle)
+            raise
+        answer = future.result()
+        if answer is None:  # the future was cancelled or failed: no result came back
+            raise TrialFailedError(f"the simulator gave no result for trial {trial} of seed {seed}")
+        response = answer.result
+        if not response.success:
+            raise TrialFailedError(f"the simulator could not run the trial: {response.message}")
+        return trial_record_of(response, trial)
+
+    def cancel(self, handle: ClientGoalHandle) -> None:
+        """Ask the simulator to cancel the goal; wait a little for its answer."""
+        with contextlib.suppress(Exception):
+            future = handle.cancel_goal_async()
+            deadline = time.monotonic() + 5.0
+            while not future.done() and time.monotonic() < deadline:
+                self.executor.spin_once(timeout_sec=0.05)
+
+    def run_trial(self, seed: int, trial: int) -> TrialRecord:
+        return self.result(self.send_trial(seed, trial), seed, trial)
+
+
+class TrialGraph:
+    """A running trial graph (simulator and one controller process per robot) that runs any number of
+    trials, each optionally recorded to a bag of its own. A context manager.
+
+    ``domain``: the ROS domain (default: one reserved for this graph alone, so tests run side by side);
+    ``namespace``: the graph's namespace (e.g. ``/swarm_a``); ``params_file``: a ROS parameter file for every
+    node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
+    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
+    ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
+    (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
+    one each)."""
+
+    def __init__(
+        self,
+        *,
+        robots: int = DEFAULT.n_robots,
+        timeout: float = 60.0,
+        domain: int | None = None,
+        namespace: str = "",
+        params_file: Path | None = None,
+        log_dir: Path | None = None,
+        conditions: Sequence[str] = (),
+        profile: str = DEFAULT.profile,
+        clock: str = "/clock",
+    ) -> None:
+        self.conditions = list(conditions)
+        self.clock = clock
+        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots, profile=profile))
+        self.robots = self.config.n_robots
+        self.timeout = timeout
+        self.domain = domain
+        self.namespace = graph_namespace(namespace)
+        self.params_file = params_file
+        self.log_dir = log_dir
+        self._stack = contextlib.ExitStack()
+        self.runner: TrialRunner | None = None
+        self.graph: Graph | None = None
+        self.trials_run = 0
+        self._temporary_logs: Path | None = None
+
+    def __enter__(self) -> TrialGraph:
+        stack = self._stack.__enter__()
+        try:
+            domain = self.domain if self.domain is not None else stack.enter_context(reserved_domain())
+            logs = self.log_dir
+            if logs is None:  # kept when the graph fails, since the error points to it
+                logs = Path(tempfile.mkdtemp(prefix="swarm-trial-logs-"))
+                self._temporary_logs = logs
+            self.graph = stack.enter_context(Graph(domain, log_dir=logs))
+            start_trial_graph(
+                self.graph,
+                self.robots,
+                self.conditions,
+                namespace=self.namespace,
+                params_file=self.params_file,
+                profile=self.config.profile,
+                clock=self.clock,
+            )
+            context = rclpy.Context()
+            rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
+            stack.callback(rclpy.try_shutdown, context=context)
+            self.runner = TrialRunner(context, self.graph, self.robots, self.timeout, self.namespace)
+            stack.callback(self.runner.close)
+            self.runner.activate()
+        except BaseException:
+            stack.close()
+            raise
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:  # (type, value, traceback), passed on as received
+        self._stack.__exit__(*exc_info)
+        if self._temporary_logs is not None and exc_info[0] is None:
+            shutil.rmtree(self._temporary_logs, ignore_errors=True)
+
+    def run(self, tree_text: str, seed: int, trial: int, bag_path: Path | None = None) -> TrialRecord:
+        """Run trial ``trial`` of ``seed`` with ``tree_text`` on every robot; record it to ``bag_path`` when
+        given (a new directory); return its record."""
+        runner = self.runner
+        if runner is None:
+            raise RuntimeError("the trial graph is not started: use it as a context manager")
+        runner.load_tree(tree_text)
+        if bag_path is None:
+            record = runner.run_trial(seed, trial)
+            self.trials_run += 1
+            return record
+        node = Node("trial_recorder", context=runner.node.context)
+        runner.executor.add_node(node)
+        try:
+            with BagRecorder(bag_path) as bag:
+                topics = trial_topics(self.robots, self.namespace, self.clock)
+                recorder = GraphRecorder(node, bag, topics, armed=False)
+                runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
+                # The latched topics hand over their last message on joining: the arena of the simulator's
+                # start, and the start of any trial run before. Those belong to no trial of this bag.
+                stale = {
+                    f"{self.namespace}/markers": 1,
+                    f"{self.namespace}/trial_start": min(self.trials_run, 1),
+                }
+                runner.spin_until(
+                    lambda: all(recorder.received[t] >= n for t, n in stale.items()), "the latched topics"
+                )
+                recorder.arm()
+                record = runner.run_trial(seed, trial)
+                self.trials_run += 1
+                expected = expected_messages(self.robots, self.namespace, trial, self.config, self.clock)
+                # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
+                # trials are recorded too): wait as long as for any step of the graph
+                runner.spin_until(
+                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()), "the last messages"
+                )
+                write_result(
+                    bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
+                )
+            return record
+        finally:
+            runner.executor.remove_node(node)
+            node.destroy_node()
+
+
+def run_recorded_trial(
+    tree_text: str,
+    seed: int,
+    trial: int,
+    bag_path: Path,
+    *,
+    robots: int = DEFAULT.n_robots,
+    timeout: float = 60.0,
+    domain: int | None = None,
+    namespace: str = "",
+    params_file: Path | None = None,
+    log_dir: Path | None = None,
+    profile: str = DEFAULT.profile,
+    clock: str = "/clock",
+) -> TrialRecord:
+    """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
+    ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
+    with TrialGraph(
+        robots=robots,
+        timeout=timeout,
+        domain=domain,
+        namespace=namespace,
+        params_file=params_file,
+        log_dir=log_dir,
+        profile=profile,
+        clock=clock,
+    ) as graph:
+        return graph.run(tree_text, seed, trial, bag_path)
+
+
+def write_result(
+    bag: BagRecorder,
+    tree_text: str,
+    seed: int,
+    record: TrialRecord,
+    stamp_ns: int,
+    namespace: str = "",
+    profile: str = DEFAULT.profile,
+) -> None:
+    """Close the trial's bag with its result (tree, seed, profile, six values), stamped ``stamp_ns``."""
+    fields = result_fields(tree_text, seed, 1, record.values, "food", profile=profile)
+    bag.write(namespace + RESULT_TOPIC, bag.message("swarm_msgs/msg/EvaluationResult", **fields), stamp_ns)
+
+
+def caller_domain() -> int:
+    """The caller's ROS domain: ``ROS_DOMAIN_ID``, 0 when unset (as every ROS 2 tool does)."""
+    text = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
+    try:
+        return domain_id(text)
+    except argparse.ArgumentTypeError as error:
+        raise ValueError(f"ROS_DOMAIN_ID: {error}") from None
+
+
+def domain_id(text: str) -> int:
+    """A ROS domain id from the command line: an integer in 0..232."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {text!r}") from None
+    if not 0 <= value <= MAX_DOMAIN:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {value}")
+    return value
+
+
+def tree_argument(argument: str) -> str:
+    """The tree text of ``--tree``: the text itself, unless it names an existing file (as ``bt`` reads it)."""
+    try:
+        is_file = len(argument) < 4096 and "\n" not in argument and Path(argument).is_file()
+    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
+        is_file = False
+    if not is_file:
+        return argument
+    try:
+        return Path(argument).read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read the tree file {argument}: {error}") from None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``trial``: one trial through the node graph, recorded; prints the trial's JSON."""
+    parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
+    parser.add_argument("--tree", required=True, help="the tree as text, or a file holding it")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the evaluation (default 0)")
+    parser.add_argument(
+        "--trial",
+        type=int,
+        default=0,
+        help="index of the trial (default 0); the earlier trials of its chain run (and are recorded) first",
+    )
+    parser.add_argument(
+        "--profile",
+        choices=PROFILES,
+        default=DEFAULT.profile,
+        help=f"the model's profile (docs/model.md; default {DEFAULT.profile})",
+    )
+    parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
+    parser.add_argument(
+        "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
+    )
+    parser.add_argument(
+        "--domain",
+        type=domain_id,
+        default=None,
+        help="ROS domain of the graph (default: $ROS_DOMAIN_ID or 0)",
+    )
+    parser.add_argument("--namespace", default="", help="namespace of the graph, e.g. /swarm_a (default: /)")
+    parser.add_argument(
+        "--clock",
+        default="/clock",
+        help="topic of the simulator's clock (default /clock; give each graph its own, e.g. /swarm_a/clock, "
+        "to run two in one domain)",
+    )
+    parser.add_argument(
+        "--params-file",
+        type=Path,
+        default=None,
+        help="a ROS parameter file (YAML) for every node of the graph",
+    )
+    parser.add_argument(
+        "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
+    )
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        tree = parse(tree_argument(args.tree))
+        if args.trial < 0:
+            raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
+        check_new_bag(args.bag)
+        args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)  # an unusable place fails here, at once
+        if args.params_file is not None and not args.params_file.is_file():
+            raise ValueError(f"--params-file {args.params_file}: no such file")
+        domain = caller_domain() if args.domain is None else args.domain
+        logs = args.logs or args.bag.with_name(args.bag.name + ".logs")
+        namespace = graph_namespace(args.namespace)
+        print(
+            f"trial: graph in ROS domain {domain}, namespace {namespace or '/'}; node logs in {logs}",
+            file=sys.stderr,
+        )
+        with signals_as_interrupts():
+            record = run_recorded_trial(
+                to_text(tree),
+                args.seed,
+                args.trial,
+                args.bag,
+                timeout=args.timeout,
+                domain=domain,
+                namespace=namespace,
+                params_file=args.params_file,
+                log_dir=logs,
+                profile=args.profile,
+                clock=args.clock,
+            )
+    except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
+        print(f"trial: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as error:
+        print("trial: interrupted", file=sys.stderr)
+        return exit_status(error)
+    print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record], args.profile))
+    print(f"trial: recorded to {args.bag}", file=sys.stderr)
+    return 0

@@ -1,0 +1,239 @@
+"""Start and stop node graphs as separate processes: the launcher behind ``trial``, the manager and the tests.
+
+A full ROS 2 install would use ``ros2 launch`` (see the launch files in ``launch/``); the PyPI wheels have no
+``launch``, so this module starts the installed executables itself, each in its own process, all in one ROS
+domain, and stops them with SIGINT, then SIGKILL for any that does not stop in time. Each node's output and
+its ROS log files (``ROS_LOG_DIR``) go to the graph's log directory when it has one. Nothing here imports
+``rclpy``. Every
+process it starts dies with the process that started it, whatever kills that one
+(``processes.die_with_parent``).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+from ament_index_python.packages import (
+    PackageNotFoundError,
+    get_package_prefix,
+    get_package_share_directory,
+)
+
+from evolution_manager.errors import GraphError
+from evolution_manager.processes import die_with_parent
+from swarm_ros.isolation import domain_environment
+from swarm_ros.names import robot_namespaces
+from swarm_sim.config import DEFAULT
+
+
+def executable(package: str, name: str) -> Path:
+    """The installed executable ``name`` of ``package`` (where ``ros2 run`` finds it)."""
+    try:
+        prefix = Path(get_package_prefix(package))
+    except PackageNotFoundError:
+        raise GraphError(f"package {package} is not installed: source the workspace (ws/env.sh)") from None
+    path = prefix / "lib" / package / name
+    if not os.access(path, os.X_OK):
+        raise GraphError(f"package {package} has no executable {name} (looked for {path})")
+    return path
+
+
+class Graph:
+    """A set of node processes in one ROS domain; a context manager that stops them all on exit."""
+
+    def __init__(self, domain: int, log_dir: Path | None = None) -> None:
+        self.domain = domain
+        self.log_dir = log_dir
+        self.processes: dict[str, subprocess.Popen] = {}
+        self._logs: list[IO[str]] = []
+
+    def __enter__(self) -> Graph:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    def start(
+        self,
+        name: str,
+        package: str,
+        executable_name: str,
+        *,
+        namespace: str = "",
+        node_name: str = "",
+        parameters: dict[str, object] | None = None,
+        params_files: Sequence[Path] = (),
+        arguments: Sequence[str] = (),
+        remaps: Mapping[str, str] | None = None,
+    ) -> subprocess.Popen:
+        """Start one node process, known in this graph as ``name``. Each parameter file overrides the ones
+        before it; ``parameters`` override them all; ``remaps``: topic name -> the name it is remapped to."""
+        if name in self.processes:
+            raise GraphError(f"a process named {name} is already running")
+        command = [str(executable(package, executable_name)), *arguments, "--ros-args"]
+        if namespace:
+            command += ["-r", f"__ns:={namespace}"]
+        if node_name:
+            command += ["-r", f"__node:={node_name}"]
+        for topic, remapped in (remaps or {}).items():
+            command += ["-r", f"{topic}:={remapped}"]
+        for params_file in params_files:
+            command += ["--params-file", str(params_file)]
+        for key, value in (parameters or {}).items():
+            command += ["-p", f"{key}:={value}"]
+        output: IO[str] | int = subprocess.DEVNULL
+        env = domain_environment(self.domain)
+        if self.log_dir is not None:
+            self.log_dir.mkdir(parents=True, exist_ok=True)
+            output = (self.log_dir / f"{name.replace('/', '_')}.log").open("w")
+            self._logs.append(output)
+            env["ROS_LOG_DIR"] = str(self.log_dir / "ros")
+        process = subprocess.Popen(
+            command,
+            env=env,
+            stdout=output,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            preexec_fn=die_with_parent,
+        )
+        self.processes[name] = process
+        return process
+
+    def exited(self) -> list[str]:
+        """The names of the processes that have exited (they stay known until :meth:`forget`)."""
+        return [name for name, p in self.processes.items() if p.poll() is not None]
+
+    def forget(self, name: str) -> None:
+        """Forget an exited process (so that its name can be started again)."""
+        process = self.processes.pop(name)
+        process.wait()
+
+    def check(self) -> None:
+        """Raise ``GraphError`` naming every process that has exited."""
+        dead = [
+            f"{name} (exit code {p.returncode})" for name, p in self.processes.items() if p.poll() is not None
+        ]
+        if dead:
+            where = f"; see the logs in {self.log_dir}" if self.log_dir else ""
+            raise GraphError(f"node process(es) exited: {', '.join(dead)}{where}")
+
+    def kill(self, name: str) -> None:
+        """Kill one process with SIGKILL (for fault-injection tests) and forget it."""
+        process = self.processes.pop(name)
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """Stop every process: SIGINT, then SIGKILL for those still running after ``timeout`` seconds."""
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        for process in self.processes.values():
+            try:
+                process.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        self.processes.clear()
+        for log in self._logs:
+            log.close()
+        self._logs.clear()
+
+
+def package_config(package: str) -> Path:
+    """The installed parameter file of ``package`` (``share/<package>/config/<package>.yaml``)."""
+    try:
+        path = Path(get_package_share_directory(package)) / "config" / f"{package}.yaml"
+    except PackageNotFoundError:
+        raise GraphError(f"package {package} is not installed: source the workspace (ws/env.sh)") from None
+    if not path.is_file():
+        raise GraphError(f"package {package} has no parameter file (looked for {path})")
+    return path
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """One node of a graph: what ``ros2 launch`` and :func:`start_trial_graph` both start."""
+
+    name: str
+    """The process's name in the graph (and its log file's)."""
+    package: str
+    executable: str
+    namespace: str
+    """Absolute namespace ("" for the root)."""
+    parameters: dict[str, object] = field(default_factory=dict)
+    """Parameters that override the parameter files."""
+    remaps: dict[str, str] = field(default_factory=dict)
+    """Topic remappings (name -> new name)."""
+
+
+def trial_graph_nodes(
+    robots: int = DEFAULT.n_robots,
+    namespace: str = "",
+    tree: str = "",
+    profile: str = "",
+    conditions: Sequence[str] = (),
+    clock: str = "/clock",
+) -> list[NodeSpec]:
+    """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
+    in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
+    namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
+    profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
+    ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
+    (``/clock``, at the root whatever the namespace, unless two graphs share a domain)."""
+    if robots < 1:
+        raise GraphError(f"a trial graph needs at least one robot, got {robots}")
+    prefix = namespace.rstrip("/")
+    simulator: dict[str, object] = {"n_robots": robots}
+    if profile:
+        simulator["profile"] = profile
+    if conditions:
+        simulator["conditions"] = " ".join(conditions)
+    remaps = {"/clock": clock} if clock != "/clock" else {}
+    nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
+    for robot in robot_namespaces(robots):
+        nodes.append(
+            NodeSpec(
+                f"{prefix}/{robot}".lstrip("/"),
+                "bt_controller",
+                "footbot_controller",
+                f"{prefix}/{robot}",
+                {"tree": tree} if tree else {},
+            )
+        )
+    return nodes
+
+
+def start_trial_graph(
+    graph: Graph,
+    robots: int = DEFAULT.n_robots,
+    conditions: Sequence[str] = (),
+    *,
+    namespace: str = "",
+    params_file: Path | None = None,
+    profile: str = "",
+    clock: str = "/clock",
+) -> None:
+    """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
+    clock=clock)``, each in its own process, with its package's parameter file and then ``params_file`` (every
+    node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the simulator's model profile. The
+    simulator, a managed node, is started unconfigured (``autostart:=false``): the caller drives it through
+    configure and activate (``TrialRunner.activate``)."""
+    for spec in trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions, clock=clock):
+        files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
+        managed = {"autostart": "false"} if spec.executable == "simulator" else {}
+        graph.start(
+            spec.name,
+            spec.package,
+            spec.executable,
+            namespace=spec.namespace,
+            parameters={**spec.parameters, **managed},
+            params_files=files,
+            remaps=spec.remaps,
+        )

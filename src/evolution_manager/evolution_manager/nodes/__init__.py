@@ -1,1 +1,0 @@
-"""ROS 2 nodes: thin wrappers that declare parameters, topics and services and call the pure core."""

@@ -1,0 +1,309 @@
+"""Recording to rosbag2 bags with MCAP storage, reading them back, and recovering a bag whose writer was
+killed.
+
+Bags are written with ``rosbags`` (pure Python): rosbag2 format version 9, MCAP storage, CDR serialisation,
+and the message definitions of ``swarm_msgs`` embedded, so ``ros2 bag``, Foxglove and the ``mcap`` tools can
+open them. Nothing here imports ``rclpy``: nodes hand the recorder the CDR bytes they received (``raw=True``
+subscriptions), and the manager hands it message objects of the ``rosbags`` typestore.
+
+A writer killed with SIGKILL leaves an MCAP file without its summary and no ``metadata.yaml``; ``recover_bag``
+reads such a file as a stream and writes a whole bag holding every message of the chunks that were flushed.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import struct
+import tempfile
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from rosbags.typesys.store import Typestore
+
+from evolution_manager.errors import BagError
+from evolution_manager.processes import Lock, exclusive_lock, is_locked, lock_holder, lock_path_for
+
+INTERFACE_PACKAGE = "swarm_msgs"
+
+
+def bag_lock(path: Path) -> Path:
+    """The lock a recorder holds while it writes the bag at ``path``. It lives outside the bag folder (in
+    the machine's temporary folder, named by the bag's full path), so that a killed recorder leaves nothing
+    in the folder but the bag; lock files are never deleted (see ``exclusive_lock``)."""
+    return lock_path_for(Path(path), "bag")
+
+
+def swarm_msgs_definitions() -> dict[str, str]:
+    """The ``.msg`` definitions of swarm_msgs, by type name (``swarm_msgs/msg/WheelCommand``), read from the
+    installed package (found on ``AMENT_PREFIX_PATH``)."""
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        msg_dir = Path(prefix) / "share" / INTERFACE_PACKAGE / "msg"
+        if msg_dir.is_dir():
+            return {f"{INTERFACE_PACKAGE}/msg/{f.stem}": f.read_text() for f in sorted(msg_dir.glob("*.msg"))}
+    raise BagError(
+        f"the {INTERFACE_PACKAGE} message definitions were not found on AMENT_PREFIX_PATH: "
+        "source the workspace (ws/env.sh) or run through ws/run"
+    )
+
+
+def swarm_typestore() -> Typestore:
+    """A ROS 2 Kilted typestore that also knows every swarm_msgs message."""
+    store = get_typestore(Stores.ROS2_KILTED)
+    types: dict[str, Any] = {}
+    for name, text in swarm_msgs_definitions().items():
+        types.update(get_types_from_msg(text, name))
+    store.register(types)
+    return store
+
+
+class BagRecorder:
+    """Write messages to a new rosbag2 bag with MCAP storage.
+
+    Use as a context manager; the bag is whole (index and ``metadata.yaml`` written) once the context exits,
+    also when the body raised. To stop a recording on a signal, set a flag in the signal handler and leave the
+    context normally: a process killed inside ``write`` loses only the unflushed tail (see ``recover_bag``).
+    """
+
+    def __init__(self, path: Path | str, typestore: Typestore | None = None) -> None:
+        self.path = Path(path)
+        check_new_bag(self.path)
+        self.typestore = typestore or swarm_typestore()
+        self._writer: Writer | None = None
+        self._lock: Lock | None = None
+        self._connections: dict[str, Any] = {}
+        self.count = 0
+
+    def __enter__(self) -> BagRecorder:
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
+            self._writer.open()  # creates the directory, or fails if another writer did
+        except OSError as error:
+            self._writer = None
+            raise BagError(f"cannot write a bag at {self.path}: {error.strerror or error}") from None
+        except Exception as error:  # rosbags' WriterError: the directory appeared meanwhile
+            self._writer = None
+            check_new_bag(self.path)
+            raise BagError(f"cannot write a bag at {self.path}: {error}") from None
+        self._lock = exclusive_lock(bag_lock(self.path), f"the bag {self.path}")
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
+
+    def flush(self, sync: bool = False) -> None:
+        """Put every message written so far on disk as a whole MCAP chunk, so that a kill from now on loses
+        none of them (``recover`` reads them back); with ``sync``, also wait for the disk."""
+        # rosbags' MCAP writer (McapWriter) keeps the pending chunk and the file; its protocol type does not
+        # show them, hence Any.
+        storage: Any = None if self._writer is None else self._writer.storage
+        if storage is None:
+            return
+        # rosbags closes a chunk only at 1 MiB or at the end; close the pending one now.
+        if storage.chunk.bio.tell():
+            storage.close_chunk()
+        storage.bio.flush()
+        if sync:
+            os.fsync(storage.bio.fileno())
+
+    def write_cdr(self, topic: str, msgtype: str, timestamp_ns: int, data: bytes | memoryview) -> None:
+        """Record one message given as CDR bytes (as an rclpy ``raw=True`` subscription delivers it)."""
+        if self._writer is None:
+            raise BagError("the recorder is not open: use it as a context manager")
+        connection = self._connections.get(topic)
+        if connection is None:
+            connection = self._writer.add_connection(topic, msgtype, typestore=self.typestore)
+            self._connections[topic] = connection
+        elif connection.msgtype != msgtype:
+            raise BagError(f"topic {topic} is recorded as {connection.msgtype}, not {msgtype}")
+        self._writer.write(connection, timestamp_ns, data)
+        self.count += 1
+
+    def write(self, topic: str, msg: Any, timestamp_ns: int) -> None:
+        """Record one message object of this recorder's typestore (e.g. ``recorder.message(...)``)."""
+        msgtype = msg.__msgtype__
+        self.write_cdr(topic, msgtype, timestamp_ns, self.typestore.serialize_cdr(msg, msgtype))
+
+    def message(self, msgtype: str, **fields: Any) -> Any:
+        """A message object of type ``msgtype`` (e.g. ``swarm_msgs/msg/EvaluationResult``)."""
+        return self.typestore.types[msgtype](**fields)
+
+
+@dataclass(frozen=True)
+class BagMessage:
+    """One message read back from a bag."""
+
+    topic: str
+    msgtype: str
+    timestamp_ns: int
+    data: bytes
+    message: Any
+
+
+def read_bag(path: Path | str, typestore: Typestore | None = None) -> Iterator[BagMessage]:
+    """Every message of a whole bag, in timestamp order, deserialised with ``typestore``.
+
+    Raises ``BagError`` at once (not on the first iteration) when ``path`` holds no whole bag."""
+    path = Path(path)
+    check_bag(path)
+    return _messages(path, typestore or swarm_typestore())
+
+
+def check_new_bag(path: Path) -> None:
+    """Raise ``BagError`` when ``path`` cannot be a new bag: it exists (naming the process that is writing it,
+    if one is)."""
+    if not path.exists():
+        return
+    lock = bag_lock(path)
+    if is_locked(lock):
+        holder = lock_holder(lock)
+        raise BagError(f"{path} is being written by {f'process {holder}' if holder else 'another process'}")
+    raise BagError(f"refusing to overwrite {path}: choose a new bag directory")
+
+
+def check_not_being_written(path: Path) -> None:
+    """Raise ``BagError`` when a live recorder still writes the bag at ``path``."""
+    lock = bag_lock(path)
+    if is_locked(lock):
+        holder = lock_holder(lock)
+        raise BagError(
+            f"{path} is still being written by {f'process {holder}' if holder else 'another process'}: "
+            "wait for it to end"
+        )
+
+
+def check_bag(path: Path) -> None:
+    """Raise ``BagError`` saying what is wrong when ``path`` is not a whole rosbag2 bag."""
+    if not path.exists():
+        raise BagError(f"no bag at {path}")
+    if not (path / "metadata.yaml").exists():
+        raise BagError(
+            f"{path} is not a whole rosbag2 bag (no metadata.yaml): if its recorder was killed, run "
+            f"`ws/run evolution_manager recover {path} NEW_BAG`"
+        )
+
+
+def topic_counts(path: Path) -> dict[str, int]:
+    """How many messages each topic of the whole bag at ``path`` holds (from its index, reading none)."""
+    check_bag(path)
+    try:
+        with Reader(path) as reader:
+            counts: dict[str, int] = {}
+            for connection in reader.connections:
+                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
+            return counts
+    except Exception as error:  # rosbags' ReaderError, a damaged metadata.yaml
+        raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
+
+
+def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:
+    try:
+        with Reader(path) as reader:
+            for connection, timestamp, data in reader.messages():
+                message = store.deserialize_cdr(data, connection.msgtype)
+                yield BagMessage(connection.topic, connection.msgtype, timestamp, bytes(data), message)
+    except BagError:
+        raise
+    except Exception as error:  # rosbags' ReaderError, a truncated MCAP file, a damaged metadata.yaml
+        raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
+
+
+def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
+    """(topic, type, timestamp, CDR bytes) of every message that reached the disk in the MCAP file(s) of a bag
+    whose writer may have been killed, in file order; a truncated tail is skipped."""
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+
+    damaged = Path(damaged)
+    files = sorted(damaged.glob("*.mcap")) if damaged.is_dir() else [damaged]
+    for file in files:
+        schemas: dict[int, str] = {}
+        channels: dict[int, tuple[str, str]] = {}
+        with file.open("rb") as stream:
+            try:
+                for record in StreamReader(stream, emit_chunks=False).records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record.name
+                    elif isinstance(record, Channel):
+                        channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
+                    elif isinstance(record, Message) and record.channel_id in channels:
+                        topic, msgtype = channels[record.channel_id]
+                        yield topic, msgtype, record.log_time, bytes(record.data)
+            except (McapError, EOFError, ValueError, OSError, AssertionError, struct.error):
+                pass  # the truncated tail: everything before it is kept
+
+
+def recover_bag(damaged: Path | str, recovered: Path | str) -> int:
+    """Write a whole bag at ``recovered`` from every message that reached the disk in the MCAP file(s) of a
+    bag whose writer was killed; return the number of messages recovered. Raises ``BagError`` when nothing
+    could be recovered from a non-empty file (it is not an MCAP file, or no whole chunk reached the disk)."""
+    damaged = Path(damaged)
+    check_not_being_written(damaged)
+    files = sorted(damaged.glob("*.mcap")) if damaged.is_dir() else [damaged]
+    if not files:
+        raise BagError(f"no MCAP file found in {damaged}")
+    check_new_bag(Path(recovered))
+    messages = list(stream_messages(damaged))
+    size = sum(f.stat().st_size for f in files)
+    if not messages and size > 0:
+        raise BagError(
+            f"nothing could be recovered from {damaged} ({size} bytes): not an MCAP file, or no whole chunk "
+            "of messages reached the disk"
+        )
+    with BagRecorder(recovered, swarm_typestore()) as recorder:
+        for topic, msgtype, timestamp, data in messages:
+            recorder.write_cdr(topic, msgtype, timestamp, data)
+        return recorder.count
+
+
+def rewrite_bag(
+    path: Path, keep: Callable[[str, str, int, bytes], bool], typestore: Typestore | None = None
+) -> int:
+    """Replace the bag at ``path`` (whole, or left by a killed writer) by a whole bag of the messages for
+    which ``keep(topic, type, timestamp, data)`` is true; return how many were kept.
+
+    The new bag is written aside (``.<name>.rewrite-*/<name>``) and swapped in with two renames, the old one
+    kept as ``.<name>.old-*`` until the swap is done; :func:`finish_rewrites` completes or undoes a swap
+    interrupted by a kill."""
+    path = Path(path)
+    if (path / "metadata.yaml").exists():
+        messages = [(m.topic, m.msgtype, m.timestamp_ns, m.data) for m in read_bag(path, typestore)]
+    else:
+        messages = list(stream_messages(path))
+    aside = Path(tempfile.mkdtemp(prefix=f".{path.name}.rewrite-", dir=path.parent))
+    kept = 0
+    with BagRecorder(aside / path.name, typestore) as recorder:
+        for topic, msgtype, timestamp, data in messages:
+            if keep(topic, msgtype, timestamp, data):
+                recorder.write_cdr(topic, msgtype, timestamp, data)
+        kept = recorder.count
+    old = path.parent / f".{path.name}.old-{aside.name.rsplit('-', 1)[1]}"
+    os.rename(path, old)
+    os.rename(aside / path.name, path)
+    shutil.rmtree(old)
+    shutil.rmtree(aside)
+    return kept
+
+
+def finish_rewrites(folder: Path) -> None:
+    """Complete or undo what :func:`rewrite_bag` calls killed half-way left in ``folder``: a bag moved aside
+    whose replacement never arrived is put back; leftovers are removed."""
+    for old in sorted(Path(folder).glob(".*.old-*")):
+        name = old.name[1:].rsplit(".old-", 1)[0]
+        if not (old.parent / name).exists():
+            os.rename(old, old.parent / name)
+        else:
+            shutil.rmtree(old, ignore_errors=True)
+    for aside in Path(folder).glob(".*.rewrite-*"):
+        shutil.rmtree(aside, ignore_errors=True)

@@ -1,0 +1,92 @@
+"""Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
+
+A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed and trial index) and ends with
+``/trial_result`` (the tree, the model's profile and the six values); ``/swarm_state`` holds the exact
+poses of every step of the trial's chain up to the trial (the earlier trials of the chain are run, and
+recorded, first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
+trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``),
+under the recorded profile, and every recorded pose and value is compared with the re-run's, bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from bt_controller.errors import TreeError
+from bt_controller.timeline import PROFILES
+from bt_controller.tree import parse
+from evolution_manager.recording.bags import BagError, read_bag
+from swarm_sim.config import DEFAULT, default_config
+from swarm_sim.lockstep import LockstepChain, run_with_controllers
+from swarm_sim.trial_data import VALUE_NAMES
+
+RESULT_TOPIC = "/trial_result"
+"""Topic of a trial bag's last message: its tree, seed and values (swarm_msgs/EvaluationResult)."""
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The outcome of re-running a recorded trial."""
+
+    tree: str
+    seed: int
+    trial: int
+    steps_compared: int
+    first_divergence: str | None
+    """None when the re-run reproduced the recording; else what first differed."""
+
+    @property
+    def reproduced(self) -> bool:
+        return self.first_divergence is None
+
+    def summary(self) -> str:
+        what = f"trial {self.trial} of seed {self.seed} with {self.tree}"
+        if self.reproduced:
+            return f"reproduced: {what}: {self.steps_compared} steps of poses and all six values identical"
+        return f"NOT reproduced: {what}: {self.first_divergence}"
+
+
+def verify_trial_bag(path: Path | str) -> Verification:
+    """Re-run the trial recorded in the bag at ``path`` and compare it with the recording."""
+    starts, results, states = [], [], []
+    for message in read_bag(path):
+        name = "/" + message.topic.rsplit("/", 1)[-1]  # the topic's name below the graph's namespace
+        if name == "/trial_start":
+            starts.append(message.message)
+        elif name == RESULT_TOPIC:
+            results.append(message.message)
+        elif name == "/swarm_state":
+            states.append(message.message)
+    if len(starts) != 1 or len(results) != 1:
+        raise BagError(
+            f"{path} is not the bag of one recorded trial: it has {len(starts)} /trial_start and "
+            f"{len(results)} {RESULT_TOPIC} messages (expected one of each; record with `trial --bag`)"
+        )
+    start, result = starts[0], results[0]
+    try:
+        tree = parse(result.tree)
+    except TreeError as error:
+        raise BagError(f"the recorded tree does not parse: {error}") from None
+    seed, trial = int(start.seed), int(start.trial)
+    profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
+    if profile not in PROFILES:
+        raise BagError(f"the recorded profile {profile!r} is not one of {', '.join(PROFILES)}")
+
+    recorded = {state.step: [(p.x, p.y, p.theta) for p in state.poses] for state in states}
+    divergences: list[str] = []
+    visited: list[int] = []
+
+    def compare(world: LockstepChain) -> None:
+        visited.append(world.step)
+        poses = [tuple(p) for p in world.poses().tolist()]
+        if not divergences and recorded.get(world.step) != poses:
+            divergences.append(f"the poses differ at step {world.step}")
+
+    record = run_with_controllers(tree, seed, trial, default_config(profile), on_step=compare)
+    if not divergences and sorted(recorded) != visited:
+        divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
+    for name, value in zip(VALUE_NAMES, record.values, strict=True):
+        if not divergences and getattr(result, name) != value:
+            divergences.append(f"{name} was {getattr(result, name)!r}, the re-run gives {value!r}")
+    return Verification(result.tree, seed, trial, len(recorded), divergences[0] if divergences else None)

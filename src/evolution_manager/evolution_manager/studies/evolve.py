@@ -1,0 +1,175 @@
+"""``evolve``: run one algorithm on one objective (or GP_fnd on all three) and write a run directory.
+
+    ws/run evolution_manager evolve --algorithm qd --objective food --evaluations 25000 --seed 1 --out runs/qd
+    ws/run evolution_manager evolve --out runs/qd --resume        # continue a killed or interrupted run
+
+Bad options print one line saying what was expected and exit with status 2; nothing already saved is
+touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
+from evolution_manager.evolution.options import (
+    add_scenario_options,
+    check_resume_options,
+    config_from_args,
+    progress_bar,
+)
+from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
+from evolution_manager.processes import exit_status, signals_as_interrupts
+
+if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
+    from swarm_sim.evaluation import Evaluator
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``evolve`` command line."""
+    parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
+    )
+    parser.add_argument(
+        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
+    )
+    budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
+    parser.add_argument(
+        "--evaluations",
+        type=positive_int,
+        help=f"budget of individuals produced after the initial population (default: {budgets})",
+    )
+    parser.add_argument("--seed", type=seed_int, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
+    parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
+    add_scenario_options(parser)
+    parser.add_argument(
+        "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
+    )
+    parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
+    parser.add_argument(
+        "--resume", action="store_true", help="continue the run in --out from its last checkpoint"
+    )
+    parser.add_argument(
+        "--checkpoint-every",
+        type=seconds,
+        default=30.0,
+        metavar="SECONDS",
+        help="checkpoint period (default 30)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-figures", action="store_true", help="write results but no figures")
+    return parser
+
+
+def _evaluator(workers: int, profile: str) -> Evaluator:
+
+    from swarm_sim.config import default_config
+    from swarm_sim.evaluation import BatchEvaluator
+
+    try:
+        return BatchEvaluator(default_config(profile), threads=workers)
+    except ValueError as error:
+        raise UsageError(f"--workers: {error}") from None
+
+
+def evolve(argv: Sequence[str] | None = None) -> int:
+    """Run ``evolve``; return the exit status."""
+    try:
+        args = build_parser().parse_args(argv)
+        config = None if args.resume else config_from_args(args)
+        from evolution_manager.evolution.run import Run, RunDirectory
+        from evolution_manager.viewing.results import write_results
+
+        directory = RunDirectory(args.out)
+        if args.resume:
+            if not directory.started():
+                raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
+            saved = directory.read_config()
+            check_resume_options(args, saved)
+            run = Run.resume(args.out, _evaluator(args.workers, saved.profile))
+        else:
+            if directory.started():
+                raise UsageError(
+                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
+                )
+            assert config is not None  # made from the options when not resuming
+            evaluator = _evaluator(args.workers, config.profile)
+            run = Run.start(config, args.out, evaluator)
+    except WriteError as error:  # the new run directory could not be written
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_IO
+    except (UsageError, EvolutionError) as error:
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as error:  # an --out that cannot be created or written
+        print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
+        return EXIT_USAGE
+    bar = progress_bar(run.config, run.evaluations, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            best = [run.passive[o].best_value for o in run.config.objectives]
+            bar.set_postfix_str(
+                " ".join(
+                    f"{o}={b:.3f}" for o, b in zip(run.config.objectives, best, strict=True) if b is not None
+                )
+            )
+
+    resume = f"continue with: evolve --out {args.out} --resume"
+    try:
+        with signals_as_interrupts():
+            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+            if bar is not None:
+                bar.close()
+            write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+    except KeyboardInterrupt as interruption:  # Ctrl-C or SIGTERM: the last checkpoint holds the run
+        if bar is not None:
+            bar.close()
+        print(f"evolve: interrupted; {resume}", file=sys.stderr)
+        return exit_status(interruption)
+    except WriteError as error:  # a full disk: what was saved is whole (atomic files, logs cut on resume)
+        if bar is not None:
+            bar.close()
+        print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
+        return EXIT_IO
+    print(result_lines(run, args.out))
+    return 0
+
+
+def result_lines(run: object, out: Path) -> str:
+    """What a finished run prints: evaluations, simulations saved, and per objective the in-run and
+    held-out scores (from its summary.json)."""
+    from evolution_manager.files import read_json
+
+    summary = read_json(Path(out) / "summary.json")
+    assert isinstance(summary, dict)
+    lines = [
+        f"{summary['run']}: {summary['individuals_produced']} individuals produced, "
+        f"{summary['evaluations']} evaluations, {summary['simulations']} simulated "
+        f"({summary['simulations_saved']} answered from the fixed scenario's cache) in {out}"
+    ]
+    for objective, m in summary["objectives"].items():
+        if not m["evolved"] or m["best_fitness"] is None:
+            continue
+        held = m["heldout_best_fitness"]
+        held_qd = m["heldout_qd_score"]
+        lines.append(
+            f"{objective}: best {m['best_fitness']:.4f}"
+            + (f" (held-out {held:.4f})" if held is not None else "")
+            + f", coverage {m['coverage']:.4f}, QD score {m['qd_score']:.4f}"
+            + (f" (held-out {held_qd:.4f})" if held_qd is not None else "")
+            + f", {m['repertoire_size']} filled bins"
+        )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    """Console entry point of ``evolve``."""
+    sys.exit(evolve())

@@ -1,0 +1,342 @@
+"""``experiment``: every algorithm x objective x run in parallel processes, then the report.
+
+    ws/run evolution_manager experiment --runs 10 --evaluations 25000 --out experiments/paper
+
+GP_o and QD_o run once per objective and run index with ``--evaluations``; GP_fnd runs once per run index
+on all three objectives with three times the budget (the paper's 75,000 against 25,000). Run ``r`` of a
+configuration gets a seed derived from ``--seed``, the configuration and ``r``, and (unless
+``--scenario-seed`` gives one for every run) a scenario seed derived from its run seed. Each run is an
+ordinary run directory under ``DIR/runs/<label>/run<r>``; starting the same command again continues
+unfinished runs from their checkpoints and leaves finished ones alone. ``experiment.json`` records the
+plan, ``sessions.json`` the wall time and commit of every session that ran something, ``runs.csv`` one row
+per run and objective (written with the report, in the plan's order, so a killed and continued experiment
+writes the same bytes as an uninterrupted one).
+
+Progress covers the whole experiment: individuals produced over all runs against the total budget, with
+tqdm's rate and ETA.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import queue as queues
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from multiprocessing import Manager, get_context
+from pathlib import Path
+
+from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
+from evolution_manager.arguments import (
+    EXIT_INTERRUPTED,
+    EXIT_IO,
+    EXIT_USAGE,
+    Parser,
+    positive_int,
+    seconds,
+    seed_int,
+)
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
+from evolution_manager.evolution.deap_trees import OBJECTIVES
+from evolution_manager.evolution.options import add_scenario_options
+from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from evolution_manager.files import read_json, read_json_object, write_json
+
+PLAN_FILE = "experiment.json"
+SESSIONS_FILE = "sessions.json"
+
+
+def plan(
+    runs: int,
+    evaluations: int,
+    seed: int,
+    trials: int = 10,
+    scenarios: str = "fixed",
+    scenario_seed: int | None = None,
+    profile: str | None = None,
+) -> list[tuple[RunConfig, str]]:
+    """Every run of the experiment with its directory relative to the experiment's folder."""
+    planned = []
+    for a, algorithm in enumerate(ALGORITHMS):
+        objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else OBJECTIVES
+        budget = 3 * evaluations if algorithm == "gp-fnd" else evaluations
+        for objective in objectives:
+            o = -1 if objective is None else OBJECTIVES.index(objective)
+            for r in range(runs):
+                run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
+                config = RunConfig.make(
+                    algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed, profile
+                )
+                planned.append((config, f"runs/{config.label}/run{r:02d}"))
+    return planned
+
+
+def finished(root: Path) -> bool:
+    """Whether the run directory ``root`` holds a finished run with its held-out scores."""
+    summary_path = Path(root) / "summary.json"
+    if not summary_path.exists():
+        return False
+    summary = read_json(summary_path)
+    return isinstance(summary, dict) and bool(summary.get("finished")) and summary.get("heldout") is not None
+
+
+def produced_so_far(root: Path, budget: int) -> int:
+    """Individuals produced by the run in ``root`` at its last checkpoint (the budget when finished)."""
+    if finished(root):
+        return budget
+    checkpoint = Path(root) / "checkpoint.json"
+    if not checkpoint.exists():
+        return 0
+    try:
+        state = read_json_object(checkpoint)
+        return min(budget, int(state["algorithm"].get("produced", 0)))
+    except (EvolutionError, KeyError, TypeError, ValueError):
+        return 0
+
+
+def run_one(
+    config_data: dict,
+    root: str,
+    progress: queues.Queue[tuple[str, int]] | None = None,
+    checkpoint_interval: float = 30.0,
+) -> str:
+    """Run (or finish, or leave alone when finished) one planned run; return its directory.
+
+    A top-level function so that a process pool can call it; each process evaluates on one thread.
+    ``progress`` (a queue) receives ``(root, individuals produced)`` after every batch.
+    """
+
+    from evolution_manager.evolution.run import Run, RunDirectory
+    from evolution_manager.viewing.results import write_results
+    from swarm_sim.config import default_config
+    from swarm_sim.evaluation import BatchEvaluator
+
+    config = RunConfig.from_json(config_data)
+    directory = RunDirectory(Path(root))
+    if finished(directory.root):
+        return root
+    evaluator = BatchEvaluator(default_config(config.profile), threads=1)
+    if directory.started():
+        run = Run.resume(directory.root, evaluator)
+        if run.config != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+    else:
+        run = Run.start(config, directory.root, evaluator)
+
+    def on_batch(produced: int, _budget: int) -> None:
+        if progress is not None:
+            progress.put((root, produced))
+
+    run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
+    write_results(run, with_figures=False, evaluator=evaluator)
+    return root
+
+
+def current_commit() -> str:
+    """The commit of the working directory's git checkout ("unknown" outside one), "+" when it has
+    uncommitted changes."""
+    try:
+        commit = subprocess.run(
+            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True, timeout=10
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=30,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return commit + ("+" if dirty else "")
+
+
+def record_session(out: Path, started: float, argv: Sequence[str], runs_done: int) -> None:
+    """Record this session (wall seconds so far, commit, command) in ``sessions.json``: appended the first
+    time, updated after every run it finishes (so a killed session keeps the time up to its last run)."""
+    path = out / SESSIONS_FILE
+    sessions = read_json(path) if path.exists() else []
+    assert isinstance(sessions, list)
+    if sessions and sessions[-1].get("started_unix") == round(started, 1):
+        sessions.pop()
+    sessions.append(
+        {
+            "started_unix": round(started, 1),
+            "wall_seconds": round(time.time() - started, 1),
+            "commit": current_commit(),
+            "command": "ws/run evolution_manager experiment " + " ".join(argv),
+            "runs_finished": runs_done,
+        }
+    )
+    write_json(path, sessions)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``experiment`` command line."""
+    parser = Parser(prog="experiment", description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--runs", type=positive_int, default=10, help="runs per algorithm and objective (default 10)"
+    )
+    parser.add_argument(
+        "--evaluations",
+        type=positive_int,
+        default=25_000,
+        help="budget of individuals produced per objective (default 25000; GP_fnd 3x)",
+    )
+    parser.add_argument(
+        "--out", type=Path, required=True, help="experiment folder (continued when it exists)"
+    )
+    parser.add_argument("--seed", type=seed_int, default=0, help="experiment seed (default 0)")
+    parser.add_argument("--trials", type=positive_int, default=10, help="trials per evaluation (default 10)")
+    add_scenario_options(parser)
+    parser.add_argument(
+        "--processes", type=positive_int, default=os.cpu_count() or 1, help="runs at once (default: cores)"
+    )
+    parser.add_argument(
+        "--checkpoint-every",
+        type=seconds,
+        default=30.0,
+        metavar="SECONDS",
+        help="checkpoint period of each run (default 30)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return parser
+
+
+def experiment(argv: Sequence[str] | None = None) -> int:
+    """Run ``experiment``; return the exit status."""
+    from evolution_manager.studies.report import build_report
+
+    try:
+        args = build_parser().parse_args(argv)
+        if not 0 <= args.seed <= MAX_SEED:
+            raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
+        if args.scenario_seed is not None and args.scenarios == "fresh":
+            raise UsageError("--scenario-seed applies to --scenarios fixed; leave it out with fresh")
+        if args.scenario_seed is not None and not 0 <= args.scenario_seed <= MAX_SEED:
+            raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {args.scenario_seed}")
+        scenarios = args.scenarios or "fixed"
+        planned = plan(
+            args.runs, args.evaluations, args.seed, args.trials, scenarios, args.scenario_seed, args.profile
+        )
+        document = {
+            "profile": planned[0][0].profile,
+            "runs": args.runs,
+            "evaluations": args.evaluations,
+            "seed": args.seed,
+            "trials": args.trials,
+            "scenarios": scenarios,
+            "scenario_seed": args.scenario_seed,
+            "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
+        }
+        plan_path = args.out / PLAN_FILE
+        if plan_path.exists():
+            saved = read_json(plan_path)
+            if saved != json.loads(json.dumps(document)):
+                raise UsageError(
+                    f"{args.out} holds an experiment with other options; "
+                    "use the same options to continue it, "
+                    "or another --out"
+                )
+        elif args.out.exists() and any(args.out.iterdir()):
+            raise UsageError(f"{args.out} exists and is not an experiment folder; choose another --out")
+        args.out.mkdir(parents=True, exist_ok=True)
+        write_json(plan_path, document)
+    except (UsageError, EvolutionError) as error:
+        print(f"experiment: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as error:  # an --out that cannot be created or written
+        print(f"experiment: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    started = time.time()
+    command = list(argv if argv is not None else sys.argv[1:])
+    budgets = {str(args.out / path): config.evaluations for config, path in planned}
+    done = {root: produced_so_far(Path(root), budget) for root, budget in budgets.items()}
+    to_run = [(config, path) for config, path in planned if not finished(args.out / path)]
+    to_run.sort(key=lambda item: -item[0].evaluations)  # the longest (GP_fnd) first: a shorter makespan
+    bar = None
+    if not args.no_progress:
+        from tqdm import tqdm
+
+        bar = tqdm(
+            total=sum(budgets.values()),
+            initial=sum(done.values()),
+            unit="ind",
+            desc=f"experiment ({len(planned) - len(to_run)}/{len(planned)} runs)",
+            dynamic_ncols=True,
+            disable=None,
+        )
+    failures = []
+    full_disk = False  # a run could not write its files: what each saved is whole, the command continues it
+    finished_now = 0
+    try:
+        with (
+            Manager() as manager,
+            ProcessPoolExecutor(max_workers=args.processes, mp_context=get_context("spawn")) as pool,
+        ):
+            progress = manager.Queue()
+            futures = {
+                pool.submit(
+                    run_one, config.to_json(), str(args.out / path), progress, args.checkpoint_every
+                ): path
+                for config, path in to_run
+            }
+            pending = set(futures)
+            while pending:
+                completed, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+                _drain(progress, done)
+                for future in completed:
+                    root = str(args.out / futures[future])
+                    try:
+                        future.result()
+                        finished_now += 1
+                        done[root] = budgets[root]
+                        record_session(args.out, started, command, finished_now)
+                    except Exception as error:  # a failed run is reported, the others go on
+                        failures.append(f"{futures[future]}: {error}")
+                        full_disk = full_disk or isinstance(error, WriteError)
+                if bar is not None:
+                    bar.n = sum(done.values())
+                    bar.set_description(
+                        f"experiment ({len(planned) - len(pending) - len(failures)}/{len(planned)} runs)"
+                    )
+                    bar.refresh()
+    except KeyboardInterrupt:
+        print(
+            f"experiment: interrupted; run the same command again to continue ({args.out})", file=sys.stderr
+        )
+        return EXIT_INTERRUPTED
+    finally:
+        if bar is not None:
+            bar.close()
+    if failures:
+        print("experiment: some runs failed:\n  " + "\n  ".join(failures), file=sys.stderr)
+        if full_disk:
+            print(
+                f"experiment: make room, then run the same command again to continue ({args.out})",
+                file=sys.stderr,
+            )
+            return EXIT_IO
+        return 1
+    report = build_report(args.out)
+    print(f"experiment: {len(planned)} runs in {args.out}; report: {report}")
+    return 0
+
+
+def _drain(progress: queues.Queue[tuple[str, int]], done: dict[str, int]) -> None:
+    """Take every progress message waiting in the queue."""
+    while True:
+        try:
+            root, produced = progress.get_nowait()
+        except queues.Empty:
+            return
+        done[root] = max(done.get(root, 0), int(produced))
+
+
+def main() -> None:
+    """Console entry point of ``experiment``."""
+    sys.exit(experiment())

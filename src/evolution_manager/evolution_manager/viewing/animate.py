@@ -1,0 +1,240 @@
+"""``animate``: one trial as an animated GIF (or MP4), from a tree and a seed or from a trial bag; the frames
+come from ``evolution_manager.viewing.frames``.
+
+``render_frame`` draws one frame with Pillow: the arena as the paper's fig. 1 (nest disc at the centre, the
+gap, the food region outside it), robots with heading and id, a trail, message links, and a side panel with
+step, tick, fitness so far and each robot's action. ``write_animation`` writes a GIF (or an MP4 through
+ffmpeg when it is installed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from PIL import Image, ImageDraw, ImageFont
+
+from bt_controller.vocabulary import ACTIONS
+from evolution_manager.errors import AnimationError
+from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
+
+if TYPE_CHECKING:
+    from swarm_sim.config import Config
+
+
+# ----------------------------------------------------------------------------------------------- drawing
+
+ARENA_PX = 520
+PANEL_PX = 250
+TRAIL = 24  # frames of trail behind each robot
+ROBOT_COLOURS = (
+    (31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189), (140, 86, 75),
+    (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
+)  # fmt: skip
+NEST_COLOUR = (246, 214, 160)
+FOOD_COLOUR = (196, 230, 180)
+GAP_COLOUR = (250, 250, 250)
+
+
+DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
+"""DejaVu Sans from Debian's fonts-dejavu-core (ws/setup installs it); matplotlib ships the same file."""
+
+
+@functools.cache
+def text_font(size: int = 12) -> ImageFont.FreeTypeFont:
+    """DejaVu Sans at ``size`` pixels for the pictures' text (Pillow's built-in bitmap font drops spaces at
+    small sizes): Debian's file, else the copy inside matplotlib."""
+    path = DEJAVU
+    if not path.is_file():
+        import importlib.util
+
+        spec = importlib.util.find_spec("matplotlib")
+        locations = spec.submodule_search_locations if spec else None
+        path = Path(next(iter(locations or []), "")) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"
+    try:
+        return ImageFont.truetype(str(path), size)
+    except OSError:
+        raise AnimationError(
+            f"no DejaVu Sans font for the pictures' text (looked for {DEJAVU} and matplotlib's copy): "
+            "install Debian's fonts-dejavu-core (ws/setup does)"
+        ) from None
+
+
+def to_pixels(frames: TrialFrames, x: float, y: float) -> tuple[float, float]:
+    """Image coordinates of arena point (x, y) mm (y up in the arena, down in the image)."""
+    scale = ARENA_PX / (2 * frames.arena_half)
+    return (x + frames.arena_half) * scale, (frames.arena_half - y) * scale
+
+
+def render_frame(frames: TrialFrames, k: int) -> Image.Image:
+    """Frame ``k`` as a Pillow RGB image (arena on the left, values on the right)."""
+    image = Image.new("RGB", (ARENA_PX + PANEL_PX, ARENA_PX), (255, 255, 255))
+    draw = ImageDraw.Draw(image)
+    font = text_font()
+    scale = ARENA_PX / (2 * frames.arena_half)
+    cx, cy = to_pixels(frames, 0.0, 0.0)
+    draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=FOOD_COLOUR, outline=(60, 60, 60), width=3)
+    r_gap = (frames.nest_radius + frames.gap) * scale
+    draw.ellipse((cx - r_gap, cy - r_gap, cx + r_gap, cy + r_gap), fill=GAP_COLOUR)
+    r_nest = frames.nest_radius * scale
+    draw.ellipse((cx - r_nest, cy - r_nest, cx + r_nest, cy + r_nest), fill=NEST_COLOUR)
+    draw.text((cx - 12, cy - 5), "nest", font=font, fill=(120, 80, 20))
+    draw.text((8, 8), f"food (gap {frames.gap:.0f} mm)", font=font, fill=(40, 100, 40))
+    poses = frames.poses
+    for i in range(frames.n_robots):
+        trail = [to_pixels(frames, px, py) for px, py in poses[max(0, k - TRAIL) : k + 1, i, :2]]
+        if len(trail) > 1:
+            draw.line(trail, fill=_light(ROBOT_COLOURS[i % 9]), width=2)
+    for receiver, sender in frames.links[k]:
+        a = to_pixels(frames, *poses[k, receiver, :2])
+        b = to_pixels(frames, *poses[k, sender, :2])
+        draw.line((a, b), fill=(150, 150, 220), width=1)
+    radius = max(3.0, frames.robot_radius * scale)
+    for i in range(frames.n_robots):
+        x, y = to_pixels(frames, *poses[k, i, :2])
+        heading = poses[k, i, 2]
+        draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
+        tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))
+        draw.line(((x, y), tip), fill=(0, 0, 0), width=2)
+        draw.text((x + radius + 1, y - radius - 9), str(i), font=font, fill=(0, 0, 0))
+    panel = ARENA_PX + 10
+    tick = int(frames.ticks[k])
+    lines = [
+        f"seed {frames.seed}, trial {frames.trial}",
+        f"step {int(frames.steps[k])} of {int(frames.steps[-1])}",
+        f"tick {tick if tick >= 0 else '-'}",
+        "fitness so far:",
+    ]
+    from swarm_sim.world import OBJECTIVES
+
+    for name, value in zip(OBJECTIVES, frames.fitness[k], strict=True):
+        lines.append(f"  {name:8s} {'-' if math.isnan(value) else f'{value:.3f}'}")
+    lines.append("actions:")
+    y = 10
+    for line in lines:
+        draw.text((panel, y), line, font=font, fill=(0, 0, 0))
+        y += 15
+    for i in range(frames.n_robots):
+        action = int(frames.actions[k, i])
+        draw.rectangle((panel, y + 2, panel + 9, y + 11), fill=ROBOT_COLOURS[i % 9])
+        draw.text(
+            (panel + 14, y),
+            f"{i}: {ACTIONS[action] if action >= 0 else '(still)'}",
+            font=font,
+            fill=(0, 0, 0),
+        )
+        y += 15
+    return image
+
+
+def _light(colour: tuple[int, int, int]) -> tuple[int, int, int]:
+    red, green, blue = (int(c + (255 - c) * 0.55) for c in colour)
+    return red, green, blue
+
+
+def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16) -> Path:
+    """Write every frame to ``out``: an animated GIF, or an MP4 when ``out`` ends in .mp4 (needs ffmpeg)."""
+    out = Path(out)
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise AnimationError(f"{out}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
+    encoder = shutil.which("ffmpeg") or ""
+    if suffix == ".mp4" and not encoder:
+        raise AnimationError("writing .mp4 needs ffmpeg, which is not installed: write a .gif instead")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    images = [render_frame(frames, k) for k in range(len(frames.steps))]
+    if suffix == ".gif":
+        paletted = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=64) for im in images]
+        paletted[0].save(
+            out, save_all=True, append_images=paletted[1:], duration=int(1000 / fps), loop=0, optimize=False
+        )
+        return out
+    with tempfile.TemporaryDirectory(prefix="swarm-animation-") as folder:
+        for k, image in enumerate(images):
+            image.save(Path(folder) / f"{k:05d}.png")
+        command = [encoder, "-y", "-loglevel", "error", "-framerate", str(fps), "-i", f"{folder}/%05d.png",
+                   "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", str(out)]  # fmt: skip
+        done = subprocess.run(command, capture_output=True, text=True, check=False)
+        if done.returncode != 0:
+            raise AnimationError(f"ffmpeg could not write {out}: {done.stderr.strip()[-300:]}")
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- command
+
+
+def _config_for(profile: str | None) -> Config:
+    """The model configuration of ``profile`` (None: the default)."""
+
+    from swarm_sim.config import DEFAULT, Config
+
+    if profile is None:
+        return DEFAULT
+    if not any(f.name == "profile" for f in dataclasses.fields(Config)):
+        raise AnimationError(f"--profile {profile}: this build of the model has no profiles")
+    choice: dict[str, Any] = {"profile": profile}
+    try:
+        return dataclasses.replace(DEFAULT, **choice)
+    except (ValueError, TypeError) as error:
+        raise AnimationError(f"--profile {profile}: {error}") from None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``animate``: one trial to an animated GIF (or MP4), from a tree and a seed or from a trial bag."""
+    import argparse
+    import sys
+    import time
+
+    parser = argparse.ArgumentParser(
+        prog="animate",
+        description="Render one trial to an animated GIF (.mp4 with ffmpeg): one frame per sensing step.",
+    )
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--tree", help="tree text, or a file holding it (the trial runs in-process)")
+    source.add_argument("--bag", type=Path, help="a trial bag written by `trial --bag`")
+    parser.add_argument("--seed", type=int, help="seed of the trial (with --tree)")
+    parser.add_argument("--trial", type=int, default=0, help="trial index (with --tree; default 0)")
+    parser.add_argument("--profile", help="model profile (with --tree; default: the model's default)")
+    parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4")
+    parser.add_argument("--fps", type=int, default=16, help="frames per second (default 16: 2x real time)")
+    args = parser.parse_args(argv)
+    try:
+        started = time.monotonic()
+        if args.bag is not None:
+            if args.seed is not None or args.profile is not None or args.trial != 0:
+                raise AnimationError("--seed, --trial and --profile go with --tree; a bag holds its own")
+            frames = frames_from_bag(args.bag)
+        else:
+            if args.seed is None:
+                raise AnimationError("--tree needs --seed S")
+            tree = _tree_text(args.tree)
+            frames = frames_from_tree(tree, args.seed, args.trial, _config_for(args.profile))
+        write_animation(frames, args.out, args.fps)
+    except AnimationError as error:
+        print(f"animate: error: {error}", file=sys.stderr)
+        return 2
+    except ValueError as error:  # a bad seed, trial or tree
+        print(f"animate: error: {error}", file=sys.stderr)
+        return 2
+    seconds = time.monotonic() - started
+    print(f"{args.out}: {len(frames.steps)} frames (one per sensing step) in {seconds:.1f} s")
+    return 0
+
+
+def _tree_text(source: str) -> str:
+    from bt_controller.errors import TreeError
+    from bt_controller.tree import parse, to_text
+
+    path = Path(source)
+    text = path.read_text(encoding="utf-8") if "(" not in source and path.is_file() else source
+    try:
+        return to_text(parse(text))
+    except TreeError as error:
+        raise AnimationError(f"--tree: {error}") from None

@@ -1,0 +1,287 @@
+"""The repertoire explorer: ``explorer.html`` in a run directory, one self-contained page (no server, no
+network: it opens from ``file://``).
+
+It shows each objective's 8 x 8 x 8 grid as the paper's fig. 7 (eight 8 x 8 heatmaps, one per conditionality
+bin; movement across, rotation up), coloured by the best in-run fitness of each bin or, where the run's files
+hold them, by held-out fitness. Clicking a bin (or opening ``explorer.html#objective=food&bin=3,4,2``) shows
+its trees drawn, simplified and original, their fitness and descriptors, and the trial animation of the bin's
+best tree, drawn on a canvas from poses stored in the page.
+
+Animations: trial 0 of the evaluation's own seed under the run's model profile, run in-process exactly as the
+node graph runs it (``frames.frames_from_tree``, through the compiled kernels), every ``STRIDE``-th sensing
+step, for the best tree of every filled bin of the objectives the run evolved (other objectives' bins show the
+one of the same evaluation when there is one, else the command that renders it). Poses are packed as bytes
+(``_pack``) so that a 25,000-evaluation run's page stays well under 5 MB.
+
+``ws/run evolution_manager explorer RUN_DIR`` (re)builds it; the run writer builds it for every run.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import json
+import math
+import struct
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from bt_controller.simplify import simplify
+from bt_controller.tree import parse, to_text
+from evolution_manager.errors import ExplorerError
+from evolution_manager.files import write_atomic
+from evolution_manager.viewing.explorer_page import PAGE
+from evolution_manager.viewing.frames import TrialFrames
+
+STRIDE = 2
+"""One animation frame per this many sensing steps."""
+
+
+def _held_out_scores(root: Path, config: dict) -> dict[tuple[str, str, str], float]:
+    """The held-out fitness of each bin's best tree from the run's ``heldout.json`` (written at the end of a
+    run, ``evolution.heldout``), by (objective, bin, tree); empty when the run has none or the file belongs
+    to another configuration."""
+    path = root / "heldout.json"
+    if not path.exists():
+        return {}
+    document = _read(path)
+    if document.get("config") != config:
+        return {}
+    scores = {}
+    for objective, metrics in document.get("objectives", {}).items():
+        for row in metrics.get("bins", []):
+            held = row.get("heldout_fitness")
+            if isinstance(held, (int, float)) and math.isfinite(held):
+                scores[(objective, ",".join(str(b) for b in row["bin"]), row["tree"])] = float(held)
+    return scores
+
+
+def _group_copies(items: list[dict]) -> list[dict]:
+    """A bin's trees with those that simplify to the same tree shown once: the first (fittest) stands for the
+    group, with ``copies`` (how many trees of the bin it stands for) and ``copy_trees`` (the others, as
+    evolved)."""
+    groups: dict[str, dict] = {}
+    for entry in items:
+        first = groups.setdefault(entry["simplified"], {**entry, "copies": 0, "copy_trees": []})
+        first["copies"] += 1
+        if first is not entry and entry["tree"] != first["tree"]:
+            first["copy_trees"].append(entry["tree"])
+    return list(groups.values())
+
+
+def _evaluation_seeds(root: Path) -> dict[int, int]:
+    path = root / "evaluations.csv"
+    if not path.exists():
+        return {}
+    with open(path, newline="") as handle:
+        return {
+            int(row["evaluation"]): int(row["seed"])
+            for row in csv.DictReader(handle)
+            if row.get("evaluation", "").isdigit() and row.get("seed", "").isdigit()
+        }
+
+
+def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
+    evaluation = item.get("evaluation")
+    if isinstance(item.get("seed"), int):
+        return int(item["seed"])
+    if isinstance(evaluation, int) and evaluation in seeds:
+        return seeds[evaluation]
+    from evolution_manager.evolution.run_config import evaluation_seed
+
+    return evaluation_seed(run_seed, int(evaluation or 0))
+
+
+def _pack(frames: TrialFrames, stride: int) -> dict:
+    """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
+    heading (u8, 256 steps a turn); then density, nest, food so far (u16, value * 10000; 65535: not yet); the
+    last tick (u8, 255: none); each robot's action (u8, 255: none). Little-endian."""
+    keep = list(range(0, len(frames.steps), stride))
+    if keep[-1] != len(frames.steps) - 1:
+        keep.append(len(frames.steps) - 1)
+    out = bytearray()
+    half = frames.arena_half
+    for k in keep:
+        for x, y, h in frames.poses[k]:
+            out += struct.pack(
+                "<HHB",
+                round((x + half) * 10),
+                round((y + half) * 10),
+                round((h % (2 * math.pi)) / (2 * math.pi) * 256) % 256,
+            )
+        for value in frames.fitness[k]:
+            out += struct.pack("<H", 65535 if math.isnan(value) else round(value * 10000))
+        tick = int(frames.ticks[k])
+        out += struct.pack("<B", 255 if tick < 0 else tick)
+        out += bytes(255 if a < 0 else int(a) for a in frames.actions[k])
+    return {
+        "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
+        "trial": frames.trial,
+        "gap": frames.gap,
+        "steps": [int(frames.steps[k]) for k in keep],
+        "data": base64.b64encode(bytes(out)).decode("ascii"),
+    }
+
+
+Progress = Callable[[int, int], None] | None
+
+
+def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -> dict:
+    """Everything the page shows, read from the run directory ``root``."""
+    root = Path(root)
+    config = _read(root / "config.json") if (root / "config.json").exists() else {}
+    summary = _read(root / "summary.json") if (root / "summary.json").exists() else {}
+    metrics = summary.get("objectives", {})
+    evolved = [o for o, m in metrics.items() if isinstance(m, dict) and m.get("evolved")]
+    if not evolved and config.get("objective"):
+        evolved = [config["objective"]]
+    run_seed = int(config.get("seed", 0) or 0)
+    objectives: dict[str, dict] = {}
+    simplified: dict[str, str] = {}
+    held_out = _held_out_scores(root, config)
+    from swarm_sim.world import OBJECTIVES
+
+    for objective in OBJECTIVES:
+        path = root / f"repertoire_{objective}.json"
+        if not path.exists():
+            continue
+        document = _read(path)
+        bins: dict[str, list[dict]] = {}
+        for item in document.get("items", []):
+            tree = item["tree"]
+            if tree not in simplified:
+                simplified[tree] = to_text(simplify(parse(tree)))
+            entry = {
+                "tree": tree,
+                "simplified": simplified[tree],
+                "fitness": item["fitness"],
+                "descriptors": item["descriptors"],
+                "evaluation": item.get("evaluation"),
+            }
+            key = ",".join(str(b) for b in item["bin"])
+            held = held_out.get((objective, key, tree))
+            if held is not None:
+                entry["held_out"] = held
+            bins.setdefault(key, []).append(entry)
+        for key, items in bins.items():
+            items.sort(key=lambda e: -e["fitness"])
+            bins[key] = _group_copies(items)
+        objectives[objective] = {
+            "evolved": objective in evolved,
+            "shape": document.get("shape", [8, 8, 8]),
+            "descriptors": document.get("descriptors", ["movement", "rotation", "conditionality"]),
+            "coverage": document.get("coverage"),
+            "qd_score": document.get("qd_score"),
+            "bins": bins,
+        }
+    if not objectives:
+        raise ExplorerError(f"{root} holds no repertoire_<objective>.json: not a run directory")
+    animations: dict[str, dict] = {}
+    if animate:
+        from evolution_manager.viewing.frames import frames_from_tree
+        from swarm_sim.config import DEFAULT, default_config
+
+        model = default_config(config.get("profile") or DEFAULT.profile)  # the run's model
+        seeds = _evaluation_seeds(root)
+        wanted = []
+        for grid in objectives.values():
+            if grid["evolved"] or not evolved:
+                for items in grid["bins"].values():
+                    wanted.append(items[0])
+        for done, entry in enumerate(wanted, 1):
+            seed = _seed_of(entry, seeds, run_seed)
+            key = f"{entry['simplified']}|{seed}"
+            if key not in animations:
+                # The simplified tree sets the same motors: the same trial, a little faster to run.
+                animations[key] = _pack(frames_from_tree(entry["simplified"], seed, 0, model), STRIDE)
+            entry["animation"] = key
+            if progress is not None:
+                progress(done, len(wanted))
+        for grid in objectives.values():
+            for items in grid["bins"].values():
+                for entry in items:
+                    key = f"{entry['simplified']}|{_seed_of(entry, seeds, run_seed)}"
+                    if key in animations:
+                        entry["animation"] = key
+                    entry["seed"] = str(_seed_of(entry, seeds, run_seed))
+    return {
+        "run": config.get("label") or root.name,
+        "seed": str(run_seed),
+        "evaluations": summary.get("evaluations"),
+        "evolved": evolved,
+        "objectives": objectives,
+        "animations": animations,
+        "arena": _arena(),
+        "actions": _actions(),
+    }
+
+
+def _arena() -> dict:
+    from swarm_sim.config import DEFAULT
+
+    return {
+        "half": DEFAULT.arena_half,
+        "nest_radius": DEFAULT.nest_radius,
+        "robot_radius": DEFAULT.robot_radius,
+        "range": 1000.0,
+        "robots": DEFAULT.n_robots,
+    }
+
+
+def _actions() -> list[str]:
+    from bt_controller.vocabulary import ACTIONS
+
+    return list(ACTIONS)
+
+
+def _read(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as error:
+        raise ExplorerError(f"{path} is not a readable JSON file: {error}") from None
+    if not isinstance(data, dict):
+        raise ExplorerError(f"{path} does not hold a JSON object")
+    return data
+
+
+def write_explorer(root: Path | str, animate: bool = True, progress: Progress = None) -> Path:
+    """Build ``explorer.html`` in the run directory ``root``; return its path."""
+    root = Path(root)
+    data = explorer_data(root, animate, progress)
+    page = PAGE.replace("__TITLE__", html.escape(f"Repertoire explorer: {data['run']}"))
+    payload = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    page = page.replace("__DATA__", payload)
+    path = root / "explorer.html"
+    write_atomic(path, page)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``explorer RUN_DIR``: (re)build a run directory's explorer.html."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="explorer", description="Build RUN_DIR/explorer.html.")
+    parser.add_argument("run", type=Path, help="a run directory (with repertoire_<objective>.json files)")
+    parser.add_argument("--no-animations", action="store_true", help="leave the trial animations out")
+    args = parser.parse_args(argv)
+    started = time.monotonic()
+
+    def progress(done: int, total: int) -> None:
+        if done == total or done % 25 == 0:
+            print(f"\ranimations {done}/{total}", end="", file=sys.stderr, flush=True)
+
+    try:
+        path = write_explorer(args.run, not args.no_animations, progress)
+    except ExplorerError as error:
+        print(f"explorer: error: {error}", file=sys.stderr)
+        return 2
+    print(file=sys.stderr)
+    size = path.stat().st_size
+    print(f"{path}: {size / 1e6:.2f} MB in {time.monotonic() - started:.1f} s")
+    return 0
+
+
+__all__ = ["ExplorerError", "explorer_data", "write_explorer"]

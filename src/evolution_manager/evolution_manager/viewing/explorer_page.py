@@ -1,0 +1,372 @@
+"""The explorer page's HTML, CSS and JavaScript (``explorer.write_explorer`` fills in __TITLE__ and __DATA__).
+
+Plain JavaScript, no library: heatmaps and trees are SVG built in the page, the animation is drawn on a
+canvas from the packed poses (layout: ``explorer._pack``). The page reads ``location.hash``
+(``#objective=food&bin=3,4,2``) at load and on every change, and writes it when a bin is clicked.
+"""
+
+PAGE = r"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>__TITLE__</title>
+<style>
+body { font: 14px/1.4 system-ui, sans-serif; margin: 0; color: #222; }
+header { padding: 8px 16px; background: #f3f3f3; border-bottom: 1px solid #ccc; }
+header h1 { font-size: 18px; margin: 0 0 4px 0; }
+button.objective, button.colour { margin-right: 4px; }
+button.active { font-weight: bold; background: #dde8f7; }
+main { display: flex; flex-wrap: wrap; gap: 16px; padding: 12px 16px; }
+#heatmaps { display: grid; grid-template-columns: repeat(4, auto); gap: 8px 12px; align-content: start; }
+.panel h3 { font-size: 12px; font-weight: normal; margin: 0; text-align: center; }
+.cell { stroke: #fff; stroke-width: 1; }
+.cell.empty { fill: #eee; }
+.cell.filled { cursor: pointer; }
+.cell.selected { stroke: #e00; stroke-width: 3; }
+#legend { grid-column: 1 / span 4; font-size: 12px; }
+#tooltip { position: fixed; pointer-events: none; background: #fffbe6; border: 1px solid #aaa; padding: 4px 6px;
+  font-size: 12px; display: none; max-width: 420px; z-index: 2; }
+#detail { flex: 1 1 520px; min-width: 0; }
+#detail table { border-collapse: collapse; margin: 6px 0; }
+#detail td, #detail th { border: 1px solid #ccc; padding: 2px 6px; font-size: 13px; }
+.tree { margin: 6px 0 12px 0; overflow-x: auto; max-width: 100%; }
+.tree code { display: block; font-size: 12px; white-space: pre-wrap; word-break: break-all; color: #333; }
+.tree h4 { margin: 4px 0; font-size: 13px; }
+#player { margin-top: 8px; }
+#animation { border: 1px solid #999; }
+.note { color: #666; font-size: 12px; }
+</style>
+</head>
+<body>
+<header>
+<h1>__TITLE__</h1>
+<div id="info"></div>
+<div>objective: <span id="objectives"></span> colour by: <span id="colours"></span></div>
+</header>
+<main>
+<div id="heatmaps"></div>
+<section id="detail"><p class="note">Click a bin to see its trees, values and trial.</p></section>
+</main>
+<div id="tooltip"></div>
+<script type="application/json" id="data">__DATA__</script>
+<script>
+"use strict";
+const DATA = JSON.parse(document.getElementById("data").textContent);
+const state = { objective: null, bin: null, colour: "in-run", timer: null };
+const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],
+  [109,205,89],[180,222,44],[253,231,37]];
+const SVGNS = "http://www.w3.org/2000/svg";
+
+function colourOf(v) {
+  const x = Math.min(1, Math.max(0, v)) * (VIRIDIS.length - 1);
+  const i = Math.min(VIRIDIS.length - 2, Math.floor(x)), f = x - i;
+  const c = VIRIDIS[i].map((a, k) => Math.round(a + (VIRIDIS[i + 1][k] - a) * f));
+  return `rgb(${c[0]},${c[1]},${c[2]})`;
+}
+function el(tag, attrs, text) {
+  const e = tag.startsWith("svg:") ? document.createElementNS(SVGNS, tag.slice(4)) : document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+function fmt(v) { return v === undefined || v === null ? "-" : Number(v).toFixed(4); }
+function hasHeldOut(objective) {
+  return Object.values(DATA.objectives[objective].bins).some(items => items.some(i => i.held_out !== undefined));
+}
+function binValue(items) {
+  if (state.colour === "held-out") {
+    const h = items.map(i => i.held_out).filter(v => v !== undefined);
+    return h.length ? Math.max(...h) : null;
+  }
+  return items[0].fitness;
+}
+
+function drawControls() {
+  const objs = document.getElementById("objectives");
+  objs.textContent = "";
+  for (const name of Object.keys(DATA.objectives)) {
+    const b = el("button", { class: "objective" + (name === state.objective ? " active" : ""), "data-objective": name },
+      name + (DATA.objectives[name].evolved ? " (evolved)" : ""));
+    b.onclick = () => select(name, null);
+    objs.appendChild(b);
+  }
+  const cols = document.getElementById("colours");
+  cols.textContent = "";
+  const options = ["in-run"].concat(hasHeldOut(state.objective) ? ["held-out"] : []);
+  if (!options.includes(state.colour)) state.colour = "in-run";
+  for (const name of options) {
+    const b = el("button", { class: "colour" + (name === state.colour ? " active" : "") }, name + " fitness");
+    b.onclick = () => { state.colour = name; select(state.objective, state.bin); };
+    cols.appendChild(b);
+  }
+  if (options.length === 1) cols.appendChild(el("span", { class: "note" }, " (no held-out scores in this run)"));
+  const grid = DATA.objectives[state.objective];
+  document.getElementById("info").textContent = `run ${DATA.run}, seed ${DATA.seed}, ` +
+    `${DATA.evaluations ?? "?"} evaluations; ${state.objective}: ${Object.keys(grid.bins).length} filled bins ` +
+    `of 512, coverage ${fmt(grid.coverage)}, QD score ${fmt(grid.qd_score)}`;
+}
+
+function drawHeatmaps() {
+  const box = document.getElementById("heatmaps");
+  box.textContent = "";
+  box.setAttribute("data-objective", state.objective);
+  box.setAttribute("data-colour", state.colour);
+  const grid = DATA.objectives[state.objective];
+  const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22;
+  for (let k = 0; k < nz; k++) {
+    const panel = el("div", { class: "panel" });
+    panel.appendChild(el("h3", {}, `${d[2]} bin ${k}`));
+    const svg = el("svg:svg", { width: nx * size + 18, height: ny * size + 16, "data-panel": k });
+    for (let i = 0; i < nx; i++) for (let j = 0; j < ny; j++) {
+      const key = `${i},${j},${k}`, items = grid.bins[key];
+      const rect = el("svg:rect", { x: 18 + i * size, y: (ny - 1 - j) * size, width: size, height: size,
+        "data-bin": key, class: "cell " + (items ? "filled" : "empty") });
+      if (items) {
+        const v = binValue(items);
+        rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v));
+        rect.setAttribute("data-value", v === null ? "" : v.toFixed(4));
+        rect.onclick = () => select(state.objective, key);
+        rect.onmousemove = ev => tooltip(ev, key, items);
+        rect.onmouseleave = () => { document.getElementById("tooltip").style.display = "none"; };
+        if (key === state.bin) rect.classList.add("selected");
+      } else {
+        rect.onmousemove = ev => tooltip(ev, key, null);
+        rect.onmouseleave = () => { document.getElementById("tooltip").style.display = "none"; };
+      }
+      svg.appendChild(rect);
+    }
+    svg.appendChild(el("svg:text", { x: 18, y: ny * size + 12, "font-size": 10 }, `${d[0]} →`));
+    svg.appendChild(el("svg:text", { x: 0, y: 10, "font-size": 10 }, "↑"));
+    panel.appendChild(svg);
+    box.appendChild(panel);
+  }
+  box.appendChild(el("div", { id: "legend" }, `x: ${d[0]} bin, y: ${d[1]} bin (up); colour: best ` +
+    `${state.colour} fitness in the bin, 0 (purple) to 1 (yellow); grey: not scored held-out; light: empty`));
+}
+
+function tooltip(ev, key, items) {
+  const t = document.getElementById("tooltip");
+  if (!items) t.textContent = `bin ${key}: empty`;
+  else {
+    const best = items[0];
+    t.textContent = `bin ${key}: ${items.length} tree(s); best fitness ${fmt(best.fitness)}` +
+      (best.held_out !== undefined ? `, held-out ${fmt(best.held_out)}` : "") +
+      `; descriptors ${best.descriptors.map(fmt).join(", ")}; ${best.simplified}`;
+  }
+  t.style.display = "block";
+  t.style.left = (ev.clientX + 14) + "px";
+  t.style.top = (ev.clientY + 14) + "px";
+}
+
+// ---- trees: parse the text format, lay out leaves left to right, composites over their children
+function parseTree(text) {
+  const tokens = text.match(/[A-Za-z_][A-Za-z0-9_]*|[(),]/g) || [];
+  let pos = 0;
+  function node() {
+    const name = tokens[pos++];
+    if (tokens[pos] === "(") {
+      pos++;
+      const children = [];
+      while (true) {
+        children.push(node());
+        const t = tokens[pos++];
+        if (t === ")") break;
+      }
+      return { name: name.replace(/[0-9]+$/, ""), children };
+    }
+    return { name, children: [] };
+  }
+  return node();
+}
+function drawTree(text) {
+  const root = parseTree(text);
+  const placed = [];
+  let leaf = 0;
+  (function place(n, depth, parent) {
+    const index = placed.length;
+    placed.push({ n, depth, parent, x: 0 });
+    if (n.children.length) {
+      const xs = n.children.map(c => place(c, depth + 1, index));
+      placed[index].x = (xs[0] + xs[xs.length - 1]) / 2;
+    } else placed[index].x = leaf++;
+    return placed[index].x;
+  })(root, 0, null);
+  const W = 92, H = 46, width = Math.max(...placed.map(p => p.x)) + 1, height = Math.max(...placed.map(p => p.depth)) + 1;
+  const svg = el("svg:svg", { width: width * W, height: height * H, class: "tree-drawing",
+    "data-nodes": placed.length });
+  for (const p of placed) if (p.parent !== null) {
+    const q = placed[p.parent];
+    svg.appendChild(el("svg:line", { x1: q.x * W + W / 2, y1: q.depth * H + 30, x2: p.x * W + W / 2,
+      y2: p.depth * H + 8, stroke: "#666" }));
+  }
+  const fill = { seq: "#cfe2f3", sel: "#fce5cd", prob: "#d9ead3" };
+  const label = { seq: "seq →", sel: "sel ?", prob: "prob %" };
+  for (const p of placed) {
+    const composite = p.n.children.length > 0;
+    const isCondition = !composite && !DATA.actions.includes(p.n.name);
+    svg.appendChild(el("svg:rect", { x: p.x * W + 3, y: p.depth * H + 8, width: W - 6, height: 22,
+      rx: isCondition ? 11 : composite ? 4 : 0, fill: composite ? fill[p.n.name] : isCondition ? "#fff" : "#eee",
+      stroke: "#333" }));
+    svg.appendChild(el("svg:text", { x: p.x * W + W / 2, y: p.depth * H + 23, "text-anchor": "middle",
+      "font-size": 11 }, composite ? label[p.n.name] : p.n.name + (isCondition ? "?" : "")));
+  }
+  return svg;
+}
+
+// ---- the trial animation, from the packed frames (explorer._pack)
+function unpack(anim) {
+  const bytes = Uint8Array.from(atob(anim.data), c => c.charCodeAt(0));
+  const view = new DataView(bytes.buffer), n = DATA.arena.robots, rec = n * 5 + 6 + 1 + n;
+  const frames = [];
+  for (let off = 0; off + rec <= bytes.length; off += rec) {
+    const robots = [];
+    for (let i = 0; i < n; i++) {
+      const o = off + i * 5;
+      robots.push({ x: view.getUint16(o, true) / 10 - DATA.arena.half, y: view.getUint16(o + 2, true) / 10 - DATA.arena.half,
+        h: view.getUint8(o + 4) / 256 * 2 * Math.PI });
+    }
+    const f = off + n * 5, fit = [0, 1, 2].map(k => view.getUint16(f + 2 * k, true));
+    const tick = view.getUint8(f + 6), actions = [];
+    for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 7 + i));
+    frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 255 ? null : tick, actions });
+  }
+  return frames;
+}
+const COLOURS = ["#1f77b4","#d62728","#2ca02c","#9467bd","#8c564b","#e377c2","#7f7f7f","#bcbd22","#17becf"];
+function drawFrame(canvas, anim, frames, k) {
+  const ctx = canvas.getContext("2d"), S = canvas.width, A = DATA.arena, scale = S / (2 * A.half);
+  const px = (x, y) => [(x + A.half) * scale, (A.half - y) * scale];
+  ctx.fillStyle = "#c4e6b4"; ctx.fillRect(0, 0, S, S);
+  ctx.beginPath(); ctx.arc(S / 2, S / 2, (A.nest_radius + anim.gap) * scale, 0, 2 * Math.PI);
+  ctx.fillStyle = "#fafafa"; ctx.fill();
+  ctx.beginPath(); ctx.arc(S / 2, S / 2, A.nest_radius * scale, 0, 2 * Math.PI);
+  ctx.fillStyle = "#f6d6a0"; ctx.fill();
+  ctx.fillStyle = "#785014"; ctx.font = "11px sans-serif"; ctx.fillText("nest", S / 2 - 11, S / 2 + 4);
+  const f = frames[k];
+  ctx.lineWidth = 2;
+  f.robots.forEach((r, i) => {
+    ctx.strokeStyle = COLOURS[i % 9] + "88"; ctx.beginPath();
+    for (let j = Math.max(0, k - 12); j <= k; j++) { const [x, y] = px(frames[j].robots[i].x, frames[j].robots[i].y);
+      if (j === Math.max(0, k - 12)) ctx.moveTo(x, y); else ctx.lineTo(x, y); }
+    ctx.stroke();
+  });
+  ctx.strokeStyle = "#9696dc"; ctx.lineWidth = 1;
+  for (let i = 0; i < f.robots.length; i++) for (let j = i + 1; j < f.robots.length; j++) {
+    const a = f.robots[i], b = f.robots[j];
+    if (Math.hypot(a.x - b.x, a.y - b.y) <= A.range) {
+      ctx.beginPath(); ctx.moveTo(...px(a.x, a.y)); ctx.lineTo(...px(b.x, b.y)); ctx.stroke(); }
+  }
+  const rr = Math.max(3, A.robot_radius * scale);
+  f.robots.forEach((r, i) => {
+    const [x, y] = px(r.x, r.y);
+    ctx.beginPath(); ctx.arc(x, y, rr, 0, 2 * Math.PI); ctx.fillStyle = COLOURS[i % 9]; ctx.fill();
+    ctx.strokeStyle = "#000"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(x, y);
+    ctx.lineTo(x + 1.8 * rr * Math.cos(r.h), y - 1.8 * rr * Math.sin(r.h)); ctx.stroke();
+    ctx.fillStyle = "#000"; ctx.fillText(String(i), x + rr + 1, y - rr);
+  });
+  const status = document.getElementById("frame-status");
+  status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; fitness so far: ` +
+    Object.keys(DATA.objectives).map((n, i) => `${n} ${f.fitness[i] === null ? "-" : f.fitness[i].toFixed(3)}`).join(", ") +
+    "; actions: " + f.actions.map((a, i) => `${i}:${a === 255 ? "(still)" : DATA.actions[a]}`).join(" ");
+  document.getElementById("frame-slider").value = k;
+}
+
+function drawDetail() {
+  const box = document.getElementById("detail");
+  if (state.timer) { clearInterval(state.timer); state.timer = null; }
+  box.textContent = "";
+  const items = state.bin && DATA.objectives[state.objective].bins[state.bin];
+  box.setAttribute("data-objective", state.objective);
+  box.setAttribute("data-bin", state.bin || "");
+  if (!state.bin) { box.appendChild(el("p", { class: "note" }, "Click a bin to see its trees, values and trial.")); return; }
+  if (!items) { box.appendChild(el("p", { class: "note", id: "empty-bin" }, `bin ${state.bin} of ${state.objective} is empty`)); return; }
+  box.appendChild(el("h2", {}, `${state.objective}, bin ${state.bin} (${DATA.objectives[state.objective].descriptors.join(", ")})`));
+  const table = el("table", { id: "values" });
+  const head = el("tr");
+  ["", "fitness", "held-out", "movement", "rotation", "conditionality", "evaluation", "seed"].forEach(h => head.appendChild(el("th", {}, h)));
+  table.appendChild(head);
+  items.forEach((it, n) => {
+    const row = el("tr", { class: "item", "data-fitness": it.fitness });
+    const name = `tree ${n + 1}` + (it.copies > 1 ? ` (${it.copies} copies)` : "");
+    [name, fmt(it.fitness), fmt(it.held_out), ...it.descriptors.map(fmt), it.evaluation ?? "-", it.seed ?? "-"]
+      .forEach(v => row.appendChild(el("td", {}, String(v))));
+    table.appendChild(row);
+  });
+  box.appendChild(table);
+  const best = items[0], anim = best.animation && DATA.animations[best.animation];
+  const player = el("div", { id: "player" });
+  box.appendChild(player);
+  if (!anim) {
+    player.appendChild(el("p", { class: "note", id: "no-animation" }, "No animation stored for this bin (only the " +
+      "evolved objectives' bins have one). Render it with: ws/run evolution_manager animate --tree '" + best.simplified +
+      "' --seed " + best.seed + " --out trial.gif"));
+    drawTrees(box, items);
+    return;
+  }
+  const frames = unpack(anim);
+  player.appendChild(el("h3", {}, `trial ${anim.trial} of seed ${anim.seed} (gap ${anim.gap} mm), best tree of the bin`));
+  const canvas = el("canvas", { id: "animation", width: 460, height: 460, "data-frames": frames.length,
+    "data-tree": best.simplified });
+  player.appendChild(canvas);
+  const controls = el("div");
+  const play = el("button", { id: "play" }, "pause");
+  const slider = el("input", { id: "frame-slider", type: "range", min: 0, max: frames.length - 1, value: 0 });
+  controls.append(play, slider, el("div", { id: "frame-status", class: "note" }));
+  player.appendChild(controls);
+  let k = 0;
+  const tick = () => { drawFrame(canvas, anim, frames, k); k = (k + 1) % frames.length; };
+  slider.oninput = () => { k = Number(slider.value); drawFrame(canvas, anim, frames, k); };
+  play.onclick = () => {
+    if (state.timer) { clearInterval(state.timer); state.timer = null; play.textContent = "play"; }
+    else { state.timer = setInterval(tick, 125); play.textContent = "pause"; }
+  };
+  tick();
+  state.timer = setInterval(tick, 125);
+  drawTrees(box, items);
+}
+
+function drawTrees(box, items) {
+  items.forEach((it, n) => {
+    for (const [kind, text] of [["simplified", it.simplified], ["original", it.tree]]) {
+      if (kind === "original" && text === it.simplified) continue;
+      const div = el("div", { class: `tree ${kind}`, "data-tree": text });
+      div.appendChild(el("h4", {}, `tree ${n + 1}, ${kind}` + (kind === "simplified" && text === it.tree ? " (the original is already simplest)" : "")));
+      div.appendChild(drawTree(text));
+      div.appendChild(el("code", {}, text));
+      box.appendChild(div);
+    }
+    if (it.copies > 1) {
+      const note = el("div", { class: "tree copies", "data-copies": it.copies });
+      note.appendChild(el("h4", {}, `tree ${n + 1} stands for ${it.copies} trees of this bin that simplify to the ` +
+        "same tree" + (it.copy_trees.length ? "; the others as evolved:" : " (evolved identically)")));
+      it.copy_trees.forEach(t => note.appendChild(el("code", {}, t)));
+      box.appendChild(note);
+    }
+  });
+}
+
+function render() { drawControls(); drawHeatmaps(); drawDetail(); }
+function select(objective, bin) {
+  state.objective = objective; state.bin = bin;
+  const hash = `#objective=${objective}` + (bin ? `&bin=${bin}` : "") +
+    (state.colour === "held-out" ? "&colour=held-out" : "");
+  if (location.hash !== hash) history.replaceState(null, "", hash);
+  render();
+}
+function fromHash() {
+  const params = new URLSearchParams(location.hash.replace(/^#/, ""));
+  const names = Object.keys(DATA.objectives);
+  let objective = params.get("objective");
+  if (!names.includes(objective)) objective = DATA.evolved.find(o => names.includes(o)) || names[0];
+  const bin = params.get("bin");
+  state.objective = objective;
+  state.bin = bin && /^\d+,\d+,\d+$/.test(bin) ? bin : null;
+  state.colour = params.get("colour") === "held-out" ? "held-out" : "in-run";
+  render();
+}
+window.addEventListener("hashchange", fromHash);
+fromHash();
+</script>
+</body>
+</html>
+"""

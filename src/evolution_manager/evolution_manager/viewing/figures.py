@@ -1,0 +1,142 @@
+"""Figures in the style of the paper: grid heatmaps (fig. 7), fitness histograms (fig. 8), box plots
+(figs. 4-6) and progress curves. Every function writes one PNG with matplotlib's Agg backend and returns
+its path; none keeps state between calls."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from evolution_manager.evolution.archive import Repertoire
+from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES
+
+_SAVE: dict[str, Any] = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Software": None}}
+
+
+def _save(figure: plt.Figure, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, **_SAVE)
+    plt.close(figure)
+    return path
+
+
+def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
+    """The 8 x 8 x 8 grid as eight 8 x 8 heatmaps (fig. 7): one panel per conditionality bin, movement
+    across, rotation up, colour the best fitness in the bin (blank when empty)."""
+    best = np.full(repertoire.shape, np.nan)
+    for index, value in repertoire.best_per_bin().items():
+        best[index] = value
+    figure, axes = plt.subplots(2, 4, figsize=(12, 6.2), constrained_layout=True)
+    image = None
+    for k, axis in enumerate(axes.flat):
+        image = axis.imshow(best[:, :, k].T, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis")
+        axis.set_title(f"{DESCRIPTORS[2]} bin {k}", fontsize=9)
+        axis.set_xticks(range(8))
+        axis.set_yticks(range(8))
+        axis.tick_params(labelsize=7)
+        if k >= 4:
+            axis.set_xlabel(DESCRIPTORS[0], fontsize=8)
+        if k % 4 == 0:
+            axis.set_ylabel(DESCRIPTORS[1], fontsize=8)
+    assert image is not None  # eight panels were drawn
+    figure.colorbar(image, ax=axes, shrink=0.8, label="best fitness in bin")
+    figure.suptitle(f"{title}: coverage {repertoire.coverage:.3f}, QD score {repertoire.qd_score:.2f}")
+    return _save(figure, path)
+
+
+def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path:
+    """The best fitness of every filled bin of each repertoire (fig. 8, as the authors' analysis): one row
+    per objective, one panel per algorithm (in the order given), each titled with the repertoire's size in
+    filled bins. ``rows[objective][algorithm label]``."""
+    objectives = list(rows)
+    columns = max(len(row) for row in rows.values())
+    figure, axes = plt.subplots(
+        len(objectives), columns, figsize=(3.6 * columns, 2.6 * len(objectives)), squeeze=False
+    )
+    bins = np.linspace(0.0, 1.0, 41)
+    for i, objective in enumerate(objectives):
+        for j in range(columns):
+            axis = axes[i][j]
+            if j >= len(rows[objective]):
+                axis.axis("off")
+                continue
+            label, repertoire = list(rows[objective].items())[j]
+            values = list(repertoire.best_per_bin().values())
+            axis.hist(values, bins=bins, color="tab:blue")
+            axis.set_title(f"{objective}: {label}, {len(values)} solutions", fontsize=9)
+            axis.set_xlim(0.0, 1.0)
+            axis.tick_params(labelsize=7)
+            if i == len(objectives) - 1:
+                axis.set_xlabel("fitness", fontsize=8)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+def progress(
+    curves: Mapping[str, Sequence[Mapping[str, str]]],
+    path: Path,
+    objectives: Sequence[str],
+    heldout: Mapping[str, Mapping[str, tuple[float, float | None, float | None]]] | None = None,
+) -> Path:
+    """Best fitness, coverage and QD score against evaluations, one line per curve label and objective.
+    Each curve is a list of progress rows (``evaluations``, ``best_<o>``, ``coverage_<o>``,
+    ``qd_score_<o>``). ``heldout[label][objective]`` = (evaluations, held-out best fitness, held-out QD
+    score) adds the held-out scores as hollow markers in the curve's colour."""
+    metrics = ("best", "coverage", "qd_score")
+    figure, axes = plt.subplots(1, 3, figsize=(14, 3.8))
+    for label, rows in curves.items():
+        x = [float(r["evaluations"]) for r in rows]
+        for axis, metric in zip(axes, metrics, strict=True):
+            for objective in objectives:
+                y = [
+                    float(r[f"{metric}_{objective}"]) if r[f"{metric}_{objective}"] != "" else np.nan
+                    for r in rows
+                ]
+                name = label if len(objectives) == 1 else f"{label} {objective}"
+                (line,) = axis.plot(x, y, label=name, linewidth=1.2)
+                held = (heldout or {}).get(label, {}).get(objective)
+                value = None if held is None or metric == "coverage" else held[1 if metric == "best" else 2]
+                if held is not None and value is not None:
+                    axis.plot(
+                        [held[0]],
+                        [value],
+                        marker="o",
+                        markersize=7,
+                        markerfacecolor="none",
+                        color=line.get_color(),
+                        linestyle="none",
+                        label=f"{name} held-out",
+                    )
+    for axis, metric in zip(axes, metrics, strict=True):
+        axis.set_xlabel("evaluations")
+        axis.set_title(metric.replace("_", " "))
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, path: Path) -> Path:
+    """Box plots of one metric (figs. 4-6): one panel per objective, one box per algorithm.
+    ``samples[objective][algorithm label]`` is the metric over runs."""
+    figure, axes = plt.subplots(1, len(samples), figsize=(4.2 * len(samples), 3.8), squeeze=False)
+    for axis, (objective, by_label) in zip(axes[0], samples.items(), strict=True):
+        labels = list(by_label)
+        axis.boxplot([list(by_label[label]) for label in labels], tick_labels=labels)
+        axis.set_title(objective)
+        axis.set_ylabel(metric)
+        axis.grid(alpha=0.3, axis="y")
+        axis.tick_params(labelsize=8)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+__all__ = ["OBJECTIVES", "boxes", "heatmaps", "histograms", "progress"]

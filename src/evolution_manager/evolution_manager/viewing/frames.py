@@ -1,0 +1,205 @@
+"""A trial as frames (poses, actions, messages, fitness so far), from a tree or from a bag.
+
+``frames_from_tree`` runs the trial in-process through the compiled kernels, recorded step by step
+(``swarm_sim.recording``, equal frame for frame to the node graph's trial); ``frames_from_bag`` reads a trial
+bag written by ``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``: **one
+frame per sensing step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at that
+step, the action driving each robot's wheels after it, the messages heard at it, the last tick and the fitness
+so far (each objective scored with the robots' smoothed values of that step as if the trial ended there;
+undefined before the initial values are taken). No ROS here: bags are read with
+``evolution_manager.recording.bags``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bt_controller import timeline
+from evolution_manager.errors import AnimationError
+
+if TYPE_CHECKING:
+    from swarm_sim.config import Config, Params
+
+
+@dataclass(frozen=True)
+class TrialFrames:
+    """One trial, frame by frame (one frame per sensing step)."""
+
+    tree: str
+    seed: int
+    trial: int
+    gap: float
+    arena_half: float
+    nest_radius: float
+    robot_radius: float
+    steps: np.ndarray
+    """(T,) sensing step of each frame."""
+    poses: np.ndarray
+    """(T, n, 3): x, y (mm) and heading (rad) of every robot, as published on /swarm_state."""
+    actions: np.ndarray
+    """(T, n): the action driving each robot's wheels after this step (index into ACTIONS; -1: not yet
+    ticked, standing still)."""
+    ticks: np.ndarray
+    """(T,): the last tick at or before this step (-1 before the first)."""
+    links: tuple[np.ndarray, ...]
+    """Per frame, (k, 2) int: (receiver, sender) of every message heard at this step."""
+    fitness: np.ndarray
+    """(T, 3): density, nest, food so far (NaN before the initial values)."""
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.poses.shape[1])
+
+    def to_json(self) -> dict:
+        """A compact JSON form (poses in whole mm and centiradians) for the repertoire explorer."""
+        return {
+            "tree": self.tree,
+            "seed": self.seed,
+            "trial": self.trial,
+            "gap": self.gap,
+            "arena_half": self.arena_half,
+            "nest_radius": self.nest_radius,
+            "robot_radius": self.robot_radius,
+            "steps": [int(s) for s in self.steps],
+            "x": np.rint(self.poses[:, :, 0]).astype(int).tolist(),
+            "y": np.rint(self.poses[:, :, 1]).astype(int).tolist(),
+            "h": np.rint(self.poses[:, :, 2] * 100).astype(int).tolist(),
+            "actions": self.actions.astype(int).tolist(),
+            "ticks": [int(t) for t in self.ticks],
+            "links": [[int(v) for v in pair] for frame in self.links for pair in [frame.ravel()]],
+            "fitness": [[None if math.isnan(v) else round(float(v), 4) for v in row] for row in self.fitness],
+        }
+
+
+def arena_fields(config: Config, trial: int) -> dict[str, float]:
+    """The arena of ``trial`` as ``TrialFrames`` draws it: the gap between nest and food, the arena's and the
+    nest's size and the robots' radius (mm)."""
+    return {
+        "gap": config.gap(trial),
+        "arena_half": config.arena_half,
+        "nest_radius": config.nest_radius,
+        "robot_radius": config.robot_radius,
+    }
+
+
+def _fitness_so_far(initial: np.ndarray, current: np.ndarray, p: Params) -> np.ndarray:
+    """The three objectives as if the trial ended now (they depend on the smoothed values only)."""
+    from swarm_sim import world
+
+    n = initial.shape[0]
+    return world.trial_values(initial, current, np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), p)[:3]
+
+
+def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
+    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot through the compiled kernels, recorded
+    step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
+    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps."""
+    from swarm_sim.config import DEFAULT
+    from swarm_sim.recording import record_trial
+
+    config = config or DEFAULT
+    recorded = record_trial(tree, seed, trial, config)
+    return TrialFrames(
+        tree=tree,
+        seed=seed,
+        trial=trial,
+        **arena_fields(config, trial),
+        steps=recorded.steps,
+        poses=recorded.poses,
+        actions=recorded.actions,
+        ticks=recorded.ticks,
+        links=tuple(recorded.links),
+        fitness=recorded.fitness,
+    )
+
+
+def _links_shape(links: np.ndarray) -> np.ndarray:
+    """(k, 2) links sorted by receiver, then sender (a bag holds them in arrival order)."""
+    if not links.size:
+        return np.zeros((0, 2), np.int64)
+    pairs = links.reshape(-1, 2)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def frames_from_bag(path: Path | str) -> TrialFrames:
+    """The frames of the trial recorded in the bag at ``path`` (``trial --bag``): trial K's steps only (the
+    bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
+    from evolution_manager.recording.bags import BagError, read_bag
+    from evolution_manager.recording.reproduce import RESULT_TOPIC
+    from swarm_sim.config import DEFAULT, default_config
+
+    try:
+        messages = list(read_bag(path))
+    except BagError as error:
+        raise AnimationError(str(error)) from None
+    start = next((m.message for m in messages if m.topic == "/trial_start"), None)
+    if start is None:
+        raise AnimationError(f"{path} holds no /trial_start: not a trial bag (record one with `trial --bag`)")
+    result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
+    profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
+    config = default_config(profile)
+    trial = int(start.trial)
+    states = {
+        m.message.step: m.message
+        for m in messages
+        if m.topic == "/swarm_state" and int(m.message.trial) == trial
+    }
+    if not states:
+        raise AnimationError(f"{path} holds no /swarm_state messages: nothing to animate")
+    n = int(start.robots)
+    steps = sorted(states)
+    index = {s: k for k, s in enumerate(steps)}
+    poses = np.array([[[q.x, q.y, q.theta] for q in states[s].poses] for s in steps], dtype=np.float64)
+    wheels = np.full((len(steps), n), -1, dtype=np.int64)
+    smoothed = np.full((len(steps), n, 3), np.nan)
+    heard: list[list[tuple[int, int]]] = [[] for _ in steps]
+    tick_at: dict[int, int] = {}
+    for m in messages:
+        parts = m.topic.split("/")
+        if len(parts) != 3 or not parts[1].startswith("footbot_"):
+            continue
+        robot, kind, msg = int(parts[1].split("_")[1]), parts[2], m.message
+        if kind == "tree_status":
+            tick_at[int(msg.step)] = int(msg.tick)
+            continue
+        if kind not in ("wheels", "range_and_bearing"):  # e.g. pose (PoseStamped): no step
+            continue
+        k = index.get(int(msg.step))
+        if k is None:
+            continue
+        if kind == "wheels":
+            wheels[k, robot] = int(msg.action)  # the action's index (wheel speeds are in m/s since issue 13)
+            smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density)
+        elif kind == "range_and_bearing":
+            heard[k].extend((robot, int(r.sender)) for r in msg.readings)
+    p = config.params()
+    ticks, actions, fitness = [], np.full((len(steps), n), -1, np.int64), np.full((len(steps), 3), np.nan)
+    # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
+    earlier = [s for s in tick_at if s < steps[0]]
+    tick, initial = (tick_at[max(earlier)] if earlier else -1), None
+    for k, s in enumerate(steps):
+        tick = tick_at.get(s, tick)
+        ticks.append(tick)
+        if tick >= 0:
+            actions[k] = wheels[k]
+        if timeline.is_initial(config.timeline, s):
+            initial = smoothed[k]
+        if initial is not None:
+            fitness[k] = _fitness_so_far(initial, smoothed[k], p)
+    return TrialFrames(
+        tree=result.tree if result is not None else "",
+        seed=int(start.seed),
+        trial=trial,
+        **arena_fields(config, trial),
+        steps=np.array(steps),
+        poses=poses,
+        actions=actions,
+        ticks=np.array(ticks),
+        links=tuple(_links_shape(np.array(h, np.int64)) for h in heard),
+        fitness=fitness,
+    )

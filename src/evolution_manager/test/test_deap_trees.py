@@ -1,0 +1,62 @@
+"""The primitive set factory and the tree text round trip."""
+
+from __future__ import annotations
+
+import random
+
+import deap.creator
+import pytest
+
+from bt_controller.tree import parse, to_text
+from bt_controller.vocabulary import ACTIONS, CONDITIONS
+from evolution_manager.errors import TreeTextError
+from evolution_manager.evolution.deap_trees import (
+    BehaviourTree,
+    make_primitive_set,
+    tree_from_text,
+    tree_to_text,
+)
+from evolution_manager.evolution.operators import full_tree
+
+
+def test_primitive_set_has_the_vocabulary_and_leaves_no_global_state(pset):
+    before = set(vars(deap.creator))
+    names = sorted(p.name for p in pset.primitives[pset.ret])
+    assert names == sorted(f"{c}{n}" for c in ("seq", "sel", "prob") for n in (2, 3, 4))
+    assert [t.name for t in pset.terminals[pset.ret]] == list(CONDITIONS + ACTIONS)
+    make_primitive_set()
+    assert set(vars(deap.creator)) == before
+
+
+def test_text_round_trip_matches_the_bt_engine(pset):
+    rng = random.Random(5)
+    for _ in range(200):
+        tree = full_tree(pset, rng, 1, 4)
+        text = tree_to_text(tree)
+        assert text == to_text(parse(text))
+        again = tree_from_text(text, pset)
+        assert [n.name for n in again] == [n.name for n in tree]
+        assert isinstance(again, BehaviourTree) and not again.fitness.valid
+
+
+def test_suffixed_names_are_read_and_canonical_text_is_written(pset):
+    tree = tree_from_text("sel2(seq2(in_nest, stop), forward)", pset)
+    assert tree_to_text(tree) == "sel(seq(in_nest, stop), forward)"
+    assert tree.height == 2 and len(tree) == 5
+
+
+BAD = ["", "sel(stop)", "seq(stop, stop", "seq3(stop, stop)", "fly", "sel(a, b)", 7]
+
+
+@pytest.mark.parametrize("bad", BAD)
+def test_bad_text_is_refused_with_a_reason(pset, bad):
+    with pytest.raises(TreeTextError, match="not a behaviour tree"):
+        tree_from_text(bad, pset)
+
+
+def test_the_size_limit_of_trees_is_the_evaluators():
+    from bt_controller.tree import MAX_DEPTH, MAX_NODES
+    from evolution_manager.evolution.parameters import GPParameters, QDParameters
+
+    assert GPParameters().max_nodes == QDParameters().max_nodes == MAX_NODES
+    assert GPParameters().max_height <= MAX_DEPTH

@@ -1,0 +1,22 @@
+"""The parameters the simulator and the evaluator declare beside the world's (``swarm_sim.config.Config``):
+one home, so that each node knows which names of a shared parameter file (``/**``) belong to the other."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class EvaluatorSettings:
+    """The evaluator's parameters beside the world's."""
+
+    slice: int = 10
+    """Evaluations between two feedback messages and cancel checks of the evaluate action."""
+
+
+EVALUATOR_RANGES = {"slice": (1, 1000)}
+"""Closed ranges of the evaluator's parameters."""
+
+SIMULATOR_PARAMETERS = frozenset({"conditions", "robot_namespaces", "answer_timeout"})
+"""The simulator's parameters beside the world's (declared by ``SimulatorNode``; a test checks that the two
+agree)."""
