@@ -238,3 +238,28 @@ def test_the_run_bag_holds_every_evaluation_once_in_order_cached_ones_marked(tmp
             assert first[m.tree] == (m.density, m.nest, m.food, m.movement, m.rotation, m.conditionality)
         else:
             first.setdefault(m.tree, (m.density, m.nest, m.food, m.movement, m.rotation, m.conditionality))
+
+
+@pytest.mark.parametrize(
+    ("parameters", "says"),
+    [
+        ('/**:\n  ros__parameters:\n    wheel_speed: "fast"\n', "wheel_speed"),
+        ("/**:\n  ros__parameters:\n    n_robots: -3\n", "n_robots -3"),
+        ("/**:\n  ros__parameters:\n    wheel_sped: 50.0\n", "wheel_sped"),
+        ("/**:\n  ros__parameters:\n    wheel_speed: [50.0\n", "line"),
+    ],
+)
+def test_trial_refuses_a_bad_parameter_file_in_one_line(tmp_path, workspace, parameters, says):
+    params = tmp_path / "params.yaml"
+    params.write_text(parameters)
+    where = ["--bag", str(tmp_path / "t.bag"), "--domain", str(workspace.domain)]
+    done = subprocess.run(
+        [exe("trial"), "--tree", "forward", "--seed", "1", *where, "--params-file", str(params)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = [line for line in done.stderr.splitlines() if not line.startswith("trial: graph in ROS domain")]
+    line = one_line_error("\n".join(lines))
+    assert (says in line and str(params) in line) or says in line, line

@@ -22,3 +22,6 @@ names in its ``__all__``. From the bottom up:
 Wings to come (composition of primitives into foragers) take their place in this order by what
 they import.
 """
+
+WINGS = ("evolution", "recording", "viewing", "graph", "cluster", "studies", "adaptation")
+"""The wings, bottom up: each may import the ones before it (``test/test_wings.py`` holds them to it)."""

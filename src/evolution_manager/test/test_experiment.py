@@ -9,8 +9,9 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
-from evolution_manager.studies.experiment import experiment, plan
+from evolution_manager.studies.experiment import experiment, plan, shared_scenario_seed
 from evolution_manager.studies.report import report
 from evolution_manager.studies.significance import compare, holm
 
@@ -41,6 +42,37 @@ def test_the_plan_covers_every_algorithm_objective_and_run_with_distinct_seeds()
     assert len({config.seed for config, _ in planned}) == len(planned)
     assert all(config.evaluations == (300 if config.label == "GP_fnd" else 100) for config, _ in planned)
     assert plan(runs=3, evaluations=100, seed=4) == planned
+
+
+def test_the_authors_design_is_the_default_one_scenario_for_every_run_and_per_run_an_option():
+    shared = plan(runs=3, evaluations=100, seed=4)
+    assert len({config.scenario_seed for config, _ in shared}) == 1
+    assert shared[0][0].scenario_seed == shared_scenario_seed(4)
+    given = plan(runs=3, evaluations=100, seed=4, scenario_seed=77)
+    assert {config.scenario_seed for config, _ in given} == {77}
+    per_run = plan(runs=3, evaluations=100, seed=4, design="per-run")
+    assert len({config.scenario_seed for config, _ in per_run}) == len(per_run)
+    assert [c.seed for c, _ in per_run] == [c.seed for c, _ in shared]  # only the scenarios differ
+
+
+def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsys):
+    out = tmp_path / "experiment"
+    args = ["--runs", "1", "--evaluations", "50", "--out", str(out), "--processes", "2", "--no-progress"]
+    assert experiment(args) == 0
+    document = json.loads((out / "experiment.json").read_text())
+    assert document["design"] == "shared" and document["scenario_seed"] == shared_scenario_seed(0)
+    configs = [json.loads(p.read_text()) for p in out.glob("runs/*/run*/config.json")]
+    assert {c["scenario_seed"] for c in configs} == {document["scenario_seed"]}
+    assert "every run on one shared scenario" in (out / "report.md").read_text()
+    assert experiment([*args, "--design", "per-run"]) == 2  # another design is another experiment
+    assert "other options" in capsys.readouterr().err
+    committed = Path(__file__).resolve().parents[3] / "docs" / "results" / "paper" / "runs.csv"
+    beside = out / "runs_per_run_design.csv"
+    beside.write_text(committed.read_text())
+    assert report([str(out), "--beside", str(beside), "--beside-title", "the per-run design"]) == 0
+    text = (out / "report.md").read_text()
+    assert "### Table 6 again: the per-run design" in text
+    assert "16 of 18 rows reach the paper's conclusion" in text  # the committed per-run experiment's verdict
 
 
 def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tmp_path, capsys):

@@ -8,10 +8,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import evolution_manager
+
 PACKAGE = Path(__file__).resolve().parents[1] / "evolution_manager"  # the sources, not the installed copy
-WINGS = ("evolution", "recording", "viewing", "graph", "cluster", "studies", "adaptation")
-"""Bottom up: a wing may import the ones before it (the package docstring says why each sits where)."""
-ROS_FREE = ("evolution", "recording", "viewing", "cluster", "studies", "adaptation")
+WINGS = evolution_manager.WINGS
+ROS_FREE = tuple(wing for wing in WINGS if wing != "graph")  # graph: the one wing that imports rclpy
 
 
 def _module_name(path: Path, root: Path) -> str:

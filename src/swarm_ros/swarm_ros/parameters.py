@@ -25,7 +25,7 @@ import textwrap
 from collections.abc import Callable, Collection, Mapping, Sequence
 from itertools import pairwise
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import rclpy
 import yaml
@@ -35,7 +35,10 @@ from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-T = TypeVar("T")
+if TYPE_CHECKING:  # typeshed's name for "an instance of any dataclass" (no runtime counterpart)
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 N = TypeVar("N", bound=Node)
 
 EXIT_BAD_PARAMETER = 2
@@ -122,8 +125,9 @@ def attribute_docs(cls: type) -> dict[str, str]:
     except (OSError, TypeError):  # no source (a frozen executable): descriptions stay empty
         return {}
     docs: dict[str, str] = {}
-    body = tree.body[0].body  # type: ignore[attr-defined]
-    for statement, following in pairwise(body):
+    if not tree.body or not isinstance(tree.body[0], ast.ClassDef):
+        return docs
+    for statement, following in pairwise(tree.body[0].body):
         if (
             isinstance(statement, ast.AnnAssign)
             and isinstance(statement.target, ast.Name)
@@ -166,7 +170,7 @@ def declare_dataclass(
     docs = attribute_docs(type(defaults))
     ranges = ranges or {}
     values: dict[str, Any] = {}
-    for field in dataclasses.fields(defaults):  # type: ignore[arg-type]
+    for field in dataclasses.fields(defaults):
         default = getattr(defaults, field.name)
         is_tuple = isinstance(default, tuple)
         integer = isinstance(default, int) and not isinstance(default, bool)
@@ -182,7 +186,7 @@ def declare_dataclass(
             ),
         )
         values[field.name] = tuple(value) if is_tuple else value
-    return dataclasses.replace(defaults, **values)  # type: ignore[type-var]
+    return dataclasses.replace(defaults, **values)
 
 
 def field_names(cls: type) -> frozenset[str]:

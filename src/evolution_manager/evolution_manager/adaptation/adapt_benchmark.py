@@ -216,7 +216,7 @@ def benchmark(args: argparse.Namespace) -> dict:
                 add_run(condition, f"{algorithm}-scratch", "", seed, trees, fitness)
             for r, (name, candidates) in enumerate(repertoires.items()):
                 top = max(candidates, key=lambda c: c.prior)
-                value = evaluate([top.tree])[0].fitness[k]  # type: ignore[index]  # a repertoire tree evaluates
+                value = evaluate([top.tree])[0].objective(k)
                 add_run(condition, "unchanged", name, seed, [top.tree], [value])
                 ite = IntelligentTrialAndError(candidates, args.budget, ITEParameters(stop_fraction=None))
                 run_picker(ite, evaluate, args.objective)

@@ -27,6 +27,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -39,6 +40,9 @@ from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
 from evolution_manager.files import read_json_object
+
+if TYPE_CHECKING:  # the simulator (numba) is imported when a trial is evaluated
+    from swarm_sim.evaluation import Evaluator
 
 
 class AdaptationError(EvolutionError, ValueError):
@@ -268,7 +272,7 @@ class ConditionEvaluation:
     one exact fitness and a tree seen before is not simulated again) through any evaluator of the contract
     (``swarm_sim.evaluation.BatchEvaluator`` built with the condition's config, or the node graph)."""
 
-    def __init__(self, evaluator: object, seed: int, trials: int = 10) -> None:
+    def __init__(self, evaluator: Evaluator, seed: int, trials: int = 10) -> None:
         self.evaluator = evaluator
         self.seed = seed
         self.trials = trials
@@ -281,7 +285,7 @@ class ConditionEvaluation:
         new = [t for t in dict.fromkeys(trees) if t not in self._cache]
         if new:
             requests = [EvaluationRequest(t, self.seed, self.trials) for t in new]
-            results = self.evaluator.evaluate(requests)  # type: ignore[attr-defined]  # an Evaluator
+            results = self.evaluator.evaluate(requests)
             self.simulated += len(new)
             for tree, result in zip(new, results, strict=True):
                 outcome = as_outcome(result)
@@ -329,7 +333,7 @@ def reevolve(
         batch = asked[: budget - len(trees)]
         outcomes = evaluate(batch)
         trees.extend(batch)
-        fitness.extend(o.fitness[k] for o in outcomes)  # type: ignore[index]  # None only for a failed evaluation
+        fitness.extend(o.objective(k) for o in outcomes)
         if len(batch) < len(asked):
             break
         search.tell(outcomes)

@@ -23,7 +23,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from bt_controller.validate import integer
-from evolution_manager.errors import AskTellError, ConfigError
+from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.archive import Entry, Repertoire
 from evolution_manager.evolution.deap_trees import (
     OBJECTIVES,
@@ -58,6 +58,13 @@ class Outcome:
         if self.error is None and self.fitness is not None and self.descriptors is not None:
             return self.fitness, self.descriptors
         return None
+
+    def objective(self, k: int) -> float:
+        """Objective ``k`` of a successful evaluation (``EvolutionError`` for a failed one)."""
+        measured = self.measured()
+        if measured is None:
+            raise EvolutionError(f"a failed evaluation has no fitness: {self.error}")
+        return measured[0][k]
 
 
 def as_outcome(result: object) -> Outcome:

@@ -174,20 +174,11 @@ class ServiceEvaluator:
     def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
         """Evaluate every request over the services; results in request order (see ``Evaluator``)."""
         self.calls += 1
-        results: list[EvaluationResult | None] = [None] * len(requests)
-        sendable = []
-        for index, request in enumerate(requests):
-            problem = _check(request)
-            if problem:
-                results[index] = failed(problem)
-            else:
-                sendable.append(index)
+        problems = [_check(request) for request in requests]
+        sendable = [index for index, problem in enumerate(problems) if not problem]
         self._requests = [requests[i] for i in sendable]
-        if self._requests:
-            dispatched = self._dispatch()
-            for index, result in zip(sendable, dispatched, strict=True):
-                results[index] = result
-        return results  # type: ignore[return-value]  # every slot was filled above, none is left None
+        answered = dict(zip(sendable, self._dispatch(), strict=True)) if self._requests else {}
+        return [failed(problem) if problem else answered[i] for i, problem in enumerate(problems)]
 
     def _dispatch(self) -> list[EvaluationResult]:
         dispatcher = self.dispatcher

@@ -52,6 +52,7 @@ class Graph:
         self.log_dir = log_dir
         self.processes: dict[str, subprocess.Popen] = {}
         self._logs: list[IO[str]] = []
+        self._log_paths: dict[str, Path] = {}
 
     def __enter__(self) -> Graph:
         return self
@@ -91,7 +92,8 @@ class Graph:
         env = domain_environment(self.domain)
         if self.log_dir is not None:
             self.log_dir.mkdir(parents=True, exist_ok=True)
-            output = (self.log_dir / f"{name.replace('/', '_')}.log").open("w")
+            self._log_paths[name] = self.log_dir / f"{name.replace('/', '_')}.log"
+            output = self._log_paths[name].open("w")
             self._logs.append(output)
             env["ROS_LOG_DIR"] = str(self.log_dir / "ros")
         process = subprocess.Popen(
@@ -115,13 +117,25 @@ class Graph:
         process.wait()
 
     def check(self) -> None:
-        """Raise ``GraphError`` naming every process that has exited."""
+        """Raise ``GraphError`` naming every process that has exited, each with the last line of its log (a
+        node that refuses its parameters says why in one line)."""
         dead = [
-            f"{name} (exit code {p.returncode})" for name, p in self.processes.items() if p.poll() is not None
+            f"{name} (exit code {p.returncode}{self._last_words(name)})"
+            for name, p in self.processes.items()
+            if p.poll() is not None
         ]
         if dead:
             where = f"; see the logs in {self.log_dir}" if self.log_dir else ""
             raise GraphError(f"node process(es) exited: {', '.join(dead)}{where}")
+
+    def _last_words(self, name: str) -> str:
+        """``: <the last line of the process's log>``, or nothing when it has no log or an empty one."""
+        path = self._log_paths.get(name)
+        try:
+            lines = path.read_text(errors="replace").strip().splitlines() if path else []
+        except OSError:
+            return ""
+        return f": {lines[-1].strip()}" if lines else ""
 
     def kill(self, name: str) -> None:
         """Kill one process with SIGKILL (for fault-injection tests) and forget it."""

@@ -4,8 +4,12 @@
 
 GP_o and QD_o run once per objective and run index with ``--evaluations``; GP_fnd runs once per run index
 on all three objectives with three times the budget (the paper's 75,000 against 25,000). Run ``r`` of a
-configuration gets a seed derived from ``--seed``, the configuration and ``r``, and (unless
-``--scenario-seed`` gives one for every run) a scenario seed derived from its run seed. Each run is an
+configuration gets a seed derived from ``--seed``, the configuration and ``r``.
+
+Under fixed scenarios the ``--design`` says which scenario each run is evaluated on. ``shared`` (the
+default, the authors' design: their seeds never change between runs): one scenario seed for every run and
+every evaluation of the experiment, ``--scenario-seed`` or one derived from ``--seed``. ``per-run``: each run
+its own scenario seed, derived from its run seed. Each run is an
 ordinary run directory under ``DIR/runs/<label>/run<r>``; starting the same command again continues
 unfinished runs from their checkpoints and leaves finished ones alone. ``experiment.json`` records the
 plan, ``sessions.json`` the wall time and commit of every session that ran something, ``runs.csv`` one row
@@ -30,7 +34,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import Manager, get_context
 from pathlib import Path
 
-from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, derive_seed
+from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
 from evolution_manager.arguments import (
     EXIT_INTERRUPTED,
     EXIT_IO,
@@ -48,6 +52,13 @@ from evolution_manager.files import read_json, read_json_object, write_json
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
+DESIGNS = ("shared", "per-run")
+"""Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
+
+
+def shared_scenario_seed(seed: int) -> int:
+    """The scenario seed every run of an experiment of seed ``seed`` shares under the ``shared`` design."""
+    return derive_seed(seed, RUN_SCENARIO)
 
 
 def plan(
@@ -58,8 +69,16 @@ def plan(
     scenarios: str = "fixed",
     scenario_seed: int | None = None,
     profile: str | None = None,
+    design: str = "shared",
 ) -> list[tuple[RunConfig, str]]:
-    """Every run of the experiment with its directory relative to the experiment's folder."""
+    """Every run of the experiment with its directory relative to the experiment's folder. ``design``
+    (``DESIGNS``) says whether the runs share one scenario (``scenario_seed``, or derived from ``seed``)."""
+    if design not in DESIGNS:
+        raise UsageError(f"--design must be one of {', '.join(DESIGNS)}, got {design!r}")
+    if design == "per-run" and scenario_seed is not None:
+        raise UsageError("--scenario-seed gives every run the same scenario: that is --design shared")
+    if design == "shared" and scenarios == "fixed" and scenario_seed is None:
+        scenario_seed = shared_scenario_seed(seed)
     planned = []
     for a, algorithm in enumerate(ALGORITHMS):
         objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else OBJECTIVES
@@ -194,6 +213,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--trials", type=positive_int, default=10, help="trials per evaluation (default 10)")
     add_scenario_options(parser)
     parser.add_argument(
+        "--design",
+        choices=DESIGNS,
+        default="shared",
+        help="under fixed scenarios: shared, every run on one scenario (the authors' design, default), or "
+        "per-run, each run on its own; in experiment.json",
+    )
+    parser.add_argument(
         "--processes", type=positive_int, default=os.cpu_count() or 1, help="runs at once (default: cores)"
     )
     parser.add_argument(
@@ -220,9 +246,18 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if args.scenario_seed is not None and not 0 <= args.scenario_seed <= MAX_SEED:
             raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {args.scenario_seed}")
         scenarios = args.scenarios or "fixed"
+        design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
         planned = plan(
-            args.runs, args.evaluations, args.seed, args.trials, scenarios, args.scenario_seed, args.profile
+            args.runs,
+            args.evaluations,
+            args.seed,
+            args.trials,
+            scenarios,
+            args.scenario_seed,
+            args.profile,
+            design or "per-run",
         )
+        shared = {config.scenario_seed for config, _ in planned}
         document = {
             "profile": planned[0][0].profile,
             "runs": args.runs,
@@ -230,7 +265,8 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             "seed": args.seed,
             "trials": args.trials,
             "scenarios": scenarios,
-            "scenario_seed": args.scenario_seed,
+            "design": design,
+            "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
             "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
         }
         plan_path = args.out / PLAN_FILE

@@ -106,6 +106,30 @@ def load_runs(root: Path) -> list[FinishedRun]:
     return runs
 
 
+def runs_from_csv(path: Path) -> list[FinishedRun]:
+    """The runs of an experiment's ``runs.csv`` (one row per run and objective), for the statistics of
+    table 6 when the run directories are not at hand (e.g. a committed robustness check)."""
+    text = Path(path).read_text()
+    rows = list(csv.DictReader(io.StringIO(text)))
+    if not rows or list(rows[0]) != RUNS_HEADER:
+        raise EvolutionError(f"{path} is not a runs.csv (expected the columns {', '.join(RUNS_HEADER)})")
+    grouped: dict[tuple[str, str], dict] = {}
+    for row in rows:
+        label = row["algorithm"]
+        algorithm = "gp-fnd" if label == "GP_fnd" else ("gp" if label.startswith("GP_") else "qd")
+        key = (label, row["seed"])
+        run = grouped.setdefault(key, {"algorithm": algorithm, "objectives": {}})
+        run["objectives"][row["objective"]] = {
+            name: None if row[name] == "" else float(row[name]) for name in RUNS_HEADER[3:]
+        }
+    runs = []
+    for index, ((label, seed), run) in enumerate(grouped.items()):
+        objective = None if run["algorithm"] == "gp-fnd" else label.split("_", 1)[1]
+        summary = {"config": {"seed": int(seed)}, "objectives": run["objectives"]}
+        runs.append(FinishedRun(run["algorithm"], objective, index, Path(path).parent, summary))
+    return runs
+
+
 def _labels(objective: str) -> list[str]:
     return [f"GP_{objective}", "GP_fnd", f"QD_{objective}"]
 
@@ -277,19 +301,29 @@ def _header(root: Path, runs: Sequence[FinishedRun]) -> list[str]:
     assert isinstance(document, dict)
     scenarios = document.get("scenarios", "fresh")
     profile = document.get("profile", DEFAULT_PROFILE)  # experiments planned before profiles: the default
+    # experiments planned before designs existed gave each run its own scenario unless one was given
+    design = document.get("design") or ("per-run" if document.get("scenario_seed") is None else "shared")
+    where = (
+        f"every run on one shared scenario (scenario seed {document['scenario_seed']}, the authors' design)"
+        if design == "shared"
+        else "each run on its own scenario (the per-run design)"
+    )
     parts.append(
         f"{len(runs)} finished runs of {len(document['plan'])} planned: "
         f"{document['runs']} runs per algorithm and objective, a budget of {document['evaluations']} "
         f"individuals produced per objective (GP_fnd {3 * document['evaluations']} on all three), "
-        f"{document['trials']} trials per evaluation, {scenarios} scenarios, the model's `{profile}` profile "
-        f"(docs/model.md), experiment seed {document['seed']}.\n"
+        f"{document['trials']} trials per evaluation, {scenarios} scenarios"
+        + (f", {where}" if scenarios == "fixed" else "")
+        + f", the model's `{profile}` profile (docs/model.md), experiment seed {document['seed']}.\n"
     )
     command = (
         f"ws/run evolution_manager experiment --runs {document['runs']} --evaluations "
         f"{document['evaluations']} --seed {document['seed']} --trials {document['trials']} "
         f"--scenarios {scenarios} --profile {profile}"
     )
-    if document.get("scenario_seed") is not None:
+    if scenarios == "fixed":
+        command += f" --design {design}"
+    if document.get("scenario_seed") is not None and document.get("design") != "shared":
         command += f" --scenario-seed {document['scenario_seed']}"
     lines = [f"- Reproduce: `{command} --out {root.name}`"]
     sessions_path = root / "sessions.json"
@@ -337,9 +371,10 @@ def _sizes_table(first: dict, runs: Sequence[FinishedRun]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def build_report(root: Path) -> Path:
+def build_report(root: Path, beside: Path | None = None, beside_title: str = "") -> Path:
     """Write ``report.md``, ``runs.csv`` and the figures for the experiment in ``root``; return the
-    report's path."""
+    report's path. ``beside``: another experiment's ``runs.csv`` whose table 6 is shown after this one's
+    (e.g. the per-run design's, as a robustness check), under ``beside_title``."""
     root = Path(root)
     runs = load_runs(root)
     if not runs:
@@ -372,6 +407,13 @@ def build_report(root: Path) -> Path:
         "(Holm over its 12 rows, not shown). Verdict: whether our uncorrected test at 0.05 reaches the "
         "paper's conclusion (significance, and GP_o the lower where significant).\n\n" + _table6(runs)
     )
+    if beside is not None:
+        other = runs_from_csv(beside)
+        parts.append(
+            f"### Table 6 again: {beside_title or beside}\n\n"
+            f"The same tests on the runs of [{beside.name}]({beside.name}) ({len(other)} runs), which differ "
+            "from the runs above only in how scenarios are given to runs.\n\n" + _table6(other)
+        )
     extra = _comparisons(runs, "extra")
     if extra:
         parts.append(
@@ -444,6 +486,12 @@ def report(argv: Sequence[str] | None = None) -> int:
     """Run ``report``; return the exit status."""
     parser = Parser(prog="report", description=__doc__.split("\n")[0])
     parser.add_argument("dir", type=Path, help="an experiment folder or a run directory")
+    parser.add_argument(
+        "--beside",
+        type=Path,
+        help="another experiment's runs.csv: its table 6 is shown after this one's (a robustness check)",
+    )
+    parser.add_argument("--beside-title", default="", help="what the --beside runs are (for the report)")
     try:
         args = parser.parse_args(argv)
     except UsageError as error:
@@ -451,7 +499,7 @@ def report(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     try:
         if (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
-            print(build_report(args.dir))
+            print(build_report(args.dir, args.beside, args.beside_title))
         elif (args.dir / "config.json").exists():
             for path in rebuild_run(args.dir):
                 print(path)
@@ -468,4 +516,4 @@ def main() -> None:
     sys.exit(report())
 
 
-__all__ = ["build_report", "load_runs", "rebuild_run", "report"]
+__all__ = ["build_report", "load_runs", "rebuild_run", "report", "runs_from_csv"]

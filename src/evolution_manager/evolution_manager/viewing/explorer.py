@@ -152,8 +152,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         bins: dict[str, list[dict]] = {}
         for item in document.get("items", []):
             tree = item["tree"]
-            if tree not in simplified:
-                simplified[tree] = to_text(simplify(parse(tree)))
+            if tree not in simplified:  # the repertoire file holds it (simplified when it was written)
+                simplified[tree] = item.get("simplified") or to_text(simplify(parse(tree)))
             entry = {
                 "tree": tree,
                 "simplified": simplified[tree],

@@ -54,6 +54,7 @@ from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
 from swarm_ros.names import robot_namespaces
+from swarm_ros.parameters import read_parameter_file
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
@@ -263,12 +264,27 @@ class TrialGraph:
         self.domain = domain
         self.namespace = graph_namespace(namespace)
         self.params_file = params_file
+        if params_file is not None:
+            self._check_params_file(params_file)
         self.log_dir = log_dir
         self._stack = contextlib.ExitStack()
         self.runner: TrialRunner | None = None
         self.graph: Graph | None = None
         self.trials_run = 0
         self._temporary_logs: Path | None = None
+
+    def _check_params_file(self, path: Path) -> None:
+        """Refuse, before any node starts, a parameter file that cannot be read or whose robot count is not
+        the graph's: the graph starts one controller per robot and gives the simulator ``n_robots`` on its
+        command line, which would silently win over the file's. The nodes check every other value."""
+        simulator = f"{self.namespace}/simulator"
+        for section in read_parameter_file(path):
+            count = section.parameters.get("n_robots")
+            if count is not None and section.names(simulator) and count != self.robots:
+                raise ValueError(
+                    f"--params-file {path}: n_robots {count!r} differs from this trial's {self.robots} "
+                    "robots; leave n_robots out of the file (the trial sets it: the condition robots=N)"
+                )
 
     def __enter__(self) -> TrialGraph:
         stack = self._stack.__enter__()
