@@ -3,13 +3,16 @@
     bt check TREE_OR_FILE                  parse; print the canonical text, size and depth
     bt show TREE_OR_FILE [--format F]      print the tree (text view by default) or draw it (--output)
     bt export TREE_OR_FILE --output PATH   write the tree in a format (default: from PATH's suffix)
-    bt simplify TREE_OR_FILE               print the simplified tree: one line of tree text (it pipes)
+    bt simplify TREE_OR_FILE               print the simplified tree: one line of tree text (it pipes);
+                                           --keep-positions: no probabilistic node moves (no prob@K added)
 
 TREE_OR_FILE is tree text such as "sel(seq(in_nest, stop), forward)", a file holding tree text or
 BehaviorTree.CPP XML (recognised by a leading '<'), or '-' for standard input. Formats: text (a view with
 branch lines), tree (the canonical one-line text), xml (BehaviorTree.CPP v4), dot (Graphviz), svg, png.
-A simplified tree drives the wheels exactly as the tree does, tick for tick (bt_controller.simplify).
-Bad input gives one line on standard error and exit status 2.
+A simplified tree drives the wheels exactly as the tree does, tick for tick (bt_controller.simplify); a
+probabilistic node it moves keeps its draw with an explicit key, prob@K. Any depth --max-depth allows is
+handled; simplify takes at most 2000 nodes, and a PNG what matplotlib can hold. Bad input gives one line on
+standard error and exit status 2.
 """
 
 from __future__ import annotations
@@ -104,6 +107,12 @@ def build_parser() -> argparse.ArgumentParser:
         if name in ("show", "export"):
             sub.add_argument("--format", "-f", choices=FORMATS, help="output format")
             sub.add_argument("--output", "-o", required=name == "export", help="output file ('-': stdout)")
+        if name == "simplify":
+            sub.add_argument(
+                "--keep-positions",
+                action="store_true",
+                help="only rewrites that leave every prob at its pre-order index (no prob@K is added)",
+            )
         sub.add_argument("--max-nodes", type=int, default=MAX_NODES, help=f"node limit (default {MAX_NODES})")
         sub.add_argument(
             "--max-depth", type=int, default=MAX_DEPTH, help=f"depth limit (default {MAX_DEPTH})"
@@ -116,18 +125,25 @@ def run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     if args.max_nodes < 1 or args.max_depth < 0:
         raise UsageError("--max-nodes must be at least 1 and --max-depth at least 0")
-    tree, _ = _load(args.tree, args.max_nodes, args.max_depth)
+    tree, label = _load(args.tree, args.max_nodes, args.max_depth)
     if args.command == "check":
         print(f"ok: {tree.size} nodes, depth {tree.depth}: {to_text(tree)}")
         return 0
     if args.command == "simplify":
-        print(to_text(simplify(tree)))
+        try:
+            simple = simplify(tree, keep_positions=args.keep_positions)
+        except TreeError as error:  # a tree too large to simplify
+            raise UsageError(f"{label}: {error}") from None
+        print(to_text(simple))
         return 0
     fmt = args.format
     if fmt is None:
         suffix = Path(args.output).suffix.lower() if args.output not in (None, "-") else ""
         fmt = _SUFFIX_FORMAT.get(suffix, "text" if args.command == "show" else "xml")
-    _emit(tree, fmt, args.output)
+    try:
+        _emit(tree, fmt, args.output)
+    except TreeError as error:  # a picture too large
+        raise UsageError(f"{label}: {error}") from None
     return 0
 
 

@@ -7,9 +7,11 @@ pre-order (root 0, indices local to the tree) to
 - ``arg`` int8: condition or action index, -1 for composites;
 - ``first`` int32: index into ``children`` of the node's first child (-1 for leaves);
 - ``nchild`` int8: number of children (0 for leaves);
-- ``children`` int32: the children of every composite, composite after composite in pre-order.
+- ``children`` int32: the children of every composite, composite after composite in pre-order;
+- ``draw`` int32: a probabilistic composite's draw key (``tree.draw_key_at``: its own ``prob@K`` or its
+  pre-order index), -1 for every other node.
 
-The five arrays travel together as a ``FlatTree`` and many trees as one ``PackedTrees`` (named tuples of
+The six arrays travel together as a ``FlatTree`` and many trees as one ``PackedTrees`` (named tuples of
 arrays, which numba passes to kernels whole); ``tree_at`` is the one place a pack is cut into trees.
 
 Per robot, ``memory`` is int8 with one entry per node (see ``semantics``). ``tick`` is an ``njit`` function
@@ -32,14 +34,21 @@ from numba.extending import intrinsic
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.draws import choose, derive
-from bt_controller.errors import TreeLimitError
 from bt_controller.timeline import PAPER
-from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.tree import (
+    MAX_TICK_DEPTH,
+    Action,
+    Composite,
+    Condition,
+    Node,
+    check_tick_depth,
+    draw_key_at,
+)
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, FAILURE, RUNNING, SUCCESS
 
 OP_SEQ, OP_SEL, OP_PROB, OP_CONDITION, OP_ACTION = 0, 1, 2, 3, 4
 N_COUNTS = 1 + len(ACTIONS)
-MAX_COMPILED_DEPTH = 63
+MAX_COMPILED_DEPTH = MAX_TICK_DEPTH
 """Deepest tree ``flatten`` accepts (the tick's ancestor stack has MAX_COMPILED_DEPTH + 1 slots)."""
 _STACK_SLOTS = MAX_COMPILED_DEPTH + 1
 
@@ -52,6 +61,7 @@ class FlatTree(NamedTuple):
     first: np.ndarray
     nchild: np.ndarray
     children: np.ndarray
+    draw: np.ndarray
 
     @property
     def n_nodes(self) -> int:
@@ -61,21 +71,21 @@ class FlatTree(NamedTuple):
 
 def flatten(tree: Node) -> FlatTree:
     """Flatten ``tree`` to the contract's arrays; raise TreeLimitError if deeper than MAX_COMPILED_DEPTH."""
-    if tree.depth > MAX_COMPILED_DEPTH:
-        raise TreeLimitError(
-            f"tree has depth {tree.depth}; the compiled interpreter takes {MAX_COMPILED_DEPTH}"
-        )
+    check_tick_depth(tree, "compiled interpreter")
     nodes = list(tree.preorder())
     op = np.empty(len(nodes), np.int8)
     arg = np.full(len(nodes), -1, np.int8)
     first = np.full(len(nodes), -1, np.int32)
     nchild = np.zeros(len(nodes), np.int8)
+    draw = np.full(len(nodes), -1, np.int32)
     children: list[int] = []  # composite after composite, in pre-order
     for index, node in enumerate(nodes):
         if isinstance(node, Composite):
             op[index] = COMPOSITES.index(node.kind)
             first[index] = len(children)
             nchild[index] = len(node.children)
+            if node.kind == "prob":
+                draw[index] = draw_key_at(node, index)
             child = index + 1  # the first child follows its parent in pre-order ...
             for sibling in node.children:
                 children.append(child)
@@ -86,7 +96,7 @@ def flatten(tree: Node) -> FlatTree:
             op[index], arg[index] = OP_ACTION, node.index
         else:
             raise TypeError(f"not a tree node: {type(node).__name__}")
-    return FlatTree(op, arg, first, nchild, np.asarray(children, np.int32))
+    return FlatTree(op, arg, first, nchild, np.asarray(children, np.int32), draw)
 
 
 class PackedTrees(NamedTuple):
@@ -99,6 +109,7 @@ class PackedTrees(NamedTuple):
     first: np.ndarray
     nchild: np.ndarray
     children: np.ndarray
+    draw: np.ndarray
     node_offset: np.ndarray
     child_offset: np.ndarray
 
@@ -135,6 +146,7 @@ def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
         cat("first", np.int32),
         cat("nchild", np.int8),
         cat("children", np.int32),
+        cat("draw", np.int32),
         node_offset,
         child_offset,
     )
@@ -161,7 +173,14 @@ def tree_at(trees: PackedTrees, t: int) -> FlatTree:
     """Views of tree ``t`` of a pack: the one place where a pack is cut into trees."""
     a, b = trees.node_offset[t], trees.node_offset[t + 1]
     c, d = trees.child_offset[t], trees.child_offset[t + 1]
-    return FlatTree(trees.op[a:b], trees.arg[a:b], trees.first[a:b], trees.nchild[a:b], trees.children[c:d])
+    return FlatTree(
+        trees.op[a:b],
+        trees.arg[a:b],
+        trees.first[a:b],
+        trees.nchild[a:b],
+        trees.children[c:d],
+        trees.draw[a:b],
+    )
 
 
 @numba.njit(cache=True)
@@ -197,7 +216,8 @@ def tick(
     of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
     Inlined into calling kernels (a call would cost more than the tick itself).
     """
-    op, arg, first, nchild, children = tree  # locals: a field read inside the loop would cost a refcount
+    # Locals: a field read inside the loop would cost a refcount.
+    op, arg, first, nchild, children, draw = tree
     slots: Any = _stack_slots(_STACK_SLOTS)  # type: ignore[call-arg]  # an intrinsic: numba passes the typing context
     stack = numba.carray(slots, _STACK_SLOTS)  # ancestors of ``node``
     depth = 0
@@ -208,7 +228,7 @@ def tick(
         while kind <= OP_PROB:
             position = memory[node]
             if position < 0:
-                position = choose(derive(key, tick_index), node, nchild[node]) if kind == OP_PROB else 0
+                position = choose(derive(key, tick_index), draw[node], nchild[node]) if kind == OP_PROB else 0
                 memory[node] = position
             stack[depth] = node
             depth += 1

@@ -3,21 +3,35 @@
 BehaviorTree.CPP mapping. ``seq`` is BT.CPP's built-in ``Sequence`` and ``sel`` its ``Fallback``: in BT.CPP
 v4 both resume at a RUNNING child and start again from the first child once they finish, which is our memory
 semantics (``SequenceWithMemory`` would not restart after a failure, and the ``Reactive*`` nodes re-tick
-earlier children). ``prob`` is our control node ``Probabilistic``; conditions and actions are leaves named
-as in the text format. The ``TreeNodesModel`` declares ``Probabilistic`` and every condition and action, so
-Groot2 opens the file without complaints. Import reads what export writes (compact ``<on_food/>`` or explicit
-``<Condition ID="on_food"/>`` forms) with defusedxml, never following entities or external references.
+earlier children). ``prob`` is our control node ``Probabilistic``, and a draw key (``prob@7``) its attribute
+``draw_key="7"``; conditions and actions are leaves named as in the text format. The ``TreeNodesModel``
+declares ``Probabilistic`` (with its ``draw_key`` input port when the tree uses one, so that the documents of
+trees without keys are as before) and every condition and action, so Groot2 opens the file without complaints.
+Import reads what export writes (compact ``<on_food/>`` or explicit ``<Condition ID="on_food"/>`` forms; an
+empty ``draw_key=""`` means no key) with defusedxml, never following entities or external references.
+
+Every conversion here is iterative (the XML is written line by line, not by ElementTree's recursive
+serialiser), so trees of any depth the parser accepts convert.
 """
 
 from __future__ import annotations
 
-from xml.etree.ElementTree import Comment, Element, ParseError, SubElement, indent, tostring
+from xml.etree.ElementTree import Element, ParseError
 
 import defusedxml.ElementTree as SafeET
 from defusedxml import DefusedXmlException
 
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Action, Composite, Condition, Node, leaf_name
+from bt_controller.tree import (
+    MAX_DEPTH,
+    MAX_DRAW_KEY,
+    MAX_NODES,
+    Action,
+    Composite,
+    Condition,
+    Node,
+    leaf_name,
+)
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
 
 BTCPP_CONTROL = {"seq": "Sequence", "sel": "Fallback", "prob": "Probabilistic"}
@@ -27,6 +41,9 @@ PROBABILISTIC_DESCRIPTION = (
     "Probabilistic composite with memory: with no remembered child it ticks one child chosen uniformly at "
     "random; a RUNNING child is remembered and ticked again next time; otherwise returns the child's status."
 )
+DRAW_KEY_DESCRIPTION = "prob@K draws its child with K instead of its pre-order index (docs/interfaces.md)."
+DRAW_KEY_ATTRIBUTE = "draw_key"
+"""The attribute of a ``Probabilistic`` element that holds its draw key."""
 MAX_XML_CHARS = 10_000_000
 """Longest XML document ``from_xml`` reads."""
 
@@ -34,27 +51,55 @@ MAX_XML_CHARS = 10_000_000
 # ---------------------------------------------------------------------------------------------- XML
 
 
+def _attribute(value: str) -> str:
+    """An attribute value quoted as ElementTree writes it."""
+    for raw, escaped in (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;"), ("\r", "&#13;"),
+                         ("\n", "&#10;"), ("\t", "&#09;")):  # fmt: skip
+        value = value.replace(raw, escaped)
+    return f'"{value}"'
+
+
 def to_xml(tree: Node, tree_id: str = "MainTree") -> str:
-    """The tree as a BehaviorTree.CPP v4 XML document, with a TreeNodesModel for Groot2."""
-    root = Element("root", {"BTCPP_format": "4", "main_tree_to_execute": tree_id})
-    behavior_tree = SubElement(root, "BehaviorTree", {"ID": tree_id})
-    stack: list[tuple[Node, Element]] = [(tree, behavior_tree)]
+    """The tree as a BehaviorTree.CPP v4 XML document, with a TreeNodesModel for Groot2.
+
+    Written line by line (two spaces per level, ``<leaf />``), byte for byte what ElementTree's ``indent`` and
+    ``tostring`` wrote before, without their recursion."""
+    lines = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<root BTCPP_format="4" main_tree_to_execute={_attribute(tree_id)}>',
+        f"  <BehaviorTree ID={_attribute(tree_id)}>",
+    ]
+    keyed = False
+    stack: list[tuple[Node | str, int]] = [(tree, 2)]  # a node, or a closing tag, with its level
     while stack:
-        node, parent = stack.pop()
-        if isinstance(node, Composite):
-            element = SubElement(parent, BTCPP_CONTROL[node.kind])
-            stack.extend((child, element) for child in reversed(node.children))
+        item, level = stack.pop()
+        pad = "  " * level
+        if isinstance(item, str):
+            lines.append(f"{pad}</{item}>")
+        elif isinstance(item, Composite):
+            tag = BTCPP_CONTROL[item.kind]
+            if item.draw_key is None:
+                lines.append(f"{pad}<{tag}>")
+            else:
+                keyed = True
+                lines.append(f'{pad}<{tag} {DRAW_KEY_ATTRIBUTE}="{item.draw_key}">')
+            stack.append((tag, level))
+            stack.extend((child, level + 1) for child in reversed(item.children))
         else:
-            SubElement(parent, leaf_name(node))
-    model = SubElement(root, "TreeNodesModel")
-    model.append(Comment(f" {PROBABILISTIC_DESCRIPTION} "))
-    SubElement(model, "Control", {"ID": "Probabilistic"})
-    for name in CONDITIONS:
-        SubElement(model, "Condition", {"ID": name})
-    for name in ACTIONS:
-        SubElement(model, "Action", {"ID": name})
-    indent(root, space="  ")
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
+            lines.append(f"{pad}<{leaf_name(item)} />")
+    lines += ["  </BehaviorTree>", "  <TreeNodesModel>", f"    <!-- {PROBABILISTIC_DESCRIPTION} -->"]
+    if keyed:
+        lines += [
+            '    <Control ID="Probabilistic">',
+            f'      <input_port name="{DRAW_KEY_ATTRIBUTE}" type="int">{DRAW_KEY_DESCRIPTION}</input_port>',
+            "    </Control>",
+        ]
+    else:
+        lines.append('    <Control ID="Probabilistic" />')
+    lines += [f'    <Condition ID="{name}" />' for name in CONDITIONS]
+    lines += [f'    <Action ID="{name}" />' for name in ACTIONS]
+    lines += ["  </TreeNodesModel>", "</root>"]
+    return "\n".join(lines) + "\n"
 
 
 def _known_xml_names() -> str:
@@ -128,6 +173,8 @@ def _element_to_tree(top: Element, max_nodes: int, max_depth: int) -> Node:
         if tag in _KIND_OF_CONTROL:
             stack.append((element, path, []))
             return None
+        if (element.get(DRAW_KEY_ATTRIBUTE) or "").strip():
+            raise TreeSyntaxError(f"{DRAW_KEY_ATTRIBUTE} at {path}: only Probabilistic takes a draw key")
         if tag in CONDITIONS or tag in ACTIONS:
             if len(element):
                 raise TreeSyntaxError(f"{tag} is a leaf and takes no children (at {path})")
@@ -151,18 +198,42 @@ def _element_to_tree(top: Element, max_nodes: int, max_depth: int) -> Node:
             continue
         stack.pop()
         tag = element.tag if element.tag != "Control" else element.get("ID", "")
-        node = Composite(_KIND_OF_CONTROL[tag], tuple(done))
+        node = Composite(_KIND_OF_CONTROL[tag], tuple(done), _draw_key(element, tag, path))
     assert node is not None
     return node
 
 
+def _draw_key(element: Element, tag: str, path: str) -> int | None:
+    """The draw key of a control element (None when it has none); raise TreeSyntaxError for a bad one."""
+    value = (element.get(DRAW_KEY_ATTRIBUTE) or "").strip()
+    if not value:
+        return None
+    if tag != "Probabilistic":
+        raise TreeSyntaxError(f"{DRAW_KEY_ATTRIBUTE} at {path}: only Probabilistic takes a draw key")
+    digits = value.lstrip("0") or "0"
+    if (
+        not value.isascii()
+        or not value.isdigit()
+        or len(digits) > len(str(MAX_DRAW_KEY))
+        or int(digits) > MAX_DRAW_KEY
+    ):
+        shown = value if len(value) <= 20 else value[:12] + "..."
+        raise TreeSyntaxError(
+            f"{DRAW_KEY_ATTRIBUTE}={shown!r} at {path}: expected an integer in [0, {MAX_DRAW_KEY}]"
+        )
+    return int(digits)
+
+
 # ---------------------------------------------------------------------------------------------- DOT
 
-_DOT_STYLE = {
-    "seq": 'shape=box, style="rounded,filled", fillcolor="#cfe2f3", label="seq →"',
-    "sel": 'shape=box, style="rounded,filled", fillcolor="#fce5cd", label="sel ?"',
-    "prob": 'shape=box, style="rounded,filled", fillcolor="#d9ead3", label="prob %"',
-}
+COMPOSITE_FILL = {"seq": "#cfe2f3", "sel": "#fce5cd", "prob": "#d9ead3"}
+"""The fill colour of each composite in drawings (DOT, ``render``)."""
+
+
+def composite_label(node: Composite) -> str:
+    """The label of a composite in drawings: ``seq →``, ``sel ?``, ``prob %``, and ``prob % @7`` for a key."""
+    label = {"seq": "seq →", "sel": "sel ?", "prob": "prob %"}[node.kind]
+    return label if node.draw_key is None else f"{label} @{node.draw_key}"
 
 
 def to_dot(tree: Node, name: str = "behaviour_tree") -> str:
@@ -181,7 +252,10 @@ def to_dot(tree: Node, name: str = "behaviour_tree") -> str:
             edges.append(f"  n{parents[-1]} -> n{index};")
             remaining[-1] -= 1
         if isinstance(node, Composite):
-            lines.append(f"  n{index} [{_DOT_STYLE[node.kind]}];")
+            fill, label = COMPOSITE_FILL[node.kind], composite_label(node)
+            lines.append(
+                f'  n{index} [shape=box, style="rounded,filled", fillcolor="{fill}", label="{label}"];'
+            )
             parents.append(index)
             remaining.append(len(node.children))
         elif isinstance(node, Condition):
@@ -204,7 +278,7 @@ def to_ascii(tree: Node) -> str:
     while stack:
         node, lead, child_lead = stack.pop()
         if isinstance(node, Composite):
-            lines.append(f"{lead}{node.kind}")
+            lines.append(f"{lead}{node.head}")
             n = len(node.children)
             for i in reversed(range(n)):
                 last = i == n - 1

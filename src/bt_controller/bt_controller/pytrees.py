@@ -20,7 +20,7 @@ import py_trees
 
 from bt_controller.draws import choose, derive
 from bt_controller.timeline import PAPER
-from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.tree import Action, Composite, Condition, Node, check_tick_depth, draw_key_at
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, FAILURE, RUNNING, SUCCESS
 
 _STATUS = {py_trees.common.Status.SUCCESS: SUCCESS, py_trees.common.Status.FAILURE: FAILURE,
@@ -75,10 +75,11 @@ class Probabilistic(py_trees.composites.Composite):
     it runs; otherwise finish with its status."""
 
     def __init__(self, name: str, children: list[py_trees.behaviour.Behaviour], context: PyTreesContext,
-                 node_index: int, first_child: bool = False) -> None:  # fmt: skip
+                 draw_key: int, first_child: bool = False) -> None:  # fmt: skip
         super().__init__(name=name, children=children)
         self.context = context
-        self.node_index = node_index
+        self.draw_key = draw_key
+        """Its draw key (``tree.draw_key_at``: its own ``prob@K`` or its pre-order index)."""
         self.pending_first = first_child
         """Under ``paper`` the first child is child 0, not drawn (A3)."""
 
@@ -91,8 +92,8 @@ class Probabilistic(py_trees.composites.Composite):
             if self.pending_first:
                 self.current_child = self.children[0]
             else:
-                draw_key = np.uint64(derive(np.uint64(self.context.key), self.context.tick_index))
-                self.current_child = self.children[int(choose(draw_key, self.node_index, len(self.children)))]
+                tick_key = np.uint64(derive(np.uint64(self.context.key), self.context.tick_index))
+                self.current_child = self.children[int(choose(tick_key, self.draw_key, len(self.children)))]
         self.pending_first = False
         chosen = self.current_child
         assert chosen is not None, "a running probabilistic composite remembers its child"
@@ -105,7 +106,9 @@ class Probabilistic(py_trees.composites.Composite):
 
 
 def build(tree: Node, context: PyTreesContext, profile: int = PAPER) -> py_trees.behaviour.Behaviour:
-    """The py_trees behaviour tree of ``tree`` whose behaviours use ``context``, under ``profile``."""
+    """The py_trees behaviour tree of ``tree`` whose behaviours use ``context``, under ``profile``; trees
+    deeper than ``tree.MAX_TICK_DEPTH`` are refused (TreeLimitError: py_trees ticks recursively)."""
+    check_tick_depth(tree, "py_trees mapping")
     counter = 0
 
     def make(node: Node) -> py_trees.behaviour.Behaviour:
@@ -122,7 +125,9 @@ def build(tree: Node, context: PyTreesContext, profile: int = PAPER) -> py_trees
             return py_trees.composites.Sequence(name="seq", memory=True, children=children)
         if node.kind == "sel":
             return py_trees.composites.Selector(name="sel", memory=True, children=children)
-        return Probabilistic("prob", children, context, index, first_child=profile == PAPER)
+        return Probabilistic(
+            node.head, children, context, draw_key_at(node, index), first_child=profile == PAPER
+        )
 
     return make(tree)
 

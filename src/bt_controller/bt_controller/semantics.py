@@ -13,7 +13,8 @@ One tick (``tick``):
 - selector: the same with success and failure swapped.
 - probabilistic: its current child is remembered; under ``paper`` the first is child 0 (A3), under ``clean``
   none; with no remembered child, pick one uniformly at random with the counter-based draw
-  ``choose(derive(key, tick_index), node_index, n_children)`` (``docs/interfaces.md``); tick it; running is
+  ``choose(derive(key, tick_index), draw_key, n_children)`` (``docs/interfaces.md``), where ``draw_key`` is
+  the node's own key (``prob@K``) or else its pre-order index (``tree.draw_key_at``); tick it; running is
   remembered and returned; otherwise clear memory and return the child's status.
 - condition: success if its blackboard entry is true, else failure; counted in ``counts[0]``.
 - action: if it is not running, it starts (counted in ``counts[1 + action]``) and returns running; if it
@@ -36,7 +37,7 @@ import numpy as np
 
 from bt_controller.draws import choose, derive
 from bt_controller.timeline import PAPER
-from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.tree import Action, Composite, Condition, Node, check_tick_depth, draw_key_at
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, FAILURE, RUNNING, STOP, SUCCESS
 
 N_COUNTS = 1 + len(ACTIONS)
@@ -69,7 +70,9 @@ def tick(
 
     Returns ``(status, action)``: the root status and the index of the action started by this tick, or -1
     when none started. ``key`` is the robot's tree stream key, ``tick_index`` the 0-based tick in the trial.
+    Trees deeper than ``tree.MAX_TICK_DEPTH`` are refused (TreeLimitError): the tick recurses.
     """
+    check_tick_depth(tree, "reference interpreter")
     started = -1
 
     def run(node: Node, index: int) -> int:
@@ -91,7 +94,8 @@ def tick(
         if node.kind == "prob":
             position = memory[index]
             if position < 0:
-                position = int(choose(np.uint64(derive(np.uint64(key), tick_index)), index, n))
+                draw_key = draw_key_at(node, index)
+                position = int(choose(np.uint64(derive(np.uint64(key), tick_index)), draw_key, n))
             status = run(node.children[position], child_indices[position])
             memory[index] = position if status == RUNNING else -1
             return status
@@ -131,7 +135,7 @@ class ReferenceRobot:
     """One robot running a tree: its memory, counts, stream key and tick counter, ticked by ``step``."""
 
     def __init__(self, tree: Node, key: int, profile: int = PAPER) -> None:
-        self.tree = tree
+        self.tree = check_tick_depth(tree, "reference interpreter")
         self.key = int(key)
         self.memory = new_memory(tree, profile)
         self.counts = new_counts()

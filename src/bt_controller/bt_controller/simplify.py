@@ -16,8 +16,8 @@ Three facts about the memory semantics carry every proof below (``semantics`` mo
    failure, an action is "not running" after its success tick, and a child that returns running is resumed by
    its parent at the next tick of the parent, which itself returned running, up to the root. So between ticks
    every sequence, selector and action off the root's running path is in its initial state. (A probabilistic
-   node may keep a current child off the path; no rule moves, merges or copies one, except rule 6 which needs
-   prob-free children.)
+   node may keep a current child off the path; no rule merges or copies one, except rule 6 which needs
+   prob-free children; a rule may move one, see "Draw keys".)
 2. *A resumed node knows nothing of the blackboard.* A node ticked because its parent resumed at it follows
    no condition evaluated in the same tick; a node entered afresh follows its earlier siblings in the same
    tick (same blackboard), so what they established still holds ("knowledge", below).
@@ -30,12 +30,38 @@ the started action is that action when the status is running and none otherwise,
 action) keeps both readings. Rules keep that pair exactly, except at blind positions, where success and
 failure may swap.
 
-Probabilistic nodes draw their picks from ``choose(derive(key, tick), node_index, n_children)``
-(``bt_controller.draws``): the pick depends on the node's pre-order index and its number of children. So
-every probabilistic node that survives keeps its **pre-order index, its number of children and their
-order**; a rewrite that would shift a surviving probabilistic node (by removing or flattening anything before
-it in pre-order) is not made. Nodes after the last surviving probabilistic node, and probabilistic nodes that
-are removed whole (dead, or rule 5/6), are free.
+Draw keys. A probabilistic node picks its children with ``choose(derive(key, tick), k, n_children)``
+(``bt_controller.draws``), where ``k`` is its draw key (``tree.draw_key_at``: its own ``prob@k``, else its
+pre-order index): nothing else about its place in the tree enters its picks, and its memory is its own. So a
+rewrite may move a probabilistic node anywhere, as long as the node keeps its key, its number of children and
+their order, and is never copied or merged with another (no rule does either). The simplifier carries every
+node's original key along and writes ``prob@k`` where the node's new pre-order index is not ``k`` (plain
+``prob`` where it is), so the simplified tree makes exactly the original's picks. The keys of the result are
+the original's keys, so it shares a key between two nodes only where the original did. With
+``keep_positions=True`` it makes only the rewrites that leave every surviving probabilistic node at its
+pre-order index (the simplifier before draw keys existed; its result needs no key the original lacked).
+
+The rules (each a rewrite of one subtree ``n``; its proof in a comment at the rule in ``_rewrites``):
+
+1. *dead children*: a child of a sequence (selector) that is never entered afresh goes: it is never ticked.
+2. *flatten*: ``seq(a, seq(b, c), d)`` is ``seq(a, b, c, d)`` (at most 4 children): both remember the same
+   running child and finish alike.
+3. *neutral condition*: an action-free child that always succeeds in a sequence (fails in a selector) goes:
+   it only hands control on in the same tick.
+4. *blind tail*: the action-free last child of a composite at a blind position goes: it only chooses between
+   success and failure, which look alike there (fact 3).
+5. *blind condition subtree*: an action-free composite at a blind position becomes its first condition: it
+   shows the world nothing.
+6. *identical choices*: ``prob(T, T, ...)`` with every child the same probabilistic-free ``T`` becomes ``T``:
+   whichever is picked starts in the same state and behaves as ``T``.
+
+A composite left with one child becomes that child (same statuses, same memory). Every rule keeps what each
+subtree shows its parent on every tick, so it is sound wherever the subtree sits; the knowledge and blindness
+it relies on are facts about every run of the tree, which other rewrites keep (each keeps statuses), so rules
+can be applied one after the other until none applies. All passes are iterative (no recursion, whatever the
+depth), but each rewrite re-analyses the whole tree, so the work grows with the square of the size: trees of
+more than ``MAX_SIMPLIFY_NODES`` nodes are refused (TreeLimitError; a chain collapsing level by level at that
+size takes about a minute on one core, a random tree of that size a few seconds).
 
 Blackboard facts (``WORLD_FACTS``) hold in every profile: the two regions are disjoint (r < 500 mm against
 r >= 1000 mm), a direction is left or right but not both (``perception.is_left``/``is_right`` of one bearing;
@@ -45,12 +71,16 @@ inside a region there is no direction to it (the raw estimate is 0, no source: `
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from bt_controller.tree import Action, Composite, Condition, Node
+from bt_controller.errors import TreeLimitError
+from bt_controller.tree import MAX_NODES, Action, Composite, Condition, Node, draw_key_at
 from bt_controller.vocabulary import CONDITIONS
 
 S, F, R = "S", "F", "R"
+
+MAX_SIMPLIFY_NODES = 2 * MAX_NODES
+"""Largest tree ``simplify`` takes (twice the parser's default limit; module docstring)."""
 
 Literal = tuple[int, bool]
 """(condition index, value)."""
@@ -75,13 +105,14 @@ WORLD_FACTS: tuple[tuple[str, str], ...] = (
 
 @dataclass(eq=False)
 class _N:
-    """A node under rewriting: ``orig`` is its pre-order index in the original tree (probabilistic nodes
-    must end at the same index)."""
+    """A node under rewriting: ``orig`` is its pre-order index in the original tree and ``draw`` the draw key
+    of a probabilistic node (kept through every rewrite; -1 for other nodes)."""
 
     kind: str  # "seq", "sel", "prob", "cond" or "act"
     name: str
     children: list[_N]
     orig: int
+    draw: int = -1
     # analysis, recomputed after every rewrite
     status: frozenset[str] = frozenset()
     pure: bool = True  # ticks no action
@@ -92,32 +123,48 @@ class _N:
     post_f: frozenset[Literal] = frozenset()
     size: int = 1
     position: int = 0
-    key: str = field(default="")
+    shape: int = 0  # equal for equal subtrees (interned structure)
+    parent: _N | None = None
+    slot: int = 0  # index among the parent's children
 
 
 def _from_node(tree: Node) -> _N:
-    counter = 0
-
-    def build(node: Node) -> _N:
-        nonlocal counter
-        index = counter
-        counter += 1
+    nodes = list(tree.preorder())
+    out = []
+    for index, node in enumerate(nodes):
         if isinstance(node, Composite):
-            return _N(node.kind, node.kind, [build(c) for c in node.children], index)
-        if isinstance(node, Condition):
-            return _N("cond", node.name, [], index)
-        assert isinstance(node, Action)
-        return _N("act", node.name, [], index)
+            draw = draw_key_at(node, index) if node.kind == "prob" else -1
+            out.append(_N(node.kind, node.kind, [], index, draw))
+        elif isinstance(node, Condition):
+            out.append(_N("cond", node.name, [], index))
+        else:
+            assert isinstance(node, Action)
+            out.append(_N("act", node.name, [], index))
+    for index, node in enumerate(nodes):
+        if isinstance(node, Composite):
+            child = index + 1  # children follow their parent in pre-order, each after the previous subtree
+            for sibling in node.children:
+                out[index].children.append(out[child])
+                child += sibling.size
+    return out[0]
 
-    return build(tree)
 
-
-def _to_node(n: _N) -> Node:
-    if n.kind == "cond":
-        return Condition(n.name)
-    if n.kind == "act":
-        return Action(n.name)
-    return Composite(n.kind, tuple(_to_node(c) for c in n.children))
+def _to_node(root: _N) -> Node:
+    """The tree of ``root``; a probabilistic node names its draw key where its pre-order index differs."""
+    order = _walk(root)  # pre-order: a node's index is its new pre-order index
+    position = {id(n): i for i, n in enumerate(order)}
+    built: dict[int, Node] = {}
+    for n in reversed(order):  # children before parents
+        node: Node
+        if n.kind == "cond":
+            node = Condition(n.name)
+        elif n.kind == "act":
+            node = Action(n.name)
+        else:
+            key = n.draw if n.kind == "prob" and n.draw != position[id(n)] else None
+            node = Composite(n.kind, tuple(built.pop(id(c)) for c in n.children), key)
+        built[id(n)] = node
+    return built[id(root)]
 
 
 class _Facts:
@@ -137,20 +184,35 @@ def _join(a: Knowledge, b: frozenset[Literal]) -> Knowledge:
     return None if a is None else a | b
 
 
-def _analyse(root: _N, facts: _Facts) -> None:
-    """Fill in every node's statuses, purity, knowledge, blindness, post-conditions, size and position."""
-    position = 0
+@dataclass(eq=False)
+class _Visit:
+    """A composite being analysed: its next child, the children accounted for, and (sequence, selector) the
+    knowledge for its next child and the statuses gathered so far."""
 
-    def visit(n: _N, fresh: Knowledge, blind: bool) -> None:
+    n: _N
+    next: int = 0
+    done: int = 0
+    knowledge: Knowledge = None
+    status: frozenset[str] = frozenset()
+
+
+def _analyse(root: _N, facts: _Facts) -> None:
+    """Fill in every node's statuses, purity, knowledge, blindness, post-conditions, size, position, shape
+    and parent; one iterative pass (pre-order on the way down, children before parents on the way up)."""
+    position = 0
+    shapes: dict[tuple, int] = {}  # subtree structure -> a small integer, equal for equal subtrees
+
+    def enter(n: _N, fresh: Knowledge, blind: bool, parent: _N | None, slot: int) -> _Visit | None:
         nonlocal position
         n.position = position
         position += 1
         n.fresh = None if fresh is None else facts.close(fresh)
-        n.blind = blind
+        n.blind, n.parent, n.slot = blind, parent, slot
         if n.kind == "cond":
             c = _C[n.name]
             n.post_s, n.post_f = frozenset({(c, True)}), frozenset({(c, False)})
-            n.pure, n.has_prob, n.size, n.key = True, False, 1, n.name
+            n.pure, n.has_prob, n.size = True, False, 1
+            n.shape = shapes.setdefault(("cond", n.name), len(shapes))
             if n.fresh is None:
                 n.status = frozenset()
             elif (c, True) in n.fresh:
@@ -159,47 +221,70 @@ def _analyse(root: _N, facts: _Facts) -> None:
                 n.status = frozenset({F})
             else:
                 n.status = frozenset({S, F})
-            return
+            return None
         if n.kind == "act":
             # Entered afresh it starts and runs; resumed, it succeeds.
             n.status = frozenset() if n.fresh is None else frozenset({R, S})
-            n.pure, n.has_prob, n.size, n.key = n.fresh is None, False, 1, n.name
+            n.pure, n.has_prob, n.size = n.fresh is None, False, 1
+            n.shape = shapes.setdefault(("act", n.name), len(shapes))
             n.post_s = n.post_f = frozenset()
-            return
+            return None
+        return _Visit(n, knowledge=n.fresh)
+
+    def finish(visit: _Visit) -> None:
+        n = visit.n
         kids = n.children
         if n.kind == "prob":
-            for child in kids:
-                visit(child, n.fresh, blind)
             n.status = frozenset().union(*(c.status for c in kids))
             n.post_s = _meet([c.post_s for c in kids if S in c.status])
             n.post_f = _meet([c.post_f for c in kids if F in c.status])
         else:
             go_on, stop = (S, F) if n.kind == "seq" else (F, S)
-            knowledge: Knowledge = n.fresh
-            status: set[str] = set()
-            for i, child in enumerate(kids):
-                visit(child, knowledge, blind and i == len(kids) - 1)
-                if child.fresh is not None:
-                    status |= child.status & {stop, R}
-                # The next child is entered afresh only after this one returned ``go_on`` in the same tick;
-                # this one was then afresh (knowledge holds) or resumed (nothing known, fact 2).
-                if go_on not in child.status:
-                    knowledge = None
-                else:
-                    before = child.fresh if R not in child.status else frozenset()
-                    knowledge = _join(before, child.post_s if go_on == S else child.post_f)
+            status = visit.status
             if go_on in kids[-1].status:
-                status.add(go_on)
-            n.status = frozenset(status)
+                status = status | {go_on}
+            n.status = status
             chain = _chain([c.post_s if go_on == S else c.post_f for c in kids], kids)
             ends = _meet([c.post_f if go_on == S else c.post_s for c in kids if stop in c.status])
             n.post_s, n.post_f = (chain, ends) if go_on == S else (ends, chain)
         n.pure = all(c.pure for c in kids)
         n.has_prob = n.kind == "prob" or any(c.has_prob for c in kids)
         n.size = 1 + sum(c.size for c in kids)
-        n.key = n.kind + "(" + ", ".join(c.key for c in kids) + ")"
+        n.shape = shapes.setdefault((n.kind, n.draw, *(c.shape for c in kids)), len(shapes))
 
-    visit(root, frozenset(), True)
+    top = enter(root, frozenset(), True, None, 0)
+    stack = [top] if top is not None else []
+    while stack:
+        visit = stack[-1]
+        n = visit.n
+        kids = n.children
+        if visit.done < visit.next and n.kind != "prob":
+            # The child just analysed decides what the next one knows (sequence, selector).
+            child = kids[visit.done]
+            visit.done = visit.next
+            go_on, stop = (S, F) if n.kind == "seq" else (F, S)
+            if child.fresh is not None:
+                visit.status = visit.status | (child.status & {stop, R})
+            # The next child is entered afresh only after this one returned ``go_on`` in the same tick;
+            # this one was then afresh (knowledge holds) or resumed (nothing known, fact 2).
+            if go_on not in child.status:
+                visit.knowledge = None
+            else:
+                before = child.fresh if R not in child.status else frozenset()
+                visit.knowledge = _join(before, child.post_s if go_on == S else child.post_f)
+        if visit.next < len(kids):
+            i = visit.next
+            visit.next += 1
+            if n.kind == "prob":
+                fresh, blind = n.fresh, n.blind
+            else:
+                fresh, blind = visit.knowledge, n.blind and i == len(kids) - 1
+            inner = enter(kids[i], fresh, blind, n, i)
+            if inner is not None:
+                stack.append(inner)
+            continue
+        finish(visit)
+        stack.pop()
 
 
 def _meet(sets: list[frozenset[Literal]]) -> frozenset[Literal]:
@@ -261,7 +346,7 @@ def _rewrites(n: _N) -> list[tuple[int, str, _N]]:
     # Rule 6 (identical choices). prob(T, T, ...) with every child the same prob-free subtree: whichever
     # is picked, it is in its initial state when entered (fact 1: a prob-free subtree returns to it when
     # it finishes), so each behaves as T would; the picks no longer matter.
-    if n.kind == "prob" and not any(c.has_prob for c in kids) and len({c.key for c in kids}) == 1:
+    if n.kind == "prob" and not any(c.has_prob for c in kids) and len({c.shape for c in kids}) == 1:
         out.append((1, "identical choices", kids[0]))
     # Rule 5 (blind condition-only subtree). A composite that ticks no action at a blind position shows the
     # world nothing (fact 3 and no motors): its first condition does the same.
@@ -277,34 +362,29 @@ def _rebuild(n: _N, children: list[_N]) -> _N:
     """``n`` with ``children``; a composite of one child is that child (same statuses, same memory)."""
     if len(children) == 1:
         return children[0]
-    return _N(n.kind, n.name, children, n.orig)
+    return _N(n.kind, n.name, children, n.orig, n.draw)
 
 
 def _replace(root: _N, target: _N, replacement: _N) -> _N:
-    if root is target:
-        return replacement
-    if not root.children:
-        return root
-    new = [_replace(c, target, replacement) for c in root.children]
-    if all(a is b for a, b in zip(new, root.children, strict=True)):
-        return root
-    return _N(root.kind, root.name, new, root.orig)
+    """The tree ``root`` with ``target`` replaced: new nodes on the path up from ``target`` (parents as the
+    last analysis found them), every other subtree shared."""
+    node, new = target, replacement
+    while node.parent is not None:
+        parent = node.parent
+        children = list(parent.children)
+        children[node.slot] = new
+        node, new = parent, _N(parent.kind, parent.name, children, parent.orig, parent.draw)
+    assert node is root
+    return new
 
 
-def _keeps_draws(root: _N) -> bool:
+def _keeps_positions(root: _N) -> bool:
     """Every probabilistic node sits at its original pre-order index."""
-    position = 0
-    stack = [root]
-    while stack:
-        n = stack.pop()
-        if n.kind == "prob" and n.orig != position:
-            return False
-        position += 1
-        stack.extend(reversed(n.children))
-    return True
+    return all(n.kind != "prob" or n.orig == i for i, n in enumerate(_walk(root)))
 
 
 def _walk(root: _N) -> list[_N]:
+    """The nodes in pre-order."""
     out, stack = [], [root]
     while stack:
         n = stack.pop()
@@ -321,8 +401,12 @@ class Simplified:
     rules: tuple[str, ...]
 
 
-def simplify_with_rules(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS) -> Simplified:
+def simplify_with_rules(
+    tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS, *, keep_positions: bool = False
+) -> Simplified:
     """Simplify ``tree``; also say which rules were applied (see ``simplify``)."""
+    if tree.size > MAX_SIMPLIFY_NODES:
+        raise TreeLimitError(f"tree has {tree.size} nodes; simplify takes at most {MAX_SIMPLIFY_NODES}")
     known = _Facts(facts)
     root = _from_node(tree)
     applied: list[str] = []
@@ -331,12 +415,12 @@ def simplify_with_rules(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_F
         candidates = []
         for n in _walk(root):
             for priority, rule, replacement in _rewrites(n):
-                # Later positions first: they shift fewer probabilistic nodes.
+                # Later positions first (they shifted fewer probabilistic nodes when positions mattered).
                 candidates.append((priority, -n.position, rule, n, replacement))
         candidates.sort(key=lambda c: (c[0], c[1]))
         for _, _, rule, target, replacement in candidates:
             new_root = _replace(root, target, replacement)
-            if _keeps_draws(new_root):
+            if not keep_positions or _keeps_positions(new_root):
                 root = new_root
                 applied.append(rule)
                 break
@@ -344,8 +428,13 @@ def simplify_with_rules(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_F
             return Simplified(_to_node(root), tuple(applied))
 
 
-def simplify(tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS) -> Node:
+def simplify(
+    tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS, *, keep_positions: bool = False
+) -> Node:
     """The simplest tree this module's rules reach from ``tree``: same motors on every tick of every
-    blackboard trace, same probabilistic picks (module docstring), never larger. ``facts``: pairs of
-    conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards)."""
-    return simplify_with_rules(tree, facts).tree
+    blackboard trace, same probabilistic picks (each probabilistic node keeps its draw key, written
+    ``prob@k`` where its pre-order index changed; module docstring), never larger. ``facts``: pairs of
+    conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards).
+    ``keep_positions``: make only rewrites that leave every probabilistic node at its pre-order index (no
+    key is then added; the simplifier before draw keys). TreeLimitError beyond ``MAX_SIMPLIFY_NODES``."""
+    return simplify_with_rules(tree, facts, keep_positions=keep_positions).tree

@@ -9,13 +9,19 @@ ordered (by canonical text, so that sets of trees can be sorted deterministicall
   DEAP's arity-suffixed names (``seq2``, ``sel3``, ``prob4``) are accepted as input and the suffix must match
   the number of children;
 - conditions and actions (see ``bt_controller.vocabulary``) are bare names; a single leaf is a tree;
+- a probabilistic composite may name its **draw key**: ``prob@7(a, b)`` draws its child with 7 where a
+  plain ``prob`` uses its pre-order index (``semantics``; ``docs/interfaces.md``, "Random draws"); a key is
+  an integer in [0, ``MAX_DRAW_KEY``]; two probabilistic nodes of one tree may share a key (they then draw
+  alike);
 - whitespace and newlines are free anywhere between tokens.
 
-``to_text`` writes the one canonical form (no suffixes, ``", "`` between children) and
-``parse(to_text(t)) == t`` for every tree ``t``. The parser is iterative (no recursion, no ``eval``); it
-refuses trees with more than ``max_nodes`` nodes or deeper than ``max_depth`` (a single leaf has depth 0, as
-DEAP's height) with a ``TreeLimitError``, and malformed input with a ``TreeSyntaxError``; both say the line
-and column.
+``to_text`` writes the one canonical form (no suffixes, ``", "`` between children, a key only where one was
+given) and ``parse(to_text(t)) == t`` for every tree ``t``. The parser is iterative (no recursion, no
+``eval``); it refuses trees with more than ``max_nodes`` nodes or deeper than ``max_depth`` (a single leaf has
+depth 0, as DEAP's height) with a ``TreeLimitError``, and malformed input with a ``TreeSyntaxError``; both say
+the line and column. Every operation on trees in this package (printing, comparing, converting, simplifying)
+is iterative too, so any tree the parser accepts can be handled; only the tick interpreters stop at
+``MAX_TICK_DEPTH``.
 """
 
 from __future__ import annotations
@@ -33,6 +39,13 @@ MAX_NODES = 1000
 
 MAX_DEPTH = 17
 """Default limit on the depth of a parsed tree (a single leaf has depth 0; DEAP's usual static limit)."""
+
+MAX_DRAW_KEY = 2**31 - 1
+"""Largest draw key of a probabilistic composite (``prob@K``): keys are int32 in the compiled layout."""
+
+MAX_TICK_DEPTH = 63
+"""Deepest tree the interpreters tick: the compiled tick keeps its ancestors on the machine stack, and the
+reference and py_trees interpreters recurse (``compiled.MAX_COMPILED_DEPTH`` is this value)."""
 
 
 class Node:
@@ -136,12 +149,14 @@ def leaf_name(node: Node) -> str:
     raise TypeError(f"not a leaf: {node!r}")
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Composite(Node):
-    """A composite with memory: ``kind`` is ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children."""
+    """A composite with memory: ``kind`` is ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children. A ``prob`` may
+    carry a ``draw_key`` (``None``: its pre-order index is its key; see ``draw_key_at``)."""
 
     kind: str
     children: tuple[Node, ...]
+    draw_key: int | None = None
     size: int = field(init=False, compare=False)
     depth: int = field(init=False, compare=False)
     _hash: int = field(init=False, compare=False)
@@ -160,12 +175,57 @@ class Composite(Node):
         for child in children:
             if not isinstance(child, Node):
                 raise TypeError(f"a child of {self.kind} must be a Node, got {type(child).__name__}")
+        if self.draw_key is not None:
+            if self.kind != "prob":
+                raise TreeSyntaxError(f"{self.kind} takes no draw key; only prob does (prob@K)")
+            check_draw_key(self.draw_key)
         object.__setattr__(self, "size", 1 + sum(child.size for child in children))
         object.__setattr__(self, "depth", 1 + max(child.depth for child in children))
-        object.__setattr__(self, "_hash", hash((self.kind, children)))
+        object.__setattr__(self, "_hash", hash((self.kind, self.draw_key, children)))
+
+    @property
+    def head(self) -> str:
+        """The composite as written before its ``(``: its kind, with ``@K`` when it names a draw key."""
+        return self.kind if self.draw_key is None else f"{self.kind}@{self.draw_key}"
 
     def __hash__(self) -> int:
         return self._hash
+
+    def __eq__(self, other: object) -> bool:
+        # Iterative, so that trees of any depth compare (a generated __eq__ would recurse).
+        if not isinstance(other, Node):
+            return NotImplemented
+        pairs: list[tuple[Node, Node]] = [(self, other)]
+        while pairs:
+            a, b = pairs.pop()
+            if a is b:
+                continue
+            if not (isinstance(a, Composite) and isinstance(b, Composite)):
+                if type(a) is not type(b) or leaf_name(a) != leaf_name(b):
+                    return False
+                continue
+            if (
+                a._hash != b._hash
+                or a.kind != b.kind
+                or a.draw_key != b.draw_key
+                or len(a.children) != len(b.children)
+            ):
+                return False
+            pairs.extend(zip(a.children, b.children, strict=True))
+        return True
+
+
+def check_draw_key(key: object) -> int:
+    """``key`` if it is a draw key (an int in [0, ``MAX_DRAW_KEY``], not a bool); else TreeSyntaxError."""
+    if isinstance(key, bool) or not isinstance(key, int) or not 0 <= key <= MAX_DRAW_KEY:
+        raise TreeSyntaxError(f"a draw key must be an integer in [0, {MAX_DRAW_KEY}], got {key!r}")
+    return key
+
+
+def draw_key_at(node: Composite, index: int) -> int:
+    """The draw key of the composite ``node`` at pre-order ``index`` of its tree: its own key if it names
+    one, else ``index`` (the one rule every interpreter and the simplifier follow)."""
+    return index if node.draw_key is None else node.draw_key
 
 
 def leaf(name: str) -> Condition | Action:
@@ -187,9 +247,9 @@ def sel(*children: Node | str) -> Composite:
     return Composite("sel", tuple(_as_node(c) for c in children))
 
 
-def prob(*children: Node | str) -> Composite:
-    """A probabilistic composite with memory; string children are leaf names."""
-    return Composite("prob", tuple(_as_node(c) for c in children))
+def prob(*children: Node | str, draw_key: int | None = None) -> Composite:
+    """A probabilistic composite with memory; string children are leaf names; ``draw_key`` as ``prob@K``."""
+    return Composite("prob", tuple(_as_node(c) for c in children), draw_key)
 
 
 def _as_node(child: Node | str) -> Node:
@@ -209,7 +269,7 @@ def to_text(tree: Node) -> str:
         if isinstance(item, str):
             parts.append(item)
         elif isinstance(item, Composite):
-            parts.append(item.kind + "(")
+            parts.append(item.head + "(")
             stack.append(")")
             for i, child in enumerate(reversed(item.children)):
                 stack.append(child)
@@ -223,25 +283,27 @@ def to_text(tree: Node) -> str:
 def to_indented(tree: Node, indent: str = "    ") -> str:
     """A multi-line view, one node per line, children indented under their parent (also parseable)."""
     lines: list[str] = []
-
-    def visit(node: Node, level: int, last: bool) -> None:
+    # (node or closing text, level, whether it is its parent's last child); iterative for any depth.
+    stack: list[tuple[Node | str, int, bool]] = [(tree, 0, True)]
+    while stack:
+        item, level, last = stack.pop()
         pad = indent * level
         tail = "" if last else ","
-        if isinstance(node, Composite):
-            lines.append(f"{pad}{node.kind}(")
-            for i, child in enumerate(node.children):
-                visit(child, level + 1, i == len(node.children) - 1)
+        if isinstance(item, str):
             lines.append(f"{pad}){tail}")
+        elif isinstance(item, Composite):
+            lines.append(f"{pad}{item.head}(")
+            stack.append(("", level, last))
+            n = len(item.children)
+            stack.extend((item.children[i], level + 1, i == n - 1) for i in reversed(range(n)))
         else:
-            lines.append(f"{pad}{leaf_name(node)}{tail}")
-
-    visit(tree, 0, True)
+            lines.append(f"{pad}{leaf_name(item)}{tail}")
     return "\n".join(lines) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------- parsing
 
-_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|([(),])|(\S))")
+_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|([0-9]+)|([(),@])|(\S))")
 _COMPOSITE_NAME = re.compile(r"^(seq|sel|prob)([0-9]*)$")
 
 
@@ -265,7 +327,7 @@ class _Tokens:
         return line, offset - self._line_starts[line - 1] + 1
 
     def next(self) -> tuple[str, str, int]:
-        """(kind, value, offset) of the next token; kind is 'name', 'punct', 'bad' or 'end'."""
+        """(kind, value, offset) of the next token; kind is 'name', 'number', 'punct', 'bad' or 'end'."""
         match = _TOKEN.match(self.text, self.pos)
         if match is None:  # only whitespace is left
             self.pos = len(self.text)
@@ -274,8 +336,10 @@ class _Tokens:
         if match.group(1) is not None:
             return "name", match.group(1), match.start(1)
         if match.group(2) is not None:
-            return "punct", match.group(2), match.start(2)
-        return "bad", match.group(3), match.start(3)
+            return "number", match.group(2), match.start(2)
+        if match.group(3) is not None:
+            return "punct", match.group(3), match.start(3)
+        return "bad", match.group(4), match.start(4)
 
     def error(self, offset: int, reason: str) -> TreeSyntaxError:
         line, column = self.where(offset)
@@ -294,8 +358,24 @@ def _describe(kind: str, value: str) -> str:
 class _Frame:
     kind: str
     arity: int | None
+    draw_key: int | None
     offset: int
     children: list[Node]
+
+
+def _draw_key(tokens: _Tokens, head: str) -> int:
+    """The draw key after ``head@`` (``prob@7``), checked; raise a located TreeSyntaxError."""
+    kind, value, offset = tokens.next()
+    expected = f"an integer in [0, {MAX_DRAW_KEY}]"
+    if kind != "number":
+        found = _describe(kind, value)
+        raise tokens.error(offset, f"expected a draw key ({expected}) after '{head}@', found {found}")
+    digits = value.lstrip("0") or "0"
+    # Compare lengths first: a huge number is refused without converting it.
+    if len(digits) > len(str(MAX_DRAW_KEY)) or int(digits) > MAX_DRAW_KEY:
+        shown = value if len(value) <= 20 else value[:12] + "..."
+        raise tokens.error(offset, f"draw key {shown} of {head} is out of range: expected {expected}")
+    return int(digits)
 
 
 def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
@@ -332,9 +412,16 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
                     offset, f"{value!r}: a composite takes {MIN_CHILDREN} to {MAX_CHILDREN} children"
                 )
             kind2, value2, offset2 = tokens.next()
+            draw_key = None
+            if (kind2, value2) == ("punct", "@"):
+                if composite.group(1) != "prob":
+                    raise tokens.error(offset2, f"{value} takes no draw key; only prob does (prob@K)")
+                draw_key = _draw_key(tokens, value)
+                value = f"{value}@{draw_key}"
+                kind2, value2, offset2 = tokens.next()
             if (kind2, value2) != ("punct", "("):
                 raise tokens.error(offset2, f"expected '(' after {value!r}, found {_describe(kind2, value2)}")
-            stack.append(_Frame(composite.group(1), arity, offset, []))
+            stack.append(_Frame(composite.group(1), arity, draw_key, offset, []))
             continue
         if value in CONDITIONS:
             node = Condition(value)
@@ -349,6 +436,8 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
                 if kind != "end":
                     if (kind, value) == ("punct", "("):
                         reason = f"{node} is a leaf and takes no children"
+                    elif (kind, value) == ("punct", "@") and not isinstance(node, Composite):
+                        reason = f"{node} is a leaf and takes no draw key; only prob does (prob@K)"
                     else:
                         reason = f"expected end of input after the tree, found {_describe(kind, value)}"
                     raise tokens.error(offset, reason)
@@ -372,11 +461,21 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
                         offset, f"{frame.kind}{frame.arity} expects {frame.arity} children, found {n}"
                     )
                 stack.pop()
-                node = Composite(frame.kind, tuple(frame.children))
+                node = Composite(frame.kind, tuple(frame.children), frame.draw_key)
                 continue
             if (kind, value) == ("punct", "(") and not isinstance(node, Composite):
                 raise tokens.error(offset, f"{node} is a leaf and takes no children")
+            if (kind, value) == ("punct", "@") and not isinstance(node, Composite):
+                raise tokens.error(offset, f"{node} is a leaf and takes no draw key; only prob does (prob@K)")
             raise tokens.error(offset, f"expected ',' or ')' in {frame.kind}, found {_describe(kind, value)}")
+
+
+def check_tick_depth(tree: Node, interpreter: str) -> Node:
+    """Return ``tree`` if an interpreter can tick it (at most ``MAX_TICK_DEPTH`` deep), else raise
+    TreeLimitError naming ``interpreter`` and the limit."""
+    if tree.depth > MAX_TICK_DEPTH:
+        raise TreeLimitError(f"tree has depth {tree.depth}; the {interpreter} takes {MAX_TICK_DEPTH}")
+    return tree
 
 
 def check_limits(tree: Node, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:

@@ -73,3 +73,35 @@ def test_binary_file_is_a_clear_error(tmp_path, capsys):
     path.write_bytes(b"\xff\xfe\x00seq")
     assert main(["check", str(path)]) == 2
     assert "UTF-8" in capsys.readouterr().err
+
+
+def _deep(levels: int, composite: str, condition: str) -> str:
+    text = "forward"
+    for i in range(levels):
+        text = f"seq({composite}, {text})" if i % 2 else f"sel({condition}, {text})"
+    return text
+
+
+def test_deep_trees(tmp_path, capsys):
+    """Issue 25, item 6: with --max-depth 100000, `bt simplify` and `bt show --format xml` of a 10,000-level
+    tree raised RecursionError. Every format now takes it; simplify takes up to 2,000 nodes at any depth and
+    refuses more in one line."""
+    limits = ["--max-depth", "100000", "--max-nodes", "100000"]
+    path = tmp_path / "deep.txt"
+    path.write_text(_deep(10_000, "in_nest", "on_food"))
+    assert main(["show", str(path), "-f", "xml", *limits]) == 0
+    xml = capsys.readouterr().out
+    assert xml.count("<Sequence>") == 5_000 and xml.count("<Fallback>") == 5_000
+    assert main(["simplify", str(path), *limits]) == 2
+    assert (
+        capsys.readouterr().err == f"bt: error: {path}: tree has 20001 nodes; simplify takes at most 2000\n"
+    )
+    # 900 levels: past the recursion the simplifier had (RecursionError), and nothing to simplify.
+    irreducible = _deep(900, "forward", "on_food")
+    assert main(["simplify", irreducible, *limits]) == 0
+    assert capsys.readouterr().out == irreducible + "\n"
+    # ... and one that collapses: after in_nest, on_food is false and in_nest true at every level.
+    assert main(["simplify", _deep(300, "in_nest", "on_food"), *limits]) == 0
+    assert capsys.readouterr().out == "seq(in_nest, forward)\n"
+    assert main(["export", str(path), "-o", str(tmp_path / "deep.png"), *limits]) == 2
+    assert "a PNG drawing takes at most 404 leaves" in capsys.readouterr().err

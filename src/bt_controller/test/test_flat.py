@@ -14,12 +14,18 @@ from bt_controller.tree import parse
 def test_flatten_example():
     flat = flatten(parse("sel(seq(in_nest, stop), prob(forward, reverse, on_food))"))
     assert flat.op.dtype == np.int8 and flat.arg.dtype == np.int8 and flat.nchild.dtype == np.int8
-    assert flat.first.dtype == np.int32 and flat.children.dtype == np.int32
+    assert flat.first.dtype == np.int32 and flat.children.dtype == np.int32 and flat.draw.dtype == np.int32
     assert flat.op.tolist() == [1, 0, 3, 4, 2, 4, 4, 3]
     assert flat.arg.tolist() == [-1, -1, 1, 0, -1, 1, 4, 0]
     assert flat.first.tolist() == [0, 2, -1, -1, 4, -1, -1, -1]
     assert flat.nchild.tolist() == [2, 2, 0, 0, 3, 0, 0, 0]
     assert flat.children.tolist() == [1, 4, 2, 3, 5, 6, 7]
+    assert flat.draw.tolist() == [-1, -1, -1, -1, 4, -1, -1, -1]  # a plain prob draws with its index
+
+
+def test_flatten_keeps_draw_keys():
+    flat = flatten(parse("prob@2147483647(prob@0(stop, stop), prob(stop, stop), prob@5(stop, stop))"))
+    assert flat.draw.tolist() == [2**31 - 1, 0, -1, -1, 4, -1, -1, 5, -1, -1]
 
 
 def test_single_leaf_flattens():
@@ -36,8 +42,9 @@ def test_reset_memory():
 
 
 def test_pack_offsets_and_views():
-    trees = [parse("stop"), parse("seq(on_food, stop)"), parse("prob(stop, sel(on_food, stop), forward)")]
+    trees = [parse("stop"), parse("seq(on_food, stop)"), parse("prob@9(stop, sel(on_food, stop), forward)")]
     packed = pack(trees)
+    assert packed.draw.tolist() == [-1, -1, -1, -1, 9, -1, -1, -1, -1, -1]
     assert packed.node_offset.tolist() == [0, 1, 4, 10]
     assert packed.child_offset.tolist() == [0, 0, 2, 7]
     assert packed.n_trees == 3 and packed.max_nodes == 6

@@ -2,14 +2,26 @@
 
 from __future__ import annotations
 
+from xml.etree.ElementTree import Comment, Element, SubElement, indent, tostring
+
+import numpy as np
 import pytest
 from bt_strategies import trees
 from hypothesis import given, settings
 
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
-from bt_controller.formats import from_xml, to_ascii, to_dot, to_xml
+from bt_controller.formats import (
+    BTCPP_CONTROL,
+    PROBABILISTIC_DESCRIPTION,
+    composite_label,
+    from_xml,
+    to_ascii,
+    to_dot,
+    to_xml,
+)
+from bt_controller.random_trees import random_tree
 from bt_controller.render import layout, render
-from bt_controller.tree import parse
+from bt_controller.tree import Composite, Node, leaf_name, parse
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 
 EXAMPLE = parse("sel(seq(in_nest, stop), prob(forward, reverse, seq(on_food, robot_left)))")
@@ -114,3 +126,105 @@ def test_render(tmp_path, fmt):
     assert data.startswith(b"\x89PNG") if fmt == "png" else b"<svg" in data[:2000]
     with pytest.raises(ValueError):
         render(EXAMPLE, tmp_path / "tree.pdf")
+
+
+def _elementtree_xml(tree: Node, tree_id: str = "MainTree") -> str:
+    """The document as ElementTree's ``indent`` and ``tostring`` wrote it before ``to_xml`` wrote it line by
+    line (recursive: shallow trees only); the new writer must give the same bytes for trees without keys."""
+    root = Element("root", {"BTCPP_format": "4", "main_tree_to_execute": tree_id})
+    stack: list[tuple[Node, Element]] = [(tree, SubElement(root, "BehaviorTree", {"ID": tree_id}))]
+    while stack:
+        node, parent = stack.pop()
+        if isinstance(node, Composite):
+            element = SubElement(parent, BTCPP_CONTROL[node.kind])
+            stack.extend((child, element) for child in reversed(node.children))
+        else:
+            SubElement(parent, leaf_name(node))
+    model = SubElement(root, "TreeNodesModel")
+    model.append(Comment(f" {PROBABILISTIC_DESCRIPTION} "))
+    SubElement(model, "Control", {"ID": "Probabilistic"})
+    for name in CONDITIONS:
+        SubElement(model, "Condition", {"ID": name})
+    for name in ACTIONS:
+        SubElement(model, "Action", {"ID": name})
+    indent(root, space="  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + tostring(root, encoding="unicode") + "\n"
+
+
+def test_xml_of_trees_without_keys_is_as_before():
+    rng = np.random.default_rng(4)
+    for tree in [EXAMPLE, parse("stop")] + [random_tree(rng, int(rng.integers(3, 80))) for _ in range(300)]:
+        assert to_xml(tree) == _elementtree_xml(tree)
+    assert to_xml(EXAMPLE, 'a "tree" & <more>\n') == _elementtree_xml(EXAMPLE, 'a "tree" & <more>\n')
+
+
+def test_xml_draw_keys_are_attributes_declared_as_a_port():
+    tree = parse("sel(prob@7(forward, stop), prob(stop, forward))")
+    xml = to_xml(tree)
+    assert '<Probabilistic draw_key="7">' in xml and "<Probabilistic>" in xml
+    assert '<input_port name="draw_key" type="int">' in xml
+    assert '<Control ID="Probabilistic" />' not in xml
+    assert from_xml(xml) == tree
+    explicit = """<root BTCPP_format="4"><BehaviorTree>
+      <Control ID="Probabilistic" draw_key=" 12 ">
+        <stop/><Fallback draw_key=""><stop/><stop/></Fallback>
+      </Control>
+    </BehaviorTree></root>"""
+    assert from_xml(explicit) == parse("prob@12(stop, sel(stop, stop))")
+
+
+@pytest.mark.parametrize(
+    ("element", "fragment"),
+    [
+        ('<Sequence draw_key="3"><stop/><stop/></Sequence>', "draw_key at Sequence: only Probabilistic"),
+        (
+            '<Fallback><stop draw_key="3"/><stop/></Fallback>',
+            "draw_key at Fallback/stop[0]: only Probabilistic",
+        ),
+        (
+            '<Probabilistic draw_key="-1"><stop/><stop/></Probabilistic>',
+            "draw_key='-1' at Probabilistic: expected",
+        ),
+        (
+            '<Probabilistic draw_key="2147483648"><stop/><stop/></Probabilistic>',
+            "expected an integer in [0, 2147",
+        ),
+        ('<Probabilistic draw_key="１"><stop/><stop/></Probabilistic>', "expected an integer"),
+        ('<Probabilistic draw_key="7.0"><stop/><stop/></Probabilistic>', "draw_key='7.0'"),
+    ],
+)
+def test_xml_bad_draw_keys_are_refused(element, fragment):
+    with pytest.raises(TreeSyntaxError) as info:
+        from_xml(f"<root><BehaviorTree>{element}</BehaviorTree></root>")
+    assert fragment in str(info.value)
+
+
+def test_drawings_show_draw_keys():
+    tree = parse("sel(prob@7(forward, stop), prob(stop, forward))")
+    dot = to_dot(tree)
+    assert 'label="prob % @7"' in dot and 'label="prob %"' in dot
+    assert to_ascii(tree).splitlines()[1] == "├── prob@7"
+    assert composite_label(tree.children[0]) == "prob % @7"  # render draws this label too
+
+
+def test_every_format_takes_a_tree_of_any_depth(tmp_path):
+    # Issue 25, item 6: XML export used ElementTree's recursive serialiser; the layout recursed.
+    text = "forward"
+    for i in range(10_000):
+        text = f"seq(in_nest, {text})" if i % 2 else f"prob@{i}(on_food, {text})"
+    tree = parse(text, max_depth=100_000, max_nodes=100_000)
+    # The XML is indented, 2 spaces a level: 1,500 levels (past Python's recursion limit) keep the document
+    # within MAX_XML_CHARS for the round trip.
+    part = tree
+    while part.depth > 1_500:
+        part = part.children[1]
+    assert from_xml(to_xml(part), max_depth=100_000, max_nodes=100_000) == part
+    closing_tags = sum(isinstance(node, Composite) for node in tree.preorder())
+    assert to_xml(tree).count("\n") == tree.size + closing_tags + 26  # and 26 lines around the tree
+    assert to_dot(tree).count(" -> ") == tree.size - 1
+    placed = layout(tree)
+    assert len(placed) == tree.size and placed[-1][2] == 10_000
+    assert placed[0][1] == (placed[1][1] + placed[2][1]) / 2
+    assert to_ascii(tree).count("\n") == tree.size
+    with pytest.raises(TreeLimitError, match="a PNG drawing takes at most 404 leaves and depth 605"):
+        render(tree, tmp_path / "deep.png")

@@ -7,9 +7,10 @@ import pytest
 
 from bt_controller.compiled import CompiledRobot
 from bt_controller.draws import choose, derive
+from bt_controller.errors import TreeLimitError
 from bt_controller.semantics import ReferenceRobot, wheels
 from bt_controller.timeline import CLEAN, PAPER
-from bt_controller.tree import parse
+from bt_controller.tree import MAX_TICK_DEPTH, parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, FAILURE, RUNNING, SUCCESS
 
 S, F, R = SUCCESS, FAILURE, RUNNING
@@ -28,7 +29,7 @@ def robot(request):
     cls = ReferenceRobot if request.param == "reference" else CompiledRobot
 
     def make(text: str, key: int = 7, profile: int = CLEAN):
-        return cls(parse(text), key, profile)
+        return cls(parse(text, max_depth=1000), key, profile)
 
     return make
 
@@ -161,6 +162,44 @@ def test_prob_uses_the_local_preorder_index_of_the_node(robot):
     r = robot("seq(on_food, stop, prob(forward, reverse))", key)
     assert r.step(board("on_food")) == (R, STOP)  # tick 0 ends on stop: the prob node is not reached
     assert r.step(board("on_food")) == (R, REV)  # tick 1 reaches it: counter 3, its pre-order index
+
+
+def test_prob_with_a_draw_key_draws_with_the_key_instead_of_its_index(robot):
+    """The same tree and key as above: ``prob@2`` at pre-order index 3 draws with counter 2 (forward), and
+    ``prob@3`` exactly as the plain node (reverse); keys shared by two nodes make them draw alike."""
+    key = next(
+        k
+        for k in range(1, 10_000)
+        if choose(np.uint64(derive(np.uint64(k), 1)), 3, 2) == 1
+        and choose(np.uint64(derive(np.uint64(k), 1)), 2, 2) == 0
+        and choose(np.uint64(derive(np.uint64(k), 0)), 3, 2) == 0
+    )
+    for text, action in (("prob@2", FWD), ("prob@3", REV), ("prob", REV)):
+        r = robot(f"seq(on_food, stop, {text}(forward, reverse))", key)
+        assert r.step(board("on_food")) == (R, STOP)
+        assert r.step(board("on_food")) == (R, action), text
+    # Two nodes with one key pick the same child position when both draw in one tick: with on_food true and
+    # in_nest false, the second node fails after the first succeeded only if they picked differently.
+    outcomes = {}
+    for keys in ("9, 9", "9, 10"):
+        a, b = keys.split(", ")
+        text = f"seq(prob@{a}(on_food, in_nest), prob@{b}(on_food, in_nest), forward)"
+        outcomes[keys] = set()
+        for k in range(40):
+            r = robot(text, k)
+            status, _ = r.step(board("on_food"))
+            outcomes[keys].add((status, int(r.counts[0])))
+    assert outcomes["9, 9"] == {(R, 2), (F, 1)}
+    assert (F, 2) in outcomes["9, 10"]
+
+
+def test_interpreters_refuse_trees_deeper_than_max_tick_depth(robot):
+    deep = "stop"
+    for _ in range(MAX_TICK_DEPTH + 1):
+        deep = f"seq(on_food, {deep})"
+    with pytest.raises(TreeLimitError, match=f"takes {MAX_TICK_DEPTH}"):
+        robot(deep)
+    assert robot(deep[len("seq(on_food, ") : -1]).step(board("on_food")) == (R, STOP)
 
 
 def test_prob_starts_at_its_first_child_under_paper_then_draws(robot):

@@ -5,15 +5,17 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from collections import Counter
 
 import numpy as np
 import pytest
 
 from bt_controller.draws import choose, derive
+from bt_controller.formats import from_xml, to_ascii, to_dot, to_xml
 from bt_controller.random_trees import random_tree_grow
 from bt_controller.semantics import new_counts, new_memory, tick, wheels
 from bt_controller.simplify import WORLD_FACTS, simplify, simplify_with_rules
-from bt_controller.tree import Action, Composite, Condition, Node, parse, to_text
+from bt_controller.tree import Action, Composite, Condition, Node, draw_key_at, parse, to_indented, to_text
 from bt_controller.vocabulary import ACTION_WHEELS, CONDITIONS, RUNNING, STOP, SUCCESS
 
 
@@ -36,7 +38,9 @@ def motors_model_v2(tree: Node, boards: np.ndarray, key: int, profile: str) -> l
     memory = [0] * len(nodes)  # composites: remembered/current child; actions: 1 when running
     for i, n in enumerate(nodes):
         if isinstance(n, Composite) and n.kind == "prob" and profile == "clean":
-            memory[i] = int(choose(np.uint64(derive(np.uint64(key), 10**6)), i, len(n.children)))
+            memory[i] = int(
+                choose(np.uint64(derive(np.uint64(key), 10**6)), draw_key_at(n, i), len(n.children))
+            )
     out = []
     for t, board in enumerate(boards):
         motors = [STOP]
@@ -57,7 +61,7 @@ def motors_model_v2(tree: Node, boards: np.ndarray, key: int, profile: str) -> l
                 status = run(kids[memory[index]])
                 if status != RUNNING:
                     draw_key = np.uint64(derive(np.uint64(derive(np.uint64(key), t)), 1))
-                    memory[index] = int(choose(draw_key, index, len(kids)))
+                    memory[index] = int(choose(draw_key, draw_key_at(n, index), len(kids)))
                 return status
             go_on = SUCCESS if n.kind == "seq" else 1
             for position in range(memory[index], len(kids)):
@@ -100,40 +104,78 @@ def random_boards(rng: np.random.Generator, n: int, reading: str, facts: bool) -
     return boards
 
 
-def random_trees(seed: int, n: int) -> list[Node]:
+def random_trees(seed: int, n: int, keyed: float = 0.0) -> list[Node]:
+    """``n`` random trees; with ``keyed`` > 0 that share of them names random draw keys (small ones, so that
+    some keys repeat within a tree and some equal another node's pre-order index)."""
     rng = np.random.default_rng(seed)
-    return [random_tree_grow(rng, int(rng.integers(1, 6)), float(rng.uniform(0.15, 0.6))) for _ in range(n)]
+    trees = [random_tree_grow(rng, int(rng.integers(1, 6)), float(rng.uniform(0.15, 0.6))) for _ in range(n)]
+    return [with_random_keys(rng, t) if rng.random() < keyed else t for t in trees]
+
+
+def with_random_keys(rng: np.random.Generator, tree: Node) -> Node:
+    """``tree`` with each probabilistic node given a draw key in [0, 20) with probability 1/2."""
+    built: list[Node] = []
+    for node in reversed(list(tree.preorder())):  # children before parents, on a stack
+        if isinstance(node, Composite):
+            children = tuple(built.pop() for _ in node.children)
+            key = int(rng.integers(0, 20)) if node.kind == "prob" and rng.random() < 0.5 else None
+            built.append(Composite(node.kind, children, key))
+        else:
+            built.append(node)
+    return built[0]
 
 
 @pytest.mark.parametrize("reading", list(READINGS))
 @pytest.mark.parametrize("facts", [True, False])
 def test_random_trees_keep_every_motor(reading: str, facts: bool) -> None:
-    """2000 random trees per reading and blackboard kind, 3 traces of 60 ticks each."""
+    """2000 random trees per reading and blackboard kind (a fifth of them with draw keys of their own), 3
+    traces of 60 ticks each; the simplifier moves probabilistic nodes (adding keys) in many of them."""
     motors = READINGS[reading]
     rng = np.random.default_rng(7)
-    shrunk = 0
-    for tree in random_trees(11 if facts else 12, 2000):
+    shrunk = moved = 0
+    for tree in random_trees(11 if facts else 12, 2000, keyed=0.2):
         simple = simplify(tree, WORLD_FACTS if facts else ())
         assert simple.size <= tree.size
         shrunk += simple.size < tree.size
+        moved += "@" in to_text(simple) and "@" not in to_text(tree)
         for _ in range(3):
             boards = random_boards(rng, 60, reading, facts)
             key = int(rng.integers(0, 2**63))
             assert motors(simple, boards, key) == motors(tree, boards, key), (to_text(tree), to_text(simple))
     assert shrunk > 600  # the test exercises the rules, not only trees left alone
+    assert moved > 100  # ... and moves probabilistic nodes
 
 
-def test_probabilistic_nodes_keep_their_index_and_children() -> None:
-    for tree in random_trees(5, 2000):
+def probs(tree: Node) -> dict[int, tuple[int, int]]:
+    """Pre-order index -> (draw key, number of children) of every probabilistic node."""
+    return {
+        i: (draw_key_at(n, i), len(n.children))
+        for i, n in enumerate(tree.preorder())
+        if isinstance(n, Composite) and n.kind == "prob"
+    }
+
+
+def test_probabilistic_nodes_keep_their_draw_key_and_children() -> None:
+    """Every surviving probabilistic node draws with its original key and keeps its number of children; a key
+    is written only where it is not the node's index; with keep_positions no node moves."""
+    for tree in random_trees(5, 2000, keyed=0.2):
+        text = to_text(tree)
         simple = simplify(tree)
-        old = {i: n for i, n in enumerate(tree.preorder()) if isinstance(n, Composite) and n.kind == "prob"}
+        assert not Counter(probs(simple).values()) - Counter(probs(tree).values()), (text, to_text(simple))
         for i, n in enumerate(simple.preorder()):
-            if isinstance(n, Composite) and n.kind == "prob":
-                assert i in old and len(old[i].children) == len(n.children), (to_text(tree), to_text(simple))
+            if isinstance(n, Composite) and n.draw_key is not None:
+                assert n.draw_key != i, (text, to_text(simple))
+        kept = simplify(tree, keep_positions=True)
+        assert kept.size >= simple.size
+        before = probs(tree)
+        for i, draw in probs(kept).items():
+            assert before.get(i) == draw, (text, to_text(kept))
+        if "@" not in text:
+            assert "@" not in to_text(kept)
 
 
 def test_simplify_is_idempotent_and_deterministic() -> None:
-    for tree in random_trees(6, 500):
+    for tree in random_trees(6, 500, keyed=0.2):
         once = simplify(tree)
         assert simplify(once) == once
         assert simplify(tree) == once
@@ -165,14 +207,32 @@ def test_hand_worked_rewrites(before: str, after: str, rule: str | None) -> None
     assert (rule in result.rules) if rule else result.rules == ()
 
 
-def test_a_rewrite_that_would_move_a_probabilistic_node_is_not_made() -> None:
-    # Flattening would move prob from index 3 to 2, changing its draws: kept as it is.
+def test_a_probabilistic_node_that_moves_keeps_its_draws_with_a_key() -> None:
+    # Flattening moves prob from index 4 to 3: it keeps drawing with 4, written prob@4.
     text = "seq(stop, seq(forward, prob(reverse, stop)))"
-    assert to_text(simplify(parse(text))) == text
-    # The same flattening after the probabilistic node is made.
+    assert to_text(simplify(parse(text))) == "seq(stop, forward, prob@4(reverse, stop))"
+    # keep_positions: the rewrite is not made (the simplifier before draw keys).
+    assert to_text(simplify(parse(text), keep_positions=True)) == text
+    # A node that stays at its index is written plain; one whose key is its new index too.
     assert to_text(simplify(parse("seq(prob(reverse, stop), seq(forward, stop))"))) == (
         "seq(prob(reverse, stop), forward, stop)"
     )
+    assert to_text(simplify(parse("seq(stop, seq(forward, prob@3(reverse, stop)))"))) == (
+        "seq(stop, forward, prob(reverse, stop))"
+    )
+    # The main job's best tree (issue 26): the dead selector before the probabilistic node now goes.
+    best = "sel(on_food, seq(sel(forward, forward), forward, prob(forward_left, forward)))"
+    assert to_text(simplify(parse(best), keep_positions=True)) == best
+    assert (
+        to_text(simplify(parse(best))) == "sel(on_food, seq(forward, forward, prob@7(forward_left, forward)))"
+    )
+
+
+def test_simplified_keys_pass_through_every_format() -> None:
+    simple = simplify(parse("sel(on_food, seq(sel(forward, forward), forward, prob(forward_left, forward)))"))
+    assert from_xml(to_xml(simple)) == simple
+    assert parse(to_indented(simple)) == simple
+    assert "prob % @7" in to_dot(simple) and "prob@7" in to_ascii(simple)
 
 
 def test_cli_prints_one_line_that_pipes() -> None:

@@ -8,6 +8,7 @@ from hypothesis import given, settings
 
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
 from bt_controller.tree import (
+    MAX_DRAW_KEY,
     Action,
     Composite,
     Condition,
@@ -124,3 +125,66 @@ def test_model_refuses_bad_nodes():
         Condition("forward")
     with pytest.raises(TypeError):
         parse(b"stop")  # type: ignore[arg-type]  # the point: bytes are refused at run time
+
+
+def test_draw_keys_parse_print_and_compare():
+    tree = parse("sel(prob3@7(forward, stop, on_food), prob @ 0 (stop, stop), prob@007(stop, stop))")
+    assert to_text(tree) == "sel(prob@7(forward, stop, on_food), prob@0(stop, stop), prob@7(stop, stop))"
+    assert tree.children[0].draw_key == 7 and tree.children[0].head == "prob@7"
+    assert prob("stop", "stop", draw_key=3) == parse("prob@3(stop, stop)")
+    assert parse("prob@3(stop, stop)") != parse("prob(stop, stop)")
+    assert parse("prob@3(stop, stop)") != parse("prob@4(stop, stop)")
+    assert parse(to_indented(tree)) == tree
+    assert "prob@7(" in to_indented(tree)
+    assert parse(f"prob@{MAX_DRAW_KEY}(stop, stop)").draw_key == MAX_DRAW_KEY
+
+
+@pytest.mark.parametrize(
+    ("text", "column", "fragment"),
+    [
+        ("seq@3(stop, stop)", 4, "seq takes no draw key; only prob does"),
+        ("sel2@3(stop, stop)", 5, "sel2 takes no draw key"),
+        (
+            "prob@(stop, stop)",
+            6,
+            "expected a draw key (an integer in [0, 2147483647]) after 'prob@', found '('",
+        ),
+        ("prob@-1(stop, stop)", 6, "found unexpected character '-'"),
+        ("prob@x(stop, stop)", 6, "found 'x'"),
+        ("prob@2147483648(stop, stop)", 6, "draw key 2147483648 of prob is out of range"),
+        ("prob@" + "9" * 5000 + "(stop, stop)", 6, "draw key 999999999999... of prob is out of range"),
+        ("prob@7 stop", 8, "expected '(' after 'prob@7', found 'stop'"),
+        ("prob(stop@1, stop)", 10, "stop is a leaf and takes no draw key"),
+        ("forward@1", 8, "forward is a leaf and takes no draw key"),
+        ("seq(stop, 7)", 11, "expected a node name for a child of seq, found '7'"),
+    ],
+)
+def test_bad_draw_keys_say_where_and_what(text, column, fragment):
+    with pytest.raises(TreeSyntaxError) as info:
+        parse(text)
+    assert (info.value.line, info.value.column) == (1, column)
+    assert fragment in str(info.value)
+
+
+def test_model_refuses_bad_draw_keys():
+    for key in (-1, MAX_DRAW_KEY + 1, True, 1.0, "3"):
+        with pytest.raises(TreeSyntaxError, match="a draw key must be an integer"):
+            Composite("prob", (Action("stop"), Action("stop")), key)  # type: ignore[arg-type]  # refused at run time
+    with pytest.raises(TreeSyntaxError, match="only prob"):
+        Composite("seq", (Action("stop"), Action("stop")), 3)
+
+
+def test_trees_of_any_depth_print_compare_and_hash():
+    # Issue 25, item 6: every operation on a tree is iterative (the parser already was).
+    text = "forward"
+    for i in range(10_000):
+        text = f"seq(in_nest, {text})" if i % 2 else f"prob@{i}(on_food, {text})"
+    tree = parse(text, max_depth=100_000, max_nodes=100_000)
+    again = parse(text, max_depth=100_000, max_nodes=100_000)
+    assert tree.depth == 10_000 and tree is not again
+    assert tree == again and hash(tree) == hash(again)
+    assert not tree != again  # noqa: SIM202  # the point: __ne__ of a deep tree
+    assert tree != parse(text.replace("prob@9998", "prob@1"), max_depth=100_000, max_nodes=100_000)
+    assert to_text(tree) == text
+    assert parse(to_indented(tree), max_depth=100_000, max_nodes=100_000) == tree
+    assert sorted([tree, again, parse("stop")])[-1] == parse("stop")

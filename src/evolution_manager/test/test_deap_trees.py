@@ -45,6 +45,16 @@ def test_suffixed_names_are_read_and_canonical_text_is_written(pset):
     assert tree.height == 2 and len(tree) == 5
 
 
+def test_draw_keys_other_than_the_index_are_refused(pset):
+    # A key equal to the node's pre-order index is its default: the same draws as plain prob.
+    assert (
+        tree_to_text(tree_from_text("sel(stop, prob@2(stop, forward))", pset))
+        == "sel(stop, prob(stop, forward))"
+    )
+    with pytest.raises(TreeTextError, match="prob@1 at node 2 names a draw key"):
+        tree_from_text("sel(stop, prob@1(stop, forward))", pset)
+
+
 BAD = ["", "sel(stop)", "seq(stop, stop", "seq3(stop, stop)", "fly", "sel(a, b)", 7]
 
 

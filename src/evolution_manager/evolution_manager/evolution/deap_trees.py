@@ -105,7 +105,13 @@ def tree_from_text(
     except (TreeError, TypeError) as error:
         raise TreeTextError(f"not a behaviour tree: {error}") from None
     nodes = []
-    for node in root.preorder():
+    for index, node in enumerate(root.preorder()):
+        if isinstance(node, Composite) and node.draw_key not in (None, index):
+            # DEAP's primitives cannot carry a key: the tree would draw differently (docs/interfaces.md).
+            raise TreeTextError(
+                f"not a behaviour tree of this primitive set: {node.head} at node {index} names a draw key "
+                f"other than its index (simplify with keep_positions=True for trees without keys)"
+            )
         name = f"{node.kind}{len(node.children)}" if isinstance(node, Composite) else leaf_name(node)
         if name not in pset.mapping:
             raise TreeTextError(f"not a behaviour tree of this primitive set: unknown node {name!r}")

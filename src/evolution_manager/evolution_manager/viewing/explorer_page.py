@@ -160,7 +160,7 @@ function tooltip(ev, key, items) {
 
 // ---- trees: parse the text format, lay out leaves left to right, composites over their children
 function parseTree(text) {
-  const tokens = text.match(/[A-Za-z_][A-Za-z0-9_]*|[(),]/g) || [];
+  const tokens = text.match(/[A-Za-z_][A-Za-z0-9_]*(?:\s*@\s*[0-9]+)?|[(),]/g) || [];
   let pos = 0;
   function node() {
     const name = tokens[pos++];
@@ -172,7 +172,8 @@ function parseTree(text) {
         const t = tokens[pos++];
         if (t === ")") break;
       }
-      return { name: name.replace(/[0-9]+$/, ""), children };
+      const [head, key] = name.split("@").map(s => s.trim());  // prob@7: a draw key
+      return { name: head.replace(/[0-9]+$/, ""), key, children };
     }
     return { name, children: [] };
   }
@@ -208,7 +209,8 @@ function drawTree(text) {
       rx: isCondition ? 11 : composite ? 4 : 0, fill: composite ? fill[p.n.name] : isCondition ? "#fff" : "#eee",
       stroke: "#333" }));
     svg.appendChild(el("svg:text", { x: p.x * W + W / 2, y: p.depth * H + 23, "text-anchor": "middle",
-      "font-size": 11 }, composite ? label[p.n.name] : p.n.name + (isCondition ? "?" : "")));
+      "font-size": 11 }, composite ? label[p.n.name] + (p.n.key !== undefined ? " @" + p.n.key : "")
+        : p.n.name + (isCondition ? "?" : "")));
   }
   return svg;
 }
