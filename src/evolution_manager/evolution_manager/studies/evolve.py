@@ -173,3 +173,7 @@ def result_lines(run: object, out: Path) -> str:
 def main() -> None:
     """Console entry point of ``evolve``."""
     sys.exit(evolve())
+
+
+if __name__ == "__main__":
+    main()
