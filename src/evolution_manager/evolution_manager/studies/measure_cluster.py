@@ -103,7 +103,7 @@ def run_comparison(client: object, evaluations: int, chunk: int, work: Path, pai
 
     local = BatchEvaluator(default_config(PROFILE))
     local.evaluate([EvaluationRequest(WARM_UP_TREE, 0, 1)])  # kernels loaded before the clock, as ...
-    dask = DaskEvaluator(client, PROFILE, chunk)  # type: ignore[arg-type]  # ... on the worker (its plugin)
+    dask = DaskEvaluator(client, PROFILE, chunk)  # ... on the worker (its plugin)
     evaluators = {"local": local, "dask": dask}
     seconds: dict[str, list[float]] = {"local": [], "dask": []}
     order = [("local", "dask"), ("dask", "local")]
