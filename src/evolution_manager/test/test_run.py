@@ -224,16 +224,20 @@ def test_clean_grids_refuse_a_tree_whose_simplified_form_is_in_its_bin(tmp_path)
     assert any(len({forms(t) for t, _, _ in items}) < len(items) for items in text_rule.values())
 
 
-def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(tmp_path):
-    """The authors' rule (qdpy/ea.py:372-382 with 447-496): a tree whose simplified form an earlier batch
-    evaluated is not simulated and takes the fitness and descriptors, conditionality included, of that form's
-    last evaluation in the batch that first met it; trees of one form first met in one batch are each
-    simulated; a clone then enters the grid as any tree (its text alone is refused twice): same bin."""
+@pytest.mark.parametrize("algorithm", ["qd", "gp"])
+def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(tmp_path, algorithm):
+    """The authors' rule (qdpy/ea.py:372-382 with 447-496; gp/ea.py:357-371 with 506-555): a tree whose
+    simplified form an earlier batch evaluated is not simulated and takes the fitness and descriptors,
+    conditionality included, of that form's last (MAP-Elites; qdpy/ea.py:496) or first (GP;
+    redundancy.py:1798-1822) evaluation in the batch that first met it; trees of one form first met in one
+    batch are each simulated; in MAP-Elites a clone then enters the grid as any tree (its text alone is
+    refused twice): same bin."""
     from evolution_manager.evolution.archive import SimplifiedForms
     from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
     root = tmp_path / "paper"
-    run = _finish(Run.start(RunConfig.make("qd", "food", 400, 2, profile="paper"), root, BatchEvaluator()))
+    config = RunConfig.make(algorithm, "food", 400, 2, profile="paper")
+    run = _finish(Run.start(config, root, BatchEvaluator()))
     forms = SimplifiedForms()
     known: dict[str, tuple] = {}
     simulated: set[str] = set()
@@ -248,7 +252,8 @@ def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(t
                 assert values == known[forms(row["tree"])]
                 inherited.append(row)
                 continue
-            met[forms(row["tree"])] = values  # the last evaluation of the batch stays
+            if algorithm == "qd" or forms(row["tree"]) not in met:  # MAP-Elites keeps the last, GP the first
+                met[forms(row["tree"])] = values
             if row["tree"] not in in_batch:  # the same text again in the batch: its first copy's answer
                 simulations += 1
                 in_batch.add(row["tree"])
@@ -264,6 +269,8 @@ def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(t
     requests = [EvaluationRequest(tree=r["tree"], seed=run.config.scenario_seed) for r in clones[:4]]
     for row, result in zip(clones[:4], BatchEvaluator().evaluate(requests), strict=True):
         assert [*result.fitness, *result.descriptors][:5] == [float(row[k]) for k in VALUES[:5]]
+    if algorithm == "gp":  # its repertoire holds one tree per bin
+        return
     clone_bins = _clone_bins(root, "food", forms)
     assert clone_bins  # paper keeps clones, with identical values
     for items in clone_bins.values():

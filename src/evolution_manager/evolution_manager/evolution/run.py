@@ -175,8 +175,8 @@ class Run:
         """Every tree text simulated in this run with its outcome (answers repeats under ``fixed``)."""
         self.known_forms: dict[str, Outcome] = {}
         """``paper`` with fixed scenarios: every simplified form evaluated in an earlier batch, with the
-        outcome of its last evaluation in the batch that first met it (the authors' dict update,
-        qdpy/ea.py:496)."""
+        outcome of its last evaluation in the batch that first met it (MAP-Elites) or its first (GP), as the
+        authors' archives (:meth:`_remember`)."""
         self.answers: list[str] = []
         """How each evaluation of the run so far was answered (``SIMULATED``, ``CACHED``, ``INHERITED``)."""
         self.simulations = 0
@@ -372,10 +372,15 @@ class Run:
             if how == SIMULATED:
                 self.known[tree] = outcome
         if self.config.inherits_by_form:
-            # every evaluation of a form first met in this batch; the last one stays (qdpy/ea.py:496)
+            # a form first met in this batch keeps its last evaluation in MAP-Elites (a dict update,
+            # qdpy/ea.py:496) and its first in GP (added only when new, redundancy.py:1798-1822)
+            first = isinstance(self.algorithm, GeneticProgramming)
             for tree, how, outcome in zip(trees, plan, outcomes, strict=True):
                 if how != INHERITED:
-                    self.known_forms[self.forms(tree)] = outcome
+                    if first:
+                        self.known_forms.setdefault(self.forms(tree), outcome)
+                    else:
+                        self.known_forms[self.forms(tree)] = outcome
         simulated = plan.count(SIMULATED)
         self.simulations += simulated
         self.simulations_saved += len(plan) - simulated
