@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
-from evolution_manager.evolution.archive import Entry, Repertoire
+from evolution_manager.evolution.archive import Entry, Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import (
     OBJECTIVES,
     BehaviourTree,
@@ -315,14 +315,22 @@ class MapElites(AskTell):
     tournament of ``tournament`` items drawn uniformly with replacement from the archive (derated fitness,
     see :mod:`.operators`; the authors' qdpy/ea.py:536-555), are varied by the GP operators (qdpy's
     ``qdSimple`` with DEAP's ``varAnd``) and every touched offspring is evaluated and offered to the
-    archive on ``objective``. A tree the archive already holds is not stored again (qdpy/ea.py:394). Items
-    are drawn in the archive's canonical order (bin index, then arrival), so the draw does not depend on
-    the order in which qdpy keeps its items.
+    archive on ``objective``. A tree the archive already holds is not stored again (qdpy/ea.py:394); with
+    ``forms`` (the ``clean`` profile) nor is a tree whose simplified form is already in its bin
+    (:class:`~evolution_manager.evolution.archive.Repertoire`). Items are drawn in the archive's canonical
+    order (bin index, then arrival), so the draw does not depend on the order in which qdpy keeps its items.
     """
 
     name = "qd"
 
-    def __init__(self, objective: int, budget: int, seed: int, parameters: QDParameters) -> None:
+    def __init__(
+        self,
+        objective: int,
+        budget: int,
+        seed: int,
+        parameters: QDParameters,
+        forms: SimplifiedForms | None = None,
+    ) -> None:
         super().__init__(budget, seed)
         if objective not in range(len(OBJECTIVES)):
             raise ConfigError(f"objective must be an index into {OBJECTIVES}, got {objective}")
@@ -338,7 +346,7 @@ class MapElites(AskTell):
             raise ConfigError(f"the tournament size must be >= 1, got {p.tournament}")
         self.objective = objective
         self.parameters = p
-        self.archive = Repertoire()
+        self.archive = Repertoire(forms=forms)
         self.batches = 0
 
     def _random_batch(self, size: int) -> list[BehaviourTree]:
@@ -394,4 +402,4 @@ class MapElites(AskTell):
         if int(state["objective"]) != self.objective:
             raise ValueError(f"the state is for objective {state['objective']}, not {self.objective}")
         self.batches = int(state["batches"])
-        self.archive = Repertoire.from_state(state["archive"])
+        self.archive = Repertoire.from_state(state["archive"], self.archive.forms)
