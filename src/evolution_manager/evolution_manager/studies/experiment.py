@@ -346,7 +346,7 @@ def experiment(argv: Sequence[str] | None = None) -> int:
     to_run.sort(key=lambda item: -item[0].evaluations)  # the longest (GP_fnd) first: a shorter makespan
     already = len(planned) - len(to_run)
     bar = None
-    failures = []
+    failures: list[str] = []
     full_disk = False  # a run could not write its files: what each saved is whole, the command continues it
     finished_now = 0
 
@@ -396,14 +396,14 @@ def experiment(argv: Sequence[str] | None = None) -> int:
                 from evolution_manager.cluster.runs import map_runs  # loads Dask: only for a cluster
 
                 results = map_runs(client, run_one, runs, args.checkpoint_every, on_progress=on_progress)
-            for root, error in results:
-                if error is None:
+            for root, problem in results:
+                if problem is None:
                     finished_now += 1
                     done[root] = budgets[root]
                     record_session(args.out, started, command, cluster, runs_finished=finished_now)
                 else:  # a failed run is reported, the others go on
-                    failures.append(f"{paths[root]}: {error}")
-                    full_disk = full_disk or isinstance(error, WriteError)
+                    failures.append(f"{paths[root]}: {problem}")
+                    full_disk = full_disk or isinstance(problem, WriteError)
                 show()
     except KeyboardInterrupt:
         print(
