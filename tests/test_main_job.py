@@ -33,9 +33,10 @@ def test_main_job_writes_the_run_and_the_recorded_best_trial(tmp_path):
         assert (out / name).stat().st_size > 0, name
     assert food["best_tree"] in done.stdout and str(out / "best_trial.bag") in done.stdout
 
-    evaluations = [m for m in read_bag(out / "run.bag") if m.topic == "/evaluations"]
-    # the bag holds every simulated evaluation once (under fixed scenarios a repeated tree is not simulated)
-    assert len(evaluations) == summary["simulations"] > 0
+    evaluations = [m.message for m in read_bag(out / "run.bag") if m.topic == "/evaluations"]
+    # the bag holds every evaluation once, those answered from the fixed scenario's cache marked
+    assert len(evaluations) == summary["evaluations"] > 0
+    assert sum(not m.cached for m in evaluations) == summary["simulations"] > 0
     assert verify_trial_bag(out / "best_trial.bag").reproduced
 
 
