@@ -11,7 +11,7 @@ import subprocess
 
 import pytest
 
-from evolution_manager.graph import executable
+from evolution_manager.graph.startup import executable
 from swarm_sim import transfer
 
 
