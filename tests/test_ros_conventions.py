@@ -24,7 +24,7 @@ from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
 from swarm_ros.isolation import domain_environment, reserved_domain
-from swarm_ros.qos import LATCHED
+from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
@@ -85,7 +85,7 @@ def test_a_trial_bag_shows_the_arena_and_labelled_robots_in_si_units(graph, tmp_
 def test_a_trial_bag_records_the_qos_each_publisher_offers(graph, tmp_path):
     """`ros2 bag play` republishes a topic with the offered QoS the bag recorded: latched topics must replay
     latched. Checked against what the graph's own publishers offer (durability and reliability are what DDS
-    discovery reports; depth it does not)."""
+    discovery reports; depth it does not: checked against the profiles the publishers are made with)."""
     bag = tmp_path / "trial"
     graph.run("forward", 3, 0, bag)
     with Reader(bag) as reader:
@@ -101,6 +101,7 @@ def test_a_trial_bag_records_the_qos_each_publisher_offers(graph, tmp_path):
             for info in node.get_publishers_info_by_topic(topic)
         }
         assert offered == {(qos.durability.name, qos.reliability.name)}, topic
+        assert qos.depth == (LATCHED if topic in latched else RELIABLE).depth, topic
 
 
 def test_a_late_joiner_gets_the_latched_arena_and_trial_start(graph):

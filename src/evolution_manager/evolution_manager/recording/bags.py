@@ -49,7 +49,7 @@ def offered_qos(topic: str) -> Qos:
     latched = is_latched(topic)
     return Qos(
         history=QosHistory.KEEP_LAST,
-        depth=1 if latched else 100,
+        depth=1 if latched else 1000,  # swarm_ros.qos LATCHED and RELIABLE (a test checks)
         reliability=QosReliability.RELIABLE,
         durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
         deadline=_UNSET,

@@ -70,6 +70,10 @@ numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time,
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
+PUBLISHERS_MATCH_SETTLE = 1.0
+"""Seconds a new recorder waits after its subscriptions matched, for the publishers to match them too."""
+
+
 def expected_messages(
     robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT, clock: str = "/clock"
 ) -> dict[str, int]:
@@ -144,6 +148,26 @@ class TrialRunner:
             if time.monotonic() > deadline:
                 raise TrialFailedError(f"timed out waiting for {what}")
             self.executor.spin_once(timeout_sec=0.05)
+
+    def spin_while_progressing(
+        self, done: Callable[[], bool], progress: Callable[[], int], what: Callable[[], str]
+    ) -> None:
+        """Spin until ``done()`` while ``progress()`` keeps growing: raise ``TrialFailedError`` naming
+        ``what()`` once it has not grown for the runner's timeout (a recorder trailing a loaded graph is slow,
+        not stuck)."""
+        seen = [progress()]
+
+        def done_or_moved() -> bool:
+            return done() or progress() != seen[0]
+
+        while True:
+            try:
+                self.spin_until(done_or_moved, "")
+            except TrialFailedError:
+                raise TrialFailedError(f"timed out waiting for {what()}") from None
+            if done():
+                return
+            seen[0] = progress()
 
     def spin_for(self, seconds: float) -> None:
         """Spin for ``seconds``."""
@@ -338,6 +362,10 @@ class TrialGraph:
                 topics = trial_topics(self.robots, self.namespace, self.clock)
                 recorder = GraphRecorder(node, bag, topics, armed=False)
                 runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
+                # Matching is seen from this side first: the publishers learn of the new subscriptions a
+                # moment later, and a volatile writer does not resend what it wrote before. Without this
+                # wait a trial lost its first ticks on one robot in about one run of ten.
+                runner.spin_for(PUBLISHERS_MATCH_SETTLE)
                 # The latched topics hand over their last message on joining: the arena of the simulator's
                 # start, and the start of any trial run before. Those belong to no trial of this bag.
                 stale = {
@@ -353,8 +381,18 @@ class TrialGraph:
                 expected = expected_messages(self.robots, self.namespace, trial, self.config, self.clock)
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
-                runner.spin_until(
-                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()), "the last messages"
+                runner.spin_while_progressing(
+                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
+                    lambda: sum(recorder.counts.values()),
+                    lambda: (
+                        "the last messages (recorded/expected: "
+                        + ", ".join(
+                            f"{t} {recorder.counts[t]}/{n}"
+                            for t, n in expected.items()
+                            if recorder.counts[t] < n
+                        )
+                        + ")"
+                    ),
                 )
                 write_result(
                     bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
