@@ -22,6 +22,7 @@ import numpy as np
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.timeline import PAPER
+from bt_controller.vocabulary import N_CONDITIONS
 
 
 class PerceptionParams(NamedTuple):
@@ -258,7 +259,7 @@ class RobotView:
             raise RuntimeError("blackboard before any readings")
         r = self.latest
         nest_b, food_b, near_b = (r.bearings[k] if k >= 0 else math.nan for k in self.sources)
-        out = np.zeros(8, dtype=np.bool_)
+        out = np.zeros(N_CONDITIONS, dtype=np.bool_)
         blackboard(
             r.in_nest,
             r.on_food,

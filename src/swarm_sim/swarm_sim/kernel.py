@@ -32,7 +32,7 @@ from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees, start_memory, tick, tree_at
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
-from bt_controller.vocabulary import CONDITION_INDEX, STOP
+from bt_controller.vocabulary import CONDITION_INDEX, N_CONDITIONS, STOP
 from swarm_sim import world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Config, Params
@@ -362,7 +362,7 @@ def simulate_chain(
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
     robot_arcs = world.arcs(gains, p)
     samples = 0
-    board = np.zeros(8, dtype=np.bool_)
+    board = np.zeros(N_CONDITIONS, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):

@@ -159,6 +159,8 @@ function tooltip(ev, key, items) {
 }
 
 // ---- trees: parse the text format, lay out leaves left to right, composites over their children
+// (inner nodes: seq, sel, prob with a draw key prob@K, and the success decorator; leaves: conditions, got_food
+// among them, drawn as ellipses, and actions)
 function parseTree(text) {
   const tokens = text.match(/[A-Za-z_][A-Za-z0-9_]*(?:\s*@\s*[0-9]+)?|[(),]/g) || [];
   let pos = 0;
@@ -200,8 +202,8 @@ function drawTree(text) {
     svg.appendChild(el("svg:line", { x1: q.x * W + W / 2, y1: q.depth * H + 30, x2: p.x * W + W / 2,
       y2: p.depth * H + 8, stroke: "#666" }));
   }
-  const fill = { seq: "#cfe2f3", sel: "#fce5cd", prob: "#d9ead3" };
-  const label = { seq: "seq →", sel: "sel ?", prob: "prob %" };
+  const fill = { seq: "#cfe2f3", sel: "#fce5cd", prob: "#d9ead3", success: "#fff2cc" };
+  const label = { seq: "seq →", sel: "sel ?", prob: "prob %", success: "success ✓" };
   for (const p of placed) {
     const composite = p.n.children.length > 0;
     const isCondition = !composite && !DATA.actions.includes(p.n.name);
