@@ -21,6 +21,7 @@ import numpy as np
 from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, flatten
 from bt_controller.draws import check_seed, root_key
+from bt_controller.library import Library
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from swarm_sim import kernel, world
@@ -81,12 +82,14 @@ def _links(heard: np.ndarray, senders: np.ndarray) -> tuple[np.ndarray, ...]:
     return tuple(pairs[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True))  # (np.split: 8x slower)
 
 
-def record_trial(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT) -> RecordedTrial:
+def record_trial(
+    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+) -> RecordedTrial:
     """Trial ``trial`` of ``seed`` with ``tree`` (tree text) on every robot, through the batch road's kernels,
     in world ``config`` (its profile and conditions). Raises ``TreeError`` for a bad tree and ``ValueError``
     for a bad seed or trial."""
     trial = _check(seed, trial)
-    flat = flatten(parse(tree))
+    flat = flatten(parse(tree, library=library))
     chain, position = timeline.chain_of_trial(config.timeline, trial)
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots)
@@ -111,7 +114,9 @@ def record_trial(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT)
     )
 
 
-def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT) -> RecordedTrial:
+def record_trial_reference(
+    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+) -> RecordedTrial:
     """``record_trial`` through the reference road (``lockstep.run_with_controllers``: the simulator's side
     and one ``FootbotController`` per robot, as the node graph runs them), from the robots' answers."""
     from swarm_sim.lockstep import (
@@ -121,7 +126,7 @@ def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config 
     )  # (the slow road: on demand)
 
     trial = _check(seed, trial)
-    parsed = parse(tree)
+    parsed = parse(tree, library=library)
     line = config.timeline
     p = config.params()
     n = p.n_robots

@@ -47,9 +47,13 @@ WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 VALUE_NAMES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
 """The six values of a trial or an evaluation: the objectives, then the descriptors (the one home of these
 names)."""
-OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
-"""The three objectives, in fitness order."""
-DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[3:]
+N_OBJECTIVES = 3
+"""How many of the values are objectives (the rest are the three descriptors)."""
+OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:N_OBJECTIVES]
+"""The objectives, in fitness order."""
+PAPER_OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
+"""The three objectives of the 2023 paper (its GP_fnd evolves them together)."""
+DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[N_OBJECTIVES:]
 """The three behaviour descriptors, in grid order."""
 N_VALUES = len(VALUE_NAMES)
 

@@ -19,14 +19,18 @@ from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_in
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import (
     add_scenario_options,
+    add_task_options,
     check_resume_options,
     config_from_args,
+    library_from_args,
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
+    from bt_controller.library import Library
+    from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
 
 
@@ -37,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
     )
     parser.add_argument(
-        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
+        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd: --objectives)"
     )
     budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
     parser.add_argument(
@@ -48,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=seed_int, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
     add_scenario_options(parser)
+    add_task_options(parser)
     parser.add_argument(
         "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
     )
@@ -67,13 +72,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _evaluator(workers: int, profile: str) -> Evaluator:
+def _evaluator(workers: int, config: RunConfig, library: Library | None) -> Evaluator:
 
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
-        return BatchEvaluator(default_config(profile), threads=workers)
+        return BatchEvaluator(config.world(), threads=workers, library=library)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
 
@@ -92,15 +96,16 @@ def evolve(argv: Sequence[str] | None = None) -> int:
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
             saved = directory.read_config()
             check_resume_options(args, saved)
-            run = Run.resume(args.out, _evaluator(args.workers, saved.profile))
+            run = Run.resume(args.out, _evaluator(args.workers, saved, directory.read_library(saved)))
         else:
             if directory.started():
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
             assert config is not None  # made from the options when not resuming
-            evaluator = _evaluator(args.workers, config.profile)
-            run = Run.start(config, args.out, evaluator)
+            library = library_from_args(args)
+            evaluator = _evaluator(args.workers, config, library)
+            run = Run.start(config, args.out, evaluator, library)
     except WriteError as error:  # the new run directory could not be written
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_IO

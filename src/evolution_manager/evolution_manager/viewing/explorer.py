@@ -29,6 +29,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import ExplorerError
@@ -142,6 +143,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     objectives: dict[str, dict] = {}
     simplified: dict[str, str] = {}
     held_out = _held_out_scores(root, config)
+    library = _library(root, config)
     from swarm_sim.world import OBJECTIVES
 
     for objective in OBJECTIVES:
@@ -153,7 +155,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         for item in document.get("items", []):
             tree = item["tree"]
             if tree not in simplified:  # the repertoire file holds it (simplified when it was written)
-                simplified[tree] = item.get("simplified") or to_text(simplify(parse(tree)))
+                simplified[tree] = item.get("simplified") or _simplified(tree, library)
             entry = {
                 "tree": tree,
                 "simplified": simplified[tree],
@@ -184,7 +186,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         from evolution_manager.viewing.frames import frames_from_tree
         from swarm_sim.config import DEFAULT, default_config
 
-        model = default_config(config.get("profile") or DEFAULT.profile)  # the run's model
+        # the run's model: its profile and its task's trial length
+        model = default_config(config.get("profile") or DEFAULT.profile, config.get("task") or "primitives")
         seeds = _evaluation_seeds(root)
         wanted = []
         for grid in objectives.values():
@@ -196,7 +199,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
             key = f"{entry['simplified']}|{seed}"
             if key not in animations:
                 # The simplified tree sets the same motors: the same trial, a little faster to run.
-                animations[key] = _pack(frames_from_tree(entry["simplified"], seed, 0, model), STRIDE)
+                frames = frames_from_tree(entry["simplified"], seed, 0, model, library)
+                animations[key] = _pack(frames, STRIDE)
             entry["animation"] = key
             if progress is not None:
                 progress(done, len(wanted))
@@ -217,6 +221,23 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         "arena": _arena(),
         "actions": _actions(),
     }
+
+
+def _library(root: Path, config: dict) -> Library | None:
+    """The run's copy of its primitive library (``library.json``), or None for a run without one."""
+    path = root / "library.json"
+    if not config.get("library") or not path.exists():
+        return None
+    try:
+        return library_from_json(_read(path), str(config["library"]))
+    except LibraryError as error:
+        raise ExplorerError(str(error)) from None
+
+
+def _simplified(tree: str, library: Library | None) -> str:
+    """The simplified text of a tree text, the library's names kept."""
+    simple = simplify(parse(tree, library=library))
+    return to_text(simple) if library is None else library.fold(simple)
 
 
 def _arena() -> dict:

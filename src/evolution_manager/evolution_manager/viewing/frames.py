@@ -23,6 +23,7 @@ from bt_controller import timeline
 from evolution_manager.errors import AnimationError
 
 if TYPE_CHECKING:
+    from bt_controller.library import Library
     from swarm_sim.config import Config, Params
 
 
@@ -95,15 +96,18 @@ def _fitness_so_far(initial: np.ndarray, current: np.ndarray, p: Params) -> np.n
     return world.trial_values(initial, current, np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), p)[:3]
 
 
-def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
+def frames_from_tree(
+    tree: str, seed: int, trial: int = 0, config: Config | None = None, library: Library | None = None
+) -> TrialFrames:
     """Run trial ``trial`` of ``seed`` with ``tree`` on every robot through the compiled kernels, recorded
     step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
-    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps."""
+    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps.
+    ``library``: the primitive library the tree's names come from."""
     from swarm_sim.config import DEFAULT
     from swarm_sim.recording import record_trial
 
     config = config or DEFAULT
-    recorded = record_trial(tree, seed, trial, config)
+    recorded = record_trial(tree, seed, trial, config, library)
     return TrialFrames(
         tree=tree,
         seed=seed,

@@ -190,7 +190,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finished = time.monotonic()
 
-    values = dict(zip(OBJECTIVES, record.values[:3], strict=True))
+    values = dict(zip(OBJECTIVES, record.values[: len(OBJECTIVES)], strict=True))
     print(
         f"""
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).
