@@ -7,8 +7,8 @@ import random
 import deap.creator
 import pytest
 
-from bt_controller.tree import parse, to_text
 from bt_controller.library import library_from_json
+from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2023
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.deap_trees import (

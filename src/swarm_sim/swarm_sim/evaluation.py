@@ -41,10 +41,11 @@ class EvaluationRequest:
 
 @dataclass(frozen=True)
 class EvaluationResult:
-    """Fitness (density, nest, food) and descriptors (movement, rotation, conditionality), or an error."""
+    """Fitness (every objective, ``world.OBJECTIVES`` order) and descriptors (movement, rotation,
+    conditionality), or an error."""
 
-    fitness: tuple[float, float, float] | None
-    descriptors: tuple[float, float, float] | None
+    fitness: tuple[float, ...] | None
+    descriptors: tuple[float, ...] | None
     error: str | None
 
     @property
@@ -68,9 +69,10 @@ def failed(reason: str) -> EvaluationResult:
 
 
 def from_values(values: Sequence[float] | np.ndarray) -> EvaluationResult:
-    """A result from six values (``trial.VALUE_NAMES`` order)."""
+    """A result from the values of an evaluation (``world.VALUE_NAMES`` order)."""
     v = tuple(float(x) for x in values)
-    return EvaluationResult(fitness=(v[0], v[1], v[2]), descriptors=(v[3], v[4], v[5]), error=None)
+    k = world.N_OBJECTIVES
+    return EvaluationResult(fitness=v[:k], descriptors=v[k:], error=None)
 
 
 def check_request(

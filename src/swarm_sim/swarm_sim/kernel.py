@@ -422,6 +422,7 @@ def simulate_chain(
                     _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
                     sources[i, 2] >= 0,
                     _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
+                    False,  # got_food: carrying comes with the foraging step (after the physics merge)
                     p,
                     board,
                 )
