@@ -30,6 +30,7 @@ from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, default_config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
 EXIT_USAGE = 2
 
@@ -111,8 +112,8 @@ def evaluation_json(
         "profile": profile,
         "task": task,
         "conditions": dict(conditions or {}),
-        "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
-        "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
+        "fitness": {k: named[k] for k in OBJECTIVES},
+        "descriptors": {k: named[k] for k in DESCRIPTORS},
     }
     if library is not None:
         document["library"] = {"file": library.label, "digest": library.digest}

@@ -15,7 +15,8 @@ animations (``swarm_sim.recording``); the batch road asks for none and pays two 
 
 The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
 ``Jobs`` (what to run), ``Outputs`` (where results go), ``Recording`` (one trial, step by step); inside a
-chain, ``Swarm`` holds every robot's state and ``Inbox`` the messages of one step. ``make_jobs`` builds
+chain, ``Swarm`` holds every robot's state, ``Cargo`` its foraging state and ``Inbox`` the messages of one
+step. ``make_jobs`` builds
 ``Jobs`` from Python.
 """
 
@@ -182,6 +183,19 @@ class Swarm(NamedTuple):
     """(n, 3) the current trial's initial smoothed values."""
 
 
+class Cargo(NamedTuple):
+    """Every robot's foraging state during a chain (beside ``Swarm``): what it carries and has delivered, and
+    where the trial found it (``docs/model.md``, "Foraging")."""
+
+    carrying: np.ndarray
+    """(n,) bool: whether each robot carries food (``perception.carry``)."""
+    deliveries: np.ndarray
+    """(n,) int64: each robot's deliveries in the current trial."""
+    food: np.ndarray
+    """(n, 2) each robot's true distance from the food region at the current trial's first step and, once
+    taken, its last (``world.food_distance``: the inverse food objective)."""
+
+
 class Inbox(NamedTuple):
     """The messages of one sensing step (``world.sense_step``'s outputs), per receiving robot."""
 
@@ -215,10 +229,14 @@ class Recording(NamedTuple):
     ground: np.ndarray
     """(steps, n, 2) bool: in the nest, on food (the ground sensor at the step)."""
     fitness: np.ndarray
-    """(steps, 3): (density, nest, food) scored as if the trial ended at the step; NaN before the initial
-    step."""
+    """(steps, ``world.N_OBJECTIVES``): every objective scored as if the trial ended at the step (foraging:
+    the deliveries so far); NaN before the initial step."""
     initial: np.ndarray
     """(n, 3): the trial's initial smoothed values (taken at its initial step)."""
+    carrying: np.ndarray
+    """(steps, n) bool: whether each robot carries food after the step (what it answered)."""
+    deliveries: np.ndarray
+    """(steps, n) int64: each robot's deliveries in the trial after the step."""
 
 
 @numba.njit(cache=True)
@@ -233,8 +251,10 @@ def new_recording(steps: int, n: int) -> Recording:
         np.zeros((steps, n, n), dtype=np.int64),
         np.zeros((steps, n, 3)),
         np.zeros((steps, n, 2), dtype=np.bool_),
-        np.zeros((steps, 3)),
+        np.zeros((steps, world.N_OBJECTIVES)),
         np.zeros((n, 3)),
+        np.zeros((steps, n), dtype=np.bool_),
+        np.zeros((steps, n), dtype=np.int64),
     )
 
 
@@ -261,6 +281,9 @@ def _record_step(
     initial: np.ndarray,
     heard: np.ndarray,
     senders: np.ndarray,
+    carrying: np.ndarray,
+    deliveries: np.ndarray,
+    food: np.ndarray,
 ) -> None:
     """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
     what the simulator publishes and what the robots answered to it."""
@@ -279,14 +302,28 @@ def _record_step(
             rec.senders[row, i, c] = senders[i, c]
         for c in range(3):
             rec.smoothed[row, i, c] = smooth[i, c]
+        rec.carrying[row, i] = carrying[i]
+        rec.deliveries[row, i] = deliveries[i]
     if timeline.is_initial(p, k):
         rec.initial[:, :] = initial
     if row + 1 >= p.initial_step:
-        # The objectives only (counts and motion feed the descriptors), from this trial's initial values.
+        # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
+        # robots' distances from food now and their deliveries so far.
+        now = np.empty((n, 2))
+        for i in range(n):
+            now[i, 0] = food[i, 0]
+            now[i, 1] = world.food_distance(x[i], y[i], gap, p)
         values = world.trial_values(
-            initial, smooth, np.zeros((n, N_COUNTS), dtype=np.int64), np.zeros((n, 2), dtype=np.int64), p
+            initial,
+            smooth,
+            np.zeros((n, N_COUNTS), dtype=np.int64),
+            np.zeros((n, 2), dtype=np.int64),
+            now,
+            deliveries,
+            gap,
+            p,
         )
-        for c in range(3):
+        for c in range(world.N_OBJECTIVES):
             rec.fitness[row, c] = values[c]
     else:
         rec.fitness[row, :] = np.nan
@@ -320,6 +357,11 @@ def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
         np.zeros((n, 2), dtype=np.int64),
         np.zeros((n, 3)),
     )
+
+
+@numba.njit(cache=True)
+def _new_cargo(n: int) -> Cargo:
+    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2)))
 
 
 @numba.njit(cache=True)
@@ -359,6 +401,7 @@ def simulate_chain(
     # Locals for the loops below (a field read inside a loop would cost a reference count each time).
     (x, y, heading, x_before, y_before, gains, broadcast_nest, broadcast_food, raw_nest, raw_food, window,
      smooth, ground_now, sources, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
+    carrying, deliveries, food = _new_cargo(n)
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
     robot_arcs = world.arcs(gains, p)
     samples = 0
@@ -392,15 +435,24 @@ def simulate_chain(
                 nest_values,
                 food_values,
             )
+        if not sensing:
+            # A trial's first step: the start pose's ground sets the carrying flag, and its distance from
+            # food is the inverse food objective's first (footbot_bt.cpp:134-137, 495-496 at a73e4af).
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                carrying[i] = world.start_carrying(carrying[i], on_food)
+                food[i, 0] = world.food_distance(x[i], y[i], gap, p)
         if sensing:
             for i in range(n):
                 in_nest, on_food = world.ground(x[i], y[i], gap, p)
-                nest, food, density, nest_source, food_source, nearest = world.estimate(
+                carrying[i], delivered = world.carry(carrying[i], in_nest, on_food)
+                deliveries[i] += 1 if delivered else 0
+                nest_raw, food_raw, density, nest_source, food_source, nearest = world.estimate(
                     in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
                 )
-                world.push_sample(window[i], samples, nest, food, density)
-                raw_nest[i] = nest
-                raw_food[i] = food
+                world.push_sample(window[i], samples, nest_raw, food_raw, density)
+                raw_nest[i] = nest_raw
+                raw_food[i] = food_raw
                 ground_now[i, 0] = in_nest
                 ground_now[i, 1] = on_food
                 sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
@@ -422,7 +474,7 @@ def simulate_chain(
                     _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
                     sources[i, 2] >= 0,
                     _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
-                    False,  # got_food: carrying comes with the foraging step (after the physics merge)
+                    carrying[i],
                     p,
                     board,
                 )
@@ -444,9 +496,27 @@ def simulate_chain(
         if timeline.is_initial(p, k):
             initial[:, :] = smooth
         if position == recorded:
-            _record_step(rec, k, gap, p, x, y, heading, actions, smooth, initial, counts_in, senders)
+            _record_step(
+                rec,
+                k,
+                gap,
+                p,
+                x,
+                y,
+                heading,
+                actions,
+                smooth,
+                initial,
+                counts_in,
+                senders,
+                carrying,
+                deliveries,
+                food,
+            )
         if timeline.is_final(p, k):
-            values = world.trial_values(initial, smooth, counts, motion, p)
+            for i in range(n):
+                food[i, 1] = world.food_distance(x[i], y[i], gap, p)
+            values = world.trial_values(initial, smooth, counts, motion, food, deliveries, gap, p)
             for c in range(values.shape[0]):
                 values_out[position, c] = values[c]
             for i in range(n):
@@ -455,6 +525,9 @@ def simulate_chain(
                 poses_out[position, 1, i, 2] = heading[i]
             counts[:, :] = 0
             motion[:, :] = 0
+            # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
+            carrying[:] = False
+            deliveries[:] = 0
 
 
 @numba.njit(cache=True, inline="always")

@@ -3,8 +3,9 @@ and ``record_trial_reference`` (the reference road, as the node graph runs it; a
 
 Both give a ``RecordedTrial``: per control step of trial ``trial`` of ``seed`` (its chain's earlier trials are
 run first, not recorded; ``bt_controller.timeline``) the robots' poses, the motors their last tick set, the
-last tick's number, the messages each robot received, its smoothed values, its ground sensor, and the fitness
-so far (each objective scored from the smoothed values of the step as if the trial ended there). The two are
+last tick's number, the messages each robot received, its smoothed values, its ground sensor, its carrying
+flag and deliveries, and the fitness so far (each objective scored from the values of the step as if the trial
+ended there). The two are
 equal array for array, as the two roads' results are (``test_recording.py``).
 
 ``record_trial`` runs the batch road's ``kernel.simulate_chain`` itself, asked to record one trial
@@ -57,9 +58,13 @@ class RecordedTrial:
     initial: np.ndarray
     """(n, 3): the trial's initial smoothed values (taken at step ``initial_step`` of the trial)."""
     fitness: np.ndarray
-    """(T, 3): density, nest, food so far (NaN before the initial step)."""
+    """(T, ``world.N_OBJECTIVES``): every objective so far (NaN before the initial step)."""
     values: tuple[float, ...]
-    """The trial's six values (``world.VALUE_NAMES``), as an evaluation scores it."""
+    """The trial's values (``world.VALUE_NAMES``), as an evaluation scores it."""
+    carrying: np.ndarray
+    """(T, n) bool: whether each robot carries food after the step."""
+    deliveries: np.ndarray
+    """(T, n) int64: each robot's deliveries in the trial after the step."""
 
 
 def _check(seed: int, trial: int) -> int:
@@ -111,6 +116,8 @@ def record_trial(
         initial=rec.initial,
         fitness=rec.fitness,
         values=tuple(float(v) for v in values),
+        carrying=rec.carrying,
+        deliveries=rec.deliveries,
     )
 
 
@@ -137,6 +144,8 @@ def record_trial_reference(
     smoothed_rows: list[np.ndarray] = []
     ground: list[np.ndarray] = []
     fitness: list[np.ndarray] = []
+    carrying: list[np.ndarray] = []
+    deliveries: list[np.ndarray] = []
     current = np.full(n, -1, dtype=np.int64)
     last_tick = -1
     initial = np.zeros((n, 3))
@@ -160,10 +169,18 @@ def record_trial_reference(
         links.append(np.array(pairs, dtype=np.int64).reshape(-1, 2))
         smoothed_rows.append(smoothed)
         ground.append(np.array([[r.in_nest, r.on_food] for r in readings], dtype=np.bool_))
+        carrying.append(np.array([a.carrying for a in answers], dtype=np.bool_))
+        delivered = np.array([a.deliveries for a in answers], dtype=np.int64)
+        deliveries.append(delivered)
         if timeline.step_in_trial(line, sim.step) < line.initial_step:
-            fitness.append(np.full(3, np.nan))
+            fitness.append(np.full(world.N_OBJECTIVES, np.nan))
         else:
-            fitness.append(world.trial_values(initial, smoothed, no_counts, no_motion, p)[:3])
+            food = sim.food.copy()
+            for i in range(n):
+                food[i, 1] = world.food_distance(sim.x[i], sim.y[i], sim.setup.gap, p)
+            gap = sim.setup.gap
+            values = world.trial_values(initial, smoothed, no_counts, no_motion, food, delivered, gap, p)
+            fitness.append(values[: world.N_OBJECTIVES])
 
     record = run_with_controllers(parsed, seed, trial, config, on_answers=on_answers)
     return RecordedTrial(
@@ -181,4 +198,6 @@ def record_trial_reference(
         initial=initial,
         fitness=np.array(fitness),
         values=record.values,
+        carrying=np.array(carrying),
+        deliveries=np.array(deliveries),
     )

@@ -23,11 +23,11 @@ CLEAN_CONFIG = Config(profile="clean")
 
 
 def _movement(values: tuple[float, ...]) -> float:
-    return values[3]
+    return values[world.VALUE_NAMES.index("movement")]
 
 
 def _rotation(values: tuple[float, ...]) -> float:
-    return values[4]
+    return values[world.VALUE_NAMES.index("rotation")]
 
 
 @pytest.mark.parametrize("config", [PAPER_CONFIG, CLEAN_CONFIG], ids=["paper", "clean"])
@@ -36,7 +36,7 @@ def test_forward_has_movement_one(config):
     values, records = reference_road.evaluate(parse("forward"), seed=3, trials=5, config=config)
     assert _movement(values) == 1.0
     assert _rotation(values) == 0.5
-    assert all(r.values[3] == 1.0 for r in records)
+    assert all(_movement(r.values) == 1.0 for r in records)
 
 
 def test_forward_then_reverse_over_a_paper_chain():
@@ -46,7 +46,7 @@ def test_forward_then_reverse_over_a_paper_chain():
     values, records = reference_road.evaluate(
         parse("seq(forward, reverse)"), seed=5, trials=5, config=PAPER_CONFIG
     )
-    assert [round(r.values[3] * 80 - 40) for r in records] == [-12, -14, -14, -12, -14]
+    assert [round(_movement(r.values) * 80 - 40) for r in records] == [-12, -14, -14, -12, -14]
     assert _movement(values) == pytest.approx((13.4 - 26.6 + 40) / 80, abs=1e-12)
 
 
@@ -55,7 +55,7 @@ def test_forward_then_reverse_in_clean_trials():
     values, records = reference_road.evaluate(
         parse("seq(forward, reverse)"), seed=5, trials=3, config=CLEAN_CONFIG
     )
-    assert [round(r.values[3] * 80 - 40) for r in records] == [-12, -12, -12]
+    assert [round(_movement(r.values) * 80 - 40) for r in records] == [-12, -12, -12]
     assert _movement(values) == pytest.approx((14 - 26 + 40) / 80, abs=1e-12)
 
 
@@ -203,8 +203,8 @@ def test_nest_side_needs_an_estimate_strictly_inside_the_cap():
 
 def test_nest_objective_is_one_when_the_final_smoothed_nest_value_is_zero():
     p = PAPER_CONFIG.params()
-    density, nest, food = world.robot_objectives(
-        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), p
+    density, nest, food, *_ = world.robot_objectives(
+        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), 0.0, 0.0, 0, 1000.0, p
     )
     assert nest == 1.0
     assert food == pytest.approx(0.5 * ((2000.0 - 4000.0) / 5000.0 + 1.0))

@@ -21,7 +21,8 @@ Subscriptions (relative names, in the robot's namespace):
 
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
-        name), its wheel speeds in m/s, the broadcast and smoothed estimates.
+        name), its wheel speeds in m/s, the broadcast and smoothed estimates, whether it carries food and its
+        deliveries in the trial so far.
     cmd_vel (geometry_msgs/Twist, with ``commands`` cmd_vel or both): the same step's wheel speeds as a
         velocity of the robot's base (REP 103): ``linear.x = (left + right) / 2`` in m/s and
         ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise positive, with the wheel
@@ -243,6 +244,8 @@ class FootbotControllerNode(RosNode):
                     smoothed_nest=nest,
                     smoothed_food=food,
                     smoothed_density=density,
+                    carrying=outcome.carrying,
+                    deliveries=outcome.deliveries,
                 )
             )
 

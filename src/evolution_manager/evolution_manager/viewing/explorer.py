@@ -96,10 +96,14 @@ def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
     return evaluation_seed(run_seed, int(evaluation or 0))
 
 
-def _pack(frames: TrialFrames, stride: int) -> dict:
+def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
-    heading (u8, 256 steps a turn); then density, nest, food so far (u16, value * 10000; 65535: not yet); the
-    last tick (u8, 255: none); each robot's action (u8, 255: none). Little-endian."""
+    heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
+    10000; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255: none); whether
+    each robot carries food (u8). Little-endian."""
+    from swarm_sim.world import OBJECTIVES
+
+    columns = [OBJECTIVES.index(o) for o in objectives]
     keep = list(range(0, len(frames.steps), stride))
     if keep[-1] != len(frames.steps) - 1:
         keep.append(len(frames.steps) - 1)
@@ -113,11 +117,13 @@ def _pack(frames: TrialFrames, stride: int) -> dict:
                 round((y + half) * 10),
                 round((h % (2 * math.pi)) / (2 * math.pi) * 256) % 256,
             )
-        for value in frames.fitness[k]:
-            out += struct.pack("<H", 65535 if math.isnan(value) else round(value * 10000))
+        for column in columns:
+            value = float(frames.fitness[k, column])
+            out += struct.pack("<H", 65535 if math.isnan(value) else min(round(value * 10000), 65534))
         tick = int(frames.ticks[k])
-        out += struct.pack("<B", 255 if tick < 0 else tick)
+        out += struct.pack("<H", 65535 if tick < 0 else tick)
         out += bytes(255 if a < 0 else int(a) for a in frames.actions[k])
+        out += bytes(int(c) for c in frames.carrying[k])
     return {
         "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
         "trial": frames.trial,
@@ -200,7 +206,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
             if key not in animations:
                 # The simplified tree sets the same motors: the same trial, a little faster to run.
                 frames = frames_from_tree(entry["simplified"], seed, 0, model, library)
-                animations[key] = _pack(frames, STRIDE)
+                animations[key] = _pack(frames, STRIDE, list(objectives))
             entry["animation"] = key
             if progress is not None:
                 progress(done, len(wanted))

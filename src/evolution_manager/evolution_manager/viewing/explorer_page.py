@@ -220,7 +220,8 @@ function drawTree(text) {
 // ---- the trial animation, from the packed frames (explorer._pack)
 function unpack(anim) {
   const bytes = Uint8Array.from(atob(anim.data), c => c.charCodeAt(0));
-  const view = new DataView(bytes.buffer), n = DATA.arena.robots, rec = n * 5 + 6 + 1 + n;
+  const F = Object.keys(DATA.objectives).length;  // the page's objectives, in its order (explorer._pack)
+  const view = new DataView(bytes.buffer), n = DATA.arena.robots, rec = n * 5 + 2 * F + 2 + n + n;
   const frames = [];
   for (let off = 0; off + rec <= bytes.length; off += rec) {
     const robots = [];
@@ -229,10 +230,12 @@ function unpack(anim) {
       robots.push({ x: view.getUint16(o, true) / 10 - DATA.arena.half, y: view.getUint16(o + 2, true) / 10 - DATA.arena.half,
         h: view.getUint8(o + 4) / 256 * 2 * Math.PI });
     }
-    const f = off + n * 5, fit = [0, 1, 2].map(k => view.getUint16(f + 2 * k, true));
-    const tick = view.getUint8(f + 6), actions = [];
-    for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 7 + i));
-    frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 255 ? null : tick, actions });
+    const f = off + n * 5, fit = [...Array(F).keys()].map(k => view.getUint16(f + 2 * k, true));
+    const tick = view.getUint16(f + 2 * F, true), actions = [], carrying = [];
+    for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 2 * F + 2 + i));
+    for (let i = 0; i < n; i++) carrying.push(view.getUint8(f + 2 * F + 2 + n + i) === 1);
+    frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 65535 ? null : tick,
+      actions, carrying });
   }
   return frames;
 }
@@ -263,13 +266,16 @@ function drawFrame(canvas, anim, frames, k) {
   const rr = Math.max(3, A.robot_radius * scale);
   f.robots.forEach((r, i) => {
     const [x, y] = px(r.x, r.y);
+    if (f.carrying[i]) {  // carrying food: a green ring
+      ctx.beginPath(); ctx.arc(x, y, rr + 3, 0, 2 * Math.PI); ctx.strokeStyle = "#1e821e"; ctx.lineWidth = 3; ctx.stroke();
+    }
     ctx.beginPath(); ctx.arc(x, y, rr, 0, 2 * Math.PI); ctx.fillStyle = COLOURS[i % 9]; ctx.fill();
     ctx.strokeStyle = "#000"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(x, y);
     ctx.lineTo(x + 1.8 * rr * Math.cos(r.h), y - 1.8 * rr * Math.sin(r.h)); ctx.stroke();
     ctx.fillStyle = "#000"; ctx.fillText(String(i), x + rr + 1, y - rr);
   });
   const status = document.getElementById("frame-status");
-  status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; fitness so far: ` +
+  status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; carrying ${f.carrying.filter(c => c).length}; fitness so far: ` +
     Object.keys(DATA.objectives).map((n, i) => `${n} ${f.fitness[i] === null ? "-" : f.fitness[i].toFixed(3)}`).join(", ") +
     "; actions: " + f.actions.map((a, i) => `${i}:${a === 255 ? "(still)" : DATA.actions[a]}`).join(" ");
   document.getElementById("frame-slider").value = k;
