@@ -401,12 +401,12 @@ def simulate_chain(
     # Locals for the loops below (a field read inside a loop would cost a reference count each time).
     (x, y, heading, x_before, y_before, gains, broadcast_nest, broadcast_food, raw_nest, raw_food, window,
      smooth, ground_now, sources, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
-    carrying, deliveries, food = _new_cargo(n)
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
     robot_arcs = world.arcs(gains, p)
     samples = 0
     board = np.zeros(N_CONDITIONS, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
+    carrying, deliveries, food = _new_cargo(n)
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
         position = timeline.trial_in_chain(p, k)
