@@ -2,10 +2,14 @@
 
     validate --reference docs/validation/argos_stats.tsv [--reference MORE.tsv] [--profile paper]
              [--seeds 20] [--trials 10] [--notes docs/validation/notes.md] --out docs/validation.md
+             [--foraging-reference docs/validation/argos_stats_foraging.tsv] [--library PRIMITIVES.json]
 
 Each tree of the reference files is evaluated with seeds 1..N (one evaluation of ``--trials`` trials per seed,
-all in one batch); our mean and standard error of each of the six quantities are set beside the reference's
-with a verdict (``swarm_sim.validation``). ``--notes`` is markdown appended as it is (the explanations of
+all in one batch); our mean and standard error of each quantity the reference measured are set beside the
+reference's with a verdict (``swarm_sim.validation``). ``--reference`` files are measured in the primitives'
+20 s trials, ``--foraging-reference`` files in the 2024 foraging trials (100 s; their trees are labelled
+``[foraging]``); trees in the authors' syntax are read into ours (``bt_controller.authors``), and a tree may
+name the primitives of ``--library``. ``--notes`` is markdown appended as it is (the explanations of
 what is outside tolerance, kept in the repository so that regenerating keeps them). ``--tsv`` also writes our
 statistics in the reference's format. Bad input: one line on stderr, exit status 2; nothing is written then.
 """
@@ -16,12 +20,15 @@ import argparse
 import shlex
 import sys
 from collections.abc import Sequence
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import NoReturn
 
+from bt_controller.authors import from_authors, is_authors_syntax
+from bt_controller.library import Library
 from swarm_sim import validation
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.cli import library_option
+from swarm_sim.config import DEFAULT, TASKS, Config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 
@@ -38,6 +45,14 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--reference", type=Path, action="append", required=True, help="reference statistics TSV (repeatable)"
     )
+    parser.add_argument(
+        "--foraging-reference",
+        type=Path,
+        action="append",
+        default=[],
+        help="reference statistics TSV of foraging trials (repeatable)",
+    )
+    parser.add_argument("--library", help="a primitive library (JSON) whose names the reference trees use")
     parser.add_argument("--profile", help="model profile (default: the model's default)")
     parser.add_argument("--seeds", type=int, default=20, help="evaluations per tree, seeds 1..N (default 20)")
     parser.add_argument("--trials", type=int, default=10, help="trials per evaluation (default 10)")
@@ -59,12 +74,17 @@ def model_config(profile: str | None) -> Config:
         raise UsageError(f"--profile: {error}") from None
 
 
+def ours(tree: str) -> str:
+    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.authors``)."""
+    return from_authors(tree) if is_authors_syntax(tree) else tree
+
+
 def our_estimates(
-    trees: Sequence[str], seeds: int, trials: int, config: Config
+    trees: Sequence[str], seeds: int, trials: int, config: Config, library: Library | None = None
 ) -> dict[str, dict[str, validation.Estimate]]:
-    """Per tree, our estimates over seeds 1..``seeds`` (one batch)."""
-    requests = [EvaluationRequest(tree, seed, trials) for tree in trees for seed in range(1, seeds + 1)]
-    results = BatchEvaluator(config).evaluate(requests)
+    """Per tree (a reference's text), our estimates over seeds 1..``seeds`` (one batch)."""
+    requests = [EvaluationRequest(ours(tree), seed, trials) for tree in trees for seed in range(1, seeds + 1)]
+    results = BatchEvaluator(config, library=library).evaluate(requests)
     out = {}
     for index, tree in enumerate(trees):
         rows = []
@@ -77,16 +97,16 @@ def our_estimates(
     return out
 
 
-def stats_tsv(ours: dict[str, dict[str, validation.Estimate]]) -> str:
+def stats_tsv(estimates: dict[str, dict[str, validation.Estimate]], ticks: int = 40) -> str:
     """Our statistics in the reference's column layout (movement and rotation already in [0, 1] there as
-    ``movement01``/``rotation01``; the raw columns are mapped back to [-40, 40])."""
-    half = validation.RAW_DESCRIPTOR_HALF_RANGE
+    ``movement01``/``rotation01``; the raw columns are mapped back to [-ticks, ticks])."""
+    half = float(ticks)
     header = ["tree"]
     for q in validation.QUANTITIES:
         header += [f"{q}_mean", f"{q}_sem"]
     header += ["movement01_mean", "movement01_sem", "rotation01_mean", "rotation01_sem", "n_seeds"]
     lines = ["\t".join(header)]
-    for tree, by_q in ours.items():
+    for tree, by_q in estimates.items():
         cells = [tree]
         for q in validation.QUANTITIES:
             e = by_q[q]
@@ -109,27 +129,29 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     if not 1 <= args.trials <= 10_000:
         raise UsageError(f"--trials must be in [1, 10000], got {args.trials}")
     config = model_config(args.profile)
-    references: dict[str, dict[str, validation.Estimate]] = {}
-    for path in args.reference:
-        try:
-            stats_by_tree = validation.read_reference(path)
-        except validation.ReferenceFileError as error:
-            raise UsageError(str(error)) from None
-        for tree, stats in stats_by_tree.items():
-            try:
-                check_request(EvaluationRequest(tree, 1, args.trials))
-            except ValueError as error:
-                raise UsageError(f"{path}: tree {tree!r}: {error}") from None
-            references.setdefault(tree, stats)  # a tree in two files: the first file's statistics
+    library = library_option(args.library)
+    foraging = replace(config, ticks=TASKS["foraging"])
+    comparisons: list[validation.Comparison] = []
+    tables: list[str] = []
+    trees = 0
+    groups = (("", config, args.reference), ("foraging", foraging, args.foraging_reference))
+    for group, world, paths in groups:
+        references = _references(paths, args.trials, world.ticks, library)
+        if not references:
+            continue
+        trees += len(references)
+        estimates = our_estimates(list(references), args.seeds, args.trials, world, library)
+        for tree, stats in references.items():
+            comparisons += validation.compare(tree, estimates[tree], stats, group)
+        labelled = {f"[{group}] {t}" if group else t: e for t, e in estimates.items()}
+        tables.append(stats_tsv(labelled, world.ticks))
     notes = None
     if args.notes is not None:
         try:
             notes = args.notes.read_text()
         except OSError as error:
             raise UsageError(f"--notes {args.notes}: {error.strerror or error}") from None
-    print(f"validate: {len(references)} trees x {args.seeds} seeds x {args.trials} trials", file=sys.stderr)
-    ours = our_estimates(list(references), args.seeds, args.trials, config)
-    comparisons = [c for tree in references for c in validation.compare(tree, ours[tree], references[tree])]
+    print(f"validate: {trees} trees x {args.seeds} seeds x {args.trials} trials", file=sys.stderr)
     profile = getattr(config, "profile", None)
     command = "ws/run swarm_sim validate " + shlex.join(argv)
     tolerance = f"3 sqrt(2) SE_ARGoS + {validation.TOLERANCE_ABSOLUTE}"
@@ -141,13 +163,35 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
         "",
         f"- Model: profile `{profile or 'none (this model has no profiles)'}`. Ours: mean ± standard error "
         f"over {args.seeds} evaluations per tree (seeds 1-{args.seeds}, {args.trials} trials each).",
-        f"- ARGoS: {', '.join(f'`{p}`' for p in args.reference)} (mean ± standard error over its seeds; "
-        "how they were measured: `docs/validation/README.md`). Movement and rotation mapped to [0, 1] as "
-        "(x + 40) / 80.",
+        f"- ARGoS: {', '.join(f'`{p}`' for p in [*args.reference, *args.foraging_reference])} (mean ± "
+        "standard error over its seeds; how they were measured: `docs/validation/README.md`). Movement and "
+        "rotation mapped to [0, 1] as (x + T) / 2T for T ticks per trial (40; 200 in the `[foraging]` trees' "
+        "100 s trials)" + (f"; primitives' names from `{args.library}`." if args.library else "."),
         f"- Tolerance (`docs/model.md`): agrees when |diff| <= {tolerance}; indistinguishable when it also "
         f"has {z_rule}.",
     ]
-    return args, validation.render(comparisons, header, notes), stats_tsv(ours)
+    tsv = tables[0] + "".join(t.split("\n", 1)[1] for t in tables[1:])
+    return args, validation.render(comparisons, header, notes), tsv
+
+
+def _references(
+    paths: Sequence[Path], trials: int, ticks: int, library: Library | None
+) -> dict[str, dict[str, validation.Estimate]]:
+    """The reference statistics of ``paths`` per tree (a tree in two files: the first file's), every tree
+    checked; UsageError naming the file and the problem."""
+    references: dict[str, dict[str, validation.Estimate]] = {}
+    for path in paths:
+        try:
+            stats_by_tree = validation.read_reference(path, ticks)
+        except validation.ReferenceFileError as error:
+            raise UsageError(str(error)) from None
+        for tree, stats in stats_by_tree.items():
+            try:
+                check_request(EvaluationRequest(ours(tree), 1, trials), library=library)
+            except ValueError as error:
+                raise UsageError(f"{path}: tree {tree!r}: {error}") from None
+            references.setdefault(tree, stats)
+    return references
 
 
 def main(argv: Sequence[str] | None = None) -> int:
