@@ -1,7 +1,7 @@
-"""The authors' tree syntax (the DEAP ``str(individual)`` of KirstyMontague/big-mad-robot-repo), read into ours.
+"""The authors' tree syntax (DEAP's ``str(individual)`` in KirstyMontague/big-mad-robot-repo), read into ours.
 
-Their trees name composites by arity (``seqm2``, ``selm3``, ``probm4``), the decorator ``successd``, conditions
-``ifOnFood ifInNest ifGotFood ifFoodToLeft ifFoodToRight ifNestToLeft ifNestToRight ifRobotToLeft
+Their trees name composites by arity (``seqm2``, ``selm3``, ``probm4``), the decorator ``successd``,
+conditions ``ifOnFood ifInNest ifGotFood ifFoodToLeft ifFoodToRight ifNestToLeft ifNestToRight ifRobotToLeft
 ifRobotToRight`` and actions ``stop f fl fr r rl rr`` (``params.py`` ``addNodes``; ``CNode.cpp``). Reference
 trees of the validation (``docs/validation/``) and their sub-behaviours files come in it. ``from_authors``
 maps each token to ours and leaves anything else (a primitive's name, punctuation) as it is, so that the
@@ -56,5 +56,5 @@ def from_authors(text: str) -> str:
 
 
 def is_authors_syntax(text: str) -> bool:
-    """Whether ``text`` uses a token that only the authors' syntax has (``seqm2``, ``ifInNest``, ``f`` ...)."""
+    """Whether ``text`` uses a token only the authors' syntax has (``seqm2``, ``ifInNest``, ``f`` ...)."""
     return any(_COMPOSITE.match(t) or t in _THEIRS_ONLY for t in _TOKEN.findall(text))

@@ -340,6 +340,8 @@ class TrialGraph:
         if runner is None:
             raise RuntimeError("the trial graph is not started: use it as a context manager")
         runner.load_tree(tree_text)
+        # the bag keeps the tree its robots ran, primitives written out: it reproduces without the library
+        recorded_tree = to_text(load_library(self.library).parse(tree_text)) if self.library else tree_text
         if bag_path is None:
             record = runner.run_trial(seed, trial)
             self.trials_run += 1
@@ -369,9 +371,8 @@ class TrialGraph:
                 runner.spin_until(
                     lambda: all(recorder.counts[t] >= n for t, n in expected.items()), "the last messages"
                 )
-                write_result(
-                    bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
-                )
+                stamp = recorder.last_stamp + 1
+                write_result(bag, recorded_tree, seed, record, stamp, self.namespace, self.config.profile)
             return record
         finally:
             runner.executor.remove_node(node)
