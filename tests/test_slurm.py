@@ -129,3 +129,83 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
         assert "summary.json" in local and run_files(tmp_path / "slurm" / f"run{k}") == local
     assert run_files(tmp_path / "slurm" / "single") == run_files(tmp_path / "local" / "single")
     wait_for(lambda: not slurm.jobs(), 60, "the worker jobs ended with the client")
+
+
+# The experiment command through SLURM ---------------------------------------------------------------------
+def slurm_job_of(pid: int) -> str | None:
+    """The SLURM job a process runs in (its SLURM_JOB_ID), or None."""
+    try:
+        environ = (Path("/proc") / str(pid) / "environ").read_bytes().split(b"\0")
+    except OSError:
+        return None
+    found = [item.split(b"=", 1)[1].decode() for item in environ if item.startswith(b"SLURM_JOB_ID=")]
+    return found[0] if found else None
+
+
+def test_an_experiment_through_slurm_equals_the_local_one_though_a_job_is_cancelled_mid_run(slurm, tmp_path):
+    """``experiment --cluster slurm`` against ``--cluster local``: the same runs.csv and run files, although
+    the job running the longest run (GP_fnd) is cancelled mid-run: it is replaced, the run continues."""
+    import json
+    import subprocess
+
+    from evolution_manager.graph.startup import executable
+    from evolution_manager.processes import lock_holder
+
+    config = tmp_path / "cluster.yaml"
+    jobs = tmp_path / "jobs"
+    config.write_text(f"cores: 1\nmemory: 1GB\nwalltime: '00:30:00'\njobs: 2\nlog_directory: {jobs}\n")
+    small = ["--runs", "1", "--evaluations", "60", "--trials", "3", "--checkpoint-every", "0"]
+    small.append("--no-progress")
+    experiment = str(executable("evolution_manager", "experiment"))
+    started = {}
+    for where, options in (
+        ("local", ["--processes", "1"]),
+        ("slurm", ["--cluster", "slurm", "--cluster-config", str(config)]),
+    ):
+        log = (tmp_path / f"{where}.log").open("w")
+        started[where] = subprocess.Popen(
+            [experiment, *small, "--out", str(tmp_path / where), *options],
+            env=slurm.environment(),
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )  # both at once: the SLURM jobs start while the local runs go
+        log.close()
+    victim = tmp_path / "slurm" / "runs" / "GP_fnd" / "run00"
+    cancelled = None
+    deadline = time.monotonic() + 600
+    try:
+        while started["slurm"].poll() is None and time.monotonic() < deadline:
+            if (
+                cancelled is None
+                and (victim / "checkpoint.json").exists()
+                and not (victim / "summary.json").exists()
+            ):
+                job = slurm_job_of(lock_holder(victim / ".lock") or 0)
+                if job is not None and not (victim / "summary.json").exists():
+                    slurm.run(["scancel", job])
+                    cancelled = job
+            time.sleep(0.1)
+        for where, process in started.items():
+            assert process.wait(timeout=600) == 0, (tmp_path / f"{where}.log").read_text()[-3000:]
+    finally:
+        for process in started.values():
+            if process.poll() is None:
+                process.kill()
+    assert cancelled is not None, "the GP_fnd run was never caught mid-run"
+    assert (
+        "cluster: work goes to 2 SLURM job(s) of 1 core(s), 1GB, 00:30:00"
+        in (tmp_path / "slurm.log").read_text()
+    )
+    assert len(list(jobs.glob("*.err"))) >= 3  # the 2 jobs and the one submitted in place of the cancelled
+    local, on_slurm = tmp_path / "local", tmp_path / "slurm"
+    assert (on_slurm / "runs.csv").read_bytes() == (local / "runs.csv").read_bytes()
+    assert (on_slurm / "experiment.json").read_bytes() == (local / "experiment.json").read_bytes()
+    plan = json.loads((local / "experiment.json").read_text())["plan"]
+    assert len(plan) == 7
+    for planned in plan:
+        files = run_files(local / planned["dir"])
+        assert "summary.json" in files and run_files(on_slurm / planned["dir"]) == files, planned["dir"]
+    (session,) = json.loads((on_slurm / "sessions.json").read_text())
+    assert session["cluster"]["kind"] == "slurm" and session["cluster"]["slurm"]["jobs"] == 2
+    assert session["runs_finished"] == 7
+    wait_for(lambda: not slurm.jobs(), 60, "the worker jobs ended with the experiment")

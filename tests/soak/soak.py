@@ -33,6 +33,7 @@ import sys
 import time
 from pathlib import Path
 
+from evolution_manager.evolution.run import SIMULATED, Run
 from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
@@ -207,11 +208,7 @@ def check(args: argparse.Namespace, soak: Soak, reference: Path) -> dict:
     # evaluated again), in order; under fixed scenarios a tree seen before is answered from the cache, marked
     expected = [(r["tree"], int(r["seed"])) for r in rows]
     got = [(m.tree, m.seed) for m in evaluations]
-    seen: set[str] = set()
-    cached = []
-    for r in rows:
-        cached.append(args.scenarios == "fixed" and r["tree"] in seen)
-        seen.add(r["tree"])
+    cached = [a != SIMULATED for a in Run.resume(out, None, cut=False).answers]  # the run's rule, replayed
     lost = max(0, len(expected) - len(got))
     duplicated = max(0, len(got) - len(expected))
     agree = got == expected and [bool(m.cached) for m in evaluations] == cached

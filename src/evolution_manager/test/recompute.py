@@ -5,16 +5,20 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 OBJECTIVES = ("density", "nest", "food")
 DESCRIPTORS = ("movement", "rotation", "conditionality")
 
 
-def grids_from_log(root: Path) -> dict[str, dict[tuple, list[tuple[str, float, int]]]]:
+def grids_from_log(
+    root: Path, form: Callable[[str], str] | None = None
+) -> dict[str, dict[tuple, list[tuple[str, float, int]]]]:
     """Per objective, bin -> [(tree, fitness, evaluation)] in order of arrival, from ``evaluations.csv``: a
     bin keeps 3 trees, a full bin swaps its worst (the first of equal worsts) for a strictly better tree,
-    and a tree text already held anywhere in the grid is refused."""
+    and a tree text already held anywhere in the grid is refused; with ``form`` (the ``clean`` profile's
+    simplified form of a tree text), so is a tree with the form of a tree its bin holds."""
     with open(Path(root) / "evaluations.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
     grids: dict[str, dict[tuple, list[tuple[str, float, int]]]] = {o: {} for o in OBJECTIVES}
@@ -27,6 +31,8 @@ def grids_from_log(root: Path) -> dict[str, dict[tuple, list[tuple[str, float, i
             if any(row["tree"] == t for items in grid.values() for t, _, _ in items):
                 continue
             items = grid.setdefault(key, [])
+            if form is not None and any(form(row["tree"]) == form(t) for t, _, _ in items):
+                continue
             value = float(row[objective])
             if len(items) < 3:
                 items.append((row["tree"], value, int(row["evaluation"])))
@@ -53,11 +59,12 @@ def metrics_from_items(items: list[dict]) -> dict:
     }
 
 
-def check_repertoires(root: Path) -> None:
+def check_repertoires(root: Path, form: Callable[[str], str] | None = None) -> None:
     """Assert that every repertoire file of a run whose repertoires are its passive grids (MAP-Elites) equals
-    the recomputation from its evaluation log, and that the summary reports the same metrics."""
+    the recomputation from its evaluation log (``form``: see :func:`grids_from_log`), and that the summary
+    reports the same metrics."""
     summary = json.loads((Path(root) / "summary.json").read_text())
-    for objective, bins in grids_from_log(root).items():
+    for objective, bins in grids_from_log(root, form).items():
         document = json.loads((Path(root) / f"repertoire_{objective}.json").read_text())
         recomputed = [(list(k), t, v, e) for k in sorted(bins) for t, v, e in bins[k]]
         stored = [(i["bin"], i["tree"], i["fitness"], i["evaluation"]) for i in document["items"]]

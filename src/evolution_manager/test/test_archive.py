@@ -102,3 +102,33 @@ def test_the_repertoire_keeps_exactly_what_a_plain_qdpy_grid_keeps():
         ours.offer(f"t{i}", fitness, descriptors, i)
     expected = {k: [int(ind.name) for ind in v] for k, v in plain.solutions.items() if v}
     assert {k: [e.evaluation for e in v] for k, v in ours.bins()} == expected
+
+
+def test_a_clean_grid_refuses_a_tree_whose_simplified_form_its_bin_holds():
+    """``sel(forward, stop)`` and ``seq(forward, in_nest)`` drive the wheels exactly as ``forward`` (the
+    selector never gets past forward, the condition after it only decides the root's status): one
+    behaviour."""
+    from evolution_manager.evolution.archive import SimplifiedForms
+
+    forms = SimplifiedForms()
+    assert forms("sel(forward, stop)") == forms("seq(forward, in_nest)") == "forward"
+    d, elsewhere = (0.5, 0.5, 0.5), (0.5, 0.5, 0.9)
+    clean = Repertoire(forms=forms)
+    assert clean.offer("sel(forward, stop)", 0.4, d, 0)
+    assert not clean.offer("seq(forward, in_nest)", 0.9, d, 1)  # its form is in the bin: refused
+    assert not clean.offer("forward", 0.4, d, 2)
+    assert clean.offer("forward", 0.4, elsewhere, 3)  # another bin: another behaviour
+    assert clean.offer("reverse", 0.3, d, 4) and clean.offer("stop", 0.5, d, 5)
+    copy = Repertoire.from_state(clean.to_state(), forms)
+    assert not copy.offer("seq(forward, in_nest)", 0.45, d, 6)  # the rule survives a round trip
+    assert not clean.offer("sel(stop, reverse)", 0.6, d, 7)  # simplifies to stop, which the bin holds
+    assert clean.offer("forward_left", 0.45, d, 8)  # the bin was full: evicts its worst, reverse
+    assert clean.offer("seq(reverse, on_food)", 0.7, d, 9)  # reverse's form is free again; evicts 0.4
+    assert not clean.offer("sel(reverse, stop)", 0.9, d, 10)  # reverse, held as seq(reverse, on_food)
+    assert not clean.offer("forward", 0.8, d, 11)  # its text is held, in the other bin
+    assert clean.offer("sel(forward, reverse)", 0.8, d, 12)  # sel(forward, stop) was evicted: form free
+    held = [e.tree for e in clean.grid.solutions[clean.bin_of(d)]]
+    assert held == ["stop", "seq(reverse, on_food)", "sel(forward, reverse)"]
+    paper = Repertoire()
+    assert paper.offer("sel(forward, stop)", 0.4, d, 0) and paper.offer("seq(forward, in_nest)", 0.4, d, 1)
+    assert [e.tree for e in paper.entries()] == ["sel(forward, stop)", "seq(forward, in_nest)"]

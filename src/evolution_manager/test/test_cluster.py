@@ -4,6 +4,7 @@ a worker SIGKILLed mid-task included. The SLURM side, with real daemons and jobs
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import socket
@@ -390,3 +391,94 @@ def test_finished_runs_are_left_alone(client, tmp_path):
     before = {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()}
     assert list(map_runs(client, run_one, [(config.to_json(), root)])) == [(root, None)]
     assert {p: p.stat().st_mtime_ns for p in Path(root).rglob("*") if p.is_file()} == before
+
+
+# The commands' --cluster ----------------------------------------------------------------------------------
+def dask_option(cluster: LocalCluster) -> str:
+    return cluster.scheduler_address.replace("tcp://", "dask://")
+
+
+def test_evolve_on_a_dask_scheduler_writes_the_bytes_of_a_local_run(cluster, tmp_path, capsys):
+    from evolution_manager.studies.evolve import evolve
+
+    run = ["--algorithm", "qd", "--objective", "nest", "--evaluations", "60", "--seed", "4", "--trials", "3"]
+    run += ["--no-progress", "--no-figures", "--checkpoint-every", "0"]
+    assert evolve([*run, "--out", str(tmp_path / "local")]) == 0
+    assert evolve([*run, "--out", str(tmp_path / "dask"), "--cluster", dask_option(cluster)]) == 0
+    said = capsys.readouterr().err
+    assert f"cluster: work goes to the Dask scheduler at {cluster.scheduler_address}" in said
+    local, dask = run_files(tmp_path / "local"), run_files(tmp_path / "dask")
+    assert "heldout.json" in local and "summary.json" in local  # the held-out scores too
+    assert {k: v for k, v in dask.items() if k != "sessions.json"} == {
+        k: v for k, v in local.items() if k != "sessions.json"
+    }
+    (session,) = json.loads(dask["sessions.json"])  # where it ran, beside the run, not in config.json
+    assert session["cluster"] == {"kind": "dask", "address": cluster.scheduler_address, "slurm": None}
+    assert session["command"].endswith(f"--cluster {dask_option(cluster)}")
+    assert json.loads(local["sessions.json"])[0]["cluster"]["kind"] == "local"
+
+
+def test_adapt_benchmark_on_a_dask_scheduler_writes_the_files_of_a_local_one(cluster, tmp_path):
+    from evolution_manager.adaptation.adapt_benchmark import main as adapt_benchmark
+
+    repertoire = tmp_path / "repertoire"
+    repertoire.mkdir()
+    items = [
+        {"bin": [k, 4, 2], "tree": tree, "fitness": 0.5 + k / 20, "descriptors": [k / 8, 0.5, 0.3]}
+        for k, tree in enumerate(random_trees(3, 6))
+    ]
+    (repertoire / "repertoire_food.json").write_text(json.dumps({"objective": "food", "items": items}))
+    (repertoire / "config.json").write_text(json.dumps(RunConfig.make("qd", "food", 50, 0).to_json()))
+    common = ["--repertoires", str(repertoire), "--condition-set", "dead-robots=3", "--seeds", "1"]
+    common += ["--budget", "3", "--ceiling", "30", "--trials", "2", "--no-progress"]
+    for where, options in (("local", []), ("dask", ["--cluster", dask_option(cluster)])):
+        with pytest.raises(SystemExit) as ended:
+            adapt_benchmark([*common, "--out", str(tmp_path / where), *options])
+        assert ended.value.code == 0
+    for name in ("runs.csv", "ceilings.csv", "summary.json"):  # report.md names its --out
+        assert (tmp_path / "dask" / name).read_bytes() == (tmp_path / "local" / name).read_bytes(), name
+
+
+def _no_port() -> int:
+    with socket.socket() as s:  # a port that nobody listens on
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize(
+    "command,options,expected",
+    [
+        ("experiment", ["--cluster", "dask://127.0.0.1:{port}"], "no Dask scheduler answers there"),
+        ("evolve", ["--cluster", "dask://127.0.0.1:{port}"], "no Dask scheduler answers there"),
+        ("adapt-benchmark", ["--cluster", "dask://127.0.0.1:{port}"], "no Dask scheduler answers there"),
+        ("experiment", ["--cluster", "slurm", "--cluster-config", "{config}"], "unknown key 'queue'"),
+        ("evolve", ["--cluster", "slurm", "--cluster-config", "{config}"], "unknown key 'queue'"),
+        ("adapt-benchmark", ["--cluster", "slurm", "--cluster-config", "{config}"], "unknown key 'queue'"),
+        ("experiment", ["--cluster", "dask://host:port"], "--cluster 'dask://host:port': Port could not"),
+        ("experiment", ["--cluster", "dask://h:1", "--processes", "2"], "--processes applies to --cluster"),
+        ("evolve", ["--cluster", "dask://h:1", "--workers", "2"], "--workers applies to --cluster local"),
+    ],
+)
+def test_bad_cluster_settings_are_one_line_and_exit_2(command, options, expected, tmp_path, capsys):
+    from evolution_manager.adaptation.adapt_benchmark import main as adapt_benchmark
+    from evolution_manager.studies.evolve import evolve
+    from evolution_manager.studies.experiment import experiment
+
+    config = tmp_path / "cluster.yaml"
+    config.write_text("cores: 1\nqueue: compute\n")  # dask-jobqueue's name; ours is partition
+    out = tmp_path / "out"
+    argv = {
+        "experiment": ["--runs", "1", "--evaluations", "10", "--out", str(out)],
+        "evolve": ["--algorithm", "qd", "--objective", "food", "--evaluations", "10", "--out", str(out)],
+        "adapt-benchmark": ["--repertoires", str(tmp_path), "--condition-set", "c=1", "--out", str(out)],
+    }[command] + [option.format(port=_no_port(), config=config) for option in options]
+    if command == "adapt-benchmark":
+        with pytest.raises(SystemExit) as ended:
+            adapt_benchmark(argv)
+        status = ended.value.code
+    else:
+        status = {"experiment": experiment, "evolve": evolve}[command](argv)
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and err.startswith(f"{command}: error: ") and expected in err, err
+    assert not out.exists()  # nothing written

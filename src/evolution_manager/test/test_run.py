@@ -15,13 +15,14 @@ from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
 from evolution_manager.viewing.results import write_results
+from swarm_sim.world import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
 
 RESULT_FILES = [
     "evaluations.csv",
     "progress.csv",
     "summary.json",
     "heldout.json",
-    *(f"repertoire_{o}.json" for o in OBJECTIVES),
+    *(f"repertoire_{o}.json" for o in PAPER_OBJECTIVES),
 ]
 
 
@@ -35,9 +36,12 @@ def _finish(run):
     return run
 
 
-@pytest.mark.parametrize("algorithm,objective", [("gp", "food"), ("gp-fnd", None), ("qd", "nest")])
-def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorithm, objective):
-    config = RunConfig.make(algorithm, objective, 750, 11)
+@pytest.mark.parametrize(
+    "algorithm,objective,profile",
+    [("gp", "food", "paper"), ("gp-fnd", None, "paper"), ("qd", "nest", "paper"), ("qd", "food", "clean")],
+)
+def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorithm, objective, profile):
+    config = RunConfig.make(algorithm, objective, 750, 11, profile=profile)
     straight = _finish(Run.start(config, tmp_path / "straight", ToyEvaluator()))
     stopped = Run.start(config, tmp_path / "stopped", ToyEvaluator())
     for stop in (90, 260, 430):
@@ -55,11 +59,13 @@ def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorith
     assert stopped.evaluations == straight.evaluations
     assert stopped.algorithm.produced == straight.algorithm.produced == 750
     # the fixed scenario's cache is rebuilt on resume: the same simulations saved (summary.json too)
-    assert (stopped.simulations, stopped.simulations_saved) == (
+    assert (stopped.simulations, stopped.simulations_saved, stopped.answers) == (
         straight.simulations,
         straight.simulations_saved,
+        straight.answers,
     )
     assert straight.simulations_saved > 0
+    assert ("inherited" in straight.answers) == (profile == "paper")
 
 
 def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_path):
@@ -72,7 +78,7 @@ def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_pa
     assert all(int(r["seed"]) == run.config.scenario_seed for r in rows)  # fixed scenarios
     assert any(r["error"] for r in rows)
     check_repertoires(tmp_path / "r")
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         document = json.loads((tmp_path / "r" / f"repertoire_{objective}.json").read_text())
         grid = run.passive[objective]
         assert grid.qd_score == document["qd_score"] and grid.coverage == document["coverage"]
@@ -88,7 +94,7 @@ def test_progress_is_one_row_per_batch_and_never_loses_quality(tmp_path):
     # the initial batch, then 8 batches of 50 varied parents of which the untouched ones are not evaluated
     assert counts[0] == 100 and len(counts) == 1 + 400 // 50
     assert all(0 < b - a <= 50 for a, b in itertools.pairwise(counts))
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         for metric in ("best", "coverage", "qd_score"):
             values = [float(r[f"{metric}_{objective}"]) for r in rows]
             assert values == sorted(values)
@@ -121,7 +127,7 @@ def test_a_damaged_checkpoint_is_refused_with_its_name(tmp_path):
 def test_gp_metrics_recomputed_from_the_run_files_equal_the_reported_ones(tmp_path, algorithm, objective):
     run = _finish(Run.start(RunConfig.make(algorithm, objective, 600, 14), tmp_path / "r", ToyEvaluator()))
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
-    for o in OBJECTIVES:
+    for o in PAPER_OBJECTIVES:
         check_metrics(tmp_path / "r", o, summary)
     for o in run.config.objectives:
         document = json.loads((tmp_path / "r" / f"repertoire_{o}.json").read_text())
@@ -138,7 +144,9 @@ def test_gp_metrics_recomputed_from_the_run_files_equal_the_reported_ones(tmp_pa
 
 
 def test_fixed_scenarios_give_one_fitness_per_tree_and_fresh_ones_a_seed_per_evaluation(tmp_path):
-    fixed = _finish(Run.start(RunConfig.make("gp", "food", 500, 15), tmp_path / "fixed", ToyEvaluator()))
+    # clean: the cache is keyed on the tree text (paper keys it on the simplified form, see below)
+    fixed_config = RunConfig.make("gp", "food", 500, 15, profile="clean")
+    fixed = _finish(Run.start(fixed_config, tmp_path / "fixed", ToyEvaluator()))
     rows = fixed.directory.evaluations.read()
     values: dict[str, set] = {}
     for row in rows:
@@ -168,5 +176,103 @@ def test_evaluate_with_the_runs_scenario_seed_reproduces_every_stored_fitness(tm
     for row in chosen:
         document = json.loads(evaluate_command(["--tree", row["tree"], "--seed", str(seed)]))
         stored = [float(row[k]) for k in (*OBJECTIVES, "movement", "rotation", "conditionality")]
-        assert [*document["fitness"].values(), *document["descriptors"].values()] == stored  # exactly
+        got = [*document["fitness"].values(), *document["descriptors"].values()]
+        if run.answers[int(row["evaluation"])] == "inherited":  # a clone's values: conditionality may differ
+            got, stored = got[:5], stored[:5]
+        assert got == stored  # exactly
     assert chosen[0][best["evolved"] and "food"] and float(chosen[0]["food"]) == best["best_fitness"]
+
+
+VALUES = (*OBJECTIVES, "movement", "rotation", "conditionality")
+
+
+def _batches(root):
+    """The rows of ``evaluations.csv``, batch by batch as ``progress.csv`` delimits them."""
+    with open(root / "evaluations.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    with open(root / "progress.csv", newline="") as handle:
+        ends = [int(r["evaluations"]) for r in csv.DictReader(handle)]
+    return [rows[start:end] for start, end in itertools.pairwise([0, *ends])]
+
+
+def _clone_bins(root, objective, forms):
+    """The bins of a repertoire file holding two or more trees of one simplified form: bin -> their items."""
+    by_bin: dict[tuple, dict[str, list]] = {}
+    for item in json.loads((root / f"repertoire_{objective}.json").read_text())["items"]:
+        by_bin.setdefault(tuple(item["bin"]), {}).setdefault(forms(item["tree"]), []).append(item)
+    return {b: items for b, groups in by_bin.items() for items in groups.values() if len(items) > 1}
+
+
+def test_clean_grids_refuse_a_tree_whose_simplified_form_is_in_its_bin(tmp_path):
+    """A real run (the simulator, qdpy's grid): no bin of any repertoire holds two trees of one simplified
+    form, although its evaluations hold such clones that the text rule alone would keep."""
+    from recompute import grids_from_log
+
+    from evolution_manager.evolution.archive import SimplifiedForms
+    from swarm_sim.config import default_config
+    from swarm_sim.evaluation import BatchEvaluator
+
+    root = tmp_path / "clean"
+    evaluator = BatchEvaluator(default_config("clean"))
+    _finish(Run.start(RunConfig.make("qd", "food", 400, 2, profile="clean"), root, evaluator))
+    forms = SimplifiedForms()
+    for objective in PAPER_OBJECTIVES:
+        assert _clone_bins(root, objective, forms) == {}, objective
+    check_repertoires(root, forms)  # the grids the rule builds from the evaluation log, item for item
+    archive = json.loads((root / "archive.json").read_text())["items"]
+    assert archive == json.loads((root / "repertoire_food.json").read_text())["items"]
+    text_rule = grids_from_log(root)["food"]  # the same evaluations, clones refused only as the same text
+    assert any(len({forms(t) for t, _, _ in items}) < len(items) for items in text_rule.values())
+
+
+@pytest.mark.parametrize("algorithm", ["qd", "gp"])
+def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(tmp_path, algorithm):
+    """The authors' rule (qdpy/ea.py:372-382 with 447-496; gp/ea.py:357-371 with 506-555): a tree whose
+    simplified form an earlier batch evaluated is not simulated and takes the fitness and descriptors,
+    conditionality included, of that form's last (MAP-Elites; qdpy/ea.py:496) or first (GP;
+    redundancy.py:1798-1822) evaluation in the batch that first met it; trees of one form first met in one
+    batch are each simulated; in MAP-Elites a clone then enters the grid as any tree (its text alone is
+    refused twice): same bin."""
+    from evolution_manager.evolution.archive import SimplifiedForms
+    from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+
+    root = tmp_path / "paper"
+    config = RunConfig.make(algorithm, "food", 400, 2, profile="paper")
+    run = _finish(Run.start(config, root, BatchEvaluator()))
+    forms = SimplifiedForms()
+    known: dict[str, tuple] = {}
+    simulated: set[str] = set()
+    inherited = []
+    simulations = 0
+    for batch in _batches(root):
+        met: dict[str, tuple] = {}
+        in_batch: set[str] = set()
+        for row in batch:
+            values = tuple(row[k] for k in VALUES)
+            if forms(row["tree"]) in known:
+                assert values == known[forms(row["tree"])]
+                inherited.append(row)
+                continue
+            if algorithm == "qd" or forms(row["tree"]) not in met:  # MAP-Elites keeps the last, GP the first
+                met[forms(row["tree"])] = values
+            if row["tree"] not in in_batch:  # the same text again in the batch: its first copy's answer
+                simulations += 1
+                in_batch.add(row["tree"])
+                simulated.add(row["tree"])
+        known.update(met)
+    summary = json.loads((root / "summary.json").read_text())
+    assert summary["simulations"] == run.simulations == simulations
+    assert run.answers.count("inherited") == len(inherited)
+    clones = [row for row in inherited if row["tree"] not in simulated]  # never simulated in the run
+    assert clones
+    # simulated, a clone shows the world what its form's tree did: fitness, movement, rotation (not
+    # necessarily conditionality: simplification removes condition ticks)
+    requests = [EvaluationRequest(tree=r["tree"], seed=run.config.scenario_seed) for r in clones[:4]]
+    for row, result in zip(clones[:4], BatchEvaluator().evaluate(requests), strict=True):
+        assert [*result.fitness, *result.descriptors][:5] == [float(row[k]) for k in VALUES[:5]]
+    if algorithm == "gp":  # its repertoire holds one tree per bin
+        return
+    clone_bins = _clone_bins(root, "food", forms)
+    assert clone_bins  # paper keeps clones, with identical values
+    for items in clone_bins.values():
+        assert len({(i["fitness"], tuple(i["descriptors"])) for i in items}) == 1

@@ -49,8 +49,11 @@ class Params(NamedTuple):
     density_divisor: float
     window: int
     friction: float
-    collision_iterations: int
-    collision_slack: float
+    wall_friction: float
+    physics_substeps: int
+    solver_iterations: int
+    max_drive_accel: float
+    max_turn_accel: float
     dead_robots: int
     weak_robots: int
     weak_gain: float
@@ -65,7 +68,8 @@ _INT_MINIMUM = {
     "initial_step": 1,
     "chain_trials": 1,
     "window": 1,
-    "collision_iterations": 0,
+    "physics_substeps": 1,
+    "solver_iterations": 1,
     "dead_robots": 0,
     "weak_robots": 0,
 }
@@ -89,8 +93,8 @@ class Config:
     """Gap between nest and food per arena configuration (mm); see ``gap``."""
     n_robots: int = 9
     """Footbots in the swarm: the one place the robot count is defined."""
-    robot_radius: float = 85.0
-    """Footbot body radius (mm)."""
+    robot_radius: float = 85.036758
+    """Footbot body radius (mm): ARGoS's ``BODY_RADIUS`` (``footbot_entity.cpp``) and its dynamics2d disc."""
     start_half: float = 1000.0
     """Start positions are uniform in the square [-start_half, start_half]^2 (mm)."""
     max_start_attempts: int = 10
@@ -130,12 +134,19 @@ class Config:
     window: int = _PERCEPTION.window
     """Raw samples averaged into a smoothed value."""
     friction: float = 0.49
-    """At a robot-robot contact, relative tangential motion of the step is cancelled up to this fraction of
-    the normal correction (ARGoS: 0.7 x 0.7)."""
-    collision_iterations: int = 10
-    """Passes of pairwise positional correction per step before the fallback (undo the step's move)."""
-    collision_slack: float = 1e-6
-    """Extra separation added when two robots are pushed apart, so they end strictly apart (mm)."""
+    """Coulomb friction coefficient at a robot-robot contact (ARGoS: 0.7 per footbot body, multiplied)."""
+    wall_friction: float = 0.07
+    """Coulomb friction coefficient between a robot and a wall (ARGoS: 0.7 for the footbot, 0.1 for a box)."""
+    physics_substeps: int = 10
+    """Physics substeps per control step (ARGoS dynamics2d's default ``iterations``)."""
+    solver_iterations: int = 10
+    """Passes over the contacts and drives per substep while robots touch (Chipmunk's ``iterations``)."""
+    max_drive_accel: float = 9375.0
+    """Largest acceleration a robot's drive exerts to reach its target velocity: ARGoS's 15 N on a 1.6 kg
+    footbot (mm/s^2)."""
+    max_turn_accel: float = 6482.3
+    """Largest angular acceleration of a robot's drive: ARGoS's 150 N m over the footbot's moment of inertia,
+    1.6 kg x (2 x 85.036758 mm)^2 / 2 (rad/s^2)."""
     dead_robots: int = 0
     """Damage (``swarm_sim.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they never
     drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
@@ -229,7 +240,8 @@ def _validate(c: Config) -> None:
         "estimate_cap",
         "density_range",
         "density_divisor",
-        "collision_slack",
+        "max_drive_accel",
+        "max_turn_accel",
         "gain_low",
     ):
         _positive(c, name)
@@ -240,6 +252,9 @@ def _validate(c: Config) -> None:
     friction = _number(c, "friction")
     if not 0.0 <= friction <= 1.0:
         raise ConfigError(f"friction must be in [0, 1], got {friction}")
+    wall_friction = _number(c, "wall_friction")
+    if not 0.0 <= wall_friction <= 1.0:
+        raise ConfigError(f"wall_friction must be in [0, 1], got {wall_friction}")
     if not isinstance(c.occlusion, bool):
         raise ConfigError(f"occlusion must be true or false, got {c.occlusion!r}")
     for name in ("dead_robots", "weak_robots"):

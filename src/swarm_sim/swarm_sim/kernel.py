@@ -150,9 +150,12 @@ class Swarm(NamedTuple):
     x: np.ndarray
     y: np.ndarray
     heading: np.ndarray
-    x_before: np.ndarray
-    """Positions before the current physics step (collision fallback, friction)."""
-    y_before: np.ndarray
+    dynamics: np.ndarray
+    """(n, ``world.MOTION_FIELDS``) velocities and drive impulses carried between physics steps."""
+    contacts: np.ndarray
+    """(n, n, ``world.CONTACT_FIELDS``) the contacts' impulses carried between physics substeps."""
+    pairs: np.ndarray
+    """Workspace of ``world.physics_step``: the pairs of robots near enough to touch in a step."""
     gains: np.ndarray
     """(left, right) wheel gains."""
     broadcast_nest: np.ndarray
@@ -339,8 +342,9 @@ def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
         np.zeros(n),
         np.zeros(n),
         np.zeros(n),
-        np.empty(n),
-        np.empty(n),
+        np.zeros((n, world.MOTION_FIELDS)),
+        np.zeros((n, n, world.CONTACT_FIELDS)),
+        np.zeros((n * (n - 1) // 2, 2), dtype=np.int64),
         gains,
         np.full(n, p.estimate_cap),
         np.full(n, p.estimate_cap),
@@ -399,10 +403,11 @@ def simulate_chain(
     tree_keys = keys[TREE]
     swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), tree, p)
     # Locals for the loops below (a field read inside a loop would cost a reference count each time).
-    (x, y, heading, x_before, y_before, gains, broadcast_nest, broadcast_food, raw_nest, raw_food, window,
-     smooth, ground_now, sources, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
+    (x, y, heading, dynamics, contacts, pairs, gains, broadcast_nest, broadcast_food, raw_nest, raw_food,
+     window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
+     initial) = swarm  # fmt: skip
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
-    robot_arcs = world.arcs(gains, p)
+    robot_drive = world.drive(gains, p)
     samples = 0
     board = np.zeros(N_CONDITIONS, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
@@ -416,7 +421,7 @@ def simulate_chain(
                 poses_out[position, 0, i, 0] = x[i]
                 poses_out[position, 0, i, 1] = y[i]
                 poses_out[position, 0, i, 2] = heading[i]
-        world.physics_step(x, y, heading, actions, robot_arcs, p, x_before, y_before)
+        world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs)
         sensing = timeline.senses(p, k)
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the

@@ -69,10 +69,10 @@ class LockstepChain:
             raise ValueError(f"a chain has 1 to {config.chain_length} trials, got {trials!r}")
         self.setup = setup_chain(seed, chain, config)
         self.trials = trials
-        self.arcs = world.arcs(self.setup.gains, self.p)
+        self.drive = world.drive(self.setup.gains, self.p)
         n = self.p.n_robots
         self.x, self.y, self.heading = np.zeros(n), np.zeros(n), np.zeros(n)
-        self._x_before, self._y_before = np.empty(n), np.empty(n)
+        self._motion, self._contacts, self._pairs = world.new_dynamics(n)
         self.actions = np.full(n, STOP, dtype=np.int64)
         self.broadcast_nest = np.full(n, self.p.estimate_cap)
         self.broadcast_food = np.full(n, self.p.estimate_cap)
@@ -183,10 +183,11 @@ class LockstepChain:
             self.y,
             self.heading,
             self.actions,
-            self.arcs,
+            self.drive,
             self.p,
-            self._x_before,
-            self._y_before,
+            self._motion,
+            self._contacts,
+            self._pairs,
         )
         if timeline.step_in_trial(self.line, k) == 1:
             for i in range(self.p.n_robots):

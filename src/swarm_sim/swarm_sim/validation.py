@@ -125,12 +125,13 @@ def estimate(samples: Sequence[float]) -> Estimate:
     return Estimate(mean, math.sqrt(variance / n), n)
 
 
-def estimates(rows: Sequence[Sequence[float]]) -> dict[str, Estimate]:
-    """Per quantity, the estimate over evaluations given as rows of values (``QUANTITIES`` order)."""
+def estimates(rows: Sequence[Sequence[float]], quantities: Sequence[str] = QUANTITIES) -> dict[str, Estimate]:
+    """Per quantity, the estimate over evaluations given as rows of values (``quantities`` order: by default
+    an evaluation's, ``QUANTITIES``)."""
     for row in rows:
-        if len(row) != len(QUANTITIES):
-            raise ValueError(f"expected {len(QUANTITIES)} values per evaluation, got {len(row)}")
-    return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(QUANTITIES)}
+        if len(row) != len(quantities):
+            raise ValueError(f"expected {len(quantities)} values per evaluation, got {len(row)}")
+    return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(quantities)}
 
 
 def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]]:

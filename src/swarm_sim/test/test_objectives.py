@@ -72,33 +72,56 @@ LONE = {
 """One robot with perfect wheels (gain 0.9 on both: no turning)."""
 STEP = 0.9 * 50.0 * 0.125
 """mm per step at full speed."""
+LAG = 1 / LONE["paper"].physics_substeps
+"""The share of a step still moved at the last step's velocity (its first substep)."""
+
+
+def _motor_signs(profile, tree, trials):
+    """Per trial, the sign (+1 forward, -1 reverse, 0 stop) of the motors driving each of its steps.
+
+    paper: one chain; the tick at chain step 4 (t + 1) drives the next 4 steps. clean: a chain per trial,
+    ticks at steps 20 + 4 t. forward: always +1; seq(forward, reverse): F, R, R over the ticks t."""
+    line = LONE[profile]
+    steps = line.trial_steps
+
+    def motor(t):
+        return 1 if tree == "forward" or t % 3 == 0 else -1
+
+    if profile == "paper":
+        chain = [0 if k <= 4 else motor((k - 1) // 4 - 1) for k in range(1, trials * steps + 1)]
+        return [chain[i * steps : (i + 1) * steps] for i in range(trials)]
+    first = line.initial_step + line.steps_per_tick
+    return [[0 if k <= first else motor((k - first - 1) // 4) for k in range(1, steps + 1)]] * trials
 
 
 @pytest.mark.parametrize(
-    ("profile", "tree", "steps", "movement"),
+    ("profile", "tree", "movement"),
     [
-        # paper: forward from the tick at step 4 on: trial 0 moves in steps 5-160, later trials in all 160
-        # (the motors of the tick at step 160 drive on after the teleport).
-        ("paper", "forward", [156, 160, 160], 1.0),
-        # clean: the first tick is at step 20: steps 21-176.
-        ("clean", "forward", [156, 156, 156], 1.0),
-        # seq(forward, reverse): the motors cycle F, R, R over the chain's ticks t (F when t % 3 == 0), each
-        # driving 4 steps. paper trial 0 is driven by ticks 0-38 (13 F, 26 R), trial 1 by ticks 39-78
-        # (14 F, 26 R), trial 2 by ticks 79-118 (13 F, 27 R); movement counts ticks 0-39 (14 F), 40-79 (13 F),
-        # 80-119 (13 F).
-        ("paper", "seq(forward, reverse)", [4 * (13 - 26), 4 * (14 - 26), 4 * (13 - 27)], None),
-        ("clean", "seq(forward, reverse)", [4 * (13 - 26)] * 3, (14 - 26 + 40) / 80),
+        ("paper", "forward", 1.0),
+        ("clean", "forward", 1.0),
+        # seq(forward, reverse): movement counts ticks 0-39 (14 F, 26 R), 40-79 (13 F), 80-119 (13 F)
+        ("paper", "seq(forward, reverse)", None),
+        ("clean", "seq(forward, reverse)", (14 - 26 + 40) / 80),
     ],
 )
-def test_lone_robot_drives_as_worked_out(profile, tree, steps, movement):
+def test_lone_robot_drives_as_worked_out(profile, tree, movement):
+    # Each step moves STEP along the heading times the motors' sign, except that its first substep still
+    # moves at the velocity of the step before, which carries over a teleport (its direction too).
     _, records = both_roads(tree, 8, LONE[profile], trials=3)
-    for record, n_steps in zip(records, steps, strict=True):
+    last = np.zeros(2)  # the velocity (in steps) of the step before, as a vector
+    for record, signs in zip(records, _motor_signs(profile, tree, 3), strict=True):
         (x0, y0, h0), (x1, y1, h1) = record.start_poses[0], record.end_poses[0]
         assert h1 == h0
-        distance = n_steps * STEP
-        assert (x1, y1) == (
-            pytest.approx(x0 + distance * math.cos(h0), abs=1e-9),
-            pytest.approx(y0 + distance * math.sin(h0), abs=1e-9),
+        if profile == "clean":
+            last = np.zeros(2)  # every trial is a chain of its own, from rest
+        moved = np.zeros(2)
+        for sign in signs:
+            now = sign * np.array([math.cos(h0), math.sin(h0)])
+            moved += LAG * last + (1 - LAG) * now
+            last = now
+        assert (x1 - x0, y1 - y0) == (
+            pytest.approx(STEP * moved[0], abs=1e-9),
+            pytest.approx(STEP * moved[1], abs=1e-9),
         )
         if movement is not None:
             assert record.values[MOVEMENT] == movement

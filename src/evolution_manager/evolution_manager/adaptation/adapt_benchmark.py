@@ -21,6 +21,12 @@ Writes ``DIR/runs.csv`` (every trial of every adaptation run: its tree, fitness 
 ``DIR/ceilings.csv``, ``DIR/summary.json``, ``DIR/curves.png`` and ``DIR/report.md`` (the table: for each
 condition, the trials until a method reaches 90 % of the ceiling, median over runs, or by how much it falls
 short). Ceilings already in ``DIR/ceilings.csv`` are reused, so an interrupted benchmark continues.
+
+``--cluster dask://HOST:PORT`` or ``--cluster slurm`` (``--cluster-config FILE``) evaluates on a Dask
+cluster's workers, each changed world sent whole to them (``cluster.evaluator.DaskEvaluator``), instead of in
+this process; the files are the same either way (the cluster is not recorded in them). The methods still run
+one after another, so this pays for the ceilings' runs (batches of 25 to 100 evaluations), not for the
+adaptation trials (one evaluation each).
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -50,9 +57,16 @@ from evolution_manager.adaptation.search import (
     run_picker,
 )
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
-from evolution_manager.errors import UsageError
+from evolution_manager.cluster.client import open_client
+from evolution_manager.cluster.settings import ClusterError, add_cluster_options, settings_from_args
+from evolution_manager.errors import DispatchError, UsageError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_atomic, write_json
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+    from swarm_sim.evaluation import Evaluator
 
 METHODS: tuple[str, ...] = ("unchanged", "ite", "random", "qd-scratch", "gp-scratch")
 LABELS = {
@@ -97,6 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--trials", type=positive_int, default=10, help="simulated trials per evaluation")
     parser.add_argument("--out", type=Path, required=True, help="output directory")
     parser.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+    add_cluster_options(parser)
     return parser
 
 
@@ -136,7 +151,13 @@ def trials_to_target(curve: Sequence[float], bar: float) -> float:
 
 
 def benchmark(args: argparse.Namespace) -> dict:
-    """Run every method; write the files; return the summary."""
+    """Run every method (on the cluster of ``--cluster``); write the files; return the summary."""
+    cluster = settings_from_args(args)
+    with open_client(cluster, say=lambda line: print(f"adapt-benchmark: {line}", file=sys.stderr)) as client:
+        return _benchmark(args, client)
+
+
+def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
     from swarm_sim.conditions import ConditionError, apply_conditions
     from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
@@ -186,7 +207,12 @@ def benchmark(args: argparse.Namespace) -> dict:
             rows.append([condition, method, repertoire, seed, trial, tree, f"{value:.6f}", f"{best:.6f}"])
 
     for condition, (config, _) in worlds.items():
-        batch = BatchEvaluator(config)
+        if client is None:
+            batch: Evaluator = BatchEvaluator(config)
+        else:
+            from evolution_manager.cluster.evaluator import DaskEvaluator
+
+            batch = DaskEvaluator(client, config)
         for seed in seeds:
             evaluate = ConditionEvaluation(batch, seed, args.trials)
             best_ceiling = -math.inf
@@ -429,7 +455,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     try:
         args = build_parser().parse_args(argv)
         benchmark(args)
-    except (UsageError, AdaptationError) as error:
+    except (UsageError, AdaptationError, ClusterError) as error:
         print(f"adapt-benchmark: error: {error}", file=sys.stderr)
         sys.exit(EXIT_USAGE)
+    except DispatchError as error:  # the cluster's workers could not finish a chunk
+        print(f"adapt-benchmark: error: {error}; the ceilings found so far are kept", file=sys.stderr)
+        sys.exit(1)
     sys.exit(0)

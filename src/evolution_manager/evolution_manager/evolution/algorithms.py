@@ -26,7 +26,7 @@ from bt_controller.library import Library
 from bt_controller.validate import integer
 from bt_controller.vocabulary import CONDITIONS_2023
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
-from evolution_manager.evolution.archive import Entry, Repertoire
+from evolution_manager.evolution.archive import Entry, Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import (
     OBJECTIVES,
     BehaviourTree,
@@ -334,9 +334,10 @@ class MapElites(AskTell):
     tournament of ``tournament`` items drawn uniformly with replacement from the archive (derated fitness,
     see :mod:`.operators`; the authors' qdpy/ea.py:536-555), are varied by the GP operators (qdpy's
     ``qdSimple`` with DEAP's ``varAnd``) and every touched offspring is evaluated and offered to the
-    archive on ``objective``. A tree the archive already holds is not stored again (qdpy/ea.py:394). Items
-    are drawn in the archive's canonical order (bin index, then arrival), so the draw does not depend on
-    the order in which qdpy keeps its items.
+    archive on ``objective``. A tree the archive already holds is not stored again (qdpy/ea.py:394); with
+    ``forms`` (the ``clean`` profile) nor is a tree whose simplified form is already in its bin
+    (:class:`~evolution_manager.evolution.archive.Repertoire`). Items are drawn in the archive's canonical
+    order (bin index, then arrival), so the draw does not depend on the order in which qdpy keeps its items.
     """
 
     name = "qd"
@@ -349,6 +350,7 @@ class MapElites(AskTell):
         parameters: QDParameters,
         conditions: Sequence[str] = CONDITIONS_2023,
         library: Library | None = None,
+        forms: SimplifiedForms | None = None,
     ) -> None:
         super().__init__(budget, seed, conditions, library)
         if objective not in range(len(OBJECTIVES)):
@@ -365,7 +367,7 @@ class MapElites(AskTell):
             raise ConfigError(f"the tournament size must be >= 1, got {p.tournament}")
         self.objective = objective
         self.parameters = p
-        self.archive = Repertoire()
+        self.archive = Repertoire(forms=forms)
         self.batches = 0
 
     def _random_batch(self, size: int) -> list[BehaviourTree]:
@@ -421,4 +423,4 @@ class MapElites(AskTell):
         if int(state["objective"]) != self.objective:
             raise ValueError(f"the state is for objective {state['objective']}, not {self.objective}")
         self.batches = int(state["batches"])
-        self.archive = Repertoire.from_state(state["archive"])
+        self.archive = Repertoire.from_state(state["archive"], self.archive.forms)

@@ -3,7 +3,10 @@
 Metrics as the authors' analysis (charts/analysis.py:61-88): coverage = filled bins / 512; QD score = the sum
 over filled bins of the best fitness in the bin, divided by 512; repertoire size (paper, fig. 8) = filled
 bins. A tree text is stored at most once per grid (the authors' qdpy/ea.py:394 drops an offspring the
-container already holds): a tree offered again is refused, whatever its fitness.
+container already holds): a tree offered again is refused, whatever its fitness. A grid given ``forms`` (runs
+of the ``clean`` profile) also refuses a tree whose simplified form (:class:`SimplifiedForms`) is already in
+its bin: a clone that behaves exactly as a tree the bin holds is not a second behaviour (docs/algorithms.md,
+"Clones").
 
 A :class:`Repertoire` wraps a ``qdpy.containers.Grid`` and keeps for every stored tree its text, its
 fitness on one objective, its descriptors and the index of the evaluation that produced it. The same
@@ -27,11 +30,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bt_controller.library import Library
+from bt_controller.simplify import simplify
+from bt_controller.tree import parse, to_text
 from evolution_manager.evolution.qdpy_grid import Features, Fitness, Grid, ScoresDict
 
 GRID_SHAPE: tuple[int, int, int] = (8, 8, 8)
 ITEMS_PER_BIN = 3
 WEIGHTS = (1.0,)
+
+
+class SimplifiedForms:
+    """The simplified form of a tree text, ``to_text(simplify(parse(text)))``, computed once per text.
+
+    ``bt_controller.simplify`` keeps every motor of every tick (so fitness, movement and rotation) and may
+    change only the count of condition ticks (conditionality); it takes about a millisecond or two per
+    evolved tree, so one instance is shared by everything that asks (a run's grids and its cache). A run
+    with a primitive library gives it: its names are parsed into their ``success`` copies, and the form is
+    the expanded tree's (two trees that expand to the same simplified tree are clones, names or not)."""
+
+    def __init__(self, library: Library | None = None) -> None:
+        self._forms: dict[str, str] = {}
+        self.library = library
+
+    def __call__(self, tree: str) -> str:
+        form = self._forms.get(tree)
+        if form is None:
+            form = self._forms[tree] = to_text(simplify(parse(tree, library=self.library)))
+        return form
 
 
 class Entry:
@@ -127,12 +153,19 @@ class Repertoire:
     """A grid of ``GRID_SHAPE`` bins holding up to ``ITEMS_PER_BIN`` trees each (qdpy ``Grid``).
 
     A tree enters a bin with a free place; in a full bin it replaces the worst item when its fitness is
-    strictly higher (qdpy's rule). Every bin's items keep their order of arrival.
+    strictly higher (qdpy's rule). Every bin's items keep their order of arrival. A tree text the grid holds
+    is refused; with ``forms``, so is a tree whose simplified form one of its bin's items has.
     """
 
-    def __init__(self, shape: tuple[int, ...] = GRID_SHAPE, items_per_bin: int = ITEMS_PER_BIN) -> None:
+    def __init__(
+        self,
+        shape: tuple[int, ...] = GRID_SHAPE,
+        items_per_bin: int = ITEMS_PER_BIN,
+        forms: SimplifiedForms | None = None,
+    ) -> None:
         self.shape = tuple(shape)
         self.items_per_bin = items_per_bin
+        self.forms = forms
         self.grid = _Grid(
             shape=self.shape,
             max_items_per_bin=items_per_bin,
@@ -164,6 +197,10 @@ class Repertoire:
         held = self.grid.solutions[index]
         if len(held) >= self.items_per_bin and fitness <= min(e.value for e in held):
             return False
+        if self.forms is not None and held:  # simplified only when it could decide
+            form = self.forms(tree)
+            if any(self.forms(e.tree) == form for e in held):
+                return False
         before = [e.tree for e in held]
         if self.grid.add(Entry(tree, fitness, descriptors, evaluation, genome)) is None:
             return False
@@ -273,9 +310,10 @@ class Repertoire:
         }
 
     @classmethod
-    def from_state(cls, state: dict) -> Repertoire:
-        """Rebuild a repertoire written by :meth:`to_state` (every bin's items in their order)."""
-        repertoire = cls(tuple(state["shape"]), int(state["items_per_bin"]))
+    def from_state(cls, state: dict, forms: SimplifiedForms | None = None) -> Repertoire:
+        """Rebuild a repertoire written by :meth:`to_state` (every bin's items in their order); ``forms`` as
+        the repertoire that wrote it had (the state does not record it: the run's profile does)."""
+        repertoire = cls(tuple(state["shape"]), int(state["items_per_bin"]), forms)
         for record in state["bins"]:
             for item in record["items"]:
                 entry = Entry(

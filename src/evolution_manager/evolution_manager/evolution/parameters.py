@@ -6,7 +6,14 @@ libraries.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
+
+from evolution_manager.errors import ConfigError
+
+if TYPE_CHECKING:  # typeshed's name for "an instance of any dataclass"
+    from _typeshed import DataclassInstance
 
 MAX_TREE_NODES = 1000
 """The most nodes a tree may have: the evaluator's limit (``bt_controller.tree.MAX_NODES``; a test checks
@@ -16,6 +23,26 @@ MAX_TREE_HEIGHT = 17
 """The tallest tree the operators make: the evaluator's depth limit (``bt_controller.tree.MAX_DEPTH``, a
 leaf has height 0 as in DEAP; a test checks they agree). The authors' operators have no height limit
 (gp/ea.py:73-77); their selection derates long trees instead (see ``operators.selection_fitness``)."""
+
+
+def _check_kinds(parameters: DataclassInstance) -> None:
+    """Each field of the parameters dataclass of its declared kind (``int``, ``float`` or the mutations'
+    ``(name, probability)`` pairs); the algorithms check the ranges. A run's config.json is read into these,
+    so a damaged file is refused here in one line rather than failing deep inside an algorithm."""
+    for field in fields(parameters):
+        value = getattr(parameters, field.name)
+        name = f"{type(parameters).__name__}.{field.name}"
+        if field.type == "int" and (isinstance(value, bool) or not isinstance(value, int)):
+            raise ConfigError(f"{name} must be an integer, got {value!r}")
+        if field.type == "float" and (
+            isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+        ):
+            raise ConfigError(f"{name} must be a number, got {value!r}")
+        if field.name == "mutations" and not all(
+            isinstance(m, tuple) and len(m) == 2 and isinstance(m[0], str) and isinstance(m[1], float)
+            for m in value
+        ):
+            raise ConfigError(f"{name} must be (name, probability) pairs, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -31,6 +58,9 @@ class GPParameters:
     init_max_height: int = 4
     max_height: int = MAX_TREE_HEIGHT
     max_nodes: int = MAX_TREE_NODES
+
+    def __post_init__(self) -> None:
+        _check_kinds(self)
 
 
 @dataclass(frozen=True)
@@ -50,3 +80,6 @@ class QDParameters:
     init_max_height: int = 4
     max_height: int = MAX_TREE_HEIGHT
     max_nodes: int = MAX_TREE_NODES
+
+    def __post_init__(self) -> None:
+        _check_kinds(self)

@@ -24,8 +24,15 @@ archive; for GP a grid of one tree per bin offered every individual of generatio
 
 Scenarios (``RunConfig.scenarios``): under ``fixed`` every evaluation uses the run's scenario seed, so a tree
 asked for again is answered from the run's cache of results (keyed by the canonical tree text) without
-simulating it; :attr:`Run.simulations` and :attr:`Run.simulations_saved` count both. Its rows in
-``evaluations.csv`` are the same as a simulation's, so the cache is rebuilt from that file on resume.
+simulating it; :attr:`Run.simulations` and :attr:`Run.simulations_saved` count both. Under the ``paper``
+profile the cache is keyed on the simplified form instead, as the authors' code keys it on the
+redundancy-stripped tree (qdpy/ea.py:447-478, gp/ea.py:506-555): a tree whose simplified form an earlier
+batch evaluated takes that evaluation's fitness and descriptors, conditionality included, without being
+simulated (docs/algorithms.md, "Clones"). Either way its rows in ``evaluations.csv`` are the same as a
+simulation's, so the cache is rebuilt from that file, batch by batch (``progress.csv``), on resume.
+
+Clones: under the ``clean`` profile every grid (MAP-Elites' archive, the passive grids, GP's repertoires)
+refuses a tree whose simplified form is already in its bin (``Repertoire``).
 
 A resumed run cuts the CSV files back to the lengths in the checkpoint and continues from its state; since
 per-evaluation seeds depend only on the run's seeds and the evaluation's index, it ends with exactly the
@@ -34,6 +41,8 @@ files of an uninterrupted run.
 
 from __future__ import annotations
 
+import csv
+import io
 import os
 import shutil
 import tempfile
@@ -47,7 +56,7 @@ from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
 from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
-from evolution_manager.evolution.archive import Repertoire
+from evolution_manager.evolution.archive import Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
@@ -62,6 +71,10 @@ CHECKPOINT_FORMAT = 1
 
 _DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
 """What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
+
+SIMULATED, CACHED, INHERITED = "simulated", "cached", "inherited"
+"""How an evaluation was answered: simulated; from the cache (fixed scenarios: the same tree text evaluated
+before); from the simplified form's earlier evaluation (``paper`` with fixed scenarios)."""
 
 EVALUATION_HEADER = ["evaluation", "seed", "tree", *OBJECTIVES, *DESCRIPTORS, "error"]
 PROGRESS_HEADER = ["evaluations"] + [f"{m}_{o}" for o in OBJECTIVES for m in ("best", "coverage", "qd_score")]
@@ -88,6 +101,7 @@ class Evaluated:
     request: EvaluationRequest
     outcome: Outcome
     cached: bool
+    """Answered without simulating (``CACHED`` or ``INHERITED``)."""
 
 
 @dataclass
@@ -171,14 +185,26 @@ class Run:
         self.evaluator = evaluator
         self.library = library
         """The run's primitive library (its copy in the run directory), or None."""
-        self.algorithm: AskTell = config.make_algorithm(library)
-        self.passive = {objective: Repertoire() for objective in config.grids}
+        self.forms = SimplifiedForms(library)
+        """The simplified form of every tree text that needed one (shared by the grids and the cache)."""
+        self.grid_forms = self.forms if config.refuses_clones else None
+        """What the grids refuse clones by: the simplified forms under ``clean``, nothing under ``paper``."""
+        self.algorithm: AskTell = config.make_algorithm(library, self.forms)
+        self.passive = {objective: Repertoire(forms=self.grid_forms) for objective in config.grids}
         self.generations: dict[str, Repertoire] = {}
         """GP only: per evolved objective, the grid of one tree per bin of generations 1 onwards."""
         if isinstance(self.algorithm, GeneticProgramming):
-            self.generations = {o: Repertoire(items_per_bin=1) for o in config.objectives}
+            self.generations = {
+                o: Repertoire(items_per_bin=1, forms=self.grid_forms) for o in config.objectives
+            }
         self.known: dict[str, Outcome] = {}
-        """Every tree text evaluated in this run with its outcome (answers repeats under ``fixed``)."""
+        """Every tree text simulated in this run with its outcome (answers repeats under ``fixed``)."""
+        self.known_forms: dict[str, Outcome] = {}
+        """``paper`` with fixed scenarios: every simplified form evaluated in an earlier batch, with the
+        outcome of its last evaluation in the batch that first met it (MAP-Elites) or its first (GP), as the
+        authors' archives (:meth:`_remember`)."""
+        self.answers: list[str] = []
+        """How each evaluation of the run so far was answered (``SIMULATED``, ``CACHED``, ``INHERITED``)."""
         self.simulations = 0
         self.last_batch: list[Evaluated] = []
         """The batch evaluated last, every evaluation of it (for whoever records the run, e.g. a bag)."""
@@ -288,7 +314,9 @@ class Run:
                     f"{directory.checkpoint} belongs to another configuration than config.json"
                 )
             run.algorithm.restore(state["algorithm"])
-            run.passive = {o: Repertoire.from_state(state["passive"][o]) for o in config.grids}
+            run.passive = {
+                o: Repertoire.from_state(state["passive"][o], run.grid_forms) for o in config.grids
+            }
             run.evaluations = integer(state["evaluations"], "evaluations", 0)
             logs = {"evaluations": directory.evaluations, "progress": directory.progress}
             for name, log in logs.items():
@@ -298,7 +326,7 @@ class Run:
                 run.offsets[name] = offset
             run.timing = Timing(**state["timing"])
             for objective, grid in state.get("generations", {}).items():
-                run.generations[objective] = Repertoire.from_state(grid)
+                run.generations[objective] = Repertoire.from_state(grid, run.grid_forms)
             archive = run.archive()
             grids = [*run.passive.values(), *([archive] if archive is not None else [])]
             for grid in grids:
@@ -324,24 +352,79 @@ class Run:
         return run
 
     def _rebuild_cache(self) -> None:
-        """The cache and the simulation counts from ``evaluations.csv`` (as far as the checkpoint)."""
-        for row in self.directory.evaluations.read()[: self.evaluations]:
-            tree = row["tree"]
-            self._first.setdefault(tree, int(row["evaluation"]))
-            if self._cached(tree):
-                self.simulations_saved += 1
-                continue
-            self.simulations += 1
-            if row["error"]:
-                self.known[tree] = Outcome(None, None, row["error"])
-            else:
-                self.known[tree] = Outcome(
-                    tuple(float(row[name]) for name in OBJECTIVES),
-                    tuple(float(row[name]) for name in DESCRIPTORS),
-                )
+        """The caches, the simulation counts and :attr:`answers` from ``evaluations.csv``, batch by batch as
+        ``progress.csv`` delimits them (both as far as the checkpoint): the decisions of the run replayed."""
+        rows = self.directory.evaluations.read()[: self.evaluations]
+        start = 0
+        for end in self._batch_ends():
+            batch = rows[start:end]
+            start = end
+            try:
+                trees = [row["tree"] for row in batch]
+                outcomes = [_row_outcome(row) for row in batch]
+                plan = self._plan(trees)  # a tree text that does not parse: a ValueError (TreeError)
+                first = [int(row["evaluation"]) for row in batch]
+            except (KeyError, TypeError, ValueError) as error:
+                raise RunDirectoryError(f"{self.directory.evaluations.path} is damaged: {error}") from error
+            self._remember(trees, plan, outcomes)
+            for tree, index in zip(trees, first, strict=True):
+                self._first.setdefault(tree, index)
+        if start != len(rows) or len(rows) != self.evaluations:
+            raise RunDirectoryError(
+                f"{self.directory.evaluations.path} and {self.directory.progress.path} hold {len(rows)} and "
+                f"{start} evaluations where the checkpoint says {self.evaluations}"
+            )
 
-    def _cached(self, tree: str) -> bool:
-        return self.config.scenarios == "fixed" and tree in self.known
+    def _batch_ends(self) -> list[int]:
+        """The evaluations after each batch, from ``progress.csv`` as far as the checkpoint."""
+        with open(self.directory.progress.path, "rb") as handle:
+            data = handle.read(self.offsets["progress"])
+        try:
+            ends = [int(row["evaluations"]) for row in csv.DictReader(io.StringIO(data.decode()))]
+        except (KeyError, TypeError, ValueError) as error:
+            raise RunDirectoryError(f"{self.directory.progress.path} is damaged: {error}") from error
+        if ends != sorted(ends):
+            raise RunDirectoryError(f"{self.directory.progress.path} is damaged: evaluations decrease")
+        return ends
+
+    def _plan(self, trees: Sequence[str]) -> list[str]:
+        """How each tree of a batch is answered, from the trees and what earlier batches evaluated only:
+        ``INHERITED`` when its simplified form was evaluated in an earlier batch (``paper``, fixed scenarios),
+        else ``CACHED`` when its text was simulated before, earlier in the batch too (fixed scenarios), else
+        ``SIMULATED``. Under ``paper`` two trees of one form first met in the same batch are both simulated,
+        as the authors' assignDuplicateFitness looks only at the archive of earlier batches."""
+        fixed = self.config.scenarios == "fixed"
+        plan: list[str] = []
+        in_batch: set[str] = set()
+        for tree in trees:
+            if self.config.inherits_by_form and self.forms(tree) in self.known_forms:
+                plan.append(INHERITED)
+            elif fixed and (tree in self.known or tree in in_batch):
+                plan.append(CACHED)
+            else:
+                plan.append(SIMULATED)
+                in_batch.add(tree)
+        return plan
+
+    def _remember(self, trees: Sequence[str], plan: Sequence[str], outcomes: Sequence[Outcome]) -> None:
+        """Count a batch's simulations and keep its outcomes for the batches to come."""
+        for tree, how, outcome in zip(trees, plan, outcomes, strict=True):
+            if how == SIMULATED:
+                self.known[tree] = outcome
+        if self.config.inherits_by_form:
+            # a form first met in this batch keeps its last evaluation in MAP-Elites (a dict update,
+            # qdpy/ea.py:496) and its first in GP (added only when new, redundancy.py:1798-1822)
+            first = isinstance(self.algorithm, GeneticProgramming)
+            for tree, how, outcome in zip(trees, plan, outcomes, strict=True):
+                if how != INHERITED:
+                    if first:
+                        self.known_forms.setdefault(self.forms(tree), outcome)
+                    else:
+                        self.known_forms[self.forms(tree)] = outcome
+        simulated = plan.count(SIMULATED)
+        self.simulations += simulated
+        self.simulations_saved += len(plan) - simulated
+        self.answers.extend(plan)
 
     # Execution ---------------------------------------------------------------------------------------
     @property
@@ -392,35 +475,33 @@ class Run:
         self._timed_checkpoint()
 
     def _evaluate(self, requests: Sequence[EvaluationRequest]) -> list[Evaluated]:
-        """Every request evaluated: under ``fixed`` scenarios a tree seen before in the run (or earlier in
-        the batch) is answered from the cache; the others go to the evaluator in one batch."""
+        """Every request evaluated as :meth:`_plan` says: the ``SIMULATED`` ones go to the evaluator in one
+        batch, the others are answered from the cache or from their simplified form's evaluation."""
         if self.evaluator is None:
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
-        fresh: list[EvaluationRequest] = []
-        fresh_at: list[int] = []  # the position in ``requests`` of each fresh request
-        fresh_trees: set[str] = set()
-        for i, request in enumerate(requests):
-            # a tree seen before, or earlier in this batch (answered from its first copy below)
-            if self._cached(request.tree) or (
-                self.config.scenarios == "fixed" and request.tree in fresh_trees
-            ):
-                self.simulations_saved += 1
-            else:
-                fresh.append(request)
-                fresh_at.append(i)
-                fresh_trees.add(request.tree)
+        trees = [r.tree for r in requests]
+        plan = self._plan(trees)
+        fresh = [r for r, how in zip(requests, plan, strict=True) if how == SIMULATED]
         results = list(self.evaluator.evaluate(fresh)) if fresh else []
         if len(results) != len(fresh):
             raise RunDirectoryError(f"the evaluator answered {len(results)} of {len(fresh)} requests")
-        self.simulations += len(fresh)
-        simulated: dict[int, Outcome] = {}
-        for i, request, result in zip(fresh_at, fresh, results, strict=True):
-            # Under fresh scenarios a tree asked twice is simulated twice, on two seeds: each request keeps
-            # its own result (the cache serves fixed scenarios only).
-            simulated[i] = self.known[request.tree] = as_outcome(result)
+        answers = iter(results)
+        in_batch: dict[str, Outcome] = {}
+        outcomes: list[Outcome] = []
+        for tree, how in zip(trees, plan, strict=True):
+            if how == SIMULATED:
+                # Under fresh scenarios a tree asked twice is simulated twice, on two seeds: each request
+                # keeps its own result (the caches serve fixed scenarios only).
+                outcome = in_batch[tree] = as_outcome(next(answers))
+            elif how == INHERITED:
+                outcome = self.known_forms[self.forms(tree)]
+            else:
+                outcome = in_batch[tree] if tree in in_batch else self.known[tree]
+            outcomes.append(outcome)
+        self._remember(trees, plan, outcomes)
         return [
-            Evaluated(r, simulated[i], False) if i in simulated else Evaluated(r, self.known[r.tree], True)
-            for i, r in enumerate(requests)
+            Evaluated(r, outcome, how != SIMULATED)
+            for r, outcome, how in zip(requests, outcomes, plan, strict=True)
         ]
 
     def _offer_generations(self) -> None:
@@ -528,3 +609,13 @@ class Run:
         if isinstance(self.algorithm, GeneticProgramming):
             return [tree_to_text(t) for t in self.algorithm.population]
         return []
+
+
+def _row_outcome(row: dict[str, str]) -> Outcome:
+    """The outcome a row of ``evaluations.csv`` records."""
+    if row["error"]:
+        return Outcome(None, None, row["error"])
+    return Outcome(
+        tuple(float(row[name]) for name in OBJECTIVES),
+        tuple(float(row[name]) for name in DESCRIPTORS),
+    )

@@ -9,7 +9,10 @@ seed, so a tree has one exact fitness and a tree seen before need not be simulat
 evaluation ``i`` draws its own seed from the run seed and ``i`` (noisy fitness).
 
 Profile: the model's profile every evaluation of the run uses (``docs/model.md``: ``paper``, the authors'
-experiment, or ``clean``), recorded in ``config.json``.
+experiment, or ``clean``), recorded in ``config.json``. It also decides what a run does with clones, trees
+that simplify to the same tree (``docs/algorithms.md``, "Clones"): under ``paper`` with fixed scenarios a
+tree whose simplified form an earlier batch evaluated takes that evaluation's values unsimulated, as the
+authors' code; under ``clean`` every grid refuses a tree whose simplified form is already in its bin.
 
 Task: the trial length every evaluation uses (``swarm_sim.config.TASKS``: ``primitives``, the 2023 20 s
 trials, or ``foraging``, the 2024 100 s trials), and the node set: the paper's 8 conditions for
@@ -45,6 +48,7 @@ from swarm_sim.world import OBJECTIVES, PAPER_OBJECTIVES
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.algorithms import AskTell
+    from evolution_manager.evolution.archive import SimplifiedForms
 
 DEFAULT_PROFILE: str = PROFILES[Timeline().profile]
 """The model's default profile (``bt_controller.timeline``): runs that name none use it."""
@@ -254,11 +258,25 @@ class RunConfig:
         ``got_food``: the 2024 baseline's node set, params.py:168-189 at a73e4af)."""
         return CONDITIONS_2023 if self.task == "primitives" else CONDITIONS
 
-    def make_algorithm(self, library: Library | None = None) -> AskTell:
+    @property
+    def refuses_clones(self) -> bool:
+        """Whether the run's grids refuse a tree whose simplified form is already in its bin (``clean``)."""
+        return self.profile == "clean"
+
+    @property
+    def inherits_by_form(self) -> bool:
+        """Whether a tree whose simplified form an earlier batch of the run evaluated takes that evaluation's
+        fitness and descriptors without being simulated (``paper`` with ``fixed`` scenarios: the authors'
+        qdpy/ea.py:447-478 and gp/ea.py:506-555)."""
+        return self.profile == "paper" and self.scenarios == "fixed"
+
+    def make_algorithm(self, library: Library | None = None, forms: SimplifiedForms | None = None) -> AskTell:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed;
         ``library``: the run's primitive library (its names become terminals; the run's copy of
-        ``self.library``)."""
+        ``self.library``); ``forms``: the run's simplified forms, shared with MAP-Elites' archive when it
+        refuses clones."""
         from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites
+        from evolution_manager.evolution.archive import SimplifiedForms
 
         if (library.digest if library is not None else "") != self.library_digest:
             raise ConfigError(
@@ -267,13 +285,10 @@ class RunConfig:
             )
         algorithm_seed = derive_seed(self.seed, RUN_ALGORITHM)
         if self.algorithm == "qd":
+            grid_forms = (forms or SimplifiedForms(library)) if self.refuses_clones else None
+            objective = OBJECTIVES.index(self.objective)
             return MapElites(
-                OBJECTIVES.index(self.objective),
-                self.evaluations,
-                algorithm_seed,
-                self.qd,
-                self.conditions,
-                library,
+                objective, self.evaluations, algorithm_seed, self.qd, self.conditions, library, grid_forms
             )
         objectives = [OBJECTIVES.index(o) for o in self.objectives]
         return GeneticProgramming(

@@ -5,18 +5,30 @@
 
 Bad options print one line saying what was expected and exit with status 2; nothing already saved is
 touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
+
+``--cluster dask://HOST:PORT`` or ``--cluster slurm`` (``--cluster-config FILE``) sends each batch, and the
+held-out scores at the end, to a Dask cluster's workers in chunks (``cluster.evaluator.DaskEvaluator``)
+instead of this process's evaluator (``--workers`` threads, refused with a cluster). The run's files are the
+same bytes either way, and ``config.json`` holds no cluster setting: a run started here continues on a
+cluster and the other way round. ``sessions.json`` in the run directory records each session: its wall
+time, commit, command and where it ran.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+import time
 from collections.abc import Sequence
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
-from evolution_manager.errors import EvolutionError, UsageError, WriteError
+from evolution_manager.cluster.client import open_client
+from evolution_manager.cluster.settings import add_cluster_options, settings_from_args
+from evolution_manager.errors import DispatchError, EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import (
     add_scenario_options,
     add_task_options,
@@ -29,6 +41,8 @@ from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIO
 from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
+    from distributed import Client
+
     from bt_controller.library import Library
     from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
@@ -56,7 +70,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
     )
-    parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
+    parser.add_argument(
+        "--workers", type=positive_int, help="with --cluster local: evaluator threads (default 1)"
+    )
     parser.add_argument(
         "--resume", action="store_true", help="continue the run in --out from its last checkpoint"
     )
@@ -69,23 +85,44 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--no-figures", action="store_true", help="write results but no figures")
+    add_cluster_options(parser)
     return parser
 
 
-def _evaluator(workers: int, config: RunConfig, library: Library | None) -> Evaluator:
+def _evaluator(
+    workers: int | None, config: RunConfig, library: Library | None, client: Client | None = None
+) -> Evaluator:
+    """The run's evaluator of the run's world (profile and trial length) and library: the cluster's workers
+    through ``client``, else ``workers`` threads here."""
+    if client is not None:
+        from evolution_manager.cluster.evaluator import DaskEvaluator
 
+        return DaskEvaluator(client, config.world(), library=library)
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
-        return BatchEvaluator(config.world(), threads=workers, library=library)
+        return BatchEvaluator(config.world(), threads=workers or 1, library=library)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
 
 
 def evolve(argv: Sequence[str] | None = None) -> int:
     """Run ``evolve``; return the exit status."""
+    with ExitStack() as stack:  # the cluster's client, open until the results are written
+        status = _evolve(argv, stack)
+    return status
+
+
+def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
+    started = time.time()
     try:
         args = build_parser().parse_args(argv)
+        cluster = settings_from_args(args)
+        if args.workers is not None and not cluster.is_local:
+            raise UsageError(
+                f"--workers applies to --cluster local only; on {cluster.describe()} the batches go to "
+                "every worker thread"
+            )
         config = None if args.resume else config_from_args(args)
         from evolution_manager.evolution.run import Run, RunDirectory
         from evolution_manager.viewing.results import write_results
@@ -96,7 +133,8 @@ def evolve(argv: Sequence[str] | None = None) -> int:
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
             saved = directory.read_config()
             check_resume_options(args, saved)
-            run = Run.resume(args.out, _evaluator(args.workers, saved, directory.read_library(saved)))
+            config = saved
+            library = directory.read_library(saved)
         else:
             if directory.started():
                 raise UsageError(
@@ -104,17 +142,24 @@ def evolve(argv: Sequence[str] | None = None) -> int:
                 )
             assert config is not None  # made from the options when not resuming
             library = library_from_args(args)
-            evaluator = _evaluator(args.workers, config, library)
+        client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
+        evaluator = _evaluator(args.workers, config, library, client)
+        if args.resume:
+            run = Run.resume(args.out, evaluator)
+        else:
             run = Run.start(config, args.out, evaluator, library)
     except WriteError as error:  # the new run directory could not be written
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_IO
-    except (UsageError, EvolutionError) as error:
+    except (UsageError, EvolutionError) as error:  # a ClusterError too: no scheduler, no SLURM
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_USAGE
     except OSError as error:  # an --out that cannot be created or written
         print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
         return EXIT_USAGE
+    from evolution_manager.studies.experiment import record_session
+
+    command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
     bar = progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
@@ -130,20 +175,29 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     resume = f"continue with: evolve --out {args.out} --resume"
     try:
         with signals_as_interrupts():
+            record_session(args.out, started, command, cluster)
             run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
             if bar is not None:
                 bar.close()
             write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+            record_session(args.out, started, command, cluster)
     except KeyboardInterrupt as interruption:  # Ctrl-C or SIGTERM: the last checkpoint holds the run
         if bar is not None:
             bar.close()
         print(f"evolve: interrupted; {resume}", file=sys.stderr)
+        with contextlib.suppress(EvolutionError):  # the session's time, as far as it can be written
+            record_session(args.out, started, command, cluster)
         return exit_status(interruption)
     except WriteError as error:  # a full disk: what was saved is whole (atomic files, logs cut on resume)
         if bar is not None:
             bar.close()
         print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
         return EXIT_IO
+    except DispatchError as error:  # the cluster's workers could not finish a chunk
+        if bar is not None:
+            bar.close()
+        print(f"evolve: error: {error}; {resume}", file=sys.stderr)
+        return 1
     print(result_lines(run, args.out))
     return 0
 

@@ -18,6 +18,13 @@ writes the same bytes as an uninterrupted one).
 
 Progress covers the whole experiment: individuals produced over all runs against the total budget, with
 tqdm's rate and ETA.
+
+Where the runs go: ``--cluster local`` (the default) runs ``--processes`` of them at once in this machine's
+processes; ``--cluster dask://HOST:PORT`` or ``--cluster slurm`` (``--cluster-config FILE``) sends each run
+whole as one task to the cluster's workers, as many at once as they have threads (``--processes`` is refused
+there), with the experiment folder on a filesystem they share (``docs/cluster.md``). The results never
+depend on it: ``experiment.json`` holds no cluster setting, so an experiment started here continues on a
+cluster and the other way round; ``sessions.json`` records where each session ran.
 """
 
 from __future__ import annotations
@@ -29,8 +36,9 @@ import queue as queues
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import ExitStack
 from multiprocessing import Manager, get_context
 from pathlib import Path
 
@@ -44,11 +52,13 @@ from evolution_manager.arguments import (
     seconds,
     seed_int,
 )
+from evolution_manager.cluster.client import open_client
+from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
-from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
+from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
@@ -131,14 +141,13 @@ def run_one(
 
     from evolution_manager.evolution.run import Run, RunDirectory
     from evolution_manager.viewing.results import write_results
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
     if finished(directory.root):
         return root
-    evaluator = BatchEvaluator(default_config(config.profile), threads=1)
+    evaluator = BatchEvaluator(config.world(), threads=1)  # the run's profile and trial length
     if directory.started():
         run = Run.resume(directory.root, evaluator)
         if run.config != config:
@@ -174,10 +183,14 @@ def current_commit() -> str:
     return commit + ("+" if dirty else "")
 
 
-def record_session(out: Path, started: float, argv: Sequence[str], runs_done: int) -> None:
-    """Record this session (wall seconds so far, commit, command) in ``sessions.json``: appended the first
-    time, updated after every run it finishes (so a killed session keeps the time up to its last run)."""
-    path = out / SESSIONS_FILE
+def record_session(
+    directory: Path, started: float, command: str, cluster: ClusterSettings, **more: object
+) -> None:
+    """Record this session (wall seconds so far, commit, command, where it ran, and ``more``) in
+    ``directory/sessions.json``: appended the first time, updated at every later call (so a killed session
+    keeps the time up to its last record). ``experiment`` records after every run it finishes, ``evolve``
+    at its start and end; neither file is compared when a run or experiment continues."""
+    path = directory / SESSIONS_FILE
     sessions = read_json(path) if path.exists() else []
     assert isinstance(sessions, list)
     if sessions and sessions[-1].get("started_unix") == round(started, 1):
@@ -187,8 +200,9 @@ def record_session(out: Path, started: float, argv: Sequence[str], runs_done: in
             "started_unix": round(started, 1),
             "wall_seconds": round(time.time() - started, 1),
             "commit": current_commit(),
-            "command": "ws/run evolution_manager experiment " + " ".join(argv),
-            "runs_finished": runs_done,
+            "command": command,
+            "cluster": cluster.to_json(),
+            **more,
         }
     )
     write_json(path, sessions)
@@ -220,7 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
         "per-run, each run on its own; in experiment.json",
     )
     parser.add_argument(
-        "--processes", type=positive_int, default=os.cpu_count() or 1, help="runs at once (default: cores)"
+        "--processes",
+        type=positive_int,
+        help="with --cluster local: runs at once (default: this machine's cores)",
     )
     parser.add_argument(
         "--checkpoint-every",
@@ -230,7 +246,34 @@ def build_parser() -> argparse.ArgumentParser:
         help="checkpoint period of each run (default 30)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_cluster_options(parser)
     return parser
+
+
+def run_locally(
+    runs: Sequence[tuple[dict, str]],
+    processes: int,
+    checkpoint_interval: float,
+    on_progress: Callable[[str, int], None],
+) -> Iterator[tuple[str, BaseException | None]]:
+    """Every ``(config_data, root)`` of ``runs`` with :func:`run_one` in ``processes`` processes of this
+    machine; yield ``(root, None)`` as each run finishes, ``(root, error)`` for one that failed (the others go
+    on), as ``cluster.runs.map_runs`` does on a cluster. ``on_progress(root, produced)`` between results."""
+    with (
+        Manager() as manager,
+        ProcessPoolExecutor(max_workers=processes, mp_context=get_context("spawn")) as pool,
+    ):
+        progress = manager.Queue()
+        futures = {
+            pool.submit(run_one, config_data, root, progress, checkpoint_interval): root
+            for config_data, root in runs
+        }
+        pending = set(futures)
+        while pending:
+            completed, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+            _drain(progress, on_progress)
+            for future in completed:
+                yield futures[future], future.exception()
 
 
 def experiment(argv: Sequence[str] | None = None) -> int:
@@ -239,6 +282,12 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
     try:
         args = build_parser().parse_args(argv)
+        cluster = settings_from_args(args)
+        if args.processes is not None and not cluster.is_local:
+            raise UsageError(
+                f"--processes applies to --cluster local only; on {cluster.describe()} every worker thread "
+                "runs one run at a time"
+            )
         if not 0 <= args.seed <= MAX_SEED:
             raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
         if args.scenario_seed is not None and args.scenarios == "fresh":
@@ -280,75 +329,86 @@ def experiment(argv: Sequence[str] | None = None) -> int:
                 )
         elif args.out.exists() and any(args.out.iterdir()):
             raise UsageError(f"{args.out} exists and is not an experiment folder; choose another --out")
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_json(plan_path, document)
-    except (UsageError, EvolutionError) as error:
+    except (UsageError, EvolutionError) as error:  # a ClusterError too
         print(f"experiment: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    except OSError as error:  # an --out that cannot be created or written
+    except OSError as error:  # an --out that cannot be read
         print(f"experiment: error: {error}", file=sys.stderr)
         return EXIT_USAGE
     started = time.time()
-    command = list(argv if argv is not None else sys.argv[1:])
-    budgets = {str(args.out / path): config.evaluations for config, path in planned}
+    command = "ws/run evolution_manager experiment " + " ".join(argv if argv is not None else sys.argv[1:])
+    out = args.out.absolute()  # a cluster's workers need the whole path (the same on every machine)
+    paths = {str(out / path): path for _, path in planned}
+    budgets = {str(out / path): config.evaluations for config, path in planned}
     done = {root: produced_so_far(Path(root), budget) for root, budget in budgets.items()}
-    to_run = [(config, path) for config, path in planned if not finished(args.out / path)]
+    to_run = [(config, str(out / path)) for config, path in planned if not finished(out / path)]
     to_run.sort(key=lambda item: -item[0].evaluations)  # the longest (GP_fnd) first: a shorter makespan
+    already = len(planned) - len(to_run)
     bar = None
-    if not args.no_progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=sum(budgets.values()),
-            initial=sum(done.values()),
-            unit="ind",
-            desc=f"experiment ({len(planned) - len(to_run)}/{len(planned)} runs)",
-            dynamic_ncols=True,
-            disable=None,
-        )
-    failures = []
+    failures: list[str] = []
     full_disk = False  # a run could not write its files: what each saved is whole, the command continues it
     finished_now = 0
+
+    def say(line: str) -> None:
+        print(f"experiment: {line}", file=sys.stderr, flush=True)
+
+    def show() -> None:
+        if bar is not None:
+            bar.n = sum(done.values())
+            bar.set_description(f"experiment ({already + finished_now}/{len(planned)} runs)")
+            bar.refresh()
+
+    def on_progress(root: str, produced: int) -> None:
+        done[root] = max(done.get(root, 0), int(produced))
+        show()
+
     try:
-        with (
-            Manager() as manager,
-            ProcessPoolExecutor(max_workers=args.processes, mp_context=get_context("spawn")) as pool,
-        ):
-            progress = manager.Queue()
-            futures = {
-                pool.submit(
-                    run_one, config.to_json(), str(args.out / path), progress, args.checkpoint_every
-                ): path
-                for config, path in to_run
-            }
-            pending = set(futures)
-            while pending:
-                completed, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
-                _drain(progress, done)
-                for future in completed:
-                    root = str(args.out / futures[future])
-                    try:
-                        future.result()
-                        finished_now += 1
-                        done[root] = budgets[root]
-                        record_session(args.out, started, command, finished_now)
-                    except Exception as error:  # a failed run is reported, the others go on
-                        failures.append(f"{futures[future]}: {error}")
-                        full_disk = full_disk or isinstance(error, WriteError)
-                if bar is not None:
-                    bar.n = sum(done.values())
-                    bar.set_description(
-                        f"experiment ({len(planned) - len(pending) - len(failures)}/{len(planned)} runs)"
+        with ExitStack() as stack:
+            try:
+                client = stack.enter_context(open_client(cluster, say=say))
+                args.out.mkdir(parents=True, exist_ok=True)
+                write_json(plan_path, document)
+            except EvolutionError as error:  # no scheduler answers, no SLURM; the plan not written
+                print(f"experiment: error: {error}", file=sys.stderr)
+                return EXIT_USAGE
+            except OSError as error:  # an --out that cannot be created or written
+                print(f"experiment: error: {error}", file=sys.stderr)
+                return EXIT_USAGE
+            if not args.no_progress:
+                from tqdm import tqdm
+
+                bar = stack.enter_context(
+                    tqdm(
+                        total=sum(budgets.values()),
+                        initial=sum(done.values()),
+                        unit="ind",
+                        desc=f"experiment ({already}/{len(planned)} runs)",
+                        dynamic_ncols=True,
+                        disable=None,
                     )
-                    bar.refresh()
+                )
+            runs = [(config.to_json(), root) for config, root in to_run]
+            if client is None:
+                processes = args.processes or os.cpu_count() or 1
+                results = run_locally(runs, processes, args.checkpoint_every, on_progress)
+            else:
+                from evolution_manager.cluster.runs import map_runs  # loads Dask: only for a cluster
+
+                results = map_runs(client, run_one, runs, args.checkpoint_every, on_progress=on_progress)
+            for root, problem in results:
+                if problem is None:
+                    finished_now += 1
+                    done[root] = budgets[root]
+                    record_session(args.out, started, command, cluster, runs_finished=finished_now)
+                else:  # a failed run is reported, the others go on
+                    failures.append(f"{paths[root]}: {problem}")
+                    full_disk = full_disk or isinstance(problem, WriteError)
+                show()
     except KeyboardInterrupt:
         print(
             f"experiment: interrupted; run the same command again to continue ({args.out})", file=sys.stderr
         )
         return EXIT_INTERRUPTED
-    finally:
-        if bar is not None:
-            bar.close()
     if failures:
         print("experiment: some runs failed:\n  " + "\n  ".join(failures), file=sys.stderr)
         if full_disk:
@@ -363,14 +423,14 @@ def experiment(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-def _drain(progress: queues.Queue[tuple[str, int]], done: dict[str, int]) -> None:
-    """Take every progress message waiting in the queue."""
+def _drain(progress: queues.Queue[tuple[str, int]], on_progress: Callable[[str, int], None]) -> None:
+    """Hand every progress message waiting in the queue to ``on_progress``."""
     while True:
         try:
             root, produced = progress.get_nowait()
         except queues.Empty:
             return
-        done[root] = max(done.get(root, 0), int(produced))
+        on_progress(root, produced)
 
 
 def main() -> None:

@@ -29,12 +29,18 @@ from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run_config import RunConfig
 
 PROFILE = "paper"
+
+if TYPE_CHECKING:  # Dask and the simulator are imported where the benchmark uses them
+    from distributed import Client
+
+    from swarm_sim.evaluation import Evaluator
 
 
 def _noop(x: int) -> int:
@@ -46,7 +52,7 @@ def _load() -> str:
     return f"load average {one:.2f} (1 min), {five:.2f} (5 min) on {os.cpu_count()} cores"
 
 
-def task_overhead(client: object, tasks: int, chunk: int) -> dict[str, float]:
+def task_overhead(client: Client, tasks: int, chunk: int) -> dict[str, float]:
     """Milliseconds per empty task (round trip, and pipelined) and per chunk of ``chunk`` evaluations."""
     from bt_controller.random_trees import random_trees
     from evolution_manager.cluster.evaluator import evaluate_chunk, worker_evaluator
@@ -54,13 +60,13 @@ def task_overhead(client: object, tasks: int, chunk: int) -> dict[str, float]:
 
     c = client
     for k in range(20):  # warm the connection
-        c.submit(_noop, k, pure=False).result()  # type: ignore[attr-defined]
+        c.submit(_noop, k, pure=False).result()
     started = time.perf_counter()
     for k in range(tasks):
-        c.submit(_noop, k, pure=False).result()  # type: ignore[attr-defined]
+        c.submit(_noop, k, pure=False).result()
     round_trip = (time.perf_counter() - started) / tasks
     started = time.perf_counter()
-    c.gather(c.map(_noop, range(tasks), pure=False))  # type: ignore[attr-defined]
+    c.gather(c.map(_noop, range(tasks), pure=False))
     pipelined = (time.perf_counter() - started) / tasks
     payloads = [(tree, 7, 10) for tree in random_trees(5, chunk)]
     local, remote = [], []
@@ -70,7 +76,7 @@ def task_overhead(client: object, tasks: int, chunk: int) -> dict[str, float]:
         evaluate_chunk(PROFILE, payloads)
         local.append(time.perf_counter() - started)
         started = time.perf_counter()
-        c.submit(evaluate_chunk, PROFILE, payloads, pure=False).result()  # type: ignore[attr-defined]
+        c.submit(evaluate_chunk, PROFILE, payloads, pure=False).result()
         remote.append(time.perf_counter() - started)
     return {
         "round_trip_ms": 1000 * round_trip,
@@ -80,12 +86,12 @@ def task_overhead(client: object, tasks: int, chunk: int) -> dict[str, float]:
     }
 
 
-def one_run(evaluator: object, root: Path, evaluations: int) -> float:
+def one_run(evaluator: Evaluator, root: Path, evaluations: int) -> float:
     """Wall seconds of a MAP-Elites run on food stopped after ``evaluations`` evaluations."""
     from evolution_manager.evolution.run import Run
 
     config = RunConfig.make("qd", "food", 25_000, seed=1, profile=PROFILE)
-    run = Run.start(config, root, evaluator)  # type: ignore[arg-type]
+    run = Run.start(config, root, evaluator)
     started = time.perf_counter()
     run.execute(stop_after=evaluations, checkpoint_interval=30.0)
     wall = time.perf_counter() - started
@@ -94,7 +100,7 @@ def one_run(evaluator: object, root: Path, evaluations: int) -> float:
     return wall
 
 
-def run_comparison(client: object, evaluations: int, chunk: int, work: Path, pairs: int) -> dict[str, float]:
+def run_comparison(client: Client, evaluations: int, chunk: int, work: Path, pairs: int) -> dict[str, float]:
     """In-process against one-worker Dask for the same run, ``pairs`` times in the order ABBA... (so that a
     load that drifts weighs on both alike); raise if any two runs' evaluation logs differ."""
     from evolution_manager.cluster.evaluator import WARM_UP_TREE, DaskEvaluator
@@ -103,8 +109,8 @@ def run_comparison(client: object, evaluations: int, chunk: int, work: Path, pai
 
     local = BatchEvaluator(default_config(PROFILE))
     local.evaluate([EvaluationRequest(WARM_UP_TREE, 0, 1)])  # kernels loaded before the clock, as ...
-    dask = DaskEvaluator(client, PROFILE, chunk)  # type: ignore[arg-type]  # ... on the worker (its plugin)
-    evaluators = {"local": local, "dask": dask}
+    dask = DaskEvaluator(client, PROFILE, chunk)  # ... on the worker (its plugin)
+    evaluators: dict[str, Evaluator] = {"local": local, "dask": dask}
     seconds: dict[str, list[float]] = {"local": [], "dask": []}
     order = [("local", "dask"), ("dask", "local")]
     for k in range(pairs):

@@ -9,6 +9,12 @@ best tree in the full node graph.
    controller processes, in lockstep over topics and services), recorded to a second bag.
 3. It prints where everything is, and the commands to replay and verify the recorded trial.
 
+With ``--cluster dask://HOST:PORT`` or ``--cluster slurm`` (``--cluster-config FILE``; ``docs/cluster.md``)
+the evolution of step 1 runs as ``evolve --cluster ...`` instead, its batches on the Dask cluster's workers
+rather than on evaluator nodes: evaluator nodes need one DDS domain, which a cluster's network does not
+carry. The run directory holds the same result files, without the run bag (the manager node records it);
+step 2 still runs through the node graph on this machine.
+
 Ctrl-C or SIGTERM stops the job cleanly (the manager stops its evaluators, the trial graph its nodes) and
 exits 130 or 143; ``ws/run --resume --out DIR`` continues it: the evolution from its last checkpoint (or
 afresh if it had none), then the trial stage again. ``kill -9`` leaves no process behind either: every
@@ -55,7 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--evaluations", type=int, default=DEFAULT_EVALUATIONS, help="evaluation budget")
     parser.add_argument("--seed", type=int, default=1, help="seed of the run (default 1)")
-    parser.add_argument("--evaluators", type=int, default=DEFAULT_EVALUATORS, help="evaluator nodes to start")
+    parser.add_argument(
+        "--evaluators",
+        type=int,
+        default=None,
+        help=f"evaluator nodes to start (default {DEFAULT_EVALUATORS}; not with a --cluster)",
+    )
     parser.add_argument(
         "--scenarios", choices=SCENARIOS, default="fixed", help="fixed (default) or fresh scenarios"
     )
@@ -72,7 +83,44 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--resume", action="store_true", help="continue the interrupted job in --out (with its own options)"
     )
+    parser.add_argument(
+        "--cluster",
+        default="local",
+        metavar="local|dask://HOST:PORT|slurm",
+        help="where the evolution's evaluations run: evaluator nodes on this machine (local, the default), "
+        "or through evolve on a Dask scheduler's workers or Dask workers started as SLURM jobs "
+        "(docs/cluster.md); the trial runs through the node graph here",
+    )
+    parser.add_argument(
+        "--cluster-config", type=Path, metavar="FILE", help="with --cluster slurm: its YAML settings"
+    )
     return parser
+
+
+def evolution_command(args: argparse.Namespace, out: Path) -> list[str]:
+    """The command of the evolution stage: the manager with its evaluator nodes, or with a ``--cluster``
+    other than ``local``, ``evolve`` on that cluster (which checks the cluster options itself)."""
+    on_cluster = args.cluster != "local"
+    program = str(executable("evolution_manager", "evolve" if on_cluster else "manager"))
+    where = ["--cluster", args.cluster] if on_cluster else ["--evaluators", str(args.evaluators)]
+    if args.cluster_config is not None:
+        where += ["--cluster-config", str(args.cluster_config)]
+    if args.resume and (out / "config.json").exists():
+        return [program, "--out", str(out), "--resume", *where]
+    command = [
+        program,
+        "--algorithm", "qd",
+        "--objective", "food",
+        "--evaluations", str(args.evaluations),
+        "--seed", str(args.seed),
+        "--out", str(out),
+        "--scenarios", args.scenarios,
+        "--profile", args.profile,
+        *where,
+    ]  # fmt: skip
+    if args.scenario_seed is not None:
+        command += ["--scenario-seed", str(args.scenario_seed)]
+    return command
 
 
 def run_manager(command: list[str], env: dict[str, str]) -> tuple[int, int]:
@@ -110,40 +158,46 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 2
+    on_cluster = args.cluster != "local"
+    refused = None
+    if on_cluster and args.evaluators is not None:
+        refused = f"--evaluators applies to --cluster local only, not to --cluster {args.cluster}"
+    if args.cluster_config is not None and args.cluster != "slurm":
+        refused = f"--cluster-config applies to --cluster slurm only, not to --cluster {args.cluster}"
+    if refused:
+        print(f"main: {refused}", file=sys.stderr)
+        return 2
+    if args.evaluators is None:
+        args.evaluators = DEFAULT_EVALUATORS
     if args.evaluations < 150 or args.evaluators < 1:
         print("main: --evaluations must be at least 150 and --evaluators at least 1", file=sys.stderr)
         return 2
+    again = f"ws/run --resume --out {out}" + (f" --cluster {args.cluster}" if on_cluster else "")
+    if args.cluster_config is not None:
+        again += f" --cluster-config {args.cluster_config}"
     started = time.monotonic()
+    where = (
+        f"evolve on --cluster {args.cluster}"
+        if on_cluster
+        else f"the manager node and {args.evaluators} evaluator nodes"
+    )
     print(
-        f"[1/2] MAP-Elites for go-to-food, {args.evaluations} evaluations (seed {args.seed}), through the "
-        f"manager node and {args.evaluators} evaluator nodes -> {out}",
+        f"[1/2] MAP-Elites for go-to-food, {args.evaluations} evaluations (seed {args.seed}), through "
+        f"{where} -> {out}",
         flush=True,
     )
     try:
-        manager = str(executable("evolution_manager", "manager"))
+        command = evolution_command(args, out)
     except GraphError as error:
         print(f"main: {error}", file=sys.stderr)
         return 1
     with reserved_domain() as domain:
-        command = [
-            manager,
-            "--algorithm", "qd",
-            "--objective", "food",
-            "--evaluations", str(args.evaluations),
-            "--seed", str(args.seed),
-            "--out", str(out),
-            "--evaluators", str(args.evaluators),
-            "--scenarios", args.scenarios,
-            "--profile", args.profile,
-        ]  # fmt: skip
-        if args.scenario_seed is not None:
-            command += ["--scenario-seed", str(args.scenario_seed)]
-        if args.resume and (out / "config.json").exists():
-            command = [manager, "--out", str(out), "--resume", "--evaluators", str(args.evaluators)]
         status, received = run_manager(command, domain_environment(domain))
         if received:
-            print(f"main: interrupted; continue with: ws/run --resume --out {out}", file=sys.stderr)
+            print(f"main: interrupted; continue with: {again}", file=sys.stderr)
             return 128 + received
+        if status == 2 and on_cluster:  # evolve refused an option (a cluster setting) and said why, in a line
+            return 2
         if status != 0:
             print(f"main: the evolution run failed (exit {status}); its directory is {out}", file=sys.stderr)
             return 1
@@ -176,7 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"main: the trial through the node graph failed: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as error:
-        print(f"main: interrupted; continue with: ws/run --resume --out {out}", file=sys.stderr)
+        print(f"main: interrupted; continue with: {again}", file=sys.stderr)
         return exit_status(error)
     animation = out / "best" / "food_trial.gif"
     try:
@@ -191,6 +245,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     finished = time.monotonic()
 
     values = dict(zip(OBJECTIVES, record.values[: len(OBJECTIVES)], strict=True))
+    run_bag = (
+        ""
+        if on_cluster  # evolve records no run bag
+        else f"  run bag (MCAP)   {out}/run.bag/  (every evaluation on /evaluations, archive progress on "
+        "/progress)\n"
+    )
     print(
         f"""
 Done in {finished - started:.0f} s (evolution {evolved - started:.0f} s, trial through the graph {finished - evolved:.0f} s).
@@ -203,8 +263,7 @@ Run directory      {out}/
   best trees       {out}/best/  (simplified; as evolved in best/food.original.txt)
   explorer         {out}/explorer.html  (open it in a browser: every bin's trees, values and trial)
   animation        {animation}  (the best tree's trial through the graph, one frame per step)
-  run bag (MCAP)   {out}/run.bag/  (every evaluation on /evaluations, archive progress on /progress)
-Best tree          {best.get("best_tree_simplified") or best["best_tree"]}  (simplified)
+{run_bag}Best tree          {best.get("best_tree_simplified") or best["best_tree"]}  (simplified)
   as evolved       {best["best_tree"]}
 Trial bag (MCAP)   {bag}/  (every topic of the graph; trial 0, food {values["food"]:.4f})
 Node logs          {out}/logs/
