@@ -728,7 +728,7 @@ def trial_values(
 
 @numba.njit(cache=True)
 def mean_values(per_trial: np.ndarray) -> np.ndarray:
-    """An evaluation's six values: per-trial values (trials x ``N_VALUES``) averaged in trial order."""
+    """An evaluation's values: per-trial values (trials x ``N_VALUES``) averaged in trial order."""
     out = np.zeros(N_VALUES)
     for t in range(per_trial.shape[0]):
         for k in range(N_VALUES):
