@@ -48,10 +48,10 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import TrialFailedError
-from evolution_manager.graph.nodes.recorder import GraphRecorder, is_latched, trial_topics
+from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
 from evolution_manager.processes import exit_status, signals_as_interrupts
-from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag
+from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
 from swarm_msgs.msg import TreeStatus, TrialStart
