@@ -503,3 +503,10 @@ def simplify(
     its pre-order index (no key is then added; the simplifier before draw keys). TreeLimitError beyond
     ``MAX_SIMPLIFY_NODES``."""
     return simplify_with_rules(tree, facts, keep_positions=keep_positions, implications=implications).tree
+
+
+def simplify_if_small(tree: Node) -> Node:
+    """``simplify(tree)``, or ``tree`` itself when it has more than ``MAX_SIMPLIFY_NODES`` nodes: a tree that
+    names primitives may expand beyond what ``simplify`` takes (``tree.parse`` limits the tree as written);
+    for what needs a simplified form of any tree (clone keys, the trees shown to people)."""
+    return tree if tree.size > MAX_SIMPLIFY_NODES else simplify(tree)

@@ -432,10 +432,12 @@ def parse(
 ) -> Node:
     """Parse tree text (see the module docstring); raise TreeSyntaxError or TreeLimitError.
 
-    ``max_nodes`` and ``max_depth`` bound the accepted trees, primitives expanded (defaults ``MAX_NODES`` and
+    ``max_nodes`` and ``max_depth`` bound the accepted trees as written (defaults ``MAX_NODES`` and
     ``MAX_DEPTH``). With a ``library``, a leaf that names one of its primitives becomes ``success(<its
     tree>)``, a copy of its own (in one pass: the library's trees name no primitives); a name that is neither
-    a node nor a primitive is refused naming the library.
+    a node nor a primitive is refused naming the library. A primitive's name counts as one node of depth 0,
+    as the authors' GP counts it (gp/ea.py:949-959 at a73e4af) and as evolution's own limits see it: the
+    expanded tree may be larger, up to the library's trees (each within the default limits) in every leaf.
     """
     if not isinstance(text, str):
         raise TypeError(f"tree text must be a str, got {type(text).__name__}")
@@ -453,12 +455,13 @@ def parse(
         primitive = None
         if library is not None and value not in CONDITIONS and value not in ACTIONS:
             primitive = library.primitive(value)
-        # A primitive counts as its success decorator and its tree.
-        count += 1 if primitive is None else 1 + primitive.size
+        # The limits bound the tree as written: a primitive's name is one node (its expansion is bounded by
+        # its library, whose trees are within the default limits).
+        count += 1
         if count > max_nodes:
             line, column = tokens.where(offset)
             raise TreeLimitError(f"tree has more than max_nodes={max_nodes} nodes", line, column)
-        if len(stack) + (0 if primitive is None else 1 + primitive.depth) > max_depth:
+        if len(stack) > max_depth:
             line, column = tokens.where(offset)
             raise TreeLimitError(f"tree is deeper than max_depth={max_depth}", line, column)
         composite = _COMPOSITE_NAME.match(value)

@@ -101,11 +101,23 @@ def test_files_round_trip_and_bad_files(tmp_path):
         load_library(tmp_path / "bad.json")
 
 
-def test_limits_count_the_expanded_primitives():
+def test_limits_bound_the_tree_as_written_a_name_one_node():
+    # as the authors' GP counts a primitive (gp/ea.py:949-959) and evolution's static limits see it
     lib = library(("p", FOOD))
     assert lib.parse("seq(p, p)").size == 1 + 2 * 7  # seq and twice success with its 6 nodes
-    with pytest.raises(TreeLimitError, match="max_nodes=14"):
-        lib.parse("seq(p, p)", max_nodes=14)
-    with pytest.raises(TreeLimitError, match="max_depth=3"):
-        lib.parse("seq(p, p)", max_depth=3)
-    assert to_text(lib.parse("seq(p, p)", max_depth=4)).count("success(") == 2
+    assert lib.parse("seq(p, p)", max_nodes=3, max_depth=1).size == 15
+    with pytest.raises(TreeLimitError, match="max_nodes=2"):
+        lib.parse("seq(p, p)", max_nodes=2)
+    with pytest.raises(TreeLimitError, match="max_depth=0"):
+        lib.parse("seq(p, p)", max_depth=0)
+    assert to_text(lib.parse("p", max_nodes=1, max_depth=0)).count("success(") == 1
+    # a written tree at the limits whose expansion is larger: parsed, evaluated and simplified as it is
+    from bt_controller.simplify import MAX_SIMPLIFY_NODES, simplify_if_small
+
+    wide = "sel(seq(p, p, p, p), seq(p, p, p, p), p, p)"  # 11 nodes written, 73 expanded
+    for _ in range(3):
+        wide = "seq(" + ", ".join([wide] * 4) + ")"
+    big = lib.parse(wide)  # 725 nodes written
+    assert big.size == 4693
+    assert big.size > MAX_SIMPLIFY_NODES and simplify_if_small(big) is big
+    assert simplify_if_small(lib.parse("seq(p, p)")).size <= 15

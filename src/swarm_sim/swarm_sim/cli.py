@@ -3,7 +3,7 @@
     evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--task primitives|foraging]
              [--engine compiled|reference] [--per-trial] [--condition NAME=VALUE ...] [--library FILE]
 
-Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {density, nest, food},
+Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {every objective},
 "descriptors": {movement, rotation, conditionality}}`` (``conditions``: the world's changes,
 ``swarm_sim.conditions``, ``{}`` for none; ``task``: the trial length, ``primitives`` (20 s trials) or
 ``foraging`` (100 s trials, ``swarm_sim.config.TASKS``); ``"per_trial"`` added with ``--per-trial``: each

@@ -1,8 +1,9 @@
 """The Evaluator contract (``docs/interfaces.md``) and its in-process implementation, ``BatchEvaluator``.
 
 An evaluation of a (tree, seed) is ``trials`` trials (trial ``k`` has the gap 500 mm when ``k div 5`` is even,
-else 700 mm: ``docs/model.md``); its fitness is the (density, nest, food) objectives and its descriptors
-(movement, rotation, conditionality), each averaged over robots and trials and each in [0, 1]. A result
+else 700 mm: ``docs/model.md``); its fitness is every objective (``world.OBJECTIVES``: the paper's three, the
+inverse primitives' three and foraging) and its descriptors (movement, rotation, conditionality), each
+averaged over robots and trials and each in [0, 1] but foraging (deliveries per robot per trial). A result
 depends only on its request.
 """
 

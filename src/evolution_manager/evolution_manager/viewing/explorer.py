@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from bt_controller.library import Library, LibraryError, library_from_json
-from bt_controller.simplify import simplify
+from bt_controller.simplify import simplify_if_small
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import ExplorerError
 from evolution_manager.files import write_atomic
@@ -242,7 +242,7 @@ def _library(root: Path, config: dict) -> Library | None:
 
 def _simplified(tree: str, library: Library | None) -> str:
     """The simplified text of a tree text, the library's names kept."""
-    simple = simplify(parse(tree, library=library))
+    simple = simplify_if_small(parse(tree, library=library))
     return to_text(simple) if library is None else library.fold(simple)
 
 

@@ -73,6 +73,13 @@ function fmt(v) { return v === undefined || v === null ? "-" : Number(v).toFixed
 function hasHeldOut(objective) {
   return Object.values(DATA.objectives[objective].bins).some(items => items.some(i => i.held_out !== undefined));
 }
+function fitnessTop(grid) {
+  // 1 for the objectives in [0, 1]; above it (to a quarter) when a value exceeds 1: foraging's deliveries
+  let top = 0;
+  for (const items of Object.values(grid.bins)) for (const i of items)
+    top = Math.max(top, i.fitness, i.held_out ?? 0);
+  return top <= 1 ? 1 : Math.ceil(top * 4) / 4;
+}
 function binValue(items) {
   if (state.colour === "held-out") {
     const h = items.map(i => i.held_out).filter(v => v !== undefined);
@@ -112,7 +119,7 @@ function drawHeatmaps() {
   box.setAttribute("data-objective", state.objective);
   box.setAttribute("data-colour", state.colour);
   const grid = DATA.objectives[state.objective];
-  const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22;
+  const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22, top = fitnessTop(grid);
   for (let k = 0; k < nz; k++) {
     const panel = el("div", { class: "panel" });
     panel.appendChild(el("h3", {}, `${d[2]} bin ${k}`));
@@ -123,7 +130,7 @@ function drawHeatmaps() {
         "data-bin": key, class: "cell " + (items ? "filled" : "empty") });
       if (items) {
         const v = binValue(items);
-        rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v));
+        rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v / top));
         rect.setAttribute("data-value", v === null ? "" : v.toFixed(4));
         rect.onclick = () => select(state.objective, key);
         rect.onmousemove = ev => tooltip(ev, key, items);
@@ -141,7 +148,7 @@ function drawHeatmaps() {
     box.appendChild(panel);
   }
   box.appendChild(el("div", { id: "legend" }, `x: ${d[0]} bin, y: ${d[1]} bin (up); colour: best ` +
-    `${state.colour} fitness in the bin, 0 (purple) to 1 (yellow); grey: not scored held-out; light: empty`));
+    `${state.colour} fitness in the bin, 0 (purple) to ${top} (yellow); grey: not scored held-out; light: empty`));
 }
 
 function tooltip(ev, key, items) {

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 from bt_controller.formats import to_dot, to_xml
 from bt_controller.library import Library
 from bt_controller.render import render
-from bt_controller.simplify import simplify
+from bt_controller.simplify import simplify_if_small
 from bt_controller.tree import parse, to_indented, to_text
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS
@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are c
 def simplified(tree: str, library: Library | None = None) -> str:
     """The simplified text of a tree text (``bt_controller.simplify``), a primitive of ``library`` left whole
     written by its name."""
-    simple = simplify(parse(tree, library=library))
+    simple = simplify_if_small(parse(tree, library=library))
     return to_text(simple) if library is None else library.fold(simple)
 
 
@@ -191,7 +191,7 @@ def write_best_trees(run: Run) -> list[Path]:
             continue
         text, value, _ = best
         original = parse(text, library=run.library)
-        tree = simplify(original)
+        tree = simplify_if_small(original)
         header = f"# best {objective} tree of {run.config.label}: fitness {value!r}, "
         header += f"evaluation {run.first_evaluation(text)}; simplified from {original.size} to {tree.size} "
         header += "nodes "
