@@ -111,16 +111,18 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         draw.text((x + radius + 1, y - radius - 9), str(i), font=font, fill=(0, 0, 0))
     panel = ARENA_PX + 10
     tick = int(frames.ticks[k])
+    shown = shown_objectives(frames)
     lines = [
         f"seed {frames.seed}, trial {frames.trial}",
         f"step {int(frames.steps[k])} of {int(frames.steps[-1])}",
         f"tick {tick if tick >= 0 else '-'}",
-        f"deliveries {int(frames.deliveries[k].sum())}, carrying {int(frames.carrying[k].sum())}",
-        "fitness so far:",
     ]
+    if "foraging" in shown:  # a foraging trial: the swarm's deliveries so far and how many robots carry food
+        delivered, carrying = int(frames.deliveries[k].sum()), int(frames.carrying[k].sum())
+        lines.append(f"deliveries {delivered}, carrying {carrying}")
+    lines.append("fitness so far:")
     from swarm_sim.world import OBJECTIVES
 
-    shown = shown_objectives(frames)
     for name, value in zip(OBJECTIVES, frames.fitness[k], strict=True):
         if name in shown:
             lines.append(f"  {name:8s} {'-' if math.isnan(value) else f'{value:.3f}'}")
