@@ -365,6 +365,7 @@ def _small_trial_bag(path: Path) -> None:
                 arena_configuration=0,
                 robots=9,
                 tree_keys=np.arange(9, dtype=np.uint64),
+                ticks=40,
             )
             bag.write("/trial_start", msg, step + 1)
 
