@@ -23,6 +23,7 @@ from swarm_ros.lifecycle import LifecycleClient
 from swarm_ros.qos import RELIABLE
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.world import OBJECTIVES
 
 LONG = 300.0
 """Seconds to wait for anything a node does (starting Python processes is slow on a loaded machine)."""
@@ -153,7 +154,7 @@ def test_the_evaluator_is_driven_through_its_lifecycle_and_reports_it_on_diagnos
 @pytest.mark.parametrize(
     ("fields", "why"),
     [
-        ({"objective": "speed"}, "objective must be one of density, nest, food, got 'speed'"),
+        ({"objective": "speed"}, f"objective must be one of {', '.join(OBJECTIVES)}, got 'speed'"),
         ({"seeds": [1]}, "got 2 trees but 1 seeds"),
         ({"trials": 0}, "trials must be in 1..10000, got 0"),
     ],

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_controller.errors import TreeError
-from bt_controller.tree import Composite, Node, leaf_name, parse
+from bt_controller.tree import Composite, Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, DECORATORS
 
 LIBRARY_FORMAT = 1
@@ -92,25 +92,11 @@ class Library:
     def fold(self, tree: Node) -> str:
         """The canonical text of ``tree`` with every ``success(T)`` whose ``T`` is a primitive's tree written
         as that primitive's name (the first such name): parsing it with this library gives ``tree`` back."""
-        parts: list[str] = []
-        stack: list[Node | str] = [tree]
-        while stack:
-            item = stack.pop()
-            if isinstance(item, str):
-                parts.append(item)
-            elif isinstance(item, Composite):
-                if item.kind in DECORATORS and item.children[0] in self._by_tree:
-                    parts.append(self._by_tree[item.children[0]])
-                    continue
-                parts.append(item.head + "(")
-                stack.append(")")
-                for i, child in enumerate(reversed(item.children)):
-                    stack.append(child)
-                    if i < len(item.children) - 1:
-                        stack.append(", ")
-            else:
-                parts.append(leaf_name(item))
-        return "".join(parts)
+
+        def name_of(node: Composite) -> str | None:
+            return self._by_tree.get(node.children[0]) if node.kind in DECORATORS else None
+
+        return to_text(tree, name_of)
 
     def as_json(self) -> dict[str, object]:
         """The library as its file holds it."""

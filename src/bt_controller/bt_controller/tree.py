@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import re
 from bisect import bisect_right
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -279,8 +279,9 @@ def _as_node(child: Node | str) -> Node:
 # ---------------------------------------------------------------------------------------------- printing
 
 
-def to_text(tree: Node) -> str:
-    """The canonical one-line text: no arity suffixes, ``", "`` between children."""
+def to_text(tree: Node, name_of: Callable[[Composite], str | None] | None = None) -> str:
+    """The canonical one-line text: no arity suffixes, ``", "`` between children. ``name_of``, when given,
+    may name a composite: it is written as that name instead of its subtree (a library's primitives)."""
     parts: list[str] = []
     # Iterative, so that even trees built in code far beyond the parse limits print.
     stack: list[Node | str] = [tree]
@@ -289,6 +290,10 @@ def to_text(tree: Node) -> str:
         if isinstance(item, str):
             parts.append(item)
         elif isinstance(item, Composite):
+            name = None if name_of is None else name_of(item)
+            if name is not None:
+                parts.append(name)
+                continue
             parts.append(item.head + "(")
             stack.append(")")
             for i, child in enumerate(reversed(item.children)):
