@@ -459,6 +459,9 @@ def physics_step(
     velocity and the rest at its target. ``motion``, ``contacts`` (and the workspace ``pairs``) are
     ``new_dynamics``'s arrays; they carry velocities and impulses from step to step, as ARGoS keeps them
     across teleports too.
+
+    This is the readable statement of the physics, which the reference road runs; the batch kernels run
+    ``swarm_sim.fast_world.physics_step``, which gives the same bits with less work.
     """
     n = x.shape[0]
     substeps = p.physics_substeps
