@@ -34,6 +34,8 @@ def wheel_command(typestore, step):
         smoothed_nest=0.25 * step,
         smoothed_food=5000.0,
         smoothed_density=0.5,
+        carrying=step % 2 == 1,
+        deliveries=step // 100,
     )
 
 

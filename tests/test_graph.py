@@ -3,6 +3,7 @@ evaluator's values (trial K runs its chain's earlier trials first, as the batch 
 trial reads back whole; recorders stopped by signals leave whole bags, and a killed one leaves a recoverable
 bag."""
 
+import json
 import signal
 import subprocess
 from dataclasses import replace
@@ -11,12 +12,15 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
+from bt_controller.library import load_library
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse, to_text
 from evolution_manager.graph.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
-from swarm_sim.config import DEFAULT
+from evolution_manager.recording.reproduce import verify_trial_bag
+from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
+from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 PARITY_TREES = 20
@@ -164,3 +168,51 @@ def graph_environment(graph):
     from swarm_ros.isolation import domain_environment
 
     return domain_environment(graph.graph.domain)
+
+
+FORAGER = (
+    "sel(seq(got_food, sel(seq(nest_left, forward_left), seq(nest_right, forward_right), forward)), "
+    "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward))"
+)
+PRIMITIVES = {
+    "gotoNest": "sel(in_nest, seq(nest_left, forward_left), seq(nest_right, forward_right), "
+    "prob(forward, stop))",
+    "gotoFood": "sel(on_food, seq(food_left, forward_left), seq(food_right, forward_right), forward)",
+}
+
+
+def test_foraging_trials_through_the_graph_equal_the_batch_evaluator(tmp_path):
+    # 100 s trials under both profiles: got_food, success and named primitives (the controllers read the
+    # library file), a random tree; the first paper trial recorded, replayed bit for bit and animated as the
+    # in-process road draws it (carrying flags and deliveries included).
+    library_path = tmp_path / "primitives.json"
+    library_path.write_text(
+        json.dumps({"format": 1, "primitives": [{"name": n, "tree": t} for n, t in PRIMITIVES.items()]})
+    )
+    library = load_library(library_path)
+    trees = [
+        FORAGER,
+        "sel(seq(got_food, gotoNest), prob(gotoFood, success(seq(robot_left, forward_right))))",
+        f"sel(seq(got_food, gotoNest), {random_trees(seed=7, count=1, p_success=0.3)[0]})",
+    ]
+    for profile in ("paper", "clean"):
+        config = default_config(profile, "foraging")
+        evaluator = BatchEvaluator(config, library=library)
+        with TrialGraph(timeout=120.0, profile=profile, task="foraging", library=library_path) as graph:
+            for index, text in enumerate(trees):
+                seed, trial = 3000 + index, index % 2
+                bag = tmp_path / f"{profile}{index}" if index == 0 else None
+                record = graph.run(text, seed, trial, bag)
+                _, trial_records = evaluator.evaluate_trials([EvaluationRequest(text, seed, trial + 1)])[0]
+                assert record.values == trial_records[trial].values, f"{profile} tree {index}: {text}"
+                assert np.array_equal(record.end_poses, trial_records[trial].end_poses)
+    paper_bag = tmp_path / "paper0"
+    assert verify_trial_bag(paper_bag).reproduced
+    frames = frames_from_bag(paper_bag)
+    twin = frames_from_tree(FORAGER, 3000, 0, default_config("paper", "foraging"))
+    assert len(frames.steps) == 800
+    np.testing.assert_array_equal(twin.carrying, frames.carrying)
+    np.testing.assert_array_equal(twin.deliveries, frames.deliveries)
+    np.testing.assert_allclose(twin.fitness, frames.fitness, rtol=0, atol=1e-12)
+    states = [m.message for m in read_bag(paper_bag) if m.topic == "/swarm_state"]
+    assert all(len(s.carrying) == 9 for s in states[1:])  # as answered the step before

@@ -6,6 +6,7 @@ import ast
 import sys
 import xml.etree.ElementTree as ET  # our own package.xml files
 from pathlib import Path
+from typing import TypeGuard
 
 import pytest
 
@@ -47,7 +48,17 @@ def imported(package: str) -> dict[str, str]:
     files = [*(SRC / package / package).rglob("*.py"), *(SRC / package / "launch").glob("*.py")]
     found: dict[str, str] = {}
     for path in files:
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        module = ast.parse(path.read_text(), str(path))
+        typing_only = {
+            id(node)
+            for block in ast.walk(module)
+            if _is_type_checking(block)
+            for statement in block.body  # not its else branch, which runs
+            for node in ast.walk(statement)
+        }
+        for node in ast.walk(module):
+            if id(node) in typing_only:
+                continue  # under `if TYPE_CHECKING:`: read by type checkers, never imported at run time
             if isinstance(node, ast.Import):
                 names = [alias.name for alias in node.names]
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
@@ -57,6 +68,16 @@ def imported(package: str) -> dict[str, str]:
             for name in names:
                 found.setdefault(name.split(".")[0], str(path.relative_to(SRC)))
     return found
+
+
+def _is_type_checking(node: ast.AST) -> TypeGuard[ast.If]:
+    """Whether ``node`` is an ``if TYPE_CHECKING:`` (or ``typing.TYPE_CHECKING``) block."""
+    if not isinstance(node, ast.If):
+        return False
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
 
 
 def dependency_key(module: str) -> str | None:
@@ -88,3 +109,5 @@ def test_the_checker_sees_imports_and_declarations():
     """The checker itself: the simulator's imports are found, and the swarm_sim package.xml is read."""
     assert {"rclpy", "swarm_msgs", "numpy"} <= set(imported("swarm_sim"))
     assert "rclpy" in declared("swarm_sim")
+    # swarm_ros/parameters.py imports _typeshed (no run-time module) only for the type checker
+    assert "_typeshed" not in imported("swarm_ros") and "rclpy" in imported("swarm_ros")

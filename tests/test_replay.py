@@ -17,6 +17,7 @@ from evolution_manager.recording.bags import BagRecorder
 from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_msgs.msg import SwarmState
 from swarm_ros.isolation import domain_environment, reserved_domain
+from swarm_sim.config import DEFAULT
 from swarm_sim.lockstep import run_with_controllers
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
@@ -24,13 +25,17 @@ SEED, TRIAL = 21, 2
 STEP_NS = 125_000_000
 
 
-def write_trial_bag(path, tamper_step=None):
+def write_trial_bag(path, tamper_step=None, tamper_carrying=None):
     """The bag `trial --bag` would write for (TREE, SEED, TRIAL), from the in-process twin of the graph:
-    /trial_start, one /swarm_state per step, /trial_result; optionally with one pose moved by 1 mm."""
+    /trial_start, one /swarm_state per step (poses, carrying flags, deliveries), /trial_result; optionally
+    with one pose moved by 1 mm, or one robot's carrying flag flipped."""
     states = []
-    record = run_with_controllers(
-        parse(TREE), SEED, TRIAL, on_step=lambda world: states.append((world.step, world.poses().tolist()))
-    )
+
+    def keep(world):
+        cargo = ([bool(c) for c in world.carrying], [int(d) for d in world.deliveries])
+        states.append((world.step, world.poses().tolist(), cargo))
+
+    record = run_with_controllers(parse(TREE), SEED, TRIAL, on_step=keep)
     with BagRecorder(path) as bag:
         types = bag.typestore.types
 
@@ -46,11 +51,14 @@ def write_trial_bag(path, tamper_step=None):
             arena_configuration=TRIAL % 2,
             robots=9,
             tree_keys=np.zeros(9, dtype=np.uint64),
+            ticks=DEFAULT.ticks,
         )
         bag.write("/trial_start", start, 0)
-        for step, poses in states:
+        for step, poses, (carrying, deliveries) in states:
             if step == tamper_step:
                 poses[4][0] += 1.0
+            if step == tamper_carrying:
+                carrying[4] = not carrying[4]
             robots = [bag.message("swarm_msgs/msg/RobotPose", x=x, y=y, theta=t) for x, y, t in poses]
             state = bag.message(
                 "swarm_msgs/msg/SwarmState",
@@ -59,6 +67,8 @@ def write_trial_bag(path, tamper_step=None):
                 trial=TRIAL,
                 step=step,
                 poses=robots,
+                carrying=np.array(carrying, dtype=bool),
+                deliveries=np.array(deliveries, dtype=np.uint32),
             )
             bag.write("/swarm_state", state, step * STEP_NS)
         write_result(bag, TREE, SEED, record, len(states) * STEP_NS)
@@ -83,6 +93,9 @@ def test_verify_names_the_first_step_that_differs(tmp_path):
         text=True,
     )
     assert done.returncode == 1 and "NOT reproduced" in done.stdout
+    write_trial_bag(tmp_path / "carrying", tamper_carrying=200)
+    verification = verify_trial_bag(tmp_path / "carrying")
+    assert verification.first_divergence == "the carrying flags or deliveries differ at step 200"
 
 
 def test_replay_republishes_the_bag_in_order(tmp_path):

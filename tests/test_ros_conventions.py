@@ -12,6 +12,8 @@ import pytest
 import rclpy
 from rclpy.action import ActionClient
 from rclpy.node import Node
+from rosbags.interfaces import QosDurability
+from rosbags.rosbag2 import Reader
 from visualization_msgs.msg import MarkerArray
 
 from bt_controller.random_trees import random_trees
@@ -22,7 +24,7 @@ from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
 from swarm_ros.isolation import domain_environment, reserved_domain
-from swarm_ros.qos import LATCHED
+from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
@@ -78,6 +80,28 @@ def test_a_trial_bag_shows_the_arena_and_labelled_robots_in_si_units(graph, tmp_
     # The last step's labels name the action each robot answered with at the step before.
     last_wheels = {i: per_topic[f"/footbot_{i}/wheels"][-2].message.action_name for i in range(9)}
     assert {i: labels[i].split(": ")[1] for i in range(9)} == last_wheels
+
+
+def test_a_trial_bag_records_the_qos_each_publisher_offers(graph, tmp_path):
+    """`ros2 bag play` republishes a topic with the offered QoS the bag recorded: latched topics must replay
+    latched. Checked against what the graph's own publishers offer (durability and reliability are what DDS
+    discovery reports; depth it does not: checked against the profiles the publishers are made with)."""
+    bag = tmp_path / "trial"
+    graph.run("forward", 3, 0, bag)
+    with Reader(bag) as reader:
+        recorded = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
+    latched = {topic for topic, (qos,) in recorded.items() if qos.durability == QosDurability.TRANSIENT_LOCAL}
+    assert latched == {"/markers", "/trial_start"}
+    node = graph.runner.node
+    for topic, (qos,) in recorded.items():
+        if topic == RESULT_TOPIC:
+            continue  # written by the trial command itself, not published in the graph
+        offered = {
+            (info.qos_profile.durability.name, info.qos_profile.reliability.name)
+            for info in node.get_publishers_info_by_topic(topic)
+        }
+        assert offered == {(qos.durability.name, qos.reliability.name)}, topic
+        assert qos.depth == (LATCHED if topic in latched else RELIABLE).depth, topic
 
 
 def test_a_late_joiner_gets_the_latched_arena_and_trial_start(graph):

@@ -34,16 +34,20 @@ class Mismatch:
         )
 
 
-def random_forest(rng: np.random.Generator, n_trees: int, max_size: int = 60) -> list[Node]:
-    """Random trees for agreement checks: half of exact random sizes, half grown to random depths."""
+def random_forest(
+    rng: np.random.Generator, n_trees: int, max_size: int = 60, p_success: float = 0.1
+) -> list[Node]:
+    """Random trees for agreement checks: half of exact random sizes, half grown to random depths; an inner
+    node is a success decorator with probability ``p_success``."""
     forest: list[Node] = []
     for i in range(n_trees):
         if i % 2:
             size = int(rng.integers(1, max_size))
-            forest.append(random_tree(rng, size if size != 2 else 3))
+            forest.append(random_tree(rng, size, p_success=p_success))
         else:
             depth = int(rng.integers(0, 7))
-            forest.append(random_tree_grow(rng, depth, p_leaf=float(rng.uniform(0.1, 0.6))))
+            p_leaf = float(rng.uniform(0.1, 0.6))
+            forest.append(random_tree_grow(rng, depth, p_leaf=p_leaf, p_success=p_success))
     return forest
 
 

@@ -3,7 +3,7 @@
 The layout is the contract of ``docs/interfaces.md`` ("Compiled tree interpreter"): a tree is flattened in
 pre-order (root 0, indices local to the tree) to
 
-- ``op`` int8: 0 seq, 1 sel, 2 prob, 3 condition, 4 action;
+- ``op`` int8: 0 seq, 1 sel, 2 prob, 3 condition, 4 action, 5 success (the decorator: one child);
 - ``arg`` int8: condition or action index, -1 for composites;
 - ``first`` int32: index into ``children`` of the node's first child (-1 for leaves);
 - ``nchild`` int8: number of children (0 for leaves);
@@ -44,9 +44,10 @@ from bt_controller.tree import (
     check_tick_depth,
     draw_key_at,
 )
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, FAILURE, RUNNING, SUCCESS
+from bt_controller.vocabulary import ACTIONS, FAILURE, N_CONDITIONS, RUNNING, SUCCESS
 
-OP_SEQ, OP_SEL, OP_PROB, OP_CONDITION, OP_ACTION = 0, 1, 2, 3, 4
+OP_SEQ, OP_SEL, OP_PROB, OP_CONDITION, OP_ACTION, OP_SUCCESS = 0, 1, 2, 3, 4, 5
+_OP_OF_KIND = {"seq": OP_SEQ, "sel": OP_SEL, "prob": OP_PROB, "success": OP_SUCCESS}
 N_COUNTS = 1 + len(ACTIONS)
 MAX_COMPILED_DEPTH = MAX_TICK_DEPTH
 """Deepest tree ``flatten`` accepts (the tick's ancestor stack has MAX_COMPILED_DEPTH + 1 slots)."""
@@ -81,7 +82,7 @@ def flatten(tree: Node) -> FlatTree:
     children: list[int] = []  # composite after composite, in pre-order
     for index, node in enumerate(nodes):
         if isinstance(node, Composite):
-            op[index] = COMPOSITES.index(node.kind)
+            op[index] = _OP_OF_KIND[node.kind]
             first[index] = len(children)
             nchild[index] = len(node.children)
             if node.kind == "prob":
@@ -185,9 +186,9 @@ def tree_at(trees: PackedTrees, t: int) -> FlatTree:
 
 @numba.njit(cache=True)
 def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
-    """Set ``memory`` to the fresh state of the tree ``op``: -1 for composites, 0 for leaves."""
+    """Set ``memory`` to the fresh state of the tree ``op``: -1 for inner nodes, 0 for leaves."""
     for i in range(len(op)):
-        memory[i] = -1 if op[i] <= OP_PROB else 0
+        memory[i] = -1 if op[i] <= OP_PROB or op[i] == OP_SUCCESS else 0
 
 
 @numba.njit(cache=True)
@@ -213,7 +214,8 @@ def tick(
     """Tick the root once; update ``memory`` and ``counts``; return ``(status, action started or -1)``.
 
     Semantics, memory and counts exactly as ``bt_controller.semantics.tick``. ``blackboard`` is any array
-    of 8 values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index`` the 0-based tick.
+    of ``N_CONDITIONS`` values read as booleans; ``key`` the robot's uint64 tree stream key; ``tick_index``
+    the 0-based tick.
     Inlined into calling kernels (a call would cost more than the tick itself).
     """
     # Locals: a field read inside the loop would cost a refcount.
@@ -225,7 +227,7 @@ def tick(
     while True:
         # Descend from ``node`` to a leaf, remembering the position taken at each composite.
         kind = op[node]
-        while kind <= OP_PROB:
+        while kind <= OP_PROB or kind == OP_SUCCESS:
             position = memory[node]
             if position < 0:
                 position = choose(derive(key, tick_index), draw[node], nchild[node]) if kind == OP_PROB else 0
@@ -249,7 +251,8 @@ def tick(
             status = np.int64(SUCCESS)
         # Climb while composites finish. A sequence (op 0) moves on after SUCCESS (0) and a selector (op 1)
         # after FAILURE (1), i.e. when ``status == op``; when it has no next child it finishes with that
-        # same status. A probabilistic composite (op 2) always finishes with its child's status.
+        # same status. A probabilistic composite (op 2) always finishes with its child's status, a success
+        # decorator (op 5, one child) with success.
         while depth > 0:
             parent = stack[depth - 1]
             if status == op[parent]:
@@ -259,6 +262,8 @@ def tick(
                     node = children[first[parent] + position]
                     break  # descend into the next child
             memory[parent] = -1
+            if op[parent] == OP_SUCCESS:
+                status = np.int64(SUCCESS)
             depth -= 1
         else:
             return status, np.int64(-1)
@@ -345,13 +350,15 @@ def run_ticks(
     """Tick robots from fresh memory for ``blackboards.shape[1]`` ticks (tick indices 0, 1, ...).
 
     ``robot_tree`` (robots,) picks each robot's tree in ``packed``; ``keys`` (robots,) uint64 stream keys;
-    ``blackboards`` (robots, ticks, 8), each robot's sequence of blackboards (bool or int).
+    ``blackboards`` (robots, ticks, ``N_CONDITIONS``), each robot's sequence of blackboards (bool or int).
     """
     robot_tree = np.asarray(robot_tree, np.int64)
     keys = np.asarray(keys, np.uint64)
     n_robots = len(robot_tree)
-    if blackboards.ndim != 3 or blackboards.shape[0] != n_robots or blackboards.shape[2] != 8:
-        raise ValueError(f"need blackboards of shape ({n_robots}, ticks, 8), got {blackboards.shape}")
+    if blackboards.ndim != 3 or blackboards.shape[0] != n_robots or blackboards.shape[2] != N_CONDITIONS:
+        raise ValueError(
+            f"need blackboards of shape ({n_robots}, ticks, {N_CONDITIONS}), got {blackboards.shape}"
+        )
     if keys.shape != (n_robots,):
         raise ValueError(f"need keys of shape ({n_robots},), got {keys.shape}")
     n_ticks = blackboards.shape[1]

@@ -50,6 +50,10 @@ class StepOutcome:
     """The smoothed (nest, food, density) as last refreshed."""
     tick: TickOutcome | None
     """The tick run at this step, if any."""
+    carrying: bool = False
+    """Whether the robot carries food after this step (its got_food)."""
+    deliveries: int = 0
+    """Its deliveries in the trial so far (at a trial's last step: the trial's, before they are cleared)."""
 
 
 class FootbotController:
@@ -106,6 +110,8 @@ class FootbotController:
             self.view.sense(readings)
             if timeline.refreshes(line, step):
                 self.view.refresh()
+        else:
+            self.view.first_step(readings.on_food)
         tick = None
         if timeline.ticks_at(line, step):
             conditions_before = self.robot.counts[0]
@@ -119,11 +125,16 @@ class FootbotController:
         else:
             broadcast = self.view.broadcast()
         self.next_step = step + 1
-        return StepOutcome(
+        outcome = StepOutcome(
             step=step,
             action=self.action,
             wheels=ACTION_WHEELS[self.action],
             broadcast=broadcast,
             smoothed=self.view.smoothed(),
             tick=tick,
+            carrying=self.view.carrying,
+            deliveries=self.view.deliveries,
         )
+        if timeline.is_final(line, step):
+            self.view.end_trial()
+        return outcome

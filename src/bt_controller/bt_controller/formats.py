@@ -4,7 +4,9 @@ BehaviorTree.CPP mapping. ``seq`` is BT.CPP's built-in ``Sequence`` and ``sel`` 
 v4 both resume at a RUNNING child and start again from the first child once they finish, which is our memory
 semantics (``SequenceWithMemory`` would not restart after a failure, and the ``Reactive*`` nodes re-tick
 earlier children). ``prob`` is our control node ``Probabilistic``, and a draw key (``prob@7``) its attribute
-``draw_key="7"``; conditions and actions are leaves named as in the text format. The ``TreeNodesModel``
+``draw_key="7"``; the decorator ``success`` is BT.CPP's built-in ``ForceSuccess`` (running stays running,
+anything else becomes success; no memory of its own, as ours: checked against BT.CPP itself, see
+``docs/interfaces.md``); conditions and actions are leaves named as in the text format. The ``TreeNodesModel``
 declares ``Probabilistic`` (with its ``draw_key`` input port when the tree uses one, so that the documents of
 trees without keys are as before) and every condition and action, so Groot2 opens the file without complaints.
 Import reads what export writes (compact ``<on_food/>`` or explicit ``<Condition ID="on_food"/>`` forms; an
@@ -32,10 +34,10 @@ from bt_controller.tree import (
     Node,
     leaf_name,
 )
-from bt_controller.vocabulary import ACTIONS, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from bt_controller.vocabulary import ACTIONS, CONDITIONS, DECORATORS, MAX_CHILDREN, MIN_CHILDREN
 
-BTCPP_CONTROL = {"seq": "Sequence", "sel": "Fallback", "prob": "Probabilistic"}
-"""The BehaviorTree.CPP control node of each composite."""
+BTCPP_CONTROL = {"seq": "Sequence", "sel": "Fallback", "prob": "Probabilistic", "success": "ForceSuccess"}
+"""The BehaviorTree.CPP control node (or decorator, for ``success``) of each inner node."""
 _KIND_OF_CONTROL = {tag: kind for kind, tag in BTCPP_CONTROL.items()}
 PROBABILISTIC_DESCRIPTION = (
     "Probabilistic composite with memory: with no remembered child it ticks one child chosen uniformly at "
@@ -104,7 +106,8 @@ def to_xml(tree: Node, tree_id: str = "MainTree") -> str:
 
 def _known_xml_names() -> str:
     return (
-        "known elements: Sequence, Fallback, Probabilistic (or Control ID=...); conditions "
+        "known elements: Sequence, Fallback, Probabilistic (or Control ID=...), ForceSuccess (or "
+        "Decorator ID=...); conditions "
         f"{', '.join(CONDITIONS)}; actions {', '.join(ACTIONS)} (or Condition/Action ID=...)"
     )
 
@@ -168,7 +171,7 @@ def _element_to_tree(top: Element, max_nodes: int, max_depth: int) -> Node:
         tag = element.tag
         if not isinstance(tag, str):
             raise TreeSyntaxError(f"unexpected XML node at {path}")
-        if tag in ("Control", "Condition", "Action"):
+        if tag in ("Control", "Decorator", "Condition", "Action"):
             tag = element.get("ID", "")
         if tag in _KIND_OF_CONTROL:
             stack.append((element, path, []))
@@ -188,7 +191,11 @@ def _element_to_tree(top: Element, max_nodes: int, max_depth: int) -> Node:
             done.append(node)
             node = None
         children = list(element)
-        if len(children) > MAX_CHILDREN or len(children) < MIN_CHILDREN:
+        tag = element.tag if element.tag not in ("Control", "Decorator") else element.get("ID", "")
+        if _KIND_OF_CONTROL[tag] in DECORATORS:
+            if len(children) != 1:
+                raise TreeSyntaxError(f"{path} has {len(children)} children; {tag} takes exactly one")
+        elif len(children) > MAX_CHILDREN or len(children) < MIN_CHILDREN:
             raise TreeSyntaxError(
                 f"{path} has {len(children)} children; a composite takes {MIN_CHILDREN} to {MAX_CHILDREN}"
             )
@@ -197,7 +204,6 @@ def _element_to_tree(top: Element, max_nodes: int, max_depth: int) -> Node:
             node = open_element(child, f"{path}/{child.tag}[{len(done)}]")
             continue
         stack.pop()
-        tag = element.tag if element.tag != "Control" else element.get("ID", "")
         node = Composite(_KIND_OF_CONTROL[tag], tuple(done), _draw_key(element, tag, path))
     assert node is not None
     return node
@@ -226,13 +232,14 @@ def _draw_key(element: Element, tag: str, path: str) -> int | None:
 
 # ---------------------------------------------------------------------------------------------- DOT
 
-COMPOSITE_FILL = {"seq": "#cfe2f3", "sel": "#fce5cd", "prob": "#d9ead3"}
-"""The fill colour of each composite in drawings (DOT, ``render``)."""
+COMPOSITE_FILL = {"seq": "#cfe2f3", "sel": "#fce5cd", "prob": "#d9ead3", "success": "#fff2cc"}
+"""The fill colour of each inner node in drawings (DOT, ``render``)."""
 
 
 def composite_label(node: Composite) -> str:
-    """The label of a composite in drawings: ``seq →``, ``sel ?``, ``prob %``, and ``prob % @7`` for a key."""
-    label = {"seq": "seq →", "sel": "sel ?", "prob": "prob %"}[node.kind]
+    """The label of an inner node in drawings: ``seq →``, ``sel ?``, ``prob %``, ``prob % @7`` for a key,
+    ``success ✓`` for the decorator."""
+    label = {"seq": "seq →", "sel": "sel ?", "prob": "prob %", "success": "success ✓"}[node.kind]
     return label if node.draw_key is None else f"{label} @{node.draw_key}"
 
 

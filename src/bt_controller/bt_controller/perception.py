@@ -2,8 +2,9 @@
 
 From one sensing step's readings (the ground sensor and the range-and-bearing messages it received) a robot
 computes its raw nest and food distance estimates (hop gradients through its neighbours' broadcasts) and its
-neighbourhood density, keeps the last ``window`` samples for the smoothed values, and fills the blackboard its
-behaviour tree reads (``docs/model.md``, "One step of a robot" and "Blackboard").
+neighbourhood density, keeps the last ``window`` samples for the smoothed values, keeps its carrying flag and
+counts its deliveries (``carry``: foraging), and fills the blackboard its behaviour tree reads
+(``docs/model.md``, "One step of a robot", "Foraging" and "Blackboard").
 
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
 ``njit`` functions inline, and the controller node and the reference road call them from Python, so both roads
@@ -22,6 +23,7 @@ import numpy as np
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.timeline import PAPER
+from bt_controller.vocabulary import N_CONDITIONS
 
 
 class PerceptionParams(NamedTuple):
@@ -149,6 +151,24 @@ def region_value(inside: bool, p: PerceptionSettings) -> float:
 
 
 @numba.njit(cache=True)
+def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
+    """``(carrying, delivered)`` after a sensing step's ground reading (``footbot_bt.cpp:243-254`` at
+    a73e4af): a robot on food carries food (it is unlimited: no item, no pick-up time); a robot in the nest
+    that carries delivers it and carries nothing more."""
+    carrying = carrying or on_food
+    if in_nest and carrying:
+        return False, True
+    return carrying, False
+
+
+@numba.njit(cache=True)
+def start_carrying(carrying: bool, on_food: bool) -> bool:
+    """The carrying flag after a trial's first step, which senses nothing but the start pose's ground
+    (``footbot_bt.cpp:134-137``, ``CBlackBoard.cpp:124-145`` at a73e4af): set on food; no delivery."""
+    return carrying or on_food
+
+
+@numba.njit(cache=True)
 def blackboard(
     in_nest: bool,
     on_food: bool,
@@ -158,10 +178,12 @@ def blackboard(
     food_bearing: float,
     heard: bool,
     nearest_bearing: float,
+    got_food: bool,
     p: PerceptionSettings,
     out: np.ndarray,
 ) -> None:
-    """Fill ``out`` (8 entries, ``vocabulary.CONDITIONS`` order) from the latest sensing step.
+    """Fill ``out`` (``vocabulary.N_CONDITIONS`` entries, ``vocabulary.CONDITIONS`` order) from the latest
+    sensing step; ``got_food`` is the carrying flag after its delivery check (``carry``).
 
     ``nest``/``food`` are the raw estimates and the bearings those of their sources
     (``footbot_bt.cpp:389-392``: a side holds when 0 < estimate < cap and the bearing is strictly on it). The
@@ -183,6 +205,7 @@ def blackboard(
     else:
         out[6] = p.profile == PAPER
         out[7] = False
+    out[8] = got_food
 
 
 @dataclass(frozen=True)
@@ -203,10 +226,13 @@ class Readings:
 
 
 class RobotView:
-    """One robot's perception across a chain: raw estimates, smoothing window, smoothed values, blackboard.
+    """One robot's perception across a chain: raw estimates, smoothing window, smoothed values, carrying flag
+    and deliveries, blackboard.
 
-    ``sense`` takes a sensing step's readings; ``refresh`` recomputes the smoothed values (the timeline says
-    when); ``broadcast`` is what the robot sends. Nothing is reset between the trials of a chain (A1).
+    ``sense`` takes a sensing step's readings; ``first_step`` a trial's first step's ground (no sensing);
+    ``refresh`` recomputes the smoothed values (the timeline says when); ``broadcast`` is what the robot
+    sends; ``end_trial`` clears the carrying flag and the deliveries at a trial's last step
+    (``footbot_bt.cpp:579-580`` at a73e4af). Nothing else is reset between the trials of a chain (A1).
     """
 
     def __init__(self, p: PerceptionSettings) -> None:
@@ -219,6 +245,8 @@ class RobotView:
         self.smooth = (0.0, 0.0, 0.0)
         self.latest: Readings | None = None
         self.sources = (-1, -1, -1)
+        self.carrying = False
+        self.deliveries = 0
 
     def sense(self, readings: Readings) -> None:
         """Take one sensing step's readings: raw estimates, the window and the sources of the blackboard."""
@@ -232,9 +260,20 @@ class RobotView:
             self.p,
         )
         self.nest, self.food, self.density = nest, food, density
+        self.carrying, delivered = carry(self.carrying, readings.in_nest, readings.on_food)
+        self.deliveries += int(delivered)
         self.samples = push_sample(self.window, self.samples, nest, food, density)
         self.latest = readings
         self.sources = (nest_source, food_source, nearest)
+
+    def first_step(self, on_food: bool) -> None:
+        """A trial's first step: the start pose's ground sets the carrying flag (``start_carrying``)."""
+        self.carrying = bool(start_carrying(self.carrying, on_food))
+
+    def end_trial(self) -> None:
+        """A trial's last step, after its tick and its scores: no carrying, no deliveries."""
+        self.carrying = False
+        self.deliveries = 0
 
     def refresh(self) -> None:
         """Recompute the smoothed (nest, food, density) from the window."""
@@ -258,7 +297,7 @@ class RobotView:
             raise RuntimeError("blackboard before any readings")
         r = self.latest
         nest_b, food_b, near_b = (r.bearings[k] if k >= 0 else math.nan for k in self.sources)
-        out = np.zeros(8, dtype=np.bool_)
+        out = np.zeros(N_CONDITIONS, dtype=np.bool_)
         blackboard(
             r.in_nest,
             r.on_food,
@@ -268,6 +307,7 @@ class RobotView:
             food_b,
             self.sources[2] >= 0,
             near_b,
+            self.carrying,
             self.p,
             out,
         )
@@ -279,6 +319,7 @@ def warm_up() -> None:
     of a trial is not slowed down by compilation."""
     view = RobotView(PerceptionParams())
     one = np.ones(1)
+    view.first_step(True)
     view.sense(Readings(False, False, np.zeros(1, dtype=np.int64), one * 300.0, one * 0.5, one, one))
     view.refresh()
     view.broadcast()

@@ -2,7 +2,8 @@
 
 ``reference`` remains the definition of a tick (see its docstring for why); this module maps our nodes onto
 py_trees: ``seq`` -> ``py_trees.composites.Sequence(memory=True)``, ``sel`` -> ``Selector(memory=True)``,
-``prob`` -> ``Probabilistic`` (below), conditions and actions -> small ``Behaviour`` subclasses. py_trees
+``prob`` -> ``Probabilistic`` (below), ``success`` -> ``py_trees.decorators.FailureIsSuccess``, conditions
+and actions -> small ``Behaviour`` subclasses. py_trees
 composites with memory resume at the RUNNING child and restart once they finish, which is our semantics;
 ``test_pytrees.py`` checks status, action, counts and memory against the reference tick for tick.
 
@@ -121,6 +122,8 @@ def build(tree: Node, context: PyTreesContext, profile: int = PAPER) -> py_trees
             return ActionBehaviour(node.name, context)
         assert isinstance(node, Composite)
         children = [make(child) for child in node.children]
+        if node.kind == "success":
+            return py_trees.decorators.FailureIsSuccess(name="success", child=children[0])
         if node.kind == "seq":
             return py_trees.composites.Sequence(name="seq", memory=True, children=children)
         if node.kind == "sel":
@@ -156,6 +159,8 @@ class PyTreesRobot:
             running = behaviour.status == py_trees.common.Status.RUNNING
             if isinstance(behaviour, Probabilistic) and behaviour.pending_first:
                 result.append(0)
+            elif isinstance(behaviour, py_trees.decorators.Decorator):
+                result.append(0 if running else -1)
             elif isinstance(behaviour, py_trees.composites.Composite):
                 current = behaviour.current_child
                 result.append(behaviour.children.index(current) if running and current is not None else -1)

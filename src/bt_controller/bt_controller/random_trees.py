@@ -20,49 +20,67 @@ def random_leaf(rng: np.random.Generator, p_condition: float = 0.5) -> Node:
     return Action(ACTIONS[rng.integers(len(ACTIONS))])
 
 
-def random_tree(rng: np.random.Generator, size: int, p_condition: float = 0.5) -> Node:
-    """A random tree of exactly ``size`` nodes (``size`` is 1 or at least 3: 2 nodes make no tree)."""
-    if size == 2 or size < 1:
+def random_tree(
+    rng: np.random.Generator, size: int, p_condition: float = 0.5, p_success: float = 0.0
+) -> Node:
+    """A random tree of exactly ``size`` nodes (``size`` is 1 or at least 3: 2 nodes make no tree without
+    decorators); with ``p_success`` > 0 an inner node is a success decorator with that probability (any
+    ``size`` >= 1 then works)."""
+    if size < 1 or (size == 2 and p_success <= 0.0):
         raise ValueError(f"no tree has {size} nodes; size must be 1 or at least 3")
     if size == 1:
         return random_leaf(rng, p_condition)
+    if p_success > 0.0 and (size == 2 or rng.random() < p_success):
+        return Composite("success", (random_tree(rng, size - 1, p_condition, p_success),))
     rest = size - 1
     while True:
         n = int(rng.integers(MIN_CHILDREN, min(MAX_CHILDREN, rest) + 1))
-        # Split ``rest`` nodes among ``n`` children, none of them 2 nodes (no such tree).
+        # Split ``rest`` nodes among ``n`` children, none of them 2 nodes unless decorators make such trees.
         cuts: np.ndarray | list[int] = []
         if n > 1:
             cuts = np.sort(rng.choice(np.arange(1, rest), size=n - 1, replace=False))
         parts = np.diff(np.concatenate(([0], cuts, [rest]))).astype(int)
-        if np.all(parts != 2):
+        if p_success > 0.0 or np.all(parts != 2):
             break
     kind = COMPOSITES[rng.integers(len(COMPOSITES))]
-    return Composite(kind, tuple(random_tree(rng, int(p), p_condition) for p in parts))
+    return Composite(kind, tuple(random_tree(rng, int(p), p_condition, p_success) for p in parts))
 
 
-def random_tree_grow(rng: np.random.Generator, max_depth: int, p_leaf: float = 0.3) -> Node:
+def random_tree_grow(
+    rng: np.random.Generator, max_depth: int, p_leaf: float = 0.3, p_success: float = 0.0
+) -> Node:
     """A random tree at most ``max_depth`` deep: the root is a composite (unless ``max_depth`` is 0) and
-    every node below it is a leaf with probability ``p_leaf`` (always at ``max_depth``)."""
-    return _grow(rng, max_depth, 0.0 if max_depth > 0 else 1.0, p_leaf)
+    every node below it is a leaf with probability ``p_leaf`` (always at ``max_depth``); with ``p_success`` >
+    0 an inner node is a success decorator with that probability (no draw is made for it otherwise, so the
+    trees of a seed are as before)."""
+    return _grow(rng, max_depth, 0.0 if max_depth > 0 else 1.0, p_leaf, p_success)
 
 
-def _grow(rng: np.random.Generator, max_depth: int, p_here: float, p_leaf: float) -> Node:
+def _grow(rng: np.random.Generator, max_depth: int, p_here: float, p_leaf: float, p_success: float) -> Node:
     if max_depth == 0 or rng.random() < p_here:
         return random_leaf(rng)
+    if p_success > 0.0 and rng.random() < p_success:
+        return Composite("success", (_grow(rng, max_depth - 1, p_leaf, p_leaf, p_success),))
     n = int(rng.integers(MIN_CHILDREN, MAX_CHILDREN + 1))
     kind = COMPOSITES[rng.integers(len(COMPOSITES))]
-    return Composite(kind, tuple(_grow(rng, max_depth - 1, p_leaf, p_leaf) for _ in range(n)))
+    return Composite(kind, tuple(_grow(rng, max_depth - 1, p_leaf, p_leaf, p_success) for _ in range(n)))
 
 
 def random_blackboards(rng: np.random.Generator, n_robots: int, n_ticks: int) -> np.ndarray:
-    """Blackboards (robots, ticks, 8) bool; each robot has its own probability of true per condition."""
+    """Blackboards (robots, ticks, ``N_CONDITIONS``) bool; each robot has its own probability of true per
+    condition (no world facts: any combination)."""
     p_true = rng.random((n_robots, 1, len(CONDITIONS)))
     return rng.random((n_robots, n_ticks, len(CONDITIONS))) < p_true
 
 
-def random_trees(seed: int, count: int, min_size: int = 10, max_size: int = 60) -> list[str]:
-    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``), reproducible
-    from ``seed``."""
+def random_trees(
+    seed: int, count: int, min_size: int = 10, max_size: int = 60, p_success: float = 0.0
+) -> list[str]:
+    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``; with
+    ``p_success`` > 0 some inner nodes are success decorators), reproducible from ``seed``."""
     rng = np.random.default_rng(seed)
     sizes = [int(rng.integers(min_size + 1, max_size + 1)) for _ in range(count)]
-    return [str(random_tree(rng, 3 if size == 2 else size)) for size in sizes]
+    return [
+        str(random_tree(rng, 3 if size == 2 and p_success <= 0 else size, p_success=p_success))
+        for size in sizes
+    ]

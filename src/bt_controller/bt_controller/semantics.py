@@ -19,6 +19,9 @@ One tick (``tick``):
 - condition: success if its blackboard entry is true, else failure; counted in ``counts[0]``.
 - action: if it is not running, it starts (counted in ``counts[1 + action]``) and returns running; if it
   returned running last tick, it returns success now.
+- success decorator: ticks its child and returns success where the child failed, else the child's status; it
+  has no memory of its own (its entry is 0 while its child runs, -1 otherwise, as a composite's remembered
+  position: the compiled interpreter keeps it so) and counts nothing (``CNode.cpp:508-513`` at a73e4af).
 
 Why not py_trees for the definition: py_trees' ``Sequence``/``Selector(memory=True)`` do match our composites
 (``bt_controller.pytrees`` maps our trees onto them and ``test_pytrees.py`` shows it agrees with this module
@@ -89,6 +92,10 @@ def tick(
             started = node.index
             return RUNNING
         assert isinstance(node, Composite)
+        if node.kind == "success":
+            status = run(node.children[0], index + 1)
+            memory[index] = 0 if status == RUNNING else -1
+            return SUCCESS if status == FAILURE else status
         child_indices = _child_indices(node, index)
         n = len(node.children)
         if node.kind == "prob":

@@ -54,6 +54,16 @@ The rules (each a rewrite of one subtree ``n``; its proof in a comment at the ru
    shows the world nothing.
 6. *identical choices*: ``prob(T, T, ...)`` with every child the same probabilistic-free ``T`` becomes ``T``:
    whichever is picked starts in the same state and behaves as ``T``.
+7. *success of a child that never fails*: ``success(X)`` becomes ``X`` when ``X`` never returns failure: the
+   decorator then passes every status on unchanged, and it has no memory of its own.
+8. *blind success*: ``success(X)`` at a blind position becomes ``X``: it only turns failure into success,
+   which look alike there (fact 3).
+
+The success decorator (``success(X)``: success where ``X`` failed, else ``X``'s status; no memory of its own)
+keeps the three facts: it remembers nothing off the running path (fact 1), it passes a resumption straight
+to its child (fact 2), and it clears nothing and sets no motors when it finishes. Its child is always at a
+blind position: its success and its failure both become the decorator's success, with the same (cleared)
+memory and motors, so rules 4, 5 and 8 apply inside it.
 
 A composite left with one child becomes that child (same statuses, same memory). Every rule keeps what each
 subtree shows its parent on every tick, so it is sound wherever the subtree sits; the knowledge and blindness
@@ -63,10 +73,13 @@ depth), but each rewrite re-analyses the whole tree, so the work grows with the 
 more than ``MAX_SIMPLIFY_NODES`` nodes are refused (TreeLimitError; a chain collapsing level by level at that
 size takes about a minute on one core, a random tree of that size a few seconds).
 
-Blackboard facts (``WORLD_FACTS``) hold in every profile: the two regions are disjoint (r < 500 mm against
-r >= 1000 mm), a direction is left or right but not both (``perception.is_left``/``is_right`` of one bearing;
-with no robot heard, robot_left is true under ``paper`` and both are false under ``clean``: never both), and
-inside a region there is no direction to it (the raw estimate is 0, no source: ``perception.estimate``).
+Blackboard facts (``WORLD_FACTS``, ``WORLD_IMPLICATIONS``) hold in every profile: the two regions are
+disjoint (r < 500 mm against r >= 1000 mm), a direction is left or right but not both
+(``perception.is_left``/``is_right`` of one bearing; with no robot heard, robot_left is true under ``paper``
+and both are false under ``clean``: never both), inside a region there is no direction to it (the raw
+estimate is 0, no source: ``perception.estimate``), and got_food is the carrying flag after the step's
+delivery check (``perception.carry``): on food it is set, in the nest it is clear. A tick reads the ground
+and the flag of the same sensing step (no tick falls on a trial's unsensed first step).
 """
 
 from __future__ import annotations
@@ -99,8 +112,12 @@ WORLD_FACTS: tuple[tuple[str, str], ...] = (
     ("in_nest", "nest_right"),
     ("on_food", "food_left"),
     ("on_food", "food_right"),
+    ("in_nest", "got_food"),
 )
 """Pairs of conditions never true together on any blackboard, in either profile (module docstring)."""
+
+WORLD_IMPLICATIONS: tuple[tuple[str, str], ...] = (("on_food", "got_food"),)
+"""Pairs (a, b): on every blackboard, in either profile, b is true whenever a is (module docstring)."""
 
 
 @dataclass(eq=False)
@@ -108,7 +125,7 @@ class _N:
     """A node under rewriting: ``orig`` is its pre-order index in the original tree and ``draw`` the draw key
     of a probabilistic node (kept through every rewrite; -1 for other nodes)."""
 
-    kind: str  # "seq", "sel", "prob", "cond" or "act"
+    kind: str  # "seq", "sel", "prob", "success", "cond" or "act"
     name: str
     children: list[_N]
     orig: int
@@ -168,16 +185,34 @@ def _to_node(root: _N) -> Node:
 
 
 class _Facts:
-    def __init__(self, pairs: tuple[tuple[str, str], ...]) -> None:
+    def __init__(
+        self, pairs: tuple[tuple[str, str], ...], implications: tuple[tuple[str, str], ...] = ()
+    ) -> None:
         self.excludes: dict[int, set[int]] = {}
         for a, b in pairs:
             self.excludes.setdefault(_C[a], set()).add(_C[b])
             self.excludes.setdefault(_C[b], set()).add(_C[a])
+        self.implies: dict[int, set[int]] = {}  # a true makes these true
+        self.implied_by: dict[int, set[int]] = {}  # a false makes these false
+        for a, b in implications:
+            self.implies.setdefault(_C[a], set()).add(_C[b])
+            self.implied_by.setdefault(_C[b], set()).add(_C[a])
 
     def close(self, known: frozenset[Literal]) -> frozenset[Literal]:
-        """Add what the facts imply: a true condition makes every condition it excludes false."""
-        extra = {(other, False) for c, v in known if v for other in self.excludes.get(c, ())}
-        return known | extra if extra else known
+        """Add what the facts imply, until nothing more follows: a true condition makes every condition it
+        excludes false and every condition it implies true; a false one makes every condition implying it
+        false."""
+        while True:
+            extra: set[Literal] = set()
+            for c, v in known:
+                if v:
+                    extra.update((other, False) for other in self.excludes.get(c, ()))
+                    extra.update((other, True) for other in self.implies.get(c, ()))
+                else:
+                    extra.update((other, False) for other in self.implied_by.get(c, ()))
+            if extra <= known:
+                return known
+            known = known | extra
 
 
 def _join(a: Knowledge, b: frozenset[Literal]) -> Knowledge:
@@ -234,7 +269,13 @@ def _analyse(root: _N, facts: _Facts) -> None:
     def finish(visit: _Visit) -> None:
         n = visit.n
         kids = n.children
-        if n.kind == "prob":
+        if n.kind == "success":
+            child = kids[0]
+            n.status = (frozenset({S}) if child.status & {S, F} else frozenset()) | (child.status & {R})
+            outcomes = ((child.post_s, S), (child.post_f, F))
+            n.post_s = _meet([post for post, status in outcomes if status in child.status])
+            n.post_f = frozenset()
+        elif n.kind == "prob":
             n.status = frozenset().union(*(c.status for c in kids))
             n.post_s = _meet([c.post_s for c in kids if S in c.status])
             n.post_f = _meet([c.post_f for c in kids if F in c.status])
@@ -258,7 +299,7 @@ def _analyse(root: _N, facts: _Facts) -> None:
         visit = stack[-1]
         n = visit.n
         kids = n.children
-        if visit.done < visit.next and n.kind != "prob":
+        if visit.done < visit.next and n.kind in ("seq", "sel"):
             # The child just analysed decides what the next one knows (sequence, selector).
             child = kids[visit.done]
             visit.done = visit.next
@@ -277,6 +318,8 @@ def _analyse(root: _N, facts: _Facts) -> None:
             visit.next += 1
             if n.kind == "prob":
                 fresh, blind = n.fresh, n.blind
+            elif n.kind == "success":
+                fresh, blind = n.fresh, True  # its success and failure both become success
             else:
                 fresh, blind = visit.knowledge, n.blind and i == len(kids) - 1
             inner = enter(kids[i], fresh, blind, n, i)
@@ -348,6 +391,16 @@ def _rewrites(n: _N) -> list[tuple[int, str, _N]]:
     # it finishes), so each behaves as T would; the picks no longer matter.
     if n.kind == "prob" and not any(c.has_prob for c in kids) and len({c.shape for c in kids}) == 1:
         out.append((1, "identical choices", kids[0]))
+    if n.kind == "success":
+        child = kids[0]
+        # Rule 7 (success of a child that never fails). The decorator only turns failure into success and
+        # has no memory of its own: over a child that never fails it passes every status on unchanged.
+        if F not in child.status:
+            out.append((1, "success never needed", child))
+        # Rule 8 (blind success). At a blind position failure and success look alike (fact 3), so turning
+        # one into the other shows the world nothing.
+        elif n.blind:
+            out.append((1, "blind success", child))
     # Rule 5 (blind condition-only subtree). A composite that ticks no action at a blind position shows the
     # world nothing (fact 3 and no motors): its first condition does the same.
     if n.blind and n.pure and n.fresh is not None:
@@ -402,12 +455,18 @@ class Simplified:
 
 
 def simplify_with_rules(
-    tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS, *, keep_positions: bool = False
+    tree: Node,
+    facts: tuple[tuple[str, str], ...] = WORLD_FACTS,
+    *,
+    keep_positions: bool = False,
+    implications: tuple[tuple[str, str], ...] | None = None,
 ) -> Simplified:
     """Simplify ``tree``; also say which rules were applied (see ``simplify``)."""
     if tree.size > MAX_SIMPLIFY_NODES:
         raise TreeLimitError(f"tree has {tree.size} nodes; simplify takes at most {MAX_SIMPLIFY_NODES}")
-    known = _Facts(facts)
+    if implications is None:
+        implications = WORLD_IMPLICATIONS if facts == WORLD_FACTS else ()
+    known = _Facts(facts, implications)
     root = _from_node(tree)
     applied: list[str] = []
     while True:
@@ -429,12 +488,25 @@ def simplify_with_rules(
 
 
 def simplify(
-    tree: Node, facts: tuple[tuple[str, str], ...] = WORLD_FACTS, *, keep_positions: bool = False
+    tree: Node,
+    facts: tuple[tuple[str, str], ...] = WORLD_FACTS,
+    *,
+    keep_positions: bool = False,
+    implications: tuple[tuple[str, str], ...] | None = None,
 ) -> Node:
     """The simplest tree this module's rules reach from ``tree``: same motors on every tick of every
     blackboard trace, same probabilistic picks (each probabilistic node keeps its draw key, written
     ``prob@k`` where its pre-order index changed; module docstring), never larger. ``facts``: pairs of
-    conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards).
-    ``keep_positions``: make only rewrites that leave every probabilistic node at its pre-order index (no
-    key is then added; the simplifier before draw keys). TreeLimitError beyond ``MAX_SIMPLIFY_NODES``."""
-    return simplify_with_rules(tree, facts, keep_positions=keep_positions).tree
+    conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards);
+    ``implications``: pairs (a, b) with b true whenever a is (default: ``WORLD_IMPLICATIONS`` with the world's
+    facts, none with others). ``keep_positions``: make only rewrites that leave every probabilistic node at
+    its pre-order index (no key is then added; the simplifier before draw keys). TreeLimitError beyond
+    ``MAX_SIMPLIFY_NODES``."""
+    return simplify_with_rules(tree, facts, keep_positions=keep_positions, implications=implications).tree
+
+
+def simplify_if_small(tree: Node) -> Node:
+    """``simplify(tree)``, or ``tree`` itself when it has more than ``MAX_SIMPLIFY_NODES`` nodes: a tree that
+    names primitives may expand beyond what ``simplify`` takes (``tree.parse`` limits the tree as written);
+    for what needs a simplified form of any tree (clone keys, the trees shown to people)."""
+    return tree if tree.size > MAX_SIMPLIFY_NODES else simplify(tree)

@@ -8,6 +8,10 @@ ordered (by canonical text, so that sets of trees can be sorted deterministicall
 - composites ``seq``, ``sel``, ``prob`` take 2, 3 or 4 children in parentheses, separated by commas;
   DEAP's arity-suffixed names (``seq2``, ``sel3``, ``prob4``) are accepted as input and the suffix must match
   the number of children;
+- the decorator ``success(X)`` takes exactly one child (``vocabulary.DECORATORS``); in the tree model it is a
+  ``Composite`` of kind ``success`` with one child (an *inner node*; ``is_decorator``);
+- with a primitive library (``parse(text, library=...)``, ``bt_controller.library``) a primitive's name is a
+  leaf of the text that stands for ``success(<its tree>)``: the parser puts a separate copy there;
 - conditions and actions (see ``bt_controller.vocabulary``) are bare names; a single leaf is a tree;
 - a probabilistic composite may name its **draw key**: ``prob@7(a, b)`` draws its child with 7 where a
   plain ``prob`` uses its pre-order index (``semantics``; ``docs/interfaces.md``, "Random draws"); a key is
@@ -30,9 +34,10 @@ import re
 from bisect import bisect_right
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, DECORATORS, MAX_CHILDREN, MIN_CHILDREN
 
 MAX_NODES = 1000
 """Default limit on the number of nodes of a parsed tree."""
@@ -151,8 +156,9 @@ def leaf_name(node: Node) -> str:
 
 @dataclass(frozen=True, repr=False, eq=False)
 class Composite(Node):
-    """A composite with memory: ``kind`` is ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children. A ``prob`` may
-    carry a ``draw_key`` (``None``: its pre-order index is its key; see ``draw_key_at``)."""
+    """An inner node: a composite with memory (``kind`` ``seq``, ``sel`` or ``prob``; 2, 3 or 4 children) or
+    the decorator ``success`` (one child). A ``prob`` may carry a ``draw_key`` (``None``: its pre-order index
+    is its key; see ``draw_key_at``)."""
 
     kind: str
     children: tuple[Node, ...]
@@ -162,13 +168,17 @@ class Composite(Node):
     _hash: int = field(init=False, compare=False)
 
     def __post_init__(self) -> None:
-        if self.kind not in COMPOSITES:
+        if self.kind not in COMPOSITES and self.kind not in DECORATORS:
             raise TreeSyntaxError(
-                f"unknown composite {self.kind!r}; known composites: {', '.join(COMPOSITES)}"
+                f"unknown composite {self.kind!r}; known composites: {', '.join(COMPOSITES)}; "
+                f"decorators: {', '.join(DECORATORS)}"
             )
         children = tuple(self.children)
         object.__setattr__(self, "children", children)
-        if not MIN_CHILDREN <= len(children) <= MAX_CHILDREN:
+        if self.kind in DECORATORS:
+            if len(children) != 1:
+                raise TreeSyntaxError(f"{self.kind} takes exactly one child, got {len(children)}")
+        elif not MIN_CHILDREN <= len(children) <= MAX_CHILDREN:
             raise TreeSyntaxError(
                 f"{self.kind} takes {MIN_CHILDREN} to {MAX_CHILDREN} children, got {len(children)}"
             )
@@ -215,6 +225,11 @@ class Composite(Node):
         return True
 
 
+def is_decorator(node: Node) -> bool:
+    """Whether ``node`` is a decorator (an inner node with one child: ``success``)."""
+    return isinstance(node, Composite) and node.kind in DECORATORS
+
+
 def check_draw_key(key: object) -> int:
     """``key`` if it is a draw key (an int in [0, ``MAX_DRAW_KEY``], not a bool); else TreeSyntaxError."""
     if isinstance(key, bool) or not isinstance(key, int) or not 0 <= key <= MAX_DRAW_KEY:
@@ -250,6 +265,11 @@ def sel(*children: Node | str) -> Composite:
 def prob(*children: Node | str, draw_key: int | None = None) -> Composite:
     """A probabilistic composite with memory; string children are leaf names; ``draw_key`` as ``prob@K``."""
     return Composite("prob", tuple(_as_node(c) for c in children), draw_key)
+
+
+def success(child: Node | str) -> Composite:
+    """The success decorator over ``child``: success where ``child`` fails, else ``child``'s status."""
+    return Composite("success", (_as_node(child),))
 
 
 def _as_node(child: Node | str) -> Node:
@@ -307,11 +327,36 @@ _TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|([0-9]+)|([(),@])|(\S))")
 _COMPOSITE_NAME = re.compile(r"^(seq|sel|prob)([0-9]*)$")
 
 
-def _known_names() -> str:
-    return (
+class PrimitiveLibrary(Protocol):
+    """What the parser reads of a primitive library (``bt_controller.library.Library``)."""
+
+    @property
+    def label(self) -> str:
+        """How messages name the library (its file)."""
+        ...
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The primitives' names, in the library's order."""
+        ...
+
+    def primitive(self, name: str) -> Node | None:
+        """The tree of primitive ``name`` (without its ``success``), or None if the library has none."""
+        ...
+
+
+def _known_names(library: PrimitiveLibrary | None = None) -> str:
+    known = (
         f"known names: composites {', '.join(COMPOSITES)} (with 2 to 4 children); "
+        f"decorators {', '.join(DECORATORS)} (with one child); "
         f"conditions {', '.join(CONDITIONS)}; actions {', '.join(ACTIONS)}"
     )
+    if library is not None:
+        names = ", ".join(library.names) if library.names else "none"
+        known += f"; primitives of library {library.label}: {names}"
+    else:
+        known += " (a primitive's name needs a library: --library FILE)"
+    return known
 
 
 class _Tokens:
@@ -378,10 +423,21 @@ def _draw_key(tokens: _Tokens, head: str) -> int:
     return int(digits)
 
 
-def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
+def parse(
+    text: str,
+    *,
+    max_nodes: int = MAX_NODES,
+    max_depth: int = MAX_DEPTH,
+    library: PrimitiveLibrary | None = None,
+) -> Node:
     """Parse tree text (see the module docstring); raise TreeSyntaxError or TreeLimitError.
 
-    ``max_nodes`` and ``max_depth`` bound the accepted trees (defaults ``MAX_NODES`` and ``MAX_DEPTH``).
+    ``max_nodes`` and ``max_depth`` bound the accepted trees as written (defaults ``MAX_NODES`` and
+    ``MAX_DEPTH``). With a ``library``, a leaf that names one of its primitives becomes ``success(<its
+    tree>)``, a copy of its own (in one pass: the library's trees name no primitives); a name that is neither
+    a node nor a primitive is refused naming the library. A primitive's name counts as one node of depth 0,
+    as the authors' GP counts it (gp/ea.py:949-959 at a73e4af) and as evolution's own limits see it: the
+    expanded tree may be larger, up to the library's trees (each within the default limits) in every leaf.
     """
     if not isinstance(text, str):
         raise TypeError(f"tree text must be a str, got {type(text).__name__}")
@@ -396,6 +452,11 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
         if kind != "name":
             what = "the tree" if not stack else f"a child of {stack[-1].kind}"
             raise tokens.error(offset, f"expected a node name for {what}, found {_describe(kind, value)}")
+        primitive = None
+        if library is not None and value not in CONDITIONS and value not in ACTIONS:
+            primitive = library.primitive(value)
+        # The limits bound the tree as written: a primitive's name is one node (its expansion is bounded by
+        # its library, whose trees are within the default limits).
         count += 1
         if count > max_nodes:
             line, column = tokens.where(offset)
@@ -405,6 +466,14 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
             raise TreeLimitError(f"tree is deeper than max_depth={max_depth}", line, column)
         composite = _COMPOSITE_NAME.match(value)
         node: Node
+        if value in DECORATORS:
+            kind2, value2, offset2 = tokens.next()
+            if (kind2, value2) == ("punct", "@"):
+                raise tokens.error(offset2, f"{value} takes no draw key; only prob does (prob@K)")
+            if (kind2, value2) != ("punct", "("):
+                raise tokens.error(offset2, f"expected '(' after {value!r}, found {_describe(kind2, value2)}")
+            stack.append(_Frame(value, 1, None, offset, []))
+            continue
         if composite is not None:
             arity = int(composite.group(2)) if composite.group(2) else None
             if arity is not None and not MIN_CHILDREN <= arity <= MAX_CHILDREN:
@@ -427,17 +496,20 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
             node = Condition(value)
         elif value in ACTIONS:
             node = Action(value)
+        elif primitive is not None:
+            node = Composite(DECORATORS[0], (primitive,))
         else:
-            raise tokens.error(offset, f"unknown node {value!r}; {_known_names()}")
+            raise tokens.error(offset, f"unknown node {value!r}; {_known_names(library)}")
+        written = value  # the leaf as written (a primitive's name, not its expansion)
         # Attach finished nodes to their parents until one expects another child.
         while True:
             kind, value, offset = tokens.next()
             if not stack:
                 if kind != "end":
-                    if (kind, value) == ("punct", "("):
-                        reason = f"{node} is a leaf and takes no children"
-                    elif (kind, value) == ("punct", "@") and not isinstance(node, Composite):
-                        reason = f"{node} is a leaf and takes no draw key; only prob does (prob@K)"
+                    if (kind, value) == ("punct", "(") and written:
+                        reason = f"{written} is a leaf and takes no children"
+                    elif (kind, value) == ("punct", "@") and written:
+                        reason = f"{written} is a leaf and takes no draw key; only prob does (prob@K)"
                     else:
                         reason = f"expected end of input after the tree, found {_describe(kind, value)}"
                     raise tokens.error(offset, reason)
@@ -445,6 +517,8 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
             frame = stack[-1]
             frame.children.append(node)
             if (kind, value) == ("punct", ","):
+                if frame.kind in DECORATORS:
+                    raise tokens.error(offset, f"expected ')': {frame.kind} takes exactly one child")
                 if len(frame.children) >= MAX_CHILDREN:
                     raise tokens.error(
                         offset, f"expected ')': {frame.kind} takes at most {MAX_CHILDREN} children"
@@ -452,7 +526,7 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
                 break
             if (kind, value) == ("punct", ")"):
                 n = len(frame.children)
-                if n < MIN_CHILDREN:
+                if n < MIN_CHILDREN and frame.kind not in DECORATORS:
                     raise tokens.error(
                         offset, f"expected ',': {frame.kind} takes at least {MIN_CHILDREN} children"
                     )
@@ -462,11 +536,13 @@ def parse(text: str, *, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) 
                     )
                 stack.pop()
                 node = Composite(frame.kind, tuple(frame.children), frame.draw_key)
+                written = ""
                 continue
-            if (kind, value) == ("punct", "(") and not isinstance(node, Composite):
-                raise tokens.error(offset, f"{node} is a leaf and takes no children")
-            if (kind, value) == ("punct", "@") and not isinstance(node, Composite):
-                raise tokens.error(offset, f"{node} is a leaf and takes no draw key; only prob does (prob@K)")
+            if (kind, value) == ("punct", "(") and written:
+                raise tokens.error(offset, f"{written} is a leaf and takes no children")
+            if (kind, value) == ("punct", "@") and written:
+                reason = f"{written} is a leaf and takes no draw key; only prob does (prob@K)"
+                raise tokens.error(offset, reason)
             raise tokens.error(offset, f"expected ',' or ')' in {frame.kind}, found {_describe(kind, value)}")
 
 

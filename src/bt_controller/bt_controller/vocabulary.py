@@ -1,13 +1,19 @@
 """The names of the behaviour-tree nodes and what they mean to a footbot (paper, tables 2-4).
 
-This module is the one source of truth for node names and their order: blackboards are 8 booleans in
-``CONDITIONS`` order, actions are indexed in ``ACTIONS`` order, and every other module refers to these.
+This module is the one source of truth for node names and their order: blackboards are ``N_CONDITIONS``
+booleans in ``CONDITIONS`` order, actions are indexed in ``ACTIONS`` order, and every other module refers to
+these.
 """
 
 from __future__ import annotations
 
 COMPOSITES: tuple[str, ...] = ("seq", "sel", "prob")
 """Sequence, selector and probabilistic composites, all with memory."""
+
+DECORATORS: tuple[str, ...] = ("success",)
+"""Inner nodes with exactly one child: ``success(X)`` ticks X and returns success where X failed, else X's
+status; it has no memory of its own (the authors' ``successd``, ``CNode.cpp:508-513`` at a73e4af;
+BehaviorTree.CPP's ``ForceSuccess``)."""
 
 MIN_CHILDREN = 2
 MAX_CHILDREN = 4
@@ -21,8 +27,18 @@ CONDITIONS: tuple[str, ...] = (
     "nest_right",
     "robot_left",
     "robot_right",
+    "got_food",
 )
-"""Blackboard entries; a condition node succeeds when its entry is true."""
+"""Blackboard entries; a condition node succeeds when its entry is true. ``got_food``: the robot carries food
+(it sensed food since its last delivery or its trial's start; ``docs/model.md``, "Foraging"). It comes last
+so that the 2023 conditions keep their indices."""
+
+N_CONDITIONS = len(CONDITIONS)
+"""Entries of a blackboard."""
+
+CONDITIONS_2023: tuple[str, ...] = CONDITIONS[:8]
+"""The conditions of the paper's table 3 (every condition but ``got_food``): the node set of the 2023
+experiment as this project runs it."""
 
 ACTIONS: tuple[str, ...] = (
     "stop",

@@ -20,7 +20,8 @@ def _composite(kind: str, children: tuple[Node, ...], key: int | None) -> Compos
 
 def _composites(children: st.SearchStrategy[Node]) -> st.SearchStrategy[Node]:
     kids = st.lists(children, min_size=2, max_size=4).map(tuple)
-    return st.builds(_composite, st.sampled_from(COMPOSITES), kids, draw_keys)
+    decorated = children.map(lambda child: Composite("success", (child,)))
+    return st.one_of(st.builds(_composite, st.sampled_from(COMPOSITES), kids, draw_keys), decorated)
 
 
 trees: st.SearchStrategy[Node] = st.recursive(leaves, _composites, max_leaves=40)

@@ -220,7 +220,10 @@ def test_every_format_takes_a_tree_of_any_depth(tmp_path):
         part = part.children[1]
     assert from_xml(to_xml(part), max_depth=100_000, max_nodes=100_000) == part
     closing_tags = sum(isinstance(node, Composite) for node in tree.preorder())
-    assert to_xml(tree).count("\n") == tree.size + closing_tags + 26  # and 26 lines around the tree
+    # and the lines around the tree: 7 of the document, 1 comment, 3 for Probabilistic with its port, and
+    # one per condition and action in the model.
+    around = 11 + len(CONDITIONS) + len(ACTIONS)
+    assert to_xml(tree).count("\n") == tree.size + closing_tags + around
     assert to_dot(tree).count(" -> ") == tree.size - 1
     placed = layout(tree)
     assert len(placed) == tree.size and placed[-1][2] == 10_000
@@ -228,3 +231,19 @@ def test_every_format_takes_a_tree_of_any_depth(tmp_path):
     assert to_ascii(tree).count("\n") == tree.size
     with pytest.raises(TreeLimitError, match="a PNG drawing takes at most 404 leaves and depth 605"):
         render(tree, tmp_path / "deep.png")
+
+
+def test_success_is_btcpp_force_success_both_ways():
+    tree = parse("sel(seq(got_food, success(seq(nest_left, forward_left))), success(forward))")
+    xml = to_xml(tree)
+    assert xml.count("<ForceSuccess>") == 2 and '<Condition ID="got_food" />' in xml
+    assert from_xml(xml) == tree
+    explicit = """<root BTCPP_format="4"><BehaviorTree ID="T">
+      <Decorator ID="ForceSuccess"><Condition ID="got_food"/></Decorator>
+    </BehaviorTree></root>"""
+    assert from_xml(explicit) == parse("success(got_food)")
+    two = '<root BTCPP_format="4"><BehaviorTree><ForceSuccess><stop/><stop/></ForceSuccess></BehaviorTree>'
+    two += "</root>"
+    with pytest.raises(TreeSyntaxError, match="ForceSuccess takes exactly one"):
+        from_xml(two)
+    assert "success ✓" in to_dot(tree) and to_ascii(tree).splitlines()[3] == "│   └── success"

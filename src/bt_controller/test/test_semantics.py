@@ -227,3 +227,41 @@ def test_wheels_are_the_running_actions_else_stop():
     assert wheels(R, FWD) == (1, 1)
     assert wheels(S, -1) == (0, 0)
     assert wheels(F, -1) == (0, 0)
+
+
+def test_success_turns_failure_into_success_and_keeps_its_child_running(robot):
+    # success(X): ticks X; X's failure becomes success, running and success pass (CNode.cpp:508-513, a73e4af).
+    r = robot("success(seq(got_food, forward))")
+    assert r.step(board()) == (S, -1)  # got_food fails: the sequence fails, the decorator succeeds
+    assert memory(r) == [-1, -1, 0, 0]
+    assert r.step(board("got_food")) == (R, FWD)  # X runs: the decorator runs, remembering nothing else
+    assert memory(r) == [0, 1, 0, 1]
+    # Resumed at forward whatever the blackboard says: got_food is not ticked again.
+    assert r.step(board()) == (S, -1)
+    assert memory(r) == [-1, -1, 0, 0]
+    assert list(r.counts) == [2, 0, 1, 0, 0, 0, 0, 0]
+
+
+def test_a_parent_resumes_a_running_success_like_any_child(robot):
+    # The guard of seq(got_food, success(P)) is not checked again while P runs (foraging.md section 3).
+    r = robot("sel(seq(got_food, success(seq(forward, reverse))), stop)")
+    assert r.step(board("got_food")) == (R, FWD)
+    assert r.step(board()) == (R, REV)  # forward succeeded, reverse started: got_food not re-ticked
+    assert r.counts[0] == 1
+    assert r.step(board()) == (S, -1)
+    assert r.step(board()) == (R, STOP)  # afresh: got_food fails, the selector moves on to stop
+    assert r.counts[0] == 2
+
+
+def test_success_of_a_failing_child_in_a_selector_ends_the_selector(robot):
+    r = robot("sel(success(in_nest), forward)")
+    for b in (board(), board("in_nest")):
+        assert r.step(b) == (S, -1)
+    assert list(r.counts) == [2, 0, 0, 0, 0, 0, 0, 0]
+
+
+def test_got_food_reads_its_own_blackboard_entry(robot):
+    r = robot("sel(seq(got_food, reverse), forward)")
+    assert r.step(board("on_food", "got_food")) == (R, REV)
+    r = robot("sel(seq(got_food, reverse), forward)")
+    assert r.step(board("on_food")) == (R, FWD)  # the interpreters read the entry as given

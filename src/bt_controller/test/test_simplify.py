@@ -14,7 +14,7 @@ from bt_controller.draws import choose, derive
 from bt_controller.formats import from_xml, to_ascii, to_dot, to_xml
 from bt_controller.random_trees import random_tree_grow
 from bt_controller.semantics import new_counts, new_memory, tick, wheels
-from bt_controller.simplify import WORLD_FACTS, simplify, simplify_with_rules
+from bt_controller.simplify import WORLD_FACTS, WORLD_IMPLICATIONS, simplify, simplify_with_rules
 from bt_controller.tree import Action, Composite, Condition, Node, draw_key_at, parse, to_indented, to_text
 from bt_controller.vocabulary import ACTION_WHEELS, CONDITIONS, RUNNING, STOP, SUCCESS
 
@@ -57,6 +57,9 @@ def motors_model_v2(tree: Node, boards: np.ndarray, key: int, profile: str) -> l
             for c in n.children:
                 kids.append(k)
                 k += c.size
+            if n.kind == "success":
+                status = run(kids[0])
+                return SUCCESS if status == 1 else status
             if n.kind == "prob":
                 status = run(kids[memory[index]])
                 if status != RUNNING:
@@ -89,8 +92,9 @@ READINGS = {
 
 
 def random_boards(rng: np.random.Generator, n: int, reading: str, facts: bool) -> np.ndarray:
-    """A random blackboard trace; with ``facts``, every board obeys ``WORLD_FACTS`` (and, under the paper
-    profile, robot_left is true whenever robot_right is false: no neighbour reads as left)."""
+    """A random blackboard trace; with ``facts``, every board obeys ``WORLD_FACTS`` and
+    ``WORLD_IMPLICATIONS`` (and, under the paper profile, robot_left is true whenever robot_right is false: no
+    neighbour reads as left)."""
     p = rng.random(len(CONDITIONS))
     boards = rng.random((n, len(CONDITIONS))) < p
     if facts:
@@ -99,6 +103,9 @@ def random_boards(rng: np.random.Generator, n: int, reading: str, facts: bool) -
             both = boards[:, index[a]] & boards[:, index[b]]
             drop = np.where(rng.random(n) < 0.5, index[a], index[b])
             boards[both, drop[both]] = False
+        # on_food makes got_food true; on food a robot is not in the nest (dropped above), so no fact breaks.
+        for a, b in WORLD_IMPLICATIONS:
+            boards[:, index[b]] |= boards[:, index[a]]
         if reading == "v2-paper":
             boards[:, index["robot_left"]] = ~boards[:, index["robot_right"]]
     return boards
@@ -108,7 +115,10 @@ def random_trees(seed: int, n: int, keyed: float = 0.0) -> list[Node]:
     """``n`` random trees; with ``keyed`` > 0 that share of them names random draw keys (small ones, so that
     some keys repeat within a tree and some equal another node's pre-order index)."""
     rng = np.random.default_rng(seed)
-    trees = [random_tree_grow(rng, int(rng.integers(1, 6)), float(rng.uniform(0.15, 0.6))) for _ in range(n)]
+    trees = [
+        random_tree_grow(rng, int(rng.integers(1, 6)), float(rng.uniform(0.15, 0.6)), p_success=0.1)
+        for _ in range(n)
+    ]
     return [with_random_keys(rng, t) if rng.random() < keyed else t for t in trees]
 
 
@@ -199,6 +209,25 @@ def test_simplify_is_idempotent_and_deterministic() -> None:
         ("seq(forward, in_nest)", "forward", "blind tail"),
         ("prob(forward, forward, forward)", "forward", "identical choices"),
         ("seq(in_nest, on_food)", "in_nest", "blind condition subtree"),
+        # got_food is clear in the nest and set on food (the carrying flag after the delivery check)
+        ("seq(in_nest, sel(got_food, forward))", "seq(in_nest, forward)", "neutral condition"),
+        ("sel(seq(on_food, got_food, reverse), forward)", "sel(seq(on_food, reverse), forward)",
+         "neutral condition"),
+        ("sel(seq(got_food, sel(on_food, reverse)), forward)",
+         "sel(seq(got_food, sel(on_food, reverse)), forward)", None),
+        # success over a child that never fails is the child
+        ("seq(success(forward), reverse)", "seq(forward, reverse)", "success never needed"),
+        ("success(success(sel(got_food, forward)))", "sel(got_food, forward)", "success never needed"),
+        # at the root, success and failure look alike
+        ("success(seq(got_food, forward))", "seq(got_food, forward)", "blind success"),
+        # inside success the child is blind: its last condition only picks success or failure
+        ("seq(success(seq(forward, in_nest)), reverse)", "seq(forward, reverse)", "blind tail"),
+        # a success that ticks no action always succeeds: neutral in a sequence, the end of a selector
+        ("seq(success(in_nest), forward)", "forward", "neutral condition"),
+        ("sel(success(seq(got_food, forward)), reverse)", "seq(got_food, forward)", "dead children"),
+        # kept: success changes what the parent sequence does after a failure
+        ("seq(success(seq(got_food, forward)), reverse)",
+         "seq(success(seq(got_food, forward)), reverse)", None),
     ],
 )  # fmt: skip
 def test_hand_worked_rewrites(before: str, after: str, rule: str | None) -> None:

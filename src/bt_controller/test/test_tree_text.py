@@ -188,3 +188,27 @@ def test_trees_of_any_depth_print_compare_and_hash():
     assert to_text(tree) == text
     assert parse(to_indented(tree), max_depth=100_000, max_nodes=100_000) == tree
     assert sorted([tree, again, parse("stop")])[-1] == parse("stop")
+
+
+def test_success_decorator_parses_prints_and_takes_one_child():
+    tree = parse("sel(seq(got_food, success(seq(nest_left, forward))), success( forward ))")
+    assert to_text(tree) == "sel(seq(got_food, success(seq(nest_left, forward))), success(forward))"
+    assert tree.size == 9 and tree.depth == 4
+    assert parse(to_indented(tree)) == tree
+    for text, column, fragment in [
+        ("success(forward, stop)", 16, "success takes exactly one child"),
+        ("success()", 9, "expected a node name for a child of success"),
+        ("success@3(forward)", 8, "success takes no draw key"),
+        ("success", 8, "expected '(' after 'success'"),
+        ("success1(forward)", 1, "unknown node 'success1'"),
+    ]:
+        with pytest.raises(TreeSyntaxError, match=fragment.replace("(", r"\(")) as info:
+            parse(text)
+        assert info.value.column == column, text
+    with pytest.raises(TreeSyntaxError, match="exactly one child"):
+        Composite("success", (Action("stop"), Action("stop")))
+
+
+def test_unknown_names_say_a_primitive_needs_a_library():
+    with pytest.raises(TreeSyntaxError, match=r"'gotoNest3'.*needs a library: --library FILE"):
+        parse("sel(seq(got_food, gotoNest3), forward)")

@@ -24,6 +24,7 @@ from evolution_manager.viewing.animate import (
 from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.world import OBJECTIVES
 
 TREE = "sel(seq(on_food, stop), prob(forward, forward_left), reverse_right)"
 SEED, TRIAL = 5, 1
@@ -49,8 +50,8 @@ def test_frames_agree_with_the_batch_evaluator(frames):
     record = records[TRIAL]
     # (the first frame is after the first step's move, which under paper the last tick's motors drive)
     np.testing.assert_allclose(frames.poses[-1], record.end_poses, rtol=0, atol=1e-9)
-    # the fitness so far at the last step is the trial's fitness (density, nest, food)
-    np.testing.assert_allclose(frames.fitness[-1], record.values[:3], rtol=0, atol=1e-12)
+    # the fitness so far at the last step is the trial's fitness (every objective, foraging included)
+    np.testing.assert_allclose(frames.fitness[-1], record.values[: len(OBJECTIVES)], rtol=0, atol=1e-12)
     assert np.isnan(frames.fitness[0]).all() and not np.isnan(frames.fitness[DEFAULT.initial_step]).any()
 
 

@@ -145,15 +145,14 @@ def test_the_profile_is_the_runs_recorded_and_reproduced_by_evaluate(tmp_path, c
     assert json.loads((out / "summary.json").read_text())["config"]["profile"] == "clean"
     with (out / "evaluations.csv").open() as f:
         rows = list(csv.DictReader(f))
-    names = ("density", "nest", "food", "movement", "rotation", "conditionality")
     differs = 0
     for row in rows[:6]:
-        stored = [float(row[k]) for k in names]
         seed = str(config["scenario_seed"])
         clean = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed, "--profile", "clean"]))
-        assert [*clean["fitness"].values(), *clean["descriptors"].values()] == stored  # exactly
+        values = {**clean["fitness"], **clean["descriptors"]}
+        assert len(values) == 10 and all(float(row[k]) == v for k, v in values.items())  # all, exactly
         paper = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed]))
-        differs += [*paper["fitness"].values(), *paper["descriptors"].values()] != stored
+        differs += any(float(row[k]) != v for k, v in {**paper["fitness"], **paper["descriptors"]}.items())
     assert differs > 0  # the run did not run the default profile
     capsys.readouterr()
     assert evolve(["--out", str(out), "--resume", "--profile", "paper"]) == 2
@@ -212,3 +211,111 @@ def test_sigkill_at_random_points_then_resume_equals_the_uninterrupted_run(tmp_p
     assert process.wait(timeout=300) == 0, process.stderr.read()
     assert kills >= 2
     assert files(killed) == files(straight)
+
+
+LIBRARY = {
+    "format": 1,
+    "primitives": [
+        {
+            "name": "toNest",
+            "tree": "sel(in_nest, seq(nest_left, forward_left), seq(nest_right, forward_right))",
+        },
+        {
+            "name": "toFood",
+            "tree": "sel(on_food, seq(food_left, forward_left), seq(food_right, forward_right))",
+        },
+    ],
+}
+
+
+def test_a_foraging_run_with_a_library_as_a_user_runs_it(tmp_path, capsys):
+    # GP_foraging in 100 s trials over a primitive library: the run keeps the library, its results (held-out
+    # scores, figures, best trees with the names, the explorer's animations of 800-step trials with the
+    # carrying flags) are the run's task's; --resume reads the library from the run, never from the options.
+    import json
+
+    from evolution_manager.evolution.run_config import RunConfig
+    from evolution_manager.viewing.explorer import explorer_data
+    from swarm_sim.cli import run as evaluate_command
+
+    library = tmp_path / "primitives.json"
+    library.write_text(json.dumps(LIBRARY))
+    out = tmp_path / "forager"
+    common = ["--algorithm", "gp", "--objective", "foraging", "--task", "foraging", "--evaluations", "25"]
+    assert (
+        evolve([*common, "--library", str(library), "--seed", "6", "--out", str(out), "--no-progress"]) == 0
+    )
+    config = RunConfig.from_json(json.loads((out / "config.json").read_text()))
+    assert (config.task, config.library, config.grids) == ("foraging", str(library), ("foraging",))
+    assert json.loads((out / "library.json").read_text()) == LIBRARY
+    assert {p.name for p in (out / "figures").iterdir()} == {
+        "heatmap_foraging.png",
+        "histogram.png",
+        "progress.png",
+    }
+    summary = json.loads((out / "summary.json").read_text())
+    assert list(summary["objectives"]) == ["foraging"]
+    foraging = summary["objectives"]["foraging"]
+    assert foraging["heldout_best_fitness"] is not None and foraging["heldout_qd_score"] is not None
+    # the best tree as evolved (names kept) scores as the run says on the run's scenario
+    best = (out / "best/foraging.original.txt").read_text().strip()
+    assert best == foraging["best_tree"]
+    scored = json.loads(
+        evaluate_command(
+            [
+                "--tree",
+                best,
+                "--seed",
+                str(config.scenario_seed),
+                "--task",
+                "foraging",
+                "--library",
+                str(library),
+            ]
+        )
+    )
+    assert scored["fitness"]["foraging"] == foraging["best_fitness"]
+    names = [r["tree"] for r in csv_rows(out / "evaluations.csv")]
+    assert any("toNest" in t or "toFood" in t for t in names)
+    data = explorer_data(out)
+    assert list(data["objectives"]) == ["foraging"]
+    animation = next(iter(data["animations"].values()))
+    assert animation["steps"][-1] == 800 and len(animation["steps"]) == 401  # every 2nd step, and the last
+    capsys.readouterr()
+    assert evolve(["--out", str(out), "--resume", "--library", str(library)]) == 2
+    assert "leave them out with --resume" in capsys.readouterr().err
+    assert evolve(["--out", str(out), "--resume", "--task", "primitives"]) == 2
+    assert evolve([*common, "--library", str(tmp_path / "none.json"), "--out", str(tmp_path / "x")]) == 2
+    assert "--library" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
+def test_gp_fnd_evolves_any_set_of_objectives(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "inverse"
+    args = [
+        "--algorithm",
+        "gp-fnd",
+        "--objectives",
+        "ifood,idensity,inest",
+        "--evaluations",
+        "75",
+        "--seed",
+        "7",
+    ]
+    assert evolve([*args, "--out", str(out), "--no-progress", "--no-figures"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    evolved = [o for o, m in summary["objectives"].items() if m["evolved"]]
+    assert evolved == ["idensity", "inest", "ifood"]  # OBJECTIVES order
+    assert set(summary["objectives"]) == {"density", "nest", "food", "idensity", "inest", "ifood"}
+    assert all(summary["objectives"][o]["heldout_best_fitness"] is not None for o in evolved)
+    assert "ifood: best" in capsys.readouterr().out
+    assert evolve([*args[:2], "--objectives", "ifood,speed", "--out", str(tmp_path / "bad")]) == 2
+    assert "speed" in capsys.readouterr().err
+
+
+def csv_rows(path: Path) -> list[dict[str, str]]:
+    import csv
+
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))

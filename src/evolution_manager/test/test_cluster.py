@@ -271,6 +271,26 @@ def test_a_changed_world_travels_whole_to_the_workers(client):
     assert results != BatchEvaluator(default_config("paper")).evaluate(requests)
 
 
+def test_a_foraging_world_and_a_library_travel_to_the_workers(client):
+    # the run's trial length in its world, its library as JSON text: every objective comes back, foraging too
+    from bt_controller.library import library_from_json
+
+    library = library_from_json(
+        {
+            "format": 1,
+            "primitives": [{"name": "toFood", "tree": "sel(on_food, seq(food_left, forward_left))"}],
+        },
+        "hand-made",
+    )
+    world = default_config("paper", "foraging")
+    trees = ["sel(seq(got_food, in_nest), toFood, forward)", *random_trees(9, 3, p_success=0.3)]
+    requests = [EvaluationRequest(tree, 4, 2) for tree in trees] + [EvaluationRequest("toNest", 4, 2)]
+    results = DaskEvaluator(client, world, chunk=2, library=library).evaluate(requests)
+    assert results == BatchEvaluator(world, library=library).evaluate(requests)
+    assert len(results[0].fitness) == 7 and results[0].fitness[6] >= 0.0
+    assert "toNest" in results[-1].error and "hand-made" in results[-1].error
+
+
 def test_every_worker_builds_the_evaluator_of_a_world_once(client):
     from swarm_sim.conditions import apply_conditions
 

@@ -7,8 +7,9 @@ import random
 import deap.creator
 import pytest
 
+from bt_controller.library import library_from_json
 from bt_controller.tree import parse, to_text
-from bt_controller.vocabulary import ACTIONS, CONDITIONS
+from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2023
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.deap_trees import (
     BehaviourTree,
@@ -23,9 +24,25 @@ def test_primitive_set_has_the_vocabulary_and_leaves_no_global_state(pset):
     before = set(vars(deap.creator))
     names = sorted(p.name for p in pset.primitives[pset.ret])
     assert names == sorted(f"{c}{n}" for c in ("seq", "sel", "prob") for n in (2, 3, 4))
-    assert [t.name for t in pset.terminals[pset.ret]] == list(CONDITIONS + ACTIONS)
+    # the paper's node set: got_food is the foraging task's (and the authors' 2023 set had it too:
+    # params.py:128 at 6c65001; the paper's table 3 lists eight conditions)
+    assert [t.name for t in pset.terminals[pset.ret]] == list(CONDITIONS_2023 + ACTIONS)
     make_primitive_set()
     assert set(vars(deap.creator)) == before
+
+
+def test_foraging_node_set_and_library_primitives_as_terminals():
+    library = library_from_json(
+        {"format": 1, "primitives": [{"name": "gotoNest3", "tree": "sel(in_nest, prob(forward, stop))"}]}, "l"
+    )
+    pset = make_primitive_set(CONDITIONS, library)
+    assert [t.name for t in pset.terminals[pset.ret]] == [*CONDITIONS, *ACTIONS, "gotoNest3"]
+    tree = tree_from_text("sel(seq(got_food, gotoNest3), success(sel(in_nest, prob(forward, stop))))", pset,
+                          library=library)  # fmt: skip
+    assert [n.name for n in tree] == ["sel2", "seq2", "got_food", "gotoNest3", "gotoNest3"]
+    assert tree_to_text(tree) == "sel(seq(got_food, gotoNest3), gotoNest3)"
+    with pytest.raises(TreeTextError, match="unknown node 'success1'"):
+        tree_from_text("success(forward)", pset, library=library)
 
 
 def test_text_round_trip_matches_the_bt_engine(pset):

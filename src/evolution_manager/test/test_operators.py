@@ -12,7 +12,7 @@ from scipy.stats import chi2_contingency
 
 from bt_controller.tree import Composite, parse
 from evolution_manager.evolution import operators
-from evolution_manager.evolution.deap_trees import BehaviourTree, tree_from_text, tree_to_text
+from evolution_manager.evolution.deap_trees import OBJECTIVES, BehaviourTree, tree_from_text, tree_to_text
 from evolution_manager.evolution.operators import (
     best_of,
     cx_one_point,
@@ -26,6 +26,9 @@ from evolution_manager.evolution.operators import (
     vary,
 )
 from evolution_manager.evolution.parameters import MAX_TREE_HEIGHT
+
+PAD = (0.0,) * (len(OBJECTIVES) - 3)
+"""The objectives after the paper's three (a fitness holds every objective)."""
 
 MUTATIONS = (("insert", 0.05), ("shrink", 0.1), ("replace", 0.5))
 
@@ -64,13 +67,13 @@ def test_operators_keep_trees_valid_and_within_limits(pset):
     rng = random.Random(2)
     population = [full_tree(pset, rng, 1, 2) for _ in range(30)]  # height 4 may exceed 120 nodes
     for tree in population:
-        tree.fitness.values = (0.5, 0.5, 0.5)
+        tree.fitness.values = (0.5, 0.5, 0.5, *PAD)
     for _ in range(60):  # generations of heavy variation push against the limits
         heavy = (("insert", 0.9), ("shrink", 0.2), ("replace", 0.9))
         population = vary(population, pset, rng, 1.0, heavy, 6, 120)
         for tree in population:
             _valid(tree, max_height=6, max_nodes=120)  # the insert may replace the root by a leaf
-            tree.fitness.values = (0.5, 0.5, 0.5)
+            tree.fitness.values = (0.5, 0.5, 0.5, *PAD)
     assert max(t.height for t in population) == 6  # the limit was reached, and held
 
 
@@ -78,7 +81,7 @@ def test_untouched_offspring_keep_fitness_and_touched_ones_lose_it(pset):
     rng = random.Random(3)
     parents = [full_tree(pset, rng, 2, 3) for _ in range(10)]
     for p in parents:
-        p.fitness.values = (0.1, 0.2, 0.3)
+        p.fitness.values = (0.1, 0.2, 0.3, *PAD)
     same = vary(parents, pset, rng, 0.0, (("insert", 0.0), ("shrink", 0.0), ("replace", 0.0)), 8, 1000)
     for child, parent in zip(same, parents, strict=True):
         assert child.fitness.valid and list(child) == list(parent) and child is not parent
@@ -93,7 +96,7 @@ def test_operators_use_only_the_generator_they_are_given(pset):
     rng = random.Random(4)
     trees = [full_tree(pset, rng, 1, 4) for _ in range(20)]
     for t in trees:
-        t.fitness.values = (0.0, 0.0, 0.0)
+        t.fitness.values = (0.0, 0.0, 0.0, *PAD)
     vary(trees, pset, rng, 0.8, MUTATIONS, 8, 1000)
     tournament(trees, 10, 3, rng, (0, 1, 2))
     assert random.getstate() == state
@@ -180,7 +183,7 @@ def test_operators_draw_from_deaps_distribution(pset, name):
 
 def _with_fitness(pset, text, value):
     tree = tree_from_text(text, pset)
-    tree.fitness.values = (value, value, value)
+    tree.fitness.values = (value,) * len(OBJECTIVES)
     return tree
 
 
@@ -242,6 +245,10 @@ def test_tournament_draws_the_objective_uniformly(pset, monkeypatch):
 def test_each_tournament_compares_on_its_own_objective(pset):
     rng = random.Random(10)
     a, b, c = (BehaviourTree(tree_from_text(SHALLOW, pset)) for _ in range(3))
-    a.fitness.values, b.fitness.values, c.fitness.values = (0.9, 0.1, 0.1), (0.1, 0.9, 0.1), (0.1, 0.1, 0.9)
+    a.fitness.values, b.fitness.values, c.fitness.values = (
+        (0.9, 0.1, 0.1, *PAD),
+        (0.1, 0.9, 0.1, *PAD),
+        (0.1, 0.1, 0.9, *PAD),
+    )
     winners = Counter(id(w) for w in tournament([a, b, c], 600, 30, rng, (0, 1, 2)))
     assert all(150 < winners[id(t)] < 250 for t in (a, b, c))

@@ -15,13 +15,14 @@ from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
 from evolution_manager.viewing.results import write_results
+from swarm_sim.world import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
 
 RESULT_FILES = [
     "evaluations.csv",
     "progress.csv",
     "summary.json",
     "heldout.json",
-    *(f"repertoire_{o}.json" for o in OBJECTIVES),
+    *(f"repertoire_{o}.json" for o in PAPER_OBJECTIVES),
 ]
 
 
@@ -77,7 +78,7 @@ def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_pa
     assert all(int(r["seed"]) == run.config.scenario_seed for r in rows)  # fixed scenarios
     assert any(r["error"] for r in rows)
     check_repertoires(tmp_path / "r")
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         document = json.loads((tmp_path / "r" / f"repertoire_{objective}.json").read_text())
         grid = run.passive[objective]
         assert grid.qd_score == document["qd_score"] and grid.coverage == document["coverage"]
@@ -93,7 +94,7 @@ def test_progress_is_one_row_per_batch_and_never_loses_quality(tmp_path):
     # the initial batch, then 8 batches of 50 varied parents of which the untouched ones are not evaluated
     assert counts[0] == 100 and len(counts) == 1 + 400 // 50
     assert all(0 < b - a <= 50 for a, b in itertools.pairwise(counts))
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         for metric in ("best", "coverage", "qd_score"):
             values = [float(r[f"{metric}_{objective}"]) for r in rows]
             assert values == sorted(values)
@@ -126,7 +127,7 @@ def test_a_damaged_checkpoint_is_refused_with_its_name(tmp_path):
 def test_gp_metrics_recomputed_from_the_run_files_equal_the_reported_ones(tmp_path, algorithm, objective):
     run = _finish(Run.start(RunConfig.make(algorithm, objective, 600, 14), tmp_path / "r", ToyEvaluator()))
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
-    for o in OBJECTIVES:
+    for o in PAPER_OBJECTIVES:
         check_metrics(tmp_path / "r", o, summary)
     for o in run.config.objectives:
         document = json.loads((tmp_path / "r" / f"repertoire_{o}.json").read_text())
@@ -215,7 +216,7 @@ def test_clean_grids_refuse_a_tree_whose_simplified_form_is_in_its_bin(tmp_path)
     evaluator = BatchEvaluator(default_config("clean"))
     _finish(Run.start(RunConfig.make("qd", "food", 400, 2, profile="clean"), root, evaluator))
     forms = SimplifiedForms()
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         assert _clone_bins(root, objective, forms) == {}, objective
     check_repertoires(root, forms)  # the grids the rule builds from the evaluation log, item for item
     archive = json.loads((root / "archive.json").read_text())["items"]

@@ -1,7 +1,8 @@
 """A tiny evaluator for the tests: a deterministic function of (tree text, seed), not a model of anything.
 
-Fitness rewards some leaves per objective, plus a little seed noise; descriptors come from the mix of
-actions and conditions, so MAP-Elites has somewhere to spread. It answers the evaluator contract.
+Fitness rewards some leaves per objective (every one of ``OBJECTIVES``), plus a little seed noise;
+descriptors come from the mix of actions and conditions, so MAP-Elites has somewhere to spread.
+It answers the evaluator contract.
 """
 
 from __future__ import annotations
@@ -45,7 +46,14 @@ class ToyEvaluator:
         density = (words["stop"] + words["robot_left"]) / total
         nest = (words["in_nest"] + words["nest_left"] + words["forward"]) / total
         food = (words["on_food"] + words["food_right"] + words["forward_left"]) / total
-        fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food))
+        # the inverse primitives reward the other leaves, foraging the carrying condition (every objective,
+        # ``OBJECTIVES`` order)
+        inverse = [
+            (words["reverse"] + words["reverse_left"] + words[c]) / total
+            for c in ("robot_right", "nest_right", "food_left")
+        ]
+        foraging = (words["got_food"] + words["forward_right"]) / total
+        fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food, *inverse, foraging))
         a = max(1, actions)
         movement = 0.5 + 0.5 * (words["forward"] - words["reverse"]) / a
         rotation = (

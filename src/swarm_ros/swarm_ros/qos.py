@@ -5,8 +5,10 @@ from __future__ import annotations
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-"""Every lockstep topic: no message may be lost, and a step's messages can queue while a node is busy."""
+RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+"""Every lockstep topic: no message may be lost, and a step's messages can queue while a node is busy. Deep
+because a reliable keep-last writer forgets its oldest unacknowledged sample when its history is full: a
+recorder starved of CPU on a loaded machine trailed the lockstep by more than 100 steps and lost messages."""
 
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL

@@ -1,13 +1,16 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
 
-    evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--engine compiled|reference]
-             [--per-trial] [--condition NAME=VALUE ...]
+    evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--task primitives|foraging]
+             [--engine compiled|reference] [--per-trial] [--condition NAME=VALUE ...] [--library FILE]
 
-Prints ``{"tree", "seed", "trials", "profile", "conditions", "fitness": {density, nest, food}, "descriptors":
-{movement, rotation, conditionality}}`` (``conditions``: the world's changes, ``swarm_sim.conditions``, ``{}``
-for none; ``"per_trial"`` added with ``--per-trial``: each trial's values, gap and the robots' start and end
-poses as [x, y, heading]). The tree is printed in canonical form. Bad input: one line on stderr, exit
-status 2.
+Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {every objective},
+"descriptors": {movement, rotation, conditionality}}`` (``conditions``: the world's changes,
+``swarm_sim.conditions``, ``{}`` for none; ``task``: the trial length, ``primitives`` (20 s trials) or
+``foraging`` (100 s trials, ``swarm_sim.config.TASKS``); ``"per_trial"`` added with ``--per-trial``: each
+trial's values, gap and the robots' start and end poses as [x, y, heading]). The tree is printed in canonical
+form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) the tree may name its
+primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
+"digest"}`` is added. Bad input: one line on stderr, exit status 2.
 """
 
 from __future__ import annotations
@@ -19,13 +22,15 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
+from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import to_text
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
-from swarm_sim.config import DEFAULT, default_config
+from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, default_config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
 EXIT_USAGE = 2
 
@@ -48,6 +53,13 @@ def _parser() -> argparse.ArgumentParser:
         f"(default {DEFAULT.profile})",
     )
     parser.add_argument(
+        "--task",
+        choices=tuple(TASKS),
+        default=DEFAULT_TASK,
+        help=f"the trial length: primitives (20 s, the 2023 primitives') or foraging (100 s, the 2024 "
+        f"foraging trials) (default {DEFAULT_TASK})",
+    )
+    parser.add_argument(
         "--engine",
         choices=("compiled", "reference"),
         default="compiled",
@@ -61,7 +73,22 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help=f"change the world (repeatable): {', '.join(CONDITION_NAMES)}; e.g. dead-robots=2",
     )
+    parser.add_argument(
+        "--library",
+        metavar="FILE",
+        help="a primitive library (JSON): the tree may use its primitives' names",
+    )
     return parser
+
+
+def library_option(path: str | None) -> Library | None:
+    """The library of a ``--library`` option (None without one); UsageError with the library's one line."""
+    if path is None:
+        return None
+    try:
+        return load_library(path)
+    except LibraryError as error:
+        raise UsageError(f"--library: {error}") from None
 
 
 def evaluation_json(
@@ -72,18 +99,24 @@ def evaluation_json(
     records: Sequence[TrialRecord] | None,
     profile: str = DEFAULT.profile,
     conditions: dict[str, object] | None = None,
+    library: Library | None = None,
+    task: str = DEFAULT_TASK,
 ) -> str:
-    """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``)."""
+    """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``; ``library``
+    given: with ``library``)."""
     named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
     document: dict[str, object] = {
         "tree": tree_text,
         "seed": seed,
         "trials": trials,
         "profile": profile,
+        "task": task,
         "conditions": dict(conditions or {}),
-        "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
-        "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
+        "fitness": {k: named[k] for k in OBJECTIVES},
+        "descriptors": {k: named[k] for k in DESCRIPTORS},
     }
+    if library is not None:
+        document["library"] = {"file": library.label, "digest": library.digest}
     if records is not None:
         document["per_trial"] = [r.as_dict() for r in records]
     return json.dumps(document)
@@ -97,12 +130,13 @@ def run(argv: Sequence[str] | None = None) -> str:
     if not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
     try:
-        config, conditions = apply_conditions(args.condition, default_config(args.profile))
+        config, conditions = apply_conditions(args.condition, default_config(args.profile, args.task))
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
+    library = library_option(args.library)
     request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
     try:
-        tree = check_request(request)
+        tree = check_request(request, library=library)
     except ValueError as error:
         raise UsageError(str(error)) from None
     if args.engine == "reference":
@@ -110,19 +144,21 @@ def run(argv: Sequence[str] | None = None) -> str:
 
         values, records = reference_road.evaluate(tree, args.seed, args.trials, config)
     else:
-        result, records = BatchEvaluator(config).evaluate_trials([request])[0]
+        result, records = BatchEvaluator(config, library=library).evaluate_trials([request])[0]
         if result.error is not None:
             raise UsageError(result.error)
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
     return evaluation_json(
-        to_text(tree),
+        to_text(tree) if library is None else library.fold(tree),
         args.seed,
         args.trials,
         values,
         records if args.per_trial else None,
         args.profile,
         conditions,
+        library,
+        args.task,
     )
 
 

@@ -1,8 +1,9 @@
 """The Evaluator contract (``docs/interfaces.md``) and its in-process implementation, ``BatchEvaluator``.
 
 An evaluation of a (tree, seed) is ``trials`` trials (trial ``k`` has the gap 500 mm when ``k div 5`` is even,
-else 700 mm: ``docs/model.md``); its fitness is the (density, nest, food) objectives and its descriptors
-(movement, rotation, conditionality), each averaged over robots and trials and each in [0, 1]. A result
+else 700 mm: ``docs/model.md``); its fitness is every objective (``world.OBJECTIVES``: the paper's three, the
+inverse primitives' three and foraging) and its descriptors (movement, rotation, conditionality), each
+averaged over robots and trials and each in [0, 1] but foraging (deliveries per robot per trial). A result
 depends only on its request.
 """
 
@@ -19,6 +20,7 @@ import numpy as np
 from bt_controller.compiled import FlatTree, flatten, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.errors import TreeError
+from bt_controller.library import Library
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
 from bt_controller.validate import integer
 from swarm_sim import kernel, world
@@ -40,10 +42,11 @@ class EvaluationRequest:
 
 @dataclass(frozen=True)
 class EvaluationResult:
-    """Fitness (density, nest, food) and descriptors (movement, rotation, conditionality), or an error."""
+    """Fitness (every objective, ``world.OBJECTIVES`` order) and descriptors (movement, rotation,
+    conditionality), or an error."""
 
-    fitness: tuple[float, float, float] | None
-    descriptors: tuple[float, float, float] | None
+    fitness: tuple[float, ...] | None
+    descriptors: tuple[float, ...] | None
     error: str | None
 
     @property
@@ -67,14 +70,21 @@ def failed(reason: str) -> EvaluationResult:
 
 
 def from_values(values: Sequence[float] | np.ndarray) -> EvaluationResult:
-    """A result from six values (``trial.VALUE_NAMES`` order)."""
+    """A result from the values of an evaluation (``world.VALUE_NAMES`` order)."""
     v = tuple(float(x) for x in values)
-    return EvaluationResult(fitness=(v[0], v[1], v[2]), descriptors=(v[3], v[4], v[5]), error=None)
+    k = world.N_OBJECTIVES
+    return EvaluationResult(fitness=v[:k], descriptors=v[k:], error=None)
 
 
-def check_request(request: object, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> Node:
-    """The parsed tree of a valid request; raise ValueError saying what is wrong otherwise."""
-    return _parse(_check_fields(request).tree, max_nodes, max_depth)
+def check_request(
+    request: object,
+    max_nodes: int = MAX_NODES,
+    max_depth: int = MAX_DEPTH,
+    library: Library | None = None,
+) -> Node:
+    """The parsed tree of a valid request (its primitives' names expanded with ``library``); raise
+    ValueError saying what is wrong otherwise."""
+    return _parse(_check_fields(request).tree, max_nodes, max_depth, library)
 
 
 def _check_fields(request: object) -> EvaluationRequest:
@@ -87,18 +97,19 @@ def _check_fields(request: object) -> EvaluationRequest:
     return request
 
 
-def _parse(text: str, max_nodes: int, max_depth: int) -> Node:
+def _parse(text: str, max_nodes: int, max_depth: int, library: Library | None) -> Node:
     try:
-        return parse(text, max_nodes=max_nodes, max_depth=max_depth)
+        return parse(text, max_nodes=max_nodes, max_depth=max_depth, library=library)
     except TreeError as error:
         raise ValueError(f"bad tree: {error}") from None
 
 
 @functools.lru_cache(maxsize=4096)
-def _flat_tree(text: str, max_nodes: int, max_depth: int) -> FlatTree:
+def _flat_tree(text: str, max_nodes: int, max_depth: int, library: Library | None) -> FlatTree:
     """The flat tree of a tree text, remembered: evolution offers the same tree again and again. (Errors are
-    not cached; a FlatTree's arrays are only read.)"""
-    return flatten(_parse(text, max_nodes, max_depth))
+    not cached; a FlatTree's arrays are only read; a library is one object per evaluator, compared by
+    identity.)"""
+    return flatten(_parse(text, max_nodes, max_depth, library))
 
 
 @dataclass(frozen=True)
@@ -115,8 +126,10 @@ class BatchEvaluator:
     """The in-process evaluator: every trial of every request in compiled kernels.
 
     ``evaluate`` answers the contract; ``evaluate_trials`` also returns each trial's record (values and
-    poses). Trees are refused beyond ``max_nodes`` nodes or ``max_depth`` depth. With ``threads`` > 1 the
-    trials are spread over that many numba threads; results are the same bits either way.
+    poses). Trees are refused beyond ``max_nodes`` nodes or ``max_depth`` depth (primitives expanded). A
+    tree may name the primitives of ``library`` (``bt_controller.library``): each use is its own
+    ``success`` copy. With ``threads`` > 1 the trials are spread over that many numba threads; results are the
+    same bits either way.
     """
 
     def __init__(
@@ -125,6 +138,7 @@ class BatchEvaluator:
         max_nodes: int = MAX_NODES,
         max_depth: int = MAX_DEPTH,
         threads: int = 1,
+        library: Library | None = None,
     ) -> None:
         most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set by numba at import
         integer(threads, "threads", 1, most)
@@ -132,6 +146,7 @@ class BatchEvaluator:
         self.config = config
         self.max_nodes = max_nodes
         self.max_depth = max_depth
+        self.library = library
         self._params = config.params()
 
     def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
@@ -148,7 +163,7 @@ class BatchEvaluator:
         """Check, parse and flatten a request and derive its seed key: everything before the kernels, in one
         place; raise ValueError or TreeError saying what is wrong."""
         checked = _check_fields(request)
-        flat = _flat_tree(checked.tree, self.max_nodes, self.max_depth)
+        flat = _flat_tree(checked.tree, self.max_nodes, self.max_depth, self.library)
         return _Request(index, flat, root_key(int(checked.seed)), int(checked.trials))
 
     def _evaluate(

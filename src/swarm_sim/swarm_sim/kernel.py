@@ -16,7 +16,8 @@ animations (``swarm_sim.recording``); the batch road asks for none and pays two 
 
 The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
 ``Jobs`` (what to run), ``Outputs`` (where results go), ``Recording`` (one trial, step by step); inside a
-chain, ``Swarm`` holds every robot's state and ``Inbox`` the messages of one step. ``make_jobs`` builds
+chain, ``Swarm`` holds every robot's state, ``Cargo`` its foraging state and ``Inbox`` the messages of one
+step. ``make_jobs`` builds
 ``Jobs`` from Python.
 """
 
@@ -33,7 +34,7 @@ from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees, start_memory, tick, tree_at
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
-from bt_controller.vocabulary import CONDITION_INDEX, STOP
+from bt_controller.vocabulary import CONDITION_INDEX, N_CONDITIONS, STOP
 from swarm_sim import fast_world, world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Config, Params
@@ -187,6 +188,19 @@ class Swarm(NamedTuple):
     """(n, 3) the current trial's initial smoothed values."""
 
 
+class Cargo(NamedTuple):
+    """Every robot's foraging state during a chain (beside ``Swarm``): what it carries and has delivered, and
+    where the trial found it (``docs/model.md``, "Foraging")."""
+
+    carrying: np.ndarray
+    """(n,) bool: whether each robot carries food (``perception.carry``)."""
+    deliveries: np.ndarray
+    """(n,) int64: each robot's deliveries in the current trial."""
+    food: np.ndarray
+    """(n, 2) each robot's true distance from the food region at the current trial's first step and, once
+    taken, its last (``world.food_distance``: the inverse food objective)."""
+
+
 class Inbox(NamedTuple):
     """The messages of one sensing step (``world.sense_step``'s outputs), per receiving robot."""
 
@@ -220,10 +234,14 @@ class Recording(NamedTuple):
     ground: np.ndarray
     """(steps, n, 2) bool: in the nest, on food (the ground sensor at the step)."""
     fitness: np.ndarray
-    """(steps, 3): (density, nest, food) scored as if the trial ended at the step; NaN before the initial
-    step."""
+    """(steps, ``world.N_OBJECTIVES``): every objective scored as if the trial ended at the step (foraging:
+    the deliveries so far); NaN before the initial step."""
     initial: np.ndarray
     """(n, 3): the trial's initial smoothed values (taken at its initial step)."""
+    carrying: np.ndarray
+    """(steps, n) bool: whether each robot carries food after the step (what it answered)."""
+    deliveries: np.ndarray
+    """(steps, n) int64: each robot's deliveries in the trial after the step."""
 
 
 @numba.njit(cache=True)
@@ -238,8 +256,10 @@ def new_recording(steps: int, n: int) -> Recording:
         np.zeros((steps, n, n), dtype=np.int64),
         np.zeros((steps, n, 3)),
         np.zeros((steps, n, 2), dtype=np.bool_),
-        np.zeros((steps, 3)),
+        np.zeros((steps, world.N_OBJECTIVES)),
         np.zeros((n, 3)),
+        np.zeros((steps, n), dtype=np.bool_),
+        np.zeros((steps, n), dtype=np.int64),
     )
 
 
@@ -266,6 +286,9 @@ def _record_step(
     initial: np.ndarray,
     heard: np.ndarray,
     senders: np.ndarray,
+    carrying: np.ndarray,
+    deliveries: np.ndarray,
+    food: np.ndarray,
 ) -> None:
     """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
     what the simulator publishes and what the robots answered to it."""
@@ -284,14 +307,28 @@ def _record_step(
             rec.senders[row, i, c] = senders[i, c]
         for c in range(3):
             rec.smoothed[row, i, c] = smooth[i, c]
+        rec.carrying[row, i] = carrying[i]
+        rec.deliveries[row, i] = deliveries[i]
     if timeline.is_initial(p, k):
         rec.initial[:, :] = initial
     if row + 1 >= p.initial_step:
-        # The objectives only (counts and motion feed the descriptors), from this trial's initial values.
+        # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
+        # robots' distances from food now and their deliveries so far.
+        now = np.empty((n, 2))
+        for i in range(n):
+            now[i, 0] = food[i, 0]
+            now[i, 1] = world.food_distance(x[i], y[i], gap, p)
         values = world.trial_values(
-            initial, smooth, np.zeros((n, N_COUNTS), dtype=np.int64), np.zeros((n, 2), dtype=np.int64), p
+            initial,
+            smooth,
+            np.zeros((n, N_COUNTS), dtype=np.int64),
+            np.zeros((n, 2), dtype=np.int64),
+            now,
+            deliveries,
+            gap,
+            p,
         )
-        for c in range(3):
+        for c in range(world.N_OBJECTIVES):
             rec.fitness[row, c] = values[c]
     else:
         rec.fitness[row, :] = np.nan
@@ -326,6 +363,11 @@ def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
         np.zeros((n, 2), dtype=np.int64),
         np.zeros((n, 3)),
     )
+
+
+@numba.njit(cache=True)
+def _new_cargo(n: int) -> Cargo:
+    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2)))
 
 
 @numba.njit(cache=True)
@@ -369,8 +411,9 @@ def simulate_chain(
     counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
     robot_drive = world.drive(gains, p)
     samples = 0
-    board = np.zeros(8, dtype=np.bool_)
+    board = np.zeros(N_CONDITIONS, dtype=np.bool_)
     sides = _sides_read(tree.op, tree.arg)
+    carrying, deliveries, food = _new_cargo(n)
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
         position = timeline.trial_in_chain(p, k)
@@ -399,15 +442,24 @@ def simulate_chain(
                 nest_values,
                 food_values,
             )
+        if not sensing:
+            # A trial's first step: the start pose's ground sets the carrying flag, and its distance from
+            # food is the inverse food objective's first (footbot_bt.cpp:134-137, 495-496 at a73e4af).
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                carrying[i] = world.start_carrying(carrying[i], on_food)
+                food[i, 0] = world.food_distance(x[i], y[i], gap, p)
         if sensing:
             for i in range(n):
                 in_nest, on_food = world.ground(x[i], y[i], gap, p)
-                nest, food, density, nest_source, food_source, nearest = world.estimate(
+                carrying[i], delivered = world.carry(carrying[i], in_nest, on_food)
+                deliveries[i] += 1 if delivered else 0
+                nest_raw, food_raw, density, nest_source, food_source, nearest = world.estimate(
                     in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
                 )
-                world.push_sample(window[i], samples, nest, food, density)
-                raw_nest[i] = nest
-                raw_food[i] = food
+                world.push_sample(window[i], samples, nest_raw, food_raw, density)
+                raw_nest[i] = nest_raw
+                raw_food[i] = food_raw
                 ground_now[i, 0] = in_nest
                 ground_now[i, 1] = on_food
                 sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
@@ -429,6 +481,7 @@ def simulate_chain(
                     _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
                     sources[i, 2] >= 0,
                     _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
+                    carrying[i],
                     p,
                     board,
                 )
@@ -450,9 +503,27 @@ def simulate_chain(
         if timeline.is_initial(p, k):
             initial[:, :] = smooth
         if position == recorded:
-            _record_step(rec, k, gap, p, x, y, heading, actions, smooth, initial, counts_in, senders)
+            _record_step(
+                rec,
+                k,
+                gap,
+                p,
+                x,
+                y,
+                heading,
+                actions,
+                smooth,
+                initial,
+                counts_in,
+                senders,
+                carrying,
+                deliveries,
+                food,
+            )
         if timeline.is_final(p, k):
-            values = world.trial_values(initial, smooth, counts, motion, p)
+            for i in range(n):
+                food[i, 1] = world.food_distance(x[i], y[i], gap, p)
+            values = world.trial_values(initial, smooth, counts, motion, food, deliveries, gap, p)
             for c in range(values.shape[0]):
                 values_out[position, c] = values[c]
             for i in range(n):
@@ -461,6 +532,9 @@ def simulate_chain(
                 poses_out[position, 1, i, 2] = heading[i]
             counts[:, :] = 0
             motion[:, :] = 0
+            # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
+            carrying[:] = False
+            deliveries[:] = 0
 
 
 @numba.njit(cache=True, inline="always")

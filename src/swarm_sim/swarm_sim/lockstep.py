@@ -41,6 +41,10 @@ class RobotAnswer:
     """Condition nodes ticked by this step's tick (0 without a tick)."""
     started: int = -1
     """The action this step's tick started, or -1."""
+    carrying: bool = False
+    """Whether the robot carries food after this step (foraging)."""
+    deliveries: int = 0
+    """The robot's deliveries in the trial so far; the foraging objective is scored from them."""
 
 
 def action_of_wheels(left: float, right: float) -> int:
@@ -75,6 +79,12 @@ class LockstepChain:
         self.counts = np.zeros((n, 1 + len(ACTIONS)), dtype=np.int64)
         self.motion = np.zeros((n, 2), dtype=np.int64)
         self.initial = np.zeros((n, 3))
+        self.food = np.zeros((n, 2))
+        """Each robot's true distance from the food region at the trial's first step, and at its last."""
+        self.carrying = np.zeros(n, dtype=np.bool_)
+        """Each robot's carrying flag, as it answered the last step (for viewers: swarm_state)."""
+        self.deliveries = np.zeros(n, dtype=np.int64)
+        """Each robot's deliveries in the trial, as it answered the last step."""
         self.start_poses = np.zeros((n, 3))
         self.records: list[TrialRecord] = []
         self.last_step = trials * timeline.trial_steps(self.line)
@@ -114,6 +124,8 @@ class LockstepChain:
         for i, answer in enumerate(answers):
             self.broadcast_nest[i], self.broadcast_food[i] = answer.broadcast
             self.actions[i] = answer.action
+            self.carrying[i] = answer.carrying
+            self.deliveries[i] = answer.deliveries
         if timeline.ticks_at(self.line, k):
             for i, answer in enumerate(answers):
                 self.counts[i, 0] += answer.condition_ticks
@@ -126,7 +138,18 @@ class LockstepChain:
             self.initial = smoothed
         record = None
         if timeline.is_final(self.line, k):
-            values = world.trial_values(self.initial, smoothed, self.counts, self.motion, self.p)
+            for i in range(self.p.n_robots):
+                self.food[i, 1] = world.food_distance(self.x[i], self.y[i], self.setup.gap, self.p)
+            values = world.trial_values(
+                self.initial,
+                smoothed,
+                self.counts,
+                self.motion,
+                self.food,
+                self.deliveries,
+                self.setup.gap,
+                self.p,
+            )
             record = TrialRecord(
                 trial=self.trial,
                 gap=self.setup.gap,
@@ -166,6 +189,9 @@ class LockstepChain:
             self._contacts,
             self._pairs,
         )
+        if timeline.step_in_trial(self.line, k) == 1:
+            for i in range(self.p.n_robots):
+                self.food[i, 0] = world.food_distance(self.x[i], self.y[i], self.setup.gap, self.p)
         return sense_swarm(
             self.x,
             self.y,
@@ -214,6 +240,8 @@ def run_chain_with_controllers(
                     outcome.smoothed,
                     tick.condition_ticks if tick is not None else 0,
                     tick.started if tick is not None else -1,
+                    outcome.carrying,
+                    outcome.deliveries,
                 )
             )
         if on_answers is not None:
@@ -244,6 +272,9 @@ def warm_up(config: Config = DEFAULT) -> None:
     for _ in range(config.steps_per_tick + 1):
         sim.advance([still] * config.n_robots)
     n = config.n_robots
+    counts = np.zeros((n, 1 + len(ACTIONS)), np.int64)
     world.trial_values(
-        np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), sim.p
-    )
+        np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64), np.zeros((n, 2)),
+        np.zeros(n, np.int64), 500.0, sim.p,
+    )  # fmt: skip
+    world.food_distance(0.0, 0.0, 500.0, sim.p)

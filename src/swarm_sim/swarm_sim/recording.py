@@ -3,8 +3,9 @@ and ``record_trial_reference`` (the reference road, as the node graph runs it; a
 
 Both give a ``RecordedTrial``: per control step of trial ``trial`` of ``seed`` (its chain's earlier trials are
 run first, not recorded; ``bt_controller.timeline``) the robots' poses, the motors their last tick set, the
-last tick's number, the messages each robot received, its smoothed values, its ground sensor, and the fitness
-so far (each objective scored from the smoothed values of the step as if the trial ended there). The two are
+last tick's number, the messages each robot received, its smoothed values, its ground sensor, its carrying
+flag and deliveries, and the fitness so far (each objective scored from the values of the step as if the trial
+ended there). The two are
 equal array for array, as the two roads' results are (``test_recording.py``).
 
 ``record_trial`` runs the batch road's ``kernel.simulate_chain`` itself, asked to record one trial
@@ -21,6 +22,7 @@ import numpy as np
 from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, flatten
 from bt_controller.draws import check_seed, root_key
+from bt_controller.library import Library
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from swarm_sim import kernel, world
@@ -56,9 +58,13 @@ class RecordedTrial:
     initial: np.ndarray
     """(n, 3): the trial's initial smoothed values (taken at step ``initial_step`` of the trial)."""
     fitness: np.ndarray
-    """(T, 3): density, nest, food so far (NaN before the initial step)."""
+    """(T, ``world.N_OBJECTIVES``): every objective so far (NaN before the initial step)."""
     values: tuple[float, ...]
-    """The trial's six values (``world.VALUE_NAMES``), as an evaluation scores it."""
+    """The trial's values (``world.VALUE_NAMES``), as an evaluation scores it."""
+    carrying: np.ndarray
+    """(T, n) bool: whether each robot carries food after the step."""
+    deliveries: np.ndarray
+    """(T, n) int64: each robot's deliveries in the trial after the step."""
 
 
 def _check(seed: int, trial: int) -> int:
@@ -81,12 +87,14 @@ def _links(heard: np.ndarray, senders: np.ndarray) -> tuple[np.ndarray, ...]:
     return tuple(pairs[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True))  # (np.split: 8x slower)
 
 
-def record_trial(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT) -> RecordedTrial:
+def record_trial(
+    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+) -> RecordedTrial:
     """Trial ``trial`` of ``seed`` with ``tree`` (tree text) on every robot, through the batch road's kernels,
     in world ``config`` (its profile and conditions). Raises ``TreeError`` for a bad tree and ``ValueError``
     for a bad seed or trial."""
     trial = _check(seed, trial)
-    flat = flatten(parse(tree))
+    flat = flatten(parse(tree, library=library))
     chain, position = timeline.chain_of_trial(config.timeline, trial)
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots)
@@ -108,10 +116,14 @@ def record_trial(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT)
         initial=rec.initial,
         fitness=rec.fitness,
         values=tuple(float(v) for v in values),
+        carrying=rec.carrying,
+        deliveries=rec.deliveries,
     )
 
 
-def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config = DEFAULT) -> RecordedTrial:
+def record_trial_reference(
+    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+) -> RecordedTrial:
     """``record_trial`` through the reference road (``lockstep.run_with_controllers``: the simulator's side
     and one ``FootbotController`` per robot, as the node graph runs them), from the robots' answers."""
     from swarm_sim.lockstep import (
@@ -121,7 +133,7 @@ def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config 
     )  # (the slow road: on demand)
 
     trial = _check(seed, trial)
-    parsed = parse(tree)
+    parsed = parse(tree, library=library)
     line = config.timeline
     p = config.params()
     n = p.n_robots
@@ -132,6 +144,8 @@ def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config 
     smoothed_rows: list[np.ndarray] = []
     ground: list[np.ndarray] = []
     fitness: list[np.ndarray] = []
+    carrying: list[np.ndarray] = []
+    deliveries: list[np.ndarray] = []
     current = np.full(n, -1, dtype=np.int64)
     last_tick = -1
     initial = np.zeros((n, 3))
@@ -155,10 +169,18 @@ def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config 
         links.append(np.array(pairs, dtype=np.int64).reshape(-1, 2))
         smoothed_rows.append(smoothed)
         ground.append(np.array([[r.in_nest, r.on_food] for r in readings], dtype=np.bool_))
+        carrying.append(np.array([a.carrying for a in answers], dtype=np.bool_))
+        delivered = np.array([a.deliveries for a in answers], dtype=np.int64)
+        deliveries.append(delivered)
         if timeline.step_in_trial(line, sim.step) < line.initial_step:
-            fitness.append(np.full(3, np.nan))
+            fitness.append(np.full(world.N_OBJECTIVES, np.nan))
         else:
-            fitness.append(world.trial_values(initial, smoothed, no_counts, no_motion, p)[:3])
+            food = sim.food.copy()
+            for i in range(n):
+                food[i, 1] = world.food_distance(sim.x[i], sim.y[i], sim.setup.gap, p)
+            gap = sim.setup.gap
+            values = world.trial_values(initial, smoothed, no_counts, no_motion, food, delivered, gap, p)
+            fitness.append(values[: world.N_OBJECTIVES])
 
     record = run_with_controllers(parsed, seed, trial, config, on_answers=on_answers)
     return RecordedTrial(
@@ -176,4 +198,6 @@ def record_trial_reference(tree: str, seed: int, trial: int = 0, config: Config 
         initial=initial,
         fitness=np.array(fitness),
         values=record.values,
+        carrying=np.array(carrying),
+        deliveries=np.array(deliveries),
     )

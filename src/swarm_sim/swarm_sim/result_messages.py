@@ -4,8 +4,8 @@ the recorder and the bags.
 Nothing here imports ROS: a message is filled from (and read into) plain field values, so the same functions
 serve rclpy's message classes (``EvaluationResult(**result_fields(...))``), rosbags' (``bag.message(type,
 **result_fields(...))``) and any object with the fields. Fields follow ``swarm_msgs``: ``EvaluationResult``,
-the ``RunTrial`` action's result and service response (``success``, ``message``, ``gap``, the six values,
-``start_poses``, ``end_poses``) and ``RobotPose`` (``x``, ``y`` in mm, ``theta`` in rad).
+the ``RunTrial`` action's result and service response (``success``, ``message``, ``gap``, every value of
+``VALUE_NAMES``, ``start_poses``, ``end_poses``) and ``RobotPose`` (``x``, ``y`` in mm, ``theta`` in rad).
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ import numpy as np
 
 from swarm_sim.evaluation import EvaluationResult, failed
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.world import N_OBJECTIVES, OBJECTIVES
 
-OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
-"""The objectives a result's ``fitness`` field may report."""
+__all__ = ["OBJECTIVES", "evaluation_fields", "result_fields", "trial_fields", "values_of"]
 
 
 class ResultValues(Protocol):
@@ -75,7 +75,7 @@ def result_fields(
     profile: str,
     cached: bool = False,
 ) -> dict[str, Any]:
-    """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (the six, ``VALUE_NAMES`` order) or
+    """The fields of a ``swarm_msgs/msg/EvaluationResult``: ``values`` (``VALUE_NAMES`` order) or
     None with ``error`` saying why the tree could not be evaluated; ``fitness`` is the ``objective``'s
     value; ``profile`` the model's profile it was evaluated under; ``cached`` when a run answered it from
     its cache instead of simulating it again."""
@@ -113,7 +113,7 @@ def evaluation_fields(
 
 
 def values_of(msg: object) -> tuple[float, ...]:
-    """The six values of a message with the ``VALUE_NAMES`` fields, in order."""
+    """The values of a message with the ``VALUE_NAMES`` fields, in order."""
     return tuple(float(getattr(msg, name)) for name in VALUE_NAMES)
 
 
@@ -121,8 +121,8 @@ def evaluation_result_of(msg: EvaluationMessage) -> EvaluationResult:
     """The evaluator contract's result from an ``EvaluationResult`` message (values copied bit for bit)."""
     if not msg.ok:
         return failed(msg.error)
-    d, n, f, m, r, c = values_of(msg)
-    return EvaluationResult(fitness=(d, n, f), descriptors=(m, r, c), error=None)
+    values = values_of(msg)
+    return EvaluationResult(fitness=values[:N_OBJECTIVES], descriptors=values[N_OBJECTIVES:], error=None)
 
 
 def trial_fields(record: TrialRecord, pose: Callable[..., object]) -> dict[str, Any]:

@@ -32,7 +32,7 @@ from pathlib import Path
 from swarm_sim import validation
 from swarm_sim.errors import UsageError
 from swarm_sim.validation import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
 
 __all__ = [
     "ArgosHarness",
@@ -51,6 +51,10 @@ __all__ = [
 ]
 
 RAW_HALF_RANGE = validation.RAW_DESCRIPTOR_HALF_RANGE
+QUANTITIES: tuple[str, ...] = (*PAPER_OBJECTIVES, *DESCRIPTORS)
+"""The six quantities the ARGoS driver measures in the primitives' 20 s trials (the 2023 build): the paper's
+three objectives and the three descriptors. Runs of the foraging task, or with a primitive library, are not
+transferred (the driver knows neither)."""
 
 
 @dataclass(frozen=True)
@@ -81,7 +85,7 @@ class Pick:
 
 @dataclass(frozen=True)
 class TransferRow:
-    """One picked tree's six comparisons (``validation.QUANTITIES`` order)."""
+    """One picked tree's six comparisons (``QUANTITIES`` order)."""
 
     pick: Pick
     comparisons: tuple[Comparison, ...]
@@ -211,7 +215,21 @@ def pick_trees(run_dirs: Sequence[Path], per_run: int) -> list[Pick]:
     for run_dir in run_dirs:
         if not run_dir.is_dir():
             raise UsageError(f"--transfer {run_dir}: not a directory (expected an evolution run directory)")
+        config = run_dir / "config.json"
+        settings = _read_json(config) if config.is_file() else {}
+        if settings.get("task", "primitives") != "primitives" or settings.get("library"):
+            raise UsageError(
+                f"--transfer {run_dir}: a run of the {settings.get('task')} task"
+                + (f" with the library {settings['library']}" if settings.get("library") else "")
+                + ": the ARGoS driver measures the primitives' trials without libraries only"
+            )
         objectives = evolved_objectives(run_dir)
+        beyond = [o for o in objectives if o not in PAPER_OBJECTIVES]
+        if beyond:
+            raise UsageError(
+                f"--transfer {run_dir}: evolved {', '.join(beyond)}; the ARGoS driver measures "
+                f"{', '.join(PAPER_OBJECTIVES)} only"
+            )
         if not objectives:
             raise UsageError(
                 f"--transfer {run_dir}: holds no repertoire_<objective>.json of an evolved objective"
@@ -291,16 +309,16 @@ def read_argos_raw(raw: Path) -> dict[tuple[str, int], tuple[float, ...]]:
     rows: dict[tuple[str, int], tuple[float, ...]] = {}
     with raw.open(newline="") as f:
         reader = csv.DictReader(f, delimiter="\t")
-        missing = [q for q in ("tree", "seed", *validation.QUANTITIES) if q not in (reader.fieldnames or ())]
+        missing = [q for q in ("tree", "seed", *QUANTITIES) if q not in (reader.fieldnames or ())]
         if missing:
             raise UsageError(f"{raw}: not the ARGoS driver's raw TSV: missing column(s) {', '.join(missing)}")
         for line, row in enumerate(reader, start=2):
             try:
-                values = [float(row[q]) for q in validation.QUANTITIES]
+                values = [float(row[q]) for q in QUANTITIES]
                 seed = int(row["seed"])
             except (TypeError, ValueError):
                 raise UsageError(f"{raw}:{line}: expected numbers in the seed and value columns") from None
-            for i, q in enumerate(validation.QUANTITIES):
+            for i, q in enumerate(QUANTITIES):
                 if q in ("movement", "rotation"):
                     values[i] = (values[i] + RAW_HALF_RANGE) / (2 * RAW_HALF_RANGE)
             rows[(row["tree"], seed)] = tuple(values)
@@ -321,7 +339,7 @@ def argos_estimates(
             else:
                 missing.append((tree, seed))
         if len(rows) == len(seeds):
-            out[tree] = validation.estimates(rows)
+            out[tree] = validation.estimates(rows, QUANTITIES)
     return out, missing
 
 
@@ -393,7 +411,7 @@ def read_transfer_tsv(path: Path) -> list[TransferRow]:
         entry[1].append(Comparison(r["tree"], r["quantity"], ours, theirs))
     rows = [TransferRow(pick, tuple(cs)) for _, (pick, cs) in sorted(by_index.items())]
     for row in rows:
-        if [c.quantity for c in row.comparisons] != list(validation.QUANTITIES):
+        if [c.quantity for c in row.comparisons] != list(QUANTITIES):
             raise UsageError(f"{path}: tree {row.pick.tree!r} does not have the six quantities in order")
     if not rows:
         raise UsageError(f"{path}: an empty transfer table")
@@ -433,8 +451,8 @@ def render_summary(rows: Sequence[TransferRow]) -> list[str]:
         f"Verdicts: {_MARK[INDISTINGUISHABLE]} indistinguishable, {_MARK[validation.AGREES]} agrees (within "
         f"tolerance, |z| > {MAX_Z:g}), {_MARK[OUTSIDE]} outside tolerance.",
         "",
-        "| # | run | grid | bin | pick | tree | " + " | ".join(validation.QUANTITIES) + " |",
-        "|---|---|---|---|---|---|" + "---|" * len(validation.QUANTITIES),
+        "| # | run | grid | bin | pick | tree | " + " | ".join(QUANTITIES) + " |",
+        "|---|---|---|---|---|---|" + "---|" * len(QUANTITIES),
     ]
     for number, row in enumerate(rows, start=1):
         p = row.pick

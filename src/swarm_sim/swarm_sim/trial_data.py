@@ -19,7 +19,7 @@ from bt_controller.timeline import chain_of_trial
 from bt_controller.validate import integer
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.world import VALUE_NAMES
+from swarm_sim.world import DESCRIPTORS, OBJECTIVES, VALUE_NAMES
 
 __all__ = ["VALUE_NAMES", "ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]
 
@@ -77,7 +77,7 @@ class TrialRecord:
     trial: int
     gap: float
     values: tuple[float, ...]
-    """density, nest, food, movement, rotation, conditionality (``VALUE_NAMES``)."""
+    """Every objective, then movement, rotation, conditionality (``VALUE_NAMES``)."""
     start_poses: np.ndarray
     end_poses: np.ndarray
 
@@ -87,8 +87,8 @@ class TrialRecord:
         return {
             "trial": self.trial,
             "gap": self.gap,
-            "fitness": {k: named[k] for k in VALUE_NAMES[:3]},
-            "descriptors": {k: named[k] for k in VALUE_NAMES[3:]},
+            "fitness": {k: named[k] for k in OBJECTIVES},
+            "descriptors": {k: named[k] for k in DESCRIPTORS},
             "start_poses": self.start_poses.tolist(),
             "end_poses": self.end_poses.tolist(),
         }

@@ -2,23 +2,27 @@
 
     validate --reference docs/validation/argos_stats.tsv [--reference MORE.tsv] [--profile paper]
              [--seeds 20] [--trials 10] [--notes docs/validation/notes.md] [--transfer-table T.tsv]
+             [--foraging-reference docs/validation/argos_stats_foraging.tsv] [--library PRIMITIVES.json]
              --out docs/validation.md
     validate --transfer RUN_DIR [RUN_DIR ...] [--per-run 4] [--evaluations 20] [--seeds 1-20]
              [--tree TREE ...] [--argos-eval argos_eval.py] [--argos-raw RAW.tsv] --out T.md [--tsv T.tsv]
 
-Reference mode: each tree of the reference files (ARGoS statistics measured by the harness) is evaluated with
-seeds 1..N (one evaluation of ``--trials`` trials per seed, all in one batch); our mean and standard error of
-each of the six quantities are set beside the reference's with a verdict (``swarm_sim.validation``).
-``--notes`` is markdown appended as it is (the explanations of what is outside tolerance, kept in the
-repository so that regenerating keeps them); ``--transfer-table`` adds the summary of a transfer table.
-``--tsv`` also writes our statistics in the reference's format.
+Reference mode: each tree of the reference files (ARGoS statistics measured by the harness) is evaluated
+with seeds 1..N (one evaluation of ``--trials`` trials per seed, all in one batch); our mean and standard
+error of each quantity the reference measured are set beside the reference's with a verdict
+(``swarm_sim.validation``). ``--reference`` files are measured in the primitives' 20 s trials,
+``--foraging-reference`` files in the 2024 foraging trials (100 s; their trees are labelled ``[foraging]``);
+trees in the authors' syntax are read into ours (``bt_controller.authors``), and a tree may name the
+primitives of ``--library``. ``--notes`` is markdown appended as it is (the explanations of what is outside
+tolerance, kept in the repository so that regenerating keeps them); ``--transfer-table`` adds the summary of a
+transfer table. ``--tsv`` also writes our statistics in the reference's format.
 
-Transfer mode (``swarm_sim.transfer``): trees picked from evolution run directories (each evolved grid's best
-and ``--per-run`` more by farthest-point sampling of the grid, plus any ``--tree``) are evaluated here with
-``--evaluations`` fresh seeds (1..N, less any run's own scenario seed) and in ARGoS with ``--seeds`` through
-the harness's driver (``--argos-eval`` or ``$ARGOS_EVAL``); its raw rows go to ``--argos-raw`` (default: the
-report's name with ``_argos_raw.tsv``), which is also read back as a cache. Writes the report (markdown) and
-the table (``--tsv``, default the report's name with ``.tsv``).
+Transfer mode (``swarm_sim.transfer``): trees picked from evolution run directories of the primitives' task
+without a library (each evolved grid's best and ``--per-run`` more by farthest-point sampling of the grid,
+plus any ``--tree``) are evaluated here with ``--evaluations`` fresh seeds (1..N, less any run's own scenario
+seed) and in ARGoS with ``--seeds`` through the harness's driver (``--argos-eval`` or ``$ARGOS_EVAL``); its
+raw rows go to ``--argos-raw`` (default: the report's name with ``_argos_raw.tsv``), which is also read back
+as a cache. Writes the report (markdown) and the table (``--tsv``, default the report's name with ``.tsv``).
 
 Bad input, or an ARGoS build that is not there when rows are missing: one line on stderr, exit status 2;
 nothing is written then (but the raw rows ARGoS produced).
@@ -31,12 +35,15 @@ import shlex
 import sys
 import tempfile
 from collections.abc import Sequence
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import NoReturn
 
+from bt_controller.authors import from_authors, is_authors_syntax
+from bt_controller.library import Library
 from swarm_sim import transfer, validation
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.cli import library_option
+from swarm_sim.config import DEFAULT, TASKS, Config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 
@@ -53,6 +60,14 @@ def _parser() -> argparse.ArgumentParser:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--reference", type=Path, action="append", help="reference statistics TSV (repeatable)")
     mode.add_argument("--transfer", type=Path, nargs="+", metavar="RUN_DIR", help="evolution run directories")
+    parser.add_argument(
+        "--foraging-reference",
+        type=Path,
+        action="append",
+        default=[],
+        help="reference: statistics TSV of foraging trials (repeatable)",
+    )
+    parser.add_argument("--library", help="reference: a primitive library (JSON) whose names the trees use")
     parser.add_argument("--profile", help="model profile (default: the model's default)")
     parser.add_argument(
         "--seeds",
@@ -87,12 +102,21 @@ def model_config(profile: str | None) -> Config:
         raise UsageError(f"--profile: {error}") from None
 
 
+def ours(tree: str) -> str:
+    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.authors``)."""
+    return from_authors(tree) if is_authors_syntax(tree) else tree
+
+
 def our_estimates(
-    trees: Sequence[str], seeds: Sequence[int], trials: int, config: Config
+    trees: Sequence[str],
+    seeds: Sequence[int],
+    trials: int,
+    config: Config,
+    library: Library | None = None,
 ) -> dict[str, dict[str, validation.Estimate]]:
-    """Per tree, our estimates over ``seeds`` (one batch)."""
-    requests = [EvaluationRequest(tree, seed, trials) for tree in trees for seed in seeds]
-    results = BatchEvaluator(config).evaluate(requests)
+    """Per tree (a reference's text, or ours), our estimates over ``seeds`` (one batch)."""
+    requests = [EvaluationRequest(ours(tree), seed, trials) for tree in trees for seed in seeds]
+    results = BatchEvaluator(config, library=library).evaluate(requests)
     n = len(seeds)
     out = {}
     for index, tree in enumerate(trees):
@@ -106,16 +130,16 @@ def our_estimates(
     return out
 
 
-def stats_tsv(ours: dict[str, dict[str, validation.Estimate]]) -> str:
+def stats_tsv(estimates: dict[str, dict[str, validation.Estimate]], ticks: int = 40) -> str:
     """Our statistics in the reference's column layout (movement and rotation already in [0, 1] there as
-    ``movement01``/``rotation01``; the raw columns are mapped back to [-40, 40])."""
-    half = validation.RAW_DESCRIPTOR_HALF_RANGE
+    ``movement01``/``rotation01``; the raw columns are mapped back to [-ticks, ticks])."""
+    half = float(ticks)
     header = ["tree"]
     for q in validation.QUANTITIES:
         header += [f"{q}_mean", f"{q}_sem"]
     header += ["movement01_mean", "movement01_sem", "rotation01_mean", "rotation01_sem", "n_seeds"]
     lines = ["\t".join(header)]
-    for tree, by_q in ours.items():
+    for tree, by_q in estimates.items():
         cells = [tree]
         for q in validation.QUANTITIES:
             e = by_q[q]
@@ -163,23 +187,28 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     seeds = _seed_list(args.seeds or "20", "--seeds")
     _check_trials(args)
     config = model_config(args.profile)
-    references: dict[str, dict[str, validation.Estimate]] = {}
-    for path in args.reference:
-        try:
-            stats_by_tree = validation.read_reference(path)
-        except validation.ReferenceFileError as error:
-            raise UsageError(str(error)) from None
-        for tree, stats in stats_by_tree.items():
-            try:
-                check_request(EvaluationRequest(tree, 1, args.trials))
-            except ValueError as error:
-                raise UsageError(f"{path}: tree {tree!r}: {error}") from None
-            references.setdefault(tree, stats)  # a tree in two files: the first file's statistics
+    library = library_option(args.library)
+    foraging = replace(config, ticks=TASKS["foraging"])
     notes = _read_notes(args.notes)
     transfer_rows = None if args.transfer_table is None else transfer.read_transfer_tsv(args.transfer_table)
-    print(f"validate: {len(references)} trees x {len(seeds)} seeds x {args.trials} trials", file=sys.stderr)
-    ours = our_estimates(list(references), seeds, args.trials, config)
-    comparisons = [c for tree in references for c in validation.compare(tree, ours[tree], references[tree])]
+    comparisons: list[validation.Comparison] = []
+    tables: list[str] = []
+    groups = (("", config, args.reference), ("foraging", foraging, args.foraging_reference))
+    checked = [
+        (g, world, _references(paths, args.trials, world.ticks, library)) for g, world, paths in groups
+    ]
+    print(
+        f"validate: {sum(len(r) for _, _, r in checked)} trees x {len(seeds)} seeds x {args.trials} trials",
+        file=sys.stderr,
+    )
+    for group, world, references in checked:
+        if not references:
+            continue
+        estimates = our_estimates(list(references), seeds, args.trials, world, library)
+        for tree, stats in references.items():
+            comparisons += validation.compare(tree, estimates[tree], stats, group)
+        labelled = {f"[{group}] {t}" if group else t: e for t, e in estimates.items()}
+        tables.append(stats_tsv(labelled, world.ticks))
     profile = getattr(config, "profile", None)
     command = "ws/run swarm_sim validate " + shlex.join(argv)
     tolerance = f"3 sqrt(2) SE_ARGoS + {validation.TOLERANCE_ABSOLUTE}"
@@ -191,15 +220,37 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
         "",
         f"- Model: profile `{profile or 'none (this model has no profiles)'}`. Ours: mean ± standard error "
         f"over {len(seeds)} evaluations per tree (seeds {_seeds_text(seeds)}, {args.trials} trials each).",
-        f"- ARGoS: {', '.join(f'`{p}`' for p in args.reference)} (mean ± standard error over its seeds; "
-        "how they were measured: `docs/validation/README.md`). Movement and rotation mapped to [0, 1] as "
-        "(x + 40) / 80.",
+        f"- ARGoS: {', '.join(f'`{p}`' for p in [*args.reference, *args.foraging_reference])} (mean ± "
+        "standard error over its seeds; how they were measured: `docs/validation/README.md`). Movement and "
+        "rotation mapped to [0, 1] as (x + T) / 2T for T ticks per trial (40; 200 in the `[foraging]` trees' "
+        "100 s trials)" + (f"; primitives' names from `{args.library}`." if args.library else "."),
         f"- Tolerance (`docs/model.md`): agrees when |diff| <= {tolerance}; indistinguishable when it also "
         f"has {z_rule}.",
     ]
     if transfer_rows is not None:
         notes = "\n".join([*_transfer_section(transfer_rows, args.transfer_table), "", notes or ""])
-    return args, validation.render(comparisons, header, notes), stats_tsv(ours)
+    tsv = tables[0] + "".join(t.split("\n", 1)[1] for t in tables[1:])
+    return args, validation.render(comparisons, header, notes), tsv
+
+
+def _references(
+    paths: Sequence[Path], trials: int, ticks: int, library: Library | None
+) -> dict[str, dict[str, validation.Estimate]]:
+    """The reference statistics of ``paths`` per tree (a tree in two files: the first file's), every tree
+    checked; UsageError naming the file and the problem."""
+    references: dict[str, dict[str, validation.Estimate]] = {}
+    for path in paths:
+        try:
+            stats_by_tree = validation.read_reference(path, ticks)
+        except validation.ReferenceFileError as error:
+            raise UsageError(str(error)) from None
+        for tree, stats in stats_by_tree.items():
+            try:
+                check_request(EvaluationRequest(ours(tree), 1, trials), library=library)
+            except ValueError as error:
+                raise UsageError(f"{path}: tree {tree!r}: {error}") from None
+            references.setdefault(tree, stats)
+    return references
 
 
 def _seeds_text(seeds: Sequence[int]) -> str:
@@ -220,8 +271,10 @@ def _transfer_section(rows: Sequence[transfer.TransferRow], path: Path) -> list[
 
 def run_transfer(args: argparse.Namespace, argv: Sequence[str]) -> tuple[str, str]:
     """The transfer check (module docstring): (report markdown, table TSV). Raise UsageError."""
-    if args.transfer_table is not None or args.notes is not None:
-        raise UsageError("--transfer-table and --notes belong to --reference")
+    if args.transfer_table is not None or args.notes is not None or args.foraging_reference or args.library:
+        raise UsageError(
+            "--transfer-table, --notes, --foraging-reference and --library belong to --reference"
+        )
     _check_trials(args)
     if not 0 <= args.per_run <= 512:
         raise UsageError(f"--per-run must be in [0, 512], got {args.per_run}")

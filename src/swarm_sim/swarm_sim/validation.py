@@ -1,9 +1,12 @@
 """Validation against the authors' ARGoS simulation: our statistics beside theirs, a verdict per quantity.
 
 A reference file is a TSV with one row per tree (as written by the ARGoS harness, see
-``docs/validation/README.md``): ``tree``, then ``<q>_mean`` and ``<q>_sem`` for each of the six quantities.
-Movement and rotation are in the authors' raw units there, [-40, 40] per trial; they are mapped to [0, 1] as
-the model does, (x + 40) / 80 (standard errors / 80), unless ``movement01_mean`` etc. are given.
+``docs/validation/README.md``): ``tree``, then ``<q>_mean`` and ``<q>_sem`` for the quantities it measured
+(of ``QUANTITIES``: the harness's 2023 build gives the paper's three objectives, its primitives build all six
+primitives' objectives, its foraging build foraging, each with the three descriptors). Movement and rotation
+are in the authors' raw units there, [-T, T] per trial for T ticks; they are mapped to [0, 1] as the model
+does, (x + T) / 2T (standard errors / 2T), unless ``movement01_mean`` etc. are given. Trees in the authors'
+syntax are read into ours (``bt_controller.authors``).
 
 Tolerance (``docs/model.md``, "validation"): our mean **agrees** with the reference when
 ``|ours - theirs| <= 3 * sqrt(2) * SE + 0.03``, SE being the reference's standard error; it is
@@ -23,9 +26,10 @@ from swarm_sim.errors import ReferenceFileError
 from swarm_sim.world import VALUE_NAMES
 
 QUANTITIES: tuple[str, ...] = VALUE_NAMES
-"""The six quantities of an evaluation, in the evaluator's order (three objectives, three descriptors)."""
+"""The quantities of an evaluation, in the evaluator's order (the objectives, then the three descriptors)."""
 RAW_DESCRIPTOR_HALF_RANGE = 40.0
-"""Movement and rotation per trial lie in [-40, 40] in the authors' code: one count per tick, 40 ticks."""
+"""Movement and rotation per trial lie in [-40, 40] in the authors' code for the primitives' 40 ticks (one
+count per tick); [-200, 200] for the foraging trials' 200."""
 TOLERANCE_SE = 3.0 * math.sqrt(2.0)
 """Multiple of the reference's standard error allowed between the means."""
 TOLERANCE_ABSOLUTE = 0.03
@@ -66,12 +70,14 @@ class Estimate:
 
 @dataclass(frozen=True)
 class Comparison:
-    """Our estimate of one quantity of one tree beside the reference's, and the verdict."""
+    """Our estimate of one quantity of one tree beside the reference's, and the verdict (``group``: the
+    kind of trial, e.g. ``foraging``, when a report holds more than one)."""
 
     tree: str
     quantity: str
     ours: Estimate
     theirs: Estimate
+    group: str = ""
 
     @property
     def diff(self) -> float:
@@ -119,28 +125,31 @@ def estimate(samples: Sequence[float]) -> Estimate:
     return Estimate(mean, math.sqrt(variance / n), n)
 
 
-def estimates(rows: Sequence[Sequence[float]]) -> dict[str, Estimate]:
-    """Per quantity, the estimate over evaluations given as rows of six values (``QUANTITIES`` order)."""
+def estimates(rows: Sequence[Sequence[float]], quantities: Sequence[str] = QUANTITIES) -> dict[str, Estimate]:
+    """Per quantity, the estimate over evaluations given as rows of values (``quantities`` order: by default
+    an evaluation's, ``QUANTITIES``)."""
     for row in rows:
-        if len(row) != len(QUANTITIES):
-            raise ValueError(f"expected {len(QUANTITIES)} values per evaluation, got {len(row)}")
-    return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(QUANTITIES)}
+        if len(row) != len(quantities):
+            raise ValueError(f"expected {len(quantities)} values per evaluation, got {len(row)}")
+    return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(quantities)}
 
 
-def read_reference(path: Path) -> dict[str, dict[str, Estimate]]:
-    """The reference statistics of a TSV, per tree (file order) and quantity, descriptors mapped to [0, 1]."""
+def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]]:
+    """The reference statistics of a TSV, per tree (file order) and each quantity it measured, descriptors
+    mapped to [0, 1] (raw ones with trials of ``ticks`` ticks)."""
     try:
         text = path.read_text()
     except OSError as error:
         raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
     reader = csv.DictReader(text.splitlines(), delimiter="\t")
     columns = set(reader.fieldnames or ())
-    needed = {"tree"} | {f"{q}_{s}" for q in QUANTITIES for s in ("mean", "sem")}
+    measured = [q for q in QUANTITIES if f"{q}_mean" in columns or f"{q}_sem" in columns]
+    descriptors = QUANTITIES[-3:]
+    needed = {"tree"} | {f"{q}_{s}" for q in {*measured, *descriptors} for s in ("mean", "sem")}
     missing = sorted(needed - columns)
-    if missing:
-        raise ReferenceFileError(
-            f"{path}: not a reference statistics TSV: missing column(s) {', '.join(missing)}"
-        )
+    if missing or len(measured) == len(descriptors):
+        what = ", ".join(missing) if missing else "an objective's <q>_mean and <q>_sem"
+        raise ReferenceFileError(f"{path}: not a reference statistics TSV: missing column(s) {what}")
     out: dict[str, dict[str, Estimate]] = {}
     for line, row in enumerate(reader, start=2):
         tree = (row["tree"] or "").strip()
@@ -149,7 +158,7 @@ def read_reference(path: Path) -> dict[str, dict[str, Estimate]]:
         if tree in out:
             raise ReferenceFileError(f"{path}:{line}: tree {tree!r} given twice")
         n = _number(path, line, row, "n_seeds", default=0.0)
-        out[tree] = {q: _reference_estimate(path, line, row, q, int(n)) for q in QUANTITIES}
+        out[tree] = {q: _reference_estimate(path, line, row, q, int(n), ticks) for q in measured}
     if not out:
         raise ReferenceFileError(f"{path}: no trees in the reference")
     return out
@@ -170,15 +179,17 @@ def _number(path: Path, line: int, row: dict[str, str], column: str, default: fl
     return value
 
 
-def _reference_estimate(path: Path, line: int, row: dict[str, str], quantity: str, n: int) -> Estimate:
+def _reference_estimate(
+    path: Path, line: int, row: dict[str, str], quantity: str, n: int, ticks: int
+) -> Estimate:
     if quantity in ("movement", "rotation"):
         if row.get(f"{quantity}01_mean"):
             mean = _number(path, line, row, f"{quantity}01_mean")
             sem = _number(path, line, row, f"{quantity}01_sem")
         else:
             raw_mean = _number(path, line, row, f"{quantity}_mean")
-            mean = (raw_mean + RAW_DESCRIPTOR_HALF_RANGE) / (2 * RAW_DESCRIPTOR_HALF_RANGE)
-            sem = _number(path, line, row, f"{quantity}_sem") / (2 * RAW_DESCRIPTOR_HALF_RANGE)
+            mean = (raw_mean + ticks) / (2 * ticks)
+            sem = _number(path, line, row, f"{quantity}_sem") / (2 * ticks)
     else:
         mean = _number(path, line, row, f"{quantity}_mean")
         sem = _number(path, line, row, f"{quantity}_sem")
@@ -187,9 +198,23 @@ def _reference_estimate(path: Path, line: int, row: dict[str, str], quantity: st
     return Estimate(mean, sem, n)
 
 
-def compare(tree: str, ours: dict[str, Estimate], theirs: dict[str, Estimate]) -> list[Comparison]:
-    """One comparison per quantity (``QUANTITIES`` order)."""
-    return [Comparison(tree, q, ours[q], theirs[q]) for q in QUANTITIES]
+def compare(
+    tree: str, ours: dict[str, Estimate], theirs: dict[str, Estimate], group: str = ""
+) -> list[Comparison]:
+    """One comparison per quantity the reference measured (``QUANTITIES`` order)."""
+    return [Comparison(tree, q, ours[q], theirs[q], group) for q in QUANTITIES if q in theirs]
+
+
+def _named(c: Comparison) -> str:
+    return f"[{c.group}] {c.tree}" if c.group else c.tree
+
+
+def _code(name: str) -> str:
+    """A tree's name as markdown: the tree as code, its group (``[foraging] ``) before it as text."""
+    if name.startswith("["):
+        group, tree = name.split("] ", 1)
+        return f"{group}] `{tree}`"
+    return f"`{name}`"
 
 
 def _fmt(e: Estimate) -> str:
@@ -210,9 +235,12 @@ def render(
     header: Iterable[str],
     notes: str | None = None,
 ) -> str:
-    """The markdown report: ``header`` lines, a summary, one verdict grid, one table per tree, ``notes``."""
-    trees = list(dict.fromkeys(c.tree for c in comparisons))
-    by_tree = {t: [c for c in comparisons if c.tree == t] for t in trees}
+    """The markdown report: ``header`` lines, a summary, one verdict grid (a column per quantity any tree
+    was compared on, ``-`` where a tree was not), one table per tree, ``notes``. A tree is named with its
+    group, when it has one (``[foraging] forward``)."""
+    trees = list(dict.fromkeys(_named(c) for c in comparisons))
+    by_tree = {t: [c for c in comparisons if _named(c) == t] for t in trees}
+    columns = [q for q in QUANTITIES if any(c.quantity == q for c in comparisons)]
     total = len(comparisons)
     agreeing = sum(c.agrees for c in comparisons)
     same = sum(c.verdict == INDISTINGUISHABLE for c in comparisons)
@@ -224,16 +252,17 @@ def render(
         f"Verdicts: {_MARK[INDISTINGUISHABLE]} indistinguishable, {_MARK[AGREES]} agrees (within tolerance, "
         f"|z| > {MAX_Z:g}), {_MARK[OUTSIDE]} outside tolerance.",
         "",
-        "| # | tree | " + " | ".join(QUANTITIES) + " |",
-        "|---|---|" + "---|" * len(QUANTITIES),
+        "| # | tree | " + " | ".join(columns) + " |",
+        "|---|---|" + "---|" * len(columns),
     ]
     for number, tree in enumerate(trees, start=1):
-        marks = " | ".join(_MARK[c.verdict] for c in by_tree[tree])
-        lines.append(f"| {number} | `{tree}` | {marks} |")
+        verdicts = {c.quantity: _MARK[c.verdict] for c in by_tree[tree]}
+        marks = " | ".join(verdicts.get(q, "-") for q in columns)
+        lines.append(f"| {number} | {_code(tree)} | {marks} |")
     lines.append("")
     for number, tree in enumerate(trees, start=1):
         lines += [
-            f"### {number}. `{tree}`",
+            f"### {number}. {_code(tree)}",
             "",
             "| quantity | ours (mean ± SE) | ARGoS (mean ± SE) | diff | tolerance | z | verdict |",
             "|---|---|---|---|---|---|---|",
@@ -248,8 +277,8 @@ def render(
     lines += ["## Quantities not indistinguishable", ""]
     if outside:
         lines += [
-            f"- `{c.tree}` {c.quantity}: {c.verdict}, diff {c.diff:+.4f} (tolerance {c.tolerance:.4f}), "
-            f"z {_z(c)}"
+            f"- {_code(_named(c))} {c.quantity}: {c.verdict}, diff {c.diff:+.4f} "
+            f"(tolerance {c.tolerance:.4f}), z {_z(c)}"
             for c in outside
         ]
     else:

@@ -4,9 +4,10 @@
 (a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
-``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``;
-(d) objectives and descriptors: ``robot_objectives``, ``robot_descriptors``, ``trial_values``,
-``mean_values``.
+``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
+``start_carrying``;
+(d) objectives and descriptors: ``food_distance``, ``robot_objectives``, ``robot_descriptors``,
+``trial_values``, ``mean_values``.
 
 Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
 kernels call them inline and the reference road and the nodes call the very same compiled code from Python,
@@ -44,12 +45,27 @@ drop_stale_cache(
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 """(left, right) wheel settings of each action, in units of the nominal wheel speed."""
 
-VALUE_NAMES: tuple[str, ...] = ("density", "nest", "food", "movement", "rotation", "conditionality")
-"""The six values of a trial or an evaluation: the objectives, then the descriptors (the one home of these
-names)."""
-OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:3]
-"""The three objectives, in fitness order."""
-DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[3:]
+VALUE_NAMES: tuple[str, ...] = (
+    "density",
+    "nest",
+    "food",
+    "idensity",
+    "inest",
+    "ifood",
+    "foraging",
+    "movement",
+    "rotation",
+    "conditionality",
+)
+"""The values of a trial or an evaluation: the objectives (the paper's three, the 2024 follow-up's three
+inverse primitives, foraging), then the descriptors (the one home of these names)."""
+N_OBJECTIVES = 7
+"""How many of the values are objectives (the rest are the three descriptors)."""
+OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:N_OBJECTIVES]
+"""The objectives, in fitness order."""
+PAPER_OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
+"""The three objectives of the 2023 paper (its GP_fnd evolves them together)."""
+DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[N_OBJECTIVES:]
 """The three behaviour descriptors, in grid order."""
 N_VALUES = len(VALUE_NAMES)
 
@@ -668,24 +684,50 @@ smoothed = numba.njit(inline="always")(perception.smoothed.py_func)
 broadcast_value = numba.njit(inline="always")(perception.broadcast_value.py_func)
 region_value = numba.njit(inline="always")(perception.region_value.py_func)
 blackboard = numba.njit(inline="always")(perception.blackboard.py_func)
+carry = numba.njit(inline="always")(perception.carry.py_func)
+start_carrying = numba.njit(inline="always")(perception.start_carrying.py_func)
 
 
 # ---------------------------------------------------------------------------------------------------- (d)
 
 
+@numba.njit(cache=True, inline="always")
+def food_distance(x: float, y: float, gap: float, p: Params) -> float:
+    """A robot's true distance from the food region: max(0, R - r) with R = nest_radius + gap, 0 on food
+    (``CBlackBoard.cpp:185-201, 276-292`` at a73e4af; the inverse food objective's positions)."""
+    radius = p.nest_radius + gap
+    r = math.sqrt(x * x + y * y)
+    return 0.0 if r >= radius else radius - r
+
+
 @numba.njit(cache=True)
-def robot_objectives(initial: np.ndarray, final: np.ndarray, p: Params) -> tuple:
-    """(density, nest, food) objectives of one robot in one trial (``CBlackBoard.cpp:85-96, 224-235,
-    343-347``).
+def robot_objectives(
+    initial: np.ndarray,
+    final: np.ndarray,
+    food_initial: float,
+    food_final: float,
+    deliveries: int,
+    food_radius: float,
+    p: Params,
+) -> tuple:
+    """The objectives of one robot in one trial, ``OBJECTIVES`` order (``CBlackBoard.cpp:85-96, 224-235,
+    343-347`` at 6c65001; the inverse ones and foraging ``CBlackBoard.cpp:98-104, 247-261, 355-359`` and
+    ``footbot_bt.cpp:563-566`` at a73e4af).
 
     ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps.
     Density: (final - initial + 1) / 2, clipped to [0, 1]; nest and food: distances normalised by the cap,
-    ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0.
+    ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0. Inverse density: (initial -
+    final + 1) / 2, clipped; inverse nest: ((final - initial) / cap + 1) / 2, with no rule for the nest;
+    inverse food: from the true distances from the food region at the trial's first and last steps
+    (``food_distance``), (final - initial + R) / (2 R) with R = ``food_radius``. Foraging: the deliveries.
     """
     density = min(max(0.5 * (final[2] - initial[2] + 1.0), 0.0), 1.0)
     nest = 1.0 if final[0] == 0.0 else 0.5 * ((initial[0] - final[0]) / p.estimate_cap + 1.0)
     food = 1.0 if final[1] == 0.0 else 0.5 * ((initial[1] - final[1]) / p.estimate_cap + 1.0)
-    return density, nest, food
+    idensity = min(max(0.5 * (initial[2] - final[2] + 1.0), 0.0), 1.0)
+    inest = 0.5 * ((final[0] - initial[0]) / p.estimate_cap + 1.0)
+    ifood = (food_final - food_initial + food_radius) / (2.0 * food_radius)
+    return density, nest, food, idensity, inest, ifood, float(deliveries)
 
 
 @numba.njit(cache=True)
@@ -709,22 +751,29 @@ def robot_descriptors(counts: np.ndarray, movement: int, rotation: int, p: Param
 
 @numba.njit(cache=True)
 def trial_values(
-    initial: np.ndarray, final: np.ndarray, counts: np.ndarray, motion: np.ndarray, p: Params
+    initial: np.ndarray,
+    final: np.ndarray,
+    counts: np.ndarray,
+    motion: np.ndarray,
+    food: np.ndarray,
+    deliveries: np.ndarray,
+    gap: float,
+    p: Params,
 ) -> np.ndarray:
-    """A trial's six values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in
-    id order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x 8 tick counts; ``motion``: n x 2
-    (movement, rotation) sums."""
+    """A trial's values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in id
+    order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x ``N_COUNTS`` tick counts; ``motion``:
+    n x 2 (movement, rotation) sums; ``food``: n x 2 true distances from the food region at the trial's first
+    and last steps; ``deliveries``: n; ``gap``: the trial's nest-food gap."""
     n = initial.shape[0]
+    radius = p.nest_radius + gap
     out = np.zeros(N_VALUES)
     for i in range(n):
-        o = robot_objectives(initial[i], final[i], p)
+        o = robot_objectives(initial[i], final[i], food[i, 0], food[i, 1], deliveries[i], radius, p)
         d = robot_descriptors(counts[i], motion[i, 0], motion[i, 1], p)
-        out[0] += o[0]
-        out[1] += o[1]
-        out[2] += o[2]
-        out[3] += d[0]
-        out[4] += d[1]
-        out[5] += d[2]
+        for k in range(N_OBJECTIVES):
+            out[k] += o[k]
+        for k in range(3):
+            out[N_OBJECTIVES + k] += d[k]
     for k in range(N_VALUES):
         out[k] /= n
     return out
@@ -732,7 +781,7 @@ def trial_values(
 
 @numba.njit(cache=True)
 def mean_values(per_trial: np.ndarray) -> np.ndarray:
-    """An evaluation's six values: per-trial values (trials x ``N_VALUES``) averaged in trial order."""
+    """An evaluation's values: per-trial values (trials x ``N_VALUES``) averaged in trial order."""
     out = np.zeros(N_VALUES)
     for t in range(per_trial.shape[0]):
         for k in range(N_VALUES):

@@ -27,11 +27,14 @@ def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
     assert first.returncode == 0, first.stderr
     assert first.stdout == second.stdout
     document = json.loads(first.stdout)
-    assert list(document) == ["tree", "seed", "trials", "profile", "conditions", "fitness", "descriptors"]
+    assert list(document) == [
+        "tree", "seed", "trials", "profile", "task", "conditions", "fitness", "descriptors"
+    ]  # fmt: skip
+    assert document["task"] == "primitives"
     assert document["conditions"] == {}
     assert document["tree"] == "sel(seq(in_nest, stop), forward)"
     assert (document["seed"], document["trials"]) == (5, 4)
-    assert list(document["fitness"]) == ["density", "nest", "food"]
+    assert list(document["fitness"]) == ["density", "nest", "food", "idensity", "inest", "ifood", "foraging"]
     assert list(document["descriptors"]) == ["movement", "rotation", "conditionality"]
 
 
@@ -90,3 +93,30 @@ def test_the_profile_is_chosen_and_recorded(capsys):
     # (13.4 - 26.6 + 40) / 80 over a paper chain; (14 - 26 + 40) / 80 in clean trials.
     assert abs(documents["paper"]["descriptors"]["movement"] - (13.4 - 26.6 + 40) / 80) < 1e-12
     assert abs(documents["clean"]["descriptors"]["movement"] - (14 - 26 + 40) / 80) < 1e-12
+
+
+NEST = "sel(in_nest, seq(nest_left, forward_left), seq(nest_right, forward_right), prob(forward, reverse))"
+
+
+def test_a_named_primitive_evaluates_as_its_tree_written_out_under_success(tmp_path, capsys):
+    library = tmp_path / "primitives.json"
+    library.write_text(json.dumps({"format": 1, "primitives": [{"name": "gotoNest3", "tree": NEST}]}))
+    documents = []
+    for engine in ("compiled", "reference"):
+        for tree, extra in (
+            ("sel(seq(got_food, gotoNest3), prob(forward, gotoNest3))", ["--library", str(library)]),
+            (f"sel(seq(got_food, success({NEST})), prob(forward, success({NEST})))", []),
+        ):
+            args = ["--tree", tree, "--seed", "4", "--trials", "2", "--engine", engine, *extra]
+            assert evaluate_main(args) == 0
+            documents.append(json.loads(capsys.readouterr().out))
+    named = documents[0]
+    assert named["tree"] == "sel(seq(got_food, gotoNest3), prob(forward, gotoNest3))"
+    assert named["library"]["file"] == str(library) and len(named["library"]["digest"]) == 64
+    for other in documents[1:]:
+        assert (other["fitness"], other["descriptors"]) == (named["fitness"], named["descriptors"])
+    assert evaluate_main(["--tree", "seq(got_food, gotoNest4)", "--library", str(library)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "unknown node 'gotoNest4'" in error and str(library) in error
+    assert evaluate_main(["--tree", "gotoNest3", "--library", str(tmp_path / "none.json")]) == 2
+    assert "--library: library" in capsys.readouterr().err

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference_road
+from swarm_sim import reference_road, world
 from swarm_sim.cli import evaluate_main
 from swarm_sim.conditions import ConditionError, apply_conditions, condition_texts
 from swarm_sim.config import DEFAULT, Config
@@ -52,7 +52,8 @@ def test_a_swarm_of_dead_robots_keeps_every_pose_in_both_roads():
     ((_, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest("forward", 2, 2)])
     for r in records:
         assert (r.end_poses == r.start_poses).all()
-        assert r.values[3] == 1.0  # still ticking: movement counts the motors the tree sets, not the motion
+        movement = r.values[world.VALUE_NAMES.index("movement")]
+        assert movement == 1.0  # still ticking: movement counts the motors the tree sets, not the motion
 
 
 def test_dead_robots_still_broadcast():

@@ -14,7 +14,7 @@ from bt_controller.draws import DROPS, stream_key
 from bt_controller.perception import PerceptionParams, Readings, blackboard
 from bt_controller.timeline import CLEAN, PAPER, Timeline
 from bt_controller.tree import parse
-from bt_controller.vocabulary import CONDITION_INDEX
+from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, N_CONDITIONS
 from swarm_sim import reference_road, world
 from swarm_sim.config import Config
 
@@ -23,11 +23,11 @@ CLEAN_CONFIG = Config(profile="clean")
 
 
 def _movement(values: tuple[float, ...]) -> float:
-    return values[3]
+    return values[world.VALUE_NAMES.index("movement")]
 
 
 def _rotation(values: tuple[float, ...]) -> float:
-    return values[4]
+    return values[world.VALUE_NAMES.index("rotation")]
 
 
 @pytest.mark.parametrize("config", [PAPER_CONFIG, CLEAN_CONFIG], ids=["paper", "clean"])
@@ -36,7 +36,7 @@ def test_forward_has_movement_one(config):
     values, records = reference_road.evaluate(parse("forward"), seed=3, trials=5, config=config)
     assert _movement(values) == 1.0
     assert _rotation(values) == 0.5
-    assert all(r.values[3] == 1.0 for r in records)
+    assert all(_movement(r.values) == 1.0 for r in records)
 
 
 def test_forward_then_reverse_over_a_paper_chain():
@@ -46,7 +46,7 @@ def test_forward_then_reverse_over_a_paper_chain():
     values, records = reference_road.evaluate(
         parse("seq(forward, reverse)"), seed=5, trials=5, config=PAPER_CONFIG
     )
-    assert [round(r.values[3] * 80 - 40) for r in records] == [-12, -14, -14, -12, -14]
+    assert [round(_movement(r.values) * 80 - 40) for r in records] == [-12, -14, -14, -12, -14]
     assert _movement(values) == pytest.approx((13.4 - 26.6 + 40) / 80, abs=1e-12)
 
 
@@ -55,7 +55,7 @@ def test_forward_then_reverse_in_clean_trials():
     values, records = reference_road.evaluate(
         parse("seq(forward, reverse)"), seed=5, trials=3, config=CLEAN_CONFIG
     )
-    assert [round(r.values[3] * 80 - 40) for r in records] == [-12, -12, -12]
+    assert [round(_movement(r.values) * 80 - 40) for r in records] == [-12, -12, -12]
     assert _movement(values) == pytest.approx((14 - 26 + 40) / 80, abs=1e-12)
 
 
@@ -170,7 +170,7 @@ def test_an_estimate_carried_over_a_teleport():
 
 
 def test_robot_left_with_nobody_heard_depends_on_the_profile():
-    out = np.zeros(8, np.bool_)
+    out = np.zeros(N_CONDITIONS, np.bool_)
     for profile, expected in ((PAPER, True), (CLEAN, False)):
         blackboard(
             False,
@@ -181,6 +181,7 @@ def test_robot_left_with_nobody_heard_depends_on_the_profile():
             np.nan,
             False,
             np.nan,
+            False,
             PerceptionParams(profile=profile),
             out,
         )
@@ -189,20 +190,21 @@ def test_robot_left_with_nobody_heard_depends_on_the_profile():
 
 
 def test_nest_side_needs_an_estimate_strictly_inside_the_cap():
-    out = np.zeros(8, np.bool_)
+    out = np.zeros(N_CONDITIONS, np.bool_)
     p = PerceptionParams()
-    blackboard(False, False, 4999.0, 5000.0, 0.3, 0.3, True, -0.1, p, out)
+    blackboard(False, False, 4999.0, 5000.0, 0.3, 0.3, True, -0.1, False, p, out)
     assert out[CONDITION_INDEX["nest_left"]] and not out[CONDITION_INDEX["food_left"]]
     assert out[CONDITION_INDEX["robot_right"]]
-    blackboard(False, False, 2000.0, 2000.0, 0.0, -0.2, True, 0.0, p, out)
+    blackboard(False, False, 2000.0, 2000.0, 0.0, -0.2, True, 0.0, True, p, out)
     assert not out[CONDITION_INDEX["nest_left"]] and not out[CONDITION_INDEX["nest_right"]]  # bearing 0
     assert out[CONDITION_INDEX["food_right"]] and out[CONDITION_INDEX["robot_left"]]
+    assert out[CONDITION_INDEX["got_food"]]  # the carrying flag, as given
 
 
 def test_nest_objective_is_one_when_the_final_smoothed_nest_value_is_zero():
     p = PAPER_CONFIG.params()
-    density, nest, food = world.robot_objectives(
-        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), p
+    density, nest, food, *_ = world.robot_objectives(
+        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), 0.0, 0.0, 0, 1000.0, p
     )
     assert nest == 1.0
     assert food == pytest.approx(0.5 * ((2000.0 - 4000.0) / 5000.0 + 1.0))
@@ -213,3 +215,82 @@ def test_clean_trials_stand_still_until_the_initial_step_and_tick_40_times():
     c = _controller(CLEAN)
     ticks = [k for k in range(1, 177) if c.on_step(k, _readings(False, [])).tick is not None]
     assert ticks[0] == 20 and ticks[-1] == 176 and len(ticks) == 40
+
+
+FORWARD, REVERSE, STOP_ACTION = ACTION_INDEX["forward"], ACTION_INDEX["reverse"], ACTION_INDEX["stop"]
+
+
+def _ground(in_nest: bool, on_food: bool) -> Readings:
+    """Readings of the ground sensor only (nobody heard)."""
+    none = np.zeros(0)
+    return Readings(in_nest, on_food, np.zeros(0, dtype=np.int64), none, none, none, none)
+
+
+def _forager(profile: int = PAPER) -> FootbotController:
+    controller = FootbotController()
+    controller.load(parse("sel(seq(got_food, reverse), forward)"))
+    controller.start_chain(0, Timeline(profile=profile), PerceptionParams(profile=profile), trials=1)
+    return controller
+
+
+def test_a_robot_started_on_food_delivers_on_its_first_sensed_step_in_the_nest():
+    c = _forager()
+    # Step 1, the trial's first: no sensing, but the start pose on food sets the carrying flag (a73e4af:
+    # footbot_bt.cpp:134-137 -> CBlackBoard.cpp:140-143).
+    first = c.on_step(1, _ground(False, True))
+    assert first.carrying and first.deliveries == 0
+    # Steps 2-3 away from both regions: still carrying; step 4 ticks: got_food holds, reverse starts.
+    c.on_step(2, _ground(False, False))
+    c.on_step(3, _ground(False, False))
+    tick = c.on_step(4, _ground(False, False))
+    assert tick.carrying and tick.tick is not None and tick.action == tick.tick.started == REVERSE
+    # Step 5: the first sensed step in the nest delivers and clears the flag (footbot_bt.cpp:249-254).
+    delivered = c.on_step(5, _ground(True, False))
+    assert (delivered.carrying, delivered.deliveries) == (False, 1)
+    # In the nest there is nothing to deliver any more.
+    assert c.on_step(6, _ground(True, False)).deliveries == 1
+    assert not c.on_step(7, _ground(True, False)).carrying
+    # Step 8 ticks: reverse, resumed, succeeds (the motors stay reverse); step 12's fresh tick finds got_food
+    # false in the nest and goes forward.
+    assert c.on_step(8, _ground(True, False)).action == REVERSE
+    for k in range(9, 12):
+        c.on_step(k, _ground(True, False))
+    tick = c.on_step(12, _ground(True, False))
+    assert tick.tick is not None and tick.action == FORWARD
+
+
+def test_a_robot_started_in_the_nest_delivers_nothing_at_the_trial_start():
+    c = _forager()
+    assert (c.on_step(1, _ground(True, False)).carrying, c.on_step(2, _ground(True, False)).deliveries) == (
+        False, 0
+    )  # fmt: skip
+
+
+def test_a_food_crossing_between_two_ticks_still_shows_as_got_food_at_the_next_tick():
+    c = FootbotController()
+    c.load(parse("seq(got_food, reverse)"))
+    c.start_chain(0, Timeline(), PerceptionParams(), trials=1)
+    for k in range(1, 4):
+        c.on_step(k, _ground(False, False))
+    tick = c.on_step(4, _ground(False, False))
+    assert tick.tick is not None and tick.tick.status == 1 and tick.action == STOP_ACTION  # nothing carried
+    # Steps 5-7: the robot crosses the food region's edge at step 6 only (sensing at 8 Hz, ticks at 2 Hz).
+    c.on_step(5, _ground(False, False))
+    crossing = c.on_step(6, _ground(False, True))
+    assert crossing.carrying and crossing.tick is None
+    c.on_step(7, _ground(False, False))
+    tick = c.on_step(8, _ground(False, False))  # on_food is false at the tick, got_food true
+    assert tick.tick is not None and tick.action == REVERSE and tick.carrying
+
+
+def test_the_carrying_flag_and_deliveries_are_cleared_at_a_trials_last_step():
+    c = FootbotController()
+    c.load(parse("forward"))
+    c.start_chain(0, Timeline(), PerceptionParams(), trials=2)
+    for k in range(1, 161):
+        on_food, in_nest = k % 20 == 10, k % 20 == 15  # a delivery every 20 steps from step 15
+        outcome = c.on_step(k, _ground(in_nest, on_food))
+    assert (outcome.carrying, outcome.deliveries) == (False, 8)  # the trial's count, at its last step
+    # Step 161, the second trial's first: counted from 0 again, carrying only if it starts on food.
+    outcome = c.on_step(161, _ground(False, False))
+    assert (outcome.carrying, outcome.deliveries) == (False, 0)

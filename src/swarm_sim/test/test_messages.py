@@ -207,10 +207,10 @@ def test_blackboard_sides_from_bearings():
     right = world.bearing(0.0, 0.0, heading, 300.0, 10.0)
     assert 0 < left < math.pi and -math.pi < right < 0
     assert world.bearing(0.0, 0.0, 0.0, 100.0, 0.0) == 0.0  # dead ahead: a robot there counts as left
-    out = np.zeros(8, np.bool_)
-    world.blackboard(False, True, 3000.0, 3000.0, left, right, True, math.nan, P, out)
-    # on_food, in_nest, food_left, food_right, nest_left, nest_right, robot_left, robot_right
-    assert out.tolist() == [True, False, False, True, True, False, False, False]
+    out = np.zeros(9, np.bool_)
+    world.blackboard(False, True, 3000.0, 3000.0, left, right, True, math.nan, True, P, out)
+    # on_food, in_nest, food_left, food_right, nest_left, nest_right, robot_left, robot_right, got_food
+    assert out.tolist() == [True, False, False, True, True, False, False, False, True]
 
 
 def test_robot_view_blackboard_uses_the_estimate_sources():
@@ -228,7 +228,7 @@ def test_robot_view_blackboard_uses_the_estimate_sources():
     )
     view.sense(readings)
     assert (view.nest, view.food) == (700.0, 5000.0)
-    assert view.blackboard().tolist() == [False, False, False, False, True, False, False, True]
+    assert view.blackboard().tolist() == [False, False, False, False, True, False, False, True, False]
 
 
 def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():

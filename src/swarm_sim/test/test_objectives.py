@@ -11,6 +11,8 @@ from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 TRIALS = 4
+MOVEMENT = world.VALUE_NAMES.index("movement")
+DESCRIPTORS = slice(world.N_OBJECTIVES, None)
 
 
 def both_roads(tree, seed, config, trials=TRIALS):
@@ -21,17 +23,37 @@ def both_roads(tree, seed, config, trials=TRIALS):
     return values, records
 
 
-def test_objective_formulas():
+def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0):
     p = DEFAULT.params()
-    initial, final = np.array([4000.0, 1000.0, 0.2]), np.array([1500.0, 3000.0, 0.5])
-    density, nest, food = world.robot_objectives(initial, final, p)
+    initial, final = np.array(initial, float), np.array(final, float)
+    return world.robot_objectives(initial, final, food[0], food[1], deliveries, radius, p)
+
+
+def test_objective_formulas():
+    initial, final = [4000.0, 1000.0, 0.2], [1500.0, 3000.0, 0.5]
+    # 300 mm from food at the start, on food at the end; food radius 1200 mm (gap 700); 3 deliveries.
+    values = objectives(initial, final, (300.0, 0.0), 3, 1200.0)
+    density, nest, food, idensity, inest, ifood, foraging = values
     assert density == pytest.approx((0.5 - 0.2 + 1) / 2)
     assert nest == pytest.approx(((4000 - 1500) / 5000 + 1) / 2)
     assert food == pytest.approx(((1000 - 3000) / 5000 + 1) / 2)
-    # A final smoothed value of 0 (7 samples in the region) scores 1.
-    assert world.robot_objectives(initial, np.array([0.0, 0.0, 0.5]), p)[1:] == (1.0, 1.0)
-    assert world.robot_objectives(np.array([0, 0, 0.0]), np.array([1, 1, 1.2]), p)[0] == 1.0
-    assert world.robot_objectives(np.array([1, 1, 1.2]), np.array([1, 1, 0.0]), p)[0] == 0.0
+    # The inverse primitives (a73e4af: CBlackBoard.cpp:98-104, 247-261, 355-359).
+    assert idensity == pytest.approx((0.2 - 0.5 + 1) / 2)
+    assert inest == pytest.approx(((1500 - 4000) / 5000 + 1) / 2)
+    assert ifood == pytest.approx((0.0 - 300.0 + 1200.0) / 2400.0)
+    assert foraging == 3.0
+    # A final smoothed value of 0 (7 samples in the region) scores 1; the inverse nest has no such rule.
+    assert objectives(initial, [0.0, 0.0, 0.5])[1:3] == (1.0, 1.0)
+    assert objectives(initial, [0.0, 0.0, 0.5])[4] == pytest.approx(((0 - 4000) / 5000 + 1) / 2)
+    assert objectives([0, 0, 0.0], [1, 1, 1.2])[0] == 1.0 and objectives([0, 0, 0.0], [1, 1, 1.2])[3] == 0.0
+    assert objectives([1, 1, 1.2], [1, 1, 0.0])[0] == 0.0 and objectives([1, 1, 1.2], [1, 1, 0.0])[3] == 1.0
+
+
+def test_food_distance_is_the_true_distance_from_the_food_region():
+    p = DEFAULT.params()
+    assert world.food_distance(600.0, 800.0, 500.0, p) == 0.0  # r = 1000 = 500 + 500: on food
+    assert world.food_distance(300.0, 400.0, 700.0, p) == pytest.approx(1200.0 - 500.0)
+    assert world.food_distance(0.0, 0.0, 500.0, p) == 1000.0
 
 
 def test_descriptor_formulas():
@@ -102,9 +124,9 @@ def test_lone_robot_drives_as_worked_out(profile, tree, movement):
             pytest.approx(STEP * moved[1], abs=1e-9),
         )
         if movement is not None:
-            assert record.values[3] == movement
+            assert record.values[MOVEMENT] == movement
     if movement is None:
-        assert [round(r.values[3] * 80 - 40) for r in records] == [14 - 26, 13 - 27, 13 - 27]
+        assert [round(r.values[MOVEMENT] * 80 - 40) for r in records] == [14 - 26, 13 - 27, 13 - 27]
 
 
 FAR_FOOD = {profile: Config(profile=profile, gaps=(1900.0,)) for profile in ("paper", "clean")}
@@ -115,7 +137,7 @@ FAR_FOOD = {profile: Config(profile=profile, gaps=(1900.0,)) for profile in ("pa
 def test_condition_that_never_holds(profile):
     # seq(on_food, stop): every tick ticks the condition, which fails, and starts nothing.
     values, _ = both_roads("seq(on_food, stop)", 4, FAR_FOOD[profile])
-    assert values[3:] == (0.5, 0.5, 1.0)
+    assert values[DESCRIPTORS] == (0.5, 0.5, 1.0)
 
 
 @pytest.mark.parametrize("profile", ["paper", "clean"])
@@ -124,7 +146,7 @@ def test_selector_with_a_turn(profile):
     # forward_left succeeds, and so does the selector; both ticks set the motors to forward_left: rotation 40.
     # 20 conditions and 20 starts per trial.
     values, _ = both_roads("sel(on_food, forward_left)", 4, FAR_FOOD[profile])
-    assert values[3:] == (0.5, 1.0, 20 / (20 + 20))
+    assert values[DESCRIPTORS] == (0.5, 1.0, 20 / (20 + 20))
 
 
 @pytest.mark.parametrize("profile", ["paper", "clean"])
@@ -132,4 +154,6 @@ def test_values_stay_in_the_unit_interval(profile):
     for tree in ["forward", "prob(forward_left, reverse, sel(robot_left, forward_right))", "reverse_left"]:
         values, records = both_roads(tree, 2, Config(profile=profile))
         for v in [values, *(r.values for r in records)]:
-            assert all(0.0 <= x <= 1.0 for x in v)
+            named = dict(zip(world.VALUE_NAMES, v, strict=True))
+            assert all(0.0 <= x <= 1.0 for name, x in named.items() if name != "foraging")
+            assert named["foraging"] >= 0.0  # deliveries per robot

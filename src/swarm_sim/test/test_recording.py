@@ -8,12 +8,13 @@ import pytest
 
 from bt_controller.errors import TreeError
 from bt_controller.random_trees import random_trees
+from swarm_sim import world
 from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.recording import RecordedTrial, record_trial, record_trial_reference
 
-ARRAYS = ("steps", "poses", "actions", "ticks", "smoothed", "ground", "initial")
+ARRAYS = ("steps", "poses", "actions", "ticks", "smoothed", "ground", "initial", "carrying", "deliveries")
 
 
 def assert_same(a: RecordedTrial, b: RecordedTrial) -> None:
@@ -62,7 +63,23 @@ def test_a_recording_is_the_trial_the_batch_evaluator_scores():
             assert recorded.values == records[trial].values and recorded.gap == records[trial].gap
             assert (recorded.poses[-1] == records[trial].end_poses).all()
             # the fitness so far at the trial's last step is its fitness
-            assert tuple(recorded.fitness[-1]) == records[trial].values[:3]
+            assert tuple(recorded.fitness[-1]) == records[trial].values[: world.N_OBJECTIVES]
+
+
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_both_roads_record_the_same_foraging_trial(profile):
+    # 100 s trials of a forager: carrying flags and deliveries step by step, and the fitness so far.
+    config = default_config(profile, "foraging")
+    forager = (
+        "sel(seq(got_food, success(sel(seq(nest_left, forward_left), seq(nest_right, forward_right), "
+        "forward))), sel(seq(food_left, forward_left), seq(food_right, forward_right), forward))"
+    )
+    recorded = record_trial(forager, 1, 1, config)  # two deliveries in this trial, under either profile
+    assert_same(recorded, record_trial_reference(forager, 1, 1, config))
+    assert recorded.carrying.any() and recorded.deliveries[-1].sum() > 0
+    assert (np.diff(recorded.deliveries, axis=0) >= 0).all()  # counted up within the trial
+    foraging = world.OBJECTIVES.index("foraging")
+    assert recorded.fitness[-1, foraging] == recorded.deliveries[-1].mean() == recorded.values[foraging]
 
 
 def test_what_a_recording_holds():

@@ -5,7 +5,7 @@ import pytest
 
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
-from swarm_sim import reference_road
+from swarm_sim import reference_road, world
 from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
 
@@ -95,3 +95,44 @@ def test_seeds_and_trials_matter():
 def test_threads_are_validated():
     with pytest.raises(ValueError, match="threads"):
         BatchEvaluator(threads=0)
+
+
+FORAGER = (
+    "sel(seq(got_food, sel(seq(nest_left, forward_left), seq(nest_right, forward_right), forward)), "
+    "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward))"
+)
+PRIMITIVES = {
+    "gotoNest": "sel(in_nest, seq(nest_left, forward_left), seq(nest_right, forward_right), "
+    "prob(forward, reverse_left))",
+    "gotoFood": "sel(on_food, seq(food_left, forward_left), seq(food_right, forward_right), "
+    "prob(forward, forward_right))",
+}
+
+
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_roads_agree_on_foraging_trees(profile):
+    # 100 s trials: got_food, success and named primitives (each use its own success copy), random trees among
+    # them; the forager delivers, so the carrying flag and the deliveries are exercised, not only zeros.
+    from bt_controller.library import library_from_json
+    from swarm_sim.config import default_config
+
+    library = library_from_json(
+        {"format": 1, "primitives": [{"name": n, "tree": t} for n, t in PRIMITIVES.items()]}, "test"
+    )
+    config = default_config(profile, "foraging")
+    texts = [
+        FORAGER,
+        "sel(seq(got_food, gotoNest), prob(gotoFood, gotoNest))",
+        *(f"sel(seq(got_food, gotoNest), {t})" for t in random_trees(5, 2, 3, 12, p_success=0.2)),
+    ]
+    requests = [EvaluationRequest(t, 300 + k, 2) for k, t in enumerate(texts)]
+    batch = BatchEvaluator(config, library=library).evaluate_trials(requests)
+    foraging = world.VALUE_NAMES.index("foraging")
+    for request, (result, records) in zip(requests, batch, strict=True):
+        assert result.error is None, result.error
+        values, ref_records = reference_road.evaluate(
+            library.parse(request.tree), request.seed, request.trials, config
+        )
+        assert result.fitness + result.descriptors == values, request.tree
+        assert _records_equal(records, ref_records), request.tree
+    assert sum(result.fitness[foraging] for result, _ in batch) > 0

@@ -10,6 +10,7 @@ from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.transfer import GridItem
 from swarm_sim.validate_cli import main as validate_main
+from swarm_sim.world import PAPER_OBJECTIVES
 
 SHAPE = (8, 8, 8)
 
@@ -107,6 +108,25 @@ def test_bad_repertoires_are_refused_naming_the_file(tmp_path, content, message)
         transfer.pick_trees([run], 2)
 
 
+def test_runs_the_argos_driver_cannot_measure_are_refused_in_one_line(tmp_path):
+    # The driver measures the 2023 build's six quantities in 20 s trials: a foraging run, a run with a
+    # primitive library, or a run evolving an inverse primitive has nothing there to compare with.
+    items = {"density": [((0, 0, 0), "stop", 0.5)]}
+    foraging = _run_dir(tmp_path, "foraging", ["density"], items)
+    (foraging / "config.json").write_text(json.dumps({"task": "foraging"}))
+    with pytest.raises(UsageError, match="foraging task: the ARGoS driver measures the primitives"):
+        transfer.pick_trees([foraging], 1)
+    library = _run_dir(tmp_path, "library", ["density"], items)
+    (library / "config.json").write_text(json.dumps({"task": "primitives", "library": "p.json"}))
+    with pytest.raises(UsageError, match=r"with the library p\.json"):
+        transfer.pick_trees([library], 1)
+    inverse = tmp_path / "inverse"
+    inverse.mkdir()
+    (inverse / "summary.json").write_text(json.dumps({"objectives": {"idensity": {"evolved": True}}}))
+    with pytest.raises(UsageError, match="evolved idensity; the ARGoS driver measures density, nest, food"):
+        transfer.pick_trees([inverse], 1)
+
+
 def test_parse_seeds():
     assert transfer.parse_seeds("3") == [1, 2, 3]
     assert transfer.parse_seeds("1-4") == [1, 2, 3, 4]
@@ -148,7 +168,7 @@ def _our_rows(tree, seeds, trials):
     results = BatchEvaluator().evaluate([EvaluationRequest(tree, s, trials) for s in seeds])
     out = []
     for result in results:
-        values = list(result.fitness + result.descriptors)
+        values = list(result.fitness[: len(PAPER_OBJECTIVES)] + result.descriptors)  # the driver's six
         values[3] = values[3] * 80 - 40  # back to the driver's raw units
         values[4] = values[4] * 80 - 40
         out.append(values)
@@ -205,7 +225,7 @@ def test_a_missing_argos_build_is_one_line_and_exit_2(tmp_path, capsys, monkeypa
 
 def test_transfer_table_round_trip_and_summary(tmp_path):
     pick = transfer.Pick("r", "nest", (1, 2, 3), "best", "forward", 0.7)
-    ours = {q: validation.Estimate(0.5, 0.01, 20) for q in validation.QUANTITIES}
+    ours = {q: validation.Estimate(0.5, 0.01, 20) for q in transfer.QUANTITIES}
     theirs = dict(ours, nest=validation.Estimate(0.6, 0.01, 20))
     row = transfer.TransferRow(pick, tuple(validation.compare("forward", ours, theirs)))
     summary = "\n".join(transfer.render_summary([row]))
@@ -233,13 +253,13 @@ def test_transfer_table_round_trip_and_summary(tmp_path):
 
 def test_the_reference_report_adds_a_transfer_tables_summary(tmp_path, capsys):
     pick = transfer.Pick("run7", "food", (0, 1, 2), "best", "forward", 0.7)
-    same = {q: validation.Estimate(0.5, 0.01, 20) for q in validation.QUANTITIES}
+    same = {q: validation.Estimate(0.5, 0.01, 20) for q in transfer.QUANTITIES}
     table = tmp_path / "transfer.tsv"
     table.write_text(
         transfer.transfer_tsv([transfer.TransferRow(pick, tuple(validation.compare("f", same, same)))])
     )
     ref = tmp_path / "ref.tsv"
-    header = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in validation.QUANTITIES) + "\n"
+    header = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in transfer.QUANTITIES) + "\n"
     ref.write_text(header + "stop\t" + "\t".join(["0.5\t0.01"] * 3 + ["0.0\t0.0"] * 3) + "\n")
     out = tmp_path / "validation.md"
     args = [

@@ -8,7 +8,9 @@ from swarm_sim import validation
 from swarm_sim.validate_cli import main as validate_main
 from swarm_sim.validation import AGREES, INDISTINGUISHABLE, OUTSIDE, Comparison, Estimate
 
-HEADER = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in validation.QUANTITIES) + "\tn_seeds\n"
+SIX = ("density", "nest", "food", "movement", "rotation", "conditionality")
+"""The quantities of the 2023 reference files (the paper's three objectives and the descriptors)."""
+HEADER = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in SIX) + "\tn_seeds\n"
 
 
 def _row(tree, values):
@@ -69,7 +71,7 @@ def test_bad_reference_files_are_refused_naming_the_problem(tmp_path, text, mess
 
 
 def test_report_counts_and_lists_what_is_not_indistinguishable():
-    theirs = {q: Estimate(0.5, 0.01, 20) for q in validation.QUANTITIES}
+    theirs = {q: Estimate(0.5, 0.01, 20) for q in SIX}
     ours = dict(theirs, food=Estimate(0.7, 0.01, 20))
     text = validation.render(validation.compare("forward", ours, theirs), ["# title"], "## Notes\nwhy")
     assert "**5 of 6** quantities over 1 trees agree" in text
@@ -109,3 +111,41 @@ def test_validate_command_refuses_bad_input_in_one_line_and_writes_nothing(tmp_p
     assert validate_main(["--reference", str(tmp_path / "none.tsv"), "--out", str(out)]) == 2
     assert "cannot read" in capsys.readouterr().err
     assert validate_main(["--reference", str(ref), "--seeds", "1", "--out", str(out)]) == 2
+
+
+def test_foraging_references_run_100_s_trials_with_the_library_and_the_authors_syntax(tmp_path, capsys):
+    # A foraging reference file: only the quantities it measured (foraging and the descriptors, raw in
+    # [-200, 200] for 200 ticks); a tree naming a primitive of --library and one in the authors' syntax.
+    import json
+
+    library = tmp_path / "primitives.json"
+    library.write_text(json.dumps({"format": 1, "primitives": [{"name": "ahead", "tree": "forward"}]}))
+    columns = ("foraging", "movement", "rotation", "conditionality")
+    header = "tree\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in columns) + "\tn_seeds\n"
+    # forward: movement +200 raw (1.0), rotation 0 (0.5); seqm2(f, f) is the same in their syntax
+    values = "0.04\t0.01\t200.0\t0.0\t0.0\t0.0\t0.0\t0.0\t20\n"
+    ref = tmp_path / "foraging.tsv"
+    ref.write_text(header + "sel(seq(got_food, ahead), ahead)\t" + values + "seqm2(f, f)\t" + values)
+    primitives = tmp_path / "ref.tsv"
+    primitives.write_text(HEADER + _row("stop", [(0.5, 0.01)] * 3 + [(0.0, 0.0)] * 3))
+    out, tsv = tmp_path / "validation.md", tmp_path / "ours.tsv"
+    args = ["--reference", str(primitives), "--foraging-reference", str(ref), "--library", str(library)]
+    args += ["--seeds", "2", "--trials", "2", "--out", str(out), "--tsv", str(tsv)]
+    assert validate_main(args) == 0, capsys.readouterr().err
+    report = out.read_text()
+    assert "| 2 | [foraging] `sel(seq(got_food, ahead), ahead)` | - | - | - | " in report  # no 2023 objective
+    assert "### 3. [foraging] `seqm2(f, f)`" in report
+    assert (
+        "| movement | 1.0000 ± 0.0000 | 1.0000 ± 0.0000 | +0.0000 | 0.0300 | +0.0 | indistinguishable |"
+        in report
+    )
+    ours = validation.read_reference(tsv, ticks=200)
+    assert ours["[foraging] seqm2(f, f)"]["movement"] == Estimate(1.0, 0.0, 2)
+    assert 0.0 <= ours["[foraging] sel(seq(got_food, ahead), ahead)"]["foraging"].mean < 1.0
+    # a primitive the library lacks: one line naming the library, nothing written
+    out.unlink()
+    capsys.readouterr()
+    ref.write_text(header + "sel(seq(got_food, behind), ahead)\t" + values)
+    assert validate_main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert "behind" in err and str(library) in err and "\n" not in err and not out.exists()

@@ -9,6 +9,9 @@ with one line, exit status 2):
         Default -1: taken from the namespace, whose last part must then be ``footbot_<i>``. When both are
         given they must agree: ``__ns:=/footbot_4 -p robot:=0`` stops the node with an error saying so.
     tree (string, read-only): a tree to load at start (default: none; use the load_tree service).
+    library (string, read-only): a primitive library file (``bt_controller.library``) whose primitives'
+        names the trees may use (default: none). A path: the library is fixed for the node's life, as its
+        other parameters; a library that cannot be read stops the node with one line, exit status 2.
     commands (string, read-only): what each step's answer is published as: ``wheels`` (default; what the
         simulator waits for), ``cmd_vel``, or ``both``.
 
@@ -18,7 +21,8 @@ Subscriptions (relative names, in the robot's namespace):
 
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
-        name), its wheel speeds in m/s, the broadcast and smoothed estimates.
+        name), its wheel speeds in m/s, the broadcast and smoothed estimates, whether it carries food and its
+        deliveries in the trial so far.
     cmd_vel (geometry_msgs/Twist, with ``commands`` cmd_vel or both): the same step's wheel speeds as a
         velocity of the robot's base (REP 103): ``linear.x = (left + right) / 2`` in m/s and
         ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise positive, with the wheel
@@ -39,13 +43,14 @@ from dataclasses import dataclass
 
 import numpy as np
 from geometry_msgs.msg import Twist, Vector3
-from rclpy.node import Node
+from rclpy.node import Node as RosNode
 
 from bt_controller.controller import FootbotController
 from bt_controller.errors import TreeError
+from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.perception import PerceptionParams, Readings, warm_up
 from bt_controller.timeline import Timeline, profile_number
-from bt_controller.tree import parse, to_text
+from bt_controller.tree import Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
@@ -66,6 +71,9 @@ class ControllerSettings:
     """Index of this footbot in the simulator's robot_namespaces; -1: from the namespace (footbot_<i>)."""
     tree: str = ""
     """Tree to load at start (tree text); empty: wait for the load_tree service."""
+    library: str = ""
+    """A primitive library file whose names the trees may use (each use its own success copy); empty:
+    none."""
     commands: str = "wheels"
     """What each step's answer is published as: wheels (swarm_msgs/WheelCommand, what the simulator waits
     for), cmd_vel (geometry_msgs/Twist, REP 103 units, to drive a differential-drive robot) or both."""
@@ -87,7 +95,7 @@ def twist(left: float, right: float, separation: float) -> Twist:
     return Twist(linear=Vector3(x=(left + right) / 2.0), angular=Vector3(z=(right - left) / separation))
 
 
-class FootbotControllerNode(Node):
+class FootbotControllerNode(RosNode):
     """One footbot's controller: answers every sensing step, ticks at the schedule's steps."""
 
     def __init__(self) -> None:
@@ -96,6 +104,7 @@ class FootbotControllerNode(Node):
             self, ControllerSettings(), read_only=True, ranges=CONTROLLER_RANGES
         )
         self.robot = robot_index(self.get_namespace(), self.settings.robot)
+        self.library: Library | None = load_library(self.settings.library) if self.settings.library else None
         initial_tree = self.settings.tree
         self.controller = FootbotController()
         self.wheel_speed = 0.0  # m/s, from each trial's StartTrial
@@ -115,9 +124,13 @@ class FootbotControllerNode(Node):
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
         self.loaded = ""
         if initial_tree:
-            tree = parse(initial_tree)
+            tree = parse(initial_tree, library=self.library)
             self.controller.load(tree)
-            self.loaded = to_text(tree)
+            self.loaded = self._text(tree)
+
+    def _text(self, tree: Node) -> str:
+        """The canonical text of ``tree``, with the library's names where it has one."""
+        return to_text(tree) if self.library is None else self.library.fold(tree)
 
     def announce(self) -> None:
         """Log that the node is ready (once its parameters are checked)."""
@@ -128,7 +141,7 @@ class FootbotControllerNode(Node):
 
     def _on_load_tree(self, request: LoadTree.Request, response: LoadTree.Response) -> LoadTree.Response:
         try:
-            tree = parse(request.tree)
+            tree = parse(request.tree, library=self.library)
         except TreeError as error:
             response.success = False
             response.message = str(error)
@@ -136,7 +149,7 @@ class FootbotControllerNode(Node):
             return response
         self.controller.load(tree)
         response.success = True
-        response.canonical_tree = to_text(tree)
+        response.canonical_tree = self._text(tree)
         return response
 
     def _on_start_trial(
@@ -231,20 +244,25 @@ class FootbotControllerNode(Node):
                     smoothed_nest=nest,
                     smoothed_food=food,
                     smoothed_density=density,
+                    carrying=outcome.carrying,
+                    deliveries=outcome.deliveries,
                 )
             )
 
 
 class InitialTreeError(ValueError):
-    """The ``tree`` parameter is not a valid tree."""
+    """The ``tree`` parameter is not a valid tree, or the ``library`` parameter not a library."""
 
 
 def make_node() -> FootbotControllerNode:
-    """A controller node; a ``tree`` parameter that does not parse raises ``InitialTreeError``."""
+    """A controller node; a ``tree`` parameter that does not parse, or a ``library`` that cannot be read,
+    raises ``InitialTreeError``."""
     try:
         return FootbotControllerNode()
     except TreeError as error:
         raise InitialTreeError(f"the tree parameter is not a valid tree: {error}") from None
+    except LibraryError as error:
+        raise InitialTreeError(f"the library parameter: {error}") from None
 
 
 def main(args: list[str] | None = None) -> None:

@@ -5,8 +5,9 @@ worker threads, but none smaller than ``chunk`` evaluations (25), so that the co
 millisecond by Dask's own figure, tens under load) is lost in the chunk's hundreds, and a worker gets one task
 per batch rather than several in a row. Requests travel as plain text and numbers (tree text, seed, trials),
 results as numbers; no DEAP object is ever pickled. The world is a model profile's name, or a whole
-``swarm_sim`` ``Config`` (a changed world, as ``adapt-benchmark`` uses: a small frozen record). Each worker
-process builds one in-process evaluator per world and keeps it (:func:`worker_evaluator`), so numba's
+``swarm_sim`` ``Config`` (a changed world, as ``adapt-benchmark`` uses, or a task's trial length: a small
+frozen record), with the run's primitive library, if any, as its JSON text and label. Each worker process
+builds one in-process evaluator per world and library and keeps it (:func:`worker_evaluator`), so numba's
 kernels are loaded or compiled once per process, not per task; :class:`CompileKernels`, a worker plugin,
 does that when a worker starts, before its first chunk.
 
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import functools
+import json
 import math
 import time
 from collections.abc import Sequence
@@ -28,6 +30,7 @@ from distributed import WorkerPlugin
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
+from bt_controller.library import Library, library_from_json
 from evolution_manager.cluster.settings import CHUNK
 from evolution_manager.errors import DispatchError
 from swarm_sim.config import Config
@@ -54,18 +57,37 @@ WARM_UP_TREE = "sel(on_food, forward)"
 """A small tree evaluated once per worker process to load the kernels."""
 
 
+LibraryText = tuple[str, str]
+"""A primitive library as it travels: its label and its JSON document as text (("", ""): none)."""
+
+NO_LIBRARY: LibraryText = ("", "")
+
+
+def library_text(library: Library | None) -> LibraryText:
+    """How ``library`` travels to the workers."""
+    return NO_LIBRARY if library is None else (library.label, json.dumps(library.as_json()))
+
+
 @functools.lru_cache(maxsize=8)
-def worker_evaluator(world: World) -> BatchEvaluator:
-    """This process's evaluator of ``world`` (one per process and world, kept: the kernels load once)."""
+def worker_evaluator(world: World, library: LibraryText = NO_LIBRARY) -> BatchEvaluator:
+    """This process's evaluator of ``world`` with ``library`` (one per process, world and library, kept: the
+    kernels load once)."""
     from swarm_sim.config import default_config
 
-    return BatchEvaluator(default_config(world) if isinstance(world, str) else world, threads=1)
+    label, text = library
+    return BatchEvaluator(
+        default_config(world) if isinstance(world, str) else world,
+        threads=1,
+        library=library_from_json(json.loads(text), label) if text else None,
+    )
 
 
-def evaluate_chunk(world: World, payloads: Sequence[Payload]) -> list[Answer]:
-    """A Dask task: the answers to ``payloads`` from this worker's evaluator of ``world``."""
+def evaluate_chunk(
+    world: World, payloads: Sequence[Payload], library: LibraryText = NO_LIBRARY
+) -> list[Answer]:
+    """A Dask task: the answers to ``payloads`` from this worker's evaluator of ``world`` and ``library``."""
     requests = [EvaluationRequest(tree=tree, seed=seed, trials=trials) for tree, seed, trials in payloads]
-    return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(world).evaluate(requests)]
+    return [(r.fitness, r.descriptors, r.error) for r in worker_evaluator(world, library).evaluate(requests)]
 
 
 def chunks(count: int, least: int, threads: int) -> list[range]:
@@ -91,38 +113,48 @@ class CompileKernels(WorkerPlugin):
 
     name = PLUGIN
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, library: LibraryText = NO_LIBRARY) -> None:
         self.world = world
+        self.library = library
 
     async def setup(self, worker: Worker) -> None:
-        await asyncio.to_thread(_warm_up, self.world)
+        await asyncio.to_thread(_warm_up, self.world, self.library)
 
 
-def _warm_up(world: World) -> None:
-    worker_evaluator(world).evaluate([EvaluationRequest(tree=WARM_UP_TREE, seed=0, trials=1)])
+def _warm_up(world: World, library: LibraryText) -> None:
+    worker_evaluator(world, library).evaluate([EvaluationRequest(tree=WARM_UP_TREE, seed=0, trials=1)])
 
 
 class DaskEvaluator:
     """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``, in
-    ``world`` (a model profile's name, or a Config): every batch cut into one chunk per worker thread, of
+    ``world`` (a model profile's name, or a Config) with ``library`` (a primitive library whose names the
+    trees may use, or None): every batch cut into one chunk per worker thread, of
     at least ``chunk`` evaluations; the threads are counted by the scheduler at most every ``recount`` s.
 
     A request that is not an ``EvaluationRequest`` is answered with an error result here, as the in-process
     evaluator does; everything else is answered by the workers. A chunk that fails on every worker it is
     given to (the scheduler's allowed failures spent) raises :class:`DispatchError`."""
 
-    def __init__(self, client: Client, world: World, chunk: int = CHUNK, recount: float = RECOUNT) -> None:
+    def __init__(
+        self,
+        client: Client,
+        world: World,
+        chunk: int = CHUNK,
+        recount: float = RECOUNT,
+        library: Library | None = None,
+    ) -> None:
         if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
             raise ValueError(f"chunk must be a positive integer, got {chunk!r}")
         self.client = client
         self.world = world
+        self.library = library_text(library)
         self.chunk = chunk
         self.recount = recount
         self.tasks = 0
         """Chunks sent so far."""
         self._threads = 0
         self._counted = -math.inf
-        client.register_plugin(CompileKernels(world))
+        client.register_plugin(CompileKernels(world, self.library))
 
     def threads(self) -> int:
         """Worker threads of the cluster (0 while it has none), asked at most every ``recount`` seconds."""
@@ -144,7 +176,11 @@ class DaskEvaluator:
             payloads.append((str(request.tree), int(request.seed), int(request.trials)))
         pieces = chunks(len(payloads), self.chunk, self.threads() if payloads else 0)
         futures = self.client.map(
-            evaluate_chunk, [self.world] * len(pieces), [[payloads[k] for k in p] for p in pieces], pure=False
+            evaluate_chunk,
+            [self.world] * len(pieces),
+            [[payloads[k] for k in p] for p in pieces],
+            [self.library] * len(pieces),
+            pure=False,
         )
         self.tasks += len(futures)
         try:
@@ -157,9 +193,9 @@ class DaskEvaluator:
             if len(answer) != len(piece):
                 raise DispatchError(f"a worker answered {len(answer)} of {len(piece)} requests")
             for k, (fitness, descriptors, reason) in zip(piece, answer, strict=True):
-                results[sent[k]] = EvaluationResult(_triple(fitness), _triple(descriptors), reason)
+                results[sent[k]] = EvaluationResult(
+                    None if fitness is None else tuple(fitness),
+                    None if descriptors is None else tuple(descriptors),
+                    reason,
+                )
         return results  # type: ignore[return-value]  # every position filled above
-
-
-def _triple(values: tuple[float, ...] | None) -> tuple[float, float, float] | None:
-    return None if values is None else (values[0], values[1], values[2])

@@ -22,7 +22,9 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from bt_controller.library import Library
 from bt_controller.validate import integer
+from bt_controller.vocabulary import CONDITIONS_2023
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.archive import Entry, Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import (
@@ -44,7 +46,7 @@ class Outcome:
     """What an algorithm needs to know of one evaluation (see ``swarm_sim.evaluation.EvaluationResult``)."""
 
     fitness: tuple[float, ...] | None
-    """(density, nest, food), or None for a failed evaluation."""
+    """Every objective (``OBJECTIVES`` order), or None for a failed evaluation."""
     descriptors: tuple[float, ...] | None
     """(movement, rotation, conditionality), or None for a failed evaluation."""
     error: str | None = None
@@ -89,12 +91,20 @@ class AskTell:
 
     name = "base"
 
-    def __init__(self, budget: int, seed: int) -> None:
+    def __init__(
+        self,
+        budget: int,
+        seed: int,
+        conditions: Sequence[str] = CONDITIONS_2023,
+        library: Library | None = None,
+    ) -> None:
         integer(budget, "the budget (evaluations)", 1, error=ConfigError)
         self.budget = budget
         self.seed = seed
         self.rng = random.Random(seed)
-        self.pset = make_primitive_set()
+        self.library = library
+        """The primitive library whose names are terminals (None: none)."""
+        self.pset = make_primitive_set(conditions, library)
         self.evaluations = 0
         self.produced = 0
         """Individuals produced after the initial population: what the budget counts."""
@@ -165,7 +175,7 @@ class AskTell:
     def _tree(
         self, text: str, fitness: Sequence[float] | None, descriptors: Sequence[float] | None = None
     ) -> BehaviourTree:
-        tree = tree_from_text(text, self.pset)
+        tree = tree_from_text(text, self.pset, library=self.library)
         if fitness is not None:
             tree.fitness.values = tuple(float(v) for v in fitness)
         if descriptors is not None:
@@ -195,17 +205,26 @@ class GeneticProgramming(AskTell):
     """Generational GP with tournaments, the parsimony tie-break and elitism.
 
     ``objectives`` are indices into ``OBJECTIVES``. With one objective this is GP_o (population 25,
-    tournament 3, one elite). With all three it is GP_fnd: every tournament compares on an objective drawn
-    uniformly, and the best tree found so far on each objective is kept as an elite (population 75,
-    tournament 5). A generation copies the elites, fills the population with varied tournament winners
+    tournament 3, one elite). With several (the paper's three; any set works alike) it is GP_fnd: every
+    tournament compares on an objective drawn uniformly, and the best tree found so far on each objective is
+    kept as an elite (population 75, tournament 5). A generation copies the elites, fills the population with
+    varied tournament winners
     and asks for the evaluation of every offspring that an operator touched; untouched ones keep their
     parent's fitness (as DEAP's ``eaSimple``).
     """
 
     name = "gp"
 
-    def __init__(self, objectives: Sequence[int], budget: int, seed: int, parameters: GPParameters) -> None:
-        super().__init__(budget, seed)
+    def __init__(
+        self,
+        objectives: Sequence[int],
+        budget: int,
+        seed: int,
+        parameters: GPParameters,
+        conditions: Sequence[str] = CONDITIONS_2023,
+        library: Library | None = None,
+    ) -> None:
+        super().__init__(budget, seed, conditions, library)
         objectives = tuple(int(o) for o in objectives)
         if (
             not objectives
@@ -329,9 +348,11 @@ class MapElites(AskTell):
         budget: int,
         seed: int,
         parameters: QDParameters,
+        conditions: Sequence[str] = CONDITIONS_2023,
+        library: Library | None = None,
         forms: SimplifiedForms | None = None,
     ) -> None:
-        super().__init__(budget, seed)
+        super().__init__(budget, seed, conditions, library)
         if objective not in range(len(OBJECTIVES)):
             raise ConfigError(f"objective must be an index into {OBJECTIVES}, got {objective}")
         p = parameters
@@ -378,7 +399,7 @@ class MapElites(AskTell):
 
     def _parent(self, entry: Entry) -> BehaviourTree:
         if entry.genome is None:
-            entry.genome = tree_from_text(entry.tree, self.pset)
+            entry.genome = tree_from_text(entry.tree, self.pset, library=self.library)
         tree = entry.genome
         assert isinstance(tree, BehaviourTree), "MAP-Elites keeps its DEAP tree as an entry's genome"
         tree.fitness.values = (entry.value,) * len(OBJECTIVES)

@@ -30,7 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.simplify import simplify
+from bt_controller.library import Library
+from bt_controller.simplify import simplify_if_small
 from bt_controller.tree import parse, to_text
 from evolution_manager.evolution.qdpy_grid import Features, Fitness, Grid, ScoresDict
 
@@ -40,19 +41,22 @@ WEIGHTS = (1.0,)
 
 
 class SimplifiedForms:
-    """The simplified form of a tree text, ``to_text(simplify(parse(text)))``, computed once per text.
+    """The simplified form of a tree text, ``to_text(simplify_if_small(parse(text)))``, once per text.
 
     ``bt_controller.simplify`` keeps every motor of every tick (so fitness, movement and rotation) and may
     change only the count of condition ticks (conditionality); it takes about a millisecond or two per
-    evolved tree, so one instance is shared by everything that asks (a run's grids and its cache)."""
+    evolved tree, so one instance is shared by everything that asks (a run's grids and its cache). A run
+    with a primitive library gives it: its names are parsed into their ``success`` copies, and the form is
+    the expanded tree's (two trees that expand to the same simplified tree are clones, names or not)."""
 
-    def __init__(self) -> None:
+    def __init__(self, library: Library | None = None) -> None:
         self._forms: dict[str, str] = {}
+        self.library = library
 
     def __call__(self, tree: str) -> str:
         form = self._forms.get(tree)
         if form is None:
-            form = self._forms[tree] = to_text(simplify(parse(tree)))
+            form = self._forms[tree] = to_text(simplify_if_small(parse(tree, library=self.library)))
         return form
 
 

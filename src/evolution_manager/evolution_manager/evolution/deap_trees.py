@@ -2,18 +2,23 @@
 
 The primitive set is built by :func:`make_primitive_set` (no global ``creator`` classes): one primitive per
 composite and number of children (``seq2`` ... ``prob4``, DEAP needs a fixed arity) and one terminal per
-condition and action, all named as in :mod:`bt_controller.vocabulary`. Primitives are never compiled: a tree
-is data, turned into text with :func:`tree_to_text` and read back with :func:`tree_from_text` through
+condition and action, all named as in :mod:`bt_controller.vocabulary` (the conditions of the run's task:
+the paper's eight, or all nine with ``got_food`` for foraging), and one terminal per primitive of a library
+(``bt_controller.library``: a name that stands for ``success(<its tree>)``). Primitives are never compiled:
+a tree is data, turned into text with :func:`tree_to_text` and read back with :func:`tree_from_text` through
 ``bt_controller``'s parser (DEAP's ``PrimitiveTree.from_string`` falls back to ``eval`` on unknown tokens).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from deap import base, gp
 
 from bt_controller.errors import TreeError
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, leaf_name, parse
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from bt_controller.library import Library
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, is_decorator, leaf_name, parse
+from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS_2023, MAX_CHILDREN, MIN_CHILDREN
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.parameters import MAX_TREE_NODES
 from swarm_sim.world import DESCRIPTORS, OBJECTIVES
@@ -31,9 +36,9 @@ __all__ = [
 
 
 class TripleFitness(base.Fitness):
-    """The three objectives (density, nest, food) of one evaluation, all maximised."""
+    """Every objective of one evaluation (``OBJECTIVES``), all maximised."""
 
-    weights = (1.0, 1.0, 1.0)
+    weights = (1.0,) * len(OBJECTIVES)
 
 
 class BehaviourTree(gp.PrimitiveTree):
@@ -59,17 +64,21 @@ def _never_called(*_children: object) -> None:  # pragma: no cover - trees are i
     raise TypeError("behaviour-tree primitives are data; interpret trees with bt_controller")
 
 
-def make_primitive_set() -> gp.PrimitiveSet:
-    """A fresh primitive set: composites with 2-4 children (``seq2`` ... ``prob4``), conditions and actions.
+def make_primitive_set(
+    conditions: Sequence[str] = CONDITIONS_2023, library: Library | None = None
+) -> gp.PrimitiveSet:
+    """A fresh primitive set: composites with 2-4 children (``seq2`` ... ``prob4``), ``conditions`` (the
+    paper's eight by default), actions, and the primitives of ``library`` by name.
 
-    Primitives are added composite by composite, arity by arity, and terminals as conditions then actions,
-    so the lists DEAP keeps (and the operators choose from) have a fixed order.
+    Primitives are added composite by composite, arity by arity, and terminals as conditions, actions, then
+    library primitives in the library's order, so the lists DEAP keeps (and the operators choose from) have a
+    fixed order (with the paper's conditions and no library, the set of the 2023 experiment).
     """
     pset = gp.PrimitiveSet("behaviour_tree", 0)
     for composite in COMPOSITES:
         for arity in range(MIN_CHILDREN, MAX_CHILDREN + 1):
             pset.addPrimitive(_never_called, arity, name=f"{composite}{arity}")
-    for name in CONDITIONS + ACTIONS:
+    for name in (*conditions, *ACTIONS, *(library.names if library is not None else ())):
         pset.addTerminal(name, name=name)
     return pset
 
@@ -96,16 +105,32 @@ def tree_to_text(tree: gp.PrimitiveTree) -> str:
 
 
 def tree_from_text(
-    text: str, pset: gp.PrimitiveSet, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH
+    text: str,
+    pset: gp.PrimitiveSet,
+    max_nodes: int = MAX_NODES,
+    max_depth: int = MAX_DEPTH,
+    library: Library | None = None,
 ) -> BehaviourTree:
-    """Parse a tree text with ``bt_controller``'s parser (limits on size and depth, no ``eval``) into a
-    :class:`BehaviourTree` of ``pset``; raise :class:`TreeTextError` saying what is wrong."""
+    """Parse a tree text with ``bt_controller``'s parser (limits on size and depth, the library's primitives
+    expanded; no ``eval``) into a :class:`BehaviourTree` of ``pset``, each ``success(<a primitive's tree>)``
+    back as that primitive's terminal; raise :class:`TreeTextError` saying what is wrong."""
     try:
-        root = parse(text, max_nodes=max_nodes, max_depth=max_depth)
+        root = parse(text, max_nodes=max_nodes, max_depth=max_depth, library=library)
     except (TreeError, TypeError) as error:
         raise TreeTextError(f"not a behaviour tree: {error}") from None
     nodes = []
+    skip = 0  # nodes left of a primitive's expansion, taken as its terminal
     for index, node in enumerate(root.preorder()):
+        if skip:
+            skip -= 1
+            continue
+        if library is not None and is_decorator(node):
+            assert isinstance(node, Composite)
+            name = library.fold(node)
+            if name in pset.mapping:
+                nodes.append(pset.mapping[name])
+                skip = node.size - 1
+                continue
         if isinstance(node, Composite) and node.draw_key not in (None, index):
             # DEAP's primitives cannot carry a key: the tree would draw differently (docs/interfaces.md).
             raise TreeTextError(

@@ -73,7 +73,7 @@ def score_heldout(run: Run, evaluator: Evaluator) -> dict:
         if len(scored) < len(chunk):  # a tree that failed on any held-out scenario has no held-out score
             means[tree] = None
             continue
-        means[tree] = [math.fsum(float(f[k]) for f in scored) / len(scored) for k in range(3)]
+        means[tree] = [math.fsum(float(f[k]) for f in scored) / len(scored) for k in range(len(OBJECTIVES))]
     document: dict = {
         "format": HELDOUT_FORMAT,
         "config": run.config.to_json(),

@@ -7,9 +7,10 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from bt_controller.library import Library, LibraryError, load_library
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
-from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
+from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, TASKS, RunConfig
 
 if TYPE_CHECKING:  # imported where used: tqdm loads slowly, and not every command needs it
     from tqdm import tqdm
@@ -37,16 +38,52 @@ def add_scenario_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_task_options(parser: argparse.ArgumentParser) -> None:
+    """``--task``, ``--objectives`` (GP_fnd's set) and ``--library`` (evolve and manager)."""
+    parser.add_argument(
+        "--task",
+        choices=tuple(TASKS),
+        help="primitives: 20 s trials and the paper's node set (default); foraging: the 2024 100 s foraging "
+        "trials, with got_food in the node set",
+    )
+    parser.add_argument(
+        "--objectives",
+        help=f"gp-fnd: the objectives it evolves at once, comma-separated (of {', '.join(OBJECTIVES)}; "
+        "default: density,nest,food for primitives, foraging for foraging)",
+    )
+    parser.add_argument(
+        "--library",
+        metavar="FILE",
+        help="a primitive library (JSON): its primitives' names join the node set as leaves",
+    )
+
+
+def library_from_args(args: argparse.Namespace) -> Library | None:
+    """The library of ``--library`` (None without one); UsageError with its one line."""
+    path = getattr(args, "library", None)
+    if path is None:
+        return None
+    try:
+        return load_library(path)
+    except LibraryError as error:
+        raise UsageError(f"--library: {error}") from None
+
+
 def config_from_args(args: argparse.Namespace) -> RunConfig:
     if args.algorithm is None:
         raise UsageError("--algorithm is required to start a run (gp, gp-fnd or qd)")
     if args.algorithm != "gp-fnd" and args.objective is None:
         raise UsageError(f"--algorithm {args.algorithm} needs --objective ({', '.join(OBJECTIVES)})")
     if args.algorithm == "gp-fnd" and args.objective is not None:
-        raise UsageError("--algorithm gp-fnd evolves all three objectives at once: leave out --objective")
+        raise UsageError("--algorithm gp-fnd evolves a set of objectives at once: leave out --objective")
+    objectives_text = getattr(args, "objectives", None)
+    if objectives_text is not None and args.algorithm != "gp-fnd":
+        raise UsageError(f"--objectives is for gp-fnd; --algorithm {args.algorithm} takes --objective")
+    fnd = tuple(o.strip() for o in objectives_text.split(",")) if objectives_text is not None else ()
     seed = 0 if args.seed is None else args.seed
     if args.scenario_seed is not None and args.scenarios == "fresh":
         raise UsageError("--scenario-seed applies to --scenarios fixed; leave it out with fresh")
+    library = library_from_args(args)
     try:
         return RunConfig.make(
             args.algorithm,
@@ -57,9 +94,14 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
             scenarios=args.scenarios or "fixed",
             scenario_seed=args.scenario_seed,
             profile=args.profile,
+            task=getattr(args, "task", None) or "primitives",
+            fnd_objectives=fnd,
+            library=str(library.label) if library is not None else "",
+            library_digest=library.digest if library is not None else "",
         )
     except EvolutionError as error:
-        raise UsageError(str(error).replace("the scenario seed", "--scenario-seed")) from None
+        message = str(error).replace("the scenario seed", "--scenario-seed")
+        raise UsageError(message.replace("objectives must", "--objectives must")) from None
 
 
 def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
@@ -72,7 +114,12 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         "scenarios": getattr(args, "scenarios", None),
         "scenario_seed": getattr(args, "scenario_seed", None),
         "profile": getattr(args, "profile", None),
+        "task": getattr(args, "task", None),
     }
+    if getattr(args, "objectives", None) is not None or getattr(args, "library", None) is not None:
+        raise UsageError(
+            "--objectives and --library are the run's, read from its directory: leave them out with --resume"
+        )
     for name, value in given.items():
         if value is not None and value != getattr(saved, name):
             raise UsageError(

@@ -4,20 +4,23 @@ A run directory holds (all written by this module, all plain text):
 
 ``config.json``
     the configuration and seed (never changed after the run starts);
+``library.json``
+    with a primitive library, the run's copy of it (what every later step of the run reads);
 ``evaluations.csv``
-    one row per evaluation: index, simulator seed, tree text, the three objectives, the three descriptors,
+    one row per evaluation: index, simulator seed, tree text, every objective, the three descriptors,
     error;
 ``progress.csv``
     one row per batch: evaluations so far, then for each objective the best fitness, the coverage and the QD
-    score of its repertoire (:meth:`Run.repertoire`);
+    score of its repertoire (:meth:`Run.repertoire`; empty for an objective the run has no grid of);
 ``checkpoint.json``
     the algorithm's state, the passive grids and the lengths of the two CSV files, written atomically;
 ``repertoire_<objective>.json``, ``archive.json`` (MAP-Elites), ``summary.json``, ``figures/``, ``best/``
     written when the run ends (see ``evolution_manager.viewing.results``).
 
-Every evaluated tree is offered to a passive grid per objective (3 per bin). The repertoire of an objective
-that the run evolves is what the authors' analysis measures: MAP-Elites' own archive; for GP a grid of one
-tree per bin offered every individual of generations 1 onwards (charts/analysis.py:96-121).
+Every evaluated tree is offered to a passive grid per objective of ``RunConfig.grids`` (3 per bin). The
+repertoire of an objective that the run evolves is what the authors' analysis measures: MAP-Elites' own
+archive; for GP a grid of one tree per bin offered every individual of generations 1 onwards
+(charts/analysis.py:96-121).
 
 Scenarios (``RunConfig.scenarios``): under ``fixed`` every evaluation uses the run's scenario seed, so a tree
 asked for again is answered from the run's cache of results (keyed by the canonical tree text) without
@@ -49,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
 from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
@@ -124,6 +128,7 @@ class RunDirectory:
         self.progress = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
         self.figures = self.root / "figures"
         self.best = self.root / "best"
+        self.library = self.root / "library.json"
 
     def repertoire(self, objective: str) -> Path:
         return self.root / f"repertoire_{objective}.json"
@@ -145,6 +150,19 @@ class RunDirectory:
         except (*_DAMAGE, EvolutionError) as error:
             raise RunDirectoryError(f"{self.config} is damaged: {error}") from error
 
+    def read_library(self, config: RunConfig) -> Library | None:
+        """The run's copy of its primitive library (None for a run without one), checked against the
+        configuration's digest."""
+        if not config.library:
+            return None
+        try:
+            library = library_from_json(read_json(self.library), config.library)
+        except (LibraryError, RunDirectoryError, *_DAMAGE) as error:
+            raise RunDirectoryError(f"{self.library} is damaged: {error}") from error
+        if library.digest != config.library_digest:
+            raise RunDirectoryError(f"{self.library} is not the library the run started with")
+        return library
+
     def temporary_files(self) -> list[Path]:
         """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
         if not self.root.is_dir():
@@ -155,16 +173,24 @@ class RunDirectory:
 class Run:
     """One run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
 
-    def __init__(self, config: RunConfig, directory: RunDirectory, evaluator: Evaluator | None) -> None:
+    def __init__(
+        self,
+        config: RunConfig,
+        directory: RunDirectory,
+        evaluator: Evaluator | None,
+        library: Library | None = None,
+    ) -> None:
         self.config = config
         self.directory = directory
         self.evaluator = evaluator
-        self.forms = SimplifiedForms()
+        self.library = library
+        """The run's primitive library (its copy in the run directory), or None."""
+        self.forms = SimplifiedForms(library)
         """The simplified form of every tree text that needed one (shared by the grids and the cache)."""
         self.grid_forms = self.forms if config.refuses_clones else None
         """What the grids refuse clones by: the simplified forms under ``clean``, nothing under ``paper``."""
-        self.algorithm: AskTell = config.make_algorithm(self.forms)
-        self.passive = {objective: Repertoire(forms=self.grid_forms) for objective in OBJECTIVES}
+        self.algorithm: AskTell = config.make_algorithm(library, self.forms)
+        self.passive = {objective: Repertoire(forms=self.grid_forms) for objective in config.grids}
         self.generations: dict[str, Repertoire] = {}
         """GP only: per evolved objective, the grid of one tree per bin of generations 1 onwards."""
         if isinstance(self.algorithm, GeneticProgramming):
@@ -191,7 +217,9 @@ class Run:
 
     # Construction ------------------------------------------------------------------------------------
     @classmethod
-    def start(cls, config: RunConfig, root: Path, evaluator: Evaluator) -> Run:
+    def start(
+        cls, config: RunConfig, root: Path, evaluator: Evaluator, library: Library | None = None
+    ) -> Run:
         """A new run in ``root``, which must not hold a run already (nothing saved is ever overwritten).
 
         The directory appears whole or not at all: it is built as a hidden sibling (``.<name>.new-*``) with
@@ -213,8 +241,10 @@ class Run:
         try:
             os.chmod(building, 0o777 & ~_umask())
             lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
-            run = cls(config, RunDirectory(building), evaluator)
+            run = cls(config, RunDirectory(building), evaluator, library)
             write_json(run.directory.config, config.to_json())
+            if library is not None:
+                write_json(run.directory.library, library.as_json())
             run.offsets = {
                 "evaluations": run.directory.evaluations.create(),
                 "progress": run.directory.progress.create(),
@@ -269,14 +299,24 @@ class Run:
             raise RunDirectoryError(
                 f"{directory.checkpoint} is not a checkpoint of format {CHECKPOINT_FORMAT}"
             )
-        run = cls(config, directory, evaluator)
+        for log in (directory.evaluations, directory.progress):
+            with open(log.path, newline="") as handle:
+                header = handle.readline().strip()
+            if header != ",".join(log.header):
+                raise RunDirectoryError(
+                    f"{log.path} was written with other columns ({header[:120]}): a run of an earlier "
+                    "version of the model, which this version cannot continue"
+                )
+        run = cls(config, directory, evaluator, directory.read_library(config))
         try:
             if RunConfig.from_json(state["config"]) != config:
                 raise RunDirectoryError(
                     f"{directory.checkpoint} belongs to another configuration than config.json"
                 )
             run.algorithm.restore(state["algorithm"])
-            run.passive = {o: Repertoire.from_state(state["passive"][o], run.grid_forms) for o in OBJECTIVES}
+            run.passive = {
+                o: Repertoire.from_state(state["passive"][o], run.grid_forms) for o in config.grids
+            }
             run.evaluations = integer(state["evaluations"], "evaluations", 0)
             logs = {"evaluations": directory.evaluations, "progress": directory.progress}
             for name, log in logs.items():
@@ -291,7 +331,7 @@ class Run:
             grids = [*run.passive.values(), *([archive] if archive is not None else [])]
             for grid in grids:
                 for entry in grid.entries():
-                    tree_from_text(entry.tree, run.algorithm.pset)
+                    tree_from_text(entry.tree, run.algorithm.pset, library=run.library)
             if run.algorithm.evaluations != run.evaluations or run.evaluations < 0:
                 raise ValueError(
                     f"the algorithm counts {run.algorithm.evaluations} evaluations, the run {run.evaluations}"
@@ -515,8 +555,8 @@ class Run:
             measured = outcome.measured()
             if measured is not None:
                 fitness, descriptors = measured
-                for k, objective in enumerate(OBJECTIVES):
-                    self.passive[objective].offer(request.tree, fitness[k], descriptors, index)
+                for objective, grid in self.passive.items():
+                    grid.offer(request.tree, fitness[OBJECTIVES.index(objective)], descriptors, index)
                 values = [number(v) for v in fitness + descriptors]
                 error = ""
             else:
@@ -530,9 +570,13 @@ class Run:
         self.offsets["progress"] = self.directory.progress.append([self.progress_row()])
 
     def progress_row(self) -> list[str]:
-        """Evaluations so far, then best, coverage and QD score of each objective's passive grid."""
+        """Evaluations so far, then best, coverage and QD score of each objective's repertoire (empty for an
+        objective without a grid in this run)."""
         row = [str(self.evaluations)]
         for objective in OBJECTIVES:
+            if objective not in self.passive:
+                row += ["", "", ""]
+                continue
             grid = self.repertoire(objective)
             row += [number(grid.best_value), number(grid.coverage), number(grid.qd_score)]
         return row
@@ -549,7 +593,7 @@ class Run:
                 "offsets": self.offsets,
                 "timing": {"evaluator": self.timing.evaluator, "manager": self.timing.manager},
                 "algorithm": self.algorithm.to_state(),
-                "passive": {o: self.passive[o].to_state() for o in OBJECTIVES},
+                "passive": {o: grid.to_state() for o, grid in self.passive.items()},
                 "generations": {o: grid.to_state() for o, grid in self.generations.items()},
             },
             indent=None,
@@ -571,5 +615,7 @@ def _row_outcome(row: dict[str, str]) -> Outcome:
     """The outcome a row of ``evaluations.csv`` records."""
     if row["error"]:
         return Outcome(None, None, row["error"])
-    values = [float(row[name]) for name in (*OBJECTIVES, *DESCRIPTORS)]
-    return Outcome((values[0], values[1], values[2]), (values[3], values[4], values[5]))
+    return Outcome(
+        tuple(float(row[name]) for name in OBJECTIVES),
+        tuple(float(row[name]) for name in DESCRIPTORS),
+    )

@@ -13,6 +13,15 @@ experiment, or ``clean``), recorded in ``config.json``. It also decides what a r
 that simplify to the same tree (``docs/algorithms.md``, "Clones"): under ``paper`` with fixed scenarios a
 tree whose simplified form an earlier batch evaluated takes that evaluation's values unsimulated, as the
 authors' code; under ``clean`` every grid refuses a tree whose simplified form is already in its bin.
+
+Task: the trial length every evaluation uses (``swarm_sim.config.TASKS``: ``primitives``, the 2023 20 s
+trials, or ``foraging``, the 2024 100 s trials), and the node set: the paper's 8 conditions for
+``primitives``, every condition (``got_food`` too) for ``foraging``. Objectives: GP_o and QD_o evolve one of
+``OBJECTIVES``, GP_fnd any set of them (``fnd_objectives``; by default the task's: the paper's three, or
+foraging alone). A run also keeps a passive grid per objective of ``grids``: the task's objectives and the
+evolved ones. Library: a primitive library (``bt_controller.library``) whose names become terminals of the
+node set; the run keeps a copy of it (``library.json`` in the run directory) and records the file and its
+digest here.
 """
 
 from __future__ import annotations
@@ -28,11 +37,14 @@ from bt_controller.draws import (
     RUN_SCENARIO,
     derive_seed,
 )
+from bt_controller.library import Library
 from bt_controller.timeline import PROFILES, Timeline
 from bt_controller.validate import integer
+from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
 from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.config import DEFAULT_TASK, TASKS, Config, default_config
+from swarm_sim.world import OBJECTIVES, PAPER_OBJECTIVES
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.algorithms import AskTell
@@ -53,6 +65,13 @@ SCENARIOS: tuple[str, ...] = ("fixed", "fresh")
 
 HELDOUT_EVALUATIONS = 5
 """Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
+
+TASK_OBJECTIVES: dict[str, tuple[str, ...]] = {
+    "primitives": PAPER_OBJECTIVES,
+    "foraging": tuple(o for o in OBJECTIVES if o == "foraging"),
+}
+"""The objectives a run of each task shows (passive grids, summary, figures) besides those it evolves, and
+GP_fnd's default set: the paper's three for ``primitives``, foraging for ``foraging``."""
 
 
 def default_scenario_seed(run_seed: int) -> int:
@@ -76,17 +95,39 @@ class RunConfig:
     """-1: derived from ``seed`` (see :func:`default_scenario_seed`); replaced by the value at creation."""
     profile: str = DEFAULT_PROFILE
     """The model's profile (``docs/model.md``), the same for every evaluation of the run."""
+    task: str = DEFAULT_TASK
+    """The trial length and node set (``swarm_sim.config.TASKS``)."""
+    fnd_objectives: tuple[str, ...] = ()
+    """GP_fnd: the objectives it evolves at once (empty: the task's, ``TASK_OBJECTIVES``); empty otherwise."""
+    library: str = ""
+    """The primitive library file the run was started with ("" for none); the run uses its copy."""
+    library_digest: str = ""
+    """The digest of that library (``bt_controller.library.Library.digest``)."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
+        if self.task not in TASKS:
+            raise ConfigError(f"task must be one of {', '.join(TASKS)}, got {self.task!r}")
+        object.__setattr__(self, "fnd_objectives", tuple(self.fnd_objectives))
         if self.algorithm == "gp-fnd":
             if self.objective is not None:
-                raise ConfigError("gp-fnd evolves all three objectives at once: leave out the objective")
-        elif self.objective not in OBJECTIVES:
-            raise ConfigError(
-                f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; got {self.objective!r}"
-            )
+                raise ConfigError("gp-fnd evolves a set of objectives at once: leave out the objective")
+            for name in self.fnd_objectives:
+                if name not in OBJECTIVES:
+                    raise ConfigError(f"objectives must be among {', '.join(OBJECTIVES)}; got {name!r}")
+            if len(set(self.fnd_objectives)) != len(self.fnd_objectives):
+                raise ConfigError(f"objectives must be distinct, got {', '.join(self.fnd_objectives)}")
+        else:
+            if self.fnd_objectives:
+                raise ConfigError(f"{self.algorithm} evolves one objective; a set of them is for gp-fnd")
+            if self.objective not in OBJECTIVES:
+                raise ConfigError(
+                    f"{self.algorithm} needs an objective, one of {', '.join(OBJECTIVES)}; "
+                    f"got {self.objective!r}"
+                )
+        if bool(self.library) != bool(self.library_digest):
+            raise ConfigError("a library needs its digest (and a digest its library)")
         integer(self.evaluations, "evaluations", 1, error=ConfigError)
         integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
         integer(self.trials, "trials", 1, error=ConfigError)
@@ -109,6 +150,10 @@ class RunConfig:
         scenarios: str = "fixed",
         scenario_seed: int | None = None,
         profile: str | None = None,
+        task: str = DEFAULT_TASK,
+        fnd_objectives: tuple[str, ...] = (),
+        library: str = "",
+        library_digest: str = "",
     ) -> RunConfig:
         """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
         for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
@@ -127,6 +172,10 @@ class RunConfig:
             scenarios=scenarios,
             scenario_seed=-1 if scenario_seed is None else scenario_seed,
             profile=DEFAULT_PROFILE if profile is None else profile,
+            task=task,
+            fnd_objectives=fnd_objectives,
+            library=library,
+            library_digest=library_digest,
         )
 
     def request_seed(self, index: int) -> int:
@@ -141,8 +190,18 @@ class RunConfig:
 
     @property
     def objectives(self) -> tuple[str, ...]:
-        """The objectives this run evolves."""
-        return OBJECTIVES if self.objective is None else (self.objective,)
+        """The objectives this run evolves, in ``OBJECTIVES`` order."""
+        if self.objective is not None:
+            return (self.objective,)
+        chosen = self.fnd_objectives or TASK_OBJECTIVES[self.task]
+        return tuple(o for o in OBJECTIVES if o in chosen)
+
+    @property
+    def grids(self) -> tuple[str, ...]:
+        """The objectives the run keeps a passive grid of and shows (summary, repertoires, figures): the
+        task's and the evolved ones, in ``OBJECTIVES`` order."""
+        shown = set(TASK_OBJECTIVES[self.task]) | set(self.objectives)
+        return tuple(o for o in OBJECTIVES if o in shown)
 
     @property
     def label(self) -> str:
@@ -153,6 +212,7 @@ class RunConfig:
 
     def to_json(self) -> dict:
         data = asdict(self)
+        data["fnd_objectives"] = list(self.fnd_objectives)
         data["gp"]["mutations"] = [list(m) for m in self.gp.mutations]
         data["qd"]["mutations"] = [list(m) for m in self.qd.mutations]
         return data
@@ -177,11 +237,26 @@ class RunConfig:
                 scenario_seed=integer(data.get("scenario_seed", -1), "scenario_seed"),
                 # run directories written before profiles existed ran the model's default
                 profile=str(data.get("profile", DEFAULT_PROFILE)),
+                # ... and before tasks and libraries, the primitives' trials without a library
+                task=str(data.get("task", DEFAULT_TASK)),
+                fnd_objectives=tuple(str(o) for o in data.get("fnd_objectives", ())),
+                library=str(data.get("library", "")),
+                library_digest=str(data.get("library_digest", "")),
             )
         except (KeyError, TypeError, ValueError, OverflowError) as error:
             if isinstance(error, ConfigError):
                 raise
             raise ConfigError(f"not a run configuration: {error}") from error
+
+    def world(self) -> Config:
+        """The model every evaluation of the run uses: its profile and its task's trial length."""
+        return default_config(self.profile, self.task)
+
+    @property
+    def conditions(self) -> tuple[str, ...]:
+        """The conditions of the run's node set: the paper's eight (``primitives``) or all (``foraging``, with
+        ``got_food``: the 2024 baseline's node set, params.py:168-189 at a73e4af)."""
+        return CONDITIONS_2023 if self.task == "primitives" else CONDITIONS
 
     @property
     def refuses_clones(self) -> bool:
@@ -195,19 +270,30 @@ class RunConfig:
         qdpy/ea.py:447-478 and gp/ea.py:506-555)."""
         return self.profile == "paper" and self.scenarios == "fixed"
 
-    def make_algorithm(self, forms: SimplifiedForms | None = None) -> AskTell:
+    def make_algorithm(self, library: Library | None = None, forms: SimplifiedForms | None = None) -> AskTell:
         """A fresh algorithm for this configuration, with its own generator seeded from the run seed;
-        ``forms``: the run's simplified forms, shared with MAP-Elites' archive when it refuses clones."""
+        ``library``: the run's primitive library (its names become terminals; the run's copy of
+        ``self.library``); ``forms``: the run's simplified forms, shared with MAP-Elites' archive when it
+        refuses clones."""
         from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites
         from evolution_manager.evolution.archive import SimplifiedForms
 
+        if (library.digest if library is not None else "") != self.library_digest:
+            raise ConfigError(
+                f"the primitive library given ({library.label if library else 'none'}) is not the run's "
+                f"({self.library or 'none'})"
+            )
         algorithm_seed = derive_seed(self.seed, RUN_ALGORITHM)
         if self.algorithm == "qd":
-            grid_forms = (forms or SimplifiedForms()) if self.refuses_clones else None
+            grid_forms = (forms or SimplifiedForms(library)) if self.refuses_clones else None
             objective = OBJECTIVES.index(self.objective)
-            return MapElites(objective, self.evaluations, algorithm_seed, self.qd, grid_forms)
-        objectives = range(len(OBJECTIVES)) if self.objective is None else [OBJECTIVES.index(self.objective)]
-        return GeneticProgramming(list(objectives), self.evaluations, algorithm_seed, self.gp)
+            return MapElites(
+                objective, self.evaluations, algorithm_seed, self.qd, self.conditions, library, grid_forms
+            )
+        objectives = [OBJECTIVES.index(o) for o in self.objectives]
+        return GeneticProgramming(
+            objectives, self.evaluations, algorithm_seed, self.gp, self.conditions, library
+        )
 
 
 def evaluation_seed(run_seed: int, index: int) -> int:

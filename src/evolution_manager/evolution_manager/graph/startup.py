@@ -194,13 +194,17 @@ def trial_graph_nodes(
     profile: str = "",
     conditions: Sequence[str] = (),
     clock: str = "/clock",
+    library: str = "",
+    ticks: int | None = None,
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
     namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
     profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
     ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
-    (``/clock``, at the root whatever the namespace, unless two graphs share a domain)."""
+    (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
+    primitive library file every controller reads (its ``library`` parameter); ``ticks``: the simulator's
+    trial length when given (a task's, ``swarm_sim.config.TASKS``)."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
     prefix = namespace.rstrip("/")
@@ -209,6 +213,11 @@ def trial_graph_nodes(
         simulator["profile"] = profile
     if conditions:
         simulator["conditions"] = " ".join(conditions)
+    if ticks is not None:
+        simulator["ticks"] = ticks
+    controller: dict[str, object] = {"library": library} if library else {}
+    if tree:
+        controller["tree"] = tree
     remaps = {"/clock": clock} if clock != "/clock" else {}
     nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
     for robot in robot_namespaces(robots):
@@ -218,7 +227,7 @@ def trial_graph_nodes(
                 "bt_controller",
                 "footbot_controller",
                 f"{prefix}/{robot}",
-                {"tree": tree} if tree else {},
+                dict(controller),
             )
         )
     return nodes
@@ -233,13 +242,18 @@ def start_trial_graph(
     params_file: Path | None = None,
     profile: str = "",
     clock: str = "/clock",
+    library: str = "",
+    ticks: int | None = None,
 ) -> None:
     """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
-    clock=clock)``, each in its own process, with its package's parameter file and then ``params_file`` (every
-    node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the simulator's model profile. The
-    simulator, a managed node, is started unconfigured (``autostart:=false``): the caller drives it through
-    configure and activate (``TrialRunner.activate``)."""
-    for spec in trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions, clock=clock):
+    clock=clock, library=library, ticks=ticks)``, each in its own process, with its package's parameter file
+    and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the
+    simulator's model profile. The simulator, a managed node, is started unconfigured (``autostart:=false``):
+    the caller drives it through configure and activate (``TrialRunner.activate``)."""
+    nodes = trial_graph_nodes(
+        robots, namespace, profile=profile, conditions=conditions, clock=clock, library=library, ticks=ticks
+    )
+    for spec in nodes:
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
         managed = {"autostart": "false"} if spec.executable == "simulator" else {}
         graph.start(

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
@@ -29,6 +30,34 @@ from evolution_manager.errors import BagError
 from evolution_manager.processes import Lock, exclusive_lock, is_locked, lock_holder, lock_path_for
 
 INTERFACE_PACKAGE = "swarm_msgs"
+
+LATCHED_TOPICS = ("trial_start", "markers")
+"""The last names of the simulator's transient-local (latched) topics; every other topic is volatile."""
+
+
+def is_latched(topic: str) -> bool:
+    """Whether ``topic`` (an absolute name) is one of the simulator's transient-local topics."""
+    return topic.rsplit("/", 1)[-1] in LATCHED_TOPICS
+
+
+_UNSET = QosTime(sec=0, nsec=0)  # rosbag2's "default" duration, as `ros2 bag record` writes it
+
+
+def offered_qos(topic: str) -> Qos:
+    """The QoS the graph's publishers offer on ``topic`` (swarm_ros.qos RELIABLE, or LATCHED for latched
+    topics), in the form bags record it, so that ``ros2 bag play`` republishes latched topics latched."""
+    latched = is_latched(topic)
+    return Qos(
+        history=QosHistory.KEEP_LAST,
+        depth=1 if latched else 1000,  # swarm_ros.qos LATCHED and RELIABLE (a test checks)
+        reliability=QosReliability.RELIABLE,
+        durability=QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
+        deadline=_UNSET,
+        lifespan=_UNSET,
+        liveliness=QosLiveliness.AUTOMATIC,
+        liveliness_lease_duration=_UNSET,
+        avoid_ros_namespace_conventions=False,
+    )
 
 
 def bag_lock(path: Path) -> Path:
@@ -122,7 +151,9 @@ class BagRecorder:
             raise BagError("the recorder is not open: use it as a context manager")
         connection = self._connections.get(topic)
         if connection is None:
-            connection = self._writer.add_connection(topic, msgtype, typestore=self.typestore)
+            connection = self._writer.add_connection(
+                topic, msgtype, typestore=self.typestore, offered_qos_profiles=[offered_qos(topic)]
+            )
             self._connections[topic] = connection
         elif connection.msgtype != msgtype:
             raise BagError(f"topic {topic} is recorded as {connection.msgtype}, not {msgtype}")

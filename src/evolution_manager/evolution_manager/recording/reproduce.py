@@ -1,16 +1,18 @@
 """Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
 
-A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed and trial index) and ends with
-``/trial_result`` (the tree, the model's profile and the six values); ``/swarm_state`` holds the exact
-poses of every step of the trial's chain up to the trial (the earlier trials of the chain are run, and
-recorded, first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
-trial is re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``),
-under the recorded profile, and every recorded pose and value is compared with the re-run's, bit for bit.
+A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed, trial index and the trial's length in
+ticks) and ends with ``/trial_result`` (the tree, with any primitives written out, the model's profile and
+every value); ``/swarm_state`` holds the exact poses, and each robot's carrying flag and deliveries, of every
+step of the trial's chain up to the trial (the earlier trials of the chain are run, and recorded, first). A
+graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The trial is re-run
+in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``), under the recorded
+profile and trial length, and every recorded pose, carrying flag, delivery count and value is compared with
+the re-run's, bit for bit (a bag recorded before foraging has none of these to compare).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from bt_controller.errors import TreeError
@@ -43,7 +45,7 @@ class Verification:
     def summary(self) -> str:
         what = f"trial {self.trial} of seed {self.seed} with {self.tree}"
         if self.reproduced:
-            return f"reproduced: {what}: {self.steps_compared} steps of poses and all six values identical"
+            return f"reproduced: {what}: {self.steps_compared} steps of poses and every value identical"
         return f"NOT reproduced: {what}: {self.first_divergence}"
 
 
@@ -74,6 +76,11 @@ def verify_trial_bag(path: Path | str) -> Verification:
         raise BagError(f"the recorded profile {profile!r} is not one of {', '.join(PROFILES)}")
 
     recorded = {state.step: [(p.x, p.y, p.theta) for p in state.poses] for state in states}
+    cargo = {
+        state.step: (list(state.carrying), list(state.deliveries))
+        for state in states
+        if len(getattr(state, "carrying", ()))  # bags before foraging, and a chain's first step: none
+    }
     divergences: list[str] = []
     visited: list[int] = []
 
@@ -82,11 +89,17 @@ def verify_trial_bag(path: Path | str) -> Verification:
         poses = [tuple(p) for p in world.poses().tolist()]
         if not divergences and recorded.get(world.step) != poses:
             divergences.append(f"the poses differ at step {world.step}")
+        carried = ([bool(c) for c in world.carrying], [int(d) for d in world.deliveries])
+        if not divergences and world.step in cargo and cargo[world.step] != carried:
+            divergences.append(f"the carrying flags or deliveries differ at step {world.step}")
 
-    record = run_with_controllers(tree, seed, trial, default_config(profile), on_step=compare)
+    # the trial's length (bags recorded before tasks: the primitives' trials)
+    config = replace(default_config(profile), ticks=int(getattr(start, "ticks", 0) or DEFAULT.ticks))
+    record = run_with_controllers(tree, seed, trial, config, on_step=compare)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
     for name, value in zip(VALUE_NAMES, record.values, strict=True):
-        if not divergences and getattr(result, name) != value:
-            divergences.append(f"{name} was {getattr(result, name)!r}, the re-run gives {value!r}")
+        was = getattr(result, name, None)  # bags recorded before the six primitives: the paper's values
+        if not divergences and was is not None and was != value:
+            divergences.append(f"{name} was {was!r}, the re-run gives {value!r}")
     return Verification(result.tree, seed, trial, len(recorded), divergences[0] if divergences else None)

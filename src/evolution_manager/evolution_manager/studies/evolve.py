@@ -31,8 +31,10 @@ from evolution_manager.cluster.settings import add_cluster_options, settings_fro
 from evolution_manager.errors import DispatchError, EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import (
     add_scenario_options,
+    add_task_options,
     check_resume_options,
     config_from_args,
+    library_from_args,
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
@@ -41,6 +43,8 @@ from evolution_manager.processes import exit_status, signals_as_interrupts
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from distributed import Client
 
+    from bt_controller.library import Library
+    from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
 
 
@@ -51,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
     )
     parser.add_argument(
-        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd evolves all)"
+        "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd: --objectives)"
     )
     budgets = ", ".join(f"{a} {n}" for a, n in DEFAULT_EVALUATIONS.items())
     parser.add_argument(
@@ -62,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=seed_int, help="run seed, an integer in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
     add_scenario_options(parser)
+    add_task_options(parser)
     parser.add_argument(
         "--out", type=Path, required=True, help="run directory (must not hold a run, unless --resume)"
     )
@@ -84,17 +89,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _evaluator(workers: int | None, profile: str, client: Client | None = None) -> Evaluator:
-    """The run's evaluator: the cluster's workers through ``client``, else ``workers`` threads here."""
+def _evaluator(
+    workers: int | None, config: RunConfig, library: Library | None, client: Client | None = None
+) -> Evaluator:
+    """The run's evaluator of the run's world (profile and trial length) and library: the cluster's workers
+    through ``client``, else ``workers`` threads here."""
     if client is not None:
         from evolution_manager.cluster.evaluator import DaskEvaluator
 
-        return DaskEvaluator(client, profile)
-    from swarm_sim.config import default_config
+        return DaskEvaluator(client, config.world(), library=library)
     from swarm_sim.evaluation import BatchEvaluator
 
     try:
-        return BatchEvaluator(default_config(profile), threads=workers or 1)
+        return BatchEvaluator(config.world(), threads=workers or 1, library=library)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
 
@@ -126,21 +133,21 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 raise UsageError(f"--resume: {args.out} holds no run to continue (no config.json)")
             saved = directory.read_config()
             check_resume_options(args, saved)
-            profile = saved.profile
+            config = saved
+            library = directory.read_library(saved)
         else:
             if directory.started():
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
             assert config is not None  # made from the options when not resuming
-            profile = config.profile
+            library = library_from_args(args)
         client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
-        evaluator = _evaluator(args.workers, profile, client)
+        evaluator = _evaluator(args.workers, config, library, client)
         if args.resume:
             run = Run.resume(args.out, evaluator)
         else:
-            assert config is not None
-            run = Run.start(config, args.out, evaluator)
+            run = Run.start(config, args.out, evaluator, library)
     except WriteError as error:  # the new run directory could not be written
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_IO

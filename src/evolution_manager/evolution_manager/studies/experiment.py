@@ -55,10 +55,10 @@ from evolution_manager.arguments import (
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
-from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
+from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
@@ -141,14 +141,13 @@ def run_one(
 
     from evolution_manager.evolution.run import Run, RunDirectory
     from evolution_manager.viewing.results import write_results
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
     if finished(directory.root):
         return root
-    evaluator = BatchEvaluator(default_config(config.profile), threads=1)
+    evaluator = BatchEvaluator(config.world(), threads=1)  # the run's profile and trial length
     if directory.started():
         run = Run.resume(directory.root, evaluator)
         if run.config != config:

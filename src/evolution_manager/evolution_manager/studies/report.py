@@ -24,12 +24,12 @@ from pathlib import Path
 from evolution_manager.arguments import EXIT_USAGE, Parser
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.archive import Repertoire
-from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import PROGRESS_HEADER
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE
 from evolution_manager.files import CsvLog, number, read_json, read_json_object, write_atomic
 from evolution_manager.studies.significance import ALPHA, Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
+from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
 
 METRICS = (("best_fitness", "best fitness", 4), ("coverage", "coverage", 5), ("qd_score", "QD score", 6))
 """(summary key, name, figure number in the paper)."""

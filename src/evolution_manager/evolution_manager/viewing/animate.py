@@ -2,9 +2,10 @@
 come from ``evolution_manager.viewing.frames``.
 
 ``render_frame`` draws one frame with Pillow: the arena as the paper's fig. 1 (nest disc at the centre, the
-gap, the food region outside it), robots with heading and id, a trail, message links, and a side panel with
-step, tick, fitness so far and each robot's action. ``write_animation`` writes a GIF (or an MP4 through
-ffmpeg when it is installed).
+gap, the food region outside it), robots with heading and id (a robot carrying food with a green ring), a
+trail, message links, and a side panel with step, tick, fitness so far (the paper's three objectives, or
+foraging with the deliveries so far in a foraging trial) and each robot's action. ``write_animation`` writes a
+GIF (or an MP4 through ffmpeg when it is installed).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ ROBOT_COLOURS = (
 NEST_COLOUR = (246, 214, 160)
 FOOD_COLOUR = (196, 230, 180)
 GAP_COLOUR = (250, 250, 250)
+CARRY_COLOUR = (30, 130, 30)
 
 
 DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
@@ -100,22 +102,30 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     for i in range(frames.n_robots):
         x, y = to_pixels(frames, *poses[k, i, :2])
         heading = poses[k, i, 2]
+        if frames.carrying[k, i]:  # carrying food: a ring in the food region's darker green
+            ring = radius + 3
+            draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=CARRY_COLOUR, width=3)
         draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
         tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))
         draw.line(((x, y), tip), fill=(0, 0, 0), width=2)
         draw.text((x + radius + 1, y - radius - 9), str(i), font=font, fill=(0, 0, 0))
     panel = ARENA_PX + 10
     tick = int(frames.ticks[k])
+    shown = shown_objectives(frames)
     lines = [
         f"seed {frames.seed}, trial {frames.trial}",
         f"step {int(frames.steps[k])} of {int(frames.steps[-1])}",
         f"tick {tick if tick >= 0 else '-'}",
-        "fitness so far:",
     ]
+    if "foraging" in shown:  # a foraging trial: the swarm's deliveries so far and how many robots carry food
+        delivered, carrying = int(frames.deliveries[k].sum()), int(frames.carrying[k].sum())
+        lines.append(f"deliveries {delivered}, carrying {carrying}")
+    lines.append("fitness so far:")
     from swarm_sim.world import OBJECTIVES
 
     for name, value in zip(OBJECTIVES, frames.fitness[k], strict=True):
-        lines.append(f"  {name:8s} {'-' if math.isnan(value) else f'{value:.3f}'}")
+        if name in shown:
+            lines.append(f"  {name:8s} {'-' if math.isnan(value) else f'{value:.3f}'}")
     lines.append("actions:")
     y = 10
     for line in lines:
@@ -132,6 +142,16 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         )
         y += 15
     return image
+
+
+def shown_objectives(frames: TrialFrames) -> tuple[str, ...]:
+    """The objectives a frame's panel shows: foraging in a foraging trial (the task's 200 ticks), else the
+    paper's three."""
+    from swarm_sim.config import TASKS
+    from swarm_sim.world import PAPER_OBJECTIVES
+
+    foraging = len(frames.steps) >= TASKS["foraging"] * 4  # 800 steps (816 under clean)
+    return ("foraging",) if foraging else PAPER_OBJECTIVES
 
 
 def _light(colour: tuple[int, int, int]) -> tuple[int, int, int]:

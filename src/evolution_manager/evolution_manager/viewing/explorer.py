@@ -23,13 +23,15 @@ import csv
 import html
 import json
 import math
-import struct
 import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from bt_controller.simplify import simplify
+import numpy as np
+
+from bt_controller.library import Library, LibraryError, library_from_json
+from bt_controller.simplify import simplify_if_small
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import ExplorerError
 from evolution_manager.files import write_atomic
@@ -95,34 +97,52 @@ def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
     return evaluation_seed(run_seed, int(evaluation or 0))
 
 
-def _pack(frames: TrialFrames, stride: int) -> dict:
+def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
-    heading (u8, 256 steps a turn); then density, nest, food so far (u16, value * 10000; 65535: not yet); the
-    last tick (u8, 255: none); each robot's action (u8, 255: none). Little-endian."""
+    heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
+    10000, at most 65534; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255:
+    none); whether each robot carries food (u8). Little-endian, packed (no padding)."""
+    from swarm_sim.world import OBJECTIVES
+
+    columns = [OBJECTIVES.index(o) for o in objectives]
     keep = list(range(0, len(frames.steps), stride))
     if keep[-1] != len(frames.steps) - 1:
         keep.append(len(frames.steps) - 1)
-    out = bytearray()
-    half = frames.arena_half
-    for k in keep:
-        for x, y, h in frames.poses[k]:
-            out += struct.pack(
-                "<HHB",
-                round((x + half) * 10),
-                round((y + half) * 10),
-                round((h % (2 * math.pi)) / (2 * math.pi) * 256) % 256,
-            )
-        for value in frames.fitness[k]:
-            out += struct.pack("<H", 65535 if math.isnan(value) else round(value * 10000))
-        tick = int(frames.ticks[k])
-        out += struct.pack("<B", 255 if tick < 0 else tick)
-        out += bytes(255 if a < 0 else int(a) for a in frames.actions[k])
+    rows = np.asarray(keep)
+    poses = np.asarray(frames.poses, dtype=np.float64)[rows]
+    fitness = np.asarray(frames.fitness, dtype=np.float64)[rows][:, columns]
+    ticks = np.asarray(frames.ticks)[rows]
+    actions = np.asarray(frames.actions)[rows]
+    carrying = np.asarray(frames.carrying)[rows]
+    robots = poses.shape[1]
+    # One record per kept frame; a dtype given as a list of fields is packed, as struct's "<" formats.
+    record = np.dtype(
+        [
+            ("pose", [("x", "<u2"), ("y", "<u2"), ("heading", "u1")], (robots,)),
+            ("fitness", "<u2", (len(columns),)),
+            ("tick", "<u2"),
+            ("action", "u1", (robots,)),
+            ("carrying", "u1", (robots,)),
+        ]
+    )
+    packed = np.zeros(len(rows), dtype=record)
+    half, turn = frames.arena_half, 2 * math.pi
+    # np.rint rounds halves to even, as Python's round does, and np.mod is Python's % on floats.
+    packed["pose"]["x"] = np.rint((poses[:, :, 0] + half) * 10)
+    packed["pose"]["y"] = np.rint((poses[:, :, 1] + half) * 10)
+    packed["pose"]["heading"] = np.rint(np.mod(poses[:, :, 2], turn) / turn * 256) % 256
+    scaled = np.minimum(np.rint(np.nan_to_num(fitness) * 10000), 65534)  # foraging may pass 6.5534: capped
+    packed["fitness"] = np.where(np.isnan(fitness), 65535, scaled)
+    packed["tick"] = np.where(ticks < 0, 65535, ticks)
+    packed["action"] = np.where(actions < 0, 255, actions)
+    packed["carrying"] = carrying
+    out = packed.tobytes()
     return {
         "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
         "trial": frames.trial,
         "gap": frames.gap,
         "steps": [int(frames.steps[k]) for k in keep],
-        "data": base64.b64encode(bytes(out)).decode("ascii"),
+        "data": base64.b64encode(out).decode("ascii"),
     }
 
 
@@ -142,6 +162,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     objectives: dict[str, dict] = {}
     simplified: dict[str, str] = {}
     held_out = _held_out_scores(root, config)
+    library = _library(root, config)
     from swarm_sim.world import OBJECTIVES
 
     for objective in OBJECTIVES:
@@ -153,7 +174,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         for item in document.get("items", []):
             tree = item["tree"]
             if tree not in simplified:  # the repertoire file holds it (simplified when it was written)
-                simplified[tree] = item.get("simplified") or to_text(simplify(parse(tree)))
+                simplified[tree] = item.get("simplified") or _simplified(tree, library)
             entry = {
                 "tree": tree,
                 "simplified": simplified[tree],
@@ -184,7 +205,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         from evolution_manager.viewing.frames import frames_from_tree
         from swarm_sim.config import DEFAULT, default_config
 
-        model = default_config(config.get("profile") or DEFAULT.profile)  # the run's model
+        # the run's model: its profile and its task's trial length
+        model = default_config(config.get("profile") or DEFAULT.profile, config.get("task") or "primitives")
         seeds = _evaluation_seeds(root)
         wanted = []
         for grid in objectives.values():
@@ -196,7 +218,8 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
             key = f"{entry['simplified']}|{seed}"
             if key not in animations:
                 # The simplified tree sets the same motors: the same trial, a little faster to run.
-                animations[key] = _pack(frames_from_tree(entry["simplified"], seed, 0, model), STRIDE)
+                frames = frames_from_tree(entry["simplified"], seed, 0, model, library)
+                animations[key] = _pack(frames, STRIDE, list(objectives))
             entry["animation"] = key
             if progress is not None:
                 progress(done, len(wanted))
@@ -217,6 +240,23 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         "arena": _arena(),
         "actions": _actions(),
     }
+
+
+def _library(root: Path, config: dict) -> Library | None:
+    """The run's copy of its primitive library (``library.json``), or None for a run without one."""
+    path = root / "library.json"
+    if not config.get("library") or not path.exists():
+        return None
+    try:
+        return library_from_json(_read(path), str(config["library"]))
+    except LibraryError as error:
+        raise ExplorerError(str(error)) from None
+
+
+def _simplified(tree: str, library: Library | None) -> str:
+    """The simplified text of a tree text, the library's names kept."""
+    simple = simplify_if_small(parse(tree, library=library))
+    return to_text(simple) if library is None else library.fold(simple)
 
 
 def _arena() -> dict:

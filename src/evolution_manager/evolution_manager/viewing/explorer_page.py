@@ -73,6 +73,13 @@ function fmt(v) { return v === undefined || v === null ? "-" : Number(v).toFixed
 function hasHeldOut(objective) {
   return Object.values(DATA.objectives[objective].bins).some(items => items.some(i => i.held_out !== undefined));
 }
+function fitnessTop(grid) {
+  // 1 for the objectives in [0, 1]; above it (to a quarter) when a value exceeds 1: foraging's deliveries
+  let top = 0;
+  for (const items of Object.values(grid.bins)) for (const i of items)
+    top = Math.max(top, i.fitness, i.held_out ?? 0);
+  return top <= 1 ? 1 : Math.ceil(top * 4) / 4;
+}
 function binValue(items) {
   if (state.colour === "held-out") {
     const h = items.map(i => i.held_out).filter(v => v !== undefined);
@@ -112,7 +119,7 @@ function drawHeatmaps() {
   box.setAttribute("data-objective", state.objective);
   box.setAttribute("data-colour", state.colour);
   const grid = DATA.objectives[state.objective];
-  const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22;
+  const [nx, ny, nz] = grid.shape, d = grid.descriptors, size = 22, top = fitnessTop(grid);
   for (let k = 0; k < nz; k++) {
     const panel = el("div", { class: "panel" });
     panel.appendChild(el("h3", {}, `${d[2]} bin ${k}`));
@@ -123,7 +130,7 @@ function drawHeatmaps() {
         "data-bin": key, class: "cell " + (items ? "filled" : "empty") });
       if (items) {
         const v = binValue(items);
-        rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v));
+        rect.setAttribute("fill", v === null ? "#bbb" : colourOf(v / top));
         rect.setAttribute("data-value", v === null ? "" : v.toFixed(4));
         rect.onclick = () => select(state.objective, key);
         rect.onmousemove = ev => tooltip(ev, key, items);
@@ -141,7 +148,7 @@ function drawHeatmaps() {
     box.appendChild(panel);
   }
   box.appendChild(el("div", { id: "legend" }, `x: ${d[0]} bin, y: ${d[1]} bin (up); colour: best ` +
-    `${state.colour} fitness in the bin, 0 (purple) to 1 (yellow); grey: not scored held-out; light: empty`));
+    `${state.colour} fitness in the bin, 0 (purple) to ${top} (yellow); grey: not scored held-out; light: empty`));
 }
 
 function tooltip(ev, key, items) {
@@ -159,6 +166,8 @@ function tooltip(ev, key, items) {
 }
 
 // ---- trees: parse the text format, lay out leaves left to right, composites over their children
+// (inner nodes: seq, sel, prob with a draw key prob@K, and the success decorator; leaves: conditions, got_food
+// among them, drawn as ellipses, and actions)
 function parseTree(text) {
   const tokens = text.match(/[A-Za-z_][A-Za-z0-9_]*(?:\s*@\s*[0-9]+)?|[(),]/g) || [];
   let pos = 0;
@@ -200,8 +209,8 @@ function drawTree(text) {
     svg.appendChild(el("svg:line", { x1: q.x * W + W / 2, y1: q.depth * H + 30, x2: p.x * W + W / 2,
       y2: p.depth * H + 8, stroke: "#666" }));
   }
-  const fill = { seq: "#cfe2f3", sel: "#fce5cd", prob: "#d9ead3" };
-  const label = { seq: "seq →", sel: "sel ?", prob: "prob %" };
+  const fill = { seq: "#cfe2f3", sel: "#fce5cd", prob: "#d9ead3", success: "#fff2cc" };
+  const label = { seq: "seq →", sel: "sel ?", prob: "prob %", success: "success ✓" };
   for (const p of placed) {
     const composite = p.n.children.length > 0;
     const isCondition = !composite && !DATA.actions.includes(p.n.name);
@@ -218,7 +227,8 @@ function drawTree(text) {
 // ---- the trial animation, from the packed frames (explorer._pack)
 function unpack(anim) {
   const bytes = Uint8Array.from(atob(anim.data), c => c.charCodeAt(0));
-  const view = new DataView(bytes.buffer), n = DATA.arena.robots, rec = n * 5 + 6 + 1 + n;
+  const F = Object.keys(DATA.objectives).length;  // the page's objectives, in its order (explorer._pack)
+  const view = new DataView(bytes.buffer), n = DATA.arena.robots, rec = n * 5 + 2 * F + 2 + n + n;
   const frames = [];
   for (let off = 0; off + rec <= bytes.length; off += rec) {
     const robots = [];
@@ -227,10 +237,12 @@ function unpack(anim) {
       robots.push({ x: view.getUint16(o, true) / 10 - DATA.arena.half, y: view.getUint16(o + 2, true) / 10 - DATA.arena.half,
         h: view.getUint8(o + 4) / 256 * 2 * Math.PI });
     }
-    const f = off + n * 5, fit = [0, 1, 2].map(k => view.getUint16(f + 2 * k, true));
-    const tick = view.getUint8(f + 6), actions = [];
-    for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 7 + i));
-    frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 255 ? null : tick, actions });
+    const f = off + n * 5, fit = [...Array(F).keys()].map(k => view.getUint16(f + 2 * k, true));
+    const tick = view.getUint16(f + 2 * F, true), actions = [], carrying = [];
+    for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 2 * F + 2 + i));
+    for (let i = 0; i < n; i++) carrying.push(view.getUint8(f + 2 * F + 2 + n + i) === 1);
+    frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 65535 ? null : tick,
+      actions, carrying });
   }
   return frames;
 }
@@ -261,13 +273,16 @@ function drawFrame(canvas, anim, frames, k) {
   const rr = Math.max(3, A.robot_radius * scale);
   f.robots.forEach((r, i) => {
     const [x, y] = px(r.x, r.y);
+    if (f.carrying[i]) {  // carrying food: a green ring
+      ctx.beginPath(); ctx.arc(x, y, rr + 3, 0, 2 * Math.PI); ctx.strokeStyle = "#1e821e"; ctx.lineWidth = 3; ctx.stroke();
+    }
     ctx.beginPath(); ctx.arc(x, y, rr, 0, 2 * Math.PI); ctx.fillStyle = COLOURS[i % 9]; ctx.fill();
     ctx.strokeStyle = "#000"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(x, y);
     ctx.lineTo(x + 1.8 * rr * Math.cos(r.h), y - 1.8 * rr * Math.sin(r.h)); ctx.stroke();
     ctx.fillStyle = "#000"; ctx.fillText(String(i), x + rr + 1, y - rr);
   });
   const status = document.getElementById("frame-status");
-  status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; fitness so far: ` +
+  status.textContent = `step ${anim.steps[k]}, tick ${f.tick ?? "-"}; carrying ${f.carrying.filter(c => c).length}; fitness so far: ` +
     Object.keys(DATA.objectives).map((n, i) => `${n} ${f.fitness[i] === null ? "-" : f.fitness[i].toFixed(3)}`).join(", ") +
     "; actions: " + f.actions.map((a, i) => `${i}:${a === 255 ? "(still)" : DATA.actions[a]}`).join(" ");
   document.getElementById("frame-slider").value = k;

@@ -4,7 +4,8 @@ its path; none keeps state between calls."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import math
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,16 +29,24 @@ def _save(figure: plt.Figure, path: Path) -> Path:
     return path
 
 
+def fitness_top(values: Iterable[float]) -> float:
+    """The top of a fitness axis: 1 (the objectives in [0, 1]), or above it for foraging (deliveries per
+    robot per trial) when a value exceeds 1, rounded up to a quarter."""
+    largest = max(values, default=0.0)
+    return 1.0 if largest <= 1.0 else math.ceil(largest * 4.0) / 4.0
+
+
 def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
     """The 8 x 8 x 8 grid as eight 8 x 8 heatmaps (fig. 7): one panel per conditionality bin, movement
-    across, rotation up, colour the best fitness in the bin (blank when empty)."""
+    across, rotation up, colour the best fitness in the bin (blank when empty) from 0 to ``fitness_top``."""
     best = np.full(repertoire.shape, np.nan)
     for index, value in repertoire.best_per_bin().items():
         best[index] = value
+    top = fitness_top(repertoire.best_per_bin().values())
     figure, axes = plt.subplots(2, 4, figsize=(12, 6.2), constrained_layout=True)
     image = None
     for k, axis in enumerate(axes.flat):
-        image = axis.imshow(best[:, :, k].T, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis")
+        image = axis.imshow(best[:, :, k].T, origin="lower", vmin=0.0, vmax=top, cmap="viridis")
         axis.set_title(f"{DESCRIPTORS[2]} bin {k}", fontsize=9)
         axis.set_xticks(range(8))
         axis.set_yticks(range(8))
@@ -61,8 +70,9 @@ def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path
     figure, axes = plt.subplots(
         len(objectives), columns, figsize=(3.6 * columns, 2.6 * len(objectives)), squeeze=False
     )
-    bins = np.linspace(0.0, 1.0, 41)
     for i, objective in enumerate(objectives):
+        top = fitness_top(v for r in rows[objective].values() for v in r.best_per_bin().values())
+        bins = np.linspace(0.0, top, 41)
         for j in range(columns):
             axis = axes[i][j]
             if j >= len(rows[objective]):
@@ -72,7 +82,7 @@ def histograms(rows: Mapping[str, Mapping[str, Repertoire]], path: Path) -> Path
             values = list(repertoire.best_per_bin().values())
             axis.hist(values, bins=bins, color="tab:blue")
             axis.set_title(f"{objective}: {label}, {len(values)} solutions", fontsize=9)
-            axis.set_xlim(0.0, 1.0)
+            axis.set_xlim(0.0, top)
             axis.tick_params(labelsize=7)
             if i == len(objectives) - 1:
                 axis.set_xlabel("fitness", fontsize=8)

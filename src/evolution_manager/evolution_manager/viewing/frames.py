@@ -4,16 +4,16 @@
 (``swarm_sim.recording``, equal frame for frame to the node graph's trial); ``frames_from_bag`` reads a trial
 bag written by ``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``: **one
 frame per sensing step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at that
-step, the action driving each robot's wheels after it, the messages heard at it, the last tick and the fitness
-so far (each objective scored with the robots' smoothed values of that step as if the trial ended there;
-undefined before the initial values are taken). No ROS here: bags are read with
-``evolution_manager.recording.bags``.
+step, the action driving each robot's wheels after it, the messages heard at it, whether each robot carries
+food and its deliveries after it, the last tick and the fitness so far (each objective scored with the values
+of that step as if the trial ended there; undefined before the initial values are taken). No ROS here: bags
+are read with ``evolution_manager.recording.bags``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,6 +23,7 @@ from bt_controller import timeline
 from evolution_manager.errors import AnimationError
 
 if TYPE_CHECKING:
+    from bt_controller.library import Library
     from swarm_sim.config import Config, Params
 
 
@@ -49,7 +50,11 @@ class TrialFrames:
     links: tuple[np.ndarray, ...]
     """Per frame, (k, 2) int: (receiver, sender) of every message heard at this step."""
     fitness: np.ndarray
-    """(T, 3): density, nest, food so far (NaN before the initial values)."""
+    """(T, ``world.N_OBJECTIVES``): every objective so far (NaN before the initial values)."""
+    carrying: np.ndarray
+    """(T, n) bool: whether each robot carries food after this step (its answer)."""
+    deliveries: np.ndarray
+    """(T, n) int: each robot's deliveries in the trial after this step."""
 
     @property
     def n_robots(self) -> int:
@@ -73,6 +78,8 @@ class TrialFrames:
             "ticks": [int(t) for t in self.ticks],
             "links": [[int(v) for v in pair] for frame in self.links for pair in [frame.ravel()]],
             "fitness": [[None if math.isnan(v) else round(float(v), 4) for v in row] for row in self.fitness],
+            "carrying": self.carrying.astype(int).tolist(),
+            "deliveries": self.deliveries.astype(int).tolist(),
         }
 
 
@@ -87,23 +94,32 @@ def arena_fields(config: Config, trial: int) -> dict[str, float]:
     }
 
 
-def _fitness_so_far(initial: np.ndarray, current: np.ndarray, p: Params) -> np.ndarray:
-    """The three objectives as if the trial ended now (they depend on the smoothed values only)."""
+def _fitness_so_far(
+    initial: np.ndarray, current: np.ndarray, food: np.ndarray, deliveries: np.ndarray, gap: float, p: Params
+) -> np.ndarray:
+    """Every objective as if the trial ended now: from the smoothed values, the distances from food at the
+    trial's first step and now (``food``, n x 2) and the deliveries so far."""
+    from bt_controller.compiled import N_COUNTS
     from swarm_sim import world
 
     n = initial.shape[0]
-    return world.trial_values(initial, current, np.zeros((n, 8), np.int64), np.zeros((n, 2), np.int64), p)[:3]
+    counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
+    values = world.trial_values(initial, current, counts, motion, food, deliveries, gap, p)
+    return values[: world.N_OBJECTIVES]
 
 
-def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None = None) -> TrialFrames:
+def frames_from_tree(
+    tree: str, seed: int, trial: int = 0, config: Config | None = None, library: Library | None = None
+) -> TrialFrames:
     """Run trial ``trial`` of ``seed`` with ``tree`` on every robot through the compiled kernels, recorded
     step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
-    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps."""
+    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps.
+    ``library``: the primitive library the tree's names come from."""
     from swarm_sim.config import DEFAULT
     from swarm_sim.recording import record_trial
 
     config = config or DEFAULT
-    recorded = record_trial(tree, seed, trial, config)
+    recorded = record_trial(tree, seed, trial, config, library)
     return TrialFrames(
         tree=tree,
         seed=seed,
@@ -115,6 +131,8 @@ def frames_from_tree(tree: str, seed: int, trial: int = 0, config: Config | None
         ticks=recorded.ticks,
         links=tuple(recorded.links),
         fitness=recorded.fitness,
+        carrying=recorded.carrying,
+        deliveries=recorded.deliveries,
     )
 
 
@@ -142,7 +160,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         raise AnimationError(f"{path} holds no /trial_start: not a trial bag (record one with `trial --bag`)")
     result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
     profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
-    config = default_config(profile)
+    # the trial's length (bags recorded before tasks: the primitives' trials)
+    config = replace(default_config(profile), ticks=int(getattr(start, "ticks", 0) or DEFAULT.ticks))
     trial = int(start.trial)
     states = {
         m.message.step: m.message
@@ -157,6 +176,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     poses = np.array([[[q.x, q.y, q.theta] for q in states[s].poses] for s in steps], dtype=np.float64)
     wheels = np.full((len(steps), n), -1, dtype=np.int64)
     smoothed = np.full((len(steps), n, 3), np.nan)
+    carrying = np.zeros((len(steps), n), dtype=np.bool_)
+    deliveries = np.zeros((len(steps), n), dtype=np.int64)
     heard: list[list[tuple[int, int]]] = [[] for _ in steps]
     tick_at: dict[int, int] = {}
     for m in messages:
@@ -175,10 +196,18 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if kind == "wheels":
             wheels[k, robot] = int(msg.action)  # the action's index (wheel speeds are in m/s since issue 13)
             smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density)
+            carrying[k, robot] = bool(getattr(msg, "carrying", False))  # (bags before foraging: none)
+            deliveries[k, robot] = int(getattr(msg, "deliveries", 0))
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
+    from swarm_sim import world
+
     p = config.params()
-    ticks, actions, fitness = [], np.full((len(steps), n), -1, np.int64), np.full((len(steps), 3), np.nan)
+    gap = config.gap(trial)
+    food = np.zeros((n, 2))
+    food[:, 0] = [world.food_distance(x, y, gap, p) for x, y, _ in poses[0]]  # at the trial's first step
+    ticks, actions = [], np.full((len(steps), n), -1, np.int64)
+    fitness = np.full((len(steps), world.N_OBJECTIVES), np.nan)
     # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
     earlier = [s for s in tick_at if s < steps[0]]
     tick, initial = (tick_at[max(earlier)] if earlier else -1), None
@@ -190,7 +219,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
-            fitness[k] = _fitness_so_far(initial, smoothed[k], p)
+            food[:, 1] = [world.food_distance(x, y, gap, p) for x, y, _ in poses[k]]
+            fitness[k] = _fitness_so_far(initial, smoothed[k], food, deliveries[k], gap, p)
     return TrialFrames(
         tree=result.tree if result is not None else "",
         seed=int(start.seed),
@@ -202,4 +232,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         ticks=np.array(ticks),
         links=tuple(_links_shape(np.array(h, np.int64)) for h in heard),
         fitness=fitness,
+        carrying=carrying,
+        deliveries=deliveries,
     )

@@ -21,7 +21,10 @@
     the repertoire explorer (``evolution_manager.viewing.explorer``), one self-contained page.
 
 Trees are shown to people simplified, with the original kept: every item of a repertoire file has ``tree``
-(as evolved) and ``simplified``; the summary has ``best_tree`` and ``best_tree_simplified``.
+(as evolved) and ``simplified``; the summary has ``best_tree`` and ``best_tree_simplified``. With a primitive
+library, a simplified tree names each primitive left whole (``Library.fold``); the drawings show them
+expanded. The repertoires and the summary cover the run's ``grids`` (its task's objectives and the evolved
+ones).
 """
 
 from __future__ import annotations
@@ -31,11 +34,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_controller.formats import to_dot, to_xml
+from bt_controller.library import Library
 from bt_controller.render import render
-from bt_controller.simplify import simplify
+from bt_controller.simplify import simplify_if_small
 from bt_controller.tree import parse, to_indented, to_text
 from evolution_manager.evolution.archive import Repertoire
-from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES
+from evolution_manager.evolution.deap_trees import DESCRIPTORS
 from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.files import write_atomic, write_json
 
@@ -44,9 +48,11 @@ if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are c
 
 
 @cache
-def simplified(tree: str) -> str:
-    """The simplified text of a tree text (``bt_controller.simplify``)."""
-    return to_text(simplify(parse(tree)))
+def simplified(tree: str, library: Library | None = None) -> str:
+    """The simplified text of a tree text (``bt_controller.simplify``), a primitive of ``library`` left whole
+    written by its name."""
+    simple = simplify_if_small(parse(tree, library=library))
+    return to_text(simple) if library is None else library.fold(simple)
 
 
 def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
@@ -70,7 +76,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
             {
                 "bin": list(item.bin),
                 "tree": item.tree,
-                "simplified": simplified(item.tree),
+                "simplified": simplified(item.tree, run.library),
                 "fitness": item.fitness,
                 "descriptors": list(item.descriptors),
                 "evaluation": item.evaluation,
@@ -83,7 +89,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
 def summary_document(run: Run, heldout: dict | None = None) -> dict:
     """The deterministic summary of a run (no timings); ``heldout`` is the document of ``heldout.json``."""
     metrics = {}
-    for objective in OBJECTIVES:
+    for objective in run.config.grids:
         grid = run.repertoire(objective)
         best = run.best(objective)
         held = (heldout or {}).get("objectives", {}).get(objective, {})
@@ -92,7 +98,7 @@ def summary_document(run: Run, heldout: dict | None = None) -> dict:
             "best_fitness": best[1] if best else None,
             "heldout_best_fitness": held.get("heldout_best_fitness"),
             "best_tree": best[0] if best else None,
-            "best_tree_simplified": simplified(best[0]) if best else None,
+            "best_tree_simplified": simplified(best[0], run.library) if best else None,
             "best_descriptors": list(best[2]) if best else None,
             "best_evaluation": run.first_evaluation(best[0]) if best else None,
             "coverage": grid.coverage,
@@ -153,7 +159,7 @@ def write_results(run: Run, with_figures: bool = True, evaluator: Evaluator | No
         document = read_json(heldout_path(run))
         if isinstance(document, dict) and document.get("config") == run.config.to_json():
             heldout = document
-    for objective in OBJECTIVES:
+    for objective in run.config.grids:
         path = directory.repertoire(objective)
         write_json(path, repertoire_document(run.repertoire(objective), objective, run))
         written.append(path)
@@ -184,14 +190,14 @@ def write_best_trees(run: Run) -> list[Path]:
         if best is None:
             continue
         text, value, _ = best
-        original = parse(text)
-        tree = simplify(original)
+        original = parse(text, library=run.library)
+        tree = simplify_if_small(original)
         header = f"# best {objective} tree of {run.config.label}: fitness {value!r}, "
         header += f"evaluation {run.first_evaluation(text)}; simplified from {original.size} to {tree.size} "
         header += "nodes "
         header += f"(the same motors on every tick; the tree as evolved is in {objective}.original.txt)\n"
         files = {
-            "txt": to_text(tree) + "\n",
+            "txt": (to_text(tree) if run.library is None else run.library.fold(tree)) + "\n",
             "original.txt": text + "\n",
             "indented.txt": header + to_indented(tree),
             "xml": to_xml(tree),

@@ -9,6 +9,9 @@ It configures and activates itself at start unless ``-p autostart:=false``.
 Parameters (``config/swarm_sim.yaml``; a bad one stops the node with one line, exit status 2):
     every field of ``swarm_sim.config.Config`` (read-only), as the simulator's: the world evaluated.
     slice (int, 1..1000, default 10): evaluations between two feedback messages and cancel checks.
+    library (string, default none): a primitive library file (``bt_controller.library``) whose primitives'
+        names the trees may use; the manager that starts evaluators passes its run's library. A library that
+        cannot be read stops the node with one line, exit status 2.
     autostart (bool, default true): configure and activate at start.
 
 Actions and services:
@@ -41,6 +44,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.lifecycle import LifecycleState, TransitionCallbackReturn
 
+from bt_controller.library import LibraryError, load_library
 from bt_controller.nodes.footbot_controller import ControllerSettings
 from swarm_msgs.action import EvaluateBatch as EvaluateBatchAction
 from swarm_msgs.msg import EvaluationResult
@@ -74,6 +78,7 @@ class EvaluatorNode(ManagedNode):
         self.config = declare_dataclass(self, DEFAULT, read_only=True)
         self.settings = declare_dataclass(self, EvaluatorSettings(), read_only=True, ranges=EVALUATOR_RANGES)
         self.slice = self.settings.slice
+        self.library = load_library(self.settings.library) if self.settings.library else None
         self.profile = self.config.profile
         self.evaluator: BatchEvaluator | None = None
         self._busy = threading.Lock()  # one batch at a time: the evaluator uses one core
@@ -87,7 +92,7 @@ class EvaluatorNode(ManagedNode):
 
     # --- lifecycle
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.evaluator = BatchEvaluator(self.config)
+        self.evaluator = BatchEvaluator(self.config, library=self.library)
         group = MutuallyExclusiveCallbackGroup()
         self._service = self.create_service(
             EvaluateBatch, "~/evaluate", self._on_evaluate, callback_group=group
@@ -214,6 +219,6 @@ SHARED = SIMULATOR_PARAMETERS | field_names(ControllerSettings)
 
 def main(args: list[str] | None = None) -> None:
     """Run an evaluator node until shut down; a bad parameter is a one-line error and exit status 2."""
-    node = start_node("evaluator", EvaluatorNode, args, shared=SHARED, errors=(ConfigError,))
+    node = start_node("evaluator", EvaluatorNode, args, shared=SHARED, errors=(ConfigError, LibraryError))
     node.start()
     spin_until_shutdown(node, MultiThreadedExecutor(num_threads=2))

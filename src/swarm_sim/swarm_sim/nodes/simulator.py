@@ -37,7 +37,8 @@ Publishers:
     <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
         (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
     <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
-    swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step.
+    swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step, with whether each robot
+        carries food and its deliveries in the trial, as it answered the step before.
     poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
 
 Subscriptions:
@@ -414,6 +415,7 @@ class SimulatorNode(ManagedNode):
                 arena_configuration=self.arena_of(trial),
                 robots=self.robots,
                 tree_keys=[int(k) for k in world.setup.tree_keys],
+                ticks=world.p.ticks,
             )
         )
         record: TrialRecord | None = None
@@ -449,6 +451,8 @@ class SimulatorNode(ManagedNode):
                         smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
                         condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
                         started=statuses[i].action if statuses is not None else -1,
+                        carrying=a.carrying,
+                        deliveries=a.deliveries,
                     )
                     for i, a in enumerate(answers)
                 ]
@@ -520,6 +524,8 @@ class SimulatorNode(ManagedNode):
                 trial=world.trial,
                 step=world.step,
                 poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in poses.tolist()],
+                carrying=[bool(c) for c in world.carrying],
+                deliveries=[int(d) for d in world.deliveries],
             )
         )
         listed = poses.tolist()
@@ -532,7 +538,15 @@ class SimulatorNode(ManagedNode):
         for publisher, q in zip(self._pose, listed, strict=True):
             publisher.publish(visualisation.pose_stamped(stamp, *q))
         self._robot_markers.publish(
-            visualisation.robot_markers(self.config, stamp, listed, self.namespaces, self._actions)
+            visualisation.robot_markers(
+                self.config,
+                stamp,
+                listed,
+                self.namespaces,
+                self._actions,
+                [bool(c) for c in world.carrying],
+                [int(d) for d in world.deliveries],
+            )
         )
         for i, readings in enumerate(world.readings()):
             header = Header(stamp=stamp, frame_id=self.namespaces[i])

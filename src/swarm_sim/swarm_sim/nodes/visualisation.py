@@ -3,8 +3,9 @@
 
 - ``arena_markers``: the arena's walls, the nest and the food region of the trial's gap, published latched on
   ``markers`` at each trial's start (``visualization_msgs/MarkerArray``).
-- ``robot_markers``: per robot a body, a heading arrow and a text label ``<i> <namespace>: <action>``, every
-  sensing step on ``robot_markers``.
+- ``robot_markers``: per robot a body (green while it carries food), a heading arrow and a text label
+  ``<i> <namespace>: <action>`` (with its deliveries once it has made one), and the swarm's delivery counter,
+  every sensing step on ``robot_markers``.
 - ``pose_stamped``: a robot's pose, every sensing step on ``<robot namespace>/pose``.
 """
 
@@ -32,12 +33,13 @@ def _colour(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
     return ColorRGBA(r=r, g=g, b=b, a=a)
 
 
-WALL, NEST, FOOD, ROBOT, LABEL = (
+WALL, NEST, FOOD, ROBOT, LABEL, CARRYING = (
     _colour(0.3, 0.3, 0.3),
     _colour(0.2, 0.4, 0.9, 0.5),
     _colour(0.2, 0.7, 0.2, 0.35),
     _colour(0.95, 0.55, 0.1),
     _colour(1.0, 1.0, 1.0),
+    _colour(0.1, 0.6, 0.1),
 )
 
 
@@ -119,13 +121,19 @@ def robot_markers(
     poses: Sequence[Sequence[float]],
     namespaces: Sequence[str],
     actions: Sequence[str],
+    carrying: Sequence[bool] = (),
+    deliveries: Sequence[int] = (),
 ) -> MarkerArray:
-    """Per robot ``i``: a body (ns ``robots``, id i), a heading arrow (``headings``) and a text label
-    (``labels``: ``<i> <namespace>: <action>``)."""
+    """Per robot ``i``: a body (ns ``robots``, id i; green while it carries food), a heading arrow
+    (``headings``) and a text label (``labels``: ``<i> <namespace>: <action>``, then ``, <d> delivered`` once
+    it has delivered); and a text marker (ns ``deliveries``) counting the swarm's deliveries in the trial.
+    ``carrying`` and ``deliveries`` are per robot (empty: none yet)."""
     markers = []
     radius = config.robot_radius * MM
+    carrying = list(carrying) or [False] * len(poses)
+    deliveries = list(deliveries) or [0] * len(poses)
     for i, ((x, y, theta), namespace, action) in enumerate(zip(poses, namespaces, actions, strict=True)):
-        body = _marker(stamp, "robots", i, Marker.CYLINDER, ROBOT)
+        body = _marker(stamp, "robots", i, Marker.CYLINDER, CARRYING if carrying[i] else ROBOT)
         body.pose = pose_in_metres(x, y, theta, 0.05)
         body.scale.x = body.scale.y = 2.0 * radius
         body.scale.z = 0.1
@@ -135,6 +143,11 @@ def robot_markers(
         label = _marker(stamp, "labels", i, Marker.TEXT_VIEW_FACING, LABEL)
         label.pose = pose_in_metres(x, y, 0.0, 0.3)
         label.scale.z = 0.1
-        label.text = f"{i} {namespace}: {action}"
+        label.text = f"{i} {namespace}: {action}" + (f", {deliveries[i]} delivered" if deliveries[i] else "")
         markers += [body, arrow, label]
-    return MarkerArray(markers=markers)
+    counter = _marker(stamp, "deliveries", 0, Marker.TEXT_VIEW_FACING, LABEL)
+    position = counter.pose.position
+    position.x, position.y, position.z = 0.0, config.arena_half * MM, 0.3
+    counter.scale.z = 0.15
+    counter.text = f"deliveries {sum(deliveries)}, carrying {sum(carrying)}"
+    return MarkerArray(markers=[*markers, counter])

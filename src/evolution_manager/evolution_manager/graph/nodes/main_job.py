@@ -244,7 +244,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     finished = time.monotonic()
 
-    values = dict(zip(OBJECTIVES, record.values[:3], strict=True))
+    values = dict(zip(OBJECTIVES, record.values[: len(OBJECTIVES)], strict=True))
     run_bag = (
         ""
         if on_cluster  # evolve records no run bag

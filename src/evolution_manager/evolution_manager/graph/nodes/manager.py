@@ -67,8 +67,10 @@ from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.options import (
     add_scenario_options,
+    add_task_options,
     check_resume_options,
     config_from_args,
+    library_from_args,
     progress_bar,
 )
 from evolution_manager.evolution.run import Run, RunDirectory
@@ -101,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=seed_int, help="run seed in [0, 2**63 - 1] (default 0)")
     parser.add_argument("--trials", type=positive_int, help="trials per evaluation (default 10)")
     add_scenario_options(parser)
+    add_task_options(parser)
     parser.add_argument("--out", type=Path, required=True, help="run directory (new, unless --resume)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument(
@@ -186,7 +189,7 @@ class RunRecording:
             )
             msg = EvaluationResult(**fields)
             self._emit(self.node.evaluations, EVALUATIONS_TOPIC, EVALUATION_TYPE, msg)
-        for name in OBJECTIVES:
+        for name in run.config.grids:
             grid = run.repertoire(name)
             msg = ArchiveProgress(
                 algorithm=self.config.algorithm,
@@ -254,23 +257,27 @@ def _open_run(args: argparse.Namespace, evaluator: Evaluator) -> Run:
         return Run.resume(args.out, evaluator)
     if directory.started():
         raise UsageError(f"{args.out} already holds a run: add --resume to continue it, or use another --out")
-    return Run.start(config_from_args(args), args.out, evaluator)
+    return Run.start(config_from_args(args), args.out, evaluator, library_from_args(args))
 
 
 class OwnedEvaluators:
     """The evaluator processes this manager started: one that dies is replaced at once by a new process under
     a new node name (``<name>_<life>``), and :meth:`dead` tells the service evaluator which services died."""
 
-    def __init__(self, graph: Graph, log: Callable[[str, str], None], profile: str) -> None:
+    def __init__(self, graph: Graph, log: Callable[[str, str], None], run: Run) -> None:
         self.graph = graph
         self.log = log
-        self.profile = profile
+        # the run's model (profile, trial length) and its copy of the primitive library
+        world = run.config.world()
+        self.parameters: dict[str, object] = {"profile": world.profile, "ticks": world.ticks}
+        if run.library is not None:
+            self.parameters["library"] = str(run.directory.library.absolute())
         self.lives: dict[str, int] = {}  # process name -> its base name
         self.replaced = 0
 
     def start(self, base: str, life: int = 1) -> None:
         name = base if life == 1 else f"{base}_{life}"
-        self.graph.start(name, "swarm_sim", "evaluator", node_name=name, parameters={"profile": self.profile})
+        self.graph.start(name, "swarm_sim", "evaluator", node_name=name, parameters=dict(self.parameters))
         self.lives[name] = life
 
     def dead(self) -> list[str]:
@@ -341,7 +348,7 @@ def _manage(args: argparse.Namespace, argv: Sequence[str]) -> int:
         except OSError as error:  # an --out that cannot be created or written
             raise UsageError(f"{args.out}: {error.strerror or error}") from None
         services.profile = run.config.profile
-        owned = OwnedEvaluators(graph, log, run.config.profile)
+        owned = OwnedEvaluators(graph, log, run)
         services.watch = owned.dead
         if args.evaluators:
             graph.log_dir = Path(args.out) / "logs"

@@ -31,7 +31,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from visualization_msgs.msg import MarkerArray
 
-from evolution_manager.recording.bags import BagError, BagRecorder
+from evolution_manager.recording.bags import BagError, BagRecorder, is_latched
 from swarm_msgs.msg import (
     GroundSensor,
     RangeAndBearingReadings,
@@ -43,9 +43,6 @@ from swarm_msgs.msg import (
 from swarm_ros.names import robot_namespaces
 from swarm_ros.qos import NO_SUBSCRIPTION_EVENTS, RECORDING, RECORDING_LATCHED
 from swarm_sim.config import DEFAULT
-
-LATCHED_TOPICS = ("trial_start", "markers")
-"""Topics the simulator publishes transient-local (their last message waits for late joiners)."""
 
 
 def msgtype_name(msg_class: type) -> str:
@@ -77,11 +74,6 @@ def trial_topics(robots: int, namespace: str = "", clock: str = "/clock") -> lis
             (f"{ns}/tree_status", TreeStatus),
         ]
     return topics
-
-
-def is_latched(topic: str) -> bool:
-    """Whether ``topic`` (an absolute name) is one of the simulator's transient-local topics."""
-    return topic.rsplit("/", 1)[-1] in LATCHED_TOPICS
 
 
 def cdr_stamp_ns(data: bytes, msg_class: type) -> int:

@@ -27,8 +27,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
-from evolution_manager.graph.nodes.recorder import is_latched
-from evolution_manager.recording.bags import BagError, check_bag, read_bag, recover_bag
+from evolution_manager.recording.bags import BagError, check_bag, is_latched, read_bag, recover_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_ros.qos import NO_PUBLISHER_EVENTS, RECORDING, RECORDING_LATCHED
 

@@ -11,6 +11,10 @@ from other graphs in the same domain. ``--params-file FILE`` hands a ROS paramet
 instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). Node logs are kept in
 ``--logs DIR`` (default: ``<bag>.logs`` beside the bag).
 
+``--task foraging`` runs the authors' 100 s foraging trials (``swarm_sim.config.TASKS``; default
+``primitives``, 20 s). ``--library FILE`` (a primitive library, ``bt_controller.library``) is handed to every
+controller as its ``library`` parameter: the tree may then name its primitives.
+
 ``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
 this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
 graph that failed; 130 interrupted (SIGINT), 143 terminated (SIGTERM).
@@ -40,13 +44,14 @@ from rclpy.task import Future
 
 from bt_controller import timeline
 from bt_controller.errors import TreeError
+from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import TrialFailedError
-from evolution_manager.graph.nodes.recorder import GraphRecorder, is_latched, trial_topics
+from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
 from evolution_manager.processes import exit_status, signals_as_interrupts
-from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag
+from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
 from swarm_msgs.msg import TreeStatus, TrialStart
@@ -58,7 +63,7 @@ from swarm_ros.parameters import read_parameter_file
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, Config, default_config
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.trial_data import TrialRecord
 
@@ -68,6 +73,10 @@ STARTUP_TIMEOUT = 600.0
 """Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
 numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
+
+
+PUBLISHERS_MATCH_SETTLE = 1.0
+"""Seconds a new recorder waits after its subscriptions matched, for the publishers to match them too."""
 
 
 def expected_messages(
@@ -144,6 +153,26 @@ class TrialRunner:
             if time.monotonic() > deadline:
                 raise TrialFailedError(f"timed out waiting for {what}")
             self.executor.spin_once(timeout_sec=0.05)
+
+    def spin_while_progressing(
+        self, done: Callable[[], bool], progress: Callable[[], int], what: Callable[[], str]
+    ) -> None:
+        """Spin until ``done()`` while ``progress()`` keeps growing: raise ``TrialFailedError`` naming
+        ``what()`` once it has not grown for the runner's timeout (a recorder trailing a loaded graph is slow,
+        not stuck)."""
+        seen = [progress()]
+
+        def done_or_moved() -> bool:
+            return done() or progress() != seen[0]
+
+        while True:
+            try:
+                self.spin_until(done_or_moved, "")
+            except TrialFailedError:
+                raise TrialFailedError(f"timed out waiting for {what()}") from None
+            if done():
+                return
+            seen[0] = progress()
 
     def spin_for(self, seconds: float) -> None:
         """Spin for ``seconds``."""
@@ -241,7 +270,8 @@ class TrialGraph:
     ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
     ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
     (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
-    one each)."""
+    one each); ``library``: a primitive library every controller reads (a file); ``task``: the trial length
+    (``swarm_sim.config.TASKS``)."""
 
     def __init__(
         self,
@@ -255,10 +285,15 @@ class TrialGraph:
         conditions: Sequence[str] = (),
         profile: str = DEFAULT.profile,
         clock: str = "/clock",
+        library: Path | None = None,
+        task: str = DEFAULT_TASK,
     ) -> None:
         self.conditions = list(conditions)
         self.clock = clock
-        self.config, _ = apply_conditions(self.conditions, replace(DEFAULT, n_robots=robots, profile=profile))
+        self.library = library
+        self.task = task
+        world = replace(default_config(profile, task), n_robots=robots)
+        self.config, _ = apply_conditions(self.conditions, world)
         self.robots = self.config.n_robots
         self.timeout = timeout
         self.domain = domain
@@ -303,6 +338,8 @@ class TrialGraph:
                 params_file=self.params_file,
                 profile=self.config.profile,
                 clock=self.clock,
+                library=str(self.library.absolute()) if self.library is not None else "",
+                ticks=self.config.ticks,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -327,6 +364,8 @@ class TrialGraph:
         if runner is None:
             raise RuntimeError("the trial graph is not started: use it as a context manager")
         runner.load_tree(tree_text)
+        # the bag keeps the tree its robots ran, primitives written out: it reproduces without the library
+        recorded_tree = to_text(load_library(self.library).parse(tree_text)) if self.library else tree_text
         if bag_path is None:
             record = runner.run_trial(seed, trial)
             self.trials_run += 1
@@ -338,6 +377,10 @@ class TrialGraph:
                 topics = trial_topics(self.robots, self.namespace, self.clock)
                 recorder = GraphRecorder(node, bag, topics, armed=False)
                 runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
+                # Matching is seen from this side first: the publishers learn of the new subscriptions a
+                # moment later, and a volatile writer does not resend what it wrote before. Without this
+                # wait a trial lost its first ticks on one robot in about one run of ten.
+                runner.spin_for(PUBLISHERS_MATCH_SETTLE)
                 # The latched topics hand over their last message on joining: the arena of the simulator's
                 # start, and the start of any trial run before. Those belong to no trial of this bag.
                 stale = {
@@ -353,12 +396,21 @@ class TrialGraph:
                 expected = expected_messages(self.robots, self.namespace, trial, self.config, self.clock)
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
-                runner.spin_until(
-                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()), "the last messages"
+                runner.spin_while_progressing(
+                    lambda: all(recorder.counts[t] >= n for t, n in expected.items()),
+                    lambda: sum(recorder.counts.values()),
+                    lambda: (
+                        "the last messages (recorded/expected: "
+                        + ", ".join(
+                            f"{t} {recorder.counts[t]}/{n}"
+                            for t, n in expected.items()
+                            if recorder.counts[t] < n
+                        )
+                        + ")"
+                    ),
                 )
-                write_result(
-                    bag, tree_text, seed, record, recorder.last_stamp + 1, self.namespace, self.config.profile
-                )
+                stamp = recorder.last_stamp + 1
+                write_result(bag, recorded_tree, seed, record, stamp, self.namespace, self.config.profile)
             return record
         finally:
             runner.executor.remove_node(node)
@@ -379,6 +431,8 @@ def run_recorded_trial(
     log_dir: Path | None = None,
     profile: str = DEFAULT.profile,
     clock: str = "/clock",
+    library: Path | None = None,
+    task: str = DEFAULT_TASK,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
     ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
@@ -391,6 +445,8 @@ def run_recorded_trial(
         log_dir=log_dir,
         profile=profile,
         clock=clock,
+        library=library,
+        task=task,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
@@ -460,6 +516,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=DEFAULT.profile,
         help=f"the model's profile (docs/model.md; default {DEFAULT.profile})",
     )
+    parser.add_argument(
+        "--task",
+        choices=tuple(TASKS),
+        default=DEFAULT_TASK,
+        help=f"the trial length: primitives (20 s) or foraging (100 s) (default {DEFAULT_TASK})",
+    )
+    parser.add_argument(
+        "--library", type=Path, default=None, help="a primitive library (JSON) whose names the tree may use"
+    )
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
@@ -488,7 +553,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        tree = parse(tree_argument(args.tree))
+        library: Library | None = load_library(args.library) if args.library is not None else None
+        text = tree_argument(args.tree)
+        tree = parse(text, library=library)
+        shown = to_text(tree) if library is None else library.fold(tree)
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
         check_new_bag(args.bag)
@@ -504,7 +572,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         with signals_as_interrupts():
             record = run_recorded_trial(
-                to_text(tree),
+                shown,
                 args.seed,
                 args.trial,
                 args.bag,
@@ -515,13 +583,19 @@ def main(argv: Sequence[str] | None = None) -> int:
                 log_dir=logs,
                 profile=args.profile,
                 clock=args.clock,
+                library=args.library,
+                task=args.task,
             )
-    except (TreeError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
+    except (TreeError, LibraryError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as error:
         print("trial: interrupted", file=sys.stderr)
         return exit_status(error)
-    print(evaluation_json(to_text(tree), args.seed, 1, record.values, [record], args.profile))
+    print(
+        evaluation_json(
+            shown, args.seed, 1, record.values, [record], args.profile, library=library, task=args.task
+        )
+    )
     print(f"trial: recorded to {args.bag}", file=sys.stderr)
     return 0
