@@ -6,7 +6,8 @@
 ``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.world``,
 ``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
 order; it only skips work whose result is never read (a bearing is computed for the three senders the
-blackboard needs, at ticks, rather than for every message).
+blackboard needs, at ticks, rather than for every message) or known (``fast_world.physics_step``, the
+physics to the same bits).
 ``run_jobs(trees, params, jobs, out)`` runs many (tree, seed, chain) jobs; each job writes only its own
 output rows (one per trial), so a job's result never depends on the others, their order or their number.
 ``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
@@ -34,7 +35,7 @@ from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
 from bt_controller.vocabulary import CONDITION_INDEX, N_CONDITIONS, STOP
-from swarm_sim import world
+from swarm_sim import fast_world, world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Config, Params
 from swarm_sim.trial_data import chain_plan
@@ -53,6 +54,7 @@ drop_stale_cache(
         "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.config",
+        "swarm_sim.fast_world",
         "swarm_sim.world",
     ),
 )
@@ -421,7 +423,7 @@ def simulate_chain(
                 poses_out[position, 0, i, 0] = x[i]
                 poses_out[position, 0, i, 1] = y[i]
                 poses_out[position, 0, i, 2] = heading[i]
-        world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs)
+        fast_world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs)
         sensing = timeline.senses(p, k)
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the

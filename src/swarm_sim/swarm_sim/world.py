@@ -210,33 +210,74 @@ def drive(gains: np.ndarray, p: Params) -> np.ndarray:
 
 
 @numba.njit(cache=True, inline="always")
-def _drive_pass(motion: np.ndarray, i: int, linear: float, angular: float) -> None:
-    """One pass of robot i's drive (ARGoS's pivot and gear joints to a kinematic control body, max force 15 N
-    and torque 150 N m, ``dynamics2d_velocity_control.cpp``): the velocity is set to its target unless the
-    substep's accumulated impulse would exceed ``linear`` (a vector length) or ``angular``, in which case it
-    is pulled towards it by what is left. (Here and below ``motion`` and ``contacts`` are indexed whole: a
-    row view would cost a reference count.)"""
-    ax = motion[i, 3] + (motion[i, 6] - motion[i, 0])
-    ay = motion[i, 4] + (motion[i, 7] - motion[i, 1])
+def _drive_solve(
+    vx: float,
+    vy: float,
+    w: float,
+    jx: float,
+    jy: float,
+    jw: float,
+    tx: float,
+    ty: float,
+    tw: float,
+    linear: float,
+    angular: float,
+) -> tuple:
+    """One pass of a robot's drive (ARGoS's pivot and gear joints to a kinematic control body, max force 15 N
+    and torque 150 N m, ``dynamics2d_velocity_control.cpp``): from its velocity (vx, vy, w), the impulse
+    (jx, jy, jw) its drive accumulated in the substep and its target (tx, ty, tw), the new velocity and
+    accumulated impulse. The velocity is set to its target unless the accumulated impulse would exceed
+    ``linear`` (a vector length) or ``angular``, in which case it is pulled towards it by what is left."""
+    ax = jx + (tx - vx)
+    ay = jy + (ty - vy)
     length2 = ax * ax + ay * ay
     if length2 <= linear * linear:
-        motion[i, 0] = motion[i, 6]
-        motion[i, 1] = motion[i, 7]
+        vx = tx
+        vy = ty
     else:
         scale = linear / math.sqrt(length2)
         ax *= scale
         ay *= scale
-        motion[i, 0] += ax - motion[i, 3]
-        motion[i, 1] += ay - motion[i, 4]
-    motion[i, 3] = ax
-    motion[i, 4] = ay
-    aw = motion[i, 5] + (motion[i, 8] - motion[i, 2])
+        vx += ax - jx
+        vy += ay - jy
+    aw = jw + (tw - w)
     if -angular <= aw <= angular:
-        motion[i, 2] = motion[i, 8]
+        w = tw
     else:
         aw = min(max(aw, -angular), angular)
-        motion[i, 2] += aw - motion[i, 5]
-    motion[i, 5] = aw
+        w += aw - jw
+    return vx, vy, w, ax, ay, aw
+
+
+@numba.njit(cache=True, inline="always")
+def _drive_pass(motion: np.ndarray, i: int, linear: float, angular: float) -> None:
+    """One pass of robot i's drive (``_drive_solve``), in place. (Here and below ``motion`` and ``contacts``
+    are indexed whole: a row view would cost a reference count.)"""
+    motion[i, 0], motion[i, 1], motion[i, 2], motion[i, 3], motion[i, 4], motion[i, 5] = _drive_solve(
+        motion[i, 0],
+        motion[i, 1],
+        motion[i, 2],
+        motion[i, 3],
+        motion[i, 4],
+        motion[i, 5],
+        motion[i, 6],
+        motion[i, 7],
+        motion[i, 8],
+        linear,
+        angular,
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def _contact_push(nx: float, ny: float, r: float, dn: float, dt: float, p: Params) -> tuple:
+    """What a normal impulse ``dn`` and a tangential one ``dt`` (per unit mass) at the contact of robots
+    i < j (unit normal (nx, ny) from i to j, ``r`` from each centre) do to them: (jx, jy, turn), jx and jy
+    added to j's velocity and taken from i's, ``turn`` taken from both spins (moment of inertia per unit mass
+    2 R^2: ARGoS gives the footbot ``cpMomentForCircle(m, 0, 2 R)``, ``dynamics2d_footbot_model.cpp``)."""
+    jx = nx * dn - ny * dt
+    jy = ny * dn + nx * dt
+    turn = r * dt / (2.0 * p.robot_radius * p.robot_radius)
+    return jx, jy, turn
 
 
 @numba.njit(cache=True, inline="always")
@@ -244,39 +285,49 @@ def _apply_contact(
     motion: np.ndarray, contacts: np.ndarray, i: int, j: int, dn: float, dt: float, p: Params
 ) -> None:
     """Apply a normal impulse ``dn`` and a tangential one ``dt`` (per unit mass) at the contact of robots
-    i < j: equal and opposite on their centres, and the tangential one turns both (moment of inertia per
-    unit mass 2 R^2: ARGoS gives the footbot ``cpMomentForCircle(m, 0, 2 R)``,
-    ``dynamics2d_footbot_model.cpp``)."""
-    nx = contacts[i, j, 3]
-    ny = contacts[i, j, 4]
-    jx = nx * dn - ny * dt
-    jy = ny * dn + nx * dt
+    i < j (``_contact_push``): equal and opposite on their centres, and the tangential one turns both."""
+    jx, jy, turn = _contact_push(contacts[i, j, 3], contacts[i, j, 4], contacts[i, j, 5], dn, dt, p)
     motion[i, 0] -= jx
     motion[i, 1] -= jy
     motion[j, 0] += jx
     motion[j, 1] += jy
-    turn = contacts[i, j, 5] * dt / (2.0 * p.robot_radius * p.robot_radius)
     motion[i, 2] -= turn
     motion[j, 2] -= turn
 
 
 @numba.njit(cache=True, inline="always")
-def _contact_pass(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, p: Params) -> None:
+def _contact_solve(
+    dvx: float, dvy: float, spin: float, old_n: float, old_t: float, nx: float, ny: float, r: float, p: Params
+) -> tuple:
     """One pass of the contact of robots i < j (Chipmunk's ``cpArbiterApplyImpulse``, as ARGoS's dynamics2d
-    runs it with no elasticity): the normal impulse stops any approach of the centres (it never pulls); the
-    tangential impulse stops the sliding of the two surfaces at the contact point, each surface moving with
-    its robot's centre and spin, up to ``friction`` times the normal impulse (Coulomb)."""
-    nx = contacts[i, j, 3]
-    ny = contacts[i, j, 4]
-    r = contacts[i, j, 5]
-    dvx = motion[j, 0] - motion[i, 0]
-    dvy = motion[j, 1] - motion[i, 1]
-    old_n = contacts[i, j, 0]
+    runs it with no elasticity), from their relative velocity (dvx, dvy) = v_j - v_i, the sum of their spins
+    and the normal and tangential impulses accumulated so far: the new accumulated impulses. The normal
+    impulse stops any approach of the centres (it never pulls); the tangential impulse stops the sliding of
+    the two surfaces at the contact point, each surface moving with its robot's centre and spin, up to
+    ``friction`` times the normal impulse (Coulomb)."""
     new_n = max(old_n - 0.5 * (dvx * nx + dvy * ny), 0.0)
-    slide = -dvx * ny + dvy * nx - r * (motion[i, 2] + motion[j, 2])
-    old_t = contacts[i, j, 1]
+    slide = -dvx * ny + dvy * nx - r * spin
     bound = p.friction * new_n
     new_t = min(max(old_t - slide / (2.0 + r * r / (p.robot_radius * p.robot_radius)), -bound), bound)
+    return new_n, new_t
+
+
+@numba.njit(cache=True, inline="always")
+def _contact_pass(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, p: Params) -> None:
+    """One pass of the contact of robots i < j (``_contact_solve``), in place."""
+    old_n = contacts[i, j, 0]
+    old_t = contacts[i, j, 1]
+    new_n, new_t = _contact_solve(
+        motion[j, 0] - motion[i, 0],
+        motion[j, 1] - motion[i, 1],
+        motion[i, 2] + motion[j, 2],
+        old_n,
+        old_t,
+        contacts[i, j, 3],
+        contacts[i, j, 4],
+        contacts[i, j, 5],
+        p,
+    )
     contacts[i, j, 0] = new_n
     contacts[i, j, 1] = new_t
     _apply_contact(motion, contacts, i, j, new_n - old_n, new_t - old_t, p)
@@ -424,6 +475,9 @@ def physics_step(
     velocity and the rest at its target. ``motion``, ``contacts`` (and the workspace ``pairs``) are
     ``new_dynamics``'s arrays; they carry velocities and impulses from step to step, as ARGoS keeps them
     across teleports too.
+
+    This is the readable statement of the physics, which the reference road runs; the batch kernels run
+    ``swarm_sim.fast_world.physics_step``, which gives the same bits with less work.
     """
     n = x.shape[0]
     substeps = p.physics_substeps
@@ -539,22 +593,21 @@ def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
     its distance from the line is below the body radius. (The ends themselves need no test: ``m``'s centre is
     at least two radii from theirs, as robots do not overlap.) Written without divisions: the dot product
     ``d`` against the squared length ``L2`` locates the foot, and the cross product ``c`` gives the distance
-    ``|c| / sqrt(L2)``.
+    ``|c| / sqrt(L2)``. Every robot is tested, without branching (so the loop runs on vector instructions):
+    ``not c * c >= limit`` rather than ``c * c < limit`` keeps what a NaN would do.
     """
     sx = x[j] - x[i]
     sy = y[j] - y[i]
     length2 = sx * sx + sy * sy
     limit = p.robot_radius * p.robot_radius * length2
+    hit = False
     for m in range(x.shape[0]):
         mx = x[m] - x[i]
         my = y[m] - y[i]
         c = mx * sy - my * sx
-        if c * c >= limit:
-            continue  # far from the line (i and j themselves lie on it, and fail the next test)
         d = mx * sx + my * sy
-        if 0.0 < d < length2 and m != j:
-            return True
-    return False
+        hit |= (not c * c >= limit) & (d > 0.0) & (d < length2) & (m != j)
+    return hit
 
 
 @numba.njit(cache=True, inline="always")
