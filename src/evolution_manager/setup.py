@@ -39,6 +39,7 @@ setup(
             "evolve = evolution_manager.studies.evolve:main",
             "experiment = evolution_manager.studies.experiment:main",
             "report = evolution_manager.studies.report:main",
+            "library = evolution_manager.evolution.libraries:main",
             "measure = evolution_manager.studies.measure:main",
             "measure-cluster = evolution_manager.studies.measure_cluster:main",
             "snapshot = evolution_manager.viewing.snapshot:main",

@@ -60,9 +60,9 @@ def test_gp_fnd_tournaments_use_all_three_objectives_and_gp_o_only_its_own(monke
     seen = Counter()
     real = operators.best_of
 
-    def spy(candidates, objective):
+    def spy(candidates, objective, rule):
         seen[objective] += 1
-        return real(candidates, objective)
+        return real(candidates, objective, rule)
 
     monkeypatch.setattr(operators, "best_of", spy)
     drive(RunConfig.make("gp-fnd", None, 75 * 4, 5).make_algorithm(), ToyEvaluator())

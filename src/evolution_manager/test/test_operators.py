@@ -229,9 +229,9 @@ def test_tournament_draws_the_objective_uniformly(pset, monkeypatch):
     seen = Counter()
     real = operators.best_of
 
-    def spy(candidates, objective):
+    def spy(candidates, objective, rule):
         seen[objective] += 1
-        return real(candidates, objective)
+        return real(candidates, objective, rule)
 
     monkeypatch.setattr(operators, "best_of", spy)
     trees = [_with_fitness(pset, SHALLOW, 0.5) for _ in range(5)]

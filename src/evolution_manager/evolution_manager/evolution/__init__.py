@@ -4,8 +4,19 @@ The paper's parameters (``parameters``), DEAP's primitive set and the conversion
 text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and MAP-Elites as ask/tell
 algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
 configuration and command-line options (``run_config``, ``options``), the run loop with its checkpoints
-(``run``) and the held-out scores (``heldout``). Imports: the base modules, bt_controller, swarm_sim, DEAP
+(``run``), the held-out scores (``heldout``) and primitive libraries made from runs' repertoires
+(``libraries``, the ``library`` command). Imports: the base modules, bt_controller, swarm_sim, DEAP
 and qdpy; no other wing.
 """
 
-__all__ = ["algorithms", "archive", "deap_trees", "heldout", "operators", "options", "run", "run_config"]
+__all__ = [
+    "algorithms",
+    "archive",
+    "deap_trees",
+    "heldout",
+    "libraries",
+    "operators",
+    "options",
+    "run",
+    "run_config",
+]

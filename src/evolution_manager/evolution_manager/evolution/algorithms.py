@@ -35,7 +35,7 @@ from evolution_manager.evolution.deap_trees import (
     tree_to_text,
 )
 from evolution_manager.evolution.operators import best_of, full_tree, tournament, vary
-from evolution_manager.evolution.parameters import GPParameters, QDParameters
+from evolution_manager.evolution.parameters import DERATINGS, GPParameters, QDParameters
 
 FAILED = -1.0
 """The fitness given, on every objective, to a tree whose evaluation failed: below every real fitness."""
@@ -97,6 +97,7 @@ class AskTell:
         seed: int,
         conditions: Sequence[str] = CONDITIONS_2023,
         library: Library | None = None,
+        nodes: str = "flat",
     ) -> None:
         integer(budget, "the budget (evaluations)", 1, error=ConfigError)
         self.budget = budget
@@ -104,7 +105,10 @@ class AskTell:
         self.rng = random.Random(seed)
         self.library = library
         """The primitive library whose names are terminals (None: none)."""
-        self.pset = make_primitive_set(conditions, library)
+        try:
+            self.pset = make_primitive_set(conditions, library, nodes)
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
         self.evaluations = 0
         self.produced = 0
         """Individuals produced after the initial population: what the budget counts."""
@@ -223,8 +227,9 @@ class GeneticProgramming(AskTell):
         parameters: GPParameters,
         conditions: Sequence[str] = CONDITIONS_2023,
         library: Library | None = None,
+        nodes: str = "flat",
     ) -> None:
-        super().__init__(budget, seed, conditions, library)
+        super().__init__(budget, seed, conditions, library, nodes)
         objectives = tuple(int(o) for o in objectives)
         if (
             not objectives
@@ -247,6 +252,8 @@ class GeneticProgramming(AskTell):
             raise ConfigError("heights must satisfy 1 <= init_min_height <= init_max_height <= max_height")
         self.objectives = objectives
         self.parameters = p
+        self.derating = DERATINGS[p.derating]
+        """The length derating of every selection (``parameters.DERATINGS``)."""
         self.population: list[BehaviourTree] = []
         self.elites: list[list[BehaviourTree]] = [[] for _ in objectives]  # per objective, best first
         self.generation = 0
@@ -264,7 +271,12 @@ class GeneticProgramming(AskTell):
         while True:
             kept = [tree.clone() for trees in self.elites for tree in trees]
             parents = tournament(
-                self.population, p.population - len(kept), p.tournament, self.rng, self.objectives
+                self.population,
+                p.population - len(kept),
+                p.tournament,
+                self.rng,
+                self.objectives,
+                self.derating,
             )
             offspring = vary(
                 parents, self.pset, self.rng, p.crossover, p.mutations, p.max_height, p.max_nodes
@@ -298,7 +310,8 @@ class GeneticProgramming(AskTell):
             candidates = self.elites[k] + self.population
             ranked: list[BehaviourTree] = []
             for _ in range(min(self.parameters.elites_per_objective, len(candidates))):
-                winner = best_of([c for c in candidates if all(c is not r for r in ranked)], objective)
+                others = [c for c in candidates if all(c is not r for r in ranked)]
+                winner = best_of(others, objective, self.derating)
                 ranked.append(winner)
             self.elites[k] = [tree.clone() for tree in ranked]
 
@@ -351,8 +364,9 @@ class MapElites(AskTell):
         conditions: Sequence[str] = CONDITIONS_2023,
         library: Library | None = None,
         forms: SimplifiedForms | None = None,
+        nodes: str = "flat",
     ) -> None:
-        super().__init__(budget, seed, conditions, library)
+        super().__init__(budget, seed, conditions, library, nodes)
         if objective not in range(len(OBJECTIVES)):
             raise ConfigError(f"objective must be an index into {OBJECTIVES}, got {objective}")
         p = parameters

@@ -4,9 +4,11 @@ The primitive set is built by :func:`make_primitive_set` (no global ``creator`` 
 composite and number of children (``seq2`` ... ``prob4``, DEAP needs a fixed arity) and one terminal per
 condition and action, all named as in :mod:`bt_controller.vocabulary` (the conditions of the run's task:
 the paper's eight, or all nine with ``got_food`` for foraging), and one terminal per primitive of a library
-(``bt_controller.library``: a name that stands for ``success(<its tree>)``). Primitives are never compiled:
-a tree is data, turned into text with :func:`tree_to_text` and read back with :func:`tree_from_text` through
-``bt_controller``'s parser (DEAP's ``PrimitiveTree.from_string`` falls back to ``eval`` on unknown tokens).
+(``bt_controller.library``: a name that stands for ``success(<its tree>)``); the hierarchical node set of
+the 2024 follow-up has no actions and three conditions (``HIERARCHICAL_CONDITIONS``). Primitives are never
+compiled: a tree is data, turned into text with :func:`tree_to_text` and read back with
+:func:`tree_from_text` through ``bt_controller``'s parser (DEAP's ``PrimitiveTree.from_string`` falls back to
+``eval`` on unknown tokens).
 """
 
 from __future__ import annotations
@@ -20,12 +22,14 @@ from bt_controller.library import Library
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, is_decorator, leaf_name, parse
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS_2023, MAX_CHILDREN, MIN_CHILDREN
 from evolution_manager.errors import TreeTextError
-from evolution_manager.evolution.parameters import MAX_TREE_NODES
+from evolution_manager.evolution.parameters import HIERARCHICAL_CONDITIONS, MAX_TREE_NODES, NODE_SETS
 from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
 __all__ = [
     "DESCRIPTORS",
+    "HIERARCHICAL_CONDITIONS",
     "MAX_TREE_NODES",
+    "NODE_SETS",
     "OBJECTIVES",
     "BehaviourTree",
     "TripleFitness",
@@ -65,21 +69,36 @@ def _never_called(*_children: object) -> None:  # pragma: no cover - trees are i
 
 
 def make_primitive_set(
-    conditions: Sequence[str] = CONDITIONS_2023, library: Library | None = None
+    conditions: Sequence[str] = CONDITIONS_2023, library: Library | None = None, nodes: str = "flat"
 ) -> gp.PrimitiveSet:
     """A fresh primitive set: composites with 2-4 children (``seq2`` ... ``prob4``), ``conditions`` (the
-    paper's eight by default), actions, and the primitives of ``library`` by name.
+    paper's eight by default), actions unless ``nodes`` is ``hierarchical``, and the primitives of
+    ``library`` by name.
 
     Primitives are added composite by composite, arity by arity, and terminals as conditions, actions, then
     library primitives in the library's order, so the lists DEAP keeps (and the operators choose from) have a
-    fixed order (with the paper's conditions and no library, the set of the 2023 experiment).
+    fixed order (with the paper's conditions and no library, the set of the 2023 experiment). A hierarchical
+    set also has ``leaf_classes``, (conditions, primitives): a new tree's leaf is a condition or a primitive
+    with probability 1/2 each, then uniform within its class (``operators.choose_leaf``; the authors'
+    local.py:132,177 at a73e4af: 1/6 per condition and 1/96 per primitive with 48 primitives).
     """
+    if nodes not in NODE_SETS:
+        raise ValueError(f"nodes must be one of {', '.join(NODE_SETS)}, got {nodes!r}")
+    names = library.names if library is not None else ()
+    if nodes == "hierarchical" and not names:
+        raise ValueError("the hierarchical node set needs a library with at least one primitive")
     pset = gp.PrimitiveSet("behaviour_tree", 0)
     for composite in COMPOSITES:
         for arity in range(MIN_CHILDREN, MAX_CHILDREN + 1):
             pset.addPrimitive(_never_called, arity, name=f"{composite}{arity}")
-    for name in (*conditions, *ACTIONS, *(library.names if library is not None else ())):
+    actions = ACTIONS if nodes == "flat" else ()
+    for name in (*conditions, *actions, *names):
         pset.addTerminal(name, name=name)
+    if nodes == "hierarchical":
+        pset.leaf_classes = (
+            tuple(pset.mapping[name] for name in conditions),
+            tuple(pset.mapping[name] for name in names),
+        )
     return pset
 
 

@@ -22,7 +22,12 @@ Choices taken from the authors' code (KirstyMontague/big-mad-robot-repo at 6c650
   go to the challenger when the holder is taller than ``PARSIMONY_HEIGHT`` and the challenger is shorter
   (gp/ea.py:794; the paper's section 3.3 states only this tie-break). The paper's rule alone hardly acts
   (exact ties are rare on continuous fitness), the derating acts on every comparison: we follow the code,
-  which produced the paper's numbers.
+  which produced the paper's numbers. The 2024 flat foraging baseline derates by 1 - (nodes - 64) / 6930
+  instead (``parameters.DERATINGS``; GP runs name theirs in ``GPParameters.derating``);
+- a new tree's leaves are drawn uniformly over the terminals (DEAP), except in the hierarchical node set,
+  where a leaf is a condition or a primitive with probability 1/2 each, then uniform within its class
+  (:func:`choose_leaf`; the authors' 2024 code, local.py:132,177 at a73e4af). Node replacement keeps DEAP's
+  uniform choice over the terminals in both sets (the addendum cites the classed draw for generation only).
 """
 
 from __future__ import annotations
@@ -33,12 +38,13 @@ from collections.abc import Sequence
 from deap import gp
 
 from evolution_manager.evolution.deap_trees import BehaviourTree
+from evolution_manager.evolution.parameters import DERATINGS, Derating
 
 PARSIMONY_HEIGHT = 3
 """Exact ties in derated fitness prefer a shorter challenger when the holder is taller than this."""
 
-DERATING_FREE_NODES = 10
-DERATING_SPAN = 990
+STANDARD = DERATINGS["standard"]
+"""The 2023 derating, 1 - max(0, nodes - 10) / 990 (``parameters.DERATINGS``)."""
 
 
 def generate(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_height: int, grow: bool) -> list:
@@ -50,12 +56,22 @@ def generate(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_hei
         depth = stack.pop()
         leaf = depth == height or (grow and depth >= min_height and rng.random() < pset.terminalRatio)
         if leaf:
-            nodes.append(rng.choice(pset.terminals[pset.ret]))
+            nodes.append(choose_leaf(pset, rng))
         else:
             primitive = rng.choice(pset.primitives[pset.ret])
             nodes.append(primitive)
             stack.extend([depth + 1] * primitive.arity)
     return nodes
+
+
+def choose_leaf(pset: gp.PrimitiveSet, rng: random.Random) -> gp.Terminal:
+    """A leaf for a new tree: uniform over the set's terminals (DEAP), or, for a set with ``leaf_classes``
+    (``deap_trees.make_primitive_set``, the hierarchical node set), a class drawn uniformly and then a leaf
+    uniformly within it (the authors' 2024 generation, local.py:132,177 at a73e4af)."""
+    classes = getattr(pset, "leaf_classes", None)
+    if classes is None:
+        return rng.choice(pset.terminals[pset.ret])
+    return rng.choice(classes[rng.randrange(len(classes))])
 
 
 def full_tree(pset: gp.PrimitiveSet, rng: random.Random, min_height: int, max_height: int) -> BehaviourTree:
@@ -164,34 +180,35 @@ def vary(
     return offspring
 
 
-def derating(nodes: int) -> float:
-    """The selection weight of a tree of ``nodes`` nodes: 1 up to 10 nodes, falling linearly to 0 at 1000."""
-    if nodes > 1000:
-        return 0.0
-    return 1.0 - max(0, nodes - DERATING_FREE_NODES) / DERATING_SPAN
+def derating(nodes: int, rule: Derating = STANDARD) -> float:
+    """The selection weight of a tree of ``nodes`` nodes under ``rule`` (by default 1 up to 10 nodes, falling
+    linearly to 0 at 1000)."""
+    return rule(nodes)
 
 
-def selection_fitness(fitness: float, nodes: int) -> float:
+def selection_fitness(fitness: float, nodes: int, rule: Derating = STANDARD) -> float:
     """The fitness that selection compares: the stored fitness times :func:`derating`."""
-    return fitness * derating(nodes)
+    return fitness * rule(nodes)
 
 
-def preferred(challenger: BehaviourTree, holder: BehaviourTree, objective: int) -> bool:
+def preferred(
+    challenger: BehaviourTree, holder: BehaviourTree, objective: int, rule: Derating = STANDARD
+) -> bool:
     """Whether ``challenger`` beats ``holder`` on ``objective``: higher derated fitness, or an exact tie
     that the parsimony rule gives to a shorter challenger when the holder is taller than
     ``PARSIMONY_HEIGHT``."""
-    a = selection_fitness(challenger.fitness.values[objective], len(challenger))
-    b = selection_fitness(holder.fitness.values[objective], len(holder))
+    a = selection_fitness(challenger.fitness.values[objective], len(challenger), rule)
+    b = selection_fitness(holder.fitness.values[objective], len(holder), rule)
     if a != b:
         return a > b
     return holder.height > PARSIMONY_HEIGHT and challenger.height < holder.height
 
 
-def best_of(candidates: Sequence[BehaviourTree], objective: int) -> BehaviourTree:
+def best_of(candidates: Sequence[BehaviourTree], objective: int, rule: Derating = STANDARD) -> BehaviourTree:
     """The first candidate that no later candidate beats (see :func:`preferred`)."""
     winner = candidates[0]
     for candidate in candidates[1:]:
-        if preferred(candidate, winner, objective):
+        if preferred(candidate, winner, objective, rule):
             winner = candidate
     return winner
 
@@ -202,13 +219,14 @@ def tournament(
     size: int,
     rng: random.Random,
     objectives: Sequence[int],
+    rule: Derating = STANDARD,
 ) -> list[BehaviourTree]:
     """DEAP's ``selTournament`` with the parsimony tie-break: ``count`` tournaments among ``size``
     individuals drawn with replacement. Each tournament compares on one of ``objectives`` drawn uniformly
-    (with one objective, no draw is made: GP_o; with all three: GP_fnd)."""
+    (with one objective, no draw is made: GP_o; with all three: GP_fnd), under the derating ``rule``."""
     chosen = []
     for _ in range(count):
         objective = objectives[0] if len(objectives) == 1 else objectives[rng.randrange(len(objectives))]
         aspirants = [population[rng.randrange(len(population))] for _ in range(size)]
-        chosen.append(best_of(aspirants, objective))
+        chosen.append(best_of(aspirants, objective, rule))
     return chosen

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 from bt_controller.library import Library, LibraryError, load_library
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.evolution.parameters import NODE_SETS
 from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, TASKS, RunConfig
 
 if TYPE_CHECKING:  # imported where used: tqdm loads slowly, and not every command needs it
@@ -54,7 +55,14 @@ def add_task_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--library",
         metavar="FILE",
-        help="a primitive library (JSON): its primitives' names join the node set as leaves",
+        help="a primitive library (JSON): its primitives' names are leaves of the node set",
+    )
+    parser.add_argument(
+        "--nodes",
+        choices=NODE_SETS,
+        help="the node set: hierarchical (the default with --library: composites, got_food, on_food, "
+        "in_nest and the library's names, no actions) or flat (the default without: composites, the task's "
+        "conditions, the actions, and the library's names if one is given)",
     )
 
 
@@ -98,6 +106,7 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
             fnd_objectives=fnd,
             library=str(library.label) if library is not None else "",
             library_digest=library.digest if library is not None else "",
+            nodes=getattr(args, "nodes", None),
         )
     except EvolutionError as error:
         message = str(error).replace("the scenario seed", "--scenario-seed")
@@ -115,6 +124,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         "scenario_seed": getattr(args, "scenario_seed", None),
         "profile": getattr(args, "profile", None),
         "task": getattr(args, "task", None),
+        "nodes": getattr(args, "nodes", None),
     }
     if getattr(args, "objectives", None) is not None or getattr(args, "library", None) is not None:
         raise UsageError(

@@ -25,6 +25,47 @@ leaf has height 0 as in DEAP; a test checks they agree). The authors' operators 
 (gp/ea.py:73-77); their selection derates long trees instead (see ``operators.selection_fitness``)."""
 
 
+NODE_SETS: tuple[str, ...] = ("flat", "hierarchical")
+"""The node sets a run evolves over (``deap_trees.make_primitive_set``): ``flat``, composites, the run's
+conditions, the actions and a library's names if it has one; ``hierarchical``, composites,
+``HIERARCHICAL_CONDITIONS`` and a library's names, no actions (the 2024 follow-up's high-level trees)."""
+
+HIERARCHICAL_CONDITIONS: tuple[str, ...] = ("got_food", "on_food", "in_nest")
+"""The conditions of the hierarchical node set: ifGotFood, ifOnFood, ifInNest (params.py:134-166 at
+a73e4af; ``../shared/design/foraging.md`` section 4)."""
+
+
+@dataclass(frozen=True)
+class Derating:
+    """A length derating: selection compares fitness x ``1 - (nodes - free) / span`` (the authors' parsimony,
+    ``operators`` module docstring). ``clipped``: trees of ``free`` nodes or fewer are not favoured (the
+    factor is at most 1) and a tree of more than ``free + span`` nodes rates 0; unclipped, the line holds
+    for every size."""
+
+    free: int
+    span: int
+    clipped: bool
+
+    def __call__(self, nodes: int) -> float:
+        if not self.clipped:
+            return 1.0 - (nodes - self.free) / self.span
+        if nodes > self.free + self.span:
+            return 0.0
+        return 1.0 - max(0, nodes - self.free) / self.span
+
+
+DERATINGS: dict[str, Derating] = {
+    "standard": Derating(10, 990, clipped=True),
+    "baseline": Derating(64, 6930, clipped=False),
+}
+"""The named deratings (``../shared/design/foraging.md`` section 5; the authors' code at a73e4af):
+``standard``, 1 - max(0, len - 10)/990, of the 2023 GP and MAP-Elites (gp/ea.py:762-770 at 6c65001) and of
+the 2024 hierarchical GP, where a primitive's name is one node (gp/ea.py:949-959); ``baseline``,
+1 - (len - 64)/6930, of the 2024 flat baseline over the low-level nodes (gp/ea.py:953-954, params.py:12,
+8b049a6), written without a floor as the design addendum gives it, so that a tree under 64 nodes rates
+above its fitness."""
+
+
 def _check_kinds(parameters: DataclassInstance) -> None:
     """Each field of the parameters dataclass of its declared kind (``int``, ``float`` or the mutations'
     ``(name, probability)`` pairs); the algorithms check the ranges. A run's config.json is read into these,
@@ -58,9 +99,15 @@ class GPParameters:
     init_max_height: int = 4
     max_height: int = MAX_TREE_HEIGHT
     max_nodes: int = MAX_TREE_NODES
+    derating: str = "standard"
+    """The length derating of every selection (``DERATINGS``): ``baseline`` for the 2024 flat baseline."""
 
     def __post_init__(self) -> None:
         _check_kinds(self)
+        if self.derating not in DERATINGS:
+            raise ConfigError(
+                f"GPParameters.derating must be one of {', '.join(DERATINGS)}, got {self.derating!r}"
+            )
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,12 @@ from bt_controller.timeline import PROFILES, Timeline
 from bt_controller.validate import integer
 from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
 from evolution_manager.errors import ConfigError
-from evolution_manager.evolution.parameters import GPParameters, QDParameters
+from evolution_manager.evolution.parameters import (
+    HIERARCHICAL_CONDITIONS,
+    NODE_SETS,
+    GPParameters,
+    QDParameters,
+)
 from swarm_sim.config import DEFAULT_TASK, TASKS, Config, default_config
 from swarm_sim.world import OBJECTIVES, PAPER_OBJECTIVES
 
@@ -103,6 +108,8 @@ class RunConfig:
     """The primitive library file the run was started with ("" for none); the run uses its copy."""
     library_digest: str = ""
     """The digest of that library (``bt_controller.library.Library.digest``)."""
+    nodes: str = "flat"
+    """The node set (``parameters.NODE_SETS``): ``flat`` or ``hierarchical`` (needs a library)."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -128,6 +135,12 @@ class RunConfig:
                 )
         if bool(self.library) != bool(self.library_digest):
             raise ConfigError("a library needs its digest (and a digest its library)")
+        if self.nodes not in NODE_SETS:
+            raise ConfigError(f"nodes must be one of {', '.join(NODE_SETS)}, got {self.nodes!r}")
+        if self.nodes == "hierarchical" and not self.library:
+            raise ConfigError(
+                "the hierarchical node set has a library's primitives as leaves: give --library"
+            )
         integer(self.evaluations, "evaluations", 1, error=ConfigError)
         integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
         integer(self.trials, "trials", 1, error=ConfigError)
@@ -154,13 +167,25 @@ class RunConfig:
         fnd_objectives: tuple[str, ...] = (),
         library: str = "",
         library_digest: str = "",
+        nodes: str | None = None,
     ) -> RunConfig:
         """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
         for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
-        ``seed`` when ``scenario_seed`` is None; the model's default profile when ``profile`` is None."""
+        ``seed`` when ``scenario_seed`` is None; the model's default profile when ``profile`` is None.
+        ``nodes`` None: ``hierarchical`` with a library, else ``flat``. GP over the flat node set of the
+        foraging task without a library (the 2024 flat baseline) derates as the authors' baseline
+        (``parameters.DERATINGS``, ``baseline``); every other GP run as the 2023 GP."""
         if algorithm not in ALGORITHMS:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
-        gp = GPParameters(population=75, tournament=5) if algorithm == "gp-fnd" else GPParameters()
+        if nodes is None:
+            nodes = "hierarchical" if library else "flat"
+        baseline = task == "foraging" and nodes == "flat" and not library
+        derating = "baseline" if baseline else "standard"
+        gp = (
+            GPParameters(population=75, tournament=5, derating=derating)
+            if algorithm == "gp-fnd"
+            else GPParameters(derating=derating)
+        )
         budget = DEFAULT_EVALUATIONS[algorithm] if evaluations is None else evaluations
         return cls(
             algorithm,
@@ -176,6 +201,7 @@ class RunConfig:
             fnd_objectives=fnd_objectives,
             library=library,
             library_digest=library_digest,
+            nodes=nodes,
         )
 
     def request_seed(self, index: int) -> int:
@@ -211,10 +237,17 @@ class RunConfig:
         return f"{LABELS[self.algorithm][:-2]}_{self.objective}"
 
     def to_json(self) -> dict:
+        """The configuration as ``config.json`` holds it. The node set and the GP derating are left out at
+        their values of before they existed (``flat``, ``standard``), so that the files of earlier runs and
+        experiments (``config.json``, ``heldout.json``, ``experiment.json``) still compare equal."""
         data = asdict(self)
         data["fnd_objectives"] = list(self.fnd_objectives)
         data["gp"]["mutations"] = [list(m) for m in self.gp.mutations]
         data["qd"]["mutations"] = [list(m) for m in self.qd.mutations]
+        if self.nodes == "flat":
+            del data["nodes"]
+        if self.gp.derating == "standard":
+            del data["gp"]["derating"]
         return data
 
     @classmethod
@@ -242,6 +275,8 @@ class RunConfig:
                 fnd_objectives=tuple(str(o) for o in data.get("fnd_objectives", ())),
                 library=str(data.get("library", "")),
                 library_digest=str(data.get("library_digest", "")),
+                # ... and before node sets, the flat one
+                nodes=str(data.get("nodes", "flat")),
             )
         except (KeyError, TypeError, ValueError, OverflowError) as error:
             if isinstance(error, ConfigError):
@@ -256,6 +291,8 @@ class RunConfig:
     def conditions(self) -> tuple[str, ...]:
         """The conditions of the run's node set: the paper's eight (``primitives``) or all (``foraging``, with
         ``got_food``: the 2024 baseline's node set, params.py:168-189 at a73e4af)."""
+        if self.nodes == "hierarchical":
+            return HIERARCHICAL_CONDITIONS
         return CONDITIONS_2023 if self.task == "primitives" else CONDITIONS
 
     @property
@@ -288,11 +325,18 @@ class RunConfig:
             grid_forms = (forms or SimplifiedForms(library)) if self.refuses_clones else None
             objective = OBJECTIVES.index(self.objective)
             return MapElites(
-                objective, self.evaluations, algorithm_seed, self.qd, self.conditions, library, grid_forms
+                objective,
+                self.evaluations,
+                algorithm_seed,
+                self.qd,
+                self.conditions,
+                library,
+                grid_forms,
+                self.nodes,
             )
         objectives = [OBJECTIVES.index(o) for o in self.objectives]
         return GeneticProgramming(
-            objectives, self.evaluations, algorithm_seed, self.gp, self.conditions, library
+            objectives, self.evaluations, algorithm_seed, self.gp, self.conditions, library, self.nodes
         )
 
 
