@@ -107,7 +107,8 @@ def test_evolution_never_leaves_the_hierarchical_node_set(algorithm):
 def test_the_flat_foraging_baseline_derates_as_the_authors_and_the_rest_as_in_2023():
     standard, baseline = DERATINGS["standard"], DERATINGS["baseline"]
     assert [standard(n) for n in (1, 10, 11, 1000, 1001)] == [1.0, 1.0, 1 - 1 / 990, 1 - 990 / 990, 0.0]
-    assert [baseline(n) for n in (1, 64, 65, 1000)] == [1 + 63 / 6930, 1.0, 1 - 1 / 6930, 1 - 936 / 6930]
+    sizes = (1, 64, 65, 1000, 6994, 6995)
+    assert [baseline(n) for n in sizes] == [1.0, 1.0, 1 - 1 / 6930, 1 - 936 / 6930, 0.0, 0.0]
     flat = RunConfig.make("gp", "foraging", 100, 1, task="foraging")
     assert (flat.nodes, flat.gp.derating, flat.conditions) == ("flat", "baseline", CONDITIONS)
     assert flat.to_json()["gp"]["derating"] == "baseline"

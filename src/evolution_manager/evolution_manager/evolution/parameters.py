@@ -37,33 +37,29 @@ a73e4af; ``../shared/design/foraging.md`` section 4)."""
 
 @dataclass(frozen=True)
 class Derating:
-    """A length derating: selection compares fitness x ``1 - (nodes - free) / span`` (the authors' parsimony,
-    ``operators`` module docstring). ``clipped``: trees of ``free`` nodes or fewer are not favoured (the
-    factor is at most 1) and a tree of more than ``free + span`` nodes rates 0; unclipped, the line holds
-    for every size."""
+    """A length derating: selection compares fitness x ``1 - max(0, nodes - free) / span`` (the authors'
+    parsimony, ``operators`` module docstring): trees of ``free`` nodes or fewer are not favoured (the factor
+    is at most 1) and a tree of more than ``free + span`` nodes rates 0."""
 
     free: int
     span: int
-    clipped: bool
 
     def __call__(self, nodes: int) -> float:
-        if not self.clipped:
-            return 1.0 - (nodes - self.free) / self.span
         if nodes > self.free + self.span:
             return 0.0
         return 1.0 - max(0, nodes - self.free) / self.span
 
 
 DERATINGS: dict[str, Derating] = {
-    "standard": Derating(10, 990, clipped=True),
-    "baseline": Derating(64, 6930, clipped=False),
+    "standard": Derating(10, 990),
+    "baseline": Derating(64, 6930),
 }
 """The named deratings (``../shared/design/foraging.md`` section 5; the authors' code at a73e4af):
 ``standard``, 1 - max(0, len - 10)/990, of the 2023 GP and MAP-Elites (gp/ea.py:762-770 at 6c65001) and of
 the 2024 hierarchical GP, where a primitive's name is one node (gp/ea.py:949-959); ``baseline``,
-1 - (len - 64)/6930, of the 2024 flat baseline over the low-level nodes (gp/ea.py:953-954, params.py:12,
-8b049a6), written without a floor as the design addendum gives it, so that a tree under 64 nodes rates
-above its fitness."""
+1 - max(0, len - 64)/6930, of the 2024 flat baseline over the low-level nodes (params.py:12, 8b049a6; at
+a73e4af its lines are commented out in gp/ea.py:953-954, which floor it at 64 nodes and rate a tree of more
+than 6,994 nodes 0, as the standard one at 10 and 1,000)."""
 
 
 def _check_kinds(parameters: DataclassInstance) -> None:
