@@ -89,6 +89,11 @@ class Library:
         """``tree.parse(text, library=self, **limits)``."""
         return parse(text, library=self, **limits)
 
+    def is_copy(self, node: Node) -> bool:
+        """Whether ``node`` is a copy of one of the primitives: ``success(T)`` with ``T`` a primitive's tree
+        (what a name expands to; ``fold`` writes it as the name)."""
+        return isinstance(node, Composite) and node.kind in DECORATORS and node.children[0] in self._by_tree
+
     def fold(self, tree: Node) -> str:
         """The canonical text of ``tree`` with every ``success(T)`` whose ``T`` is a primitive's tree written
         as that primitive's name (the first such name): parsing it with this library gives ``tree`` back."""

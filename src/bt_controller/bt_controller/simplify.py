@@ -84,6 +84,7 @@ and the flag of the same sensing step (no tick falls on a trial's unsensed first
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from bt_controller.errors import TreeLimitError
@@ -446,6 +447,18 @@ def _walk(root: _N) -> list[_N]:
     return out
 
 
+def _kept_whole(tree: Node, whole: Callable[[Node], bool] | None) -> frozenset[int]:
+    """The original pre-order indices of the nodes of every subtree of ``tree`` that ``whole`` names, and of
+    the nodes inside them: no rule rewrites them (a rule above may still drop such a subtree as a whole)."""
+    if whole is None:
+        return frozenset()
+    kept: set[int] = set()
+    for index, node in enumerate(tree.preorder()):
+        if index not in kept and whole(node):
+            kept.update(range(index, index + node.size))
+    return frozenset(kept)
+
+
 @dataclass(frozen=True)
 class Simplified:
     """A simplification: the tree, and the rules applied in order."""
@@ -460,6 +473,7 @@ def simplify_with_rules(
     *,
     keep_positions: bool = False,
     implications: tuple[tuple[str, str], ...] | None = None,
+    whole: Callable[[Node], bool] | None = None,
 ) -> Simplified:
     """Simplify ``tree``; also say which rules were applied (see ``simplify``)."""
     if tree.size > MAX_SIMPLIFY_NODES:
@@ -468,11 +482,14 @@ def simplify_with_rules(
         implications = WORLD_IMPLICATIONS if facts == WORLD_FACTS else ()
     known = _Facts(facts, implications)
     root = _from_node(tree)
+    kept_whole = _kept_whole(tree, whole)
     applied: list[str] = []
     while True:
         _analyse(root, known)
         candidates = []
         for n in _walk(root):
+            if n.orig in kept_whole:
+                continue
             for priority, rule, replacement in _rewrites(n):
                 # Later positions first (they shifted fewer probabilistic nodes when positions mattered).
                 candidates.append((priority, -n.position, rule, n, replacement))
@@ -493,6 +510,7 @@ def simplify(
     *,
     keep_positions: bool = False,
     implications: tuple[tuple[str, str], ...] | None = None,
+    whole: Callable[[Node], bool] | None = None,
 ) -> Node:
     """The simplest tree this module's rules reach from ``tree``: same motors on every tick of every
     blackboard trace, same probabilistic picks (each probabilistic node keeps its draw key, written
@@ -500,13 +518,16 @@ def simplify(
     conditions never true together (``WORLD_FACTS``; pass ``()`` to assume nothing about blackboards);
     ``implications``: pairs (a, b) with b true whenever a is (default: ``WORLD_IMPLICATIONS`` with the world's
     facts, none with others). ``keep_positions``: make only rewrites that leave every probabilistic node at
-    its pre-order index (no key is then added; the simplifier before draw keys). TreeLimitError beyond
-    ``MAX_SIMPLIFY_NODES``."""
-    return simplify_with_rules(tree, facts, keep_positions=keep_positions, implications=implications).tree
+    its pre-order index (no key is then added; the simplifier before draw keys). ``whole``: subtrees to keep
+    as they are, rewritten neither inside nor at their root (a library's primitives, so that they can still
+    be named: ``Library.is_copy``). TreeLimitError beyond ``MAX_SIMPLIFY_NODES``."""
+    return simplify_with_rules(
+        tree, facts, keep_positions=keep_positions, implications=implications, whole=whole
+    ).tree
 
 
-def simplify_if_small(tree: Node) -> Node:
+def simplify_if_small(tree: Node, whole: Callable[[Node], bool] | None = None) -> Node:
     """``simplify(tree)``, or ``tree`` itself when it has more than ``MAX_SIMPLIFY_NODES`` nodes: a tree that
     names primitives may expand beyond what ``simplify`` takes (``tree.parse`` limits the tree as written);
     for what needs a simplified form of any tree (clone keys, the trees shown to people)."""
-    return tree if tree.size > MAX_SIMPLIFY_NODES else simplify(tree)
+    return tree if tree.size > MAX_SIMPLIFY_NODES else simplify(tree, whole=whole)

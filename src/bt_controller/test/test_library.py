@@ -9,6 +9,7 @@ import pytest
 from bt_controller.errors import TreeLimitError, TreeSyntaxError
 from bt_controller.library import LibraryError, library_from_json, load_library
 from bt_controller.semantics import ReferenceRobot
+from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import CONDITION_INDEX
 
@@ -121,3 +122,17 @@ def test_limits_bound_the_tree_as_written_a_name_one_node():
     assert big.size == 4693
     assert big.size > MAX_SIMPLIFY_NODES and simplify_if_small(big) is big
     assert simplify_if_small(lib.parse("seq(p, p)")).size <= 15
+
+
+def test_simplifying_keeps_each_primitive_whole_so_that_it_is_still_named():
+    """Under ``in_nest`` the simplifier knows the copy's own ``in_nest`` holds and would rewrite inside it,
+    losing its name; kept whole, the tree is simplified around it and still folds to its name."""
+    away = "sel(seq(in_nest, forward), reverse)"
+    lib = library(("goAwayFromNest1", away))
+    tree = lib.parse("sel(seq(in_nest, in_nest, goAwayFromNest1), forward)")
+    assert lib.fold(simplify(tree)) == "sel(seq(in_nest, forward), forward)"  # rewritten inside
+    kept = simplify(tree, whole=lib.is_copy)
+    assert lib.fold(kept) == "sel(seq(in_nest, goAwayFromNest1), forward)"
+    # a copy that can never run still goes, whole
+    dead = lib.parse("sel(forward, goAwayFromNest1)")
+    assert lib.fold(simplify(dead, whole=lib.is_copy)) == "forward"

@@ -31,12 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from bt_controller.library import Library, LibraryError, library_from_json
-from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import parse, to_text
 from evolution_manager.errors import ExplorerError
 from evolution_manager.files import write_atomic
 from evolution_manager.viewing.explorer_page import PAGE
 from evolution_manager.viewing.frames import TrialFrames
+from evolution_manager.viewing.results import simplified as simplified_text
 
 STRIDE = 2
 """One animation frame per this many sensing steps."""
@@ -174,7 +173,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         for item in document.get("items", []):
             tree = item["tree"]
             if tree not in simplified:  # the repertoire file holds it (simplified when it was written)
-                simplified[tree] = item.get("simplified") or _simplified(tree, library)
+                simplified[tree] = item.get("simplified") or simplified_text(tree, library)
             entry = {
                 "tree": tree,
                 "simplified": simplified[tree],
@@ -251,12 +250,6 @@ def _library(root: Path, config: dict) -> Library | None:
         return library_from_json(_read(path), str(config["library"]))
     except LibraryError as error:
         raise ExplorerError(str(error)) from None
-
-
-def _simplified(tree: str, library: Library | None) -> str:
-    """The simplified text of a tree text, the library's names kept."""
-    simple = simplify_if_small(parse(tree, library=library))
-    return to_text(simple) if library is None else library.fold(simple)
 
 
 def _arena() -> dict:

@@ -49,10 +49,11 @@ if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are c
 
 @cache
 def simplified(tree: str, library: Library | None = None) -> str:
-    """The simplified text of a tree text (``bt_controller.simplify``), a primitive of ``library`` left whole
-    written by its name."""
-    simple = simplify_if_small(parse(tree, library=library))
-    return to_text(simple) if library is None else library.fold(simple)
+    """The simplified text of a tree text (``bt_controller.simplify``); each copy of a primitive of
+    ``library`` is kept whole and written by its name."""
+    if library is None:
+        return to_text(simplify_if_small(parse(tree)))
+    return library.fold(simplify_if_small(parse(tree, library=library), whole=library.is_copy))
 
 
 def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
