@@ -154,6 +154,10 @@ def test_a_seeded_hierarchical_run_is_reproducible_and_refuses_what_it_cannot_ru
     assert all(set(leaves(t)) <= allowed for t in trees) and any(
         set(leaves(t)) & set(PRIMITIVES) for t in trees
     )
+    # the best tree as people read it is simplified around its primitives, which keep their names
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())["objectives"]["foraging"]
+    assert set(leaves(summary["best_tree_simplified"])) <= allowed
+    assert (tmp_path / "a" / "best" / "foraging.txt").read_text() == summary["best_tree_simplified"] + "\n"
     capsys.readouterr()
     assert evolve(["--out", str(tmp_path / "a"), "--resume", "--nodes", "flat"]) == 2
     assert "--nodes flat differs from the run being resumed (hierarchical)" in capsys.readouterr().err

@@ -192,7 +192,7 @@ def write_best_trees(run: Run) -> list[Path]:
             continue
         text, value, _ = best
         original = parse(text, library=run.library)
-        tree = simplify_if_small(original)
+        tree = simplify_if_small(original, whole=None if run.library is None else run.library.is_copy)
         header = f"# best {objective} tree of {run.config.label}: fitness {value!r}, "
         header += f"evaluation {run.first_evaluation(text)}; simplified from {original.size} to {tree.size} "
         header += "nodes "
