@@ -37,7 +37,7 @@ from bt_controller.formats import to_dot, to_xml
 from bt_controller.library import Library
 from bt_controller.render import render
 from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import parse, to_indented, to_text
+from bt_controller.tree import Node, parse, to_indented, to_text
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS
 from evolution_manager.evolution.run import Run, RunDirectory
@@ -51,9 +51,13 @@ if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are c
 def simplified(tree: str, library: Library | None = None) -> str:
     """The simplified text of a tree text (``bt_controller.simplify``); each copy of a primitive of
     ``library`` is kept whole and written by its name."""
-    if library is None:
-        return to_text(simplify_if_small(parse(tree)))
-    return library.fold(simplify_if_small(parse(tree, library=library), whole=library.is_copy))
+    simple = simplified_tree(parse(tree, library=library), library)
+    return to_text(simple) if library is None else library.fold(simple)
+
+
+def simplified_tree(tree: Node, library: Library | None = None) -> Node:
+    """``tree`` simplified for people to read: each copy of a primitive of ``library`` kept whole."""
+    return simplify_if_small(tree, whole=None if library is None else library.is_copy)
 
 
 def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
@@ -192,7 +196,7 @@ def write_best_trees(run: Run) -> list[Path]:
             continue
         text, value, _ = best
         original = parse(text, library=run.library)
-        tree = simplify_if_small(original, whole=None if run.library is None else run.library.is_copy)
+        tree = simplified_tree(original, run.library)
         header = f"# best {objective} tree of {run.config.label}: fitness {value!r}, "
         header += f"evaluation {run.first_evaluation(text)}; simplified from {original.size} to {tree.size} "
         header += "nodes "
