@@ -1,5 +1,5 @@
 """Primitive libraries: named subtrees that a tree may use as leaves (``docs/interfaces.md``, "Primitive
-libraries"; the authors' sub-behaviours, ``../shared/design/foraging.md`` section 4).
+libraries"; the authors' sub-behaviours, ``docs/model.md``, "Foraging and the six primitives").
 
 A library is a JSON file::
 

@@ -1,13 +1,13 @@
 """Primitive libraries made from the repertoires of evolved primitives (the ``library`` command).
 
 The authors' 2024 follow-up builds its named primitives from the final grids of their six primitives
-(``../shared/design/foraging.md``, section 4, "The 8 variants"; their code at a73e4af:
+(``docs/algorithms.md``, "Primitive libraries from repertoires"; their code at a73e4af:
 ``charts/sub-behaviours.py:26-66``, ``analysis.py:1296-1358``). This module does the same from our run
 directories (``repertoire_<objective>.json``, ``config.json`` and ``heldout.json`` of ``evolve`` or
 ``experiment`` runs), and writes a library that ``--library`` reads (``bt_controller.library``):
 
 1. **Families.** Each primitive objective has a family name (``FAMILIES``; the primitive's own objective as
-   ``../shared/argos/README.md`` measures it in ARGoS): density ``increaseDensity``, nest ``gotoNest``, food
+   the authors' ARGoS code measures it, ``docs/validation/README.md``): density ``increaseDensity``, nest ``gotoNest``, food
    ``gotoFood``, idensity ``reduceDensity``, inest ``goAwayFromNest``, ifood ``goAwayFromFood``. A run gives
    the repertoire of each primitive objective it evolved (GP_o and QD_o one, GP_fnd each of its set).
 2. **Blocks.** The 8 x 8 x 8 grid (movement, rotation, conditionality) is cut into ``bins``^3 blocks, bins =

@@ -32,7 +32,7 @@ conditions, the actions and a library's names if it has one; ``hierarchical``, c
 
 HIERARCHICAL_CONDITIONS: tuple[str, ...] = ("got_food", "on_food", "in_nest")
 """The conditions of the hierarchical node set: ifGotFood, ifOnFood, ifInNest (params.py:134-166 at
-a73e4af; ``../shared/design/foraging.md`` section 4)."""
+a73e4af; ``docs/algorithms.md``, "Hierarchical GP and the flat baseline")."""
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ DERATINGS: dict[str, Derating] = {
     "standard": Derating(10, 990),
     "baseline": Derating(64, 6930),
 }
-"""The named deratings (``../shared/design/foraging.md`` section 5; the authors' code at a73e4af):
+"""The named deratings (``docs/algorithms.md``, "Hierarchical GP and the flat baseline"; the authors' code at a73e4af):
 ``standard``, 1 - max(0, len - 10)/990, of the 2023 GP and MAP-Elites (gp/ea.py:762-770 at 6c65001) and of
 the 2024 hierarchical GP, where a primitive's name is one node (gp/ea.py:949-959); ``baseline``,
 1 - max(0, len - 64)/6930, of the 2024 flat baseline over the low-level nodes (params.py:12, 8b049a6; at
