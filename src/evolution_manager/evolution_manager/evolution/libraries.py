@@ -7,9 +7,10 @@ directories (``repertoire_<objective>.json``, ``config.json`` and ``heldout.json
 ``experiment`` runs), and writes a library that ``--library`` reads (``bt_controller.library``):
 
 1. **Families.** Each primitive objective has a family name (``FAMILIES``; the primitive's own objective as
-   the authors' ARGoS code measures it, ``docs/validation/README.md``): density ``increaseDensity``, nest ``gotoNest``, food
-   ``gotoFood``, idensity ``reduceDensity``, inest ``goAwayFromNest``, ifood ``goAwayFromFood``. A run gives
-   the repertoire of each primitive objective it evolved (GP_o and QD_o one, GP_fnd each of its set).
+   the authors' ARGoS code measures it, ``docs/validation/README.md``): density ``increaseDensity``, nest
+   ``gotoNest``, food ``gotoFood``, idensity ``reduceDensity``, inest ``goAwayFromNest``, ifood
+   ``goAwayFromFood``. A run gives the repertoire of each primitive objective it evolved (GP_o and QD_o one,
+   GP_fnd each of its set).
 2. **Blocks.** The 8 x 8 x 8 grid (movement, rotation, conditionality) is cut into ``bins``^3 blocks, bins =
    1, 2 or 4 for 1, 8 or 64 blocks. Block (a, b, c) is variant ``k = a bins^2 + b bins + c + 1``: for 8 blocks
    the authors' 4a + 2b + c + 1 (``charts/sub-behaviours.py:47``), so variants 1-4 are the movement < 0 half;

@@ -54,7 +54,8 @@ DERATINGS: dict[str, Derating] = {
     "standard": Derating(10, 990),
     "baseline": Derating(64, 6930),
 }
-"""The named deratings (``docs/algorithms.md``, "Hierarchical GP and the flat baseline"; the authors' code at a73e4af):
+"""The named deratings (``docs/algorithms.md``, "Hierarchical GP and the flat baseline"; the authors' code
+at a73e4af):
 ``standard``, 1 - max(0, len - 10)/990, of the 2023 GP and MAP-Elites (gp/ea.py:762-770 at 6c65001) and of
 the 2024 hierarchical GP, where a primitive's name is one node (gp/ea.py:949-959); ``baseline``,
 1 - max(0, len - 64)/6930, of the 2024 flat baseline over the low-level nodes (params.py:12, 8b049a6; at
