@@ -106,6 +106,7 @@ RUN_ALGORITHM = 2
 RUN_EXPERIMENT = 3
 RUN_SCENARIO = 4
 RUN_HELDOUT = 5
+RUN_STUDY = 6
 
 
 def key_path(seed: int, *path: int) -> np.uint64:

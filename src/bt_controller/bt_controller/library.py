@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_controller.errors import TreeError
-from bt_controller.tree import Composite, Node, parse, to_text
+from bt_controller.tree import Composite, Node, parse, to_text, without_draw_keys
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, DECORATORS
 
 LIBRARY_FORMAT = 1
@@ -94,14 +94,22 @@ class Library:
         (what a name expands to; ``fold`` writes it as the name)."""
         return isinstance(node, Composite) and node.kind in DECORATORS and node.children[0] in self._by_tree
 
+    def name_of(self, node: Composite) -> str | None:
+        """The name of the primitive that ``node`` is a copy of (the first such name), or None."""
+        return self._by_tree.get(node.children[0]) if node.kind in DECORATORS else None
+
+    def shown_name_of(self, node: Composite) -> str | None:
+        """For drawings: the name of the primitive that ``node`` copies, draw keys aside (a copy that the
+        simplifier moved keeps its draws with ``prob@K`` keys; it behaves as the primitive there, but its
+        text cannot be folded to the name), or None."""
+        if node.kind not in DECORATORS:
+            return None
+        return self._by_tree.get(without_draw_keys(node.children[0]))
+
     def fold(self, tree: Node) -> str:
         """The canonical text of ``tree`` with every ``success(T)`` whose ``T`` is a primitive's tree written
         as that primitive's name (the first such name): parsing it with this library gives ``tree`` back."""
-
-        def name_of(node: Composite) -> str | None:
-            return self._by_tree.get(node.children[0]) if node.kind in DECORATORS else None
-
-        return to_text(tree, name_of)
+        return to_text(tree, self.name_of)
 
     def as_json(self) -> dict[str, object]:
         """The library as its file holds it."""

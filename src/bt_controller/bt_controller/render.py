@@ -2,13 +2,15 @@
 
 Leaves sit at consecutive x positions in pre-order; a composite is centred over its children; depth goes
 down. Colours and labels follow ``formats.to_dot``: sequence blue, selector orange, probabilistic green (with
-its draw key, ``prob % @7``), conditions white ellipses ending in '?', actions grey boxes. The layout is
+its draw key, ``prob % @7``), conditions white ellipses ending in '?', actions grey boxes; with a library's
+``name_of``, each copy of a primitive is one purple box with the primitive's name. The layout is
 iterative, so an SVG takes a tree of any depth; a PNG is refused (TreeLimitError) beyond the
 ``MAX_PNG_PIXELS`` matplotlib can write in each direction.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from bt_controller.errors import TreeLimitError
@@ -19,12 +21,17 @@ RENDER_FORMATS = ("svg", "png")
 DPI = 120
 INCHES_PER_LEAF = 1.35
 INCHES_PER_LEVEL = 0.9
+PRIMITIVE_FILL = "#e8dcf0"
+"""A library primitive's box (drawn by name, its tree not expanded)."""
 MAX_PNG_PIXELS = 2**16 - 1
 """Largest PNG width or height matplotlib writes."""
 
 
-def layout(tree: Node) -> list[tuple[Node, float, int, int | None]]:
-    """``(node, x, depth, parent index)`` for every node in pre-order (iterative, for any depth)."""
+def layout(
+    tree: Node, name_of: Callable[[Composite], str | None] | None = None
+) -> list[tuple[Node, float, int, int | None]]:
+    """``(node, x, depth, parent index)`` for every node in pre-order (iterative, for any depth); a
+    composite that ``name_of`` names is placed as a leaf, without its subtree."""
     placed: list[tuple[Node, float, int, int | None]] = []
     xs: list[list[float]] = []  # per open composite, the x of its children placed so far
     next_leaf = 0.0
@@ -40,7 +47,7 @@ def layout(tree: Node) -> list[tuple[Node, float, int, int | None]]:
             node, depth, parent = item
             index = len(placed)
             placed.append((node, 0.0, depth, parent))
-            if isinstance(node, Composite):
+            if isinstance(node, Composite) and (name_of is None or name_of(node) is None):
                 xs.append([])
                 stack.append(index)
                 stack.extend((child, depth + 1, index) for child in reversed(node.children))
@@ -53,19 +60,31 @@ def layout(tree: Node) -> list[tuple[Node, float, int, int | None]]:
     return placed
 
 
-def render(tree: Node, path: str | Path, fmt: str | None = None) -> Path:
-    """Draw ``tree`` into ``path`` as SVG or PNG (``fmt`` defaults to the file suffix); returns the path."""
+def render(
+    tree: Node,
+    path: str | Path,
+    fmt: str | None = None,
+    name_of: Callable[[Composite], str | None] | None = None,
+) -> Path:
+    """Draw ``tree`` into ``path`` as SVG or PNG (``fmt`` defaults to the file suffix); returns the path.
+    ``name_of`` (e.g. a library's ``name_of``) names composites drawn as one box, a primitive's copy."""
     path = Path(path)
     fmt = (fmt or path.suffix.lstrip(".")).lower()
     if fmt not in RENDER_FORMATS:
         raise ValueError(f"can render {' or '.join(RENDER_FORMATS)}, not {fmt!r}")
-    leaves = sum(1 for node in tree.preorder() if not isinstance(node, Composite))
-    size = (max(2.0, INCHES_PER_LEAF * leaves), max(1.2, INCHES_PER_LEVEL * (tree.depth + 1)))
+    placed = layout(tree, name_of)
+
+    def named(node: Node) -> str | None:
+        return name_of(node) if name_of is not None and isinstance(node, Composite) else None
+
+    leaves = sum(1 for node, _, _, _ in placed if not isinstance(node, Composite) or named(node))
+    depth = max(d for _, _, d, _ in placed) if name_of is not None else tree.depth
+    size = (max(2.0, INCHES_PER_LEAF * leaves), max(1.2, INCHES_PER_LEVEL * (depth + 1)))
     if fmt == "png" and max(size) * DPI > MAX_PNG_PIXELS:
         most_leaves = int(MAX_PNG_PIXELS / DPI / INCHES_PER_LEAF)
         most_depth = int(MAX_PNG_PIXELS / DPI / INCHES_PER_LEVEL) - 1
         raise TreeLimitError(
-            f"tree has {leaves} leaves and depth {tree.depth}; a PNG drawing takes at most {most_leaves} "
+            f"tree has {leaves} leaves and depth {depth}; a PNG drawing takes at most {most_leaves} "
             f"leaves and depth {most_depth} (draw it as svg, or use text, xml or dot)"
         )
     import matplotlib
@@ -74,19 +93,23 @@ def render(tree: Node, path: str | Path, fmt: str | None = None) -> Path:
     from matplotlib import pyplot as plt
     from matplotlib.patches import FancyBboxPatch
 
-    placed = layout(tree)
     figure = plt.figure(figsize=size)
-    width, height = leaves, tree.depth + 1
+    width, height = leaves, depth + 1
     axes = figure.add_axes((0, 0, 1, 1))
     axes.set_xlim(-0.6, width - 0.4)
     axes.set_ylim(-height + 0.4, 0.6)
     axes.axis("off")
-    for _, x, depth, parent in placed:
+    for _, x, level, parent in placed:
         if parent is not None:
-            _, px, pdepth, _ = placed[parent]
-            axes.plot([px, x], [-pdepth - 0.18, -depth + 0.18], color="#555555", linewidth=0.8, zorder=1)
-    for node, x, depth, _ in placed:
-        if isinstance(node, Composite):
+            _, px, parent_level, _ = placed[parent]
+            axes.plot(
+                [px, x], [-parent_level - 0.18, -level + 0.18], color="#555555", linewidth=0.8, zorder=1
+            )
+    for node, x, level, _ in placed:
+        name = named(node)
+        if name is not None:  # a primitive's copy, drawn as one box
+            label, fill, style = name, PRIMITIVE_FILL, "round,pad=0.02,rounding_size=0.08"
+        elif isinstance(node, Composite):
             label, fill, style = composite_label(node), COMPOSITE_FILL[node.kind], "round,pad=0.02"
         elif isinstance(node, Condition):
             label, fill, style = node.name + "?", "#ffffff", "round,pad=0.02,rounding_size=0.18"
@@ -94,7 +117,7 @@ def render(tree: Node, path: str | Path, fmt: str | None = None) -> Path:
             label, fill, style = leaf_name(node), "#eeeeee", "square,pad=0.02"
         axes.add_patch(
             FancyBboxPatch(
-                (x - 0.45, -depth - 0.18),
+                (x - 0.45, -level - 0.18),
                 0.9,
                 0.36,
                 boxstyle=style,
@@ -104,7 +127,9 @@ def render(tree: Node, path: str | Path, fmt: str | None = None) -> Path:
                 zorder=2,
             )
         )
-        axes.text(x, -depth, label, ha="center", va="center", fontsize=8, zorder=3)
-    figure.savefig(path, format=fmt, dpi=DPI)
+        axes.text(x, -level, label, ha="center", va="center", fontsize=8, zorder=3)
+    # no date and a fixed salt for the SVG's element ids: the same tree gives the same bytes
+    with matplotlib.rc_context({"svg.hashsalt": "bt_controller.render"}):
+        figure.savefig(path, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
     plt.close(figure)
     return path

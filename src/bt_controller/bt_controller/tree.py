@@ -230,6 +230,13 @@ def is_decorator(node: Node) -> bool:
     return isinstance(node, Composite) and node.kind in DECORATORS
 
 
+def without_draw_keys(tree: Node) -> Node:
+    """``tree`` with every ``prob@K`` written as a plain ``prob`` (its draws then follow its position)."""
+    if not isinstance(tree, Composite):
+        return tree
+    return Composite(tree.kind, tuple(without_draw_keys(child) for child in tree.children))
+
+
 def check_draw_key(key: object) -> int:
     """``key`` if it is a draw key (an int in [0, ``MAX_DRAW_KEY``], not a bool); else TreeSyntaxError."""
     if isinstance(key, bool) or not isinstance(key, int) or not 0 <= key <= MAX_DRAW_KEY:

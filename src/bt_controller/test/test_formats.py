@@ -19,6 +19,7 @@ from bt_controller.formats import (
     to_dot,
     to_xml,
 )
+from bt_controller.library import LIBRARY_FORMAT, library_from_json
 from bt_controller.random_trees import random_tree
 from bt_controller.render import layout, render
 from bt_controller.tree import Composite, Node, leaf_name, parse
@@ -247,3 +248,29 @@ def test_success_is_btcpp_force_success_both_ways():
     with pytest.raises(TreeSyntaxError, match="ForceSuccess takes exactly one"):
         from_xml(two)
     assert "success ✓" in to_dot(tree) and to_ascii(tree).splitlines()[3] == "│   └── success"
+
+
+def test_a_drawing_shows_each_copy_of_a_primitive_as_one_box_named_even_when_moved(tmp_path):
+    library = library_from_json(
+        {"format": LIBRARY_FORMAT, "primitives": [{"name": "wander1", "tree": "prob(forward, stop)"}]}, "lib"
+    )
+    # the second copy was moved by the simplifier: its prob keeps its draws with a key
+    tree = parse("sel(on_food, wander1, success(prob@9(forward, stop)))", library=library)
+    placed = layout(tree, library.shown_name_of)
+    assert [leaf_name(n) if not isinstance(n, Composite) else n.kind for n, *_ in placed] == [
+        "sel",
+        "on_food",
+        "success",
+        "success",
+    ]
+    assert [library.shown_name_of(n) for n, *_ in placed[2:]] == ["wander1", "wander1"]
+    assert library.name_of(placed[3][0]) is None  # the text keeps the keyed copy whole (it folds exactly)
+    svg = render(tree, tmp_path / "named.svg", name_of=library.shown_name_of).read_text()
+    plain = render(tree, tmp_path / "plain.svg").read_bytes()
+    assert len(svg.encode()) < len(plain)  # fewer boxes drawn
+
+
+def test_drawings_are_the_same_bytes_every_time(tmp_path):
+    for fmt in ("svg", "png"):
+        first = render(EXAMPLE, tmp_path / f"a.{fmt}").read_bytes()
+        assert render(EXAMPLE, tmp_path / f"b.{fmt}").read_bytes() == first

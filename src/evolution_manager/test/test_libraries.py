@@ -10,14 +10,13 @@ import pytest
 
 from bt_controller.library import load_library
 from bt_controller.simplify import simplify
-from bt_controller.tree import parse, success, to_text
+from bt_controller.tree import parse, success, to_text, without_draw_keys
 from evolution_manager.evolution.libraries import (
     FAMILIES,
     block_of,
     library_command,
     library_entry_tree,
     variant,
-    without_draw_keys,
 )
 from evolution_manager.evolution.operators import derating
 from evolution_manager.evolution.run_config import RunConfig

@@ -48,7 +48,7 @@ from pathlib import Path
 from bt_controller.errors import TreeError
 from bt_controller.library import LIBRARY_FORMAT, Library, library_from_json
 from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import Composite, Node, parse, to_text
+from bt_controller.tree import parse, to_text, without_draw_keys
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser
 from evolution_manager.errors import EvolutionError, RunDirectoryError, UsageError, WriteError
 from evolution_manager.evolution.operators import selection_fitness
@@ -225,13 +225,6 @@ def best_across_runs(winners: Sequence[Item | None], profile: str) -> int | None
         if best is None or value > best[0]:
             best = (value, k)
     return None if best is None else best[1]
-
-
-def without_draw_keys(tree: Node) -> Node:
-    """``tree`` with every ``prob@K`` written as a plain ``prob`` (its draws then follow its position)."""
-    if not isinstance(tree, Composite):
-        return tree
-    return Composite(tree.kind, tuple(without_draw_keys(child) for child in tree.children))
 
 
 def library_entry_tree(text: str) -> str:

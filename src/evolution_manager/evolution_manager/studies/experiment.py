@@ -43,6 +43,7 @@ from multiprocessing import Manager, get_context
 from pathlib import Path
 
 from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
+from bt_controller.library import Library, LibraryError, load_library
 from evolution_manager.arguments import (
     EXIT_INTERRUPTED,
     EXIT_IO,
@@ -62,6 +63,7 @@ from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study:
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
+STUDIES = ("paper", "foraging")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
 
@@ -147,13 +149,18 @@ def run_one(
     directory = RunDirectory(Path(root))
     if finished(directory.root):
         return root
-    evaluator = BatchEvaluator(config.world(), threads=1)  # the run's profile and trial length
+    if directory.started():
+        if directory.read_config() != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+        library = directory.read_library(config)  # the run's own copy
+    else:
+        library = planned_library(config)
+    # the run's profile, trial length and library
+    evaluator = BatchEvaluator(config.world(), threads=1, library=library)
     if directory.started():
         run = Run.resume(directory.root, evaluator)
-        if run.config != config:
-            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
     else:
-        run = Run.start(config, directory.root, evaluator)
+        run = Run.start(config, directory.root, evaluator, library)
 
     def on_batch(produced: int, _budget: int) -> None:
         if progress is not None:
@@ -162,6 +169,23 @@ def run_one(
     run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
     write_results(run, with_figures=False, evaluator=evaluator)
     return root
+
+
+def planned_library(config: RunConfig) -> Library | None:
+    """The primitive library a planned run starts with (None without one): the file its configuration
+    names, which must still be the library of the recorded digest."""
+    if not config.library:
+        return None
+    try:
+        library = load_library(config.library)
+    except LibraryError as error:
+        raise EvolutionError(str(error)) from None
+    if library.digest != config.library_digest:
+        raise EvolutionError(
+            f"{config.library} is no longer the library the experiment planned with (digest "
+            f"{library.digest}, expected {config.library_digest})"
+        )
+    return library
 
 
 def current_commit() -> str:
@@ -245,6 +269,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SECONDS",
         help="checkpoint period of each run (default 30)",
     )
+    parser.add_argument(
+        "--study",
+        choices=STUDIES,
+        default="paper",
+        help="paper: the 2023 paper's three algorithms on its three objectives (default); foraging: the 2024 "
+        "study, primitives, libraries and foragers (docs/algorithms.md)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
     return parser
@@ -276,10 +307,13 @@ def run_locally(
                 yield futures[future], future.exception()
 
 
+Stage = Callable[[], list[tuple[RunConfig, str]]]
+"""A stage of a study: called when the stages before it have finished, it gives the runs to run (each with
+its directory relative to the study's folder)."""
+
+
 def experiment(argv: Sequence[str] | None = None) -> int:
     """Run ``experiment``; return the exit status."""
-    from evolution_manager.studies.report import build_report
-
     try:
         args = build_parser().parse_args(argv)
         cluster = settings_from_args(args)
@@ -296,28 +330,16 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {args.scenario_seed}")
         scenarios = args.scenarios or "fixed"
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
-        planned = plan(
-            args.runs,
-            args.evaluations,
-            args.seed,
-            args.trials,
-            scenarios,
-            args.scenario_seed,
-            args.profile,
-            design or "per-run",
-        )
-        shared = {config.scenario_seed for config, _ in planned}
-        document = {
-            "profile": planned[0][0].profile,
-            "runs": args.runs,
-            "evaluations": args.evaluations,
-            "seed": args.seed,
-            "trials": args.trials,
-            "scenarios": scenarios,
-            "design": design,
-            "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
-            "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
-        }
+        if args.study == "foraging":
+            from evolution_manager.studies import foraging_study
+
+            document, stages, budgets = foraging_study.plan_study(args, scenarios, design)
+            report: Callable[[Path], Path] = foraging_study.build_report
+        else:
+            from evolution_manager.studies import report as paper_report
+
+            document, stages, budgets = _paper_study(args, scenarios, design)
+            report = paper_report.build_report
         plan_path = args.out / PLAN_FILE
         if plan_path.exists():
             saved = read_json(plan_path)
@@ -335,15 +357,65 @@ def experiment(argv: Sequence[str] | None = None) -> int:
     except OSError as error:  # an --out that cannot be read
         print(f"experiment: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    started = time.time()
     command = "ws/run evolution_manager experiment " + " ".join(argv if argv is not None else sys.argv[1:])
+    status = execute(args, cluster, command, document, stages, budgets)
+    if status != 0:
+        return status
+    try:
+        written = report(args.out)
+    except EvolutionError as error:
+        print(f"experiment: error: the report cannot be written: {error}", file=sys.stderr)
+        return 1
+    print(f"experiment: {sum(1 for _ in budgets)} runs in {args.out}; report: {written}")
+    return 0
+
+
+def _paper_study(
+    args: argparse.Namespace, scenarios: str, design: str | None
+) -> tuple[dict, list[Stage], dict[str, int]]:
+    """The 2023 paper's experiment: its plan document, its one stage, the budget of every run."""
+    planned = plan(
+        args.runs,
+        args.evaluations,
+        args.seed,
+        args.trials,
+        scenarios,
+        args.scenario_seed,
+        args.profile,
+        design or "per-run",
+    )
+    shared = {config.scenario_seed for config, _ in planned}
+    document = {
+        "profile": planned[0][0].profile,
+        "runs": args.runs,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": args.trials,
+        "scenarios": scenarios,
+        "design": design,
+        "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
+        "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
+    }
+    return document, [lambda: planned], {path: config.evaluations for config, path in planned}
+
+
+def execute(
+    args: argparse.Namespace,
+    cluster: ClusterSettings,
+    command: str,
+    document: dict,
+    stages: Sequence[Stage],
+    budgets: dict[str, int],
+) -> int:
+    """Write the plan ``document`` and run every stage's runs in turn (those not finished), with one progress
+    bar over ``budgets`` (individuals per run directory, relative to ``args.out``); the exit status. A stage
+    starts only when every run before it has finished."""
+    started = time.time()
     out = args.out.absolute()  # a cluster's workers need the whole path (the same on every machine)
-    paths = {str(out / path): path for _, path in planned}
-    budgets = {str(out / path): config.evaluations for config, path in planned}
-    done = {root: produced_so_far(Path(root), budget) for root, budget in budgets.items()}
-    to_run = [(config, str(out / path)) for config, path in planned if not finished(out / path)]
-    to_run.sort(key=lambda item: -item[0].evaluations)  # the longest (GP_fnd) first: a shorter makespan
-    already = len(planned) - len(to_run)
+    plan_path = args.out / PLAN_FILE
+    total = {str(out / path): budget for path, budget in budgets.items()}
+    done = {root: produced_so_far(Path(root), budget) for root, budget in total.items()}
+    already = sum(1 for root in total if finished(Path(root)))
     bar = None
     failures: list[str] = []
     full_disk = False  # a run could not write its files: what each saved is whole, the command continues it
@@ -355,7 +427,7 @@ def experiment(argv: Sequence[str] | None = None) -> int:
     def show() -> None:
         if bar is not None:
             bar.n = sum(done.values())
-            bar.set_description(f"experiment ({already + finished_now}/{len(planned)} runs)")
+            bar.set_description(f"experiment ({already + finished_now}/{len(total)} runs)")
             bar.refresh()
 
     def on_progress(root: str, produced: int) -> None:
@@ -379,31 +451,42 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
                 bar = stack.enter_context(
                     tqdm(
-                        total=sum(budgets.values()),
+                        total=sum(total.values()),
                         initial=sum(done.values()),
                         unit="ind",
-                        desc=f"experiment ({already}/{len(planned)} runs)",
+                        desc=f"experiment ({already}/{len(total)} runs)",
                         dynamic_ncols=True,
                         disable=None,
                     )
                 )
-            runs = [(config.to_json(), root) for config, root in to_run]
-            if client is None:
-                processes = args.processes or os.cpu_count() or 1
-                results = run_locally(runs, processes, args.checkpoint_every, on_progress)
-            else:
-                from evolution_manager.cluster.runs import map_runs  # loads Dask: only for a cluster
+            for stage in stages:
+                try:
+                    planned = stage()
+                except EvolutionError as error:  # e.g. a library cannot be built from the stage before
+                    print(f"experiment: error: {error}", file=sys.stderr)
+                    return 1
+                paths = {str(out / path): path for _, path in planned}
+                to_run = [(config, str(out / path)) for config, path in planned if not finished(out / path)]
+                to_run.sort(key=lambda item: -item[0].evaluations)  # the longest first: a shorter makespan
+                runs = [(config.to_json(), root) for config, root in to_run]
+                if client is None:
+                    processes = args.processes or os.cpu_count() or 1
+                    results = run_locally(runs, processes, args.checkpoint_every, on_progress)
+                else:
+                    from evolution_manager.cluster.runs import map_runs  # loads Dask: only for a cluster
 
-                results = map_runs(client, run_one, runs, args.checkpoint_every, on_progress=on_progress)
-            for root, problem in results:
-                if problem is None:
-                    finished_now += 1
-                    done[root] = budgets[root]
-                    record_session(args.out, started, command, cluster, runs_finished=finished_now)
-                else:  # a failed run is reported, the others go on
-                    failures.append(f"{paths[root]}: {problem}")
-                    full_disk = full_disk or isinstance(problem, WriteError)
-                show()
+                    results = map_runs(client, run_one, runs, args.checkpoint_every, on_progress=on_progress)
+                for root, problem in results:
+                    if problem is None:
+                        finished_now += 1
+                        done[root] = total[root]
+                        record_session(args.out, started, command, cluster, runs_finished=finished_now)
+                    else:  # a failed run is reported, the others go on
+                        failures.append(f"{paths[root]}: {problem}")
+                        full_disk = full_disk or isinstance(problem, WriteError)
+                    show()
+                if failures:  # the next stage builds on every run of this one
+                    break
     except KeyboardInterrupt:
         print(
             f"experiment: interrupted; run the same command again to continue ({args.out})", file=sys.stderr
@@ -418,8 +501,6 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             )
             return EXIT_IO
         return 1
-    report = build_report(args.out)
-    print(f"experiment: {len(planned)} runs in {args.out}; report: {report}")
     return 0
 
 

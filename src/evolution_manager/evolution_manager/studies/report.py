@@ -482,6 +482,15 @@ def rebuild_run(root: Path) -> list[Path]:
     return write_results(Run.resume(root, None, cut=False))
 
 
+def _study(root: Path) -> str | None:
+    """The study of the experiment folder ``root`` (``paper`` when its plan names none), or None."""
+    plan = Path(root) / "experiment.json"
+    if not plan.exists():
+        return None
+    document = read_json(plan)
+    return str(document.get("study", "paper")) if isinstance(document, dict) else None
+
+
 def report(argv: Sequence[str] | None = None) -> int:
     """Run ``report``; return the exit status."""
     parser = Parser(prog="report", description=__doc__.split("\n")[0])
@@ -498,7 +507,13 @@ def report(argv: Sequence[str] | None = None) -> int:
         print(f"report: error: {error}", file=sys.stderr)
         return EXIT_USAGE
     try:
-        if (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
+        if _study(args.dir) == "foraging":
+            from evolution_manager.studies.foraging_study import build_report as build_foraging_report
+
+            if args.beside is not None:
+                raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
+            print(build_foraging_report(args.dir))
+        elif (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
             print(build_report(args.dir, args.beside, args.beside_title))
         elif (args.dir / "config.json").exists():
             for path in rebuild_run(args.dir):

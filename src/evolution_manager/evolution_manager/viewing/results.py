@@ -213,7 +213,8 @@ def write_best_trees(run: Run) -> list[Path]:
             write_atomic(path, text)
             written.append(path)
         for fmt in ("svg", "png"):
-            written.append(Path(render(tree, directory / f"{objective}.{fmt}", fmt)))
+            name_of = None if run.library is None else run.library.shown_name_of  # primitives by name
+            written.append(Path(render(tree, directory / f"{objective}.{fmt}", fmt, name_of)))
     return written
 
 

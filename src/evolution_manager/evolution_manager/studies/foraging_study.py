@@ -1,0 +1,482 @@
+"""``experiment --study foraging``: the 2024 follow-up's study, from primitives to foragers.
+
+    ws/run evolution_manager experiment --study foraging --runs 10 --out experiments/foraging
+
+Three stages, each starting when every run of the one before has finished (``docs/algorithms.md``,
+"The foraging study"):
+
+1. **Primitives** (``primitives/``): MAP-Elites (QD_o) on each of the six primitive objectives
+   (``PRIMITIVES``), ``--runs`` runs each with ``--evaluations``; and GP_fnd on the six at once, ``--runs``
+   runs with six times the budget (as the 2023 GP_fnd has three times it for three objectives). 20 s trials.
+2. **Libraries** (``libraries/``): the named-primitive libraries of the ``library`` command from every run of
+   one kind: ``qd8`` and ``qd1`` from the QD runs (8 blocks and 1 block per grid), ``gpfnd8`` and ``gpfnd1``
+   from the GP_fnd runs.
+3. **Foragers** (``arms/<arm>/``, ``ARMS``), 100 s foraging trials, ``--runs`` runs per arm: hierarchical GP
+   with each library (``hier-qd8`` ...), MAP-Elites over hierarchical foragers with ``qd8``
+   (``foragers-qd``), and the flat baseline (``flat``) over the low-level nodes with the budget that matches
+   the hierarchical arms' simulated time with their primitives' (``flat_budget``).
+
+Every run is an ordinary run directory, continued from its checkpoint when the same command is started again,
+as in the paper's experiment; the plan (``experiment.json``) names the libraries by path, and the arms'
+configurations record each library's digest. Seeds: run ``r`` of stage ``s``, kind ``k`` gets
+``derive_seed(--seed, RUN_STUDY, s, k, r)``; under the ``shared`` design (the default) every run of the study
+is evaluated on one scenario seed.
+
+The report (``report.md``, ``runs.csv`` and ``figures/``) compares the arms' best foragers: raw deliveries per
+robot per trial and as a fraction of an ideal robot's ``IDEAL_DELIVERIES``, held-out scores, the authors'
+tests (Shapiro-Wilk, then Welch's t or Mann-Whitney) with effect sizes and Holm's correction, and whether the
+2024 conclusions hold.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import shutil
+import statistics as stats
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from bt_controller.draws import RUN_STUDY, derive_seed
+from bt_controller.library import Library, LibraryError, load_library
+from evolution_manager.errors import EvolutionError
+from evolution_manager.evolution.libraries import FAMILIES, build_library, read_run
+from evolution_manager.evolution.run import PROGRESS_HEADER
+from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.files import CsvLog, read_json, write_atomic, write_json
+from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
+from swarm_sim.config import TASKS
+
+PRIMITIVES: tuple[str, ...] = tuple(FAMILIES)
+"""The six primitive objectives, in the order of their families (``libraries.FAMILIES``)."""
+
+LIBRARIES: dict[str, tuple[str, int]] = {
+    "qd8": ("qd", 8),
+    "qd1": ("qd", 1),
+    "gpfnd8": ("gp-fnd", 8),
+    "gpfnd1": ("gp-fnd", 1),
+}
+"""Library name -> (the algorithm of the primitive runs it is built from, blocks per grid)."""
+
+IDEAL_DELIVERIES = 2.6032
+"""Deliveries per robot per trial of an ideal robot in this arena (the mean over the two gaps, 2.8497 and
+2.3568), which the authors' later charts divide foraging fitness by (``docs/algorithms.md``)."""
+
+CSV_HEADER = ["arm", "run", "seed", "best_fitness", "heldout_best_fitness"]
+
+
+@dataclass(frozen=True)
+class Arm:
+    """One arm of the foraging stage."""
+
+    name: str
+    algorithm: str
+    library: str
+    """A name of ``LIBRARIES``, or "" for the flat node set."""
+    what: str
+
+
+ARMS: tuple[Arm, ...] = (
+    Arm(
+        "flat", "gp", "", "GP over the low-level nodes and got_food (the 2024 baseline), equal simulated time"
+    ),
+    Arm("hier-qd8", "gp", "qd8", "hierarchical GP over the qd8 library"),
+    Arm("hier-qd1", "gp", "qd1", "hierarchical GP over the qd1 library"),
+    Arm("hier-gpfnd8", "gp", "gpfnd8", "hierarchical GP over the gpfnd8 library"),
+    Arm("hier-gpfnd1", "gp", "gpfnd1", "hierarchical GP over the gpfnd1 library"),
+    Arm("foragers-qd", "qd", "qd8", "MAP-Elites over hierarchical foragers with the qd8 library"),
+)
+
+COMPARISONS: tuple[tuple[str, str], ...] = (
+    *((arm.name, "flat") for arm in ARMS if arm.name != "flat"),
+    ("hier-qd8", "hier-gpfnd8"),
+    ("hier-qd1", "hier-gpfnd1"),
+    ("hier-qd8", "hier-qd1"),
+    ("hier-gpfnd8", "hier-gpfnd1"),
+)
+"""The pairs the report tests: every arm against the flat baseline, then the repertoires' source (QD against
+GP_fnd) and size (8 blocks against 1)."""
+
+
+def flat_budget(evaluations: int) -> int:
+    """The flat baseline's budget: a hierarchical arm's ``evaluations`` plus the six primitives' QD runs'
+    evaluations, counted in foraging trials' simulated time (the authors' 2200 generations against 1000:
+    1200 x 25 = 6 x 25,000 x 160 / 800)."""
+    primitive_steps = len(PRIMITIVES) * evaluations * TASKS["primitives"]
+    return evaluations + round(primitive_steps / TASKS["foraging"])
+
+
+def _budget(arm: Arm, evaluations: int) -> int:
+    return flat_budget(evaluations) if arm.name == "flat" else evaluations
+
+
+def _run_dir(kind: str, r: int) -> str:
+    return f"{kind}/run{r:02d}"
+
+
+def plan_study(
+    args: argparse.Namespace, scenarios: str, design: str | None
+) -> tuple[dict, list, dict[str, int]]:
+    """The study's plan document, its stages (``experiment.Stage``) and the budget of every run, from the
+    ``experiment`` command line."""
+    from evolution_manager.studies.experiment import shared_scenario_seed
+
+    scenario_seed = args.scenario_seed
+    if design == "shared" and scenario_seed is None:
+        scenario_seed = shared_scenario_seed(args.seed)
+    runs, evaluations, seed = args.runs, args.evaluations, args.seed
+
+    def config(
+        algorithm: str, objective: str | None, budget: int, run_seed: int, **more: object
+    ) -> RunConfig:
+        return RunConfig.make(
+            algorithm,
+            objective,
+            budget,
+            run_seed,
+            args.trials,
+            scenarios,
+            scenario_seed,
+            args.profile,
+            **more,  # type: ignore[arg-type]  # task, fnd_objectives, library and its digest
+        )
+
+    primitives: list[tuple[RunConfig, str]] = []
+    for k, objective in enumerate(PRIMITIVES):
+        for r in range(runs):
+            made = config("qd", objective, evaluations, derive_seed(seed, RUN_STUDY, 0, k, r))
+            primitives.append((made, _run_dir(f"primitives/{made.label}", r)))
+    for r in range(runs):
+        made = config(
+            "gp-fnd",
+            None,
+            len(PRIMITIVES) * evaluations,
+            derive_seed(seed, RUN_STUDY, 0, len(PRIMITIVES), r),
+            fnd_objectives=PRIMITIVES,
+        )
+        primitives.append((made, _run_dir("primitives/GP_fnd", r)))
+    arms = [
+        {
+            "arm": arm.name,
+            "dir": _run_dir(f"arms/{arm.name}", r),
+            "algorithm": arm.algorithm,
+            "library": f"libraries/{arm.library}.json" if arm.library else "",
+            "evaluations": _budget(arm, evaluations),
+            "seed": derive_seed(seed, RUN_STUDY, 2, a, r),
+        }
+        for a, arm in enumerate(ARMS)
+        for r in range(runs)
+    ]
+    document = {
+        "study": "foraging",
+        "profile": primitives[0][0].profile,
+        "runs": runs,
+        "evaluations": evaluations,
+        "seed": seed,
+        "trials": args.trials,
+        "scenarios": scenarios,
+        "design": design,
+        "scenario_seed": scenario_seed,
+        "primitives": [{"dir": path, "config": made.to_json()} for made, path in primitives],
+        "libraries": {
+            name: {"from": source, "blocks": blocks} for name, (source, blocks) in LIBRARIES.items()
+        },
+        "arms": arms,
+    }
+    out = Path(args.out).absolute()
+
+    def foragers() -> list[tuple[RunConfig, str]]:
+        libraries = {name: _library(out, name, primitives) for name in LIBRARIES}
+        planned = []
+        for entry in arms:
+            library = libraries[Path(str(entry["library"])).stem] if entry["library"] else None
+            planned.append(
+                (
+                    config(
+                        str(entry["algorithm"]),
+                        "foraging",
+                        int(str(entry["evaluations"])),
+                        int(str(entry["seed"])),
+                        task="foraging",
+                        library=str(out / str(entry["library"])) if library else "",
+                        library_digest=library.digest if library else "",
+                    ),
+                    str(entry["dir"]),
+                )
+            )
+        return planned
+
+    budgets = {path: made.evaluations for made, path in primitives}
+    budgets.update({str(entry["dir"]): int(str(entry["evaluations"])) for entry in arms})
+    return document, [lambda: primitives, foragers], budgets
+
+
+def _library(out: Path, name: str, primitives: Sequence[tuple[RunConfig, str]]) -> Library:
+    """The library ``name`` of the study in ``out``: the file when an earlier session built it, else built
+    from the stage's finished primitive runs and written."""
+    path = out / "libraries" / f"{name}.json"
+    if path.exists():
+        try:
+            return load_library(path)
+        except LibraryError as error:
+            raise EvolutionError(f"{error}; remove it to build it again from the primitive runs") from None
+    source, blocks = LIBRARIES[name]
+    runs = [read_run(out / rel) for made, rel in primitives if made.algorithm == source]
+    library = build_library(runs, blocks, str(path))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_json(path, library.as_json())
+    return library
+
+
+@dataclass(frozen=True)
+class ArmRun:
+    """A finished run of an arm."""
+
+    arm: str
+    index: int
+    seed: int
+    best_fitness: float
+    heldout_best_fitness: float | None
+    best_tree: str
+    directory: Path
+
+
+def load_arm_runs(root: Path) -> tuple[dict, list[ArmRun]]:
+    """The study's plan and every finished forager run of it, in the plan's order."""
+    document = read_json(Path(root) / "experiment.json")
+    if not isinstance(document, dict) or document.get("study") != "foraging":
+        raise EvolutionError(f"{root} is not a foraging study (its experiment.json has no study foraging)")
+    found = []
+    for entry in document["arms"]:
+        directory = Path(root) / entry["dir"]
+        summary_path = directory / "summary.json"
+        if not summary_path.exists():
+            continue
+        summary = read_json(summary_path)
+        if not isinstance(summary, dict) or not summary.get("finished"):
+            continue
+        scores = summary["objectives"]["foraging"]
+        found.append(
+            ArmRun(
+                entry["arm"],
+                int(directory.name.removeprefix("run")),
+                int(entry["seed"]),
+                float(scores["best_fitness"]),
+                None if scores.get("heldout_best_fitness") is None else float(scores["heldout_best_fitness"]),
+                str(scores.get("best_tree", "")),
+                directory,
+            )
+        )
+    return document, found
+
+
+def write_runs_csv(root: Path, runs: Sequence[ArmRun]) -> Path:
+    """``runs.csv``: one row per finished forager run, in the plan's order."""
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(CSV_HEADER)
+    for run in runs:
+        held = "" if run.heldout_best_fitness is None else repr(run.heldout_best_fitness)
+        writer.writerow([run.arm, run.index, run.seed, repr(run.best_fitness), held])
+    path = Path(root) / "runs.csv"
+    write_atomic(path, text.getvalue())
+    return path
+
+
+def _by_arm(runs: Sequence[ArmRun], heldout: bool = False) -> dict[str, list[float]]:
+    values: dict[str, list[float]] = {}
+    for run in runs:
+        value = run.heldout_best_fitness if heldout else run.best_fitness
+        if value is not None:
+            values.setdefault(run.arm, []).append(value)
+    return values
+
+
+def comparisons(runs: Sequence[ArmRun]) -> list[Comparison]:
+    """The tests of ``COMPARISONS`` on the best and the held-out best fitness, where both arms have runs,
+    Holm-corrected over the whole table."""
+    rows = []
+    for metric, heldout in (("best fitness", False), ("held-out best fitness", True)):
+        values = _by_arm(runs, heldout)
+        for first, second in COMPARISONS:
+            if values.get(first) and values.get(second):
+                rows.append(compare(metric, "foraging", first, values[first], second, values[second]))
+    return holm(rows)
+
+
+def _quartiles(values: Sequence[float]) -> tuple[float, float, float]:
+    if len(values) == 1:
+        return values[0], values[0], values[0]
+    q1, q2, q3 = stats.quantiles(values, n=4, method="inclusive")
+    return q1, q2, q3
+
+
+def _arms_table(document: dict, runs: Sequence[ArmRun]) -> str:
+    planned = {entry["arm"]: 0 for entry in document["arms"]}
+    budget = {}
+    for entry in document["arms"]:
+        planned[entry["arm"]] += 1
+        budget[entry["arm"]] = entry["evaluations"]
+    best, held = _by_arm(runs), _by_arm(runs, heldout=True)
+    lines = [
+        "| arm | what | runs | budget | best fitness: median [IQR] | of ideal (median) | held-out: median "
+        "[IQR] | of ideal (median) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    what = {arm.name: arm.what for arm in ARMS}
+    for arm in planned:
+        cells = []
+        for values in (best.get(arm, []), held.get(arm, [])):
+            if not values:
+                cells += ["n/a", "n/a"]
+                continue
+            q1, q2, q3 = _quartiles(values)
+            cells += [f"{q2:.3f} [{q1:.3f}, {q3:.3f}]", f"{q2 / IDEAL_DELIVERIES:.1%}"]
+        lines.append(
+            f"| {arm} | {what.get(arm, '')} | {len(best.get(arm, []))}/{planned[arm]} | {budget[arm]} "
+            f"| {' | '.join(cells)} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _conclusions(runs: Sequence[ArmRun], rows: Sequence[Comparison]) -> list[str]:
+    best = _by_arm(runs)
+    lines = []
+    hierarchical = [arm for arm in best if arm.startswith("hier-")]
+    if hierarchical and best.get("flat"):
+        top = max(hierarchical, key=lambda arm: stats.median(best[arm]))
+        row = next(
+            (r for r in rows if r.metric == "best fitness" and r.first == top and r.second == "flat"), None
+        )
+        if row is not None:
+            beats = row.significant and row.mean_first > row.mean_second
+            lines.append(
+                f"- Hierarchical beats flat: **{'yes' if beats else 'not shown'}**. The best hierarchical "
+                f"arm by median, {top} ({stats.median(best[top]):.3f}), against flat "
+                f"({stats.median(best['flat']):.3f}): "
+                f"{row.test}, p (Holm) {row.p_holm:.4g}, A = {row.vargha_delaney_a:.2f}."
+            )
+        median = stats.median(best[top])
+        lines.append(
+            f"- The goal of a median forager at >= 1.0 deliveries per robot per trial: "
+            f"**{'met' if median >= 1.0 else 'not met'}** ({top}: {median:.3f})."
+        )
+    for first, second, claim in (
+        ("hier-qd8", "hier-gpfnd8", "QD repertoires give better foragers than GP_fnd ones (8 blocks)"),
+        ("hier-qd8", "hier-qd1", "more primitives per family (8 blocks against 1) give better foragers"),
+    ):
+        row = next(
+            (r for r in rows if r.metric == "best fitness" and r.first == first and r.second == second), None
+        )
+        if row is not None:
+            holds = row.significant and row.mean_first > row.mean_second
+            lines.append(
+                f"- {claim}: **{'yes' if holds else 'not shown'}** ({first} {row.mean_first:.3f} against "
+                f"{second} {row.mean_second:.3f} in the mean; p (Holm) {row.p_holm:.4g})."
+            )
+    return lines
+
+
+def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
+    """Each arm's best forager: the run's simplified best tree (``best/foraging.txt``, the library's
+    primitives written by name) and its drawing, copied to ``figure_dir``."""
+    parts = []
+    for arm in dict.fromkeys(run.arm for run in runs):
+        top = max((run for run in runs if run.arm == arm), key=lambda run: run.best_fitness)
+        simplified = top.directory / "best" / "foraging.txt"
+        text = simplified.read_text().strip() if simplified.exists() else top.best_tree
+        parts.append(
+            f"**{arm}**, run {top.index} ({top.best_fitness:.3f} deliveries per robot per trial):\n\n"
+            f"```\n{text}\n```\n"
+        )
+        drawing = top.directory / "best" / "foraging.png"
+        if drawing.exists():
+            figure_dir.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(drawing, figure_dir / f"best_{arm}.png")
+            parts.append(f"![best forager of {arm}](figures/best_{arm}.png)\n")
+    return "\n".join(parts)
+
+
+def _libraries_table(root: Path, document: dict) -> str:
+    lines = ["| library | built from | blocks | primitives |", "|---|---|---|---|"]
+    for name, entry in document["libraries"].items():
+        path = Path(root) / "libraries" / f"{name}.json"
+        count = "not built yet"
+        if path.exists():
+            try:
+                count = str(len(load_library(path).primitives))
+            except LibraryError as error:
+                count = f"unreadable ({error})"
+        source = "QD_o runs" if entry["from"] == "qd" else "GP_fnd runs"
+        lines.append(f"| {name} | {source} | {entry['blocks']} | {count} |")
+    return "\n".join(lines) + "\n"
+
+
+def build_report(root: Path) -> Path:
+    """Write ``report.md``, ``runs.csv`` and ``figures/`` for the foraging study in ``root``; return the
+    report's path. Works on a study under way: it reports the runs finished so far."""
+    from evolution_manager.viewing import figures
+
+    root = Path(root)
+    document, runs = load_arm_runs(root)
+    write_runs_csv(root, runs)
+    rows = comparisons(runs)
+    planned = len(document["arms"])
+    parts = [
+        f"# Foraging study: {root.name}\n",
+        f"{len(runs)} of {planned} forager runs finished: {document['runs']} runs per arm, a budget of "
+        f"{document['evaluations']} individuals (the flat baseline {flat_budget(document['evaluations'])}), "
+        f"{document['trials']} trials per evaluation, {document['scenarios']} scenarios"
+        + (f" ({document['design']} design)" if document.get("design") else "")
+        + f", the `{document['profile']}` profile, study seed {document['seed']}. Fitness: deliveries "
+        f"per robot per trial of each run's best forager; 'of ideal': as a fraction of an ideal robot's "
+        f"{IDEAL_DELIVERIES}.\n",
+        "- Reproduce: `ws/run evolution_manager experiment --study foraging "
+        f"--runs {document['runs']} --evaluations {document['evaluations']} --seed {document['seed']} "
+        f"--trials {document['trials']} --profile {document['profile']} --out {root.name}`\n",
+    ]
+    sessions_path = root / "sessions.json"
+    if sessions_path.exists():
+        sessions = read_json(sessions_path)
+        assert isinstance(sessions, list)
+        wall = sum(float(s["wall_seconds"]) for s in sessions)
+        parts.append(f"- Wall time: {wall:.0f} s ({wall / 3600:.2f} h) over {len(sessions)} session(s)\n")
+    parts += ["\n## Libraries\n", _libraries_table(root, document)]
+    parts += ["\n## Arms\n", _arms_table(document, runs)]
+    if rows:
+        parts += ["\n## Comparisons\n", markdown_table(rows)]
+        conclusions = _conclusions(runs, rows)
+        if conclusions:
+            parts += ["\n## The 2024 conclusions\n", "\n".join(conclusions) + "\n"]
+    if runs:
+        figure_dir = root / "figures"
+        best, held = _by_arm(runs), _by_arm(runs, heldout=True)
+        shown = [
+            figures.boxes(
+                {"foraging": best},
+                "best fitness (deliveries per robot per trial)",
+                figure_dir / "best_fitness.png",
+            )
+        ]
+        if held:
+            shown.append(
+                figures.boxes(
+                    {"foraging": held}, "held-out best fitness", figure_dir / "heldout_best_fitness.png"
+                )
+            )
+        curves = {}
+        for run in runs:
+            if run.arm not in curves:  # the first finished run of each arm
+                curves[run.arm] = CsvLog(run.directory / "progress.csv", PROGRESS_HEADER).read()
+        shown.append(figures.progress(curves, figure_dir / "progress.png", ["foraging"]))
+        parts.append("\n## Figures\n")
+        parts += [f"![{path.stem}](figures/{path.name})\n" for path in shown]
+        parts += ["\n## Best forager of each arm\n", _best_trees(runs, figure_dir)]
+    path = root / "report.md"
+    write_atomic(path, "".join(parts))
+    return path
+
+
+__all__ = ["ARMS", "IDEAL_DELIVERIES", "LIBRARIES", "PRIMITIVES", "build_report", "flat_budget", "plan_study"]

@@ -1,0 +1,121 @@
+"""``experiment --study foraging`` end to end on a tiny budget: primitives, libraries, foragers, report."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from bt_controller.library import load_library
+from bt_controller.tree import parse
+from evolution_manager.evolution.libraries import FAMILIES
+from evolution_manager.studies.experiment import experiment
+from evolution_manager.studies.foraging_study import ARMS, CSV_HEADER, LIBRARIES, PRIMITIVES, flat_budget
+from evolution_manager.studies.report import report
+
+TINY = ["--study", "foraging", "--runs", "1", "--evaluations", "10", "--trials", "1", "--processes", "1"]
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A whole study run without interruption."""
+    out = tmp_path_factory.mktemp("foraging") / "study"
+    assert experiment([*TINY, "--out", str(out), "--no-progress"]) == 0
+    return out
+
+
+def test_the_flat_baseline_gets_the_hierarchical_budget_plus_the_primitives_in_foraging_time():
+    # the authors' 2200 generations against 1000: 6 primitives x 25,000 evaluations x 160 / 800 steps
+    assert flat_budget(25_000) == 55_000
+    assert flat_budget(10) == 22
+
+
+def test_a_study_builds_libraries_from_its_primitive_runs_and_runs_every_arm_with_them(study: Path):
+    document = json.loads((study / "experiment.json").read_text())
+    assert document["study"] == "foraging"
+    labels = sorted({Path(entry["dir"]).parent.name for entry in document["primitives"]})
+    assert labels == sorted([f"QD_{o}" for o in PRIMITIVES] + ["GP_fnd"])
+    seeds = [entry["config"]["seed"] for entry in document["primitives"]] + [
+        a["seed"] for a in document["arms"]
+    ]
+    assert len(set(seeds)) == len(seeds)
+    libraries = {name: load_library(study / "libraries" / f"{name}.json") for name in LIBRARIES}
+    for name, library in libraries.items():
+        source, blocks = LIBRARIES[name]
+        assert library.primitives, f"{name} is empty"
+        for primitive in library.primitives:
+            family = primitive.name.rstrip("0123456789")
+            assert family in FAMILIES.values()
+            assert 1 <= int(primitive.name[len(family) :]) <= blocks
+            assert primitive.source is not None
+            origin = Path(str(primitive.source["run"])).relative_to(study / "primitives")
+            assert origin.parts[0] == (
+                "GP_fnd" if source == "gp-fnd" else f"QD_{primitive.source['objective']}"
+            )
+            # the name expands to the primitive's tree
+            assert parse(primitive.name, library=library).children[0] == primitive.tree
+    for arm in ARMS:
+        config = json.loads((study / "arms" / arm.name / "run00" / "config.json").read_text())
+        assert config["task"] == "foraging" and config["objective"] == "foraging"
+        assert config["algorithm"] == arm.algorithm
+        if arm.library:
+            assert config["library_digest"] == libraries[arm.library].digest
+            copy = load_library(study / "arms" / arm.name / "run00" / "library.json")
+            assert copy.digest == libraries[arm.library].digest
+        else:
+            assert config["library"] == "" and config["evaluations"] == flat_budget(10)
+
+
+def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: Path, capsys):
+    with (study / "runs.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert list(rows[0]) == CSV_HEADER
+    assert [row["arm"] for row in rows] == [arm.name for arm in ARMS]
+    for row in rows:
+        summary = json.loads((study / "arms" / row["arm"] / "run00" / "summary.json").read_text())
+        assert float(row["best_fitness"]) == summary["objectives"]["foraging"]["best_fitness"]
+    text = (study / "report.md").read_text()
+    for arm in ARMS:
+        assert f"| {arm.name} |" in text
+        assert (study / "figures" / f"best_{arm.name}.png").exists()
+    assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
+    assert "--study foraging" in text  # the reproduce command
+    before = text
+    assert report([str(study)]) == 0  # the report command rebuilds the same report
+    assert (study / "report.md").read_text() == before
+    capsys.readouterr()
+
+
+def test_a_study_continued_with_other_options_is_refused(study: Path, capsys):
+    other = [a if a != "10" else "11" for a in TINY]
+    assert experiment([*other, "--out", str(study), "--no-progress"]) == 2
+    assert "holds an experiment with other options" in capsys.readouterr().err
+
+
+def test_a_killed_study_continues_to_the_same_libraries_and_results(study: Path, tmp_path: Path):
+    killed = tmp_path / "killed"
+    call = f"experiment({[*TINY, '--checkpoint-every', '0', '--out', str(killed)]!r})"
+    code = f"from evolution_manager.studies.experiment import experiment; {call}"
+    process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    try:  # killed in the foragers' stage: the libraries are built, some arms started
+        deadline = time.monotonic() + 600
+        while not list(killed.glob("arms/*/run00/config.json")) and process.poll() is None:
+            assert time.monotonic() < deadline, "the study never reached its foragers"
+            time.sleep(0.2)
+    finally:
+        os.killpg(process.pid, signal.SIGKILL)  # the command and its process pool
+        process.wait()
+    assert not (killed / "runs.csv").exists(), "the kill came too late to interrupt the study"
+    assert experiment([*TINY, "--checkpoint-every", "0", "--out", str(killed), "--no-progress"]) == 0
+    for name in LIBRARIES:  # the same primitives (their sources name each study's own folders)
+        kept = load_library(killed / "libraries" / f"{name}.json").primitives
+        straight = load_library(study / "libraries" / f"{name}.json").primitives
+        assert [(p.name, p.tree) for p in kept] == [(p.name, p.tree) for p in straight]
+    assert (killed / "runs.csv").read_bytes() == (study / "runs.csv").read_bytes()
