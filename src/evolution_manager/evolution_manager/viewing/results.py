@@ -55,6 +55,12 @@ def simplified(tree: str, library: Library | None = None) -> str:
     return to_text(simple) if library is None else library.fold(simple)
 
 
+def shown_form(run: Run, tree: str) -> str:
+    """``simplified(tree, run.library)``; without a library that is the run's clone key, which the run
+    has mostly computed already (``run.forms``)."""
+    return run.forms(tree) if run.library is None else simplified(tree, run.library)
+
+
 def simplified_tree(tree: Node, library: Library | None = None) -> Node:
     """``tree`` simplified for people to read: each copy of a primitive of ``library`` kept whole."""
     return simplify_if_small(tree, whole=None if library is None else library.is_copy)
@@ -81,7 +87,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
             {
                 "bin": list(item.bin),
                 "tree": item.tree,
-                "simplified": simplified(item.tree, run.library),
+                "simplified": shown_form(run, item.tree),
                 "fitness": item.fitness,
                 "descriptors": list(item.descriptors),
                 "evaluation": item.evaluation,
@@ -103,7 +109,7 @@ def summary_document(run: Run, heldout: dict | None = None) -> dict:
             "best_fitness": best[1] if best else None,
             "heldout_best_fitness": held.get("heldout_best_fitness"),
             "best_tree": best[0] if best else None,
-            "best_tree_simplified": simplified(best[0], run.library) if best else None,
+            "best_tree_simplified": shown_form(run, best[0]) if best else None,
             "best_descriptors": list(best[2]) if best else None,
             "best_evaluation": run.first_evaluation(best[0]) if best else None,
             "coverage": grid.coverage,
