@@ -11,6 +11,7 @@ from evolution_manager.graph.nodes.trial import RESULT_TOPIC, TrialGraph
 from evolution_manager.graph.startup import executable, trial_graph_nodes
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
+from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
 from swarm_sim.swarm_layout import of_trees
 
@@ -74,6 +75,12 @@ def test_trial_swarm_records_each_robots_tree_and_replays_per_robot(tmp_path):
         [str(executable("evolution_manager", "replay")), str(bag), "--verify"], capture_output=True, text=True
     )
     assert replay.returncode == 0 and "reproduced" in replay.stdout
+    # the animation of the bag names each robot's tree and shows the in-process twin's frames
+    frames = frames_from_bag(bag)
+    twin = frames_from_tree(of_trees(MIXED, 9), 41, 1)
+    assert frames.trees == twin.trees == MIXED
+    np.testing.assert_array_equal(frames.poses, twin.poses)
+    np.testing.assert_array_equal(frames.actions, twin.actions)
 
 
 def test_trial_swarm_refuses_a_bad_layout_before_starting_a_graph(tmp_path):
