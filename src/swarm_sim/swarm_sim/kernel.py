@@ -122,13 +122,13 @@ def make_jobs(
     n_robots = config.n_robots
     if robot_trees is None:
         robot_trees = [[t] * n_robots for t in range(len(seed_keys))]
-    tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
+    robot_tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
     next_row = 0
     for key, n, robots in zip(seed_keys, trials, robot_trees, strict=True):
         if len(robots) != n_robots:
             raise ValueError(f"expected a tree index for each of the {n_robots} robots, got {len(robots)}")
         for c, count in chain_plan(int(n), config):
-            tree.append(list(robots))
+            robot_tree.append(list(robots))
             seed_key.append(key)
             chain.append(c)
             length.append(count)
@@ -136,7 +136,7 @@ def make_jobs(
             row.append(next_row)
             next_row += count
     return Jobs(
-        np.array(tree, dtype=np.int64).reshape(len(tree), n_robots),
+        np.array(robot_tree, dtype=np.int64).reshape(len(robot_tree), n_robots),
         np.array(seed_key, dtype=np.uint64),
         np.array(chain, dtype=np.int64),
         np.array(length, dtype=np.int64),
@@ -412,9 +412,9 @@ def simulate_chain(
     rec: Recording,
 ) -> None:
     """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
-    ``trees``; write the chain's trial ``t``'s
-    ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]``
-    (2 x n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none)."""
+    ``trees``; write the chain's trial ``t``'s ``world.N_VALUES`` values into ``values_out[t]`` and its start
+    and end poses into ``poses_out[t]`` (2 x n_robots x 3), and the chain's trial ``recorded`` step by step
+    into ``rec`` (-1: none)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
     position_keys = keys[POSITION]
