@@ -18,7 +18,7 @@ from swarm_sim.nodes.settings import SIMULATOR_PARAMETERS, EvaluatorSettings
 
 LAUNCH_DIR = Path(get_package_share_directory("evolution_manager")) / "launch"
 ARGUMENTS = {
-    "trial_graph.launch.py": {"robots", "namespace", "tree", "profile", "params_file"},
+    "trial_graph.launch.py": {"robots", "namespace", "tree", "swarm", "profile", "params_file"},
     "evaluators.launch.py": {"count", "profile", "params_file"},
 }
 

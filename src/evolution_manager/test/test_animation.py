@@ -3,8 +3,10 @@ trial values, robots drawn where the frames put them, a GIF that Pillow opens; c
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -110,3 +112,43 @@ def test_the_pictures_text_is_dejavu_and_keeps_its_spaces(frames):
     inked = np.flatnonzero((row < 128).any(axis=0))
     left, _, right, _ = font.getbbox("fitness so far:")
     assert abs((inked[-1] - inked[0] + 1) - (right - left)) <= 2  # drawn as wide as the text with its spaces
+
+
+NEST = "sel(seq(in_nest, stop), seq(nest_left, forward_left), seq(nest_right, forward_right), forward)"
+FLOCK = "sel(seq(robot_left, forward_left), seq(robot_right, forward_right), prob(forward, reverse_right))"
+MIXED = (NEST, TREE, FLOCK, TREE, NEST, NEST, FLOCK, TREE, NEST)
+
+
+def test_a_heterogeneous_swarm_is_animated_with_each_robots_tree_named(frames, tmp_path):
+    from evolution_manager.viewing.animate import tree_legend, tree_letters
+    from swarm_sim.evaluation import SwarmRequest
+    from swarm_sim.swarm_layout import of_trees
+
+    layout = of_trees(MIXED, 9)
+    mixed = frames_from_tree(layout, SEED, TRIAL)
+    ((_, records),) = BatchEvaluator().evaluate_trials([SwarmRequest(layout, SEED, trials=TRIAL + 1)])
+    np.testing.assert_array_equal(mixed.poses[-1], records[TRIAL].end_poses)
+    np.testing.assert_array_equal(mixed.fitness[-1], records[TRIAL].values[: len(OBJECTIVES)])
+    assert mixed.trees == MIXED and mixed.heterogeneous and mixed.to_json()["trees"] == list(MIXED)
+    assert tree_letters(mixed) == list("ABCBAACBA")
+    legend = tree_legend(mixed)
+    assert legend[0] == "trees:" and [line[:3] for line in legend if not line.startswith(" ")][1:] == [
+        "A: ", "B: ", "C: "
+    ]  # fmt: skip
+    assert "".join(line[3:] for line in legend[1:]).replace(" ", "").startswith("sel(seq(in_nest,stop)")
+    # one tree for all: no letters, no legend, the picture as before
+    assert tree_letters(frames) == [] and "trees" not in frames.to_json() and frames.trees == (TREE,) * 9
+    image = np.asarray(render_frame(mixed, 50).convert("L"))
+    plain = np.asarray(render_frame(replace(mixed, trees=(TREE,) * 9), 50).convert("L"))
+    assert (image[:, ARENA_PX:] != plain[:, ARENA_PX:]).any() and (
+        image[:, :ARENA_PX] == plain[:, :ARENA_PX]
+    ).all()
+    swarm = tmp_path / "swarm.json"
+    swarm.write_text(json.dumps({"trees": list(MIXED)}))
+    assert (
+        main(["--swarm", str(swarm), "--seed", str(SEED), "--trial", "1", "--out", str(tmp_path / "s.gif")])
+        == 0
+    )
+    assert Image.open(tmp_path / "s.gif").n_frames == len(mixed.steps)
+    swarm.write_text(json.dumps({"trees": list(MIXED[:3])}))
+    assert main(["--swarm", str(swarm), "--seed", "1", "--out", str(tmp_path / "t.gif")]) == 2

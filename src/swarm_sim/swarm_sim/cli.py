@@ -1,7 +1,8 @@
-"""``ws/run swarm_sim evaluate``: evaluate one tree and print one JSON object on stdout.
+"""``ws/run swarm_sim evaluate``: evaluate one tree, or a swarm of a tree per robot; print one JSON object.
 
-    evaluate --tree TREE [--trials 10] [--seed S] [--profile paper|clean] [--task primitives|foraging]
-             [--engine compiled|reference] [--per-trial] [--condition NAME=VALUE ...] [--library FILE]
+    evaluate (--tree TREE | --swarm FILE) [--trials 10] [--seed S] [--profile paper|clean]
+             [--task primitives|foraging] [--engine compiled|reference] [--per-trial]
+             [--condition NAME=VALUE ...] [--library FILE]
 
 Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {every objective},
 "descriptors": {movement, rotation, conditionality}}`` (``conditions``: the world's changes,
@@ -10,7 +11,9 @@ Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": 
 trial's values, gap and the robots' start and end poses as [x, y, heading]). The tree is printed in canonical
 form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) the tree may name its
 primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
-"digest"}`` is added. Bad input: one line on stderr, exit status 2.
+"digest"}`` is added. ``--swarm FILE`` (a swarm layout, ``swarm_sim.swarm_layout``: ``{"trees": [one tree
+text per robot]}`` or ``{"tree": TREE}``) gives each robot its own tree; ``"trees"`` (each robot's tree,
+robot 0 first, canonical) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status 2.
 """
 
 from __future__ import annotations
@@ -24,11 +27,12 @@ from typing import NoReturn
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
-from bt_controller.tree import to_text
+from bt_controller.tree import Node, to_text
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, default_config
 from swarm_sim.errors import UsageError
-from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
+from swarm_sim.swarm_layout import LayoutError, load_layout
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
@@ -41,8 +45,16 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="evaluate", description="Evaluate one behaviour tree; print one JSON object.")
-    parser.add_argument("--tree", required=True, help="tree text, e.g. 'sel(seq(in_nest, stop), forward)'")
+    parser = _Parser(
+        prog="evaluate", description="Evaluate one behaviour tree or a swarm layout; print one JSON object."
+    )
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--tree", help="tree text for every robot, e.g. 'sel(seq(in_nest, stop), forward)'")
+    what.add_argument(
+        "--swarm",
+        metavar="FILE",
+        help='a tree per robot: a JSON file {"trees": ["tree text", ...]} (one per robot, robot 0 first)',
+    )
     parser.add_argument("--trials", type=int, default=10, help="number of trials (default 10)")
     parser.add_argument("--seed", type=int, default=0, help=f"seed in [0, {MAX_SEED}] (default 0)")
     parser.add_argument(
@@ -92,7 +104,7 @@ def library_option(path: str | None) -> Library | None:
 
 
 def evaluation_json(
-    tree_text: str,
+    tree_text: str | Sequence[str],
     seed: int,
     trials: int,
     values: Sequence[float],
@@ -102,11 +114,12 @@ def evaluation_json(
     library: Library | None = None,
     task: str = DEFAULT_TASK,
 ) -> str:
-    """The one-line JSON document ``evaluate`` prints (``records`` given: with ``per_trial``; ``library``
-    given: with ``library``)."""
+    """The one-line JSON document ``evaluate`` prints (``tree_text`` a sequence: each robot's tree, as
+    ``trees``; ``records`` given: with ``per_trial``; ``library`` given: with ``library``)."""
     named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
+    which = {"tree": tree_text} if isinstance(tree_text, str) else {"trees": list(tree_text)}
     document: dict[str, object] = {
-        "tree": tree_text,
+        **which,
         "seed": seed,
         "trials": trials,
         "profile": profile,
@@ -134,23 +147,37 @@ def run(argv: Sequence[str] | None = None) -> str:
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
     library = library_option(args.library)
-    request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
-    try:
-        tree = check_request(request, library=library)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
+    request: EvaluationRequest | SwarmRequest
+    trees: Node | list[Node]  # every robot's tree, or each robot's own
+    if args.swarm is not None:
+        try:
+            layout = load_layout(args.swarm, config.n_robots, library)
+        except LayoutError as error:
+            raise UsageError(f"--swarm: {error}") from None
+        request = SwarmRequest(layout, seed=args.seed, trials=args.trials)
+        trees = layout.parsed(library)
+    else:
+        request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
+        try:
+            trees = check_request(request, library=library)
+        except ValueError as error:
+            raise UsageError(str(error)) from None
     if args.engine == "reference":
         from swarm_sim import reference_road  # (the controllers' modules: only for this engine)
 
-        values, records = reference_road.evaluate(tree, args.seed, args.trials, config)
+        values, records = reference_road.evaluate(trees, args.seed, args.trials, config)
     else:
         result, records = BatchEvaluator(config, library=library).evaluate_trials([request])[0]
         if result.error is not None:
             raise UsageError(result.error)
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
+
+    def canonical(tree: Node) -> str:
+        return to_text(tree) if library is None else library.fold(tree)
+
     return evaluation_json(
-        to_text(tree) if library is None else library.fold(tree),
+        canonical(trees) if isinstance(trees, Node) else [canonical(t) for t in trees],
         args.seed,
         args.trials,
         values,

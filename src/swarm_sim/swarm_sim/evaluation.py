@@ -5,6 +5,9 @@ else 700 mm: ``docs/model.md``); its fitness is every objective (``world.OBJECTI
 inverse primitives' three and foraging) and its descriptors (movement, rotation, conditionality), each
 averaged over robots and trials and each in [0, 1] but foraging (deliveries per robot per trial). A result
 depends only on its request.
+
+A ``SwarmRequest`` evaluates a heterogeneous swarm (``swarm_sim.swarm_layout``: a tree per robot) the same
+way; a layout of one tree on every robot gives the very bits of the ``EvaluationRequest`` of that tree.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
 from bt_controller.validate import integer
 from swarm_sim import kernel, world
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.swarm_layout import SwarmLayout
 from swarm_sim.trial_data import TrialRecord, combine
 
 MAX_TRIALS = 10_000
@@ -36,6 +40,15 @@ class EvaluationRequest:
     """Evaluate ``tree`` (tree text) with ``seed`` over ``trials`` trials."""
 
     tree: str
+    seed: int
+    trials: int = 10
+
+
+@dataclass(frozen=True)
+class SwarmRequest:
+    """Evaluate ``swarm`` (robot ``i`` running ``swarm.trees[i]``) with ``seed`` over ``trials`` trials."""
+
+    swarm: SwarmLayout
     seed: int
     trials: int = 10
 
@@ -114,10 +127,12 @@ def _flat_tree(text: str, max_nodes: int, max_depth: int, library: Library | Non
 
 @dataclass(frozen=True)
 class _Request:
-    """A request checked and made ready for the kernels: its flat tree, seed key and trial count."""
+    """A request checked and made ready for the kernels: its flat trees, each robot's index into them, seed
+    key and trial count."""
 
     index: int
-    flat: FlatTree
+    flats: tuple[FlatTree, ...]
+    robot_tree: tuple[int, ...]
     seed_key: np.uint64
     trials: int
 
@@ -149,25 +164,45 @@ class BatchEvaluator:
         self.library = library
         self._params = config.params()
 
-    def evaluate(self, requests: Sequence[EvaluationRequest]) -> list[EvaluationResult]:
-        """Evaluate every request (see ``Evaluator``)."""
+    def evaluate(self, requests: Sequence[EvaluationRequest | SwarmRequest]) -> list[EvaluationResult]:
+        """Evaluate every request (see ``Evaluator``), a swarm layout's as well."""
         return [result for result, _ in self._evaluate(requests, keep_records=False)]
 
     def evaluate_trials(
-        self, requests: Sequence[EvaluationRequest]
+        self, requests: Sequence[EvaluationRequest | SwarmRequest]
     ) -> list[tuple[EvaluationResult, list[TrialRecord]]]:
-        """Evaluate every request; with each result, its trials' records (empty for an error)."""
+        """Evaluate every request, a swarm layout's as well; with each result, its trials' records (empty for
+        an error)."""
         return self._evaluate(requests, keep_records=True)
 
     def _prepare(self, index: int, request: object) -> _Request:
         """Check, parse and flatten a request and derive its seed key: everything before the kernels, in one
         place; raise ValueError or TreeError saying what is wrong."""
-        checked = _check_fields(request)
-        flat = _flat_tree(checked.tree, self.max_nodes, self.max_depth, self.library)
-        return _Request(index, flat, root_key(int(checked.seed)), int(checked.trials))
+        n_robots = self._params.n_robots
+        if isinstance(request, SwarmRequest):
+            swarm = request.swarm
+            if not isinstance(swarm, SwarmLayout):
+                raise ValueError(f"swarm must be a SwarmLayout, got {type(swarm).__name__}")
+            if swarm.n_robots != n_robots:
+                raise ValueError(f"the swarm layout has {swarm.n_robots} trees for {n_robots} robots")
+            check_seed(request.seed)
+            integer(request.trials, "trials", 1, MAX_TRIALS, numpy=True)
+            flats = []
+            for i, text in enumerate(swarm.distinct):
+                try:
+                    flats.append(_flat_tree(text, self.max_nodes, self.max_depth, self.library))
+                except ValueError as error:  # (TreeError is one)
+                    robot = swarm.robot_tree.index(i)
+                    raise ValueError(f"robot {robot}: {error}") from None
+            trees, robot_tree, seed, trials = tuple(flats), swarm.robot_tree, request.seed, request.trials
+        else:
+            checked = _check_fields(request)
+            trees = (_flat_tree(checked.tree, self.max_nodes, self.max_depth, self.library),)
+            robot_tree, seed, trials = (0,) * n_robots, checked.seed, checked.trials
+        return _Request(index, trees, robot_tree, root_key(int(seed)), int(trials))
 
     def _evaluate(
-        self, requests: Sequence[EvaluationRequest], keep_records: bool
+        self, requests: Sequence[EvaluationRequest | SwarmRequest], keep_records: bool
     ) -> list[tuple[EvaluationResult, list[TrialRecord]]]:
         out: list[tuple[EvaluationResult, list[TrialRecord]] | None] = [None] * len(requests)
         ready: list[_Request] = []
@@ -186,8 +221,15 @@ class BatchEvaluator:
         out: list[tuple[EvaluationResult, list[TrialRecord]] | None],
         keep_records: bool,
     ) -> None:
-        trees = pack([r.flat for r in ready])
-        jobs = kernel.make_jobs([r.seed_key for r in ready], [r.trials for r in ready], self.config)
+        # One pack of every request's trees; each robot's index into its request's trees moved into the pack.
+        offsets = np.cumsum([0] + [len(r.flats) for r in ready])
+        trees = pack([flat for r in ready for flat in r.flats])
+        robot_trees = [
+            [int(offset) + t for t in r.robot_tree] for r, offset in zip(ready, offsets, strict=False)
+        ]
+        jobs = kernel.make_jobs(
+            [r.seed_key for r in ready], [r.trials for r in ready], self.config, robot_trees
+        )
         results = kernel.Outputs.zeros(jobs.n_rows, self._params.n_robots)
         if self.threads > 1:
             numba.set_num_threads(self.threads)

@@ -1,15 +1,16 @@
 """The batch road: whole chains of trials in compiled kernels, with the compiled tree interpreter.
 
 ``simulate_chain`` runs the trials of one chain (``bt_controller.timeline``: 5 trials as one simulation under
-``paper``, one trial under ``clean``) of one flat tree exactly as the reference road
+``paper``, one trial under ``clean``), each robot with its own tree of a pack (the same for every robot in a
+homogeneous swarm), exactly as the reference road
 (``swarm_sim.reference_road``: the simulator of ``swarm_sim.lockstep`` with one
 ``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.world``,
 ``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
 order; it only skips work whose result is never read (a bearing is computed for the three senders the
 blackboard needs, at ticks, rather than for every message) or known (``fast_world.physics_step``, the
 physics to the same bits).
-``run_jobs(trees, params, jobs, out)`` runs many (tree, seed, chain) jobs; each job writes only its own
-output rows (one per trial), so a job's result never depends on the others, their order or their number.
+``run_jobs(trees, params, jobs, out)`` runs many (robots' trees, seed, chain) jobs; each job writes only its
+own output rows (one per trial), so a job's result never depends on the others, their order or their number.
 ``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
 one of its trials looks like (``Recording``: poses, actions, messages, smoothed values, fitness so far), for
 animations (``swarm_sim.recording``); the batch road asks for none and pays two comparisons a step.
@@ -31,7 +32,7 @@ import numba
 import numpy as np
 
 from bt_controller import timeline
-from bt_controller.compiled import N_COUNTS, OP_CONDITION, FlatTree, PackedTrees, start_memory, tick, tree_at
+from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_memory, tick, tree_at
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
 from bt_controller.vocabulary import CONDITION_INDEX, N_CONDITIONS, STOP
@@ -86,11 +87,11 @@ def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
 
 
 class Jobs(NamedTuple):
-    """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]`` of tree ``tree[j]`` of a
-    pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) and nest-food gap ``gap[j]``, into output
-    rows ``row[j] .. row[j] + trials[j] - 1``."""
+    """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]``, robot ``i`` running
+    tree ``robot_tree[j, i]`` of a pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) and
+    nest-food gap ``gap[j]``, into output rows ``row[j] .. row[j] + trials[j] - 1``."""
 
-    tree: np.ndarray  # int64
+    robot_tree: np.ndarray  # int64 (jobs, n_robots)
     seed_key: np.ndarray  # uint64
     chain: np.ndarray  # int64
     trials: np.ndarray  # int64
@@ -100,7 +101,7 @@ class Jobs(NamedTuple):
     @property
     def n_jobs(self) -> int:
         """Number of jobs."""
-        return len(self.tree)
+        return len(self.robot_tree)
 
     @property
     def n_rows(self) -> int:
@@ -108,14 +109,26 @@ class Jobs(NamedTuple):
         return int(self.trials.sum())
 
 
-def make_jobs(seed_keys: Sequence[np.uint64], trials: Sequence[int], config: Config) -> Jobs:
-    """Trials ``0 .. trials[t] - 1`` of tree ``t`` with seed key ``seed_keys[t]``, tree after tree, as the
-    chains of ``trial_data.chain_plan``; each tree's trials take consecutive output rows in trial order."""
-    tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
+def make_jobs(
+    seed_keys: Sequence[np.uint64],
+    trials: Sequence[int],
+    config: Config,
+    robot_trees: Sequence[Sequence[int]] | None = None,
+) -> Jobs:
+    """Trials ``0 .. trials[t] - 1`` of request ``t`` with seed key ``seed_keys[t]``, request after request,
+    as the chains of ``trial_data.chain_plan``; each request's trials take consecutive output rows in trial
+    order. Robot ``i`` of request ``t`` runs tree ``robot_trees[t][i]`` of the pack (None: every robot of
+    request ``t`` runs tree ``t``, a homogeneous swarm)."""
+    n_robots = config.n_robots
+    if robot_trees is None:
+        robot_trees = [[t] * n_robots for t in range(len(seed_keys))]
+    robot_tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
     next_row = 0
-    for t, (key, n) in enumerate(zip(seed_keys, trials, strict=True)):
+    for key, n, robots in zip(seed_keys, trials, robot_trees, strict=True):
+        if len(robots) != n_robots:
+            raise ValueError(f"expected a tree index for each of the {n_robots} robots, got {len(robots)}")
         for c, count in chain_plan(int(n), config):
-            tree.append(t)
+            robot_tree.append(list(robots))
             seed_key.append(key)
             chain.append(c)
             length.append(count)
@@ -123,7 +136,7 @@ def make_jobs(seed_keys: Sequence[np.uint64], trials: Sequence[int], config: Con
             row.append(next_row)
             next_row += count
     return Jobs(
-        np.array(tree, dtype=np.int64),
+        np.array(robot_tree, dtype=np.int64).reshape(len(robot_tree), n_robots),
         np.array(seed_key, dtype=np.uint64),
         np.array(chain, dtype=np.int64),
         np.array(length, dtype=np.int64),
@@ -335,11 +348,14 @@ def _record_step(
 
 
 @numba.njit(cache=True)
-def _new_swarm(gains: np.ndarray, tree: FlatTree, p: Params) -> Swarm:
+def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p: Params) -> Swarm:
     n = p.n_robots
-    memory = np.empty((n, tree.op.shape[0]), dtype=np.int8)
+    width = 1
     for i in range(n):
-        start_memory(tree.op, memory[i], p.profile)
+        width = max(width, tree_at(trees, robot_tree[i]).op.shape[0])
+    memory = np.zeros((n, width), dtype=np.int8)
+    for i in range(n):
+        start_memory(tree_at(trees, robot_tree[i]).op, memory[i], p.profile)
     return Swarm(
         np.zeros(n),
         np.zeros(n),
@@ -383,7 +399,8 @@ def _new_inbox(n: int) -> Inbox:
 
 @numba.njit(cache=True)
 def simulate_chain(
-    tree: FlatTree,
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
     seed_key: np.uint64,
     chain: int,
     trials: int,
@@ -394,16 +411,17 @@ def simulate_chain(
     recorded: int,
     rec: Recording,
 ) -> None:
-    """Run the first ``trials`` trials of chain ``chain`` of one flat tree; write the chain's trial ``t``'s
-    ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]``
-    (2 x n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none)."""
+    """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
+    ``trees``; write the chain's trial ``t``'s ``world.N_VALUES`` values into ``values_out[t]`` and its start
+    and end poses into ``poses_out[t]`` (2 x n_robots x 3), and the chain's trial ``recorded`` step by step
+    into ``rec`` (-1: none)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
     position_keys = keys[POSITION]
     heading_keys = keys[HEADING]
     drop_keys = keys[DROPS]
     tree_keys = keys[TREE]
-    swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), tree, p)
+    swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
     # Locals for the loops below (a field read inside a loop would cost a reference count each time).
     (x, y, heading, dynamics, contacts, pairs, gains, broadcast_nest, broadcast_food, raw_nest, raw_food,
      window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
@@ -412,7 +430,14 @@ def simulate_chain(
     robot_drive = world.drive(gains, p)
     samples = 0
     board = np.zeros(N_CONDITIONS, dtype=np.bool_)
-    sides = _sides_read(tree.op, tree.arg)
+    # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
+    shared = tree_at(trees, robot_tree[0])
+    uniform = True
+    sides = np.zeros((n, 3), dtype=np.bool_)
+    for i in range(n):
+        own = tree_at(trees, robot_tree[i])
+        sides[i] = _sides_read(own.op, own.arg)
+        uniform = uniform and robot_tree[i] == robot_tree[0]
     carrying, deliveries, food = _new_cargo(n)
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
@@ -472,15 +497,16 @@ def simulate_chain(
         if timeline.ticks_at(p, k):
             number = timeline.tick_number(p, k)
             for i in range(n):
+                tree = shared if uniform else tree_at(trees, robot_tree[i])
                 world.blackboard(
                     ground_now[i, 0],
                     ground_now[i, 1],
                     raw_nest[i],
                     raw_food[i],
-                    _source_bearing(sides[0], i, sources[i, 0], x, y, heading),
-                    _source_bearing(sides[1], i, sources[i, 1], x, y, heading),
+                    _source_bearing(sides[i, 0], i, sources[i, 0], x, y, heading),
+                    _source_bearing(sides[i, 1], i, sources[i, 1], x, y, heading),
                     sources[i, 2] >= 0,
-                    _source_bearing(sides[2], i, sources[i, 2], x, y, heading),
+                    _source_bearing(sides[i, 2], i, sources[i, 2], x, y, heading),
                     carrying[i],
                     p,
                     board,
@@ -543,7 +569,8 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
     a = jobs.row[j]
     b = a + jobs.trials[j]
     simulate_chain(
-        tree_at(trees, jobs.tree[j]),
+        trees,
+        jobs.robot_tree[j],
         jobs.seed_key[j],
         jobs.chain[j],
         jobs.trials[j],
@@ -558,26 +585,34 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
 
 @numba.njit(cache=True)
 def run_jobs(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
-    """Run every job ``j`` of ``jobs`` (a tree of ``trees``, seed key, chain, trials, gap) in world ``params``
-    into its rows of ``out``."""
-    for j in range(jobs.tree.shape[0]):
+    """Run every job ``j`` of ``jobs`` (the robots' trees of ``trees``, seed key, chain, trials, gap) in world
+    ``params`` into its rows of ``out``."""
+    for j in range(jobs.robot_tree.shape[0]):
         _run_job(j, trees, params, jobs, out)
 
 
 @numba.njit(cache=True, parallel=True)
 def run_jobs_parallel(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
     """``run_jobs`` with the jobs spread over numba's threads; every job still writes only its own rows."""
-    for j in numba.prange(jobs.tree.shape[0]):
+    for j in numba.prange(jobs.robot_tree.shape[0]):
         _run_job(j, trees, params, jobs, out)
 
 
 @numba.njit(cache=True)
 def record_chain(
-    tree: FlatTree, seed_key: np.uint64, chain: int, recorded: int, gap: float, p: Params, rec: Recording
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
+    seed_key: np.uint64,
+    chain: int,
+    recorded: int,
+    gap: float,
+    p: Params,
+    rec: Recording,
 ) -> np.ndarray:
-    """Run trials 0 .. ``recorded`` of chain ``chain`` of one flat tree (``simulate_chain``), recording trial
-    ``recorded`` into ``rec`` (``new_recording(trial_steps, n_robots)``); its ``world.N_VALUES`` values."""
+    """Run trials 0 .. ``recorded`` of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
+    ``trees`` (``simulate_chain``), recording trial ``recorded`` into ``rec`` (``new_recording(trial_steps,
+    n_robots)``); its ``world.N_VALUES`` values."""
     values = np.zeros((recorded + 1, world.N_VALUES))
     poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
-    simulate_chain(tree, seed_key, chain, recorded + 1, gap, p, values, poses, recorded, rec)
+    simulate_chain(trees, robot_tree, seed_key, chain, recorded + 1, gap, p, values, poses, recorded, rec)
     return values[recorded]

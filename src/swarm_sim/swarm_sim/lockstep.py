@@ -205,8 +205,19 @@ class LockstepChain:
         )
 
 
+def robot_trees(tree: Node | Sequence[Node], n_robots: int) -> list[Node]:
+    """Each robot's tree: ``tree`` on every robot (a homogeneous swarm), or one tree per robot in id order
+    (``swarm_sim.swarm_layout.SwarmLayout.parsed``); ValueError for a count that is not ``n_robots``."""
+    if isinstance(tree, Node):
+        return [tree] * n_robots
+    trees = list(tree)
+    if len(trees) != n_robots:
+        raise ValueError(f"expected one tree per robot ({n_robots}), got {len(trees)}")
+    return trees
+
+
 def run_chain_with_controllers(
-    tree: Node,
+    tree: Node | Sequence[Node],
     seed: int,
     chain: int,
     trials: int,
@@ -215,15 +226,16 @@ def run_chain_with_controllers(
     on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
 ) -> list[TrialRecord]:
     """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
-    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers.
+    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers. ``tree``: every
+    robot's tree, or one per robot (``robot_trees``).
     ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
     simulator node would publish); ``on_answers(chain, answers)`` with the robots' answers to the step,
     before the world takes them."""
     sim = LockstepChain(seed, chain, trials, config)
     controllers = []
-    for key in sim.setup.tree_keys:
+    for key, own in zip(sim.setup.tree_keys, robot_trees(tree, sim.p.n_robots), strict=True):
         controller = FootbotController()
-        controller.load(tree)
+        controller.load(own)
         controller.start_chain(int(key), config.timeline, config.perception, trials)
         controllers.append(controller)
     while not sim.done:
@@ -251,7 +263,7 @@ def run_chain_with_controllers(
 
 
 def run_with_controllers(
-    tree: Node,
+    tree: Node | Sequence[Node],
     seed: int,
     trial: int,
     config: Config = DEFAULT,

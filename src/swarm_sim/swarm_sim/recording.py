@@ -20,20 +20,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_controller import timeline
-from bt_controller.compiled import N_COUNTS, flatten
+from bt_controller.compiled import N_COUNTS, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.library import Library
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from swarm_sim import kernel, world
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.swarm_layout import SwarmLayout
 
 
 @dataclass(frozen=True)
 class RecordedTrial:
-    """Trial ``trial`` of ``seed`` with ``tree`` on every robot, one row per control step of the trial."""
+    """Trial ``trial`` of ``seed`` with ``trees[i]`` on robot ``i``, one row per control step of the trial."""
 
     tree: str
+    """The swarm's ``SwarmLayout.label``: the tree text of a homogeneous swarm, else a JSON list of trees."""
     seed: int
     trial: int
     gap: float
@@ -65,6 +67,15 @@ class RecordedTrial:
     """(T, n) bool: whether each robot carries food after the step."""
     deliveries: np.ndarray
     """(T, n) int64: each robot's deliveries in the trial after the step."""
+    trees: tuple[str, ...]
+    """Each robot's tree text, robot 0 first."""
+
+
+def _layout(tree: str | SwarmLayout, config: Config) -> SwarmLayout:
+    layout = tree if isinstance(tree, SwarmLayout) else SwarmLayout.uniform(tree, config.n_robots)
+    if layout.n_robots != config.n_robots:
+        raise ValueError(f"the swarm layout has {layout.n_robots} trees for {config.n_robots} robots")
+    return layout
 
 
 def _check(seed: int, trial: int) -> int:
@@ -88,21 +99,27 @@ def _links(heard: np.ndarray, senders: np.ndarray) -> tuple[np.ndarray, ...]:
 
 
 def record_trial(
-    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+    tree: str | SwarmLayout,
+    seed: int,
+    trial: int = 0,
+    config: Config = DEFAULT,
+    library: Library | None = None,
 ) -> RecordedTrial:
-    """Trial ``trial`` of ``seed`` with ``tree`` (tree text) on every robot, through the batch road's kernels,
-    in world ``config`` (its profile and conditions). Raises ``TreeError`` for a bad tree and ``ValueError``
-    for a bad seed or trial."""
+    """Trial ``trial`` of ``seed`` with ``tree`` (tree text) on every robot, or a swarm layout's tree on each
+    robot, through the batch road's kernels, in world ``config`` (its profile and conditions). Raises
+    ``TreeError`` for a bad tree and ``ValueError`` for a bad seed, trial or layout."""
     trial = _check(seed, trial)
-    flat = flatten(parse(tree, library=library))
+    layout = _layout(tree, config)
+    trees = pack([parse(text, library=library) for text in layout.distinct])
     chain, position = timeline.chain_of_trial(config.timeline, trial)
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots)
     gap = config.gap(trial)  # the gap of its chain (a chain's trials share one)
     key = np.uint64(root_key(int(seed)))  # (a Python int from numba: keep the kernel's uint64)
-    values = kernel.record_chain(flat, key, chain, position, gap, p, rec)
+    robot_tree = np.array(layout.robot_tree, dtype=np.int64)
+    values = kernel.record_chain(trees, robot_tree, key, chain, position, gap, p, rec)
     return RecordedTrial(
-        tree=tree,
+        tree=layout.label,
         seed=int(seed),
         trial=trial,
         gap=gap,
@@ -118,11 +135,16 @@ def record_trial(
         values=tuple(float(v) for v in values),
         carrying=rec.carrying,
         deliveries=rec.deliveries,
+        trees=layout.trees,
     )
 
 
 def record_trial_reference(
-    tree: str, seed: int, trial: int = 0, config: Config = DEFAULT, library: Library | None = None
+    tree: str | SwarmLayout,
+    seed: int,
+    trial: int = 0,
+    config: Config = DEFAULT,
+    library: Library | None = None,
 ) -> RecordedTrial:
     """``record_trial`` through the reference road (``lockstep.run_with_controllers``: the simulator's side
     and one ``FootbotController`` per robot, as the node graph runs them), from the robots' answers."""
@@ -133,7 +155,8 @@ def record_trial_reference(
     )  # (the slow road: on demand)
 
     trial = _check(seed, trial)
-    parsed = parse(tree, library=library)
+    layout = _layout(tree, config)
+    parsed = [parse(text, library=library) for text in layout.trees]
     line = config.timeline
     p = config.params()
     n = p.n_robots
@@ -184,7 +207,7 @@ def record_trial_reference(
 
     record = run_with_controllers(parsed, seed, trial, config, on_answers=on_answers)
     return RecordedTrial(
-        tree=tree,
+        tree=layout.label,
         seed=int(seed),
         trial=trial,
         gap=config.gap(trial),
@@ -200,4 +223,5 @@ def record_trial_reference(
         values=record.values,
         carrying=np.array(carrying),
         deliveries=np.array(deliveries),
+        trees=layout.trees,
     )

@@ -8,22 +8,27 @@ robot (perception, the tree, the motors), exchanging only readings and answers.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from bt_controller.tree import Node
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.lockstep import run_chain_with_controllers
 from swarm_sim.trial_data import TrialRecord, chain_plan, combine
 
 
-def run_chain(tree: Node, seed: int, chain: int, trials: int, config: Config = DEFAULT) -> list[TrialRecord]:
-    """Run the first ``trials`` trials of chain ``chain`` of ``seed`` with every robot running ``tree``."""
+def run_chain(
+    tree: Node | Sequence[Node], seed: int, chain: int, trials: int, config: Config = DEFAULT
+) -> list[TrialRecord]:
+    """Run the first ``trials`` trials of chain ``chain`` of ``seed`` with every robot running ``tree``, or
+    robot ``i`` running ``tree[i]`` (a heterogeneous swarm: ``swarm_layout.SwarmLayout.parsed``)."""
     return run_chain_with_controllers(tree, seed, chain, trials, config)
 
 
 def evaluate(
-    tree: Node, seed: int, trials: int = 10, config: Config = DEFAULT
+    tree: Node | Sequence[Node], seed: int, trials: int = 10, config: Config = DEFAULT
 ) -> tuple[tuple[float, ...], list[TrialRecord]]:
-    """Evaluate ``tree`` over trials 0 .. trials - 1 of ``seed``: the six mean values and each trial's
-    record."""
+    """Evaluate ``tree`` (every robot's, or one per robot) over trials 0 .. trials - 1 of ``seed``: the mean
+    values and each trial's record."""
     records: list[TrialRecord] = []
     for chain, length in chain_plan(trials, config):
         records.extend(run_chain(tree, seed, chain, length, config))

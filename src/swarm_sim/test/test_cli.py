@@ -120,3 +120,58 @@ def test_a_named_primitive_evaluates_as_its_tree_written_out_under_success(tmp_p
     assert error.count("\n") == 1 and "unknown node 'gotoNest4'" in error and str(library) in error
     assert evaluate_main(["--tree", "gotoNest3", "--library", str(tmp_path / "none.json")]) == 2
     assert "--library: library" in capsys.readouterr().err
+
+
+MIXED = [NEST, "sel2(seq(food_left, forward_left), forward)", "stop"] * 3
+
+
+def test_a_swarm_layout_evaluates_with_each_robots_tree(tmp_path, capsys):
+    swarm = tmp_path / "swarm.json"
+    swarm.write_text(json.dumps({"trees": MIXED}))
+    documents = []
+    for engine in ("compiled", "reference"):
+        args = ["--swarm", str(swarm), "--seed", "6", "--trials", "2", "--engine", engine, "--per-trial"]
+        assert evaluate_main(args) == 0
+        documents.append(capsys.readouterr().out)
+    assert documents[0] == documents[1]
+    document = json.loads(documents[0])
+    assert list(document)[:2] == ["trees", "seed"] and "tree" not in document
+    assert document["trees"][1::3] == ["sel(seq(food_left, forward_left), forward)"] * 3  # canonical
+    assert document["trees"][0] == NEST and document["trees"][2] == "stop"
+    # one tree for all, either way, is the homogeneous evaluation's numbers
+    swarm.write_text(json.dumps({"tree": TREE}))
+    assert evaluate_main(["--swarm", str(swarm), "--seed", "6", "--trials", "2"]) == 0
+    uniform = json.loads(capsys.readouterr().out)
+    assert evaluate_main(["--tree", TREE, "--seed", "6", "--trials", "2"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    assert uniform["trees"] == [alone["tree"]] * 9
+    assert (uniform["fitness"], uniform["descriptors"]) == (alone["fitness"], alone["descriptors"])
+    assert (document["fitness"], document["descriptors"]) != (alone["fitness"], alone["descriptors"])
+
+
+@pytest.mark.parametrize(
+    ("content", "extra", "words"),
+    [
+        (None, ["--tree", "stop"], "argument --tree: not allowed with argument --swarm"),
+        ({"trees": MIXED[:7]}, [], "expected 9 trees (one per robot), got 7"),
+        ({"trees": MIXED}, ["--condition", "robots=5"], "expected 5 trees (one per robot), got 9"),
+        ({"trees": [*MIXED[:6], "seq(dance)", *MIXED[7:]]}, [], "the tree of robot 6 does not parse"),
+        ({"robots": MIXED}, [], 'expected {"trees": ["tree text", ...]'),
+        ("not json", [], "not JSON"),
+    ],
+)
+def test_bad_swarm_input_exits_2_with_one_line(tmp_path, capsys, content, extra, words):
+    swarm = tmp_path / "swarm.json"
+    text = (
+        content if isinstance(content, str) else json.dumps({"trees": MIXED} if content is None else content)
+    )
+    swarm.write_text(text)
+    assert evaluate_main(["--swarm", str(swarm), "--trials", "1", *extra]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    assert words in captured.err and (content is None or f"--swarm: swarm layout {swarm}: " in captured.err)
+
+
+def test_tree_or_swarm_is_required(capsys):
+    assert evaluate_main(["--seed", "1"]) == 2
+    assert "one of the arguments --tree --swarm is required" in capsys.readouterr().err

@@ -190,7 +190,7 @@ class NodeSpec:
 def trial_graph_nodes(
     robots: int = DEFAULT.n_robots,
     namespace: str = "",
-    tree: str = "",
+    tree: str | Sequence[str] = "",
     profile: str = "",
     conditions: Sequence[str] = (),
     clock: str = "/clock",
@@ -199,7 +199,8 @@ def trial_graph_nodes(
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
-    namespace). ``tree`` is loaded into every controller when given; ``profile`` sets the simulator's model
+    namespace). ``tree`` is loaded into every controller when given (a sequence: robot ``i``'s controller
+    loads ``tree[i]``, a heterogeneous swarm's trees); ``profile`` sets the simulator's model
     profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
     ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
     (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
@@ -216,18 +217,19 @@ def trial_graph_nodes(
     if ticks is not None:
         simulator["ticks"] = ticks
     controller: dict[str, object] = {"library": library} if library else {}
-    if tree:
-        controller["tree"] = tree
+    trees = [tree] * robots if isinstance(tree, str) else list(tree)
+    if len(trees) != robots:
+        raise GraphError(f"{len(trees)} trees for {robots} robots: give one tree, or one per robot")
     remaps = {"/clock": clock} if clock != "/clock" else {}
     nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
-    for robot in robot_namespaces(robots):
+    for robot, own in zip(robot_namespaces(robots), trees, strict=True):
         nodes.append(
             NodeSpec(
                 f"{prefix}/{robot}".lstrip("/"),
                 "bt_controller",
                 "footbot_controller",
                 f"{prefix}/{robot}",
-                dict(controller),
+                {**controller, "tree": own} if own else dict(controller),
             )
         )
     return nodes

@@ -1,13 +1,15 @@
 """Check that a recorded trial reproduces: re-run it from its seed and compare it with the recording.
 
 A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed, trial index and the trial's length in
-ticks) and ends with ``/trial_result`` (the tree, with any primitives written out, the model's profile and
-every value); ``/swarm_state`` holds the exact poses, and each robot's carrying flag and deliveries, of every
-step of the trial's chain up to the trial (the earlier trials of the chain are run, and recorded, first). A
-graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The trial is re-run
-in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``), under the recorded
-profile and trial length, and every recorded pose, carrying flag, delivery count and value is compared with
-the re-run's, bit for bit (a bag recorded before foraging has none of these to compare).
+ticks) and ends with ``/trial_result`` (the tree, with any primitives written out, or for a heterogeneous
+swarm the JSON list of the robots' trees, ``swarm_sim.swarm_layout.SwarmLayout.label``; the model's profile
+and every value); ``/swarm_state`` holds the exact poses, and each robot's carrying flag and deliveries, of
+every step of the trial's chain up to the trial (the earlier trials of the chain are run, and recorded,
+first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The trial is
+re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``), under the
+recorded profile and trial length, and every recorded pose, carrying flag, delivery count and value is
+compared with the re-run's, bit for bit (a bag recorded before foraging has none of these to compare). A
+heterogeneous swarm's trial is re-run with each robot's own tree.
 """
 
 from __future__ import annotations
@@ -17,10 +19,11 @@ from pathlib import Path
 
 from bt_controller.errors import TreeError
 from bt_controller.timeline import PROFILES
-from bt_controller.tree import parse
+from bt_controller.tree import Node, parse
 from evolution_manager.recording.bags import BagError, read_bag
 from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
+from swarm_sim.swarm_layout import LayoutError, layout_of_label
 from swarm_sim.trial_data import VALUE_NAMES
 
 RESULT_TOPIC = "/trial_result"
@@ -67,8 +70,11 @@ def verify_trial_bag(path: Path | str) -> Verification:
         )
     start, result = starts[0], results[0]
     try:
-        tree = parse(result.tree)
-    except TreeError as error:
+        if result.tree.lstrip().startswith("["):  # a heterogeneous swarm: each robot re-runs its own tree
+            tree: Node | list[Node] = layout_of_label(result.tree, DEFAULT.n_robots).parsed()
+        else:
+            tree = parse(result.tree)
+    except (TreeError, LayoutError) as error:
         raise BagError(f"the recorded tree does not parse: {error}") from None
     seed, trial = int(start.seed), int(start.trial)
     profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default

@@ -4,8 +4,9 @@ come from ``evolution_manager.viewing.frames``.
 ``render_frame`` draws one frame with Pillow: the arena as the paper's fig. 1 (nest disc at the centre, the
 gap, the food region outside it), robots with heading and id (a robot carrying food with a green ring), a
 trail, message links, and a side panel with step, tick, fitness so far (the paper's three objectives, or
-foraging with the deliveries so far in a foraging trial) and each robot's action. ``write_animation`` writes a
-GIF (or an MP4 through ffmpeg when it is installed).
+foraging with the deliveries so far in a foraging trial) and each robot's action; in a heterogeneous swarm
+each robot's tree is named by a letter beside its action, and the letters' trees are written out below.
+``write_animation`` writes a GIF (or an MP4 through ffmpeg when it is installed).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import math
 import shutil
 import subprocess
 import tempfile
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -28,6 +30,7 @@ from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frame
 
 if TYPE_CHECKING:
     from swarm_sim.config import Config
+    from swarm_sim.swarm_layout import SwarmLayout
 
 
 # ----------------------------------------------------------------------------------------------- drawing
@@ -131,17 +134,50 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     for line in lines:
         draw.text((panel, y), line, font=font, fill=(0, 0, 0))
         y += 15
+    letters = tree_letters(frames)
     for i in range(frames.n_robots):
         action = int(frames.actions[k, i])
         draw.rectangle((panel, y + 2, panel + 9, y + 11), fill=ROBOT_COLOURS[i % 9])
         draw.text(
             (panel + 14, y),
-            f"{i}: {ACTIONS[action] if action >= 0 else '(still)'}",
+            f"{i}{' ' + letters[i] if letters else ''}: {ACTIONS[action] if action >= 0 else '(still)'}",
             font=font,
             fill=(0, 0, 0),
         )
         y += 15
+    if letters:
+        for line in tree_legend(frames):
+            draw.text((panel, y), line, font=font, fill=(0, 0, 0))
+            y += 15
     return image
+
+
+def tree_letters(frames: TrialFrames) -> list[str]:
+    """Each robot's tree as a letter (A: the first robot's tree, B: the next different one, ...), for a
+    heterogeneous swarm; empty for one tree on every robot."""
+    if not frames.heterogeneous:
+        return []
+    distinct = list(dict.fromkeys(frames.trees))
+    return [chr(ord("A") + distinct.index(tree)) for tree in frames.trees]
+
+
+LEGEND_CHARS = 34
+"""Characters of tree text on one line of the panel."""
+
+
+def tree_legend(frames: TrialFrames) -> list[str]:
+    """The panel's lines naming each letter's tree (up to three lines each, one when there are many trees;
+    cut with an ellipsis)."""
+    distinct = list(dict.fromkeys(frames.trees))
+    most = 3 if len(distinct) <= 4 else 1
+    lines = ["trees:"]
+    for index, tree in enumerate(distinct):
+        chunks = textwrap.wrap(tree, LEGEND_CHARS - 3, break_on_hyphens=False) or [""]
+        if len(chunks) > most:
+            chunks = [*chunks[: most - 1], chunks[most - 1][: LEGEND_CHARS - 4] + "..."]
+        lines.append(f"{chr(ord('A') + index)}: {chunks[0]}")
+        lines.extend(f"   {chunk}" for chunk in chunks[1:])
+    return lines
 
 
 def shown_objectives(frames: TrialFrames) -> tuple[str, ...]:
@@ -219,7 +255,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--tree", help="tree text, or a file holding it (the trial runs in-process)")
     source.add_argument("--bag", type=Path, help="a trial bag written by `trial --bag`")
-    parser.add_argument("--seed", type=int, help="seed of the trial (with --tree)")
+    source.add_argument(
+        "--swarm",
+        type=Path,
+        metavar="FILE",
+        help='a tree per robot: {"trees": [...]} (the trial runs in-process)',
+    )
+    parser.add_argument("--seed", type=int, help="seed of the trial (with --tree or --swarm)")
     parser.add_argument("--trial", type=int, default=0, help="trial index (with --tree; default 0)")
     parser.add_argument("--profile", help="model profile (with --tree; default: the model's default)")
     parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4")
@@ -233,9 +275,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             frames = frames_from_bag(args.bag)
         else:
             if args.seed is None:
-                raise AnimationError("--tree needs --seed S")
-            tree = _tree_text(args.tree)
-            frames = frames_from_tree(tree, args.seed, args.trial, _config_for(args.profile))
+                raise AnimationError(f"{'--tree' if args.tree is not None else '--swarm'} needs --seed S")
+            config = _config_for(args.profile)
+            tree = _tree_text(args.tree) if args.tree is not None else _swarm(args.swarm, config)
+            frames = frames_from_tree(tree, args.seed, args.trial, config)
         write_animation(frames, args.out, args.fps)
     except AnimationError as error:
         print(f"animate: error: {error}", file=sys.stderr)
@@ -246,6 +289,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     seconds = time.monotonic() - started
     print(f"{args.out}: {len(frames.steps)} frames (one per sensing step) in {seconds:.1f} s")
     return 0
+
+
+def _swarm(path: Path, config: Config) -> SwarmLayout:
+    from swarm_sim.swarm_layout import LayoutError, load_layout
+
+    try:
+        return load_layout(path, config.n_robots)
+    except LayoutError as error:
+        raise AnimationError(f"--swarm: {error}") from None
 
 
 def _tree_text(source: str) -> str:

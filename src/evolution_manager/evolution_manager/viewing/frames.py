@@ -12,6 +12,7 @@ are read with ``evolution_manager.recording.bags``.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -25,6 +26,7 @@ from evolution_manager.errors import AnimationError
 if TYPE_CHECKING:
     from bt_controller.library import Library
     from swarm_sim.config import Config, Params
+    from swarm_sim.swarm_layout import SwarmLayout
 
 
 @dataclass(frozen=True)
@@ -55,10 +57,17 @@ class TrialFrames:
     """(T, n) bool: whether each robot carries food after this step (its answer)."""
     deliveries: np.ndarray
     """(T, n) int: each robot's deliveries in the trial after this step."""
+    trees: tuple[str, ...] = ()
+    """Each robot's tree text, robot 0 first (a heterogeneous swarm's differ; empty: not known)."""
 
     @property
     def n_robots(self) -> int:
         return int(self.poses.shape[1])
+
+    @property
+    def heterogeneous(self) -> bool:
+        """Whether the robots ran different trees."""
+        return len(set(self.trees)) > 1
 
     def to_json(self) -> dict:
         """A compact JSON form (poses in whole mm and centiradians) for the repertoire explorer."""
@@ -80,6 +89,7 @@ class TrialFrames:
             "fitness": [[None if math.isnan(v) else round(float(v), 4) for v in row] for row in self.fitness],
             "carrying": self.carrying.astype(int).tolist(),
             "deliveries": self.deliveries.astype(int).tolist(),
+            **({"trees": list(self.trees)} if self.heterogeneous else {}),
         }
 
 
@@ -109,9 +119,14 @@ def _fitness_so_far(
 
 
 def frames_from_tree(
-    tree: str, seed: int, trial: int = 0, config: Config | None = None, library: Library | None = None
+    tree: str | SwarmLayout,
+    seed: int,
+    trial: int = 0,
+    config: Config | None = None,
+    library: Library | None = None,
 ) -> TrialFrames:
-    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot through the compiled kernels, recorded
+    """Run trial ``trial`` of ``seed`` with ``tree`` on every robot (or a swarm layout's tree on each robot)
+    through the compiled kernels, recorded
     step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
     tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps.
     ``library``: the primitive library the tree's names come from."""
@@ -121,7 +136,7 @@ def frames_from_tree(
     config = config or DEFAULT
     recorded = record_trial(tree, seed, trial, config, library)
     return TrialFrames(
-        tree=tree,
+        tree=recorded.tree,
         seed=seed,
         trial=trial,
         **arena_fields(config, trial),
@@ -133,6 +148,7 @@ def frames_from_tree(
         fitness=recorded.fitness,
         carrying=recorded.carrying,
         deliveries=recorded.deliveries,
+        trees=recorded.trees,
     )
 
 
@@ -221,8 +237,11 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if initial is not None:
             food[:, 1] = [world.food_distance(x, y, gap, p) for x, y, _ in poses[k]]
             fitness[k] = _fitness_so_far(initial, smoothed[k], food, deliveries[k], gap, p)
+    label = result.tree if result is not None else ""
+    # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
+    trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()
     return TrialFrames(
-        tree=result.tree if result is not None else "",
+        tree=label,
         seed=int(start.seed),
         trial=trial,
         **arena_fields(config, trial),
@@ -234,4 +253,5 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         fitness=fitness,
         carrying=carrying,
         deliveries=deliveries,
+        trees=trees,
     )

@@ -1,9 +1,12 @@
 """Run one trial through the full node graph and record it.
 
 ``ws/run evolution_manager trial --tree TREE --seed S [--trial K] --bag DIR`` starts the simulator and one
-footbot controller per robot as separate processes, loads the tree into every controller, runs trial K of
+footbot controller per robot as separate processes, loads the tree into every controller (with ``--swarm
+FILE``, a swarm layout of ``swarm_sim.swarm_layout``: each controller its own tree), runs trial K of
 seed S in lockstep through the simulator's ``run_trial`` action, records every topic of the graph to a rosbag2
 bag with MCAP storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
+The bag's ``/trial_result`` keeps the swarm's tree as ``SwarmLayout.label``: the tree text of a homogeneous
+swarm, the JSON list of the robots' trees of a heterogeneous one.
 
 The graph runs in the caller's ROS domain (``ROS_DOMAIN_ID``, or ``--domain D``) so that a user can watch it
 live with their own tools (RViz2, Foxglove, ``ros2 topic echo``); ``--namespace /swarm_a`` keeps it apart
@@ -46,6 +49,7 @@ from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
+from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
 from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
@@ -65,6 +69,7 @@ from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, Config, default_config
 from swarm_sim.result_messages import result_fields, trial_record_of
+from swarm_sim.swarm_layout import LayoutError, SwarmLayout, load_layout
 from swarm_sim.trial_data import TrialRecord
 
 MAX_DOMAIN = 232
@@ -197,8 +202,11 @@ class TrialRunner:
             raise TrialFailedError(f"timed out waiting for {what}")
         return response
 
-    def load_tree(self, tree_text: str) -> None:
-        for client in self.load_clients:
+    def load_trees(self, trees: Sequence[str]) -> None:
+        """Load robot ``i``'s tree ``trees[i]`` into its controller."""
+        if len(trees) != len(self.load_clients):
+            raise TrialFailedError(f"{len(trees)} trees for {len(self.load_clients)} controllers")
+        for client, tree_text in zip(self.load_clients, trees, strict=True):
             response = self.call(
                 client, LoadTree.Request(tree=tree_text), f"{client.srv_name} to load the tree"
             )
@@ -357,15 +365,23 @@ class TrialGraph:
         if self._temporary_logs is not None and exc_info[0] is None:
             shutil.rmtree(self._temporary_logs, ignore_errors=True)
 
-    def run(self, tree_text: str, seed: int, trial: int, bag_path: Path | None = None) -> TrialRecord:
-        """Run trial ``trial`` of ``seed`` with ``tree_text`` on every robot; record it to ``bag_path`` when
-        given (a new directory); return its record."""
+    def run(
+        self, tree_text: str | SwarmLayout, seed: int, trial: int, bag_path: Path | None = None
+    ) -> TrialRecord:
+        """Run trial ``trial`` of ``seed`` with ``tree_text`` on every robot, or a swarm layout's tree on
+        each; record it to ``bag_path`` when given (a new directory); return its record."""
         runner = self.runner
         if runner is None:
             raise RuntimeError("the trial graph is not started: use it as a context manager")
-        runner.load_tree(tree_text)
-        # the bag keeps the tree its robots ran, primitives written out: it reproduces without the library
-        recorded_tree = to_text(load_library(self.library).parse(tree_text)) if self.library else tree_text
+        layout = (
+            tree_text if isinstance(tree_text, SwarmLayout) else SwarmLayout.uniform(tree_text, self.robots)
+        )
+        runner.load_trees(layout.trees)
+        # the bag keeps the trees its robots ran, primitives written out: it reproduces without the library
+        if self.library:
+            library = load_library(self.library)
+            layout = SwarmLayout(tuple(to_text(library.parse(text)) for text in layout.trees))
+        recorded_tree = layout.label
         if bag_path is None:
             record = runner.run_trial(seed, trial)
             self.trials_run += 1
@@ -418,7 +434,7 @@ class TrialGraph:
 
 
 def run_recorded_trial(
-    tree_text: str,
+    tree_text: str | SwarmLayout,
     seed: int,
     trial: int,
     bag_path: Path,
@@ -434,8 +450,9 @@ def run_recorded_trial(
     library: Path | None = None,
     task: str = DEFAULT_TASK,
 ) -> TrialRecord:
-    """Run trial ``trial`` of ``seed`` with ``tree_text`` through a fresh node graph, recording it to
-    ``bag_path``; return its record (see ``TrialGraph`` for the other arguments)."""
+    """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
+    node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other
+    arguments)."""
     with TrialGraph(
         robots=robots,
         timeout=timeout,
@@ -460,7 +477,8 @@ def write_result(
     namespace: str = "",
     profile: str = DEFAULT.profile,
 ) -> None:
-    """Close the trial's bag with its result (tree, seed, profile, six values), stamped ``stamp_ns``."""
+    """Close the trial's bag with its result (tree, seed, profile, six values), stamped ``stamp_ns``;
+    ``tree_text`` is the swarm's ``SwarmLayout.label``."""
     fields = result_fields(tree_text, seed, 1, record.values, "food", profile=profile)
     bag.write(namespace + RESULT_TOPIC, bag.message("swarm_msgs/msg/EvaluationResult", **fields), stamp_ns)
 
@@ -502,7 +520,14 @@ def tree_argument(argument: str) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """``trial``: one trial through the node graph, recorded; prints the trial's JSON."""
     parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
-    parser.add_argument("--tree", required=True, help="the tree as text, or a file holding it")
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--tree", help="every robot's tree, as text or a file holding it")
+    what.add_argument(
+        "--swarm",
+        type=Path,
+        metavar="FILE",
+        help='a tree per robot: a JSON file {"trees": ["tree text", ...]} (one per robot, robot 0 first)',
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the evaluation (default 0)")
     parser.add_argument(
         "--trial",
@@ -554,9 +579,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     try:
         library: Library | None = load_library(args.library) if args.library is not None else None
-        text = tree_argument(args.tree)
-        tree = parse(text, library=library)
-        shown = to_text(tree) if library is None else library.fold(tree)
+
+        def canonical(tree: TreeNode) -> str:
+            return to_text(tree) if library is None else library.fold(tree)
+
+        shown: str | list[str]
+        ran: str | SwarmLayout
+        if args.swarm is not None:
+            try:
+                layout = load_layout(args.swarm, DEFAULT.n_robots, library)
+            except LayoutError as error:
+                raise ValueError(f"--swarm: {error}") from None
+            shown = [canonical(tree) for tree in layout.parsed(library)]
+            ran = SwarmLayout(tuple(shown))
+        else:
+            shown = canonical(parse(tree_argument(args.tree), library=library))
+            ran = shown
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
         check_new_bag(args.bag)
@@ -572,7 +610,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         with signals_as_interrupts():
             record = run_recorded_trial(
-                shown,
+                ran,
                 args.seed,
                 args.trial,
                 args.bag,
