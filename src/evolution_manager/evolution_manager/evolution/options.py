@@ -16,6 +16,8 @@ from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARI
 if TYPE_CHECKING:  # imported where used: tqdm loads slowly, and not every command needs it
     from tqdm import tqdm
 
+    from evolution_manager.evolution.compositions import CompositionConfig
+
 
 def add_scenario_options(parser: argparse.ArgumentParser) -> None:
     """``--profile paper|clean``, ``--scenarios fixed|fresh`` and ``--scenario-seed S``: the model and the
@@ -139,7 +141,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
             )
 
 
-def progress_bar(config: RunConfig, initial: int, enabled: bool) -> tqdm | None:
+def progress_bar(config: RunConfig | CompositionConfig, initial: int, enabled: bool) -> tqdm | None:
     if not enabled:
         return None
     from tqdm import tqdm

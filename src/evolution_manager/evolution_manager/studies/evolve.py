@@ -2,6 +2,8 @@
 
     ws/run evolution_manager evolve --algorithm qd --objective food --evaluations 25000 --seed 1 --out runs/qd
     ws/run evolution_manager evolve --out runs/qd --resume        # continue a killed or interrupted run
+    ws/run evolution_manager evolve --task foraging --swarm-from runs/qd runs/qd-nest --algorithm ga \
+        --evaluations 1000 --out runs/compositions     # a repertoire cell per robot (evolution.compositions)
 
 Bad options print one line saying what was expected and exit with status 2; nothing already saved is
 touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
@@ -38,12 +40,14 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
+from evolution_manager.files import read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from distributed import Client
 
     from bt_controller.library import Library
+    from evolution_manager.cluster.settings import ClusterSettings
     from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
 
@@ -52,7 +56,9 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``evolve`` command line."""
     parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
     parser.add_argument(
-        "--algorithm", choices=ALGORITHMS, help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites)"
+        "--algorithm",
+        choices=(*ALGORITHMS, "ga"),
+        help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga or qd over compositions",
     )
     parser.add_argument(
         "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd: --objectives)"
@@ -85,6 +91,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--no-figures", action="store_true", help="write results but no figures")
+    parser.add_argument(
+        "--swarm-from",
+        nargs="+",
+        type=Path,
+        metavar="RUN_DIR",
+        help="evolve compositions (a repertoire cell per robot; --task foraging, --algorithm ga or qd) of "
+        "the repertoires in these run directories (docs/algorithms.md, 'Heterogeneous compositions')",
+    )
     add_cluster_options(parser)
     return parser
 
@@ -118,6 +132,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
     try:
         args = build_parser().parse_args(argv)
         cluster = settings_from_args(args)
+        if _compositions_asked(args):
+            return _evolve_compositions(args, argv, started, cluster)
         if args.workers is not None and not cluster.is_local:
             raise UsageError(
                 f"--workers applies to --cluster local only; on {cluster.describe()} the batches go to "
@@ -199,6 +215,149 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         print(f"evolve: error: {error}; {resume}", file=sys.stderr)
         return 1
     print(result_lines(run, args.out))
+    return 0
+
+
+def _compositions_asked(args: argparse.Namespace) -> bool:
+    """Whether the command evolves compositions: ``--swarm-from`` or ``--algorithm ga`` given, or ``--resume``
+    of a composition run."""
+    if args.swarm_from is not None or args.algorithm == "ga":
+        return True
+    if args.resume:
+        from evolution_manager.evolution.compositions import is_composition_run
+
+        return is_composition_run(args.out)
+    return False
+
+
+def _check_composition_options(args: argparse.Namespace, cluster: ClusterSettings) -> None:
+    """Refuse the options a composition run has no use for, each in one line saying what was expected."""
+    if not cluster.is_local:
+        raise UsageError(
+            "--cluster: compositions are evaluated here (--workers threads); leave --cluster out"
+        )
+    if args.library is not None and (args.swarm_from is not None or args.resume):
+        raise UsageError(
+            "--library cannot be combined with --swarm-from: a composition's cells are trees without one"
+        )
+    for name in ("objectives", "nodes"):
+        if getattr(args, name) is not None:
+            raise UsageError(
+                f"--{name} applies to tree runs, not to compositions (--swarm-from); leave it out"
+            )
+    if args.scenarios == "fresh":
+        raise UsageError("compositions are evaluated on fixed scenarios: leave out --scenarios fresh")
+    if args.resume:
+        if args.swarm_from is not None:
+            raise UsageError(
+                "--swarm-from: the run's cells are read from its directory; leave it out with --resume"
+            )
+        return
+    if args.swarm_from is None:
+        raise UsageError(
+            "--algorithm ga evolves compositions of repertoire cells: give --swarm-from RUN_DIR "
+            "[RUN_DIR ...] (and --task foraging)"
+        )
+    if args.task != "foraging":
+        raise UsageError("--swarm-from evolves compositions on the foraging task: add --task foraging")
+    if args.algorithm not in ("ga", "qd"):
+        raise UsageError("--swarm-from evolves compositions with --algorithm ga or --algorithm qd")
+    if args.objective not in (None, "foraging"):
+        raise UsageError(
+            f"--swarm-from: compositions are evolved on foraging, not on --objective {args.objective}"
+        )
+
+
+def _evolve_compositions(
+    args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
+) -> int:
+    """``evolve`` of compositions (``evolution.compositions``): start or continue a run, write its results."""
+    from evolution_manager.evolution import compositions as comp
+    from evolution_manager.studies.experiment import record_session
+
+    try:
+        _check_composition_options(args, cluster)
+        if args.resume:
+            saved = comp.CompositionConfig.from_json(read_json_object(Path(args.out) / "config.json"))
+            for name in ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed"):
+                value = getattr(args, name)
+                if value is not None and value != getattr(saved, name):
+                    raise UsageError(
+                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
+                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
+                    )
+            config = saved
+        else:
+            if comp.CompositionDirectory(args.out).config.exists():
+                raise UsageError(
+                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
+                )
+            cells = comp.read_cells(args.swarm_from)
+            config = comp.CompositionConfig(
+                args.algorithm,
+                args.evaluations or comp.DEFAULT_EVALUATIONS[args.algorithm],
+                0 if args.seed is None else args.seed,
+                args.trials or 10,
+                args.profile or comp.DEFAULT_PROFILE,
+                -1 if args.scenario_seed is None else args.scenario_seed,
+                tuple(str(p) for p in args.swarm_from),
+                len(cells),
+                comp.cells_digest(cells),
+            )
+        from swarm_sim.evaluation import BatchEvaluator
+
+        try:
+            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
+        except ValueError as error:
+            raise UsageError(f"--workers: {error}") from None
+        if args.resume:
+            run = comp.CompositionRun.resume(args.out, evaluator)
+        else:
+            run = comp.CompositionRun.start(config, cells, args.out, evaluator)
+    except WriteError as error:
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_IO
+    except (UsageError, EvolutionError) as error:
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as error:
+        print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
+        return EXIT_USAGE
+    command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
+    bar = progress_bar(run.config, run.produced, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            if run.best is not None and run.best.fitness is not None:
+                bar.set_postfix_str(f"foraging={run.best.fitness:.3f}")
+
+    resume = f"continue with: evolve --out {args.out} --resume"
+    try:
+        with signals_as_interrupts():
+            record_session(args.out, started, command, cluster)
+            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+            if bar is not None:
+                bar.close()
+            run.write_results()
+            record_session(args.out, started, command, cluster)
+    except KeyboardInterrupt as interruption:
+        if bar is not None:
+            bar.close()
+        print(f"evolve: interrupted; {resume}", file=sys.stderr)
+        with contextlib.suppress(EvolutionError):
+            record_session(args.out, started, command, cluster)
+        return exit_status(interruption)
+    except WriteError as error:
+        if bar is not None:
+            bar.close()
+        print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
+        return EXIT_IO
+    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    print(
+        f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
+        f"foraging {best}; the best swarm is {Path(args.out) / 'best' / 'foraging_swarm.json'}"
+    )
     return 0
 
 
