@@ -1,0 +1,294 @@
+"""Compositions (``evolution.compositions``, ``evolve --swarm-from``): a repertoire cell per robot, evolved by
+a GA or MAP-Elites on foraging, with the real simulator; the source repertoire is a tiny MAP-Elites run."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from evolution_manager.evolution.compositions import (
+    Cell,
+    CompositionConfig,
+    CompositionRun,
+    bin_of,
+    evaluate_genomes,
+    mutate,
+    read_cells,
+    two_point_crossover,
+    vary,
+)
+from evolution_manager.evolution.parameters import GPParameters
+from evolution_manager.studies.evolve import evolve
+from swarm_sim.cli import evaluate_main
+from swarm_sim.config import default_config
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.swarm_layout import load_layout
+from swarm_sim.world import OBJECTIVES
+
+COMPARED = [
+    "config.json",
+    "cells.json",
+    "evaluations.csv",
+    "progress.csv",
+    "checkpoint.json",
+    "summary.json",
+    "repertoire_compositions.json",
+    *(f"best/foraging_robot{i}.txt" for i in range(9)),
+    "best/foraging_swarm.json",
+]
+"""Every file of a composition run but sessions.json (wall times)."""
+
+
+def _files(root):
+    return {name: (root / name).read_bytes() for name in COMPARED if (root / name).exists()}
+
+
+@pytest.fixture(scope="module")
+def source(tmp_path_factory):
+    """A tiny MAP-Elites run on food (its repertoires: density, nest, food)."""
+    out = tmp_path_factory.mktemp("source") / "qd-food"
+    args = ["--algorithm", "qd", "--objective", "food", "--evaluations", "30", "--trials", "1"]
+    assert evolve([*args, "--out", str(out), "--no-figures", "--no-progress"]) == 0
+    return out
+
+
+def _compose(source, out, algorithm, *extra):
+    args = ["--task", "foraging", "--swarm-from", str(source), "--algorithm", algorithm, "--trials", "1"]
+    return evolve([*args, "--out", str(out), "--no-progress", "--checkpoint-every", "0", *extra])
+
+
+# Cells and genome operators --------------------------------------------------------------------------------
+def test_cells_are_every_filled_bins_best_tree_in_a_fixed_order(source):
+    cells = read_cells([source])
+    expected = []
+    for objective in OBJECTIVES:  # objectives in OBJECTIVES order, bins in index order
+        path = source / f"repertoire_{objective}.json"
+        if not path.exists():
+            continue
+        best = {}
+        for item in json.loads(path.read_text())["items"]:
+            key = tuple(item["bin"])
+            if key not in best or item["fitness"] > best[key][0]:
+                best[key] = (item["fitness"], item["tree"])
+        expected += [(objective, key, *best[key]) for key in sorted(best)]
+    assert [(c.objective, c.bin, c.fitness, c.tree) for c in cells] == expected
+    assert {c.objective for c in cells} == {"density", "nest", "food"}
+    # two directories: the first's cells, then the second's
+    assert read_cells([source, source]) == cells + cells
+
+
+def test_two_point_crossover_keeps_every_cell_at_its_position():
+    rng = random.Random(3)
+    segments = set()
+    for _ in range(300):
+        a = tuple(rng.randrange(100) for _ in range(9))
+        b = tuple(100 + rng.randrange(100) for _ in range(9))  # no cell of a is a cell of b
+        c, d = two_point_crossover(a, b, rng)
+        assert all(c[i] in (a[i], b[i]) and {c[i], d[i]} == {a[i], b[i]} for i in range(9))
+        swapped = [i for i in range(9) if c[i] == b[i]]
+        assert swapped and swapped == list(range(swapped[0], swapped[-1] + 1))  # one inner segment
+        assert swapped[0] > 0 and swapped[-1] < 8
+        segments.add((swapped[0], swapped[-1]))
+    assert len(segments) > 20  # cut points vary
+
+
+def test_mutation_changes_exactly_one_cell():
+    rng = random.Random(4)
+    positions = set()
+    for n_cells in (2, 3, 50):
+        for _ in range(200):
+            genome = tuple(rng.randrange(n_cells) for _ in range(9))
+            child = mutate(genome, rng, n_cells)
+            changed = [i for i in range(9) if child[i] != genome[i]]
+            assert len(changed) == 1 and 0 <= child[changed[0]] < n_cells
+            positions.add(changed[0])
+    assert positions == set(range(9))
+    assert mutate((0,) * 9, rng, 1) == (0,) * 9  # one cell: nothing else to draw
+
+
+def test_variation_is_seeded_and_keeps_the_batch_size():
+    parents = [tuple(range(k, k + 9)) for k in range(24)]
+    first = vary(parents, random.Random(5), 0.8, 0.5, 40)
+    assert first == vary(parents, random.Random(5), 0.8, 0.5, 40) and len(first) == 24
+    assert first != parents
+    assert vary(parents, random.Random(5), 0.0, 0.0, 40) == parents
+
+
+def test_the_ga_takes_the_2023_gps_parameters():
+    p = CompositionConfig("ga", 10, 0, cells=1).parameters
+    gp = GPParameters()
+    assert (p.population, p.tournament, p.elites, p.crossover) == (25, 3, 1, 0.8)
+    assert (p.population, p.tournament, p.elites, p.crossover) == (
+        gp.population,
+        gp.tournament,
+        gp.elites_per_objective,
+        gp.crossover,
+    )
+
+
+def test_nine_copies_of_one_cell_score_exactly_the_homogeneous_tree(source):
+    cells = read_cells([source])
+    evaluator = BatchEvaluator(default_config("paper", "foraging"))
+    k = OBJECTIVES.index("foraging")
+    picked = [0, len(cells) // 2, len(cells) - 1]
+    members = evaluate_genomes(evaluator, cells, [(i,) * 9 for i in picked], 17, 2, 0)
+    alone = evaluator.evaluate([EvaluationRequest(cells[i].tree, 17, 2) for i in picked])
+    for member, result in zip(members, alone, strict=True):
+        assert result.ok
+        assert member.fitness == result.fitness[k] and member.descriptors == result.descriptors
+    # a mixed composition is evaluated too (and is not simply one of its trees)
+    [mixed] = evaluate_genomes(evaluator, cells, [tuple(picked * 3)], 17, 2, 0)
+    assert mixed.fitness is not None and mixed.descriptors not in [r.descriptors for r in alone]
+
+
+# Runs ------------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("algorithm", ["ga", "qd"])
+def test_same_seed_same_files_and_the_best_swarm_loads(source, tmp_path, capsys, algorithm):
+    assert _compose(source, tmp_path / "a", algorithm, "--evaluations", "30", "--seed", "3") == 0
+    assert _compose(source, tmp_path / "b", algorithm, "--evaluations", "30", "--seed", "3") == 0
+    assert _compose(source, tmp_path / "c", algorithm, "--evaluations", "30", "--seed", "4") == 0
+    a, b, c = (_files(tmp_path / n) for n in "abc")
+    assert a == b
+    assert a["evaluations.csv"] != c["evaluations.csv"]
+    assert ("repertoire_compositions.json" in a) == (algorithm == "qd")
+    summary = json.loads(a["summary.json"])
+    config = summary["config"]
+    initial = 25 if algorithm == "ga" else 100
+    assert summary["evaluations"] == initial + 30 and summary["individuals_produced"] == 30
+    rows = list(csv.DictReader((tmp_path / "a" / "evaluations.csv").open()))
+    assert len(rows) == initial + 30 and all(int(r["seed"]) == config["scenario_seed"] for r in rows)
+    assert summary["best_fitness"] == max(float(r["foraging"]) for r in rows)
+    # the best composition: its layout file, its nine trees and the cells it names
+    cells = read_cells([source])
+    best = summary["best"]
+    layout = load_layout(tmp_path / "a" / "best" / "foraging_swarm.json", 9)
+    assert list(layout.trees) == best["trees"] == [cells[k].tree for k in best["genome"]]
+    assert [c["tree"] for c in best["cells"]] == best["trees"]
+    for i, tree in enumerate(best["trees"]):
+        assert (tmp_path / "a" / "best" / f"foraging_robot{i}.txt").read_text() == tree + "\n"
+    capsys.readouterr()
+    swarm = str(tmp_path / "a" / "best" / "foraging_swarm.json")
+    seed = str(config["scenario_seed"])
+    assert evaluate_main(["--swarm", swarm, "--task", "foraging", "--seed", seed, "--trials", "1"]) == 0
+    evaluated = json.loads(capsys.readouterr().out)
+    assert evaluated["fitness"]["foraging"] == summary["best_fitness"]
+    assert list(evaluated["descriptors"].values()) == best["descriptors"]
+    if algorithm == "qd":  # the grid: one composition per bin, the bin its descriptors', the fittest there
+        repertoire = json.loads(a["repertoire_compositions.json"])
+        fittest = {}
+        for r in rows:
+            key = bin_of([float(r[d]) for d in ("movement", "rotation", "conditionality")])
+            fittest[key] = max(fittest.get(key, -1.0), float(r["foraging"]))
+        assert {tuple(i["bin"]): i["fitness"] for i in repertoire["items"]} == fittest
+        assert all(tuple(i["bin"]) == bin_of(i["descriptors"]) for i in repertoire["items"])
+
+
+@pytest.mark.parametrize("algorithm", ["ga", "qd"])
+def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
+    assert _compose(source, tmp_path / "straight", algorithm, "--evaluations", "120", "--seed", "5") == 0
+    cells = read_cells([source])
+    straight = json.loads((tmp_path / "straight" / "config.json").read_text())
+    config = CompositionConfig.from_json(straight)
+    evaluator = BatchEvaluator(config.world())
+    stopped = CompositionRun.start(config, cells, tmp_path / "stopped", evaluator)
+    for stop in (30, 130, 180):
+        stopped.execute(checkpoint_interval=1e9, stop_after=stop)
+        # rows written after the last checkpoint (a crash before the next one)
+        with open(tmp_path / "stopped" / "evaluations.csv", "a") as log:
+            log.write("999,1,garbage\n")
+        stopped.lock.release()
+        stopped = CompositionRun.resume(tmp_path / "stopped", evaluator)
+    stopped.execute(checkpoint_interval=0)
+    stopped.write_results()
+    files = _files(tmp_path / "straight")
+    assert _files(tmp_path / "stopped") == files and len(files) >= 14
+
+
+def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
+    args = ["--evaluations", "1500", "--seed", "6", "--trials", "2"]
+    straight = tmp_path / "straight"
+    assert _compose(source, straight, "ga", *args) == 0
+    killed = tmp_path / "killed"
+    argv = ["--task", "foraging", "--swarm-from", str(source), "--algorithm", "ga", *args]
+    argv += ["--out", str(killed), "--no-progress", "--checkpoint-every", "0"]
+    code = f"from evolution_manager.studies.evolve import evolve; evolve({argv!r})"
+    process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    progress = killed / "progress.csv"
+    try:
+        deadline = time.monotonic() + 300
+        while process.poll() is None and time.monotonic() < deadline:
+            if progress.exists() and len(progress.read_text().splitlines()) > 6:
+                break
+            time.sleep(0.05)
+    finally:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+    assert not (killed / "summary.json").exists(), "the kill came too late to interrupt the run"
+    assert evolve(["--out", str(killed), "--resume", "--no-progress", "--checkpoint-every", "0"]) == 0
+    assert _files(killed) == _files(straight)
+
+
+# Refusals --------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        (["--algorithm", "qd", "--swarm-from", "SOURCE"], "add --task foraging"),
+        (["--algorithm", "ga", "--task", "foraging"], "give --swarm-from RUN_DIR"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "EMPTY"], "holds no repertoire"),
+        (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "BARE"], "no cell to compose"),
+        (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--library", "LIB"],
+         "--library cannot be combined with --swarm-from"),
+        (["--algorithm", "gp", "--task", "foraging", "--swarm-from", "SOURCE"],
+         "--algorithm ga or --algorithm qd"),
+        (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--objective", "food"],
+         "not on --objective food"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
+         "fixed scenarios"),
+    ],
+)  # fmt: skip
+def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, extra, words):
+    (tmp_path / "empty").mkdir()
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    empty = json.loads((source / "repertoire_food.json").read_text())
+    empty["items"] = []
+    (bare / "repertoire_food.json").write_text(json.dumps(empty))
+    library = tmp_path / "lib.json"
+    library.write_text("{}")
+    where = {"SOURCE": source, "EMPTY": tmp_path / "empty", "BARE": bare, "LIB": library}
+    argv = [str(where.get(a, a)) for a in extra]
+    capsys.readouterr()
+    assert evolve([*argv, "--out", str(tmp_path / "out"), "--no-progress"]) == 2
+    error = capsys.readouterr().err
+    assert words in error and error.count("\n") == 1 and "Traceback" not in error
+    assert not (tmp_path / "out").exists()
+
+
+def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert _compose(source, out, "ga", "--evaluations", "10") == 0
+    before = _files(out)
+    capsys.readouterr()
+    assert evolve(["--out", str(out), "--resume", "--seed", "9"]) == 2
+    assert "--seed 9 differs" in capsys.readouterr().err
+    assert evolve(["--out", str(out), "--resume", "--swarm-from", str(source)]) == 2
+    assert "leave it out with --resume" in capsys.readouterr().err
+    assert _compose(source, out, "ga", "--evaluations", "10") == 2
+    assert "already holds a run" in capsys.readouterr().err
+    assert _files(out) == before
+    # a finished run resumed: nothing to do, the same files
+    assert evolve(["--out", str(out), "--resume", "--no-progress"]) == 0
+    assert _files(out) == before
+
+
+def test_a_cell_list_is_json_round_trip():
+    cell = Cell("runs/a", "food", (1, 2, 3), 0.5, "forward")
+    assert Cell.from_json(cell.as_json()) == cell
