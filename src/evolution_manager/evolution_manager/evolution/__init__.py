@@ -5,13 +5,15 @@ text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and M
 algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
 configuration and command-line options (``run_config``, ``options``), the run loop with its checkpoints
 (``run``), the held-out scores (``heldout``) and primitive libraries made from runs' repertoires
-(``libraries``, the ``library`` command). Imports: the base modules, bt_controller, swarm_sim, DEAP
+(``libraries``, the ``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA
+or MAP-Elites (``compositions``). Imports: the base modules, bt_controller, swarm_sim, DEAP
 and qdpy; no other wing.
 """
 
 __all__ = [
     "algorithms",
     "archive",
+    "compositions",
     "deap_trees",
     "heldout",
     "libraries",
