@@ -275,8 +275,11 @@ def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, 
 def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, capsys):
     out = tmp_path / "run"
     assert _compose(source, out, "ga", "--evaluations", "10") == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # built aside, renamed into place
     before = _files(out)
     capsys.readouterr()
+    assert evolve(["--out", str(out), "--resume", "--task", "primitives"]) == 2
+    assert "evolves on the foraging task" in capsys.readouterr().err
     assert evolve(["--out", str(out), "--resume", "--seed", "9"]) == 2
     assert "--seed 9 differs" in capsys.readouterr().err
     assert evolve(["--out", str(out), "--resume", "--swarm-from", str(source)]) == 2

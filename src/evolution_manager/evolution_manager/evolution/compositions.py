@@ -30,7 +30,10 @@ import functools
 import hashlib
 import json
 import math
+import os
 import random
+import shutil
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -44,8 +47,17 @@ from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
+from evolution_manager.evolution.run import _remove_abandoned_starts
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, default_scenario_seed
-from evolution_manager.files import CsvLog, number, read_json, read_json_object, write_atomic, write_json
+from evolution_manager.files import (
+    CsvLog,
+    _umask,
+    number,
+    read_json,
+    read_json_object,
+    write_atomic,
+    write_json,
+)
 from evolution_manager.processes import Lock, exclusive_lock
 from swarm_sim.world import OBJECTIVES
 
@@ -454,22 +466,40 @@ class CompositionRun:
     def start(
         cls, config: CompositionConfig, cells: Sequence[Cell], root: Path, evaluator: Evaluator
     ) -> CompositionRun:
-        """A new run in ``root``, which must be missing or empty."""
+        """A new run in ``root``, which must be missing or empty. The directory appears whole or not at all,
+        as a tree run's (``Run.start``): built as a hidden sibling, then renamed into place."""
         root = Path(root)
         if root.exists() and (not root.is_dir() or any(root.iterdir())):
             raise RunDirectoryError(f"{root} is not an empty directory: choose an empty or new --out")
         if config.cells != len(cells) or config.cells_digest != cells_digest(cells):
             raise ConfigError("the configuration does not describe these cells")
-        root.mkdir(parents=True, exist_ok=True)
-        run = cls(config, cells, root, evaluator)
-        run.lock = exclusive_lock(root / LOCK_NAME, f"the run directory {root}")
-        write_json(run.directory.cells, {"cells": [c.as_json() for c in cells]})
-        run.offsets = {
-            "evaluations": run.directory.evaluations.create(),
-            "progress": run.directory.progress.create(),
-        }
-        run.checkpoint()
-        write_json(run.directory.config, config.to_json())  # last: a directory with it is a whole start
+        parent = root.absolute().parent
+        parent.mkdir(parents=True, exist_ok=True)
+        _remove_abandoned_starts(parent, root.name)
+        building = Path(tempfile.mkdtemp(prefix=f".{root.name}.new-", dir=parent))
+        try:
+            os.chmod(building, 0o777 & ~_umask())
+            lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+            run = cls(config, cells, building, evaluator)
+            write_json(run.directory.config, config.to_json())
+            write_json(run.directory.cells, {"cells": [c.as_json() for c in cells]})
+            run.offsets = {
+                "evaluations": run.directory.evaluations.create(),
+                "progress": run.directory.progress.create(),
+            }
+            run.checkpoint()
+            try:
+                os.rename(building, root)  # replaces an empty directory, never a full one
+            except OSError as error:
+                raise RunDirectoryError(
+                    f"{root} was created by another process meanwhile: choose another --out"
+                ) from error
+        except BaseException:
+            shutil.rmtree(building, ignore_errors=True)
+            raise
+        run.directory = CompositionDirectory(root)
+        lock.moved(root / LOCK_NAME)
+        run.lock = lock
         return run
 
     @classmethod

@@ -248,6 +248,10 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
     if args.scenarios == "fresh":
         raise UsageError("compositions are evaluated on fixed scenarios: leave out --scenarios fresh")
     if args.resume:
+        if args.task not in (None, "foraging") or args.objective not in (None, "foraging"):
+            raise UsageError(
+                "a composition run evolves on the foraging task: leave out --task and --objective"
+            )
         if args.swarm_from is not None:
             raise UsageError(
                 "--swarm-from: the run's cells are read from its directory; leave it out with --resume"
