@@ -295,3 +295,12 @@ def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, cap
 def test_a_cell_list_is_json_round_trip():
     cell = Cell("runs/a", "food", (1, 2, 3), 0.5, "forward")
     assert Cell.from_json(cell.as_json()) == cell
+
+
+def test_the_best_swarm_animates(source, tmp_path, capsys):
+    from evolution_manager.viewing.animate import main as animate
+
+    assert _compose(source, tmp_path / "run", "ga", "--evaluations", "5") == 0
+    swarm = tmp_path / "run" / "best" / "foraging_swarm.json"
+    assert animate(["--swarm", str(swarm), "--seed", "1", "--out", str(tmp_path / "best.gif")]) == 0
+    assert (tmp_path / "best.gif").stat().st_size > 0
