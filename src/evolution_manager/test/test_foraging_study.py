@@ -17,7 +17,15 @@ from bt_controller.library import load_library
 from bt_controller.tree import parse
 from evolution_manager.evolution.libraries import FAMILIES
 from evolution_manager.studies.experiment import experiment
-from evolution_manager.studies.foraging_study import ARMS, CSV_HEADER, LIBRARIES, PRIMITIVES, flat_budget
+from evolution_manager.studies.foraging_study import (
+    ARMS,
+    CSV_HEADER,
+    LIBRARIES,
+    PRIMITIVES,
+    SWARM_ARMS,
+    SWARM_SOURCE,
+    flat_budget,
+)
 from evolution_manager.studies.report import report
 
 TINY = ["--study", "foraging", "--runs", "1", "--evaluations", "10", "--trials", "1", "--processes", "1"]
@@ -71,20 +79,35 @@ def test_a_study_builds_libraries_from_its_primitive_runs_and_runs_every_arm_wit
             assert copy.digest == libraries[arm.library].digest
         else:
             assert config["library"] == "" and config["evaluations"] == flat_budget(10)
+    source = load_library(study / "arms" / SWARM_SOURCE / "run00" / "library.json")
+    for arm in SWARM_ARMS:  # compositions of the foragers of foragers-qd's run with the same index
+        run = study / "arms" / arm.name / "run00"
+        config = json.loads((run / "config.json").read_text())
+        assert config["kind"] == "compositions" and config["algorithm"] == arm.algorithm
+        assert [Path(p) for p in config["sources"]] == [(study / "arms" / SWARM_SOURCE / "run00").absolute()]
+        assert config["library_digest"] == source.digest
+        layout = json.loads((run / "best" / "foraging_swarm.json").read_text())
+        assert len(layout["trees"]) == 9
+        summary = json.loads((run / "summary.json").read_text())
+        assert summary["finished"] and summary["heldout_best_fitness"] is not None
 
 
 def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: Path, capsys):
     with (study / "runs.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert list(rows[0]) == CSV_HEADER
-    assert [row["arm"] for row in rows] == [arm.name for arm in ARMS]
+    assert [row["arm"] for row in rows] == [arm.name for arm in (*ARMS, *SWARM_ARMS)]
     for row in rows:
         summary = json.loads((study / "arms" / row["arm"] / "run00" / "summary.json").read_text())
-        assert float(row["best_fitness"]) == summary["objectives"]["foraging"]["best_fitness"]
+        scores = summary["objectives"]["foraging"] if "objectives" in summary else summary
+        assert float(row["best_fitness"]) == scores["best_fitness"]
+        assert float(row["heldout_best_fitness"]) == scores["heldout_best_fitness"]
     text = (study / "report.md").read_text()
-    for arm in ARMS:
+    for arm in (*ARMS, *SWARM_ARMS):
         assert f"| {arm.name} |" in text
+    for arm in ARMS:
         assert (study / "figures" / f"best_{arm.name}.png").exists()
+    assert "robot 8: " in text  # the best heterogeneous swarm, a tree per robot
     assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
     assert "--study foraging" in text  # the reproduce command
     before = text

@@ -40,15 +40,16 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, derive_seed
+from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_HELDOUT, derive_seed
 from bt_controller.errors import TreeError
+from bt_controller.library import Library, LibraryError, library_from_json, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
 from evolution_manager.evolution.run import _remove_abandoned_starts
-from evolution_manager.evolution.run_config import DEFAULT_PROFILE, default_scenario_seed
+from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
 from evolution_manager.files import (
     CsvLog,
     _umask,
@@ -150,12 +151,22 @@ class Cell:
 
 
 def read_cells(run_dirs: Sequence[Path]) -> list[Cell]:
+    """The cells of the repertoires in ``run_dirs`` (:func:`read_sources`)."""
+    return read_sources(run_dirs)[0]
+
+
+def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
     """The cells of the repertoires in ``run_dirs``: directory by directory (as given), objective by objective
     (``OBJECTIVES`` order: ``repertoire_<objective>.json``), bin by bin (index order), each bin's fittest
-    item (the first in the file among equals). ``ConfigError`` naming the directory or file that has none or
-    is damaged."""
+    item (the first in the file among equals); and the primitive library their trees name (a run's copy,
+    ``library.json``: the runs that have one must share it), or None. ``ConfigError`` naming the directory or
+    file that has none or is damaged, or the runs whose libraries differ."""
     cells: list[Cell] = []
+    libraries: dict[str, tuple[Path, Library]] = {}
     for directory in map(Path, run_dirs):
+        library = _run_library(directory)
+        if library is not None:
+            libraries.setdefault(library.digest, (directory, library))
         if not directory.is_dir():
             raise ConfigError(f"--swarm-from: {directory} is not a run directory")
         files = [(o, directory / f"repertoire_{o}.json") for o in OBJECTIVES]
@@ -166,16 +177,32 @@ def read_cells(run_dirs: Sequence[Path]) -> list[Cell]:
                 f"objective one of {', '.join(OBJECTIVES)}, as a finished run writes)"
             )
         for objective, path in files:
-            cells += _cells_of(path, directory, objective)
+            cells += _cells_of(path, directory, objective, library)
+    if len(libraries) > 1:
+        named = ", ".join(str(directory) for directory, _ in libraries.values())
+        raise ConfigError(
+            f"--swarm-from: the runs use different primitive libraries ({named}); give runs of one library"
+        )
     if not cells:
         raise ConfigError(
             "--swarm-from: the repertoires hold no filled bin, so there is no cell to compose (at least 1 "
             "is needed)"
         )
-    return cells
+    return cells, next(iter(libraries.values()))[1] if libraries else None
 
 
-def _cells_of(path: Path, directory: Path, objective: str) -> list[Cell]:
+def _run_library(directory: Path) -> Library | None:
+    """The primitive library of the run in ``directory`` (its copy, ``library.json``), or None."""
+    path = directory / "library.json"
+    if not path.is_file():
+        return None
+    try:
+        return load_library(path)
+    except LibraryError as error:
+        raise ConfigError(f"--swarm-from: {error}") from None
+
+
+def _cells_of(path: Path, directory: Path, objective: str, library: Library | None) -> list[Cell]:
     try:
         document = read_json_object(path)
         best: dict[tuple[int, ...], tuple[float, str]] = {}
@@ -192,11 +219,11 @@ def _cells_of(path: Path, directory: Path, objective: str) -> list[Cell]:
     for index in sorted(best):
         fitness, tree = best[index]
         try:
-            parse(tree)
+            parse(tree, library=library)
         except TreeError as error:
             raise ConfigError(
                 f"--swarm-from: the tree of bin {list(index)} in {path} does not parse ({error}); "
-                "compositions take trees without a primitive library"
+                "a run's primitives are read from its library.json"
             ) from None
         cells.append(Cell(str(directory), objective, index, fitness, tree))
     return cells
@@ -326,6 +353,8 @@ class CompositionConfig:
     cells: int = 0
     cells_digest: str = ""
     parameters: CompositionParameters = field(default_factory=CompositionParameters)
+    library_digest: str = ""
+    """The digest of the primitive library the cells' trees name ("" for none); the run keeps a copy."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -372,6 +401,7 @@ class CompositionConfig:
                 data["cells"],
                 str(data["cells_digest"]),
                 CompositionParameters(**data["parameters"]),
+                str(data.get("library_digest", "")),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, ConfigError):
@@ -399,15 +429,22 @@ def layout_of(genome: Genome, cells: Sequence[Cell]) -> SwarmLayout:
 
 
 def evaluate_genomes(
-    evaluator: Evaluator, cells: Sequence[Cell], genomes: Sequence[Genome], seed: int, trials: int, first: int
+    evaluator: Evaluator,
+    cells: Sequence[Cell],
+    genomes: Sequence[Genome],
+    seed: int,
+    trials: int,
+    first: int,
+    seeds: Sequence[int] | None = None,
 ) -> list[Member]:
-    """Each genome evaluated as a heterogeneous swarm with ``seed`` over ``trials`` trials; evaluation
-    indices from ``first``."""
+    """Each genome evaluated as a heterogeneous swarm with ``seed`` (or genome ``i`` with ``seeds[i]``) over
+    ``trials`` trials; evaluation indices from ``first``."""
     from swarm_sim.evaluation import SwarmRequest
 
     if not genomes:
         return []
-    requests = [SwarmRequest(layout_of(g, cells), seed, trials) for g in genomes]
+    chosen = [seed] * len(genomes) if seeds is None else list(seeds)
+    requests = [SwarmRequest(layout_of(g, cells), s, trials) for g, s in zip(genomes, chosen, strict=True)]
     results = evaluator.evaluate(requests)  # type: ignore[arg-type]  # BatchEvaluator takes swarm requests
     k = OBJECTIVES.index(OBJECTIVE)
     members = []
@@ -430,9 +467,22 @@ class CompositionDirectory:
         self.checkpoint = self.root / "checkpoint.json"
         self.summary = self.root / "summary.json"
         self.repertoire = self.root / "repertoire_compositions.json"
+        self.library = self.root / "library.json"
         self.best = self.root / "best"
         self.evaluations = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
         self.progress = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
+
+    def read_library(self, config: CompositionConfig) -> Library | None:
+        """The run's copy of its primitive library (None without one), checked against the digest."""
+        if not config.library_digest:
+            return None
+        try:
+            library = library_from_json(read_json(self.library), str(self.library))
+        except (LibraryError, RunDirectoryError) as error:
+            raise RunDirectoryError(f"{self.library} is damaged: {error}") from error
+        if library.digest != config.library_digest:
+            raise RunDirectoryError(f"{self.library} is not the library the run started with")
+        return library
 
 
 class CompositionRun:
@@ -464,7 +514,12 @@ class CompositionRun:
     # Construction ----------------------------------------------------------------------------------------
     @classmethod
     def start(
-        cls, config: CompositionConfig, cells: Sequence[Cell], root: Path, evaluator: Evaluator
+        cls,
+        config: CompositionConfig,
+        cells: Sequence[Cell],
+        root: Path,
+        evaluator: Evaluator,
+        library: Library | None = None,
     ) -> CompositionRun:
         """A new run in ``root``, which must be missing or empty. The directory appears whole or not at all,
         as a tree run's (``Run.start``): built as a hidden sibling, then renamed into place."""
@@ -473,6 +528,8 @@ class CompositionRun:
             raise RunDirectoryError(f"{root} is not an empty directory: choose an empty or new --out")
         if config.cells != len(cells) or config.cells_digest != cells_digest(cells):
             raise ConfigError("the configuration does not describe these cells")
+        if config.library_digest != ("" if library is None else library.digest):
+            raise ConfigError("the configuration does not describe this primitive library")
         parent = root.absolute().parent
         parent.mkdir(parents=True, exist_ok=True)
         _remove_abandoned_starts(parent, root.name)
@@ -483,6 +540,8 @@ class CompositionRun:
             run = cls(config, cells, building, evaluator)
             write_json(run.directory.config, config.to_json())
             write_json(run.directory.cells, {"cells": [c.as_json() for c in cells]})
+            if library is not None:
+                write_json(run.directory.library, library.as_json())
             run.offsets = {
                 "evaluations": run.directory.evaluations.create(),
                 "progress": run.directory.progress.create(),
@@ -512,6 +571,7 @@ class CompositionRun:
             cells = [Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
             if len(cells) != config.cells or cells_digest(cells) != config.cells_digest:
                 raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
+            directory.read_library(config)  # the evaluator was made with it
             run = cls(config, cells, root, evaluator)
             run.restore(read_json_object(directory.checkpoint))
         except (ConfigError, KeyError, TypeError, ValueError) as error:
@@ -696,6 +756,18 @@ class CompositionRun:
             best = self.composition_json(self.best)
             best["cells"] = [self.cells[k].as_json() for k in self.best.genome]
             summary["best"] = best
+        if self.done and self.best is not None and self.evaluator is not None:
+            seeds = [
+                derive_seed(self.config.scenario_seed, RUN_HELDOUT, r) for r in range(HELDOUT_EVALUATIONS)
+            ]
+            scored = evaluate_genomes(
+                self.evaluator, self.cells, [self.best.genome] * len(seeds), 0, self.config.trials, 0, seeds
+            )
+            values = [m.fitness for m in scored if m.fitness is not None]
+            summary["heldout"] = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
+            summary["heldout_best_fitness"] = (
+                math.fsum(values) / len(values) if len(values) == len(seeds) else None
+            )
         if self.config.algorithm == "qd":
             summary["coverage"] = len(self.grid) / 512
             summary["qd_score"] = math.fsum(m.rank for m in self.grid.values()) / 512

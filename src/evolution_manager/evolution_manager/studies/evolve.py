@@ -291,12 +291,13 @@ def _evolve_compositions(
                         f"({getattr(saved, name)}); leave it out or start a new run in another --out"
                     )
             config = saved
+            library = comp.CompositionDirectory(args.out).read_library(config)
         else:
             if comp.CompositionDirectory(args.out).config.exists():
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
-            cells = comp.read_cells(args.swarm_from)
+            cells, library = comp.read_sources(args.swarm_from)
             config = comp.CompositionConfig(
                 args.algorithm,
                 args.evaluations or comp.DEFAULT_EVALUATIONS[args.algorithm],
@@ -307,17 +308,18 @@ def _evolve_compositions(
                 tuple(str(p) for p in args.swarm_from),
                 len(cells),
                 comp.cells_digest(cells),
+                library_digest="" if library is None else library.digest,
             )
         from swarm_sim.evaluation import BatchEvaluator
 
         try:
-            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
+            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1, library=library)
         except ValueError as error:
             raise UsageError(f"--workers: {error}") from None
         if args.resume:
             run = comp.CompositionRun.resume(args.out, evaluator)
         else:
-            run = comp.CompositionRun.start(config, cells, args.out, evaluator)
+            run = comp.CompositionRun.start(config, cells, args.out, evaluator, library)
     except WriteError as error:
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_IO

@@ -41,6 +41,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import Manager, get_context
 from pathlib import Path
+from typing import Protocol
 
 from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
 from bt_controller.library import Library, LibraryError, load_library
@@ -63,6 +64,8 @@ from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study:
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
+COMPOSITIONS = "compositions"
+"""``config.json``'s ``kind`` of a composition run (``evolution.compositions.KIND``, without importing it)."""
 STUDIES = ("paper", "foraging")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
@@ -145,6 +148,8 @@ def run_one(
     from evolution_manager.viewing.results import write_results
     from swarm_sim.evaluation import BatchEvaluator
 
+    if config_data.get("kind") == COMPOSITIONS:
+        return _run_composition(config_data, root, progress, checkpoint_interval)
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
     if finished(directory.root):
@@ -168,6 +173,40 @@ def run_one(
 
     run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
     write_results(run, with_figures=False, evaluator=evaluator)
+    return root
+
+
+def _run_composition(
+    config_data: dict,
+    root: str,
+    progress: queues.Queue[tuple[str, int]] | None,
+    checkpoint_interval: float,
+) -> str:
+    """:func:`run_one` of a planned composition run (``evolution.compositions``): its cells are read from
+    its source runs when it starts, and must be the cells the plan recorded."""
+    from evolution_manager.evolution import compositions as comp
+    from swarm_sim.evaluation import BatchEvaluator
+
+    config = comp.CompositionConfig.from_json(config_data)
+    directory = comp.CompositionDirectory(Path(root))
+    if finished(directory.root):
+        return root
+    if directory.config.exists():
+        if comp.CompositionConfig.from_json(read_json_object(directory.config)) != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+        evaluator = BatchEvaluator(config.world(), threads=1, library=directory.read_library(config))
+        run = comp.CompositionRun.resume(directory.root, evaluator)
+    else:
+        cells, library = comp.read_sources([Path(source) for source in config.sources])
+        evaluator = BatchEvaluator(config.world(), threads=1, library=library)
+        run = comp.CompositionRun.start(config, cells, directory.root, evaluator, library)
+
+    def on_batch(produced: int, _budget: int) -> None:
+        if progress is not None:
+            progress.put((root, produced))
+
+    run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
+    run.write_results()
     return root
 
 
@@ -307,7 +346,16 @@ def run_locally(
                 yield futures[future], future.exception()
 
 
-Stage = Callable[[], list[tuple[RunConfig, str]]]
+class Planned(Protocol):
+    """What a stage plans: a tree run's ``RunConfig`` or a composition run's ``CompositionConfig``."""
+
+    @property
+    def evaluations(self) -> int: ...
+
+    def to_json(self) -> dict: ...
+
+
+Stage = Callable[[], Sequence[tuple[Planned, str]]]
 """A stage of a study: called when the stages before it have finished, it gives the runs to run (each with
 its directory relative to the study's folder)."""
 

@@ -15,6 +15,9 @@ Three stages, each starting when every run of the one before has finished (``doc
    with each library (``hier-qd8`` ...), MAP-Elites over hierarchical foragers with ``qd8``
    (``foragers-qd``), and the flat baseline (``flat``) over the low-level nodes with the budget that matches
    the hierarchical arms' simulated time with their primitives' (``flat_budget``).
+4. **Heterogeneous swarms** (``arms/swarm-ga/``, ``arms/swarm-qd/``, ``SWARM_ARMS``): compositions of one
+   forager per robot (``evolution.compositions``) drawn from the repertoire of run ``r`` of ``foragers-qd``,
+   evolved by the GA and by MAP-Elites over compositions, ``--evaluations`` each.
 
 Every run is an ordinary run directory, continued from its checkpoint when the same command is started again,
 as in the paper's experiment; the plan (``experiment.json``) names the libraries by path, and the arms'
@@ -33,11 +36,13 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import json
 import shutil
 import statistics as stats
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from bt_controller.draws import RUN_STUDY, derive_seed
 from bt_controller.library import Library, LibraryError, load_library
@@ -45,6 +50,9 @@ from evolution_manager.errors import EvolutionError
 from evolution_manager.evolution.libraries import FAMILIES, build_library, read_run
 from evolution_manager.evolution.run import PROGRESS_HEADER
 from evolution_manager.evolution.run_config import RunConfig
+
+if TYPE_CHECKING:
+    from evolution_manager.evolution.compositions import CompositionConfig
 from evolution_manager.files import CsvLog, read_json, write_atomic, write_json
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from swarm_sim.config import TASKS
@@ -89,15 +97,25 @@ ARMS: tuple[Arm, ...] = (
     Arm("foragers-qd", "qd", "qd8", "MAP-Elites over hierarchical foragers with the qd8 library"),
 )
 
+SWARM_ARMS: tuple[Arm, ...] = (
+    Arm("swarm-ga", "ga", "", "the GA over heterogeneous swarms of foragers-qd's foragers (one per robot)"),
+    Arm("swarm-qd", "qd", "", "MAP-Elites over heterogeneous swarms of foragers-qd's foragers"),
+)
+SWARM_SOURCE = "foragers-qd"
+"""The arm whose run ``r``'s repertoire gives the cells of the heterogeneous arms' run ``r``."""
+
 COMPARISONS: tuple[tuple[str, str], ...] = (
-    *((arm.name, "flat") for arm in ARMS if arm.name != "flat"),
+    *((arm.name, "flat") for arm in (*ARMS, *SWARM_ARMS) if arm.name != "flat"),
+    ("swarm-ga", SWARM_SOURCE),
+    ("swarm-qd", SWARM_SOURCE),
     ("hier-qd8", "hier-gpfnd8"),
     ("hier-qd1", "hier-gpfnd1"),
     ("hier-qd8", "hier-qd1"),
     ("hier-gpfnd8", "hier-gpfnd1"),
 )
-"""The pairs the report tests: every arm against the flat baseline, then the repertoires' source (QD against
-GP_fnd) and size (8 blocks against 1)."""
+"""The pairs the report tests: every arm against the flat baseline, the heterogeneous swarms against the
+homogeneous foragers they are made of, then the repertoires' source (QD against GP_fnd) and size (8 blocks
+against 1)."""
 
 
 def flat_budget(evaluations: int) -> int:
@@ -169,6 +187,18 @@ def plan_study(
         for a, arm in enumerate(ARMS)
         for r in range(runs)
     ]
+    swarms = [
+        {
+            "arm": arm.name,
+            "dir": _run_dir(f"arms/{arm.name}", r),
+            "algorithm": arm.algorithm,
+            "from": _run_dir(f"arms/{SWARM_SOURCE}", r),
+            "evaluations": evaluations,
+            "seed": derive_seed(seed, RUN_STUDY, 3, k, r),
+        }
+        for k, arm in enumerate(SWARM_ARMS)
+        for r in range(runs)
+    ]
     document = {
         "study": "foraging",
         "profile": primitives[0][0].profile,
@@ -183,7 +213,7 @@ def plan_study(
         "libraries": {
             name: {"from": source, "blocks": blocks} for name, (source, blocks) in LIBRARIES.items()
         },
-        "arms": arms,
+        "arms": arms + swarms,
     }
     out = Path(args.out).absolute()
 
@@ -208,9 +238,31 @@ def plan_study(
             )
         return planned
 
+    def compositions() -> list[tuple[CompositionConfig, str]]:
+        from evolution_manager.evolution import compositions as comp
+
+        planned = []
+        for entry in swarms:
+            source = out / str(entry["from"])
+            cells, library = comp.read_sources([source])
+            made = comp.CompositionConfig(
+                str(entry["algorithm"]),
+                int(str(entry["evaluations"])),
+                int(str(entry["seed"])),
+                args.trials,
+                primitives[0][0].profile,
+                -1 if scenario_seed is None else scenario_seed,
+                (str(source),),
+                len(cells),
+                comp.cells_digest(cells),
+                library_digest="" if library is None else library.digest,
+            )
+            planned.append((made, str(entry["dir"])))
+        return planned
+
     budgets = {path: made.evaluations for made, path in primitives}
-    budgets.update({str(entry["dir"]): int(str(entry["evaluations"])) for entry in arms})
-    return document, [lambda: primitives, foragers], budgets
+    budgets.update({str(entry["dir"]): int(str(entry["evaluations"])) for entry in arms + swarms})
+    return document, [lambda: primitives, foragers, compositions], budgets
 
 
 def _library(out: Path, name: str, primitives: Sequence[tuple[RunConfig, str]]) -> Library:
@@ -257,7 +309,9 @@ def load_arm_runs(root: Path) -> tuple[dict, list[ArmRun]]:
         summary = read_json(summary_path)
         if not isinstance(summary, dict) or not summary.get("finished"):
             continue
-        scores = summary["objectives"]["foraging"]
+        # a tree run's scores per objective; a composition run's at the top (foraging only)
+        scores = summary["objectives"]["foraging"] if "objectives" in summary else summary
+        best_tree = scores.get("best_tree") or json.dumps((summary.get("best") or {}).get("trees", []))
         found.append(
             ArmRun(
                 entry["arm"],
@@ -265,7 +319,7 @@ def load_arm_runs(root: Path) -> tuple[dict, list[ArmRun]]:
                 int(entry["seed"]),
                 float(scores["best_fitness"]),
                 None if scores.get("heldout_best_fitness") is None else float(scores["heldout_best_fitness"]),
-                str(scores.get("best_tree", "")),
+                str(best_tree),
                 directory,
             )
         )
@@ -325,7 +379,7 @@ def _arms_table(document: dict, runs: Sequence[ArmRun]) -> str:
         "[IQR] | of ideal (median) |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    what = {arm.name: arm.what for arm in ARMS}
+    what = {arm.name: arm.what for arm in (*ARMS, *SWARM_ARMS)}
     for arm in planned:
         cells = []
         for values in (best.get(arm, []), held.get(arm, [])):
@@ -386,7 +440,10 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
     for arm in dict.fromkeys(run.arm for run in runs):
         top = max((run for run in runs if run.arm == arm), key=lambda run: run.best_fitness)
         simplified = top.directory / "best" / "foraging.txt"
-        text = simplified.read_text().strip() if simplified.exists() else top.best_tree
+        if (top.directory / "best" / "foraging_swarm.json").exists():  # a heterogeneous swarm
+            text = "\n".join(f"robot {i}: {tree}" for i, tree in enumerate(json.loads(top.best_tree)))
+        else:
+            text = simplified.read_text().strip() if simplified.exists() else top.best_tree
         parts.append(
             f"**{arm}**, run {top.index} ({top.best_fitness:.3f} deliveries per robot per trial):\n\n"
             f"```\n{text}\n```\n"
@@ -467,8 +524,9 @@ def build_report(root: Path) -> Path:
                 )
             )
         curves = {}
+        swarms = {arm.name for arm in SWARM_ARMS}  # their progress is a composition run's, not drawn here
         for run in runs:
-            if run.arm not in curves:  # the first finished run of each arm
+            if run.arm not in curves and run.arm not in swarms:  # the first finished run of each arm
                 curves[run.arm] = CsvLog(run.directory / "progress.csv", PROGRESS_HEADER).read()
         shown.append(figures.progress(curves, figure_dir / "progress.png", ["foraging"]))
         parts.append("\n## Figures\n")
