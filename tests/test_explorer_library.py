@@ -206,6 +206,17 @@ def test_a_marked_bin_names_its_primitive_beside_its_trees(runs):
     assert dom.find("table", id="values") and not dom.find("p", id="library-primitive")
 
 
+def test_relative_source_runs_also_resolve_against_the_librarys_folder(runs):
+    run, top = runs["runs"][0], runs["top"]
+    done = command(
+        "explorer", str(run), "--library", str(top / "lib8.json"), "--no-animations", cwd=run / "best"
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    dom = rendered(run / "explorer.html", "objective=food")
+    marked = {a["data-bin"] for a, _ in dom.find("rect", cls="primitive")}
+    assert marked == {bin_text(p) for p in of_run(primitives(runs, 8), run, top)}
+
+
 def test_an_objective_without_primitives_shows_the_blocks_and_says_so(runs):
     dom = library_page(runs, runs["runs"][0], 8, "objective=nest")
     assert dom.find("div", id="heatmaps", data_objective="nest")

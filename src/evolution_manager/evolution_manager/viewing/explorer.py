@@ -280,13 +280,19 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
 
     Each primitive must say where it came from as ``library`` writes it (``source`` with ``run``,
     ``objective``, ``blocks``, ``block``, ``bin``, ``fitness``); a primitive's run is this run when the
-    paths resolve alike (a relative path resolves against the current folder, as the ``library`` command
-    that wrote it did). ExplorerError when a primitive lacks that, when the primitives disagree on the block
+    paths resolve alike (a relative path against the current folder, as the ``library`` command that wrote
+    it resolved it, or against the library file's folder, where such commands are often run).
+    ExplorerError when a primitive lacks that, when the primitives disagree on the block
     count, or when none is of an objective this run shows."""
     from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, variant
 
     here_path = Path(root).resolve()
     label = library.label
+
+    def is_here(run: str) -> bool:
+        bases = [Path.cwd(), Path(label).parent]  # the label of a library read from a file is its path
+        return any((base / run).resolve() == here_path for base in bases)
+
     blocks: set[int] = set()
     by_objective: dict[str, dict[str, list[dict]]] = {}
     for primitive in library.primitives:
@@ -326,7 +332,7 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
             "derated_fitness": source.get("derated_fitness"),
             "run": str(source["run"]),
         }
-        side = "here" if Path(str(source["run"])).resolve() == here_path else "other"
+        side = "here" if is_here(str(source["run"])) else "other"
         grid = by_objective.setdefault(str(objective), {"here": [], "other": []})
         grid[side].append(entry)
     if len(blocks) > 1:
