@@ -140,6 +140,11 @@ def test_each_run_marks_exactly_its_primitives_and_lists_the_others(runs):
             cell = marked[bin_text(p)]
             assert cell["data-primitive"] == p["name"]
             assert "filled" in cell["class"].split()
+            (outline,) = dom.find("rect", cls="primitive-outline", data_primitive=p["name"])
+            assert (float(outline[0]["x"]) - 1.5, float(outline[0]["y"]) - 1.5) == (
+                float(cell["x"]),
+                float(cell["y"]),
+            )
             (badge,) = dom.find("text", cls="primitive-badge", data_primitive=p["name"])
             assert badge[1] == p["name"].removeprefix("gotoFood")  # the block number
             (title,) = [t for a, t in dom.find("title") if p["name"] in t]

@@ -393,8 +393,7 @@ __LIBRARY_SCRIPT__</body>
 LIBRARY_STYLE = """.panel.block-odd { background: #eef3fb; }
 .panel.block-start { border-top: 3px solid #333; }
 .block-line { stroke: #111; stroke-width: 3; pointer-events: none; }
-.cell.primitive { stroke: #f80; stroke-width: 3; }
-.cell.primitive.selected { stroke: #e00; }
+.primitive-outline { fill: none; stroke: #f80; stroke-width: 3; pointer-events: none; }
 .primitive-badge { font-size: 11px; font-weight: bold; fill: #fff; stroke: #000; stroke-width: 0.6;
   pointer-events: none; }
 #library { grid-column: 1 / span 4; font-size: 12px; }
@@ -440,6 +439,9 @@ drawHeatmaps = function () {
       rect.setAttribute("data-primitive", p.name);
       rect.appendChild(el("svg:title", {}, primitiveLabel(p)));
       const x = Number(rect.getAttribute("x")), y = Number(rect.getAttribute("y"));
+      // an outline drawn over the cells (a cell's own stroke hides under its right and lower neighbours)
+      svg.appendChild(el("svg:rect", { x: x + 1.5, y: y + 1.5, width: size - 3, height: size - 3,
+        class: "primitive-outline", "data-primitive": p.name }));
       svg.appendChild(el("svg:text", { x: x + size / 2, y: y + size / 2 + 4, "text-anchor": "middle",
         class: "primitive-badge", "data-primitive": p.name }, String(p.variant)));
     }
