@@ -13,7 +13,11 @@ step, for the best tree of every filled bin of the objectives the run evolved (o
 one of the same evaluation when there is one, else the command that renders it). Poses are packed as bytes
 (``_pack``) so that a 25,000-evaluation run's page stays well under 5 MB.
 
-``ws/run evolution_manager explorer RUN_DIR`` (re)builds it; the run writer builds it for every run.
+``ws/run evolution_manager explorer RUN_DIR`` (re)builds it; the run writer builds it for every run. With
+``--library LIB.json`` the page also shows a library of the ``library`` command on the grids
+(``library_view``: block boundaries, this run's primitives on their bins, other runs' beside the grid),
+through a style and a script that only such a page holds (``explorer_page.LIBRARY_STYLE`` and
+``LIBRARY_SCRIPT``): without it the page is byte for byte what it was before the option existed.
 """
 
 from __future__ import annotations
@@ -27,13 +31,14 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from bt_controller.library import Library, LibraryError, library_from_json
+from bt_controller.library import Library, LibraryError, library_from_json, load_library
 from evolution_manager.errors import ExplorerError
 from evolution_manager.files import write_atomic
-from evolution_manager.viewing.explorer_page import PAGE
+from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
 from evolution_manager.viewing.results import simplified as simplified_text
 
@@ -252,6 +257,149 @@ def _library(root: Path, config: dict) -> Library | None:
         raise ExplorerError(str(error)) from None
 
 
+def _shown_objectives(root: Path) -> list[str]:
+    """The objectives whose grids the page of run directory ``root`` shows (its repertoire files)."""
+    from swarm_sim.world import OBJECTIVES
+
+    return [o for o in OBJECTIVES if (root / f"repertoire_{o}.json").exists()]
+
+
+def load_library_file(path: Path | str) -> Library:
+    """The library in ``path`` (a file of the ``library`` command); ExplorerError naming the file and what
+    is wrong."""
+    try:
+        return load_library(path)
+    except LibraryError as error:
+        raise ExplorerError(f"{error}; expected a library file written by the library command") from None
+
+
+def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dict:
+    """What the page shows of ``library`` on the grids of run directory ``root`` (whose page shows
+    ``objectives``): its block count and, per shown primitive objective, its primitives chosen from this
+    run (``here``: marked on their bins) and from other runs (``other``: listed beside the grid).
+
+    Each primitive must say where it came from as ``library`` writes it (``source`` with ``run``,
+    ``objective``, ``blocks``, ``block``, ``bin``, ``fitness``); a primitive's run is this run when the
+    paths resolve alike (a relative path against the current folder, as the ``library`` command that wrote
+    it resolved it, or against the library file's folder, where such commands are often run).
+    ExplorerError when a primitive lacks that, when the primitives disagree on the block
+    count, or when none is of an objective this run shows."""
+    from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, variant
+
+    here_path = Path(root).resolve()
+    label = library.label
+
+    def is_here(run: str) -> bool:
+        bases = [Path.cwd(), Path(label).parent]  # the label of a library read from a file is its path
+        return any((base / run).resolve() == here_path for base in bases)
+
+    blocks: set[int] = set()
+    by_objective: dict[str, dict[str, list[dict]]] = {}
+    for primitive in library.primitives:
+        source: dict[str, Any] = dict(primitive.source or {})
+        where = f"library {label}: primitive {primitive.name!r}"
+        missing = [k for k in ("run", "objective", "blocks", "block", "bin", "fitness") if k not in source]
+        if missing:
+            raise ExplorerError(
+                f"{where} has no source {', '.join(missing)}: the explorer shows libraries written by the "
+                "library command (each primitive's source names its run, objective, blocks, block and bin)"
+            )
+        objective, count = source["objective"], source["blocks"]
+        if objective not in FAMILIES or not primitive.name.startswith(FAMILIES[str(objective)]):
+            raise ExplorerError(
+                f"{where}: source objective {objective!r} does not match its name (expected "
+                + ", ".join(f"{o} for {f}<k>" for o, f in FAMILIES.items())
+                + ")"
+            )
+        if count not in BLOCKS:
+            raise ExplorerError(
+                f"{where}: source blocks {count!r}; expected one of {', '.join(map(str, BLOCKS))}"
+            )
+        blocks.add(int(count))
+        bins, block = source["bin"], source["block"]
+        if not (_is_index(bins) and _is_index(block)):
+            raise ExplorerError(
+                f"{where}: source bin and block must be 3 bin numbers, got {bins!r}, {block!r}"
+            )
+        if isinstance(source["fitness"], bool) or not isinstance(source["fitness"], (int, float)):
+            raise ExplorerError(f"{where}: source fitness must be a number, got {source['fitness']!r}")
+        entry = {
+            "name": primitive.name,
+            "block": list(block),
+            "variant": variant(block, BLOCKS[int(count)]),
+            "bin": ",".join(str(b) for b in bins),
+            "fitness": source["fitness"],
+            "derated_fitness": source.get("derated_fitness"),
+            "run": str(source["run"]),
+        }
+        side = "here" if is_here(str(source["run"])) else "other"
+        grid = by_objective.setdefault(str(objective), {"here": [], "other": []})
+        grid[side].append(entry)
+    if len(blocks) > 1:
+        raise ExplorerError(
+            f"library {label}: its primitives mix block counts {sorted(blocks)}; expected one"
+        )
+    covered = [o for o in FAMILIES if o in by_objective]
+    if not set(covered) & set(objectives):
+        raise ExplorerError(
+            f"library {label} holds primitives of {', '.join(covered) or 'no objective'}; the run {root} "
+            f"shows {', '.join(objectives) or 'no objective'}: none in common"
+        )
+    count = blocks.pop()
+    rivals = _block_winners(root, BLOCKS[count])
+    for o, grid in by_objective.items():
+        for entry in grid["other"]:
+            entry["here"] = rivals.get(o, {}).get(entry["variant"])
+    return {
+        "file": label,
+        "blocks": count,
+        "bins": BLOCKS[count],
+        "objectives": {
+            o: {"family": FAMILIES[o], **by_objective[o]} for o in objectives if o in by_objective
+        },
+    }
+
+
+def _block_winners(root: Path, bins: int) -> dict[str, dict[int, dict]]:
+    """Per primitive objective and block variant, the tree the ``library`` command would take from the run
+    in ``root`` (``libraries.best_in_run``: its bin, fitness and derated fitness): what lost to another
+    run's; empty for a run the command cannot read (one evolved with a library, say)."""
+    from evolution_manager.evolution.libraries import (
+        LibraryBuildError,
+        best_in_run,
+        block_of,
+        read_run,
+        variant,
+    )
+
+    try:
+        run = read_run(root)
+    except LibraryBuildError:
+        return {}
+    winners: dict[str, dict[int, dict]] = {}
+    for objective, items in run.items.items():
+        grouped: dict[int, list] = {}
+        for item in items:
+            grouped.setdefault(variant(block_of(item.bin, run.shape[objective], bins), bins), []).append(item)
+        for k, members in grouped.items():
+            best = best_in_run(members)
+            if best is not None:
+                winners.setdefault(objective, {})[k] = {
+                    "bin": ",".join(map(str, best.bin)),
+                    "fitness": best.fitness,
+                    "derated_fitness": best.derated,
+                }
+    return winners
+
+
+def _is_index(value: object) -> bool:
+    return (
+        isinstance(value, list)
+        and len(value) == 3
+        and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in value)
+    )
+
+
 def _arena() -> dict:
     from swarm_sim.config import DEFAULT
 
@@ -280,11 +428,26 @@ def _read(path: Path) -> dict:
     return data
 
 
-def write_explorer(root: Path | str, animate: bool = True, progress: Progress = None) -> Path:
-    """Build ``explorer.html`` in the run directory ``root``; return its path."""
+def write_explorer(
+    root: Path | str, animate: bool = True, progress: Progress = None, library: Path | str | None = None
+) -> Path:
+    """Build ``explorer.html`` in the run directory ``root``; return its path. With ``library`` (a file of
+    the ``library`` command) the page also shows that library's primitives on the grids (``library_view``);
+    without it the page is what it always was, byte for byte."""
     root = Path(root)
+    shown = None
+    if library is not None:
+        chosen = load_library_file(library)  # its errors before the animations' minutes
+        if _shown_objectives(root):  # else explorer_data says what the folder lacks
+            shown = library_view(chosen, root, _shown_objectives(root))
     data = explorer_data(root, animate, progress)
-    page = PAGE.replace("__TITLE__", html.escape(f"Repertoire explorer: {data['run']}"))
+    page = PAGE
+    if shown is None:
+        page = page.replace("__LIBRARY_STYLE__", "").replace("__LIBRARY_SCRIPT__", "")
+    else:
+        data["library"] = shown
+        page = page.replace("__LIBRARY_STYLE__", LIBRARY_STYLE).replace("__LIBRARY_SCRIPT__", LIBRARY_SCRIPT)
+    page = page.replace("__TITLE__", html.escape(f"Repertoire explorer: {data['run']}"))
     payload = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     page = page.replace("__DATA__", payload)
     path = root / "explorer.html"
@@ -299,6 +462,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="explorer", description="Build RUN_DIR/explorer.html.")
     parser.add_argument("run", type=Path, help="a run directory (with repertoire_<objective>.json files)")
     parser.add_argument("--no-animations", action="store_true", help="leave the trial animations out")
+    parser.add_argument(
+        "--library", type=Path, metavar="LIB.json",
+        help="also show this library (of the library command) on the grids: its block boundaries, its "
+        "primitives from this run on their bins, those from other runs in a table",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     started = time.monotonic()
 
@@ -307,7 +475,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"\ranimations {done}/{total}", end="", file=sys.stderr, flush=True)
 
     try:
-        path = write_explorer(args.run, not args.no_animations, progress)
+        path = write_explorer(args.run, not args.no_animations, progress, args.library)
     except ExplorerError as error:
         print(f"explorer: error: {error}", file=sys.stderr)
         return 2
@@ -317,4 +485,4 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-__all__ = ["ExplorerError", "explorer_data", "write_explorer"]
+__all__ = ["ExplorerError", "explorer_data", "library_view", "load_library_file", "write_explorer"]

@@ -1,4 +1,6 @@
-"""The explorer page's HTML, CSS and JavaScript (``explorer.write_explorer`` fills in __TITLE__ and __DATA__).
+"""The explorer page's HTML, CSS and JavaScript (``explorer.write_explorer`` fills in __TITLE__ and __DATA__,
+and __LIBRARY_STYLE__ and __LIBRARY_SCRIPT__ with ``LIBRARY_STYLE`` and ``LIBRARY_SCRIPT`` for a page with
+``--library``, with nothing otherwise: they sit where the page had no character, so it stays as it was).
 
 Plain JavaScript, no library: heatmaps and trees are SVG built in the page, the animation is drawn on a
 canvas from the packed poses (layout: ``explorer._pack``). The page reads ``location.hash``
@@ -35,7 +37,7 @@ main { display: flex; flex-wrap: wrap; gap: 16px; padding: 12px 16px; }
 #player { margin-top: 8px; }
 #animation { border: 1px solid #999; }
 .note { color: #666; font-size: 12px; }
-</style>
+__LIBRARY_STYLE__</style>
 </head>
 <body>
 <header>
@@ -384,6 +386,115 @@ function fromHash() {
 window.addEventListener("hashchange", fromHash);
 fromHash();
 </script>
-</body>
+__LIBRARY_SCRIPT__</body>
 </html>
 """
+
+LIBRARY_STYLE = """.panel.block-odd { background: #eef3fb; }
+.panel.block-start { border-top: 3px solid #333; }
+.block-line { stroke: #111; stroke-width: 3; pointer-events: none; }
+.primitive-outline { fill: none; stroke: #f80; stroke-width: 3; pointer-events: none; }
+.primitive-badge { font-size: 11px; font-weight: bold; fill: #fff; stroke: #000; stroke-width: 0.6;
+  pointer-events: none; }
+#library { grid-column: 1 / span 4; font-size: 12px; }
+#library table { border-collapse: collapse; margin: 4px 0; }
+#library td, #library th { border: 1px solid #ccc; padding: 1px 5px; }
+#library-primitive { font-weight: bold; color: #a50; }
+"""
+"""CSS of the library view (only in pages built with ``--library``)."""
+
+LIBRARY_SCRIPT = r"""<script>
+"use strict";
+// The library on the grids (explorer.library_view, DATA.library): thick lines between blocks, panels of one
+// conditionality block tinted alike, this run's primitives outlined on their bins (a badge with the block
+// number, the name in the tooltip and the bin's detail), other runs' primitives of the objective in a table.
+// It wraps the page's drawing functions and draws again.
+const LIBRARY = DATA.library;
+const baseHeatmaps = drawHeatmaps, baseDetail = drawDetail, baseTooltip = tooltip;
+function blockVariant(key, shape) {
+  const n = LIBRARY.bins, b = key.split(",").map((v, d) => Math.floor(Number(v) * n / shape[d]));
+  return b[0] * n * n + b[1] * n + b[2] + 1;  // libraries.variant
+}
+function primitiveAt(key) {
+  const lib = LIBRARY.objectives[state.objective];
+  return lib && key ? lib.here.find(p => p.bin === key) : undefined;
+}
+function primitiveLabel(p) { return `library primitive ${p.name} (block ${p.variant} of ${LIBRARY.blocks})`; }
+drawHeatmaps = function () {
+  baseHeatmaps();
+  const grid = DATA.objectives[state.objective], [nx, ny, nz] = grid.shape, size = 22, n = LIBRARY.bins;
+  const box = document.getElementById("heatmaps");
+  box.setAttribute("data-library-blocks", LIBRARY.blocks);
+  for (const svg of box.querySelectorAll("svg[data-panel]")) {
+    const k = Number(svg.getAttribute("data-panel")), c = Math.floor(k * n / nz), panel = svg.parentNode;
+    panel.classList.add(c % 2 ? "block-odd" : "block-even");
+    panel.setAttribute("data-conditionality-block", c);
+    if (k > 0 && (k * n) % nz === 0) panel.classList.add("block-start");
+    if (n > 1) panel.querySelector("h3").textContent += ` (block ${grid.descriptors[2]} ${c})`;
+    for (const rect of svg.querySelectorAll("rect[data-bin]")) {
+      const key = rect.getAttribute("data-bin"), p = primitiveAt(key);
+      rect.setAttribute("data-block", blockVariant(key, grid.shape));
+      if (!p) continue;
+      rect.classList.add("primitive");
+      rect.setAttribute("data-primitive", p.name);
+      rect.appendChild(el("svg:title", {}, primitiveLabel(p)));
+      const x = Number(rect.getAttribute("x")), y = Number(rect.getAttribute("y"));
+      // an outline drawn over the cells (a cell's own stroke hides under its right and lower neighbours)
+      svg.appendChild(el("svg:rect", { x: x + 1.5, y: y + 1.5, width: size - 3, height: size - 3,
+        class: "primitive-outline", "data-primitive": p.name }));
+      svg.appendChild(el("svg:text", { x: x + size / 2, y: y + size / 2 + 4, "text-anchor": "middle",
+        class: "primitive-badge", "data-primitive": p.name }, String(p.variant)));
+    }
+    for (let i = 1; i < n; i++) {  // block boundaries of movement (across) and rotation (up)
+      const x = 18 + i * nx / n * size, y = (ny - i * ny / n) * size;
+      svg.appendChild(el("svg:line", { x1: x, y1: 0, x2: x, y2: ny * size, class: "block-line", "data-axis": "0" }));
+      svg.appendChild(el("svg:line", { x1: 18, y1: y, x2: 18 + nx * size, y2: y, class: "block-line", "data-axis": "1" }));
+    }
+  }
+  const div = el("div", { id: "library", "data-blocks": LIBRARY.blocks });
+  div.appendChild(el("p", {}, `library ${LIBRARY.file}: ${LIBRARY.blocks} block(s) per grid, ${n} per descriptor ` +
+    "(thick lines divide movement and rotation; tinted and ruled panels, conditionality); orange outline and " +
+    "number: a primitive chosen from this run, and its block"));
+  const lib = LIBRARY.objectives[state.objective];
+  if (!lib) { div.appendChild(el("p", { class: "note" }, `the library has no primitive of ${state.objective}`)); }
+  else {
+    div.appendChild(el("p", { id: "library-here" }, `${lib.family} from this run: ` + (lib.here.length ?
+      lib.here.map(p => `${p.name} (bin ${p.bin})`).join(", ") : "none")));
+    if (lib.other.length) {
+      div.appendChild(el("h4", {}, `${lib.family} chosen from other runs, beside this run's candidate of the ` +
+        "block (its tree of highest derated fitness; runs are compared by raw fitness under the paper profile, " +
+        "derated under clean)"));
+      const table = el("table", { id: "library-others" }), head = el("tr");
+      ["name", "block", "source run", "bin", "fitness", "derated", "this run's bin", "fitness", "derated"]
+        .forEach(h => head.appendChild(el("th", {}, h)));
+      table.appendChild(head);
+      for (const p of lib.other) {
+        const row = el("tr", { class: "library-other", "data-primitive": p.name }), h = p.here;
+        [p.name, `${p.variant} of ${LIBRARY.blocks}`, p.run, p.bin, fmt(p.fitness), fmt(p.derated_fitness),
+          h ? h.bin : "empty", h ? fmt(h.fitness) : "-", h ? fmt(h.derated_fitness) : "-"]
+          .forEach(v => row.appendChild(el("td", {}, String(v))));
+        table.appendChild(row);
+      }
+      div.appendChild(table);
+    }
+  }
+  box.appendChild(div);
+};
+drawDetail = function () {
+  baseDetail();
+  const p = primitiveAt(state.bin);
+  if (!p) return;
+  const box = document.getElementById("detail"), note = el("p", { id: "library-primitive", "data-primitive": p.name },
+    primitiveLabel(p));
+  const title = box.querySelector("h2");
+  if (title) title.after(note); else box.prepend(note);
+};
+tooltip = function (ev, key, items) {
+  baseTooltip(ev, key, items);
+  const p = primitiveAt(key);
+  if (p) document.getElementById("tooltip").textContent += "; " + primitiveLabel(p);
+};
+render();
+</script>
+"""
+"""JavaScript of the library view (only in pages built with ``--library``), run after the page's own."""
