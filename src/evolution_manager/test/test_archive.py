@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import random
 
 import pytest
 
 from evolution_manager.evolution.archive import Repertoire
+from swarm_sim.world import fitness_ceiling
 
 
 def test_a_full_bin_replaces_its_worst_only_with_a_strictly_better_tree():
@@ -132,3 +134,18 @@ def test_a_clean_grid_refuses_a_tree_whose_simplified_form_its_bin_holds():
     paper = Repertoire()
     assert paper.offer("sel(forward, stop)", 0.4, d, 0) and paper.offer("seq(forward, in_nest)", 0.4, d, 1)
     assert [e.tree for e in paper.entries()] == ["sel(forward, stop)", "seq(forward, in_nest)"]
+
+
+def test_a_count_objective_keeps_fitness_above_one_and_a_fraction_refuses_it():
+    # foraging counts deliveries per robot per trial (an ideal robot about 2.6); the pilot study's first
+    # hierarchical forager above 1.0 stopped its run when every grid took fitness to lie in [0, 1]
+    assert fitness_ceiling("foraging") == math.inf and fitness_ceiling("food") == 1.0
+    foraging = Repertoire(fitness_max=fitness_ceiling("foraging"))
+    d = (0.5, 0.5, 0.5)
+    assert foraging.offer("a", 1.0222222222222221, d, 0) and foraging.offer("b", 2.5, d, 1)
+    copy = Repertoire.from_state(foraging.to_state(), None, foraging.fitness_max)
+    assert copy.offer("c", 1.7, d, 2) and [e.value for e in copy.entries()] == [1.0222222222222221, 2.5, 1.7]
+    with pytest.raises(ValueError, match=r"fitness must be a number in \[0, 1\], got 1.5"):
+        Repertoire().offer("a", 1.5, d, 0)
+    with pytest.raises(ValueError, match=r"in \[0, inf\], got -0.5"):
+        foraging.offer("d", -0.5, d, 3)

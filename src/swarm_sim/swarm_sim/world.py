@@ -63,6 +63,16 @@ N_OBJECTIVES = 7
 """How many of the values are objectives (the rest are the three descriptors)."""
 OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:N_OBJECTIVES]
 """The objectives, in fitness order."""
+COUNT_OBJECTIVES: tuple[str, ...] = ("foraging",)
+"""Objectives whose fitness is a count (deliveries per robot per trial: 0 or more, an ideal robot about 2.6);
+every other objective is a fraction in [0, 1]."""
+
+
+def fitness_ceiling(objective: str) -> float:
+    """The largest fitness ``objective`` can take: 1 for a fraction, unbounded for a count."""
+    return math.inf if objective in COUNT_OBJECTIVES else 1.0
+
+
 PAPER_OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
 """The three objectives of the 2023 paper (its GP_fnd evolves them together)."""
 DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[N_OBJECTIVES:]

@@ -36,6 +36,7 @@ from evolution_manager.evolution.deap_trees import (
 )
 from evolution_manager.evolution.operators import best_of, full_tree, tournament, vary
 from evolution_manager.evolution.parameters import DERATINGS, GPParameters, QDParameters
+from swarm_sim.world import fitness_ceiling
 
 FAILED = -1.0
 """The fitness given, on every objective, to a tree whose evaluation failed: below every real fitness."""
@@ -381,7 +382,7 @@ class MapElites(AskTell):
             raise ConfigError(f"the tournament size must be >= 1, got {p.tournament}")
         self.objective = objective
         self.parameters = p
-        self.archive = Repertoire(forms=forms)
+        self.archive = Repertoire(forms=forms, fitness_max=fitness_ceiling(OBJECTIVES[objective]))
         self.batches = 0
 
     def _random_batch(self, size: int) -> list[BehaviourTree]:
@@ -437,4 +438,4 @@ class MapElites(AskTell):
         if int(state["objective"]) != self.objective:
             raise ValueError(f"the state is for objective {state['objective']}, not {self.objective}")
         self.batches = int(state["batches"])
-        self.archive = Repertoire.from_state(state["archive"], self.archive.forms)
+        self.archive = Repertoire.from_state(state["archive"], self.archive.forms, self.archive.fitness_max)

@@ -142,11 +142,12 @@ class Item:
     evaluation: int
 
 
-def _unit(value: float, what: str) -> float:
+def _unit(value: float, what: str, top: float = 1.0) -> float:
+    """``value`` checked to lie in [0, ``top``] (rounding errors of 1e-9 put back inside)."""
     value = float(value)
-    if not (math.isfinite(value) and -1e-9 <= value <= 1.0 + 1e-9):
-        raise ValueError(f"{what} must be a number in [0, 1], got {value!r}")
-    return min(max(value, 0.0), 1.0)
+    if not (math.isfinite(value) and -1e-9 <= value <= top + 1e-9):
+        raise ValueError(f"{what} must be a number in [0, {top:g}], got {value!r}")
+    return min(max(value, 0.0), top)
 
 
 class Repertoire:
@@ -162,14 +163,17 @@ class Repertoire:
         shape: tuple[int, ...] = GRID_SHAPE,
         items_per_bin: int = ITEMS_PER_BIN,
         forms: SimplifiedForms | None = None,
+        fitness_max: float = 1.0,
     ) -> None:
         self.shape = tuple(shape)
         self.items_per_bin = items_per_bin
         self.forms = forms
+        self.fitness_max = fitness_max
+        """The largest fitness offered (``swarm_sim.world.fitness_ceiling``: 1, or unbounded for a count)."""
         self.grid = _Grid(
             shape=self.shape,
             max_items_per_bin=items_per_bin,
-            fitness_domain=((0.0, 1.0),),
+            fitness_domain=((0.0, fitness_max),),
             features_domain=((0.0, 1.0),) * len(self.shape),
             fitness_weights=WEIGHTS,
         )
@@ -185,7 +189,7 @@ class Repertoire:
         genome: object = None,
     ) -> bool:
         """Offer one evaluated tree; return whether the grid kept it."""
-        fitness = _unit(fitness, "fitness")
+        fitness = _unit(fitness, "fitness", self.fitness_max)
         descriptors = tuple(_unit(d, "a descriptor") for d in descriptors)
         if len(descriptors) != len(self.shape):
             raise ValueError(f"expected {len(self.shape)} descriptors, got {len(descriptors)}")
@@ -310,10 +314,13 @@ class Repertoire:
         }
 
     @classmethod
-    def from_state(cls, state: dict, forms: SimplifiedForms | None = None) -> Repertoire:
-        """Rebuild a repertoire written by :meth:`to_state` (every bin's items in their order); ``forms`` as
-        the repertoire that wrote it had (the state does not record it: the run's profile does)."""
-        repertoire = cls(tuple(state["shape"]), int(state["items_per_bin"]), forms)
+    def from_state(
+        cls, state: dict, forms: SimplifiedForms | None = None, fitness_max: float = 1.0
+    ) -> Repertoire:
+        """Rebuild a repertoire written by :meth:`to_state` (every bin's items in their order); ``forms`` and
+        ``fitness_max`` as the repertoire that wrote it had (the state records neither: the run's profile
+        and objective do)."""
+        repertoire = cls(tuple(state["shape"]), int(state["items_per_bin"]), forms, fitness_max)
         for record in state["bins"]:
             for item in record["items"]:
                 entry = Entry(

@@ -61,6 +61,7 @@ from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
 from evolution_manager.processes import Lock, exclusive_lock, is_locked
+from swarm_sim.world import fitness_ceiling
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates, not to read a run
     from swarm_sim.evaluation import EvaluationRequest, Evaluator
@@ -190,12 +191,16 @@ class Run:
         self.grid_forms = self.forms if config.refuses_clones else None
         """What the grids refuse clones by: the simplified forms under ``clean``, nothing under ``paper``."""
         self.algorithm: AskTell = config.make_algorithm(library, self.forms)
-        self.passive = {objective: Repertoire(forms=self.grid_forms) for objective in config.grids}
+        self.passive = {
+            objective: Repertoire(forms=self.grid_forms, fitness_max=fitness_ceiling(objective))
+            for objective in config.grids
+        }
         self.generations: dict[str, Repertoire] = {}
         """GP only: per evolved objective, the grid of one tree per bin of generations 1 onwards."""
         if isinstance(self.algorithm, GeneticProgramming):
             self.generations = {
-                o: Repertoire(items_per_bin=1, forms=self.grid_forms) for o in config.objectives
+                o: Repertoire(items_per_bin=1, forms=self.grid_forms, fitness_max=fitness_ceiling(o))
+                for o in config.objectives
             }
         self.known: dict[str, Outcome] = {}
         """Every tree text simulated in this run with its outcome (answers repeats under ``fixed``)."""
@@ -315,7 +320,8 @@ class Run:
                 )
             run.algorithm.restore(state["algorithm"])
             run.passive = {
-                o: Repertoire.from_state(state["passive"][o], run.grid_forms) for o in config.grids
+                o: Repertoire.from_state(state["passive"][o], run.grid_forms, fitness_ceiling(o))
+                for o in config.grids
             }
             run.evaluations = integer(state["evaluations"], "evaluations", 0)
             logs = {"evaluations": directory.evaluations, "progress": directory.progress}
@@ -326,7 +332,9 @@ class Run:
                 run.offsets[name] = offset
             run.timing = Timing(**state["timing"])
             for objective, grid in state.get("generations", {}).items():
-                run.generations[objective] = Repertoire.from_state(grid, run.grid_forms)
+                run.generations[objective] = Repertoire.from_state(
+                    grid, run.grid_forms, fitness_ceiling(objective)
+                )
             archive = run.archive()
             grids = [*run.passive.values(), *([archive] if archive is not None else [])]
             for grid in grids:
