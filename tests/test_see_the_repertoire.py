@@ -5,13 +5,13 @@ and animation, and exactly the filled bins of the run's repertoire files."""
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
 import pytest
+from headless import dump_dom
 from PIL import Image
 
 from bt_controller import timeline
@@ -94,16 +94,8 @@ class _Elements(HTMLParser):
 
 
 def rendered(page: Path, fragment: str) -> _Elements:
-    chromium = shutil.which("chromium")
-    assert chromium, "chromium is not installed: ws/setup installs it (apt-get install chromium)"
-    done = subprocess.run(
-        [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=4000", "--dump-dom",
-         f"{page.resolve().as_uri()}#{fragment}"],
-        capture_output=True, text=True, timeout=180,
-    )  # fmt: skip
-    assert done.returncode == 0 and "<body" in done.stdout, done.stderr[-2000:]
     parser = _Elements()
-    parser.feed(done.stdout)
+    parser.feed(dump_dom(page, fragment))
     return parser
 
 
