@@ -13,6 +13,7 @@ import pytest
 from PIL import Image
 
 from bt_controller import timeline
+from bt_controller.library import load_library
 from evolution_manager.errors import AnimationError
 from evolution_manager.viewing.animate import (
     ARENA_PX,
@@ -26,6 +27,7 @@ from evolution_manager.viewing.animate import (
 from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.swarm_layout import load_layout
 from swarm_sim.world import OBJECTIVES
 
 TREE = "sel(seq(on_food, stop), prob(forward, forward_left), reverse_right)"
@@ -93,6 +95,10 @@ def test_mp4_needs_ffmpeg(frames, tmp_path):
         (["--tree", "forward", "--seed", "1", "--out", "x.png"], ".gif or .mp4"),
         (["--bag", "no_such_bag", "--out", "x.gif"], "no bag at"),
         (["--bag", "b", "--seed", "3", "--out", "x.gif"], "go with --tree"),
+        (["--bag", "b", "--task", "foraging", "--out", "x.gif"], "go with --tree"),
+        (["--tree", "forward", "--seed", "1", "--task", "mowing", "--out", "x.gif"], "--task must be one of"),
+        (["--tree", "wander1", "--seed", "1", "--out", "x.gif"], "unknown node 'wander1'"),
+        (["--tree", "forward", "--seed", "1", "--library", "none.json", "--out", "x.gif"], "--library"),
     ],
 )
 def test_bad_input_is_one_line(args, message, capsys, tmp_path, monkeypatch):
@@ -152,3 +158,21 @@ def test_a_heterogeneous_swarm_is_animated_with_each_robots_tree_named(frames, t
     assert Image.open(tmp_path / "s.gif").n_frames == len(mixed.steps)
     swarm.write_text(json.dumps({"trees": list(MIXED[:3])}))
     assert main(["--swarm", str(swarm), "--seed", "1", "--out", str(tmp_path / "t.gif")]) == 2
+
+
+def test_a_foraging_trial_of_named_primitives_is_animated_at_its_length_with_the_names(tmp_path):
+    library = tmp_path / "lib.json"
+    library.write_text(
+        json.dumps({"format": 1, "primitives": [{"name": "wander1", "tree": "prob(forward, stop)"}]})
+    )
+    swarm = tmp_path / "swarm.json"
+    swarm.write_text(json.dumps({"trees": ["sel(got_food, wander1)"] * 8 + ["forward"]}))
+    out = tmp_path / "f.gif"
+    args = ["--swarm", str(swarm), "--library", str(library), "--seed", "3", "--out", str(out)]
+    assert main([*args, "--task", "foraging"]) == 0
+    with Image.open(out) as image:
+        assert image.n_frames == 800  # 100 s of 8 Hz sensing steps
+    frames = frames_from_tree(
+        load_layout(swarm, 9, load_library(library)), 3, 0, replace(DEFAULT, ticks=200), load_library(library)
+    )
+    assert frames.trees[0] == "sel(got_food, wander1)" and len(frames.steps) == 800

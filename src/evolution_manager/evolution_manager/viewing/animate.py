@@ -29,6 +29,7 @@ from evolution_manager.errors import AnimationError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 
 if TYPE_CHECKING:
+    from bt_controller.library import Library
     from swarm_sim.config import Config
     from swarm_sim.swarm_layout import SwarmLayout
 
@@ -226,11 +227,15 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16) -> Path
 # ---------------------------------------------------------------------------------------------- command
 
 
-def _config_for(profile: str | None) -> Config:
-    """The model configuration of ``profile`` (None: the default)."""
+def _config_for(profile: str | None, task: str | None = None) -> Config:
+    """The model configuration of ``profile`` (None: the default) and ``task`` (None: the default)."""
 
-    from swarm_sim.config import DEFAULT, Config
+    from swarm_sim.config import DEFAULT, TASKS, Config, task_ticks
 
+    if task is not None:
+        if task not in TASKS:
+            raise AnimationError(f"--task must be one of {', '.join(TASKS)}, got {task!r}")
+        return dataclasses.replace(_config_for(profile), ticks=task_ticks(task))
     if profile is None:
         return DEFAULT
     if not any(f.name == "profile" for f in dataclasses.fields(Config)):
@@ -264,21 +269,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, help="seed of the trial (with --tree or --swarm)")
     parser.add_argument("--trial", type=int, default=0, help="trial index (with --tree; default 0)")
     parser.add_argument("--profile", help="model profile (with --tree; default: the model's default)")
+    parser.add_argument(
+        "--task", help="with --tree or --swarm: the trial length, primitives (default) or foraging"
+    )
+    parser.add_argument(
+        "--library", type=Path, help="with --tree or --swarm: a primitive library whose names the trees use"
+    )
     parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4")
     parser.add_argument("--fps", type=int, default=16, help="frames per second (default 16: 2x real time)")
     args = parser.parse_args(argv)
     try:
         started = time.monotonic()
         if args.bag is not None:
-            if args.seed is not None or args.profile is not None or args.trial != 0:
-                raise AnimationError("--seed, --trial and --profile go with --tree; a bag holds its own")
+            if any(v is not None for v in (args.seed, args.profile, args.task, args.library)) or args.trial:
+                raise AnimationError(
+                    "--seed, --trial, --profile, --task and --library go with --tree or --swarm; a bag holds "
+                    "its own"
+                )
             frames = frames_from_bag(args.bag)
         else:
             if args.seed is None:
                 raise AnimationError(f"{'--tree' if args.tree is not None else '--swarm'} needs --seed S")
-            config = _config_for(args.profile)
-            tree = _tree_text(args.tree) if args.tree is not None else _swarm(args.swarm, config)
-            frames = frames_from_tree(tree, args.seed, args.trial, config)
+            config = _config_for(args.profile, args.task)
+            library = _library(args.library)
+            tree = (
+                _tree_text(args.tree, library)
+                if args.tree is not None
+                else _swarm(args.swarm, config, library)
+            )
+            frames = frames_from_tree(tree, args.seed, args.trial, config, library)
         write_animation(frames, args.out, args.fps)
     except AnimationError as error:
         print(f"animate: error: {error}", file=sys.stderr)
@@ -291,22 +310,34 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
-def _swarm(path: Path, config: Config) -> SwarmLayout:
+def _library(path: Path | None) -> Library | None:
+    from bt_controller.library import LibraryError, load_library
+
+    if path is None:
+        return None
+    try:
+        return load_library(path)
+    except LibraryError as error:
+        raise AnimationError(f"--library: {error}") from None
+
+
+def _swarm(path: Path, config: Config, library: Library | None = None) -> SwarmLayout:
     from swarm_sim.swarm_layout import LayoutError, load_layout
 
     try:
-        return load_layout(path, config.n_robots)
+        return load_layout(path, config.n_robots, library)
     except LayoutError as error:
         raise AnimationError(f"--swarm: {error}") from None
 
 
-def _tree_text(source: str) -> str:
+def _tree_text(source: str, library: Library | None = None) -> str:
     from bt_controller.errors import TreeError
     from bt_controller.tree import parse, to_text
 
     path = Path(source)
     text = path.read_text(encoding="utf-8") if "(" not in source and path.is_file() else source
     try:
-        return to_text(parse(text))
+        parsed = parse(text, library=library)
+        return to_text(parsed) if library is None else library.fold(parsed)
     except TreeError as error:
         raise AnimationError(f"--tree: {error}") from None
