@@ -63,7 +63,12 @@ def test_a_study_builds_libraries_from_its_primitive_runs_and_runs_every_arm_wit
             assert family in FAMILIES.values()
             assert 1 <= int(primitive.name[len(family) :]) <= blocks
             assert primitive.source is not None
-            origin = Path(str(primitive.source["run"])).relative_to(study / "primitives")
+            # the source run, relative to the library's folder
+            origin = (
+                (study / "libraries" / str(primitive.source["run"]))
+                .resolve()
+                .relative_to((study / "primitives").resolve())
+            )
             assert origin.parts[0] == (
                 "GP_fnd" if source == "gp-fnd" else f"QD_{primitive.source['objective']}"
             )

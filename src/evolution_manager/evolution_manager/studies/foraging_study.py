@@ -37,15 +37,16 @@ import argparse
 import csv
 import io
 import json
+import os
 import shutil
 import statistics as stats
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_controller.draws import RUN_STUDY, derive_seed
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.library import LIBRARY_FORMAT, Library, LibraryError, library_from_json, load_library
 from evolution_manager.errors import EvolutionError
 from evolution_manager.evolution.libraries import FAMILIES, build_library, read_run
 from evolution_manager.evolution.run import PROGRESS_HEADER
@@ -276,10 +277,25 @@ def _library(out: Path, name: str, primitives: Sequence[tuple[RunConfig, str]]) 
             raise EvolutionError(f"{error}; remove it to build it again from the primitive runs") from None
     source, blocks = LIBRARIES[name]
     runs = [read_run(out / rel) for made, rel in primitives if made.algorithm == source]
-    library = build_library(runs, blocks, str(path))
+    built = build_library(runs, blocks, str(path))
+    entries = [  # each source run relative to the library's folder, so that the study folder can move
+        {
+            "name": p.name,
+            "tree": p.text,
+            "source": {**(p.source or {}), "run": _relative(p.source, path.parent)},
+        }
+        for p in built.primitives
+    ]
+    document = {"format": LIBRARY_FORMAT, "primitives": entries}
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_json(path, library.as_json())
-    return library
+    write_json(path, document)
+    return library_from_json(document, str(path))
+
+
+def _relative(source: Mapping[str, object] | None, folder: Path) -> str:
+    """The source's run directory relative to ``folder``."""
+    assert source is not None  # build_library gives every primitive its source
+    return os.path.relpath(str(source["run"]), folder)
 
 
 @dataclass(frozen=True)
