@@ -114,6 +114,7 @@ def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: 
         assert (study / "figures" / f"best_{arm.name}.png").exists()
     assert "robot 8: " in text  # the best heterogeneous swarm, a tree per robot
     assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
+    assert "A heterogeneous swarm at least as good as the homogeneous foragers" in text
     assert "--study foraging" in text  # the reproduce command
     before = text
     assert report([str(study)]) == 0  # the report command rebuilds the same report

@@ -433,6 +433,16 @@ def _conclusions(runs: Sequence[ArmRun], rows: Sequence[Comparison]) -> list[str
             f"- The goal of a median forager at >= 1.0 deliveries per robot per trial: "
             f"**{'met' if median >= 1.0 else 'not met'}** ({top}: {median:.3f})."
         )
+    swarms = [arm.name for arm in SWARM_ARMS if best.get(arm.name)]
+    if swarms and best.get(SWARM_SOURCE):
+        top = max(swarms, key=lambda arm: stats.median(best[arm]))
+        median, homogeneous = stats.median(best[top]), stats.median(best[SWARM_SOURCE])
+        lines.append(
+            f"- A heterogeneous swarm at least as good as the homogeneous foragers it is made of: "
+            f"**{'yes' if median >= homogeneous else 'no'}** in the median ({top} {median:.3f} against "
+            f"{SWARM_SOURCE} {homogeneous:.3f}; nine copies of a run's best cell score exactly its best "
+            "homogeneous forager, so a lower value means the search did not find it)."
+        )
     for first, second, claim in (
         ("hier-qd8", "hier-gpfnd8", "QD repertoires give better foragers than GP_fnd ones (8 blocks)"),
         ("hier-qd8", "hier-qd1", "more primitives per family (8 blocks against 1) give better foragers"),

@@ -137,7 +137,10 @@ def progress(
 def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, path: Path) -> Path:
     """Box plots of one metric (figs. 4-6): one panel per objective, one box per algorithm.
     ``samples[objective][algorithm label]`` is the metric over runs."""
-    figure, axes = plt.subplots(1, len(samples), figsize=(4.2 * len(samples), 3.8), squeeze=False)
+    most = max(len(by_label) for by_label in samples.values())
+    wide = most > 4  # many boxes (the foraging study's arms): a wider panel, labels slanted
+    width = max(4.2, 0.8 * most) if wide else 4.2
+    figure, axes = plt.subplots(1, len(samples), figsize=(width * len(samples), 3.8), squeeze=False)
     for axis, (objective, by_label) in zip(axes[0], samples.items(), strict=True):
         labels = list(by_label)
         axis.boxplot([list(by_label[label]) for label in labels], tick_labels=labels)
@@ -145,6 +148,10 @@ def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, pat
         axis.set_ylabel(metric)
         axis.grid(alpha=0.3, axis="y")
         axis.tick_params(labelsize=8)
+        if wide:
+            for label in axis.get_xticklabels():
+                label.set_rotation(30)
+                label.set_horizontalalignment("right")
     figure.tight_layout()
     return _save(figure, path)
 
