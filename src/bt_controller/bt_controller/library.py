@@ -178,6 +178,17 @@ def library_from_json(document: object, label: str) -> Library:
     return Library(label, tuple(primitives))
 
 
+def library_option(path: str | Path | None, error: type[Exception]) -> Library | None:
+    """The library of a command's ``--library`` option (None without one); ``error`` (the command's own
+    usage error) with the library's one line when it cannot be used."""
+    if path is None:
+        return None
+    try:
+        return load_library(path)
+    except LibraryError as problem:
+        raise error(f"--library: {problem}") from None
+
+
 def load_library(path: str | Path) -> Library:
     """The library in the JSON file ``path``; LibraryError naming the file and the problem."""
     path = Path(path)

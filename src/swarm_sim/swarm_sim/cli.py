@@ -25,7 +25,8 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.library import Library
+from bt_controller.library import library_option as load_library_option
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node, to_text
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
@@ -95,12 +96,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def library_option(path: str | None) -> Library | None:
     """The library of a ``--library`` option (None without one); UsageError with the library's one line."""
-    if path is None:
-        return None
-    try:
-        return load_library(path)
-    except LibraryError as error:
-        raise UsageError(f"--library: {error}") from None
+    return load_library_option(path, UsageError)
 
 
 def evaluation_json(

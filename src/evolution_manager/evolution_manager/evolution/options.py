@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.library import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.parameters import NODE_SETS
@@ -70,13 +70,7 @@ def add_task_options(parser: argparse.ArgumentParser) -> None:
 
 def library_from_args(args: argparse.Namespace) -> Library | None:
     """The library of ``--library`` (None without one); UsageError with its one line."""
-    path = getattr(args, "library", None)
-    if path is None:
-        return None
-    try:
-        return load_library(path)
-    except LibraryError as error:
-        raise UsageError(f"--library: {error}") from None
+    return library_option(getattr(args, "library", None), UsageError)
 
 
 def config_from_args(args: argparse.Namespace) -> RunConfig:

@@ -311,14 +311,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _library(path: Path | None) -> Library | None:
-    from bt_controller.library import LibraryError, load_library
+    from bt_controller.library import library_option
 
-    if path is None:
-        return None
-    try:
-        return load_library(path)
-    except LibraryError as error:
-        raise AnimationError(f"--library: {error}") from None
+    return library_option(path, AnimationError)
 
 
 def _swarm(path: Path, config: Config, library: Library | None = None) -> SwarmLayout:
