@@ -140,8 +140,15 @@ def test_the_service_evaluator_finds_evaluators_started_later_and_answers_as_in_
             while len(services.discover()) < 2 and time.monotonic() < deadline:  # the run goes on meanwhile
                 assert services.evaluate(requests[:3]) == expected[:3]
             before = services.dispatcher.answered_chunks("/evaluator_2/evaluate")
-            assert services.evaluate(requests) == expected
-            assert services.dispatcher.answered_chunks("/evaluator_2/evaluate") > before
+            # the newcomer shares the work: on a loaded machine its first goals may come too late for a
+            # round, which the first evaluator then answers alone (the same results either way)
+            deadline = time.monotonic() + 120
+            while True:
+                assert services.evaluate(requests) == expected
+                shared = services.dispatcher.answered_chunks("/evaluator_2/evaluate") > before
+                if shared or time.monotonic() > deadline:
+                    break
+            assert shared, "the evaluator started later never answered a chunk"
             graph.check()
         finally:
             executor.shutdown()

@@ -125,7 +125,7 @@ def test_a_late_joiner_gets_the_latched_arena_and_trial_start(graph):
 # --- actions ------------------------------------------------------------------------------------------------
 def test_run_trial_reports_steps_and_a_cancel_leaves_the_graph_ready(graph):
     runner = graph.runner
-    runner.load_tree(TREE)
+    runner.load_trees([TREE] * len(runner.load_clients))
     handle = runner.send_trial(5, 0)
     runner.spin_until(lambda: len(runner.feedback) >= 20, "20 steps of feedback")
     future = handle.cancel_goal_async()
