@@ -21,12 +21,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from evolution_manager.arguments import EXIT_USAGE, Parser
+from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import PROGRESS_HEADER
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE
 from evolution_manager.files import CsvLog, number, read_json, read_json_object, write_atomic
+from evolution_manager.studies import argos_transfer
+from evolution_manager.studies.argos_transfer import measure as argos_measure
 from evolution_manager.studies.significance import ALPHA, Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
 from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
@@ -371,14 +373,27 @@ def _sizes_table(first: dict, runs: Sequence[FinishedRun]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def build_report(root: Path, beside: Path | None = None, beside_title: str = "") -> Path:
+def build_report(
+    root: Path,
+    beside: Path | None = None,
+    beside_title: str = "",
+    argos_eval: str | None = None,
+    argos_seeds: Sequence[int] | None = None,
+    argos_jobs: int = 1,
+) -> Path:
     """Write ``report.md``, ``runs.csv`` and the figures for the experiment in ``root``; return the
     report's path. ``beside``: another experiment's ``runs.csv`` whose table 6 is shown after this one's
-    (e.g. the per-run design's, as a robustness check), under ``beside_title``."""
+    (e.g. the per-run design's, as a robustness check), under ``beside_title``. ``argos_eval``: the ARGoS
+    harness's driver, to score in ARGoS the best trees not yet in ``argos_raw.tsv``; with that file the
+    report has a transfer section (``studies.argos_transfer``)."""
     root = Path(root)
     runs = load_runs(root)
     if not runs:
         raise EvolutionError(f"{root} has no finished runs (runs/<label>/run<r>/summary.json)")
+    seeds = list(argos_seeds) if argos_seeds else argos_transfer.parse_seeds(argos_transfer.DEFAULT_SEEDS)
+    best = argos_transfer.best_trees(runs)
+    if argos_eval is not None:
+        argos_measure(root, best, argos_eval, seeds, argos_jobs)
     folder = root / "figures"
     parts = _header(root, runs)
     write_runs_csv(root, runs)
@@ -469,6 +484,10 @@ def build_report(root: Path, beside: Path | None = None, beside_title: str = "")
             f"### Progress, {objective} (run 0 of each; circles: held-out scores at the end)\n\n"
             f"![progress](figures/{path.name})\n"
         )
+    if (root / argos_transfer.RAW_FILE).exists():
+        transferred, missing = argos_transfer.transferred(root, best, seeds)
+        argos_transfer.write_csv(root, transferred)
+        parts.append(argos_transfer.section(transferred, missing, seeds, folder))
     report = root / "report.md"
     write_atomic(report, "\n".join(parts))
     return report
@@ -501,6 +520,16 @@ def report(argv: Sequence[str] | None = None) -> int:
         help="another experiment's runs.csv: its table 6 is shown after this one's (a robustness check)",
     )
     parser.add_argument("--beside-title", default="", help="what the --beside runs are (for the report)")
+    parser.add_argument(
+        "--argos-eval",
+        metavar="DRIVER",
+        help="the ARGoS harness's argos_eval.py ($ARGOS_EVAL): score each run's best tree in the authors' "
+        "ARGoS (rows kept in argos_raw.tsv, run only when missing); the report's transfer section",
+    )
+    parser.add_argument(
+        "--argos-seeds", default=argos_transfer.DEFAULT_SEEDS, help="ARGoS's seeds: N, A-B or a list (1-20)"
+    )
+    parser.add_argument("--argos-jobs", type=positive_int, default=1, help="ARGoS evaluations at once (1)")
     try:
         args = parser.parse_args(argv)
     except UsageError as error:
@@ -510,12 +539,21 @@ def report(argv: Sequence[str] | None = None) -> int:
         if _study(args.dir) == "foraging":
             from evolution_manager.studies.foraging_study import build_report as build_foraging_report
 
-            if args.beside is not None:
-                raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
+            if args.beside is not None or args.argos_eval is not None:
+                raise UsageError(
+                    "--beside and --argos-eval apply to the paper's experiment, not to a foraging study"
+                )
             print(build_foraging_report(args.dir))
         elif (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
-            print(build_report(args.dir, args.beside, args.beside_title))
+            seeds = argos_transfer.parse_seeds(args.argos_seeds)
+            print(
+                build_report(
+                    args.dir, args.beside, args.beside_title, args.argos_eval, seeds, args.argos_jobs
+                )
+            )
         elif (args.dir / "config.json").exists():
+            if args.beside is not None or args.argos_eval is not None:
+                raise UsageError("--beside and --argos-eval apply to an experiment folder, not to a run")
             for path in rebuild_run(args.dir):
                 print(path)
         else:

@@ -156,4 +156,33 @@ def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, pat
     return _save(figure, path)
 
 
-__all__ = ["OBJECTIVES", "boxes", "heatmaps", "histograms", "progress"]
+def transfer_scatter(points: Mapping[str, Mapping[str, Sequence[tuple[float, float]]]], path: Path) -> Path:
+    """One panel per objective: each run's best tree as (our held-out score, ARGoS's score), one marker per
+    algorithm, and the diagonal where both simulators agree. ``points[objective][algorithm label]``."""
+    markers = ("o", "s", "^", "D", "v")
+    figure, axes = plt.subplots(1, len(points), figsize=(4.2 * len(points), 4.0), squeeze=False)
+    for axis, (objective, by_label) in zip(axes[0], points.items(), strict=True):
+        values = [v for pairs in by_label.values() for pair in pairs for v in pair]
+        low = min(values, default=0.0)
+        high = max(values, default=1.0)
+        pad = 0.05 * (high - low or 1.0)
+        low, high = low - pad, high + pad
+        axis.plot([low, high], [low, high], color="0.6", linewidth=1, zorder=0)
+        for marker, (label, pairs) in zip(markers, by_label.items(), strict=False):
+            if pairs:
+                axis.scatter(
+                    [p[0] for p in pairs], [p[1] for p in pairs], label=label, marker=marker, s=22, alpha=0.8
+                )
+        axis.set_xlim(low, high)
+        axis.set_ylim(low, high)
+        axis.set_aspect("equal")
+        axis.set_title(objective)
+        axis.set_xlabel("held-out here")
+        axis.set_ylabel("ARGoS")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=8, loc="upper left")
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+__all__ = ["OBJECTIVES", "boxes", "heatmaps", "histograms", "progress", "transfer_scatter"]
