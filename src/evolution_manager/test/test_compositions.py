@@ -21,12 +21,13 @@ from evolution_manager.evolution.compositions import (
     bin_of,
     evaluate_genomes,
     mutate,
-    read_cells,
+    read_sources,
     two_point_crossover,
     vary,
 )
 from evolution_manager.evolution.parameters import GPParameters
 from evolution_manager.studies.evolve import evolve
+from evolution_manager.studies.experiment import produced_so_far
 from swarm_sim.cli import evaluate_main
 from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
@@ -67,7 +68,7 @@ def _compose(source, out, algorithm, *extra):
 
 # Cells and genome operators --------------------------------------------------------------------------------
 def test_cells_are_every_filled_bins_best_tree_in_a_fixed_order(source):
-    cells = read_cells([source])
+    cells = read_sources([source])[0]
     expected = []
     for objective in OBJECTIVES:  # objectives in OBJECTIVES order, bins in index order
         path = source / f"repertoire_{objective}.json"
@@ -82,7 +83,7 @@ def test_cells_are_every_filled_bins_best_tree_in_a_fixed_order(source):
     assert [(c.objective, c.bin, c.fitness, c.tree) for c in cells] == expected
     assert {c.objective for c in cells} == {"density", "nest", "food"}
     # two directories: the first's cells, then the second's
-    assert read_cells([source, source]) == cells + cells
+    assert read_sources([source, source])[0] == cells + cells
 
 
 def test_two_point_crossover_keeps_every_cell_at_its_position():
@@ -135,7 +136,7 @@ def test_the_ga_takes_the_2023_gps_parameters():
 
 
 def test_nine_copies_of_one_cell_score_exactly_the_homogeneous_tree(source):
-    cells = read_cells([source])
+    cells = read_sources([source])[0]
     evaluator = BatchEvaluator(default_config("paper", "foraging"))
     k = OBJECTIVES.index("foraging")
     picked = [0, len(cells) // 2, len(cells) - 1]
@@ -167,7 +168,7 @@ def test_same_seed_same_files_and_the_best_swarm_loads(source, tmp_path, capsys,
     assert len(rows) == initial + 30 and all(int(r["seed"]) == config["scenario_seed"] for r in rows)
     assert summary["best_fitness"] == max(float(r["foraging"]) for r in rows)
     # the best composition: its layout file, its nine trees and the cells it names
-    cells = read_cells([source])
+    cells = read_sources([source])[0]
     best = summary["best"]
     layout = load_layout(tmp_path / "a" / "best" / "foraging_swarm.json", 9)
     assert list(layout.trees) == best["trees"] == [cells[k].tree for k in best["genome"]]
@@ -194,11 +195,12 @@ def test_same_seed_same_files_and_the_best_swarm_loads(source, tmp_path, capsys,
 @pytest.mark.parametrize("algorithm", ["ga", "qd"])
 def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
     assert _compose(source, tmp_path / "straight", algorithm, "--evaluations", "120", "--seed", "5") == 0
-    cells = read_cells([source])
+    cells = read_sources([source])[0]
     straight = json.loads((tmp_path / "straight" / "config.json").read_text())
     config = CompositionConfig.from_json(straight)
     evaluator = BatchEvaluator(config.world())
     stopped = CompositionRun.start(config, cells, tmp_path / "stopped", evaluator)
+    progress: list[int] = []
     for stop in (30, 130, 180):
         stopped.execute(checkpoint_interval=1e9, stop_after=stop)
         # rows written after the last checkpoint (a crash before the next one)
@@ -206,6 +208,10 @@ def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
             log.write("999,1,garbage\n")
         stopped.lock.release()
         stopped = CompositionRun.resume(tmp_path / "stopped", evaluator)
+        # the experiment's progress bar reads a composition's checkpoint too
+        progress.append(produced_so_far(tmp_path / "stopped", 120))
+        assert progress[-1] == min(120, stopped.produced)
+    assert progress[-1] > 0
     stopped.execute(checkpoint_interval=0)
     stopped.write_results()
     files = _files(tmp_path / "straight")

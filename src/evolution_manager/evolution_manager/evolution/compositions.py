@@ -2,7 +2,7 @@
 
 ``evolve --task foraging --swarm-from RUN_DIR [RUN_DIR ...] --algorithm ga|qd`` (``docs/algorithms.md``,
 "Heterogeneous compositions"). The *cells* are the best tree of every filled bin of every repertoire file
-found in the given run directories, listed in a fixed order (:func:`read_cells`): directory by directory
+found in the given run directories, listed in a fixed order (:func:`read_sources`): directory by directory
 as given, then the objectives in ``OBJECTIVES`` order (``repertoire_<objective>.json``), then the bins
 in index order. A *genome* is one cell index per robot (robot 0 first); it is evaluated as a heterogeneous
 swarm (``swarm_sim.swarm_layout``) on the foraging task, every evaluation on the run's scenario seed.
@@ -148,11 +148,6 @@ class Cell:
             float(data["fitness"]),
             str(data["tree"]),
         )
-
-
-def read_cells(run_dirs: Sequence[Path]) -> list[Cell]:
-    """The cells of the repertoires in ``run_dirs`` (:func:`read_sources`)."""
-    return read_sources(run_dirs)[0]
 
 
 def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:

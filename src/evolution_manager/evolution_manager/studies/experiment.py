@@ -127,8 +127,10 @@ def produced_so_far(root: Path, budget: int) -> int:
         return 0
     try:
         state = read_json_object(checkpoint)
-        return min(budget, int(state["algorithm"].get("produced", 0)))
-    except (EvolutionError, KeyError, TypeError, ValueError):
+        # a tree run keeps its count in its algorithm's state, a composition run at the top
+        holder = state.get("algorithm", state)
+        return min(budget, int(holder.get("produced", 0)))
+    except (EvolutionError, KeyError, TypeError, ValueError, AttributeError):
         return 0
 
 
