@@ -67,11 +67,13 @@ def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsy
     assert experiment([*args, "--design", "per-run"]) == 2  # another design is another experiment
     assert "other options" in capsys.readouterr().err
     committed = Path(__file__).resolve().parents[3] / "docs" / "results" / "paper" / "runs.csv"
-    beside = out / "runs_per_run_design.csv"
+    beside = out / "per-run" / "runs.csv"
+    beside.parent.mkdir()
     beside.write_text(committed.read_text())
     assert report([str(out), "--beside", str(beside), "--beside-title", "the per-run design"]) == 0
     text = (out / "report.md").read_text()
     assert "### Table 6 again: the per-run design" in text
+    assert "[per-run/runs.csv](per-run/runs.csv)" in text  # linked from the report's folder
     assert "16 of 18 rows reach the paper's conclusion" in text  # the committed per-run experiment's verdict
 
 

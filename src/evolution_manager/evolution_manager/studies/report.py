@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import statistics as stats
 import sys
 from collections.abc import Sequence
@@ -424,9 +425,10 @@ def build_report(
     )
     if beside is not None:
         other = runs_from_csv(beside)
+        link = Path(os.path.relpath(Path(beside).resolve(), root.resolve())).as_posix()
         parts.append(
             f"### Table 6 again: {beside_title or beside}\n\n"
-            f"The same tests on the runs of [{beside.name}]({beside.name}) ({len(other)} runs), which differ "
+            f"The same tests on the runs of [{link}]({link}) ({len(other)} runs), which differ "
             "from the runs above only in how scenarios are given to runs.\n\n" + _table6(other)
         )
     extra = _comparisons(runs, "extra")
