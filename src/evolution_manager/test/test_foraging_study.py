@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -16,6 +17,7 @@ import pytest
 from bt_controller.library import load_library
 from bt_controller.tree import parse
 from evolution_manager.evolution.libraries import FAMILIES
+from evolution_manager.studies import foraging_transfer
 from evolution_manager.studies.experiment import experiment
 from evolution_manager.studies.foraging_study import (
     ARMS,
@@ -25,8 +27,10 @@ from evolution_manager.studies.foraging_study import (
     SWARM_ARMS,
     SWARM_SOURCE,
     flat_budget,
+    load_arm_runs,
 )
 from evolution_manager.studies.report import report
+from swarm_sim import transfer
 
 TINY = ["--study", "foraging", "--runs", "1", "--evaluations", "10", "--trials", "1", "--processes", "1"]
 
@@ -148,3 +152,83 @@ def test_a_killed_study_continues_to_the_same_libraries_and_results(study: Path,
         straight = load_library(study / "libraries" / f"{name}.json").primitives
         assert [(p.name, p.tree) for p in kept] == [(p.name, p.tree) for p in straight]
     assert (killed / "runs.csv").read_bytes() == (study / "runs.csv").read_bytes()
+
+
+FORAGING_RAW = ["tree", "seed", "chromosome", "argos_wall_s", "foraging", "movement", "rotation",
+                "conditionality", "foraging_trials", "build", "subs"]  # fmt: skip
+
+
+def test_the_report_sets_each_arms_best_forager_beside_its_argos_score(study: Path, tmp_path: Path, capsys):
+    """The driver's rows (written here in its format: ARGoS is not built where the tests run) give the
+    transfer section; without them and without a build the command stops in one line."""
+    copy = tmp_path / "study"
+    shutil.copytree(study, copy)
+    _, runs = load_arm_runs(copy)
+    foragers = foraging_transfer.best_foragers(runs, {arm.name: arm.library for arm in ARMS})
+    assert [f.arm for f in foragers] == [arm.name for arm in ARMS]  # the homogeneous arms only
+    for f in foragers:
+        top = max((r for r in runs if r.arm == f.arm), key=lambda r: r.best_fitness)
+        assert (f.tree, f.best_fitness, f.heldout) == (
+            top.best_tree,
+            top.best_fitness,
+            top.heldout_best_fitness,
+        )
+    # without a build: one line, the report as it was, no raw file
+    before = (copy / "report.md").read_bytes()
+    env_home = tmp_path / "home"
+    code = (
+        "import os, sys; from evolution_manager.studies.report import report; "
+        f"sys.exit(report([{str(copy)!r}, '--argos-eval', {str(tmp_path / 'argos_eval.py')!r}]))"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("ARGOS_", "BT_ARGOS", "SRAND"))}
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env={**env, "HOME": str(env_home)}
+    )
+    assert done.returncode == 2, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "ARGoS build not found" in done.stderr
+    assert "rebuild_2024.sh" in done.stderr
+    assert (copy / "report.md").read_bytes() == before and not list(copy.glob("argos_raw_*"))
+    # the driver's rows: each forager's value per seed
+    for library in dict.fromkeys(f.library for f in foragers):
+        with (copy / f"argos_raw_{library or 'flat'}.tsv").open("w") as raw:
+            raw.write("\t".join(FORAGING_RAW) + "\n")
+            for k, f in enumerate(x for x in foragers if x.library == library):
+                for seed in (1, 2, 3):
+                    value = 0.1 * (k + 1) + 0.01 * seed
+                    cells = [
+                        f.tree,
+                        str(seed),
+                        "x",
+                        "3.4",
+                        str(value),
+                        "0",
+                        "0",
+                        "0.5",
+                        "",
+                        "foraging",
+                        library,
+                    ]
+                    raw.write("\t".join(cells) + "\n")
+    assert report([str(copy), "--argos-seeds", "1-3"]) == 0
+    capsys.readouterr()
+    text = (copy / "report.md").read_text().split("## Transfer: each arm's best forager")[1]
+    for f in foragers:
+        k = [x for x in foragers if x.library == f.library].index(f)
+        argos = 0.1 * (k + 1) + 0.02
+        line = next(x for x in text.splitlines() if x.startswith(f"| {f.arm} |"))
+        assert f"| {argos:.3f} ± {0.01 / 3**0.5:.3f} |" in line
+        assert line.endswith(f"| {f.heldout - argos:+.3f} |")
+    assert "Not transferred: swarm-ga, swarm-qd" in text
+    assert "not yet scored" not in text
+    assert report([str(copy), "--argos-seeds", "1-4"]) == 0  # a seed without rows: every forager missing
+    capsys.readouterr()
+    assert (
+        f"**{len(foragers)} best foragers are not yet scored in ARGoS**" in (copy / "report.md").read_text()
+    )
+
+
+def test_a_library_becomes_the_drivers_sub_behaviours_file_without_draw_keys():
+    text = transfer.subs_text(
+        [("gotoNest1", "sel(prob@56(forward, stop), in_nest)"), ("gotoFood2", "forward")]
+    )
+    assert text == "gotoNest1 sel(prob(forward, stop), in_nest)\ngotoFood2 forward\n"

@@ -24,6 +24,7 @@ import csv
 import json
 import math
 import os
+import re
 import subprocess
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -44,9 +45,11 @@ __all__ = [
     "grid_elites",
     "parse_seeds",
     "pick_trees",
+    "read_foraging_raw",
     "read_transfer_tsv",
     "render_markdown",
     "render_summary",
+    "subs_text",
     "transfer_tsv",
 ]
 
@@ -267,39 +270,98 @@ class ArgosHarness:
             )
         return ArgosHarness(Path(path))
 
-    def missing(self) -> list[Path]:
-        """The files of the driver and of the 2023 build that are not there."""
+    def missing(self, build: str = "2023") -> list[Path]:
+        """The files of the driver and of ``build`` (``BUILDS``) that are not there."""
         home = Path.home() / "argos-check"
         prefix = Path(os.environ.get("ARGOS_PREFIX", home / "install"))
-        build = Path(os.environ.get("BT_ARGOS_DIR", home / "bmr" / "argos3"))
+        variable, folder = BUILDS[build]
+        tree = Path(os.environ.get(variable, home / folder / "argos3"))
         shim = Path(os.environ.get("SRAND_SHIM", home / "build-shim" / "libsrand_shim.so"))
         needed = [
             self.driver,
             prefix / "bin" / "argos3",
-            build / "build" / "controllers" / "footbot_bt" / "libfootbot_bt.so",
-            build / "build" / "loop_functions" / "bt_loop_functions" / "libbt_loop_functions.so",
+            tree / "build" / "controllers" / "footbot_bt" / "libfootbot_bt.so",
+            tree / "build" / "loop_functions" / "bt_loop_functions" / "libbt_loop_functions.so",
             shim,
         ]
         return [path for path in needed if not path.is_file()]
 
-    def run(self, trees: Sequence[str], seeds: Sequence[int], raw: Path, jobs: int, work: Path) -> None:
+    def run(
+        self,
+        trees: Sequence[str],
+        seeds: Sequence[int],
+        raw: Path,
+        jobs: int,
+        work: Path,
+        build: str = "2023",
+        subs: Path | None = None,
+    ) -> None:
         """Evaluate every (tree, seed) missing from ``raw`` with the driver (``batch``, which appends to
-        ``raw``); UsageError when the build is missing or the driver fails."""
-        missing = self.missing()
+        ``raw``) in ``build``, named primitives defined by the sub-behaviours file ``subs``; UsageError when
+        the build is missing or the driver fails."""
+        missing = self.missing(build)
         if missing:
             raise UsageError(
                 f"ARGoS build not found: {', '.join(map(str, missing))} missing "
-                "(build it with the harness's rebuild.sh; docs/validation/README.md)"
+                "(build it with the harness's rebuild.sh"
+                + (" and rebuild_2024.sh" if build != "2023" else "")
+                + "; docs/validation/README.md)"
             )
         trees_file = work / "transfer_trees.txt"
         trees_file.write_text("".join(f"{tree}\n" for tree in trees))
         spec = ",".join(str(s) for s in seeds)
         command = ["python3", str(self.driver), "batch", "--trees", str(trees_file), "--seeds", spec]
         command += ["--raw", str(raw), "--jobs", str(jobs)]
+        if build != "2023":
+            command += ["--build", build]
+        if subs is not None:
+            command += ["--subs", str(subs)]
         done = subprocess.run(command, capture_output=True, text=True, check=False)
         if done.returncode != 0:
             last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
             raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
+
+
+BUILDS: dict[str, tuple[str, str]] = {
+    "2023": ("BT_ARGOS_DIR", "bmr"),
+    "foraging": ("BT_ARGOS_DIR_FORAGING", "bmr-a73"),
+}
+"""The harness's builds this module drives: the environment variable naming the build's ``argos3`` folder
+and the folder under ``~/argos-check`` it defaults to (the driver's own defaults): the 2023 commit (the
+primitives' 20 s trials) and the 2024 commit's foraging setting (100 s trials, deliveries)."""
+
+
+def subs_text(library: Iterable[tuple[str, str]]) -> str:
+    """A library as the driver's sub-behaviours file: ``<name> <tree>`` per line. A probabilistic node's
+    draw key (``prob@K``) is dropped: it names which of our random streams the node draws from, which ARGoS
+    (one ``rand()``) has no counterpart of; the node is the same ``prob`` there."""
+    return "".join(f"{name} {_without_keys(tree)}\n" for name, tree in library)
+
+
+def _without_keys(tree: str) -> str:
+    return re.sub(r"prob@\d+\(", "prob(", tree)
+
+
+def read_foraging_raw(raw: Path) -> dict[tuple[str, int], float]:
+    """The driver's raw TSV of the foraging build: per (tree, seed), the mean deliveries per robot per
+    trial."""
+    if not raw.is_file():
+        return {}
+    rows: dict[tuple[str, int], float] = {}
+    with raw.open(newline="") as f:
+        reader = csv.DictReader(f, delimiter="\t")
+        missing = [q for q in ("tree", "seed", "foraging", "build") if q not in (reader.fieldnames or ())]
+        if missing:
+            raise UsageError(
+                f"{raw}: not the ARGoS driver's raw TSV of the foraging build: missing column(s) "
+                f"{', '.join(missing)}"
+            )
+        for line, row in enumerate(reader, start=2):
+            try:
+                rows[(row["tree"], int(row["seed"]))] = float(row["foraging"])
+            except (TypeError, ValueError):
+                raise UsageError(f"{raw}:{line}: expected numbers in the seed and foraging columns") from None
+    return rows
 
 
 def read_argos_raw(raw: Path) -> dict[tuple[str, int], tuple[float, ...]]:

@@ -497,13 +497,24 @@ def _libraries_table(root: Path, document: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def build_report(root: Path) -> Path:
+def build_report(
+    root: Path,
+    argos_eval: str | None = None,
+    argos_seeds: Sequence[int] = tuple(range(1, 21)),
+    argos_jobs: int = 1,
+) -> Path:
     """Write ``report.md``, ``runs.csv`` and ``figures/`` for the foraging study in ``root``; return the
-    report's path. Works on a study under way: it reports the runs finished so far."""
+    report's path. Works on a study under way: it reports the runs finished so far. ``argos_eval``: the
+    ARGoS harness's driver, to score each arm's best forager in the authors' foraging build where its rows
+    are missing; with rows there the report has a transfer section (``studies.foraging_transfer``)."""
+    from evolution_manager.studies import foraging_transfer
     from evolution_manager.viewing import figures
 
     root = Path(root)
     document, runs = load_arm_runs(root)
+    foragers = foraging_transfer.best_foragers(runs, {arm.name: arm.library for arm in ARMS})
+    if argos_eval is not None:
+        foraging_transfer.measure(root, foragers, argos_eval, argos_seeds, argos_jobs)
     write_runs_csv(root, runs)
     rows = comparisons(runs)
     planned = len(document["arms"])
@@ -558,6 +569,11 @@ def build_report(root: Path) -> Path:
         parts.append("\n## Figures\n")
         parts += [f"![{path.stem}](figures/{path.name})\n" for path in shown]
         parts += ["\n## Best forager of each arm\n", _best_trees(runs, figure_dir)]
+    if list(root.glob("argos_raw_*.tsv")):
+        transferred, missing = foraging_transfer.scored(root, foragers, argos_seeds)
+        parts.append(
+            foraging_transfer.section(transferred, missing, argos_seeds, [arm.name for arm in SWARM_ARMS])
+        )
     path = root / "report.md"
     write_atomic(path, "".join(parts))
     return path

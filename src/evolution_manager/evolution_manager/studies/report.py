@@ -525,8 +525,9 @@ def report(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--argos-eval",
         metavar="DRIVER",
-        help="the ARGoS harness's argos_eval.py ($ARGOS_EVAL): score each run's best tree in the authors' "
-        "ARGoS (rows kept in argos_raw.tsv, run only when missing); the report's transfer section",
+        help="the ARGoS harness's argos_eval.py ($ARGOS_EVAL): score each run's best tree (a foraging "
+        "study: each arm's best forager) in the authors' ARGoS (rows kept in argos_raw*.tsv, run only when "
+        "missing); the report's transfer section",
     )
     parser.add_argument(
         "--argos-seeds", default=argos_transfer.DEFAULT_SEEDS, help="ARGoS's seeds: N, A-B or a list (1-20)"
@@ -541,11 +542,10 @@ def report(argv: Sequence[str] | None = None) -> int:
         if _study(args.dir) == "foraging":
             from evolution_manager.studies.foraging_study import build_report as build_foraging_report
 
-            if args.beside is not None or args.argos_eval is not None:
-                raise UsageError(
-                    "--beside and --argos-eval apply to the paper's experiment, not to a foraging study"
-                )
-            print(build_foraging_report(args.dir))
+            if args.beside is not None:
+                raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
+            seeds = argos_transfer.parse_seeds(args.argos_seeds)
+            print(build_foraging_report(args.dir, args.argos_eval, seeds, args.argos_jobs))
         elif (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
             seeds = argos_transfer.parse_seeds(args.argos_seeds)
             print(
