@@ -30,10 +30,7 @@ import functools
 import hashlib
 import json
 import math
-import os
 import random
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -48,11 +45,10 @@ from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
-from evolution_manager.evolution.run import _remove_abandoned_starts
+from evolution_manager.evolution.run import LOCK_NAME, create_whole
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
 from evolution_manager.files import (
     CsvLog,
-    _umask,
     number,
     read_json,
     read_json_object,
@@ -78,7 +74,6 @@ OBJECTIVE = "foraging"
 TASK = "foraging"
 DESCRIPTORS = ("movement", "rotation", "conditionality")
 CHECKPOINT_FORMAT = 1
-LOCK_NAME = ".lock"
 
 MUTATION = 0.5
 """Probability that a child is mutated (one robot's cell redrawn): our choice, the probability of the GP's
@@ -525,13 +520,8 @@ class CompositionRun:
             raise ConfigError("the configuration does not describe these cells")
         if config.library_digest != ("" if library is None else library.digest):
             raise ConfigError("the configuration does not describe this primitive library")
-        parent = root.absolute().parent
-        parent.mkdir(parents=True, exist_ok=True)
-        _remove_abandoned_starts(parent, root.name)
-        building = Path(tempfile.mkdtemp(prefix=f".{root.name}.new-", dir=parent))
-        try:
-            os.chmod(building, 0o777 & ~_umask())
-            lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+
+        def fill(building: Path) -> CompositionRun:
             run = cls(config, cells, building, evaluator)
             write_json(run.directory.config, config.to_json())
             write_json(run.directory.cells, {"cells": [c.as_json() for c in cells]})
@@ -542,18 +532,11 @@ class CompositionRun:
                 "progress": run.directory.progress.create(),
             }
             run.checkpoint()
-            try:
-                os.rename(building, root)  # replaces an empty directory, never a full one
-            except OSError as error:
-                raise RunDirectoryError(
-                    f"{root} was created by another process meanwhile: choose another --out"
-                ) from error
-        except BaseException:
-            shutil.rmtree(building, ignore_errors=True)
-            raise
-        run.directory = CompositionDirectory(root)
-        lock.moved(root / LOCK_NAME)
+            return run
+
+        run, lock = create_whole(root, fill)
         run.lock = lock
+        run.directory = CompositionDirectory(root)
         return run
 
     @classmethod

@@ -50,7 +50,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
@@ -67,6 +67,7 @@ if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluate
     from swarm_sim.evaluation import EvaluationRequest, Evaluator
 
 LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
+_Filled = TypeVar("_Filled")
 
 CHECKPOINT_FORMAT = 1
 
@@ -86,6 +87,33 @@ def _remove_abandoned_starts(parent: Path, name: str) -> None:
     for leftover in parent.glob(f".{name}.new-*"):
         if leftover.is_dir() and not is_locked(leftover / LOCK_NAME):
             shutil.rmtree(leftover, ignore_errors=True)
+
+
+def create_whole(root: Path, fill: Callable[[Path], _Filled]) -> tuple[_Filled, Lock]:
+    """Create the run directory ``root`` whole or not at all: ``fill(folder)`` writes a hidden sibling
+    (``.<name>.new-*``, holding the directory's lock) with the run's first files, which is then renamed into
+    place (replacing an empty directory, never a full one). Returns what ``fill`` returned and the lock, now
+    at ``root``. Leftovers of starts killed before their rename are removed first."""
+    root = Path(root)
+    parent = root.absolute().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    _remove_abandoned_starts(parent, root.name)
+    building = Path(tempfile.mkdtemp(prefix=f".{root.name}.new-", dir=parent))
+    try:
+        os.chmod(building, 0o777 & ~_umask())
+        lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+        filled = fill(building)
+        try:
+            os.rename(building, root)
+        except OSError as error:
+            raise RunDirectoryError(
+                f"{root} was created by another process meanwhile: choose another --out"
+            ) from error
+    except BaseException:
+        shutil.rmtree(building, ignore_errors=True)
+        raise
+    lock.moved(root / LOCK_NAME)
+    return filled, lock
 
 
 def _request_type() -> type[EvaluationRequest]:
@@ -239,13 +267,8 @@ class Run:
             raise RunDirectoryError(f"{root} is a file, not a directory: choose another --out")
         if directory.root.exists() and any(directory.root.iterdir()):
             raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
-        parent = directory.root.absolute().parent
-        parent.mkdir(parents=True, exist_ok=True)
-        _remove_abandoned_starts(parent, directory.root.name)
-        building = Path(tempfile.mkdtemp(prefix=f".{directory.root.name}.new-", dir=parent))
-        try:
-            os.chmod(building, 0o777 & ~_umask())
-            lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
+
+        def fill(building: Path) -> Run:
             run = cls(config, RunDirectory(building), evaluator, library)
             write_json(run.directory.config, config.to_json())
             if library is not None:
@@ -255,18 +278,11 @@ class Run:
                 "progress": run.directory.progress.create(),
             }
             run.checkpoint()
-            try:
-                os.rename(building, directory.root)  # replaces an empty directory, never a full one
-            except OSError as error:
-                raise RunDirectoryError(
-                    f"{root} was created by another process meanwhile: choose another --out"
-                ) from error
-        except BaseException:
-            shutil.rmtree(building, ignore_errors=True)
-            raise
-        run.directory = directory
-        lock.moved(directory.root / LOCK_NAME)
+            return run
+
+        run, lock = create_whole(directory.root, fill)
         run.lock = lock
+        run.directory = directory
         return run
 
     @classmethod
