@@ -22,10 +22,10 @@ import argparse
 import contextlib
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextlib import ExitStack
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
 from evolution_manager.cluster.client import open_client
@@ -45,6 +45,7 @@ from evolution_manager.processes import exit_status, signals_as_interrupts
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from distributed import Client
+    from tqdm import tqdm
 
     from bt_controller.library import Library
     from evolution_manager.cluster.settings import ClusterSettings
@@ -129,8 +130,10 @@ def evolve(argv: Sequence[str] | None = None) -> int:
 
 def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
     started = time.time()
+    out: Path | None = None  # known once the options are read
     try:
         args = build_parser().parse_args(argv)
+        out = args.out
         cluster = settings_from_args(args)
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
@@ -164,18 +167,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             run = Run.resume(args.out, evaluator)
         else:
             run = Run.start(config, args.out, evaluator, library)
-    except WriteError as error:  # the new run directory could not be written
-        print(f"evolve: error: {error}", file=sys.stderr)
-        return EXIT_IO
-    except (UsageError, EvolutionError) as error:  # a ClusterError too: no scheduler, no SLURM
-        print(f"evolve: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    except OSError as error:  # an --out that cannot be created or written
-        print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
-        return EXIT_USAGE
-    from evolution_manager.studies.experiment import record_session
-
-    command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
+    except (WriteError, UsageError, EvolutionError, OSError) as error:
+        return _could_not_start(error, out)
     bar = progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
@@ -188,6 +181,55 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 )
             )
 
+    failed = _execute(
+        run,
+        lambda: write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator),
+        args,
+        argv,
+        started,
+        cluster,
+        bar,
+        on_batch,
+    )
+    if failed is not None:
+        return failed
+    print(result_lines(run, args.out))
+    return 0
+
+
+class _Executable(Protocol):
+    def execute(self, on_batch: Callable[[int, int], None], checkpoint_interval: float) -> object: ...
+
+
+def _could_not_start(error: Exception, out: Path | None) -> int:
+    """Say in one line why a run could not be started or continued; return the exit status."""
+    if isinstance(error, WriteError):  # the new run directory could not be written
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_IO
+    if isinstance(error, (UsageError, EvolutionError)):  # a ClusterError too: no scheduler, no SLURM
+        print(f"evolve: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    assert isinstance(error, OSError)  # an --out that cannot be created or written
+    print(f"evolve: error: {out}: {error.strerror or error}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def _execute(
+    run: _Executable,
+    write: Callable[[], object],
+    args: argparse.Namespace,
+    argv: Sequence[str] | None,
+    started: float,
+    cluster: ClusterSettings,
+    bar: tqdm | None,
+    on_batch: Callable[[int, int], None],
+) -> int | None:
+    """Execute a started run with its progress bar, then ``write`` its results, the session recorded in
+    the run directory before and after; None when it finished, else the exit status, its reason said in
+    one line with how to continue."""
+    from evolution_manager.studies.experiment import record_session
+
+    command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
     resume = f"continue with: evolve --out {args.out} --resume"
     try:
         with signals_as_interrupts():
@@ -195,7 +237,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
             if bar is not None:
                 bar.close()
-            write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator)
+            write()
             record_session(args.out, started, command, cluster)
     except KeyboardInterrupt as interruption:  # Ctrl-C or SIGTERM: the last checkpoint holds the run
         if bar is not None:
@@ -214,8 +256,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             bar.close()
         print(f"evolve: error: {error}; {resume}", file=sys.stderr)
         return 1
-    print(result_lines(run, args.out))
-    return 0
+    return None
 
 
 def _compositions_asked(args: argparse.Namespace) -> bool:
@@ -277,7 +318,6 @@ def _evolve_compositions(
 ) -> int:
     """``evolve`` of compositions (``evolution.compositions``): start or continue a run, write its results."""
     from evolution_manager.evolution import compositions as comp
-    from evolution_manager.studies.experiment import record_session
 
     try:
         _check_composition_options(args, cluster)
@@ -320,16 +360,8 @@ def _evolve_compositions(
             run = comp.CompositionRun.resume(args.out, evaluator)
         else:
             run = comp.CompositionRun.start(config, cells, args.out, evaluator, library)
-    except WriteError as error:
-        print(f"evolve: error: {error}", file=sys.stderr)
-        return EXIT_IO
-    except (UsageError, EvolutionError) as error:
-        print(f"evolve: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    except OSError as error:
-        print(f"evolve: error: {args.out}: {error.strerror or error}", file=sys.stderr)
-        return EXIT_USAGE
-    command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
+    except (WriteError, UsageError, EvolutionError, OSError) as error:
+        return _could_not_start(error, args.out)
     bar = progress_bar(run.config, run.produced, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
@@ -338,27 +370,9 @@ def _evolve_compositions(
             if run.best is not None and run.best.fitness is not None:
                 bar.set_postfix_str(f"foraging={run.best.fitness:.3f}")
 
-    resume = f"continue with: evolve --out {args.out} --resume"
-    try:
-        with signals_as_interrupts():
-            record_session(args.out, started, command, cluster)
-            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
-            if bar is not None:
-                bar.close()
-            run.write_results()
-            record_session(args.out, started, command, cluster)
-    except KeyboardInterrupt as interruption:
-        if bar is not None:
-            bar.close()
-        print(f"evolve: interrupted; {resume}", file=sys.stderr)
-        with contextlib.suppress(EvolutionError):
-            record_session(args.out, started, command, cluster)
-        return exit_status(interruption)
-    except WriteError as error:
-        if bar is not None:
-            bar.close()
-        print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
-        return EXIT_IO
+    failed = _execute(run, run.write_results, args, argv, started, cluster, bar, on_batch)
+    if failed is not None:
+        return failed
     best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
     print(
         f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
