@@ -25,8 +25,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
-from bt_controller.library import Library
-from bt_controller.library import library_option as load_library_option
+from bt_controller.library import Library, library_option
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node, to_text
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
@@ -94,11 +93,6 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def library_option(path: str | None) -> Library | None:
-    """The library of a ``--library`` option (None without one); UsageError with the library's one line."""
-    return load_library_option(path, UsageError)
-
-
 def evaluation_json(
     tree_text: str | Sequence[str],
     seed: int,
@@ -142,7 +136,7 @@ def run(argv: Sequence[str] | None = None) -> str:
         config, conditions = apply_conditions(args.condition, default_config(args.profile, args.task))
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
-    library = library_option(args.library)
+    library = library_option(args.library, UsageError)
     request: EvaluationRequest | SwarmRequest
     trees: Node | list[Node]  # every robot's tree, or each robot's own
     if args.swarm is not None:
