@@ -290,6 +290,8 @@ def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, cap
     assert "--seed 9 differs" in capsys.readouterr().err
     assert evolve(["--out", str(out), "--resume", "--swarm-from", str(source)]) == 2
     assert "leave it out with --resume" in capsys.readouterr().err
+    assert evolve(["--out", str(out), "--resume", "--homogeneous", "3"]) == 2
+    assert "--homogeneous 3 differs from the run being resumed (0)" in capsys.readouterr().err
     assert _compose(source, out, "ga", "--evaluations", "10") == 2
     assert "already holds a run" in capsys.readouterr().err
     assert _files(out) == before
@@ -310,3 +312,35 @@ def test_the_best_swarm_animates(source, tmp_path, capsys):
     swarm = tmp_path / "run" / "best" / "foraging_swarm.json"
     assert animate(["--swarm", str(swarm), "--seed", "1", "--out", str(tmp_path / "best.gif")]) == 0
     assert (tmp_path / "best.gif").stat().st_size > 0
+
+
+# Homogeneous seeds (beyond the authors' GA) ---------------------------------------------------------------
+@pytest.mark.parametrize("algorithm", ["ga", "qd"])
+def test_homogeneous_seeds_start_the_run_and_the_best_is_at_least_their_best(source, tmp_path, algorithm):
+    """--homogeneous K: the first K genomes are the homogeneous swarms of the K fittest cells, so the best
+    composition is at least as good as the best of them; without it the start is the authors' (all random)
+    and config.json has no trace of the option."""
+    cells = read_sources([source])[0]
+    fittest = sorted(range(len(cells)), key=lambda c: (-cells[c].fitness, c))[:3]
+    out = tmp_path / "seeded"
+    assert _compose(source, out, algorithm, "--evaluations", "30", "--seed", "3", "--homogeneous", "3") == 0
+    config = json.loads((out / "config.json").read_text())
+    assert config["parameters"]["homogeneous"] == 3
+    rows = list(csv.DictReader((out / "evaluations.csv").open()))
+    assert [[int(c) for c in row["genome"].split()] for row in rows[:3]] == [[c] * 9 for c in fittest]
+    homogeneous_best = max(float(row["foraging"]) for row in rows[:3] if row["foraging"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["best_fitness"] >= homogeneous_best
+    plain = tmp_path / "plain"
+    assert _compose(source, plain, algorithm, "--evaluations", "30", "--seed", "3") == 0
+    assert "homogeneous" not in json.loads((plain / "config.json").read_text())["parameters"]
+    first_plain = [row["genome"] for row in csv.DictReader((plain / "evaluations.csv").open())][:3]
+    assert first_plain != [row["genome"] for row in rows[:3]]
+
+
+def test_homogeneous_seeds_need_compositions(source, tmp_path, capsys):
+    args = ["--algorithm", "qd", "--objective", "food", "--evaluations", "5", "--homogeneous", "2"]
+    assert evolve([*args, "--out", str(tmp_path / "run"), "--no-progress"]) == 2
+    assert "--homogeneous seeds compositions" in capsys.readouterr().err
+    assert _compose(source, tmp_path / "zero", "ga", "--homogeneous", "0") == 2
+    assert "--homogeneous" in capsys.readouterr().err

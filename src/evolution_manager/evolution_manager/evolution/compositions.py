@@ -101,9 +101,13 @@ class CompositionParameters:
     mutation: float = MUTATION
     init_batch: int = _QD.init_batch
     batch: int = _QD.batch
+    homogeneous: int = 0
+    """How many genomes of the initial population (ga) or batch (qd) are homogeneous swarms of the fittest
+    cells (:func:`homogeneous_genomes`), the rest random; 0, the authors' start: all random."""
 
     def __post_init__(self) -> None:
         integer(self.population, "population", 2, error=ConfigError)
+        integer(self.homogeneous, "homogeneous", 0, error=ConfigError)
         integer(self.tournament, "tournament", 1, error=ConfigError)
         integer(self.elites, "elites", 0, self.population - 1, error=ConfigError)
         integer(self.init_batch, "init_batch", 1, error=ConfigError)
@@ -229,6 +233,14 @@ def cells_digest(cells: Sequence[Cell]) -> str:
 def random_genome(rng: random.Random, n_cells: int, n_robots: int) -> Genome:
     """A genome of cells drawn uniformly, one per robot."""
     return tuple(rng.randrange(n_cells) for _ in range(n_robots))
+
+
+def homogeneous_genomes(cells: Sequence[Cell], count: int, n_robots: int) -> list[Genome]:
+    """The homogeneous swarms (every robot the same cell) of the ``count`` fittest cells by their
+    recorded fitness, fittest first (the first in cell order among equals); fewer when there are fewer
+    cells."""
+    order = sorted(range(len(cells)), key=lambda c: (-cells[c].fitness, c))
+    return [(c,) * n_robots for c in order[:count]]
 
 
 def two_point_crossover(a: Genome, b: Genome, rng: random.Random) -> tuple[Genome, Genome]:
@@ -373,6 +385,8 @@ class CompositionConfig:
     def to_json(self) -> dict:
         data = asdict(self)
         data["sources"] = list(self.sources)
+        if not self.parameters.homogeneous:  # written only when asked for: earlier runs' files unchanged
+            del data["parameters"]["homogeneous"]
         return {"kind": KIND, "objective": OBJECTIVE, "task": TASK, **data}
 
     @classmethod
@@ -616,15 +630,21 @@ class CompositionRun:
         n = len(self.cells)
         if self.config.algorithm == "ga":
             if not self.population:
-                return [random_genome(self.rng, n, self.n_robots) for _ in range(p.population)]
+                return self._initial(p.population)
             parents = tournament(self.population, p.population - p.elites, p.tournament, self.rng)
         else:
             if not self.grid:  # the initial batch (again, if every genome of it failed)
-                return [random_genome(self.rng, n, self.n_robots) for _ in range(p.init_batch)]
+                return self._initial(p.init_batch)
             entries = [self.grid[b] for b in sorted(self.grid)]
             parents = tournament(entries, p.batch, p.tournament, self.rng)
         children = vary(parents, self.rng, p.crossover, p.mutation, n)
         return children[: self.config.evaluations - self.produced]
+
+    def _initial(self, size: int) -> list[Genome]:
+        """``size`` genomes: the homogeneous swarms of the fittest cells asked for, then random ones."""
+        seeded = homogeneous_genomes(self.cells, min(size, self.config.parameters.homogeneous), self.n_robots)
+        drawn = [random_genome(self.rng, len(self.cells), self.n_robots) for _ in range(size - len(seeded))]
+        return seeded + drawn
 
     def tell(self, members: list[Member]) -> None:
         initial = not self.population if self.config.algorithm == "ga" else not self.grid

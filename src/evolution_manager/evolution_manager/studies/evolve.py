@@ -100,6 +100,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="evolve compositions (a repertoire cell per robot; --task foraging, --algorithm ga or qd) of "
         "the repertoires in these run directories (docs/algorithms.md, 'Heterogeneous compositions')",
     )
+    parser.add_argument(
+        "--homogeneous",
+        type=positive_int,
+        metavar="K",
+        help="with --swarm-from: start from the homogeneous swarms of the K fittest cells besides random "
+        "genomes (default 0: all random, as the authors' GA)",
+    )
     add_cluster_options(parser)
     return parser
 
@@ -137,6 +144,10 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         cluster = settings_from_args(args)
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
+        if args.homogeneous is not None:
+            raise UsageError(
+                "--homogeneous seeds compositions of repertoire cells: it goes with --swarm-from RUN_DIR"
+            )
         if args.workers is not None and not cluster.is_local:
             raise UsageError(
                 f"--workers applies to --cluster local only; on {cluster.describe()} the batches go to "
@@ -330,6 +341,11 @@ def _evolve_compositions(
                         f"--{name.replace('_', '-')} {value} differs from the run being resumed "
                         f"({getattr(saved, name)}); leave it out or start a new run in another --out"
                     )
+            if args.homogeneous is not None and args.homogeneous != saved.parameters.homogeneous:
+                raise UsageError(
+                    f"--homogeneous {args.homogeneous} differs from the run being resumed "
+                    f"({saved.parameters.homogeneous}); leave it out or start a new run in another --out"
+                )
             config = saved
             library = comp.CompositionDirectory(args.out).read_library(config)
         else:
@@ -348,6 +364,7 @@ def _evolve_compositions(
                 tuple(str(p) for p in args.swarm_from),
                 len(cells),
                 comp.cells_digest(cells),
+                comp.CompositionParameters(homogeneous=args.homogeneous or 0),
                 library_digest="" if library is None else library.digest,
             )
         from swarm_sim.evaluation import BatchEvaluator
