@@ -153,3 +153,20 @@ def test_the_wilcoxon_p_needs_two_values_not_all_zero():
     assert argos_transfer.signed_rank_p([0.1]) is None
     assert argos_transfer.signed_rank_p([0.0, 0.0, 0.0]) is None
     assert argos_transfer.signed_rank_p([0.1, 0.2, 0.3, 0.4, 0.5, 0.6]) == pytest.approx(0.03125)
+
+
+def test_a_persons_notes_are_kept_at_the_end_when_the_report_is_rebuilt(small_experiment, capsys):
+    notes = small_experiment / "notes.md"
+    notes.write_text("## What the numbers mean\n\nMeasured by hand.\n")
+    try:
+        assert report([str(small_experiment)]) == 0
+        capsys.readouterr()
+        assert (
+            (small_experiment / "report.md")
+            .read_text()
+            .endswith("## What the numbers mean\n\nMeasured by hand.\n")
+        )
+    finally:
+        notes.unlink()
+    assert report([str(small_experiment)]) == 0
+    assert "What the numbers mean" not in (small_experiment / "report.md").read_text()

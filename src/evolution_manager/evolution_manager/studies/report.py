@@ -6,7 +6,9 @@ per run and objective) with, beside them in ``figures/``: box plots of best fitn
 algorithm (fig. 8), the MAP-Elites grids of one run per objective (fig. 7) and progress curves with the
 held-out scores; the paper's table 6 row by row (its p-value and test beside ours, effect sizes, Holm's
 correction, the held-out comparison and a verdict per row) and fig. 8's repertoire sizes beside the
-paper's. Algorithms are compared per objective: GP_o and QD_o on their objective, GP_fnd on each of the
+paper's; with ARGoS's rows, the transfer section (``argos_transfer``); last ``notes.md`` when the folder
+has one (a person's reading of the results, kept when the report is rebuilt). Algorithms are compared per
+objective: GP_o and QD_o on their objective, GP_fnd on each of the
 three. For a run directory (``config.json``) it rewrites the run's repertoires, summary, best trees and
 figures from its last checkpoint.
 """
@@ -68,6 +70,10 @@ PAPER_TABLE_6 = {
     },
 }
 """The paper's table 6. Where it is significant, GP_o is the lower of the two (section 4)."""
+
+NOTES_FILE = "notes.md"
+"""Written by a person beside an experiment's results (what the numbers mean, measurements made to explain
+them); ``report`` appends it to ``report.md`` as it is."""
 
 PAPER_REPERTOIRE_SIZES = {
     "density": {"GP_density": 148, "GP_fnd": 255, "QD_density": 290},
@@ -490,6 +496,9 @@ def build_report(
         transferred, missing = argos_transfer.transferred(root, best, seeds)
         argos_transfer.write_csv(root, transferred)
         parts.append(argos_transfer.section(transferred, missing, seeds, folder))
+    notes = root / NOTES_FILE
+    if notes.exists():  # a person's reading of the results, kept when the report is rebuilt
+        parts.append(notes.read_text())
     report = root / "report.md"
     write_atomic(report, "\n".join(parts))
     return report
