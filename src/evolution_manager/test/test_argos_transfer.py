@@ -16,6 +16,9 @@ import pytest
 from evolution_manager.studies import argos_transfer
 from evolution_manager.studies.experiment import experiment
 from evolution_manager.studies.report import load_runs, report
+from swarm_sim.config import default_config
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.world import OBJECTIVES
 
 RAW_COLUMNS = ["tree", "seed", "chromosome", "argos_wall_s", "density", "nest", "food", "movement",
                "rotation", "conditionality"]  # fmt: skip
@@ -74,7 +77,7 @@ def test_every_runs_best_tree_is_picked_on_each_objective_it_is_compared_on(smal
         assert b.heldout == m["heldout_best_fitness"] is not None
 
 
-def test_the_report_sets_each_best_tree_beside_its_argos_score(small_experiment, capsys):
+def test_the_report_sets_each_best_tree_here_beside_its_argos_score(small_experiment, capsys):
     best = best_of(small_experiment)
     trees = {}
     for b in best:  # a tree best on two objectives (it can happen) keeps the first
@@ -84,23 +87,35 @@ def test_the_report_sets_each_best_tree_beside_its_argos_score(small_experiment,
     capsys.readouterr()
     rows = list(csv.DictReader((small_experiment / argos_transfer.CSV_FILE).open()))
     assert [r["algorithm"] for r in rows] == [b.label for b in best]
+    # ours: the model on fresh seeds 1-3 (as many as ARGoS's), the experiment's 10 trials each
+    evaluator = BatchEvaluator(default_config("paper"))
     for row, b in zip(rows, best, strict=True):
-        assert row["tree"] == b.tree and int(row["argos_n"]) == 3
+        assert row["tree"] == b.tree and int(row["argos_n"]) == 3 == int(row["ours_n"])
+        results = evaluator.evaluate([EvaluationRequest(b.tree, seed, 10) for seed in SEEDS])
+        values = [r.fitness[OBJECTIVES.index(b.objective)] for r in results]
+        assert float(row["ours_fitness"]) == pytest.approx(stats.fmean(values), abs=1e-12)
         objective, held = trees[b.tree]
         if objective == b.objective:
             assert float(row["argos_fitness"]) == pytest.approx(held - _offset(b.tree), abs=1e-9)
             assert float(row["argos_sem"]) == pytest.approx(0.003 / math.sqrt(3), rel=1e-6)
+        z = (float(row["ours_fitness"]) - float(row["argos_fitness"])) / math.hypot(
+            float(row["ours_sem"]), float(row["argos_sem"])
+        )
+        assert float(row["z"]) == pytest.approx(z, abs=1e-3)
+        assert row["verdict"] in ("indistinguishable", "agrees", "OUTSIDE")
     text = (small_experiment / "report.md").read_text()
     assert "## Transfer: each run's best tree in the authors' ARGoS" in text
     assert "not yet scored in ARGoS" not in text
     assert (small_experiment / "figures" / "transfer_argos.png").stat().st_size > 10_000
-    # the QD_nest row: its loss is the mean of held-out minus ARGoS over its two runs
+    # the QD_nest row: its loss is the mean of ours minus ARGoS over its two runs
     qd = [r for r in rows if r["algorithm"] == "QD_nest"]
-    losses = [float(r["heldout_best_fitness"]) - float(r["argos_fitness"]) for r in qd]
+    losses = [float(r["ours_fitness"]) - float(r["argos_fitness"]) for r in qd]
     se = stats.stdev(losses) / math.sqrt(2)
     section = text.split("## Transfer:")[1]
     line = next(x for x in section.splitlines() if x.startswith("| nest | QD_nest | 2 |"))
     assert f"{stats.mean(losses):.4f} ± {se:.4f}" in line
+    same = sum(r["verdict"] == "indistinguishable" for r in qd)
+    assert f"| {same} of 2 |" in line
     assert "loss in ARGoS" in text  # the algorithms' losses compared
 
 

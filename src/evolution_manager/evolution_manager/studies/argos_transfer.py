@@ -3,15 +3,18 @@
 For every finished run and every objective it is compared on (GP_o and QD_o on their own, GP_fnd on all
 three), the run's best tree (``summary.json``'s ``best_tree``, as evolved) is evaluated by the ARGoS
 harness's driver on seeds ``1..20`` (each seed one full evaluation of 10 trials on fresh start poses, wheel
-gains and message drops; ``swarm_sim.transfer``) and set beside our held-out score of the same tree (5
-fresh scenarios of 10 trials). The driver's rows are kept in the experiment folder as ``argos_raw.tsv``,
-which doubles as a cache: rows already there are not run again, so the report is rebuilt anywhere from the
-committed file without ARGoS. ``transfer.csv`` holds one row per run and objective.
+gains and message drops; ``swarm_sim.transfer``) and here on as many fresh scenarios (our seeds ``1..20``,
+the run's trials and profile), and compared as the validation compares the two simulators
+(``swarm_sim.validation``: tolerance, z and verdict). Our held-out score of the tree stands beside them: it
+is measured on 5 scenarios, which under the shared design are the same 5 for every run, so it carries their
+difficulty, common to every algorithm. The driver's rows are kept in the experiment folder as
+``argos_raw.tsv``, which doubles as a cache: rows already there are not run again, so the report is rebuilt
+anywhere from the committed file without ARGoS. ``transfer.csv`` holds one row per run and objective.
 
 The question the section answers: does any algorithm's best tree lose more in the authors' simulator than
-here? Per objective and algorithm the loss is held-out minus ARGoS, run by run; its mean is tested against
-zero (Wilcoxon signed-rank, two-sided) and the algorithms' losses against each other with the table-6 test
-(``significance.compare``), Holm over the section's rows.
+here? Per objective and algorithm the loss is ours on fresh scenarios minus ARGoS, run by run; its mean is
+tested against zero (Wilcoxon signed-rank, two-sided) and the algorithms' losses against each other with the
+table-6 test (``significance.compare``), Holm over the section's rows.
 """
 
 from __future__ import annotations
@@ -32,7 +35,8 @@ from evolution_manager.errors import UsageError
 from evolution_manager.files import number, write_atomic
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
-from swarm_sim import transfer
+from swarm_sim import transfer, validation
+from swarm_sim.config import Config
 from swarm_sim.errors import UsageError as SimUsageError
 from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES
 
@@ -47,9 +51,14 @@ CSV_HEADER = [
     "tree",
     "best_fitness",
     "heldout_best_fitness",
+    "ours_fitness",
+    "ours_sem",
+    "ours_n",
     "argos_fitness",
     "argos_sem",
     "argos_n",
+    "z",
+    "verdict",
 ]
 
 
@@ -69,17 +78,24 @@ class BestTree:
 
 @dataclass(frozen=True)
 class Transferred:
-    """A best tree with ARGoS's estimate of its fitness."""
+    """A best tree with its fitness here and in ARGoS on fresh scenarios, compared."""
 
     best: BestTree
-    argos: float
-    argos_sem: float
-    argos_n: int
+    comparison: validation.Comparison
+    """Ours against ARGoS on the tree's objective (``swarm_sim.validation``)."""
 
     @property
-    def loss(self) -> float | None:
-        """Held-out here minus ARGoS (positive: the tree does worse in ARGoS); None without a held-out."""
-        return None if self.best.heldout is None else self.best.heldout - self.argos
+    def ours(self) -> float:
+        return self.comparison.ours.mean
+
+    @property
+    def argos(self) -> float:
+        return self.comparison.theirs.mean
+
+    @property
+    def loss(self) -> float:
+        """Ours minus ARGoS (positive: the tree does worse in ARGoS)."""
+        return self.comparison.diff
 
 
 class RunLike(Protocol):
@@ -137,20 +153,30 @@ def measure(
         (Path(root) / "transfer_trees.txt").unlink(missing_ok=True)
 
 
-def transferred(root: Path, trees: Sequence[BestTree], seeds: Sequence[int]) -> tuple[list[Transferred], int]:
-    """The trees whose every seed is in ``root/argos_raw.tsv``, with ARGoS's estimate of their own
-    objective; and how many trees lack rows."""
+def transferred(
+    root: Path, trees: Sequence[BestTree], seeds: Sequence[int], world: Config, trials: int
+) -> tuple[list[Transferred], int]:
+    """The trees whose every seed is in ``root/argos_raw.tsv``, each scored here on as many fresh scenarios
+    (our seeds ``1..len(seeds)``, ``trials`` trials each in ``world``'s model) and compared with ARGoS on
+    its objective; and how many trees lack rows."""
+    from swarm_sim.validate_cli import our_estimates  # the simulator, loaded only when there is work
+
     try:
         raw = transfer.read_argos_raw(Path(root) / RAW_FILE)
-        estimates, _ = transfer.argos_estimates(raw, [t.tree for t in trees], seeds)
+        argos, _ = transfer.argos_estimates(raw, [t.tree for t in trees], seeds)
     except SimUsageError as error:
         raise UsageError(str(error)) from None
-    done = []
-    for tree in trees:
-        if tree.tree in estimates:
-            e = estimates[tree.tree][tree.objective]
-            done.append(Transferred(tree, e.mean, e.sem, e.n))
-    return done, len(trees) - len(done)
+    done = [t for t in trees if t.tree in argos]
+    texts = list(dict.fromkeys(t.tree for t in done))
+    ours = our_estimates(texts, list(range(1, len(seeds) + 1)), trials, world) if texts else {}
+    rows = [
+        Transferred(t, validation.compare(t.tree, ours[t.tree], argos[t.tree])[_INDEX[t.objective]])
+        for t in done
+    ]
+    return rows, len(trees) - len(done)
+
+
+_INDEX = {q: i for i, q in enumerate(validation.QUANTITIES)}
 
 
 def write_csv(root: Path, rows: Sequence[Transferred]) -> Path:
@@ -159,7 +185,7 @@ def write_csv(root: Path, rows: Sequence[Transferred]) -> Path:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_HEADER)
     for r in rows:
-        b = r.best
+        b, c = r.best, r.comparison
         writer.writerow(
             [
                 b.label,
@@ -169,9 +195,14 @@ def write_csv(root: Path, rows: Sequence[Transferred]) -> Path:
                 b.tree,
                 number(b.best_fitness),
                 number(b.heldout),
-                number(r.argos),
-                number(r.argos_sem),
-                str(r.argos_n),
+                number(c.ours.mean),
+                number(c.ours.sem),
+                str(c.ours.n),
+                number(c.theirs.mean),
+                number(c.theirs.sem),
+                str(c.theirs.n),
+                f"{c.z:.3f}",
+                c.verdict,
             ]
         )
     path = Path(root) / CSV_FILE
@@ -186,8 +217,7 @@ def _labels(objective: str) -> list[str]:
 def _losses(rows: Sequence[Transferred]) -> dict[str, dict[str, list[float]]]:
     losses: dict[str, dict[str, list[float]]] = {o: {label: [] for label in _labels(o)} for o in OBJECTIVES}
     for r in rows:
-        if r.loss is not None:
-            losses[r.best.objective][r.best.label].append(r.loss)
+        losses[r.best.objective][r.best.label].append(r.loss)
     return losses
 
 
@@ -225,15 +255,19 @@ def _cell(values: Sequence[float]) -> str:
 def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], folder: Path) -> str:
     """The report's section: the table per objective and algorithm, the comparisons and the figure."""
     seed_text = f"{seeds[0]}-{seeds[-1]}" if list(seeds) == list(range(seeds[0], seeds[-1] + 1)) else seeds
+    n = len(seeds)
     lines = [
         "## Transfer: each run's best tree in the authors' ARGoS (beyond the paper)\n",
         f"Each run's best tree on each objective it is compared on, scored in the authors' ARGoS code (their "
         f"2023 commit, through the project's harness; seeds {seed_text}, each a full evaluation of 10 "
-        "trials on fresh start poses, wheel gains and message drops) beside our held-out score of the same "
-        "tree (5 fresh scenarios of 10 trials). Loss: held-out minus ARGoS, run by run (positive: the tree "
-        f"does worse in ARGoS). Mean ± standard error over runs; every tree in [{CSV_FILE}]({CSV_FILE}), "
-        f"ARGoS's rows in [{RAW_FILE}]({RAW_FILE}). Wilcoxon p: the loss against zero (signed-rank, "
-        "two-sided, uncorrected).\n",
+        f"trials on fresh start poses, wheel gains and message drops) and here on {n} fresh scenarios "
+        "(our seeds 1-{n}, no run evolved on them). Loss: ours minus ARGoS, run by run (positive: the tree "
+        "does worse in ARGoS); mean ± standard error over runs. Indistinguishable: the tree's own fitness "
+        "within the validation's tolerance with |z| <= 4 (`docs/model.md`). Held-out: our held-out score "
+        "(5 scenarios; under the shared design the same 5 for every run, so it carries their difficulty, "
+        f"common to every algorithm). Every tree in [{CSV_FILE}]({CSV_FILE}), ARGoS's rows in "
+        f"[{RAW_FILE}]({RAW_FILE}). Wilcoxon p: the loss against zero (signed-rank, two-sided, "
+        "uncorrected).\n".replace("{n}", str(n)),
     ]
     if missing:
         lines.append(
@@ -241,19 +275,22 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
             "--argos-eval DRIVER` scores them).\n"
         )
     lines += [
-        "| objective | algorithm | runs | in-run best | held-out | ARGoS | loss | Wilcoxon p |",
-        "|---|---|---|---|---|---|---|---|",
+        "| objective | algorithm | runs | in-run best | held-out | ours, fresh | ARGoS | loss "
+        "| indistinguishable | largest abs(z) | Wilcoxon p |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for objective in OBJECTIVES:
         for label in _labels(objective):
             group = [r for r in rows if r.best.objective == objective and r.best.label == label]
-            loss = [r.loss for r in group if r.loss is not None]
+            loss = [r.loss for r in group]
             p = signed_rank_p(loss)
+            same = sum(r.comparison.verdict == validation.INDISTINGUISHABLE for r in group)
+            worst = f"{max(abs(r.comparison.z) for r in group):.1f}" if group else "n/a"
             lines.append(
                 f"| {objective} | {label} | {len(group)} | {_cell([r.best.best_fitness for r in group])} "
                 f"| {_cell([r.best.heldout for r in group if r.best.heldout is not None])} "
-                f"| {_cell([r.argos for r in group])} | {_cell(loss)} "
-                f"| {'n/a' if p is None else f'{p:.4f}'} |"
+                f"| {_cell([r.ours for r in group])} | {_cell([r.argos for r in group])} | {_cell(loss)} "
+                f"| {same} of {len(group)} | {worst} | {'n/a' if p is None else f'{p:.4f}'} |"
             )
     table = comparisons(rows)
     if table:
@@ -268,10 +305,9 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
             o: {label: [] for label in _labels(o)} for o in OBJECTIVES
         }
         for r in rows:
-            if r.best.heldout is not None:
-                points[r.best.objective][r.best.label].append((r.best.heldout, r.argos))
+            points[r.best.objective][r.best.label].append((r.ours, r.argos))
         path = figures.transfer_scatter(points, folder / "transfer_argos.png")
-        lines += ["", f"![held-out here against ARGoS](figures/{path.name})"]
+        lines += ["", f"![ours against ARGoS](figures/{path.name})"]
     return "\n".join(lines) + "\n"
 
 

@@ -28,7 +28,7 @@ from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import PROGRESS_HEADER
-from evolution_manager.evolution.run_config import DEFAULT_PROFILE
+from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.files import CsvLog, number, read_json, read_json_object, write_atomic
 from evolution_manager.studies import argos_transfer
 from evolution_manager.studies.argos_transfer import measure as argos_measure
@@ -493,7 +493,8 @@ def build_report(
             f"![progress](figures/{path.name})\n"
         )
     if (root / argos_transfer.RAW_FILE).exists():
-        transferred, missing = argos_transfer.transferred(root, best, seeds)
+        plan = RunConfig.from_json(runs[0].summary["config"])  # every run's model and trials: one plan
+        transferred, missing = argos_transfer.transferred(root, best, seeds, plan.world(), plan.trials)
         argos_transfer.write_csv(root, transferred)
         parts.append(argos_transfer.section(transferred, missing, seeds, folder))
     notes = root / NOTES_FILE

@@ -157,8 +157,8 @@ def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, pat
 
 
 def transfer_scatter(points: Mapping[str, Mapping[str, Sequence[tuple[float, float]]]], path: Path) -> Path:
-    """One panel per objective: each run's best tree as (our held-out score, ARGoS's score), one marker per
-    algorithm, and the diagonal where both simulators agree. ``points[objective][algorithm label]``."""
+    """One panel per objective: each run's best tree as (our score, ARGoS's score) on fresh scenarios, one
+    marker per algorithm, and the diagonal where both simulators agree. ``points[objective][label]``."""
     markers = ("o", "s", "^", "D", "v")
     figure, axes = plt.subplots(1, len(points), figsize=(4.2 * len(points), 4.0), squeeze=False)
     for axis, (objective, by_label) in zip(axes[0], points.items(), strict=True):
@@ -177,7 +177,7 @@ def transfer_scatter(points: Mapping[str, Mapping[str, Sequence[tuple[float, flo
         axis.set_ylim(low, high)
         axis.set_aspect("equal")
         axis.set_title(objective)
-        axis.set_xlabel("held-out here")
+        axis.set_xlabel("here (fresh scenarios)")
         axis.set_ylabel("ARGoS")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=8, loc="upper left")
