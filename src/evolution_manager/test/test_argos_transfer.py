@@ -158,7 +158,9 @@ def test_without_an_argos_build_it_stops_in_one_line_and_keeps_the_report(small_
 
 def test_bad_options_are_refused_in_one_line(small_experiment, capsys):
     assert report([str(small_experiment), "--argos-seeds", "0-2"]) == 2
-    assert "--argos-seeds" in capsys.readouterr().err
+    assert (
+        capsys.readouterr().err == "report: error: --argos-seeds: expected distinct seeds >= 1, got '0-2'\n"
+    )
     run = small_experiment / "runs" / "QD_nest" / "run00"
     assert report([str(run), "--argos-eval", "x.py"]) == 2
     assert "apply to an experiment folder, not to a run" in capsys.readouterr().err

@@ -545,6 +545,7 @@ def report(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--argos-jobs", type=positive_int, default=1, help="ARGoS evaluations at once (1)")
     try:
         args = parser.parse_args(argv)
+        seeds = argos_transfer.parse_seeds(args.argos_seeds)
     except UsageError as error:
         print(f"report: error: {error}", file=sys.stderr)
         return EXIT_USAGE
@@ -554,10 +555,8 @@ def report(argv: Sequence[str] | None = None) -> int:
 
             if args.beside is not None:
                 raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
-            seeds = argos_transfer.parse_seeds(args.argos_seeds)
             print(build_foraging_report(args.dir, args.argos_eval, seeds, args.argos_jobs))
         elif (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
-            seeds = argos_transfer.parse_seeds(args.argos_seeds)
             print(
                 build_report(
                     args.dir, args.beside, args.beside_title, args.argos_eval, seeds, args.argos_jobs
