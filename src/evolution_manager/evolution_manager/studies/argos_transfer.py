@@ -261,13 +261,13 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
         f"Each run's best tree on each objective it is compared on, scored in the authors' ARGoS code (their "
         f"2023 commit, through the project's harness; seeds {seed_text}, each a full evaluation of 10 "
         f"trials on fresh start poses, wheel gains and message drops) and here on {n} fresh scenarios "
-        "(our seeds 1-{n}, no run evolved on them). Loss: ours minus ARGoS, run by run (positive: the tree "
+        f"(our seeds 1-{n}, no run evolved on them). Loss: ours minus ARGoS, run by run (positive: the tree "
         "does worse in ARGoS); mean ± standard error over runs. Indistinguishable: the tree's own fitness "
         "within the validation's tolerance with |z| <= 4 (`docs/model.md`). Held-out: our held-out score "
         "(5 scenarios; under the shared design the same 5 for every run, so it carries their difficulty, "
-        f"common to every algorithm). Every tree in [{CSV_FILE}]({CSV_FILE}), ARGoS's rows in "
-        f"[{RAW_FILE}]({RAW_FILE}). Wilcoxon p: the loss against zero (signed-rank, two-sided, "
-        "uncorrected).\n".replace("{n}", str(n)),
+        f"common to every algorithm). Every tree in [{CSV_FILE}]({CSV_FILE}); ARGoS's rows in the "
+        f"experiment folder's `{RAW_FILE}`. Wilcoxon p: the loss against zero (signed-rank, two-sided, "
+        "uncorrected).\n",
     ]
     if missing:
         lines.append(
