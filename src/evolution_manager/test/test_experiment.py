@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from evolution_manager.studies.experiment import experiment, plan, shared_scenario_seed
 from evolution_manager.studies.report import report
 from evolution_manager.studies.significance import compare, holm
@@ -152,3 +154,64 @@ def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path):
     assert not (killed / "runs.csv").exists()
     assert experiment([*args, "--out", str(killed), "--no-progress"]) == 0
     assert (killed / "runs.csv").read_bytes() == (straight / "runs.csv").read_bytes()
+
+
+def _children(pid: int) -> set[int]:
+    """The live processes whose parent is ``pid``."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                found.add(int(entry.name))
+    return found
+
+
+def _alive(pids: set[int]) -> set[int]:
+    alive = set()
+    for pid in pids:
+        try:
+            state = (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            alive.add(pid)
+    return alive
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_signal_to_the_command_alone_stops_its_runs_too(tmp_path, signum):
+    """SIGTERM to the experiment's process (not its group, as a scheduler or `kill PID` sends it) stops it as
+    Ctrl-C does, exit 143, and its runs stop at once; SIGKILL takes its workers with it. The experiment
+    then continues to the same runs.csv as one never stopped."""
+    args = ["--runs", "1", "--evaluations", "400", "--processes", "2", "--checkpoint-every", "0"]
+    out = tmp_path / "stopped"
+    call = f"experiment({[*args, '--out', str(out), '--no-progress']!r})"
+    code = f"import sys; from evolution_manager.studies.experiment import experiment; sys.exit({call})"
+    process = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not list(out.glob("runs/*/run00/checkpoint.json")) and process.poll() is None:
+            assert time.monotonic() < deadline, "no run started"
+            time.sleep(0.1)
+        children = _children(process.pid)
+        assert len(children) >= 3  # the manager and two workers (and spawn's resource tracker)
+        os.kill(process.pid, signum)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    if signum == signal.SIGTERM:
+        assert process.returncode == 143 and "experiment: interrupted; run the same command again" in err
+    deadline = time.monotonic() + 20
+    while _alive(children) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _alive(children), "a worker outlived the experiment"
+    assert not (out / "runs.csv").exists(), "the signal came too late to interrupt the experiment"
+    assert experiment([*args, "--out", str(out), "--no-progress"]) == 0
+    straight = tmp_path / "straight"
+    assert experiment([*args, "--out", str(straight), "--no-progress"]) == 0
+    assert (out / "runs.csv").read_bytes() == (straight / "runs.csv").read_bytes()

@@ -30,23 +30,24 @@ cluster and the other way round; ``sessions.json`` records where each session ra
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import queue as queues
+import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
-from multiprocessing import Manager, get_context
+from multiprocessing import get_context, managers
 from pathlib import Path
 from typing import Protocol
 
 from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
 from bt_controller.library import Library, LibraryError, load_library
 from evolution_manager.arguments import (
-    EXIT_INTERRUPTED,
     EXIT_IO,
     EXIT_USAGE,
     Parser,
@@ -60,6 +61,7 @@ from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
+from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
 
 PLAN_FILE = "experiment.json"
@@ -331,21 +333,51 @@ def run_locally(
     """Every ``(config_data, root)`` of ``runs`` with :func:`run_one` in ``processes`` processes of this
     machine; yield ``(root, None)`` as each run finishes, ``(root, error)`` for one that failed (the others go
     on), as ``cluster.runs.map_runs`` does on a cluster. ``on_progress(root, produced)`` between results."""
-    with (
-        Manager() as manager,
-        ProcessPoolExecutor(max_workers=processes, mp_context=get_context("spawn")) as pool,
-    ):
+    with SyncManager() as manager:
         progress = manager.Queue()
-        futures = {
-            pool.submit(run_one, config_data, root, progress, checkpoint_interval): root
-            for config_data, root in runs
-        }
-        pending = set(futures)
-        while pending:
-            completed, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
-            _drain(progress, on_progress)
-            for future in completed:
-                yield futures[future], future.exception()
+        workers = manager.list()
+        pool = ProcessPoolExecutor(
+            max_workers=processes,
+            mp_context=get_context("spawn"),
+            initializer=_start_worker,
+            initargs=(workers,),
+        )
+        try:
+            futures = {
+                pool.submit(run_one, config_data, root, progress, checkpoint_interval): root
+                for config_data, root in runs
+            }
+            pending = set(futures)
+            while pending:
+                completed, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+                _drain(progress, on_progress)
+                for future in completed:
+                    yield futures[future], future.exception()
+        except BaseException:
+            # Interrupted (Ctrl-C, SIGTERM) or failing: stop the runs under way at once rather than wait for
+            # them; each continues from its last checkpoint (a killed run resumes to the same bytes).
+            for pid in list(workers):
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, signal.SIGKILL)
+            raise
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _start_worker(workers: managers.ListProxy[int]) -> None:
+    """A pool worker's start: it dies with the experiment's process, whatever kills that (no run goes on
+    adopted by PID 1), and says its PID so that an interrupted experiment can stop it."""
+    die_with_parent()
+    workers.append(os.getpid())
+
+
+class SyncManager(managers.SyncManager):
+    """``multiprocessing.Manager()`` whose server process dies with the experiment's process."""
+
+    def start(
+        self, initializer: Callable[..., object] | None = None, initargs: Iterable[object] = ()
+    ) -> None:
+        super().start(initializer or die_with_parent, initargs)
 
 
 class Planned(Protocol):
@@ -486,6 +518,7 @@ def execute(
 
     try:
         with ExitStack() as stack:
+            stack.enter_context(signals_as_interrupts())  # SIGTERM stops it as Ctrl-C does
             try:
                 client = stack.enter_context(open_client(cluster, say=say))
                 args.out.mkdir(parents=True, exist_ok=True)
@@ -537,11 +570,11 @@ def execute(
                     show()
                 if failures:  # the next stage builds on every run of this one
                     break
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as interruption:
         print(
             f"experiment: interrupted; run the same command again to continue ({args.out})", file=sys.stderr
         )
-        return EXIT_INTERRUPTED
+        return exit_status(interruption)
     if failures:
         print("experiment: some runs failed:\n  " + "\n  ".join(failures), file=sys.stderr)
         if full_disk:
