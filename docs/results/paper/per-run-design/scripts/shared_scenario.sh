@@ -2,7 +2,7 @@
 # Table 6's nest rows under the authors' design: GP_nest, QD_nest and GP_fnd re-run with the experiment's run
 # seeds, but every run on ONE shared scenario (--scenario-seed 1), then compared as table 6 compares them.
 #
-#   docs/results/paper/scripts/shared_scenario.sh experiments/paper runs/shared-scenario
+#   docs/results/paper/per-run-design/scripts/shared_scenario.sh experiments/paper runs/shared-scenario
 #
 # Two lanes in parallel (GP_fnd; GP_nest then QD_nest); a finished run is left alone when started again.
 set -euo pipefail

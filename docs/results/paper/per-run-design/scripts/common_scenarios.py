@@ -1,7 +1,7 @@
 """Table 6's nest rows: how much one scenario moves a tree's fitness, and the best nest trees of the three
 algorithms scored on common scenarios (the same 10 for every tree).
 
-    source ws/env.sh && python docs/results/paper/scripts/common_scenarios.py experiments/paper
+    source ws/env.sh && python docs/results/paper/per-run-design/scripts/common_scenarios.py experiments/paper
 
 For each run of GP_nest, GP_fnd and QD_nest it takes the best nest tree and evaluates it (10 trials) on the
 scenario seeds of the 10 GP_nest runs; it prints per algorithm the in-run best fitness, the mean on the common
