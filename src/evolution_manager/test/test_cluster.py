@@ -342,7 +342,9 @@ def wait_for(condition, timeout: float, what: str) -> None:
 
 
 def test_a_chunk_whose_worker_is_killed_mid_task_runs_again_elsewhere(client):
-    requests = [EvaluationRequest(tree, 7, 200) for tree in random_trees(11, 12)]  # seconds of work
+    # several seconds of work even on an idle machine (200 trials each took about 1 s there: the chunk could
+    # finish before the kill below)
+    requests = [EvaluationRequest(tree, 7, 1000) for tree in random_trees(11, 12)]
     evaluator = DaskEvaluator(client, "paper", chunk=len(requests))  # one chunk, on one worker
     client.wait_for_workers(2)
     pids = worker_pids(client)
