@@ -169,7 +169,7 @@ def _stack_slots(typingctx: object, n: types.Type) -> tuple[object, object] | No
     return types.CPointer(types.int32)(n), codegen
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def tree_at(trees: PackedTrees, t: int) -> FlatTree:
     """Views of tree ``t`` of a pack: the one place where a pack is cut into trees."""
     a, b = trees.node_offset[t], trees.node_offset[t + 1]
@@ -184,14 +184,14 @@ def tree_at(trees: PackedTrees, t: int) -> FlatTree:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def reset_memory(op: np.ndarray, memory: np.ndarray) -> None:
     """Set ``memory`` to the fresh state of the tree ``op``: -1 for inner nodes, 0 for leaves."""
     for i in range(len(op)):
         memory[i] = -1 if op[i] <= OP_PROB or op[i] == OP_SUCCESS else 0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def start_memory(op: np.ndarray, memory: np.ndarray, profile: int) -> None:
     """Set ``memory`` to the state a tree starts a chain with: ``reset_memory``, and under ``paper`` every
     probabilistic composite at its first child (A3, as ``semantics.new_memory``)."""
@@ -202,7 +202,7 @@ def start_memory(op: np.ndarray, memory: np.ndarray, profile: int) -> None:
                 memory[i] = 0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def tick(
     tree: FlatTree,
     memory: np.ndarray,
@@ -220,8 +220,9 @@ def tick(
     """
     # Locals: a field read inside the loop would cost a refcount.
     op, arg, first, nchild, children, draw = tree
-    slots: Any = _stack_slots(_STACK_SLOTS)  # type: ignore[call-arg]  # an intrinsic: numba passes the typing context
-    stack = numba.carray(slots, _STACK_SLOTS)  # ancestors of ``node``
+    # Ancestors of ``node``, indexed as a raw pointer (an array view would need reference counting, which
+    # the kernels inlining this go without).
+    stack: Any = _stack_slots(_STACK_SLOTS)  # type: ignore[call-arg]  # an intrinsic: numba passes the typing context
     depth = 0
     node = 0
     while True:
@@ -269,7 +270,7 @@ def tick(
             return status, np.int64(-1)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def tick_batch(
     trees: PackedTrees,
     robot_tree: np.ndarray,
@@ -292,7 +293,7 @@ def tick_batch(
         action_out[r] = action
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def run_ticks_kernel(
     trees: PackedTrees,
     robot_tree: np.ndarray,
@@ -324,7 +325,7 @@ class Run:
     memory: np.ndarray  # int8 (robots, max_nodes)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _reset_rows(trees: PackedTrees, robot_tree: np.ndarray, memory: np.ndarray, profile: int) -> None:
     for r in range(len(robot_tree)):
         op = tree_at(trees, robot_tree[r]).op

@@ -53,7 +53,7 @@ MAX_SEED = 2**63 - 1
 """Seeds are integers in [0, MAX_SEED]."""
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def mix64(z: np.uint64) -> np.uint64:
     """SplitMix64 finaliser: a bijective avalanche of 64 bits."""
     z = np.uint64(z)
@@ -62,25 +62,25 @@ def mix64(z: np.uint64) -> np.uint64:
     return z ^ (z >> np.uint64(31))
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def derive(key: np.uint64, value: int) -> np.uint64:
     """The key of the sub-stream ``value`` of stream ``key``."""
     return mix64(np.uint64(key) ^ mix64(np.uint64(value) + _GOLDEN))
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def uniform(key: np.uint64, counter: int) -> float:
     """Draw number ``counter`` of stream ``key``: a float uniform in [0, 1) with 53 random bits."""
     return float(derive(key, counter) >> np.uint64(11)) * _TO_UNIT
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def choose(key: np.uint64, counter: int, n: int) -> int:
     """Draw number ``counter`` of stream ``key`` as an integer uniform in [0, n)."""
     return min(int(uniform(key, counter) * n), n - 1)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def root_key(seed: int) -> np.uint64:
     """The root stream key of a seed."""
     return mix64(np.uint64(seed) ^ _SEED_SALT)
@@ -127,7 +127,7 @@ def derive_seed(seed: int, *path: int) -> int:
     return int(key_path(seed, *path)) & MAX_SEED
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def chain_keys(seed_key: np.uint64, chain: int, n_robots: int) -> np.ndarray:
     """Every stream key of one chain: ``keys[purpose, robot]`` (``len(PURPOSES)`` x ``n_robots``, uint64)."""
     tkey = derive(seed_key, chain)

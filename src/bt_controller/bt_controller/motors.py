@@ -27,13 +27,13 @@ _REVERSE_LEFT = ACTION_INDEX["reverse_left"]
 _REVERSE_RIGHT = ACTION_INDEX["reverse_right"]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def running_action(status: int, started: int) -> int:
     """The action a tick leaves running (finishing at the next tick), or -1."""
     return started if status == RUNNING else -1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def motors_after_tick(status: int, started: int, resumed: int) -> int:
     """The motors (an action index) after a tick that returned ``status`` and started ``started`` (-1 for
     none), ``resumed`` being the action the previous tick left running (-1 for none)."""
@@ -44,7 +44,7 @@ def motors_after_tick(status: int, started: int, resumed: int) -> int:
     return STOP
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def movement_of(motors: int) -> int:
     """A tick's contribution to the movement descriptor: +1 forward, -1 reverse
     (``CBlackBoard.cpp:494-504``)."""
@@ -55,7 +55,7 @@ def movement_of(motors: int) -> int:
     return 0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def rotation_of(motors: int) -> int:
     """A tick's contribution to the rotation descriptor: +1 forward_left or reverse_right, -1 forward_right or
     reverse_left (``CBlackBoard.cpp:506-516``)."""

@@ -60,7 +60,7 @@ class PerceptionSettings(Protocol):
     def profile(self) -> int: ...
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def estimate(
     in_nest: bool,
     on_food: bool,
@@ -106,7 +106,7 @@ def estimate(
     return nest, food, total / p.density_divisor, nest_source, food_source, nearest
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def push_sample(window: np.ndarray, count: int, nest: float, food: float, density: float) -> int:
     """Store one raw sample (nest, food, density) in a ring ``window`` (w x 3) holding ``count`` samples so
     far; returns the new count."""
@@ -117,7 +117,7 @@ def push_sample(window: np.ndarray, count: int, nest: float, food: float, densit
     return count + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def smoothed(window: np.ndarray, count: int) -> tuple:
     """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first (the mean
     over the samples held, ``CBlackBoard.cpp:64-83``)."""
@@ -136,21 +136,21 @@ def smoothed(window: np.ndarray, count: int) -> tuple:
     return nest / m, food / m, density / m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def broadcast_value(smoothed_estimate: float) -> float:
     """What a robot broadcasts for a smoothed estimate: whole centimetres, truncated (the code sends a
     ``short int``, ``footbot_bt.cpp:444-445``), returned in mm."""
     return 10.0 * math.floor(smoothed_estimate / 10.0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def region_value(inside: bool, p: PerceptionSettings) -> float:
     """The value broadcast at a chain's first step: 0 inside the region, else the cap
     (``footbot_bt.cpp:144-145``)."""
     return 0.0 if inside else p.estimate_cap
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
     """``(carrying, delivered)`` after a sensing step's ground reading (``footbot_bt.cpp:243-254`` at
     a73e4af): a robot on food carries food (it is unlimited: no item, no pick-up time); a robot in the nest
@@ -161,14 +161,14 @@ def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
     return carrying, False
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def start_carrying(carrying: bool, on_food: bool) -> bool:
     """The carrying flag after a trial's first step, which senses nothing but the start pose's ground
     (``footbot_bt.cpp:134-137``, ``CBlackBoard.cpp:124-145`` at a73e4af): set on food; no delivery."""
     return carrying or on_food
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def blackboard(
     in_nest: bool,
     on_food: bool,

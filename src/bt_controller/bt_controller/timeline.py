@@ -71,57 +71,57 @@ class TimelineSettings(Protocol):
     def chain_trials(self) -> int: ...
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def trial_steps(t: TimelineSettings) -> int:
     """Control steps in one trial: 160 under ``paper``, 176 under ``clean``."""
     controlled = t.ticks * t.steps_per_tick
     return controlled + t.initial_step if t.profile == CLEAN else controlled
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def chain_length(t: TimelineSettings) -> int:
     """Trials per chain: ``chain_trials`` under ``paper``, 1 under ``clean`` (every trial a fresh start)."""
     return t.chain_trials if t.profile == PAPER else 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def step_in_trial(t: TimelineSettings, k: int) -> int:
     """The 1-based step of chain step ``k`` within its trial."""
     return (k - 1) % trial_steps(t) + 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def trial_in_chain(t: TimelineSettings, k: int) -> int:
     """The 0-based position within its chain of the trial that chain step ``k`` belongs to."""
     return (k - 1) // trial_steps(t)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def senses(t: TimelineSettings, k: int) -> bool:
     """Whether the robot reads its sensors at step ``k``: every step but a trial's first."""
     return step_in_trial(t, k) != 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def region_broadcast(k: int) -> bool:
     """Whether step ``k`` broadcasts the region values (0 inside a region, else the cap): the chain's
     first."""
     return k == 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def broadcasts(k: int) -> bool:
     """Whether step ``k`` broadcasts the smoothed values and sets the wheels: every step after the first."""
     return k > 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def refreshes(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` (a sensing step) refreshes the smoothed values."""
     return k == 2 or k % t.steps_per_tick == 0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def ticks_at(t: TimelineSettings, k: int) -> bool:
     """Whether the robot ticks its tree at step ``k``."""
     if k % t.steps_per_tick != 0:
@@ -129,7 +129,7 @@ def ticks_at(t: TimelineSettings, k: int) -> bool:
     return t.profile == PAPER or step_in_trial(t, k) > t.initial_step
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def tick_number(t: TimelineSettings, k: int) -> int:
     """The 0-based number within the chain of the tick at step ``k`` (a tick step): the tree's draw
     counter."""
@@ -138,13 +138,13 @@ def tick_number(t: TimelineSettings, k: int) -> int:
     return (step_in_trial(t, k) - t.initial_step) // t.steps_per_tick - 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def is_initial(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` takes a trial's initial values."""
     return step_in_trial(t, k) == t.initial_step
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def is_final(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` is a trial's last: final values, descriptors, counters reset."""
     return step_in_trial(t, k) == trial_steps(t)

@@ -43,13 +43,13 @@ drop_stale_cache(
 HALF_PI = 0.5 * math.pi
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _differs(a: float, b: float) -> bool:
     """Whether two floats differ in a bit (a NaN always counts as differing: the passes then go on)."""
     return a != b or (a == 0.0 and math.copysign(1.0, a) != math.copysign(1.0, b))
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _solve_pair(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, linear: float, angular: float,
                 p: Params) -> None:  # fmt: skip
     """The solver passes of a substep whose only contact is robots i < j: each pass the contact
@@ -104,7 +104,7 @@ def _solve_pair(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, linear
     contacts[i, j, 1] = ct
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _robot_moved(motion: np.ndarray, i: int, before: np.ndarray) -> bool:
     """Whether robot i's velocity, drive impulse or wall impulses differ from ``before`` (10 values)."""
     moved = False
@@ -115,13 +115,13 @@ def _robot_moved(motion: np.ndarray, i: int, before: np.ndarray) -> bool:
     return moved
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _solve_all(x: np.ndarray, y: np.ndarray, motion: np.ndarray, contacts: np.ndarray, pairs: np.ndarray,
-               near: int, at_walls: int, linear: float, angular: float, p: Params) -> None:  # fmt: skip
+               before: np.ndarray, near: int, at_walls: int, linear: float, angular: float,
+               p: Params) -> None:  # fmt: skip
     """The solver passes of a substep with contacts, as ``world.physics_step`` runs them, stopped early once
-    a pass moves no number of the robots in contact and their contacts."""
+    a pass moves no number of the robots in contact and their contacts (``before``: n x 10 workspace)."""
     n = x.shape[0]
-    before = np.empty((n, 10))
     for iteration in range(p.solver_iterations):
         for i in range(n):
             if motion[i, 9] == 1.0:
@@ -153,7 +153,7 @@ def _solve_all(x: np.ndarray, y: np.ndarray, motion: np.ndarray, contacts: np.nd
             return
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def physics_step(
     x: np.ndarray,
     y: np.ndarray,
@@ -164,9 +164,10 @@ def physics_step(
     motion: np.ndarray,
     contacts: np.ndarray,
     pairs: np.ndarray,
+    before: np.ndarray,
 ) -> None:
-    """``world.physics_step``, to the same bits, faster (see the module). Its steps are written out here as
-    there (an inlined helper that takes arrays and loops costs reference counts at every call)."""
+    """``world.physics_step``, to the same bits, faster (see the module); ``before`` (n x 10) is the
+    solver's workspace. Allocates nothing, so that a kernel without reference counting can inline it."""
     n = x.shape[0]
     substeps = p.physics_substeps
     h = p.step_dt / substeps
@@ -263,4 +264,4 @@ def physics_step(
                 if motion[k, 10] == 1.0 and k != i and k != j:
                     world._drive_pass(motion, k, linear, angular)
         else:
-            _solve_all(x, y, motion, contacts, pairs, near, at_walls, linear, angular, p)
+            _solve_all(x, y, motion, contacts, pairs, before, near, at_walls, linear, angular, p)

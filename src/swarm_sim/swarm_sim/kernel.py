@@ -61,7 +61,7 @@ drop_stale_cache(
 )
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _source_bearing(
     needed: bool, i: int, source: int, x: np.ndarray, y: np.ndarray, heading: np.ndarray
 ) -> float:
@@ -71,7 +71,7 @@ def _source_bearing(
     return world.bearing(x[i], y[i], heading[i], x[source], y[source])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
     """Which of the blackboard's side pairs the tree reads: (nest, food, robot), from its condition nodes."""
     read = np.zeros(3, dtype=np.bool_)
@@ -171,6 +171,8 @@ class Swarm(NamedTuple):
     """(n, n, ``world.CONTACT_FIELDS``) the contacts' impulses carried between physics substeps."""
     pairs: np.ndarray
     """Workspace of ``world.physics_step``: the pairs of robots near enough to touch in a step."""
+    solver: np.ndarray
+    """(n, 10) workspace of ``fast_world.physics_step``'s solver."""
     gains: np.ndarray
     """(left, right) wheel gains."""
     broadcast_nest: np.ndarray
@@ -257,7 +259,7 @@ class Recording(NamedTuple):
     """(steps, n) int64: each robot's deliveries in the trial after the step."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def new_recording(steps: int, n: int) -> Recording:
     """A zeroed recording of ``steps`` steps of ``n`` robots (0 steps: the batch road's, which records
     nothing)."""
@@ -276,7 +278,7 @@ def new_recording(steps: int, n: int) -> Recording:
     )
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _last_tick(p: Params, k: int) -> int:
     """The number of the last tick at or before chain step ``k``, or -1 if there was none."""
     for s in range(k, 0, -1):
@@ -285,7 +287,7 @@ def _last_tick(p: Params, k: int) -> int:
     return -1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # makes arrays: with reference counting (``_steps``)
 def _record_step(
     rec: Recording,
     k: int,
@@ -347,7 +349,7 @@ def _record_step(
         rec.fitness[row, :] = np.nan
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p: Params) -> Swarm:
     n = p.n_robots
     width = 1
@@ -363,6 +365,7 @@ def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p:
         np.zeros((n, world.MOTION_FIELDS)),
         np.zeros((n, n, world.CONTACT_FIELDS)),
         np.zeros((n * (n - 1) // 2, 2), dtype=np.int64),
+        np.zeros((n, 10)),
         gains,
         np.full(n, p.estimate_cap),
         np.full(n, p.estimate_cap),
@@ -381,12 +384,12 @@ def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _new_cargo(n: int) -> Cargo:
     return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2)))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _new_inbox(n: int) -> Inbox:
     return Inbox(
         np.zeros(n, dtype=np.int64),
@@ -397,7 +400,7 @@ def _new_inbox(n: int) -> Inbox:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def simulate_chain(
     trees: PackedTrees,
     robot_tree: np.ndarray,
@@ -414,31 +417,88 @@ def simulate_chain(
     """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
     ``trees``; write the chain's trial ``t``'s ``world.N_VALUES`` values into ``values_out[t]`` and its start
     and end poses into ``poses_out[t]`` (2 x n_robots x 3), and the chain's trial ``recorded`` step by step
-    into ``rec`` (-1: none)."""
+    into ``rec`` (-1: none). Makes the chain's state, then runs its steps (``_steps``)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
-    position_keys = keys[POSITION]
-    heading_keys = keys[HEADING]
-    drop_keys = keys[DROPS]
-    tree_keys = keys[TREE]
     swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
-    # Locals for the loops below (a field read inside a loop would cost a reference count each time).
-    (x, y, heading, dynamics, contacts, pairs, gains, broadcast_nest, broadcast_food, raw_nest, raw_food,
-     window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
-     initial) = swarm  # fmt: skip
-    counts_in, senders, ranges, nest_values, food_values = _new_inbox(n)
-    robot_drive = world.drive(gains, p)
-    samples = 0
-    board = np.zeros(N_CONDITIONS, dtype=np.bool_)
-    # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
-    shared = tree_at(trees, robot_tree[0])
-    uniform = True
     sides = np.zeros((n, 3), dtype=np.bool_)
     for i in range(n):
         own = tree_at(trees, robot_tree[i])
         sides[i] = _sides_read(own.op, own.arg)
+    _steps(
+        trees,
+        robot_tree,
+        keys,
+        sides,
+        swarm,
+        _new_cargo(n),
+        _new_inbox(n),
+        world.drive(swarm.gains, p),
+        np.zeros(N_CONDITIONS, dtype=np.bool_),
+        trials,
+        gap,
+        p,
+        values_out,
+        poses_out,
+        recorded,
+        rec,
+    )
+
+
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # makes an array: with reference counting
+def _score_trial(
+    swarm: Swarm, cargo: Cargo, gap: float, p: Params, values_out: np.ndarray, position: int
+) -> None:
+    """Write a finished trial's values into ``values_out[position]`` (``world.trial_values``, which makes an
+    array: called from ``_steps``, which cannot own one, as a function of its own)."""
+    values = world.trial_values(
+        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.food, cargo.deliveries, gap, p
+    )
+    for c in range(values.shape[0]):
+        values_out[position, c] = values[c]
+
+
+# No reference counting (numba's ``_nrt=False``, an option of numba's own, pinned in ws/requirements.txt):
+# each array view this loop makes (a robot's row, a tree of the pack, an inlined helper's array arguments)
+# would otherwise cost two atomic operations, which were about a third of the kernel's time. So the loop and
+# what it inlines make no array; what needs one (``_score_trial``, ``_record_step``) is compiled apart with
+# reference counting (``_nrt=True``, else it would inherit this one's) and frees what it makes.
+@numba.njit(cache=True, error_model="numpy", _nrt=False)
+def _steps(
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
+    keys: np.ndarray,
+    sides: np.ndarray,
+    swarm: Swarm,
+    cargo: Cargo,
+    inbox: Inbox,
+    robot_drive: np.ndarray,
+    board: np.ndarray,
+    trials: int,
+    gap: float,
+    p: Params,
+    values_out: np.ndarray,
+    poses_out: np.ndarray,
+    recorded: int,
+    rec: Recording,
+) -> None:
+    """The control steps of ``simulate_chain``'s chain, from the state it made."""
+    n = p.n_robots
+    position_keys = keys[POSITION]
+    heading_keys = keys[HEADING]
+    drop_keys = keys[DROPS]
+    tree_keys = keys[TREE]
+    (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast_nest, broadcast_food, raw_nest, raw_food,
+     window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
+     initial) = swarm  # fmt: skip
+    counts_in, senders, ranges, nest_values, food_values = inbox
+    carrying, deliveries, food = cargo
+    samples = 0
+    # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
+    shared = tree_at(trees, robot_tree[0])
+    uniform = True
+    for i in range(n):
         uniform = uniform and robot_tree[i] == robot_tree[0]
-    carrying, deliveries, food = _new_cargo(n)
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
         position = timeline.trial_in_chain(p, k)
@@ -448,7 +508,7 @@ def simulate_chain(
                 poses_out[position, 0, i, 0] = x[i]
                 poses_out[position, 0, i, 1] = y[i]
                 poses_out[position, 0, i, 2] = heading[i]
-        fast_world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs)
+        fast_world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs, solver)
         sensing = timeline.senses(p, k)
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the
@@ -527,7 +587,9 @@ def simulate_chain(
                 broadcast_nest[i] = world.broadcast_value(smooth[i, 0])
                 broadcast_food[i] = world.broadcast_value(smooth[i, 1])
         if timeline.is_initial(p, k):
-            initial[:, :] = smooth
+            for i in range(n):
+                for c in range(3):
+                    initial[i, c] = smooth[i, c]
         if position == recorded:
             _record_step(
                 rec,
@@ -549,21 +611,21 @@ def simulate_chain(
         if timeline.is_final(p, k):
             for i in range(n):
                 food[i, 1] = world.food_distance(x[i], y[i], gap, p)
-            values = world.trial_values(initial, smooth, counts, motion, food, deliveries, gap, p)
-            for c in range(values.shape[0]):
-                values_out[position, c] = values[c]
+            _score_trial(swarm, cargo, gap, p, values_out, position)
             for i in range(n):
                 poses_out[position, 1, i, 0] = x[i]
                 poses_out[position, 1, i, 1] = y[i]
                 poses_out[position, 1, i, 2] = heading[i]
-            counts[:, :] = 0
-            motion[:, :] = 0
-            # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
-            carrying[:] = False
-            deliveries[:] = 0
+            for i in range(n):
+                counts[i, :] = 0
+                motion[i, 0] = 0
+                motion[i, 1] = 0
+                # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
+                carrying[i] = False
+                deliveries[i] = 0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
     """Run job ``j`` into its rows of the outputs."""
     a = jobs.row[j]
@@ -583,7 +645,7 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def run_jobs(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
     """Run every job ``j`` of ``jobs`` (the robots' trees of ``trees``, seed key, chain, trials, gap) in world
     ``params`` into its rows of ``out``."""
@@ -598,7 +660,7 @@ def run_jobs_parallel(trees: PackedTrees, params: Params, jobs: Jobs, out: Outpu
         _run_job(j, trees, params, jobs, out)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def record_chain(
     trees: PackedTrees,
     robot_tree: np.ndarray,

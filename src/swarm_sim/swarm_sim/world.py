@@ -12,7 +12,9 @@
 Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
 kernels call them inline and the reference road and the nodes call the very same compiled code from Python,
 robot by robot, so both roads compute every number with the same operations in the same order. Arguments
-``p`` are ``config.Params``.
+``p`` are ``config.Params``. They, and every function the kernels inline, are compiled with numba's
+``error_model="numpy"``: a division by zero gives IEEE's infinity or NaN (as the authors' C++ does) rather
+than raising, so no division pays for a test of its divisor (none of the model's divisors is zero).
 
 Conventions: a robot's readings of one sensing step are the messages it received, ordered by sender id;
 what a robot broadcasts at step ``k`` reaches the others at step ``k + 1``.
@@ -85,7 +87,7 @@ TWO_PI = 2.0 * math.pi
 # ---------------------------------------------------------------------------------------------------- (a)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def wrap_angle(a: float) -> float:
     """``a`` mapped into [-pi, pi) (one turn of correction at most on each side, as steps are small)."""
     if a >= math.pi:
@@ -95,12 +97,13 @@ def wrap_angle(a: float) -> float:
     return a
 
 
-@numba.njit(cache=True, inline="always")
-def _free(x: np.ndarray, y: np.ndarray, i: int, cx: float, cy: float, present: np.ndarray, p: Params) -> bool:
-    """Whether robot ``i`` centred at (cx, cy) overlaps no other present robot where that one stands now."""
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _free(x: np.ndarray, y: np.ndarray, i: int, cx: float, cy: float, everyone: bool, p: Params) -> bool:
+    """Whether robot ``i`` centred at (cx, cy) overlaps no other robot standing in the arena where that one
+    stands now: every robot when ``everyone``, else (at a chain's start) the robots placed before ``i``."""
     min_d2 = (2.0 * p.robot_radius) ** 2
     for j in range(x.shape[0]):
-        if j != i and present[j]:
+        if j != i and (everyone or j < i):
             dx = x[j] - cx
             dy = y[j] - cy
             if dx * dx + dy * dy < min_d2:
@@ -108,7 +111,7 @@ def _free(x: np.ndarray, y: np.ndarray, i: int, cx: float, cy: float, present: n
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def place_robots(
     x: np.ndarray,
     y: np.ndarray,
@@ -130,14 +133,11 @@ def place_robots(
     keeps its pose.
     """
     n = x.shape[0]
-    present = np.zeros(n, dtype=np.bool_)
     if position == 0:
         for i in range(n):
             x[i] = 0.0
             y[i] = 0.0
             heading[i] = 0.0
-    else:
-        present[:] = True
     side = 2.0 * p.start_half
     for i in range(n):
         h = TWO_PI * uniform(heading_keys[i], position) - math.pi
@@ -145,15 +145,14 @@ def place_robots(
         for attempt in range(p.max_start_attempts):
             cx = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt)
             cy = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt + 1)
-            if _free(x, y, i, cx, cy, present, p):
+            if _free(x, y, i, cx, cy, position > 0, p):
                 x[i] = cx
                 y[i] = cy
                 heading[i] = h
                 break
-        present[i] = True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     """Each robot's (left, right) wheel gains, drawn once per chain: gain_low + gain_step * U{0 ..
     gain_levels - 1} (``footbot_bt.cpp:73-80``: (90 + rand() % 20) / 100, the right wheel first: draw 0 of
@@ -202,7 +201,7 @@ def new_dynamics(n_robots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def drive(gains: np.ndarray, p: Params) -> np.ndarray:
     """Every robot's target (speed along its heading, turn rate) for every action (n_robots x actions x 2),
     from its wheel gains: each wheel at (action's setting) x wheel speed x gain (``footbot_bt.h:41-47``), and
@@ -219,7 +218,7 @@ def drive(gains: np.ndarray, p: Params) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _drive_solve(
     vx: float,
     vy: float,
@@ -259,7 +258,7 @@ def _drive_solve(
     return vx, vy, w, ax, ay, aw
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _drive_pass(motion: np.ndarray, i: int, linear: float, angular: float) -> None:
     """One pass of robot i's drive (``_drive_solve``), in place. (Here and below ``motion`` and ``contacts``
     are indexed whole: a row view would cost a reference count.)"""
@@ -278,7 +277,7 @@ def _drive_pass(motion: np.ndarray, i: int, linear: float, angular: float) -> No
     )
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _contact_push(nx: float, ny: float, r: float, dn: float, dt: float, p: Params) -> tuple:
     """What a normal impulse ``dn`` and a tangential one ``dt`` (per unit mass) at the contact of robots
     i < j (unit normal (nx, ny) from i to j, ``r`` from each centre) do to them: (jx, jy, turn), jx and jy
@@ -290,7 +289,7 @@ def _contact_push(nx: float, ny: float, r: float, dn: float, dt: float, p: Param
     return jx, jy, turn
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _apply_contact(
     motion: np.ndarray, contacts: np.ndarray, i: int, j: int, dn: float, dt: float, p: Params
 ) -> None:
@@ -305,7 +304,7 @@ def _apply_contact(
     motion[j, 2] -= turn
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _contact_solve(
     dvx: float, dvy: float, spin: float, old_n: float, old_t: float, nx: float, ny: float, r: float, p: Params
 ) -> tuple:
@@ -322,7 +321,7 @@ def _contact_solve(
     return new_n, new_t
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _contact_pass(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, p: Params) -> None:
     """One pass of the contact of robots i < j (``_contact_solve``), in place."""
     old_n = contacts[i, j, 0]
@@ -343,7 +342,7 @@ def _contact_pass(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, p: P
     _apply_contact(motion, contacts, i, j, new_n - old_n, new_t - old_t, p)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _apply_wall(motion: np.ndarray, i: int, axis: int, r: float, dn: float, dt: float, p: Params) -> None:
     """Apply a normal impulse ``dn`` (into the wall) and a tangential one ``dt`` (per unit mass) to robot i at
     its contact, ``r`` from its centre, with the wall across ``axis``."""
@@ -358,7 +357,7 @@ def _apply_wall(motion: np.ndarray, i: int, axis: int, r: float, dn: float, dt: 
     motion[i, 2] -= r * dt / (2.0 * p.robot_radius * p.robot_radius)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _wall_pass(motion: np.ndarray, i: int, axis: int, r: float, p: Params) -> None:
     """One pass of robot i's contact with the wall across ``axis`` (0: x, 1: y), the wall a static body: no
     motion into it, and Coulomb friction (``wall_friction``) against the sliding of the robot's surface
@@ -382,7 +381,7 @@ def _wall_pass(motion: np.ndarray, i: int, axis: int, r: float, p: Params) -> No
     _apply_wall(motion, i, axis, r, new_n - old_n, new_t - old_t, p)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _near_pairs(x: np.ndarray, y: np.ndarray, motion: np.ndarray, contacts: np.ndarray, pairs: np.ndarray,
                 p: Params) -> int:  # fmt: skip
     """The pairs i < j that could touch during this step, into ``pairs`` (both robots flagged to move through
@@ -429,7 +428,7 @@ def _near_pairs(x: np.ndarray, y: np.ndarray, motion: np.ndarray, contacts: np.n
     return count
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _find_wall(motion: np.ndarray, i: int, position: float, axis: int, p: Params) -> float:
     """Whether robot i (centre at ``position`` along ``axis``) overlaps the wall across that axis: its lever
     to the contact point, its cached impulses applied first when it touched at the last substep too; 0.0
@@ -452,13 +451,13 @@ def _find_wall(motion: np.ndarray, i: int, position: float, axis: int, p: Params
     return r
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _wall_lever(position: float, p: Params) -> float:
     """The lever of a robot's contact with a wall it overlaps: to the middle of the overlap."""
     return p.robot_radius - 0.5 * (abs(position) + p.robot_radius - p.arena_half)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def physics_step(
     x: np.ndarray,
     y: np.ndarray,
@@ -586,7 +585,7 @@ def physics_step(
 # ---------------------------------------------------------------------------------------------------- (b)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def ground(x: float, y: float, gap: float, p: Params) -> tuple:
     """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) in an arena with ``gap``
     (``footbot_bt.cpp:240-247``: r < 0.5 m, r >= 0.5 m + gap)."""
@@ -595,7 +594,7 @@ def ground(x: float, y: float, gap: float, p: Params) -> tuple:
     return d2 < p.nest_radius * p.nest_radius, d2 >= food_radius * food_radius
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
     """Whether a third robot's body cuts the segment between the centres of robots ``i`` and ``j``.
 
@@ -620,7 +619,7 @@ def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
     return hit
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def sense_step(
     x: np.ndarray,
     y: np.ndarray,
@@ -675,7 +674,7 @@ def sense_step(
                 counts[j] = c + 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) -> float:
     """Bearing of (x_other, y_other) from a robot at (x, y) facing ``heading``, in [-pi, pi)."""
     return wrap_angle(math.atan2(y_other - y, x_other - x) - heading)
@@ -688,20 +687,20 @@ def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) 
 # ~15 %. These wrappers are compiled only where a kernel inlines them (or on a first call from Python); no
 # disk cache, as their source file is not this one.
 
-estimate = numba.njit(inline="always")(perception.estimate.py_func)
-push_sample = numba.njit(inline="always")(perception.push_sample.py_func)
-smoothed = numba.njit(inline="always")(perception.smoothed.py_func)
-broadcast_value = numba.njit(inline="always")(perception.broadcast_value.py_func)
-region_value = numba.njit(inline="always")(perception.region_value.py_func)
-blackboard = numba.njit(inline="always")(perception.blackboard.py_func)
-carry = numba.njit(inline="always")(perception.carry.py_func)
-start_carrying = numba.njit(inline="always")(perception.start_carrying.py_func)
+estimate = numba.njit(error_model="numpy", inline="always")(perception.estimate.py_func)
+push_sample = numba.njit(error_model="numpy", inline="always")(perception.push_sample.py_func)
+smoothed = numba.njit(error_model="numpy", inline="always")(perception.smoothed.py_func)
+broadcast_value = numba.njit(error_model="numpy", inline="always")(perception.broadcast_value.py_func)
+region_value = numba.njit(error_model="numpy", inline="always")(perception.region_value.py_func)
+blackboard = numba.njit(error_model="numpy", inline="always")(perception.blackboard.py_func)
+carry = numba.njit(error_model="numpy", inline="always")(perception.carry.py_func)
+start_carrying = numba.njit(error_model="numpy", inline="always")(perception.start_carrying.py_func)
 
 
 # ---------------------------------------------------------------------------------------------------- (d)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def food_distance(x: float, y: float, gap: float, p: Params) -> float:
     """A robot's true distance from the food region: max(0, R - r) with R = nest_radius + gap, 0 on food
     (``CBlackBoard.cpp:185-201, 276-292`` at a73e4af; the inverse food objective's positions)."""
@@ -710,7 +709,7 @@ def food_distance(x: float, y: float, gap: float, p: Params) -> float:
     return 0.0 if r >= radius else radius - r
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def robot_objectives(
     initial: np.ndarray,
     final: np.ndarray,
@@ -740,7 +739,7 @@ def robot_objectives(
     return density, nest, food, idensity, inest, ifood, float(deliveries)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def robot_descriptors(counts: np.ndarray, movement: int, rotation: int, p: Params) -> tuple:
     """(movement, rotation, conditionality) of one robot in one trial, each in [0, 1].
 
@@ -759,7 +758,7 @@ def robot_descriptors(counts: np.ndarray, movement: int, rotation: int, p: Param
     return (movement + ticks) / (2.0 * ticks), (rotation + ticks) / (2.0 * ticks), conditionality
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def trial_values(
     initial: np.ndarray,
     final: np.ndarray,
@@ -789,7 +788,7 @@ def trial_values(
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mean_values(per_trial: np.ndarray) -> np.ndarray:
     """An evaluation's values: per-trial values (trials x ``N_VALUES``) averaged in trial order."""
     out = np.zeros(N_VALUES)
