@@ -88,12 +88,10 @@ def render(
             f"leaves and depth {most_depth} (draw it as svg, or use text, xml or dot)"
         )
     import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib import pyplot as plt
+    from matplotlib.figure import Figure  # not pyplot: no half-second import, no figure kept until closed
     from matplotlib.patches import FancyBboxPatch
 
-    figure = plt.figure(figsize=size)
+    figure = Figure(figsize=size)
     width, height = leaves, depth + 1
     axes = figure.add_axes((0, 0, 1, 1))
     axes.set_xlim(-0.6, width - 0.4)
@@ -131,5 +129,4 @@ def render(
     # no date and a fixed salt for the SVG's element ids: the same tree gives the same bytes
     with matplotlib.rc_context({"svg.hashsalt": "bt_controller.render"}):
         figure.savefig(path, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
-    plt.close(figure)
     return path

@@ -138,12 +138,11 @@ def adaptation_figure(document: dict, path: Path) -> Path:
     comparison."""
     from evolution_manager.viewing import figures
 
-    plt = figures.plt
     tried = document["tried"]
     x = [t["trial"] for t in tried]
     fitness = [t["fitness"] for t in tried]
     best = [max(fitness[: k + 1]) for k in range(len(fitness))]
-    figure, axis = plt.subplots(figsize=(6.4, 4.0), constrained_layout=True)
+    figure, axis = figures.subplots(figsize=(6.4, 4.0), constrained_layout=True)
     axis.plot(x, [t["prior"] for t in tried], "x", color="0.6", label="prior (repertoire fitness)")
     axis.plot(x, fitness, "o", color="tab:blue", label="fitness in the changed world")
     axis.step(x, best, where="post", color="tab:red", label="best so far")

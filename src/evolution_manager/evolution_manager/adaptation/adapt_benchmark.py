@@ -354,11 +354,10 @@ def curves_figure(
     ceiling."""
     from evolution_manager.viewing import figures
 
-    plt = figures.plt
     conditions = list(summary["conditions"])
     columns = min(3, len(conditions))
     rows = math.ceil(len(conditions) / columns)
-    figure, axes = plt.subplots(rows, columns, figsize=(5.0 * columns, 3.6 * rows), squeeze=False)
+    figure, axes = figures.subplots(rows, columns, figsize=(5.0 * columns, 3.6 * rows), squeeze=False)
     for axis, condition in zip(axes.flat, conditions, strict=False):
         for method in METHODS:
             runs = curves.get((condition, method))

@@ -38,17 +38,15 @@ def scene(bag: Path, step: int) -> tuple[list, list, int]:
 
 def draw(arena: list, robots: list, title: str, out: Path) -> None:
     """Draw the markers top-down (x right, y up, metres) to ``out``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Circle, FancyArrow, Polygon
+
+    from evolution_manager.viewing.figures import subplots
 
     def colour(m: Any) -> tuple[float, float, float, float]:  # a Marker as rosbags reads it (untyped)
         c = m.color
         return (c.r, c.g, c.b, c.a)
 
-    figure, axes = plt.subplots(figsize=(8, 8))
+    figure, axes = subplots(figsize=(8, 8))
     for m in [*arena, *robots]:
         x, y = m.pose.position.x, m.pose.position.y
         if m.type == TRIANGLE_LIST:
@@ -76,7 +74,6 @@ def draw(arena: list, robots: list, title: str, out: Path) -> None:
     axes.set_title(title)
     out.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(out, dpi=110, bbox_inches="tight")
-    plt.close(figure)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
