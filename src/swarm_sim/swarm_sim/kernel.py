@@ -287,7 +287,8 @@ def _last_tick(p: Params, k: int) -> int:
     return -1
 
 
-@numba.njit(cache=True, error_model="numpy", _nrt=True)  # makes arrays: with reference counting (``_steps``)
+# Makes arrays: compiled with reference counting, which it would otherwise inherit from ``_steps``.
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
 def _record_step(
     rec: Recording,
     k: int,
@@ -445,7 +446,8 @@ def simulate_chain(
     )
 
 
-@numba.njit(cache=True, error_model="numpy", _nrt=True)  # makes an array: with reference counting
+# Makes an array: compiled with reference counting, which it would otherwise inherit from ``_steps``.
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
 def _score_trial(
     swarm: Swarm, cargo: Cargo, gap: float, p: Params, values_out: np.ndarray, position: int
 ) -> None:
@@ -463,7 +465,7 @@ def _score_trial(
 # would otherwise cost two atomic operations, which were about a third of the kernel's time. So the loop and
 # what it inlines make no array; what needs one (``_score_trial``, ``_record_step``) is compiled apart with
 # reference counting (``_nrt=True``, else it would inherit this one's) and frees what it makes.
-@numba.njit(cache=True, error_model="numpy", _nrt=False)
+@numba.njit(cache=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
 def _steps(
     trees: PackedTrees,
     robot_tree: np.ndarray,
