@@ -6,7 +6,8 @@ step, and the roads' parity tests compare whole trials) while skipping work whos
 
 - A substep's solver passes stop at a fixed point: once a whole pass over the contacts and the drives of the
   robots in contact leaves every velocity and impulse bit for bit as it was, the passes left would compute
-  the same again. (Bits, not values: a zero that changes its sign counts as a change.)
+  the same again. (Bits, not values, compared as integers without branches: a zero that changes its sign
+  counts as a change.)
 - The commonest contact, one pair of robots and no wall, is solved in locals (``_solve_pair``) with the very
   expressions of ``world._contact_pass`` and ``world._drive_pass`` (``world._contact_solve``,
   ``world._contact_push``, ``world._drive_solve``).
@@ -20,9 +21,13 @@ touch different numbers, so their order among themselves does not matter.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
+from llvmlite import ir as llvm_ir
+from numba import types
+from numba.extending import intrinsic
 
 from swarm_sim import world
 from swarm_sim._numba_cache import drop_stale_cache
@@ -43,10 +48,30 @@ drop_stale_cache(
 HALF_PI = 0.5 * math.pi
 
 
+@intrinsic
+def _bits(typingctx: object, x: types.Type) -> tuple[object, object] | None:
+    """The 64 bits of a float, as an int (a bit cast: no instruction of its own)."""
+    if x != types.float64:
+        return None
+
+    def codegen(context: Any, builder: Any, signature: object, args: Any) -> Any:  # numba's code generator
+        return builder.bitcast(args[0], llvm_ir.IntType(64))
+
+    return types.int64(types.float64), codegen
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _change(a: float, b: float) -> int:
+    """Nonzero when two floats differ in a bit (a zero that changes its sign, or a NaN for another NaN,
+    counts as a change). Changes are OR-ed together without branches; bits rather than values, as a pass
+    that leaves every bit of the state as it was leaves it so in every later pass too."""
+    return _bits(a) ^ _bits(b)  # type: ignore[call-arg]  # an intrinsic: numba passes the typing context
+
+
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def _differs(a: float, b: float) -> bool:
-    """Whether two floats differ in a bit (a NaN always counts as differing: the passes then go on)."""
-    return a != b or (a == 0.0 and math.copysign(1.0, a) != math.copysign(1.0, b))
+    """Whether two floats differ in a bit."""
+    return _change(a, b) != 0
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -76,21 +101,21 @@ def _solve_pair(motion: np.ndarray, contacts: np.ndarray, i: int, j: int, linear
             vjx + px, vjy + py, wj - turn, jjx, jjy, jjw, tjx, tjy, tjw, linear, angular
         )
         moved = (
-            _differs(new_n, cn)
-            or _differs(new_t, ct)
-            or _differs(i0, vix)
-            or _differs(i1, viy)
-            or _differs(i2, wi)
-            or _differs(i3, jix)
-            or _differs(i4, jiy)
-            or _differs(i5, jiw)
-            or _differs(j0, vjx)
-            or _differs(j1, vjy)
-            or _differs(j2, wj)
-            or _differs(j3, jjx)
-            or _differs(j4, jjy)
-            or _differs(j5, jjw)
-        )
+            _change(new_n, cn)
+            | _change(new_t, ct)
+            | _change(i0, vix)
+            | _change(i1, viy)
+            | _change(i2, wi)
+            | _change(i3, jix)
+            | _change(i4, jiy)
+            | _change(i5, jiw)
+            | _change(j0, vjx)
+            | _change(j1, vjy)
+            | _change(j2, wj)
+            | _change(j3, jjx)
+            | _change(j4, jjy)
+            | _change(j5, jjw)
+        ) != 0
         cn, ct = new_n, new_t
         vix, viy, wi, jix, jiy, jiw = i0, i1, i2, i3, i4, i5
         vjx, vjy, wj, jjx, jjy, jjw = j0, j1, j2, j3, j4, j5
