@@ -16,6 +16,7 @@ PYTHON_PACKAGES = sorted(p.parent.name for p in SRC.glob("*/setup.py"))
 ROSDEP_KEYS = {
     "numpy": "python3-numpy",
     "numba": "python3-numba",
+    "llvmlite": "python3-llvmlite",
     "scipy": "python3-scipy",
     "matplotlib": "python3-matplotlib",
     "defusedxml": "python3-defusedxml",

@@ -175,6 +175,11 @@ def test_load_candidates_keeps_each_bins_best_and_refuses_bad_files(tmp_path):
     (tmp_path / "bad" / "repertoire_food.json").write_text('{"items": [{"bin": [1]}]}')
     with pytest.raises(AdaptationError, match="not a repertoire file"):
         load_candidates(tmp_path / "bad", "food")
+    # A bin's tree must be tree text that parses (found by the fuzz test: a null tree reached the evaluator).
+    for tree, reason in [(None, "must be tree text, got None"), ("forwrd", "is not a tree: .*unknown")]:
+        damaged = [{**SMALL[0], "tree": tree}, *SMALL[1:]]
+        with pytest.raises(AdaptationError, match=f"the tree of bin \\[2, 4, 7\\] {reason}"):
+            load_candidates(_repertoire_file(tmp_path / f"tree-{tree}", damaged), "food")
 
 
 @pytest.mark.parametrize("profile", ["paper", "clean"])

@@ -121,6 +121,14 @@ def test_a_damaged_checkpoint_is_refused_with_its_name(tmp_path):
     (tmp_path / "r" / "checkpoint.json").write_text('{"format": 1, "config": ')
     with pytest.raises(RunDirectoryError, match=r"checkpoint\.json"):
         Run.resume(tmp_path / "r", ToyEvaluator())
+    # A checkpoint that parses but holds a value of the wrong kind is refused too (the fuzz test found a
+    # null timing accepted, failing later in a sum).
+    Run.start(RunConfig.make("gp", "nest", 60, 1), tmp_path / "t", ToyEvaluator())
+    state = json.loads((tmp_path / "t" / "checkpoint.json").read_text())
+    for timing in [{"evaluator": None, "manager": 0.5}, {"evaluator": -1.0, "manager": 0.5}, [1.0, 2.0]]:
+        (tmp_path / "t" / "checkpoint.json").write_text(json.dumps({**state, "timing": timing}))
+        with pytest.raises(RunDirectoryError, match=r"checkpoint\.json.*timing"):
+            Run.resume(tmp_path / "t", ToyEvaluator())
 
 
 @pytest.mark.parametrize("algorithm,objective", [("gp", "nest"), ("gp-fnd", None)])

@@ -33,6 +33,8 @@ import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
+from bt_controller.errors import TreeError
+from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.algorithms import Outcome, as_outcome
@@ -84,8 +86,15 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
                 )
             if not math.isfinite(fitness):
                 raise ValueError(f"fitness of bin {list(index)} is not finite")
+            tree = item["tree"]
+            if not isinstance(tree, str):
+                raise ValueError(f"the tree of bin {list(index)} must be tree text, got {tree!r}")
+            try:
+                parse(tree)
+            except TreeError as error:
+                raise ValueError(f"the tree of bin {list(index)} is not a tree: {error}") from None
             if index not in best or fitness > best[index].prior:
-                best[index] = Candidate(index, str(item["tree"]), fitness, descriptors)
+                best[index] = Candidate(index, tree, fitness, descriptors)
     except EvolutionError as error:
         raise AdaptationError(str(error)) from None
     except (KeyError, TypeError, ValueError) as error:

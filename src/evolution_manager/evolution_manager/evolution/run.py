@@ -54,6 +54,7 @@ from typing import TYPE_CHECKING, TypeVar
 
 from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
+from bt_controller.validate import number as finite_number
 from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire, SimplifiedForms
@@ -143,6 +144,16 @@ class Timing:
     @property
     def total(self) -> float:
         return self.evaluator + self.manager
+
+    @classmethod
+    def from_state(cls, state: object) -> Timing:
+        """The timing saved in a checkpoint: two non-negative seconds, or a ValueError naming the bad one."""
+        if not isinstance(state, dict) or set(state) != {"evaluator", "manager"}:
+            raise ValueError(f"timing must be an object of evaluator and manager seconds, got {state!r}")
+        seconds = {name: finite_number(value, f"timing.{name}") for name, value in state.items()}
+        if min(seconds.values()) < 0:
+            raise ValueError(f"timing seconds must not be negative, got {state!r}")
+        return cls(**seconds)
 
 
 class RunDirectory:
@@ -346,7 +357,7 @@ class Run:
                 if offset > log.size():
                     raise ValueError(f"offsets.{name} {offset} is beyond the end of {log.path.name}")
                 run.offsets[name] = offset
-            run.timing = Timing(**state["timing"])
+            run.timing = Timing.from_state(state["timing"])
             for objective, grid in state.get("generations", {}).items():
                 run.generations[objective] = Repertoire.from_state(
                     grid, run.grid_forms, fitness_ceiling(objective)
