@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from evolution_manager.studies.experiment import experiment, plan, shared_scenario_seed
+from evolution_manager.cluster.settings import ClusterSettings
+from evolution_manager.studies.experiment import experiment, plan, record_session, shared_scenario_seed
 from evolution_manager.studies.report import report
 from evolution_manager.studies.significance import compare, holm
 
@@ -215,3 +216,27 @@ def test_a_signal_to_the_command_alone_stops_its_runs_too(tmp_path, signum):
     straight = tmp_path / "straight"
     assert experiment([*args, "--out", str(straight), "--no-progress"]) == 0
     assert (out / "runs.csv").read_bytes() == (straight / "runs.csv").read_bytes()
+
+
+def test_a_session_keeps_the_commit_it_started_with(tmp_path, monkeypatch):
+    """HEAD may move while a long session runs (its finished runs committed as they finish); the session's
+    record keeps the commit of the code it started with, and a new session records the new one."""
+    monkeypatch.chdir(tmp_path)
+
+    def commit(message: str) -> str:
+        (tmp_path / "file").write_text(message)
+        git = ["git", "-c", "user.name=t", "-c", "user.email=t@t"]
+        subprocess.run([*git, "add", "file"], check=True)
+        subprocess.run([*git, "commit", "-q", "-m", message], check=True)
+        return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+
+    subprocess.run(["git", "init", "-q"], check=True)
+    first = commit("first")
+    out = tmp_path / "experiment"
+    out.mkdir()
+    record_session(out, 1000.0, "experiment", ClusterSettings(), runs_finished=0)
+    second = commit("second")
+    record_session(out, 1000.0, "experiment", ClusterSettings(), runs_finished=1)
+    record_session(out, 2000.0, "experiment", ClusterSettings(), runs_finished=0)
+    sessions = json.loads((out / "sessions.json").read_text())
+    assert [(s["commit"], s["runs_finished"]) for s in sessions] == [(first, 1), (second, 0)]

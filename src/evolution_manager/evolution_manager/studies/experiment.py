@@ -255,18 +255,21 @@ def record_session(
 ) -> None:
     """Record this session (wall seconds so far, commit, command, where it ran, and ``more``) in
     ``directory/sessions.json``: appended the first time, updated at every later call (so a killed session
-    keeps the time up to its last record). ``experiment`` records after every run it finishes, ``evolve``
-    at its start and end; neither file is compared when a run or experiment continues."""
+    keeps the time up to its last record; the commit stays the one of the first record). ``experiment``
+    records after every run it finishes, ``evolve`` at its start and end; neither file is compared when a
+    run or experiment continues."""
     path = directory / SESSIONS_FILE
     sessions = read_json(path) if path.exists() else []
     assert isinstance(sessions, list)
+    commit = None
     if sessions and sessions[-1].get("started_unix") == round(started, 1):
-        sessions.pop()
+        # The code a session runs is the code it started with: HEAD may move during a long session.
+        commit = sessions.pop().get("commit")
     sessions.append(
         {
             "started_unix": round(started, 1),
             "wall_seconds": round(time.time() - started, 1),
-            "commit": current_commit(),
+            "commit": commit or current_commit(),
             "command": command,
             "cluster": cluster.to_json(),
             **more,
