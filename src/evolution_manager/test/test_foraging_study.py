@@ -117,6 +117,12 @@ def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: 
     for arm in ARMS:
         assert (study / "figures" / f"best_{arm.name}.png").exists()
     assert "robot 8: " in text  # the best heterogeneous swarm, a tree per robot
+    for arm in ARMS:  # an arm over a library shows its best forager as evolved, primitives by name
+        summary = json.loads((study / "arms" / arm.name / "run00" / "summary.json").read_text())
+        shown = summary["objectives"]["foraging"]["best_tree"]
+        if not arm.library:
+            shown = (study / "arms" / arm.name / "run00" / "best" / "foraging.txt").read_text().strip()
+        assert f"```\n{shown}\n```" in text
     assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
     assert "A heterogeneous swarm at least as good as the homogeneous foragers" in text
     assert "--study foraging" in text  # the reproduce command

@@ -460,18 +460,26 @@ def _conclusions(runs: Sequence[ArmRun], rows: Sequence[Comparison]) -> list[str
 
 
 def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
-    """Each arm's best forager: the run's simplified best tree (``best/foraging.txt``, the library's
-    primitives written by name) and its drawing, copied to ``figure_dir``."""
+    """Each arm's best forager as text and its drawing (copied to ``figure_dir``). An arm over a library
+    shows the tree as evolved, its primitives by name: the simplifier keeps a moved copy's draws with
+    ``prob@K`` keys, so its text (``best/foraging.txt``) writes such copies out in full, while the drawing
+    names them. The flat arm shows its simplified tree."""
+    libraries = {arm.name: arm.library for arm in (*ARMS, *SWARM_ARMS)}
     parts = []
     for arm in dict.fromkeys(run.arm for run in runs):
         top = max((run for run in runs if run.arm == arm), key=lambda run: run.best_fitness)
         simplified = top.directory / "best" / "foraging.txt"
+        what = "as evolved, primitives by name; drawn simplified"
         if (top.directory / "best" / "foraging_swarm.json").exists():  # a heterogeneous swarm
             text = "\n".join(f"robot {i}: {tree}" for i, tree in enumerate(json.loads(top.best_tree)))
+            what = "a tree per robot"
+        elif libraries.get(arm) or not simplified.exists():
+            text = top.best_tree
         else:
-            text = simplified.read_text().strip() if simplified.exists() else top.best_tree
+            text = simplified.read_text().strip()
+            what = "simplified"
         parts.append(
-            f"**{arm}**, run {top.index} ({top.best_fitness:.3f} deliveries per robot per trial):\n\n"
+            f"**{arm}**, run {top.index} ({top.best_fitness:.3f} deliveries per robot per trial; {what}):\n\n"
             f"```\n{text}\n```\n"
         )
         drawing = top.directory / "best" / "foraging.png"
