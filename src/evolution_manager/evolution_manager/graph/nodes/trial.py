@@ -81,7 +81,10 @@ starting is noticed at once (``Graph.check``), so this only bounds a node that h
 
 
 PUBLISHERS_MATCH_SETTLE = 1.0
-"""Seconds a new recorder waits after its subscriptions matched, for the publishers to match them too."""
+"""Seconds a new recorder waits at least after its subscriptions matched, for the publishers to match them
+too; three times as long as its own side took when that was longer (on a loaded machine the publishers'
+processes learn of the new subscriptions late too: with CI, an experiment and ARGoS on two cores, a
+recorder lost a trial's first step on two robots after a 1 s wait)."""
 
 
 def expected_messages(
@@ -392,11 +395,12 @@ class TrialGraph:
             with BagRecorder(bag_path) as bag:
                 topics = trial_topics(self.robots, self.namespace, self.clock)
                 recorder = GraphRecorder(node, bag, topics, armed=False)
+                joining = time.monotonic()
                 runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
                 # Matching is seen from this side first: the publishers learn of the new subscriptions a
                 # moment later, and a volatile writer does not resend what it wrote before. Without this
                 # wait a trial lost its first ticks on one robot in about one run of ten.
-                runner.spin_for(PUBLISHERS_MATCH_SETTLE)
+                runner.spin_for(max(PUBLISHERS_MATCH_SETTLE, 3 * (time.monotonic() - joining)))
                 # The latched topics hand over their last message on joining: the arena of the simulator's
                 # start, and the start of any trial run before. Those belong to no trial of this bag.
                 stale = {
