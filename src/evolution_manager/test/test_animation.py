@@ -79,6 +79,19 @@ def test_gif_opens_with_pillow_with_every_frame(frames, tmp_path):
         assert gif.format == "GIF" and gif.n_frames == len(frames.steps)
 
 
+def test_every_kth_frame_is_kept_in_order_from_the_first(frames, tmp_path):
+    full = write_animation(frames, tmp_path / "full.gif")
+    sparse = write_animation(frames, tmp_path / "sparse.gif", every=4)
+    kept = range(0, len(frames.steps), 4)
+    with Image.open(full) as a, Image.open(sparse) as b:
+        assert b.n_frames == len(kept) < a.n_frames
+        for index, k in enumerate(kept[:5]):
+            a.seek(k)
+            b.seek(index)
+            assert np.array_equal(np.asarray(a.convert("RGB")), np.asarray(b.convert("RGB")))
+    assert sparse.stat().st_size < full.stat().st_size
+
+
 def test_mp4_needs_ffmpeg(frames, tmp_path):
     if shutil.which("ffmpeg") is None:
         with pytest.raises(AnimationError, match="needs ffmpeg"):
@@ -99,6 +112,7 @@ def test_mp4_needs_ffmpeg(frames, tmp_path):
         (["--tree", "forward", "--seed", "1", "--task", "mowing", "--out", "x.gif"], "--task must be one of"),
         (["--tree", "wander1", "--seed", "1", "--out", "x.gif"], "unknown node 'wander1'"),
         (["--tree", "forward", "--seed", "1", "--library", "none.json", "--out", "x.gif"], "--library"),
+        (["--tree", "forward", "--seed", "1", "--every", "0", "--out", "x.gif"], "--every must be"),
     ],
 )
 def test_bad_input_is_one_line(args, message, capsys, tmp_path, monkeypatch):

@@ -125,6 +125,14 @@ def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: 
         assert f"```\n{shown}\n```" in text
     assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
     assert "A heterogeneous swarm at least as good as the homogeneous foragers" in text
+    best = {row["arm"]: float(row["best_fitness"]) for row in rows}
+    held = {row["arm"]: float(row["heldout_best_fitness"]) for row in rows}
+    top = max((arm.name for arm in SWARM_ARMS), key=lambda name: best[name])  # one run per arm here
+    verdict = "yes" if held[top] >= held["foragers-qd"] else "no"
+    assert (
+        f"on held-out scenarios **{verdict}** ({top} {held[top]:.3f} against foragers-qd "
+        f"{held['foragers-qd']:.3f})" in text
+    )
     assert "--study foraging" in text  # the reproduce command
     before = text
     assert report([str(study)]) == 0  # the report command rebuilds the same report
