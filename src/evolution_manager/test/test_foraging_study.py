@@ -168,6 +168,36 @@ def test_a_killed_study_continues_to_the_same_libraries_and_results(study: Path,
     assert (killed / "runs.csv").read_bytes() == (study / "runs.csv").read_bytes()
 
 
+def test_a_study_moved_to_another_folder_continues_its_unfinished_runs(study: Path, tmp_path: Path):
+    """A forager run's configuration names its library's file and a composition run's its source runs by
+    path; a study folder moved with such runs unfinished continues them to the same results."""
+    moved = tmp_path / "elsewhere" / "study"
+    shutil.copytree(study, moved)
+    unfinished = [moved / "arms" / "hier-qd8" / "run00", moved / "arms" / "swarm-ga" / "run00"]
+    for run in unfinished:  # as if stopped at their last checkpoint: the folder holds their old location
+        assert str(study) in (run / "config.json").read_text()
+        (run / "summary.json").unlink()
+    (moved / "runs.csv").unlink()
+    assert experiment([*TINY, "--out", str(moved), "--no-progress"]) == 0
+    for run in unfinished:
+        assert json.loads((run / "summary.json").read_text())["finished"]
+    assert (moved / "runs.csv").read_bytes() == (study / "runs.csv").read_bytes()
+
+
+def test_a_moved_composition_run_whose_sources_changed_is_refused(study: Path, tmp_path: Path, capsys):
+    moved = tmp_path / "study"
+    shutil.copytree(study, moved)
+    run = moved / "arms" / "swarm-qd" / "run00"
+    (run / "summary.json").unlink()
+    source = moved / "arms" / SWARM_SOURCE / "run00" / "repertoire_foraging.json"
+    document = json.loads(source.read_text())
+    document["items"][0]["fitness"] += 1.0  # another repertoire than the run's cells were read from
+    source.write_text(json.dumps(document))
+    assert experiment([*TINY, "--out", str(moved), "--no-progress"]) != 0
+    assert "holds a run of another configuration than the experiment's plan" in capsys.readouterr().err
+    assert not (run / "summary.json").exists()
+
+
 FORAGING_RAW = ["tree", "seed", "chromosome", "argos_wall_s", "foraging", "movement", "rotation",
                 "conditionality", "foraging_trials", "build", "subs"]  # fmt: skip
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
 import queue as queues
@@ -43,7 +44,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import get_context, managers
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
 from bt_controller.library import Library, LibraryError, load_library
@@ -63,6 +64,9 @@ from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
+
+if TYPE_CHECKING:  # imported where used: the module is read by every command
+    from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 
 PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
@@ -159,7 +163,8 @@ def run_one(
     if finished(directory.root):
         return root
     if directory.started():
-        if directory.read_config() != config:
+        # the library's file is compared by its digest alone: the study folder may have moved since
+        if dataclasses.replace(directory.read_config(), library=config.library) != config:
             raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
         library = directory.read_library(config)  # the run's own copy
     else:
@@ -180,6 +185,18 @@ def run_one(
     return root
 
 
+def _same_cells(directory: CompositionDirectory, config: CompositionConfig) -> bool:
+    """Whether the cells the composition run in ``directory`` keeps are those its planned sources give now,
+    wherever each source run is."""
+    from evolution_manager.evolution import compositions as comp
+
+    planned, _ = comp.read_sources([Path(source) for source in config.sources])
+    kept = [comp.Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
+    return [dataclasses.replace(c, source="") for c in kept] == [
+        dataclasses.replace(c, source="") for c in planned
+    ]
+
+
 def _run_composition(
     config_data: dict,
     root: str,
@@ -196,7 +213,11 @@ def _run_composition(
     if finished(directory.root):
         return root
     if directory.config.exists():
-        if comp.CompositionConfig.from_json(read_json_object(directory.config)) != config:
+        saved = comp.CompositionConfig.from_json(read_json_object(directory.config))
+        # the source runs are compared by the cells read from them, not by their paths (the study folder
+        # may have moved since; each cell, and so the digest, names its source run by path)
+        located = dataclasses.replace(saved, sources=config.sources, cells_digest=config.cells_digest)
+        if located != config or not _same_cells(directory, config):
             raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
         evaluator = BatchEvaluator(config.world(), threads=1, library=directory.read_library(config))
         run = comp.CompositionRun.resume(directory.root, evaluator)
