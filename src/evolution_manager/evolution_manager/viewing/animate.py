@@ -200,8 +200,9 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16, every: 
     """Write every ``every``-th frame (the first included) to ``out``: an animated GIF, or an MP4 when
     ``out`` ends in .mp4 (needs ffmpeg). A foraging trial's 800 frames make a GIF of about 12 MB;
     ``every=4`` (one frame per tick) about a quarter of that."""
-    if every < 1:
-        raise AnimationError(f"--every must be a whole number of sensing steps >= 1, got {every}")
+    for name, value, unit in (("--fps", fps, "frames per second"), ("--every", every, "sensing steps")):
+        if value < 1:
+            raise AnimationError(f"{name} must be a whole number of {unit} >= 1, got {value}")
     out = Path(out)
     suffix = out.suffix.lower()
     if suffix not in (".gif", ".mp4"):
