@@ -20,8 +20,9 @@ from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
-from swarm_sim.config import DEFAULT, default_config
+from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.tasks import FORAGING
 
 PARITY_TREES = 20
 CLEAN_PARITY_TREES = 20
@@ -196,7 +197,7 @@ def test_foraging_trials_through_the_graph_equal_the_batch_evaluator(tmp_path):
         f"sel(seq(got_food, gotoNest), {random_trees(seed=7, count=1, p_success=0.3)[0]})",
     ]
     for profile in ("paper", "clean"):
-        config = default_config(profile, "foraging")
+        config = FORAGING.config(profile)
         evaluator = BatchEvaluator(config, library=library)
         with TrialGraph(timeout=120.0, profile=profile, task="foraging", library=library_path) as graph:
             for index, text in enumerate(trees):
@@ -209,7 +210,7 @@ def test_foraging_trials_through_the_graph_equal_the_batch_evaluator(tmp_path):
     paper_bag = tmp_path / "paper0"
     assert verify_trial_bag(paper_bag).reproduced
     frames = frames_from_bag(paper_bag)
-    twin = frames_from_tree(FORAGER, 3000, 0, default_config("paper", "foraging"))
+    twin = frames_from_tree(FORAGER, 3000, 0, FORAGING.config("paper"))
     assert len(frames.steps) == 800
     np.testing.assert_array_equal(twin.carrying, frames.carrying)
     np.testing.assert_array_equal(twin.deliveries, frames.deliveries)

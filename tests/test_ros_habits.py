@@ -23,7 +23,7 @@ from swarm_ros.lifecycle import LifecycleClient
 from swarm_ros.qos import RELIABLE
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.objectives import OBJECTIVES
 
 LONG = 300.0
 """Seconds to wait for anything a node does (starting Python processes is slow on a loaded machine)."""

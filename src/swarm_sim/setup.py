@@ -32,6 +32,7 @@ setup(
             "bench = swarm_sim.batch_bench:main",
             "record-bench = swarm_sim.recording_bench:main",
             "validate = swarm_sim.validate_cli:main",
+            "task = swarm_sim.tasks.cli:main",
             "simulator = swarm_sim.nodes.simulator:main",
             "evaluator = swarm_sim.nodes.evaluator:main",
         ],

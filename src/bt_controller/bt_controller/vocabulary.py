@@ -7,6 +7,8 @@ these.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 COMPOSITES: tuple[str, ...] = ("seq", "sel", "prob")
 """Sequence, selector and probabilistic composites, all with memory."""
 
@@ -18,20 +20,48 @@ BehaviorTree.CPP's ``ForceSuccess``)."""
 MIN_CHILDREN = 2
 MAX_CHILDREN = 4
 
-CONDITIONS: tuple[str, ...] = (
-    "on_food",
-    "in_nest",
-    "food_left",
-    "food_right",
-    "nest_left",
-    "nest_right",
-    "robot_left",
-    "robot_right",
-    "got_food",
+
+class Condition(NamedTuple):
+    """One row of the conditions table: what a condition node reads, declared once.
+
+    ``reads`` names what the task's world must offer for the condition to mean anything: a region kind
+    (``nest``, ``food``) or ``robots`` (the neighbours heard). ``side``: for a condition that says on which
+    side of the robot something lies, the side pair of the blackboard whose bearing it needs (``SIDES``);
+    None for the others. The batch kernels compute a bearing only for a side pair some condition of the tree
+    reads, and they take that from this table, so a new row needs no edit there.
+    """
+
+    name: str
+    reads: tuple[str, ...]
+    side: str | None
+    doc: str
+
+
+SIDES: tuple[str, ...] = ("nest", "food", "robot")
+"""The blackboard's side pairs, in the order the batch kernels index them."""
+
+CONDITION_TABLE: tuple[Condition, ...] = (
+    Condition("on_food", ("food",), None, "the ground sensor reads food"),
+    Condition("in_nest", ("nest",), None, "the ground sensor reads the nest"),
+    Condition("food_left", ("food",), "food", "the food estimate's source is on the left"),
+    Condition("food_right", ("food",), "food", "the food estimate's source is on the right"),
+    Condition("nest_left", ("nest",), "nest", "the nest estimate's source is on the left"),
+    Condition("nest_right", ("nest",), "nest", "the nest estimate's source is on the right"),
+    Condition("robot_left", ("robots",), "robot", "the nearest robot heard is on the left"),
+    Condition("robot_right", ("robots",), "robot", "the nearest robot heard is on the right"),
+    Condition("got_food", ("food", "nest"), None, "the robot carries food"),
 )
-"""Blackboard entries; a condition node succeeds when its entry is true. ``got_food``: the robot carries food
-(it sensed food since its last delivery or its trial's start; ``docs/model.md``, "Foraging"). It comes last
-so that the 2023 conditions keep their indices."""
+"""Every condition, in blackboard order. ``got_food``: the robot carries food (it sensed food since its last
+delivery or its trial's start; ``docs/model.md``, "Foraging"). It comes last so that the 2023 conditions keep
+their indices."""
+
+CONDITIONS: tuple[str, ...] = tuple(row.name for row in CONDITION_TABLE)
+"""Blackboard entries, in order; a condition node succeeds when its entry is true."""
+
+CONDITION_SIDE: tuple[int, ...] = tuple(
+    -1 if row.side is None else SIDES.index(row.side) for row in CONDITION_TABLE
+)
+"""For each condition, the index in ``SIDES`` of the side pair whose bearing it needs, or -1."""
 
 N_CONDITIONS = len(CONDITIONS)
 """Entries of a blackboard."""

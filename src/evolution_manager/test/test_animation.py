@@ -27,8 +27,8 @@ from evolution_manager.viewing.animate import (
 from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.objectives import OBJECTIVES
 from swarm_sim.swarm_layout import load_layout
-from swarm_sim.world import OBJECTIVES
 
 TREE = "sel(seq(on_food, stop), prob(forward, forward_left), reverse_right)"
 SEED, TRIAL = 5, 1
@@ -109,7 +109,10 @@ def test_mp4_needs_ffmpeg(frames, tmp_path):
         (["--bag", "no_such_bag", "--out", "x.gif"], "no bag at"),
         (["--bag", "b", "--seed", "3", "--out", "x.gif"], "go with --tree"),
         (["--bag", "b", "--task", "foraging", "--out", "x.gif"], "go with --tree"),
-        (["--tree", "forward", "--seed", "1", "--task", "mowing", "--out", "x.gif"], "--task must be one of"),
+        (
+            ["--tree", "forward", "--seed", "1", "--task", "mowing", "--out", "x.gif"],
+            "--task: task must be one of",
+        ),
         (["--tree", "wander1", "--seed", "1", "--out", "x.gif"], "unknown node 'wander1'"),
         (["--tree", "forward", "--seed", "1", "--library", "none.json", "--out", "x.gif"], "--library"),
         (["--tree", "forward", "--seed", "1", "--every", "0", "--out", "x.gif"], "--every must be"),

@@ -18,7 +18,7 @@ from evolution_manager.studies.experiment import experiment
 from evolution_manager.studies.report import load_runs, report
 from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.objectives import OBJECTIVES
 
 RAW_COLUMNS = ["tree", "seed", "chromosome", "argos_wall_s", "density", "nest", "food", "movement",
                "rotation", "conditionality"]  # fmt: skip

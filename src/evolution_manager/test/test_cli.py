@@ -246,7 +246,7 @@ def test_a_foraging_run_with_a_library_as_a_user_runs_it(tmp_path, capsys):
         evolve([*common, "--library", str(library), "--seed", "6", "--out", str(out), "--no-progress"]) == 0
     )
     config = RunConfig.from_json(json.loads((out / "config.json").read_text()))
-    assert (config.task, config.library, config.grids) == ("foraging", str(library), ("foraging",))
+    assert (config.task.name, config.library, config.grids) == ("foraging", str(library), ("foraging",))
     assert json.loads((out / "library.json").read_text()) == LIBRARY
     assert {p.name for p in (out / "figures").iterdir()} == {
         "heatmap_foraging.png",

@@ -33,6 +33,7 @@ from evolution_manager.studies.experiment import run_one
 from evolution_manager.viewing.results import write_results
 from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.tasks import FORAGING
 
 VARYING = {"timing.json", "checkpoint.json", ".lock"}
 """Files of a run directory that hold wall-clock times (or nothing): every other file is the same bytes."""
@@ -282,7 +283,7 @@ def test_a_foraging_world_and_a_library_travel_to_the_workers(client):
         },
         "hand-made",
     )
-    world = default_config("paper", "foraging")
+    world = FORAGING.config("paper")
     trees = ["sel(seq(got_food, in_nest), toFood, forward)", *random_trees(9, 3, p_success=0.3)]
     requests = [EvaluationRequest(tree, 4, 2) for tree in trees] + [EvaluationRequest("toNest", 4, 2)]
     results = DaskEvaluator(client, world, chunk=2, library=library).evaluate(requests)

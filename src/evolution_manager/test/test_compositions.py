@@ -29,10 +29,10 @@ from evolution_manager.evolution.parameters import GPParameters
 from evolution_manager.studies.evolve import evolve
 from evolution_manager.studies.experiment import produced_so_far
 from swarm_sim.cli import evaluate_main
-from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.objectives import OBJECTIVES
 from swarm_sim.swarm_layout import load_layout
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.tasks import FORAGING
 
 COMPARED = [
     "config.json",
@@ -137,7 +137,7 @@ def test_the_ga_takes_the_2023_gps_parameters():
 
 def test_nine_copies_of_one_cell_score_exactly_the_homogeneous_tree(source):
     cells = read_sources([source])[0]
-    evaluator = BatchEvaluator(default_config("paper", "foraging"))
+    evaluator = BatchEvaluator(FORAGING.config("paper"))
     k = OBJECTIVES.index("foraging")
     picked = [0, len(cells) // 2, len(cells) - 1]
     members = evaluate_genomes(evaluator, cells, [(i,) * 9 for i in picked], 17, 2, 0)

@@ -15,7 +15,7 @@ from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
 from evolution_manager.viewing.results import write_results
-from swarm_sim.world import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
+from swarm_sim.objectives import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
 
 RESULT_FILES = [
     "evaluations.csv",

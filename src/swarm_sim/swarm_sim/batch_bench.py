@@ -5,7 +5,7 @@
 
 Trees are ``bt_controller.random_trees.random_trees(seed, n)`` (11 to 60 nodes; with ``--task foraging``
 some inner nodes are success decorators, and got_food is among the conditions of both tasks' trees).
-``--task foraging`` times 100 s trials (800 steps each; ``swarm_sim.config.TASKS``). The batch evaluator is
+``--task foraging`` times 100 s trials (800 steps each; ``swarm_sim.tasks``). The batch evaluator is
 timed after a warm-up batch (compilation excluded) on one batch of ``--trees`` requests, in wall-clock time
 and in CPU time of this process (the fairer figure on a shared machine); the reference road on the first
 ``--reference-trees`` of them. ``--parity N`` then evaluates N random trees by both roads and counts
@@ -24,8 +24,9 @@ import numba
 from bt_controller.random_trees import random_trees
 from bt_controller.timeline import PROFILES
 from swarm_sim import reference_road
-from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, Config, default_config
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.tasks import add_task_option
 
 
 def _batch_rate(evaluator: BatchEvaluator, requests: list[EvaluationRequest]) -> tuple[float, float, float]:
@@ -86,20 +87,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--parity", type=int, default=0, metavar="N", help="also compare roads on N trees")
     parser.add_argument("--threads", type=int, default=1, help="numba threads (default 1)")
     parser.add_argument("--profile", choices=PROFILES, default=DEFAULT.profile, help="the model's profile")
-    parser.add_argument(
-        "--task", choices=tuple(TASKS), default=DEFAULT_TASK, help="the trial length (default primitives)"
-    )
+    add_task_option(parser)
     args = parser.parse_args(argv)
-    config = default_config(args.profile, args.task)
+    config = args.task.config(args.profile)
     numba.set_num_threads(args.threads)
 
-    texts = random_trees(args.seed, args.trees, p_success=0.1 if args.task == "foraging" else 0.0)
+    texts = random_trees(
+        args.seed, args.trees, p_success=0.1 if "got_food" in args.task.nodes.conditions else 0.0
+    )
     requests = [EvaluationRequest(t, args.seed + k, args.trials) for k, t in enumerate(texts)]
     sizes = [check_request(r).size for r in requests]
     print(
         f"trees: {len(texts)} random, {min(sizes)}-{max(sizes)} nodes (mean {sum(sizes) / len(sizes):.1f}); "
         f"{args.trials} trials of {config.trial_steps} steps per evaluation; profile {config.profile}, "
-        f"task {args.task}"
+        f"task {args.task.name}"
     )
     batch_rate, batch_time, cpu_rate = _batch_rate(BatchEvaluator(config, threads=args.threads), requests)
     print(

@@ -1,13 +1,14 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree, or a swarm of a tree per robot; print one JSON object.
 
     evaluate (--tree TREE | --swarm FILE) [--trials 10] [--seed S] [--profile paper|clean]
-             [--task primitives|foraging] [--engine compiled|reference] [--per-trial]
+             [--task NAME|FILE] [--engine compiled|reference] [--per-trial]
              [--condition NAME=VALUE ...] [--library FILE]
 
 Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {every objective},
 "descriptors": {movement, rotation, conditionality}}`` (``conditions``: the world's changes,
-``swarm_sim.conditions``, ``{}`` for none; ``task``: the trial length, ``primitives`` (20 s trials) or
-``foraging`` (100 s trials, ``swarm_sim.config.TASKS``); ``"per_trial"`` added with ``--per-trial``: each
+``swarm_sim.conditions``, ``{}`` for none; ``task``: the task's name (``primitives``, 20 s trials, or
+``foraging``, 100 s trials) or, for a task file's or an edited task, every key of it (``swarm_sim.tasks``);
+``"per_trial"`` added with ``--per-trial``: each
 trial's values, gap and the robots' start and end poses as [x, y, heading]). The tree is printed in canonical
 form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) the tree may name its
 primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
@@ -29,12 +30,13 @@ from bt_controller.library import Library, library_option
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node, to_text
 from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
-from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, default_config
+from swarm_sim.config import DEFAULT
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
+from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES
 from swarm_sim.swarm_layout import LayoutError, load_layout
+from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, task_named, task_to_record
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
-from swarm_sim.world import DESCRIPTORS, OBJECTIVES
 
 EXIT_USAGE = 2
 
@@ -64,13 +66,7 @@ def _parser() -> argparse.ArgumentParser:
         help=f"the model's profile (docs/model.md): the authors' experiment or without its artefacts "
         f"(default {DEFAULT.profile})",
     )
-    parser.add_argument(
-        "--task",
-        choices=tuple(TASKS),
-        default=DEFAULT_TASK,
-        help=f"the trial length: primitives (20 s, the 2023 primitives') or foraging (100 s, the 2024 "
-        f"foraging trials) (default {DEFAULT_TASK})",
-    )
+    add_task_option(parser)
     parser.add_argument(
         "--engine",
         choices=("compiled", "reference"),
@@ -102,7 +98,7 @@ def evaluation_json(
     profile: str = DEFAULT.profile,
     conditions: dict[str, object] | None = None,
     library: Library | None = None,
-    task: str = DEFAULT_TASK,
+    task: TaskSpec | None = None,
 ) -> str:
     """The one-line JSON document ``evaluate`` prints (``tree_text`` a sequence: each robot's tree, as
     ``trees``; ``records`` given: with ``per_trial``; ``library`` given: with ``library``)."""
@@ -113,7 +109,7 @@ def evaluation_json(
         "seed": seed,
         "trials": trials,
         "profile": profile,
-        "task": task,
+        "task": task_to_record(task_named(DEFAULT_TASK) if task is None else task),
         "conditions": dict(conditions or {}),
         "fitness": {k: named[k] for k in OBJECTIVES},
         "descriptors": {k: named[k] for k in DESCRIPTORS},
@@ -133,7 +129,7 @@ def run(argv: Sequence[str] | None = None) -> str:
     if not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must be in [0, {MAX_SEED}], got {args.seed}")
     try:
-        config, conditions = apply_conditions(args.condition, default_config(args.profile, args.task))
+        config, conditions = apply_conditions(args.condition, args.task.config(args.profile))
     except ConditionError as error:
         raise UsageError(f"--condition: {error}") from None
     library = library_option(args.library, UsageError)

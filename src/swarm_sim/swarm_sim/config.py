@@ -296,27 +296,8 @@ def _validate(c: Config) -> None:
 DEFAULT = Config()
 """The model of docs/model.md, under its default profile."""
 
-TASKS: dict[str, int] = {"primitives": _TIMELINE.ticks, "foraging": 200}
-"""Each task's trial length in ticks (``docs/model.md``, "Foraging"): ``primitives``, the 2023 trials of 20 s
-in which the six primitives are evolved (40 ticks, 160 steps); ``foraging``, the authors' 2024 foraging trials
-of 100 s (200 ticks, 800 steps: ``footbot_bt.cpp:493,538,546,551`` at a73e4af). A task is nothing but this
-setting of ``Config.ticks``: every trial scores every objective, foraging included."""
-DEFAULT_TASK = "primitives"
 
-
-def task_ticks(task: str) -> int:
-    """The trial length of ``task`` in ticks; ConfigError naming the tasks for anything else."""
-    if task not in TASKS:
-        raise ConfigError(f"task must be one of {', '.join(TASKS)}, got {task!r}")
-    return TASKS[task]
-
-
-def default_config(profile: str, task: str = DEFAULT_TASK) -> Config:
-    """The model's default configuration under ``profile`` (``paper`` or ``clean``, docs/model.md) for
-    ``task`` (its trial length, ``TASKS``)."""
-    return replace(DEFAULT, profile=profile, ticks=task_ticks(task))
-
-
-def task_of(config: Config) -> str | None:
-    """The task whose trial length ``config`` has, or None (a length of its own)."""
-    return next((task for task, ticks in TASKS.items() if ticks == config.ticks), None)
+def default_config(profile: str) -> Config:
+    """The model's default configuration (the 2023 primitives' world) under ``profile`` (``paper`` or
+    ``clean``, docs/model.md); a task's world is ``swarm_sim.tasks.TaskSpec.config``."""
+    return replace(DEFAULT, profile=profile)

@@ -35,15 +35,11 @@ from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_memory, tick, tree_at
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
-from bt_controller.vocabulary import CONDITION_INDEX, N_CONDITIONS, STOP
+from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
 from swarm_sim import fast_world, world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Config, Params
 from swarm_sim.trial_data import chain_plan
-
-FOOD_LEFT, FOOD_RIGHT = CONDITION_INDEX["food_left"], CONDITION_INDEX["food_right"]
-NEST_LEFT, NEST_RIGHT = CONDITION_INDEX["nest_left"], CONDITION_INDEX["nest_right"]
-ROBOT_LEFT, ROBOT_RIGHT = CONDITION_INDEX["robot_left"], CONDITION_INDEX["robot_right"]
 
 drop_stale_cache(
     __file__,
@@ -71,18 +67,20 @@ def _source_bearing(
     return world.bearing(x[i], y[i], heading[i], x[source], y[source])
 
 
+_CONDITION_SIDE = np.array(CONDITION_SIDE, dtype=np.int64)
+"""Each condition's side pair (``vocabulary.CONDITION_SIDE``: -1 for none), a constant of the kernels."""
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
-    """Which of the blackboard's side pairs the tree reads: (nest, food, robot), from its condition nodes."""
-    read = np.zeros(3, dtype=np.bool_)
+    """Which of the blackboard's side pairs (``vocabulary.SIDES``: nest, food, robot) the tree reads, from
+    its condition nodes and the conditions table."""
+    read = np.zeros(len(SIDES), dtype=np.bool_)
     for k in range(op.shape[0]):
         if op[k] == OP_CONDITION:
-            if arg[k] == FOOD_LEFT or arg[k] == FOOD_RIGHT:
-                read[1] = True
-            elif arg[k] == NEST_LEFT or arg[k] == NEST_RIGHT:
-                read[0] = True
-            elif arg[k] == ROBOT_LEFT or arg[k] == ROBOT_RIGHT:
-                read[2] = True
+            side = _CONDITION_SIDE[arg[k]]
+            if side >= 0:
+                read[side] = True
     return read
 
 

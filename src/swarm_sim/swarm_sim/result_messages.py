@@ -16,8 +16,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from swarm_sim.evaluation import EvaluationResult, failed
+from swarm_sim.objectives import N_OBJECTIVES, OBJECTIVES
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
-from swarm_sim.world import N_OBJECTIVES, OBJECTIVES
 
 __all__ = ["OBJECTIVES", "evaluation_fields", "result_fields", "trial_fields", "values_of"]
 

@@ -32,8 +32,8 @@ from pathlib import Path
 
 from swarm_sim import validation
 from swarm_sim.errors import UsageError
+from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
 from swarm_sim.validation import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate
-from swarm_sim.world import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
 
 __all__ = [
     "ArgosHarness",

@@ -19,7 +19,7 @@ from bt_controller.timeline import chain_of_trial
 from bt_controller.validate import integer
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
-from swarm_sim.world import DESCRIPTORS, OBJECTIVES, VALUE_NAMES
+from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES, VALUE_NAMES
 
 __all__ = ["VALUE_NAMES", "ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]
 

@@ -42,9 +42,10 @@ from typing import NoReturn
 from bt_controller.authors import from_authors, is_authors_syntax
 from bt_controller.library import Library, library_option
 from swarm_sim import transfer, validation
-from swarm_sim.config import DEFAULT, TASKS, Config
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.tasks import FORAGING
 
 EXIT_USAGE = 2
 
@@ -187,7 +188,7 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     _check_trials(args)
     config = model_config(args.profile)
     library = library_option(args.library, UsageError)
-    foraging = replace(config, ticks=TASKS["foraging"])
+    foraging = replace(config, ticks=FORAGING.trials.ticks)
     notes = _read_notes(args.notes)
     transfer_rows = None if args.transfer_table is None else transfer.read_transfer_tsv(args.transfer_table)
     comparisons: list[validation.Comparison] = []

@@ -32,6 +32,11 @@ from bt_controller.draws import uniform
 from bt_controller.vocabulary import ACTION_WHEELS
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Params
+from swarm_sim.objectives import N_OBJECTIVES, N_VALUES
+from swarm_sim.objectives import (
+    OBJECTIVES as OBJECTIVES,
+)  # re-exported: the values' order, for world.X readers
+from swarm_sim.objectives import VALUE_NAMES as VALUE_NAMES
 
 drop_stale_cache(
     __file__,
@@ -41,45 +46,12 @@ drop_stale_cache(
         "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.config",
+        "swarm_sim.objectives",
     ),
 )
 
 WHEELS = np.array(ACTION_WHEELS, dtype=np.float64)
 """(left, right) wheel settings of each action, in units of the nominal wheel speed."""
-
-VALUE_NAMES: tuple[str, ...] = (
-    "density",
-    "nest",
-    "food",
-    "idensity",
-    "inest",
-    "ifood",
-    "foraging",
-    "movement",
-    "rotation",
-    "conditionality",
-)
-"""The values of a trial or an evaluation: the objectives (the paper's three, the 2024 follow-up's three
-inverse primitives, foraging), then the descriptors (the one home of these names)."""
-N_OBJECTIVES = 7
-"""How many of the values are objectives (the rest are the three descriptors)."""
-OBJECTIVES: tuple[str, ...] = VALUE_NAMES[:N_OBJECTIVES]
-"""The objectives, in fitness order."""
-COUNT_OBJECTIVES: tuple[str, ...] = ("foraging",)
-"""Objectives whose fitness is a count (deliveries per robot per trial: 0 or more, an ideal robot about 2.6);
-every other objective is a fraction in [0, 1]."""
-
-
-def fitness_ceiling(objective: str) -> float:
-    """The largest fitness ``objective`` can take: 1 for a fraction, unbounded for a count."""
-    return math.inf if objective in COUNT_OBJECTIVES else 1.0
-
-
-PAPER_OBJECTIVES: tuple[str, ...] = ("density", "nest", "food")
-"""The three objectives of the 2023 paper (its GP_fnd evolves them together)."""
-DESCRIPTORS: tuple[str, ...] = VALUE_NAMES[N_OBJECTIVES:]
-"""The three behaviour descriptors, in grid order."""
-N_VALUES = len(VALUE_NAMES)
 
 TWO_PI = 2.0 * math.pi
 

@@ -13,6 +13,7 @@ from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT, default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.recording import RecordedTrial, record_trial, record_trial_reference
+from swarm_sim.tasks import FORAGING
 
 ARRAYS = ("steps", "poses", "actions", "ticks", "smoothed", "ground", "initial", "carrying", "deliveries")
 
@@ -69,7 +70,7 @@ def test_a_recording_is_the_trial_the_batch_evaluator_scores():
 @pytest.mark.parametrize("profile", ["paper", "clean"])
 def test_both_roads_record_the_same_foraging_trial(profile):
     # 100 s trials of a forager: carrying flags and deliveries step by step, and the fitness so far.
-    config = default_config(profile, "foraging")
+    config = FORAGING.config(profile)
     forager = (
         "sel(seq(got_food, success(sel(seq(nest_left, forward_left), seq(nest_right, forward_right), "
         "forward))), sel(seq(food_left, forward_left), seq(food_right, forward_right), forward))"

@@ -8,6 +8,7 @@ from bt_controller.tree import parse
 from swarm_sim import reference_road, world
 from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
+from swarm_sim.tasks import FORAGING
 
 # CI size; `ws/run swarm_sim bench --parity 300` runs the large comparison.
 N_TREES = 16
@@ -114,12 +115,11 @@ def test_roads_agree_on_foraging_trees(profile):
     # 100 s trials: got_food, success and named primitives (each use its own success copy), random trees among
     # them; the forager delivers, so the carrying flag and the deliveries are exercised, not only zeros.
     from bt_controller.library import library_from_json
-    from swarm_sim.config import default_config
 
     library = library_from_json(
         {"format": 1, "primitives": [{"name": n, "tree": t} for n, t in PRIMITIVES.items()]}, "test"
     )
-    config = default_config(profile, "foraging")
+    config = FORAGING.config(profile)
     texts = [
         FORAGER,
         "sel(seq(got_food, gotoNest), prob(gotoFood, gotoNest))",

@@ -7,10 +7,11 @@ import pytest
 
 from bt_controller.tree import parse
 from swarm_sim import reference_road
-from swarm_sim.config import Config, default_config
+from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
 from swarm_sim.recording import record_trial, record_trial_reference
 from swarm_sim.swarm_layout import LayoutError, SwarmLayout, layout_from_json, load_layout, of_trees
+from swarm_sim.tasks import FORAGING
 
 NEST = "sel(seq(in_nest, stop), seq(nest_left, forward_left), seq(nest_right, forward_right), forward)"
 FOOD = (
@@ -31,7 +32,7 @@ def _records_equal(a, b):
 
 CONFIGS = pytest.mark.parametrize(
     "config",
-    [Config(), Config(profile="clean"), default_config("paper", "foraging")],
+    [Config(), Config(profile="clean"), FORAGING.config("paper")],
     ids=["paper", "clean", "foraging"],
 )
 

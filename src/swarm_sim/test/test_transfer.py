@@ -8,9 +8,9 @@ import pytest
 from swarm_sim import transfer, validation
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.objectives import PAPER_OBJECTIVES
 from swarm_sim.transfer import GridItem
 from swarm_sim.validate_cli import main as validate_main
-from swarm_sim.world import PAPER_OBJECTIVES
 
 SHAPE = (8, 8, 8)
 

@@ -56,7 +56,7 @@ from evolution_manager.files import (
     write_json,
 )
 from evolution_manager.processes import Lock, exclusive_lock
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.objectives import OBJECTIVES
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates
     from evolution_manager.evolution.archive import Repertoire
@@ -378,9 +378,9 @@ class CompositionConfig:
 
     def world(self) -> Config:
         """The model of every evaluation: the run's profile, the foraging task's trials."""
-        from swarm_sim.config import default_config
+        from swarm_sim.tasks import task_named
 
-        return default_config(self.profile, TASK)
+        return task_named(TASK).config(self.profile)
 
     def to_json(self) -> dict:
         data = asdict(self)

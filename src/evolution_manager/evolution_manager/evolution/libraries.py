@@ -54,17 +54,7 @@ from evolution_manager.errors import EvolutionError, RunDirectoryError, UsageErr
 from evolution_manager.evolution.operators import selection_fitness
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.files import read_json, read_json_object, write_json
-
-FAMILIES: dict[str, str] = {
-    "density": "increaseDensity",
-    "nest": "gotoNest",
-    "food": "gotoFood",
-    "idensity": "reduceDensity",
-    "inest": "goAwayFromNest",
-    "ifood": "goAwayFromFood",
-}
-"""The family name of each primitive objective, in the authors' order (``params.py:134-166``): the one place
-that says which objective a primitive of a library was evolved for."""
+from swarm_sim.objectives import FAMILIES
 
 BLOCKS: dict[int, int] = {1: 1, 8: 2, 64: 4}
 """Blocks per grid -> bins per descriptor (``bins``^3 blocks)."""

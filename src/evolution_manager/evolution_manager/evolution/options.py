@@ -11,7 +11,8 @@ from bt_controller.library import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.parameters import NODE_SETS
-from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, TASKS, RunConfig
+from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
+from swarm_sim.tasks import add_task_option, task_label
 
 if TYPE_CHECKING:  # imported where used: tqdm loads slowly, and not every command needs it
     from tqdm import tqdm
@@ -43,11 +44,11 @@ def add_scenario_options(parser: argparse.ArgumentParser) -> None:
 
 def add_task_options(parser: argparse.ArgumentParser) -> None:
     """``--task``, ``--objectives`` (GP_fnd's set) and ``--library`` (evolve and manager)."""
-    parser.add_argument(
-        "--task",
-        choices=tuple(TASKS),
-        help="primitives: 20 s trials and the paper's node set (default); foraging: the 2024 100 s foraging "
-        "trials, with got_food in the node set",
+    add_task_option(
+        parser,
+        default=None,
+        what="; primitives: 20 s trials and the paper's node set (the default); foraging: the 2024 100 s "
+        "foraging trials, with got_food in the node set",
     )
     parser.add_argument(
         "--objectives",
@@ -128,9 +129,13 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         )
     for name, value in given.items():
         if value is not None and value != getattr(saved, name):
+            shown, kept = (
+                (task_label(value), task_label(saved.task))
+                if name == "task"
+                else (value, getattr(saved, name))
+            )
             raise UsageError(
-                f"--{name.replace('_', '-')} {value} differs from the run being resumed "
-                f"({getattr(saved, name)}); "
+                f"--{name.replace('_', '-')} {shown} differs from the run being resumed ({kept}); "
                 "leave it out or start a new run in another --out"
             )
 

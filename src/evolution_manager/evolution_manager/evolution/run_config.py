@@ -14,9 +14,9 @@ that simplify to the same tree (``docs/algorithms.md``, "Clones"): under ``paper
 tree whose simplified form an earlier batch evaluated takes that evaluation's values unsimulated, as the
 authors' code; under ``clean`` every grid refuses a tree whose simplified form is already in its bin.
 
-Task: the trial length every evaluation uses (``swarm_sim.config.TASKS``: ``primitives``, the 2023 20 s
-trials, or ``foraging``, the 2024 100 s trials), and the node set: the paper's 8 conditions for
-``primitives``, every condition (``got_food`` too) for ``foraging``. Objectives: GP_o and QD_o evolve one of
+Task: the world every evaluation runs in and the node set's conditions (``swarm_sim.tasks``: ``primitives``,
+the 2023 20 s trials with the paper's 8 conditions, ``foraging``, the 2024 100 s trials with every condition,
+``got_food`` too, or a task file), kept whole in ``config.json``. Objectives: GP_o and QD_o evolve one of
 ``OBJECTIVES``, GP_fnd any set of them (``fnd_objectives``; by default the task's: the paper's three, or
 foraging alone). A run also keeps a passive grid per objective of ``grids``: the task's objectives and the
 evolved ones. Library: a primitive library (``bt_controller.library``) whose names become terminals of the
@@ -40,7 +40,7 @@ from bt_controller.draws import (
 from bt_controller.library import Library
 from bt_controller.timeline import PROFILES, Timeline
 from bt_controller.validate import integer
-from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
+from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.parameters import (
     HIERARCHICAL_CONDITIONS,
@@ -48,8 +48,9 @@ from evolution_manager.evolution.parameters import (
     GPParameters,
     QDParameters,
 )
-from swarm_sim.config import DEFAULT_TASK, TASKS, Config, default_config
-from swarm_sim.world import OBJECTIVES, PAPER_OBJECTIVES
+from swarm_sim.config import Config
+from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, resolve_task, task_from_record, task_named, task_to_record
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.algorithms import AskTell
@@ -70,13 +71,6 @@ SCENARIOS: tuple[str, ...] = ("fixed", "fresh")
 
 HELDOUT_EVALUATIONS = 5
 """Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
-
-TASK_OBJECTIVES: dict[str, tuple[str, ...]] = {
-    "primitives": PAPER_OBJECTIVES,
-    "foraging": tuple(o for o in OBJECTIVES if o == "foraging"),
-}
-"""The objectives a run of each task shows (passive grids, summary, figures) besides those it evolves, and
-GP_fnd's default set: the paper's three for ``primitives``, foraging for ``foraging``."""
 
 
 def default_scenario_seed(run_seed: int) -> int:
@@ -100,8 +94,9 @@ class RunConfig:
     """-1: derived from ``seed`` (see :func:`default_scenario_seed`); replaced by the value at creation."""
     profile: str = DEFAULT_PROFILE
     """The model's profile (``docs/model.md``), the same for every evaluation of the run."""
-    task: str = DEFAULT_TASK
-    """The trial length and node set (``swarm_sim.config.TASKS``)."""
+    task: TaskSpec = field(default_factory=lambda: task_named(DEFAULT_TASK))
+    """The task: the world and the node set's conditions (``swarm_sim.tasks``); a name is taken for the
+    registered task."""
     fnd_objectives: tuple[str, ...] = ()
     """GP_fnd: the objectives it evolves at once (empty: the task's, ``TASK_OBJECTIVES``); empty otherwise."""
     library: str = ""
@@ -114,8 +109,13 @@ class RunConfig:
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {self.algorithm!r}")
-        if self.task not in TASKS:
-            raise ConfigError(f"task must be one of {', '.join(TASKS)}, got {self.task!r}")
+        if isinstance(self.task, str):  # a registered name, for convenience
+            object.__setattr__(self, "task", resolve_task(self.task))
+        if set(self.task.nodes.actions) != set(ACTIONS):
+            raise ConfigError(
+                f"task {self.task.name}: nodes.actions must be every action ({', '.join(ACTIONS)}): "
+                "evolution draws trees over all of them"
+            )
         object.__setattr__(self, "fnd_objectives", tuple(self.fnd_objectives))
         if self.algorithm == "gp-fnd":
             if self.objective is not None:
@@ -163,7 +163,7 @@ class RunConfig:
         scenarios: str = "fixed",
         scenario_seed: int | None = None,
         profile: str | None = None,
-        task: str = DEFAULT_TASK,
+        task: TaskSpec | str = DEFAULT_TASK,
         fnd_objectives: tuple[str, ...] = (),
         library: str = "",
         library_digest: str = "",
@@ -179,7 +179,8 @@ class RunConfig:
             raise ConfigError(f"algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
         if nodes is None:
             nodes = "hierarchical" if library else "flat"
-        baseline = task == "foraging" and nodes == "flat" and not library
+        task = resolve_task(task)
+        baseline = "foraging" in task.objectives and nodes == "flat" and not library
         derating = "baseline" if baseline else "standard"
         gp = (
             GPParameters(population=75, tournament=5, derating=derating)
@@ -219,14 +220,14 @@ class RunConfig:
         """The objectives this run evolves, in ``OBJECTIVES`` order."""
         if self.objective is not None:
             return (self.objective,)
-        chosen = self.fnd_objectives or TASK_OBJECTIVES[self.task]
+        chosen = self.fnd_objectives or self.task.objectives
         return tuple(o for o in OBJECTIVES if o in chosen)
 
     @property
     def grids(self) -> tuple[str, ...]:
         """The objectives the run keeps a passive grid of and shows (summary, repertoires, figures): the
         task's and the evolved ones, in ``OBJECTIVES`` order."""
-        shown = set(TASK_OBJECTIVES[self.task]) | set(self.objectives)
+        shown = set(self.task.objectives) | set(self.objectives)
         return tuple(o for o in OBJECTIVES if o in shown)
 
     @property
@@ -241,6 +242,7 @@ class RunConfig:
         their values of before they existed (``flat``, ``standard``), so that the files of earlier runs and
         experiments (``config.json``, ``heldout.json``, ``experiment.json``) still compare equal."""
         data = asdict(self)
+        data["task"] = task_to_record(self.task)
         data["fnd_objectives"] = list(self.fnd_objectives)
         data["gp"]["mutations"] = [list(m) for m in self.gp.mutations]
         data["qd"]["mutations"] = [list(m) for m in self.qd.mutations]
@@ -271,7 +273,7 @@ class RunConfig:
                 # run directories written before profiles existed ran the model's default
                 profile=str(data.get("profile", DEFAULT_PROFILE)),
                 # ... and before tasks and libraries, the primitives' trials without a library
-                task=str(data.get("task", DEFAULT_TASK)),
+                task=task_from_record(data.get("task"), "config.json: task"),
                 fnd_objectives=tuple(str(o) for o in data.get("fnd_objectives", ())),
                 library=str(data.get("library", "")),
                 library_digest=str(data.get("library_digest", "")),
@@ -284,16 +286,17 @@ class RunConfig:
             raise ConfigError(f"not a run configuration: {error}") from error
 
     def world(self) -> Config:
-        """The model every evaluation of the run uses: its profile and its task's trial length."""
-        return default_config(self.profile, self.task)
+        """The model every evaluation of the run uses: its task's world under its profile."""
+        return self.task.config(self.profile)
 
     @property
     def conditions(self) -> tuple[str, ...]:
-        """The conditions of the run's node set: the paper's eight (``primitives``) or all (``foraging``, with
-        ``got_food``: the 2024 baseline's node set, params.py:168-189 at a73e4af)."""
+        """The conditions of the run's node set: the task's, in blackboard order (``primitives``: the paper's
+        eight; ``foraging``: all, with ``got_food``: the 2024 baseline's node set, params.py:168-189 at
+        a73e4af)."""
         if self.nodes == "hierarchical":
             return HIERARCHICAL_CONDITIONS
-        return CONDITIONS_2023 if self.task == "primitives" else CONDITIONS
+        return tuple(c for c in CONDITIONS if c in self.task.nodes.conditions)
 
     @property
     def refuses_clones(self) -> bool:

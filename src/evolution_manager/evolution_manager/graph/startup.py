@@ -195,7 +195,7 @@ def trial_graph_nodes(
     conditions: Sequence[str] = (),
     clock: str = "/clock",
     library: str = "",
-    ticks: int | None = None,
+    world: Mapping[str, object] | None = None,
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
@@ -204,18 +204,16 @@ def trial_graph_nodes(
     profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
     ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
     (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
-    primitive library file every controller reads (its ``library`` parameter); ``ticks``: the simulator's
-    trial length when given (a task's, ``swarm_sim.config.TASKS``)."""
+    primitive library file every controller reads (its ``library`` parameter); ``world``: the simulator's
+    world parameters a task sets (``swarm_sim.tasks.world_parameters``; ``n_robots`` is ``robots``'s)."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
     prefix = namespace.rstrip("/")
-    simulator: dict[str, object] = {"n_robots": robots}
+    simulator: dict[str, object] = {**(world or {}), "n_robots": robots}
     if profile:
         simulator["profile"] = profile
     if conditions:
         simulator["conditions"] = " ".join(conditions)
-    if ticks is not None:
-        simulator["ticks"] = ticks
     controller: dict[str, object] = {"library": library} if library else {}
     trees = [tree] * robots if isinstance(tree, str) else list(tree)
     if len(trees) != robots:
@@ -245,15 +243,15 @@ def start_trial_graph(
     profile: str = "",
     clock: str = "/clock",
     library: str = "",
-    ticks: int | None = None,
+    world: Mapping[str, object] | None = None,
 ) -> None:
     """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
-    clock=clock, library=library, ticks=ticks)``, each in its own process, with its package's parameter file
+    clock=clock, library=library, world=world)``, each in its own process, with its package's parameter file
     and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the
     simulator's model profile. The simulator, a managed node, is started unconfigured (``autostart:=false``):
     the caller drives it through configure and activate (``TrialRunner.activate``)."""
     nodes = trial_graph_nodes(
-        robots, namespace, profile=profile, conditions=conditions, clock=clock, library=library, ticks=ticks
+        robots, namespace, profile=profile, conditions=conditions, clock=clock, library=library, world=world
     )
     for spec in nodes:
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]

@@ -38,7 +38,7 @@ from evolution_manager.viewing import figures
 from swarm_sim import transfer, validation
 from swarm_sim.config import Config
 from swarm_sim.errors import UsageError as SimUsageError
-from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES
+from swarm_sim.objectives import PAPER_OBJECTIVES as OBJECTIVES
 
 RAW_FILE = "argos_raw.tsv"
 CSV_FILE = "transfer.csv"

@@ -42,6 +42,7 @@ from evolution_manager.evolution.options import (
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.files import read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
+from swarm_sim.tasks import TaskSpec, registered_name
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from distributed import Client
@@ -300,7 +301,10 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
     if args.scenarios == "fresh":
         raise UsageError("compositions are evaluated on fixed scenarios: leave out --scenarios fresh")
     if args.resume:
-        if args.task not in (None, "foraging") or args.objective not in (None, "foraging"):
+        if (args.task is not None and not _is_foraging(args.task)) or args.objective not in (
+            None,
+            "foraging",
+        ):
             raise UsageError(
                 "a composition run evolves on the foraging task: leave out --task and --objective"
             )
@@ -314,7 +318,7 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
             "--algorithm ga evolves compositions of repertoire cells: give --swarm-from RUN_DIR "
             "[RUN_DIR ...] (and --task foraging)"
         )
-    if args.task != "foraging":
+    if args.task is None or not _is_foraging(args.task):
         raise UsageError("--swarm-from evolves compositions on the foraging task: add --task foraging")
     if args.algorithm not in ("ga", "qd"):
         raise UsageError("--swarm-from evolves compositions with --algorithm ga or --algorithm qd")
@@ -322,6 +326,11 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
         raise UsageError(
             f"--swarm-from: compositions are evolved on foraging, not on --objective {args.objective}"
         )
+
+
+def _is_foraging(task: TaskSpec) -> bool:
+    """Whether ``task`` is the registered foraging task (compositions run on it alone)."""
+    return registered_name(task) == "foraging"
 
 
 def _evolve_compositions(

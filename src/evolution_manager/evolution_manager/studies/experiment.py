@@ -63,7 +63,7 @@ from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
-from swarm_sim.world import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
+from swarm_sim.objectives import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory

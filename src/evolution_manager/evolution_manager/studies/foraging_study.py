@@ -56,7 +56,7 @@ if TYPE_CHECKING:
     from evolution_manager.evolution.compositions import CompositionConfig
 from evolution_manager.files import CsvLog, read_json, write_atomic, write_json
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
-from swarm_sim.config import TASKS
+from swarm_sim.tasks import task_named
 
 PRIMITIVES: tuple[str, ...] = tuple(FAMILIES)
 """The six primitive objectives, in the order of their families (``libraries.FAMILIES``)."""
@@ -123,8 +123,8 @@ def flat_budget(evaluations: int) -> int:
     """The flat baseline's budget: a hierarchical arm's ``evaluations`` plus the six primitives' QD runs'
     evaluations, counted in foraging trials' simulated time (the authors' 2200 generations against 1000:
     1200 x 25 = 6 x 25,000 x 160 / 800)."""
-    primitive_steps = len(PRIMITIVES) * evaluations * TASKS["primitives"]
-    return evaluations + round(primitive_steps / TASKS["foraging"])
+    primitive_steps = len(PRIMITIVES) * evaluations * task_named("primitives").trials.ticks
+    return evaluations + round(primitive_steps / task_named("foraging").trials.ticks)
 
 
 def _budget(arm: Arm, evaluations: int) -> int:

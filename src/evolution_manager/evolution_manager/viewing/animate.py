@@ -11,7 +11,6 @@ each robot's tree is named by a letter beside its action, and the letters' trees
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 import shutil
@@ -20,13 +19,16 @@ import tempfile
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.vocabulary import ACTIONS
-from evolution_manager.errors import AnimationError
+from evolution_manager.arguments import Parser
+from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
+from swarm_sim.objectives import OBJECTIVES, PAPER_OBJECTIVES
+from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
@@ -125,7 +127,6 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         delivered, carrying = int(frames.deliveries[k].sum()), int(frames.carrying[k].sum())
         lines.append(f"deliveries {delivered}, carrying {carrying}")
     lines.append("fitness so far:")
-    from swarm_sim.world import OBJECTIVES
 
     for name, value in zip(OBJECTIVES, frames.fitness[k], strict=True):
         if name in shown:
@@ -184,10 +185,8 @@ def tree_legend(frames: TrialFrames) -> list[str]:
 def shown_objectives(frames: TrialFrames) -> tuple[str, ...]:
     """The objectives a frame's panel shows: foraging in a foraging trial (the task's 200 ticks), else the
     paper's three."""
-    from swarm_sim.config import TASKS
-    from swarm_sim.world import PAPER_OBJECTIVES
 
-    foraging = len(frames.steps) >= TASKS["foraging"] * 4  # 800 steps (816 under clean)
+    foraging = len(frames.steps) >= FORAGING.trials.ticks * 4  # 800 steps (816 under clean)
     return ("foraging",) if foraging else PAPER_OBJECTIVES
 
 
@@ -232,33 +231,21 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16, every: 
 # ---------------------------------------------------------------------------------------------- command
 
 
-def _config_for(profile: str | None, task: str | None = None) -> Config:
-    """The model configuration of ``profile`` (None: the default) and ``task`` (None: the default)."""
-
-    from swarm_sim.config import DEFAULT, TASKS, Config, task_ticks
-
-    if task is not None:
-        if task not in TASKS:
-            raise AnimationError(f"--task must be one of {', '.join(TASKS)}, got {task!r}")
-        return dataclasses.replace(_config_for(profile), ticks=task_ticks(task))
-    if profile is None:
-        return DEFAULT
-    if not any(f.name == "profile" for f in dataclasses.fields(Config)):
-        raise AnimationError(f"--profile {profile}: this build of the model has no profiles")
-    choice: dict[str, Any] = {"profile": profile}
+def _config_for(profile: str | None, task: TaskSpec | None = None) -> Config:
+    """The model configuration of ``task``'s world (None: the default task) under ``profile`` (None: the
+    model's default)."""
     try:
-        return dataclasses.replace(DEFAULT, **choice)
+        return (task_named(DEFAULT_TASK) if task is None else task).config(profile)
     except (ValueError, TypeError) as error:
         raise AnimationError(f"--profile {profile}: {error}") from None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``animate``: one trial to an animated GIF (or MP4), from a tree and a seed or from a trial bag."""
-    import argparse
     import sys
     import time
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="animate",
         description="Render one trial to an animated GIF (.mp4 with ffmpeg): one frame per sensing step.",
     )
@@ -274,9 +261,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, help="seed of the trial (with --tree or --swarm)")
     parser.add_argument("--trial", type=int, default=0, help="trial index (with --tree; default 0)")
     parser.add_argument("--profile", help="model profile (with --tree; default: the model's default)")
-    parser.add_argument(
-        "--task", help="with --tree or --swarm: the trial length, primitives (default) or foraging"
-    )
+    add_task_option(parser, default=None, what="; with --tree or --swarm")
     parser.add_argument(
         "--library", type=Path, help="with --tree or --swarm: a primitive library whose names the trees use"
     )
@@ -289,7 +274,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="K",
         help="one frame every K sensing steps (default 1; 4: one per tick, a quarter of the file)",
     )
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as error:
+        print(f"animate: error: {error}", file=sys.stderr)
+        return 2
     try:
         started = time.monotonic()
         if args.bag is not None:

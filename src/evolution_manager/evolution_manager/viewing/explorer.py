@@ -106,7 +106,7 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
     10000, at most 65534; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255:
     none); whether each robot carries food (u8). Little-endian, packed (no padding)."""
-    from swarm_sim.world import OBJECTIVES
+    from swarm_sim.objectives import OBJECTIVES
 
     columns = [OBJECTIVES.index(o) for o in objectives]
     keep = list(range(0, len(frames.steps), stride))
@@ -167,7 +167,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     simplified: dict[str, str] = {}
     held_out = _held_out_scores(root, config)
     library = _library(root, config)
-    from swarm_sim.world import OBJECTIVES
+    from swarm_sim.objectives import OBJECTIVES
 
     for objective in OBJECTIVES:
         path = root / f"repertoire_{objective}.json"
@@ -207,10 +207,15 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     animations: dict[str, dict] = {}
     if animate:
         from evolution_manager.viewing.frames import frames_from_tree
-        from swarm_sim.config import DEFAULT, default_config
+        from swarm_sim.config import DEFAULT
+        from swarm_sim.tasks import task_from_record
 
-        # the run's model: its profile and its task's trial length
-        model = default_config(config.get("profile") or DEFAULT.profile, config.get("task") or "primitives")
+        # the run's model: its task's world under its profile
+        try:
+            task = task_from_record(config.get("task"), f"{root / 'config.json'}: task")
+            model = task.config(config.get("profile") or DEFAULT.profile)
+        except ValueError as error:  # a task or profile the model cannot run
+            raise ExplorerError(str(error)) from None
         seeds = _evaluation_seeds(root)
         wanted = []
         for grid in objectives.values():
@@ -259,7 +264,7 @@ def _library(root: Path, config: dict) -> Library | None:
 
 def _shown_objectives(root: Path) -> list[str]:
     """The objectives whose grids the page of run directory ``root`` shows (its repertoire files)."""
-    from swarm_sim.world import OBJECTIVES
+    from swarm_sim.objectives import OBJECTIVES
 
     return [o for o in OBJECTIVES if (root / f"repertoire_{o}.json").exists()]
 

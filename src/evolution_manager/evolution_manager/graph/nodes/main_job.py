@@ -42,7 +42,7 @@ from evolution_manager.graph.startup import GraphError, executable
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError
 from swarm_ros.isolation import domain_environment, reserved_domain
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.objectives import OBJECTIVES
 
 DEFAULT_EVALUATIONS = 25_000  # the paper's budget per run; about two minutes here
 DEFAULT_EVALUATORS = 2

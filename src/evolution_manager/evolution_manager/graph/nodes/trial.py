@@ -14,9 +14,10 @@ from other graphs in the same domain. ``--params-file FILE`` hands a ROS paramet
 instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). Node logs are kept in
 ``--logs DIR`` (default: ``<bag>.logs`` beside the bag).
 
-``--task foraging`` runs the authors' 100 s foraging trials (``swarm_sim.config.TASKS``; default
-``primitives``, 20 s). ``--library FILE`` (a primitive library, ``bt_controller.library``) is handed to every
-controller as its ``library`` parameter: the tree may then name its primitives.
+``--task foraging`` runs the authors' 100 s foraging trials (default ``primitives``, 20 s); ``--task FILE``
+a task file's world (``docs/tasks.md``): the simulator is given every world parameter the task sets.
+``--library FILE`` (a primitive library, ``bt_controller.library``) is handed to every controller as its
+``library`` parameter: the tree may then name its primitives.
 
 ``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
 this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
@@ -51,7 +52,8 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
-from evolution_manager.errors import TrialFailedError
+from evolution_manager.arguments import Parser
+from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
 from evolution_manager.processes import exit_status, signals_as_interrupts
@@ -67,9 +69,10 @@ from swarm_ros.parameters import read_parameter_file
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT, DEFAULT_TASK, TASKS, Config, default_config
+from swarm_sim.config import DEFAULT, Config
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.swarm_layout import LayoutError, SwarmLayout, load_layout
+from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, task_named, world_parameters
 from swarm_sim.trial_data import TrialRecord
 
 MAX_DOMAIN = 232
@@ -281,13 +284,13 @@ class TrialGraph:
     ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
     ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
     (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
-    one each); ``library``: a primitive library every controller reads (a file); ``task``: the trial length
-    (``swarm_sim.config.TASKS``)."""
+    one each); ``library``: a primitive library every controller reads (a file); ``task``: the task whose
+    world the simulator runs (``swarm_sim.tasks``; ``robots`` overrides its robot count)."""
 
     def __init__(
         self,
         *,
-        robots: int = DEFAULT.n_robots,
+        robots: int | None = None,
         timeout: float = 60.0,
         domain: int | None = None,
         namespace: str = "",
@@ -297,14 +300,15 @@ class TrialGraph:
         profile: str = DEFAULT.profile,
         clock: str = "/clock",
         library: Path | None = None,
-        task: str = DEFAULT_TASK,
+        task: TaskSpec | None = None,
     ) -> None:
         self.conditions = list(conditions)
         self.clock = clock
         self.library = library
-        self.task = task
-        world = replace(default_config(profile, task), n_robots=robots)
-        self.config, _ = apply_conditions(self.conditions, world)
+        self.task = task_named(DEFAULT_TASK) if task is None else task
+        world = self.task.config(profile)
+        self.world = world if robots is None else replace(world, n_robots=robots)
+        self.config, _ = apply_conditions(self.conditions, self.world)
         self.robots = self.config.n_robots
         self.timeout = timeout
         self.domain = domain
@@ -350,7 +354,7 @@ class TrialGraph:
                 profile=self.config.profile,
                 clock=self.clock,
                 library=str(self.library.absolute()) if self.library is not None else "",
-                ticks=self.config.ticks,
+                world=world_parameters(self.world),
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -443,7 +447,7 @@ def run_recorded_trial(
     trial: int,
     bag_path: Path,
     *,
-    robots: int = DEFAULT.n_robots,
+    robots: int | None = None,
     timeout: float = 60.0,
     domain: int | None = None,
     namespace: str = "",
@@ -452,7 +456,7 @@ def run_recorded_trial(
     profile: str = DEFAULT.profile,
     clock: str = "/clock",
     library: Path | None = None,
-    task: str = DEFAULT_TASK,
+    task: TaskSpec | None = None,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
     node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other
@@ -523,7 +527,7 @@ def tree_argument(argument: str) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``trial``: one trial through the node graph, recorded; prints the trial's JSON."""
-    parser = argparse.ArgumentParser(prog="trial", description=__doc__.split("\n\n")[1])
+    parser = Parser(prog="trial", description=__doc__.split("\n\n")[1])
     what = parser.add_mutually_exclusive_group(required=True)
     what.add_argument("--tree", help="every robot's tree, as text or a file holding it")
     what.add_argument(
@@ -545,12 +549,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=DEFAULT.profile,
         help=f"the model's profile (docs/model.md; default {DEFAULT.profile})",
     )
-    parser.add_argument(
-        "--task",
-        choices=tuple(TASKS),
-        default=DEFAULT_TASK,
-        help=f"the trial length: primitives (20 s) or foraging (100 s) (default {DEFAULT_TASK})",
-    )
+    add_task_option(parser)
     parser.add_argument(
         "--library", type=Path, default=None, help="a primitive library (JSON) whose names the tree may use"
     )
@@ -580,7 +579,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
     )
-    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    except UsageError as error:
+        print(f"trial: error: {error}", file=sys.stderr)
+        return 2
     try:
         library: Library | None = load_library(args.library) if args.library is not None else None
 
@@ -591,7 +594,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         ran: str | SwarmLayout
         if args.swarm is not None:
             try:
-                layout = load_layout(args.swarm, DEFAULT.n_robots, library)
+                layout = load_layout(args.swarm, args.task.robots.count, library)
             except LayoutError as error:
                 raise ValueError(f"--swarm: {error}") from None
             shown = [canonical(tree) for tree in layout.parsed(library)]

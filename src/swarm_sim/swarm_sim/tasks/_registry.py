@@ -1,0 +1,101 @@
+"""The named tasks: one registry, ``register`` to add one, ``task_named`` and ``resolve_task`` to find one.
+
+``primitives`` and ``foraging`` are the two papers' tasks; a variant of a task is one registration
+(``dataclasses.replace`` of a registered spec), not new code.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
+from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping
+from swarm_sim.tasks._spec import Nodes, TaskError, TaskSpec, Trials
+
+PRIMITIVES = TaskSpec(
+    name="primitives",
+    description="The 2023 paper's trials of 20 s, in which the six primitives are evolved: nine footbots, "
+    "a nest disc at the centre and food beyond 1000 mm, then 1200 mm, by blocks of five trials.",
+    objectives=PAPER_OBJECTIVES,
+    nodes=Nodes(conditions=CONDITIONS_2023),
+)
+"""The 2023 experiment's task: its objectives, its node set (table 3's conditions), 40-tick trials."""
+
+FORAGING = replace(
+    PRIMITIVES,
+    name="foraging",
+    description="The 2024 follow-up's foraging trials of 100 s in the same arena: robots carry food from the "
+    "food region to the nest; got_food joins the conditions.",
+    trials=Trials(ticks=200),
+    objectives=("foraging",),
+    nodes=Nodes(conditions=CONDITIONS),
+)
+"""The 2024 foraging task (``footbot_bt.cpp:493,538,546,551`` at a73e4af: 200 ticks, 800 steps)."""
+
+_REGISTRY: dict[str, TaskSpec] = {}
+
+DEFAULT_TASK = "primitives"
+
+
+def register(task: TaskSpec) -> TaskSpec:
+    """Add ``task`` to the registry under its name (refused when the name is taken by another spec)."""
+    known = _REGISTRY.get(task.name)
+    if known is not None and known != task:
+        raise TaskError(f"a task named {task.name!r} is already registered")
+    _REGISTRY[task.name] = task
+    return task
+
+
+register(PRIMITIVES)
+register(FORAGING)
+
+
+def task_names() -> tuple[str, ...]:
+    """The registered tasks' names, in registration order."""
+    return tuple(_REGISTRY)
+
+
+def task_named(name: str) -> TaskSpec:
+    """The registered task ``name``; ``TaskError`` naming the registered ones (and the nearest) otherwise."""
+    if name in _REGISTRY:
+        return _REGISTRY[name]
+    close = difflib.get_close_matches(name, list(_REGISTRY), n=1)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    raise TaskError(f"task must be one of {', '.join(_REGISTRY)} or a task file (.yaml), got {name!r}{hint}")
+
+
+def resolve_task(value: str | TaskSpec) -> TaskSpec:
+    """A task from a registered name or the path of a task file (``.yaml``/``.yml``, or any file that exists);
+    a ``TaskSpec`` is returned as it is."""
+    if isinstance(value, TaskSpec):
+        return value
+    if value in _REGISTRY:
+        return _REGISTRY[value]
+    path = Path(value)
+    if path.suffix in (".yaml", ".yml") or path.is_file():
+        return read_task_file(path)
+    return task_named(value)
+
+
+def registered_name(task: TaskSpec) -> str | None:
+    """The name under which exactly ``task`` is registered, or None (a task of its own, or an edited one)."""
+    return task.name if _REGISTRY.get(task.name) == task else None
+
+
+def task_to_record(task: TaskSpec) -> str | dict[str, Any]:
+    """How a run's files (``config.json``) keep ``task``: the name of a registered task it equals exactly,
+    else every key (a task of one's own, or an edited one), so that the file always says the whole world."""
+    return registered_name(task) or task_to_mapping(task)
+
+
+def task_from_record(value: object, where: str = "task") -> TaskSpec:
+    """The task a run's file keeps (``task_to_record``); None (files of before tasks): ``primitives``."""
+    if value is None:
+        return task_named(DEFAULT_TASK)
+    if isinstance(value, str):
+        return task_named(value)
+    return task_from_mapping(value, where)

@@ -1,0 +1,316 @@
+"""The task spec: everything that defines a trial's world and its scoring, as one immutable value.
+
+A task says the arena, its regions, the trials' length and chains, the robots, their communication and motors,
+the objectives it is about and the node set its trees are made of. The model's constants (the control step,
+perception, contact physics: ``docs/model.md``) and a run's profile are not part of it. ``TaskSpec.config``
+gives the world model's ``Config`` for a profile: the one way from a task to what the simulator runs.
+Units: millimetres, ticks (2 Hz).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from dataclasses import dataclass, field, replace
+
+from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS
+from swarm_sim.config import DEFAULT, Config
+from swarm_sim.errors import ConfigError
+from swarm_sim.objectives import OBJECTIVES
+
+REGION_KINDS: tuple[str, ...] = ("nest", "food")
+"""The kinds of region a task can have."""
+
+REGION_SHAPES: tuple[str, ...] = ("disc", "beyond")
+"""``disc``: the points closer than ``radius`` to ``centre``; ``beyond``: the points at least ``radius`` from
+``centre`` (the 2023 food region: everything past a circle around the nest)."""
+
+
+class TaskError(ConfigError):
+    """A task that cannot be run; the message is one line naming the key, the value and what was expected."""
+
+
+@dataclass(frozen=True)
+class Arena:
+    """The arena: a square inside walls."""
+
+    half_size: float = DEFAULT.arena_half
+    """Half the side of the free square inside the walls (mm)."""
+
+
+@dataclass(frozen=True)
+class Region:
+    """A region of the arena that the ground sensor reads.
+
+    ``radius`` holds one value per arena configuration (a single value: the same in all). A task's arena
+    configurations vary its regions by block of trials: trials come in blocks of ``Trials.chain_trials`` and
+    the blocks cycle through the configurations, as the 2023 gaps do (food 1000 mm then 1200 mm from the
+    centre).
+    """
+
+    kind: str
+    """A kind of ``REGION_KINDS``."""
+    shape: str
+    """A shape of ``REGION_SHAPES``."""
+    radius: tuple[float, ...]
+    """The circle's radius in each arena configuration (mm)."""
+    centre: tuple[float, float] = (0.0, 0.0)
+    """The circle's centre (mm; the arena's centre is the origin)."""
+
+
+@dataclass(frozen=True)
+class Trials:
+    """The trials of one evaluation."""
+
+    ticks: int = DEFAULT.ticks
+    """A trial's length in behaviour-tree ticks (2 Hz: 40 ticks are 20 s)."""
+    chain_trials: int = DEFAULT.chain_trials
+    """Trials per chain (under ``paper`` one simulation with teleports between its trials), and so per block
+    of trials sharing an arena configuration."""
+
+
+@dataclass(frozen=True)
+class Robots:
+    """The swarm's robots (footbots) and where they start."""
+
+    count: int = DEFAULT.n_robots
+    """Robots in the swarm."""
+    radius: float = DEFAULT.robot_radius
+    """Body radius (mm)."""
+    start_half_size: float = DEFAULT.start_half
+    """Start positions are uniform in the square [-start_half_size, start_half_size]^2 (mm)."""
+    start_attempts: int = DEFAULT.max_start_attempts
+    """Tries per robot to find a free start position."""
+
+
+@dataclass(frozen=True)
+class Communication:
+    """Range-and-bearing messages."""
+
+    range: float = DEFAULT.message_range
+    """Messages travel only between centres at most this far apart (mm)."""
+    delivery_probability: float = DEFAULT.delivery_probability
+    """Chance that a message within range and not occluded arrives (per ordered pair, per step)."""
+    occlusion: bool = DEFAULT.occlusion
+    """Whether a third robot's body between two robots blocks their messages."""
+
+
+@dataclass(frozen=True)
+class Motors:
+    """The differential drive."""
+
+    wheel_speed: float = DEFAULT.wheel_speed
+    """Nominal wheel speed, one unit of an action's wheel setting (mm/s)."""
+    wheel_separation: float = DEFAULT.wheel_separation
+    """Distance between the wheels (mm)."""
+    gain_low: float = DEFAULT.gain_low
+    """Each wheel's gain is gain_low + gain_step * U{0 .. gain_levels - 1}, drawn once per chain."""
+    gain_step: float = DEFAULT.gain_step
+    """Step between the possible wheel gains."""
+    gain_levels: int = DEFAULT.gain_levels
+    """Number of possible wheel gains."""
+
+
+@dataclass(frozen=True)
+class Nodes:
+    """The node set trees of the task are made of (composites are always available)."""
+
+    conditions: tuple[str, ...] = CONDITIONS
+    """Condition nodes, by name (``bt_controller.vocabulary.CONDITION_TABLE``)."""
+    actions: tuple[str, ...] = ACTIONS
+    """Action nodes, by name (``bt_controller.vocabulary.ACTIONS``)."""
+
+
+def _default_regions() -> tuple[Region, ...]:
+    nest = DEFAULT.nest_radius
+    return (
+        Region("nest", "disc", (nest,)),
+        Region("food", "beyond", tuple(nest + gap for gap in DEFAULT.gaps)),
+    )
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """A task: one trial's world and its scoring (see the module's docstring; ``docs/tasks.md``)."""
+
+    name: str
+    """The task's name (a registered name, or one of the user's own)."""
+    description: str = ""
+    """One or two sentences for people."""
+    arena: Arena = field(default_factory=Arena)
+    regions: tuple[Region, ...] = field(default_factory=_default_regions)
+    trials: Trials = field(default_factory=Trials)
+    robots: Robots = field(default_factory=Robots)
+    communication: Communication = field(default_factory=Communication)
+    motors: Motors = field(default_factory=Motors)
+    objectives: tuple[str, ...] = ()
+    """The objectives the task is about: every run of it shows them (grids, summary, figures) and GP_fnd
+    evolves them by default. Every trial scores every objective of the table all the same."""
+    nodes: Nodes = field(default_factory=Nodes)
+
+    def __post_init__(self) -> None:
+        check(self)
+
+    def region(self, kind: str) -> Region | None:
+        """The task's region of ``kind``, or None."""
+        return next((r for r in self.regions if r.kind == kind), None)
+
+    @property
+    def arena_configurations(self) -> int:
+        """How many arena configurations the task's regions go through."""
+        return max(len(r.radius) for r in self.regions)
+
+    def config(self, profile: str | None = None) -> Config:
+        """The world model's configuration for this task under ``profile`` (None: the model's default)."""
+        nest, food = self.region("nest"), self.region("food")
+        assert nest is not None and food is not None  # check() requires both
+        nest_radius = nest.radius[0]
+        gaps = tuple(radius - nest_radius for radius in _cycle(food.radius, self.arena_configurations))
+        return replace(
+            DEFAULT,
+            profile=DEFAULT.profile if profile is None else profile,
+            arena_half=self.arena.half_size,
+            nest_radius=nest_radius,
+            gaps=gaps,
+            n_robots=self.robots.count,
+            robot_radius=self.robots.radius,
+            start_half=self.robots.start_half_size,
+            max_start_attempts=self.robots.start_attempts,
+            ticks=self.trials.ticks,
+            chain_trials=self.trials.chain_trials,
+            message_range=self.communication.range,
+            delivery_probability=self.communication.delivery_probability,
+            occlusion=self.communication.occlusion,
+            wheel_speed=self.motors.wheel_speed,
+            wheel_separation=self.motors.wheel_separation,
+            gain_low=self.motors.gain_low,
+            gain_step=self.motors.gain_step,
+            gain_levels=self.motors.gain_levels,
+        )
+
+
+def _unknown(key: str, what: str, name: object, choices: tuple[str, ...]) -> str:
+    close = difflib.get_close_matches(str(name), choices, n=1)
+    hint = f" (did you mean {close[0]}?)" if close else ""
+    return f"{key}: unknown {what} {name!r}{hint}; expected among {', '.join(choices)}"
+
+
+def _cycle(values: tuple[float, ...], n: int) -> tuple[float, ...]:
+    return values if len(values) == n else values * n
+
+
+def check(task: TaskSpec) -> None:
+    """Raise ``TaskError`` naming the first thing of ``task`` that cannot be run (values of the right types
+    are the file loader's concern; this checks what they mean together)."""
+    half = task.arena.half_size
+    kinds = [r.kind for r in task.regions]
+    for k, region in enumerate(task.regions):
+        key = f"regions[{k}]"
+        if region.kind not in REGION_KINDS:
+            raise TaskError(f"{key}.kind must be one of {', '.join(REGION_KINDS)}, got {region.kind!r}")
+        if kinds.count(region.kind) > 1:
+            raise TaskError(f"{key}.kind: the task has more than one {region.kind} region; expected one")
+        if region.shape not in REGION_SHAPES:
+            raise TaskError(f"{key}.shape must be one of {', '.join(REGION_SHAPES)}, got {region.shape!r}")
+        if tuple(region.centre) != (0.0, 0.0):
+            raise TaskError(
+                f"{key}.centre must be [0, 0] (this model version places regions at the arena's centre), "
+                f"got {list(region.centre)}"
+            )
+        if not region.radius:
+            raise TaskError(f"{key}.radius must be one positive number per arena configuration, got none")
+        for radius in region.radius:
+            if not (math.isfinite(radius) and radius > 0):
+                raise TaskError(f"{key}.radius must be positive numbers, got {radius!r}")
+            if radius >= half:
+                raise TaskError(
+                    f"{key}.radius {radius} puts the region's circle outside the arena "
+                    f"(arena.half_size {half}): expected below {half}"
+                )
+    configurations = {len(r.radius) for r in task.regions} - {1}
+    if len(configurations) > 1:
+        raise TaskError(
+            "regions: every region with more than one radius must have one per arena configuration, the same "
+            f"number for all; got {', '.join(str(len(r.radius)) for r in task.regions)}"
+        )
+    nest, food = task.region("nest"), task.region("food")
+    if nest is None or nest.shape != "disc" or len(nest.radius) != 1:
+        raise TaskError("regions: this model version needs one nest region, a disc of one radius")
+    if food is None or food.shape != "beyond":
+        raise TaskError("regions: this model version needs one food region of shape beyond")
+    if min(food.radius) <= nest.radius[0]:
+        raise TaskError(
+            f"regions: the food circle's radius ({min(food.radius)}) must exceed the nest's "
+            f"({nest.radius[0]}): nest and food must not overlap"
+        )
+    for name in task.objectives:
+        if name not in OBJECTIVES:
+            raise TaskError(_unknown("objectives", "objective", name, OBJECTIVES))
+    if len(set(task.objectives)) != len(task.objectives):
+        raise TaskError(f"objectives must be distinct, got {', '.join(task.objectives)}")
+    table = {row.name: row for row in CONDITION_TABLE}
+    offered = set(kinds) | {"robots"}
+    for name in task.nodes.conditions:
+        if name not in table:
+            raise TaskError(_unknown("nodes.conditions", "condition", name, tuple(table)))
+        missing = [kind for kind in table[name].reads if kind not in offered]
+        if missing:
+            raise TaskError(
+                f"nodes.conditions: {name} reads the {missing[0]} region, which the task does not have"
+            )
+    for name in task.nodes.actions:
+        if name not in ACTIONS:
+            raise TaskError(_unknown("nodes.actions", "action", name, ACTIONS))
+    if not task.nodes.actions:
+        raise TaskError("nodes.actions must name at least one action, got none")
+    for what, names in (("conditions", task.nodes.conditions), ("actions", task.nodes.actions)):
+        if len(set(names)) != len(names):
+            raise TaskError(f"nodes.{what} must be distinct, got {', '.join(names)}")
+    robots = task.robots
+    if robots.start_half_size + robots.radius > half:
+        raise TaskError(
+            f"robots.start_half_size {robots.start_half_size} lets robots of radius {robots.radius} start "
+            f"outside the arena (arena.half_size {half}): expected at most {half - robots.radius}"
+        )
+    try:
+        task.config()
+    except TaskError:
+        raise
+    except ConfigError as error:
+        message = re.sub(r"\b[a-z_]+\b", lambda m: _TASK_KEY.get(m.group(0), m.group(0)), str(error))
+        raise TaskError(message) from None
+
+
+_TASK_KEY: dict[str, str] = {
+    "arena_half": "arena.half_size",
+    "nest_radius": "the nest's radius",
+    "n_robots": "robots.count",
+    "robot_radius": "robots.radius",
+    "start_half": "robots.start_half_size",
+    "max_start_attempts": "robots.start_attempts",
+    "ticks": "trials.ticks",
+    "chain_trials": "trials.chain_trials",
+    "message_range": "communication.range",
+    "delivery_probability": "communication.delivery_probability",
+    "occlusion": "communication.occlusion",
+    "wheel_speed": "motors.wheel_speed",
+    "wheel_separation": "motors.wheel_separation",
+    "gain_low": "motors.gain_low",
+    "gain_step": "motors.gain_step",
+    "gain_levels": "motors.gain_levels",
+}
+"""The task key of each ``Config`` field a task sets, for the messages of ``Config``'s own checks."""
+
+TASK_CONFIG_FIELDS: tuple[str, ...] = (*_TASK_KEY, "gaps")
+"""The ``Config`` fields a task sets (the rest are the model's constants, its profile and damage)."""
+
+
+def world_parameters(config: Config) -> dict[str, object]:
+    """The simulator node's parameters that give it the world of ``config`` as far as a task sets it: those
+    that differ from the model's default world (so a parameter file can still set the others)."""
+    return {
+        name: getattr(config, name)
+        for name in TASK_CONFIG_FIELDS
+        if getattr(config, name) != getattr(DEFAULT, name)
+    }

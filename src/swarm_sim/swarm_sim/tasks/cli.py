@@ -1,0 +1,58 @@
+"""``ws/run swarm_sim task list | show NAME|FILE | check FILE...``: the registered tasks, a task as the YAML
+file that reproduces it, and a check of task files (one line per file; exit status 2 for a bad one)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from swarm_sim.tasks._files import read_task_file, task_to_yaml
+from swarm_sim.tasks._registry import resolve_task, task_named, task_names
+from swarm_sim.tasks._spec import TaskError
+
+EXIT_BAD = 2
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="task", description="Tasks as data (docs/tasks.md): list, show and check them."
+    )
+    verbs = parser.add_subparsers(dest="verb", required=True, metavar="list|show|check")
+    verbs.add_parser("list", help="the registered tasks, one line each")
+    show = verbs.add_parser("show", help="a task as YAML that reproduces it (save it and edit it)")
+    show.add_argument("task", metavar="NAME|FILE")
+    check = verbs.add_parser("check", help="check task files: one line each, exit status 2 for a bad one")
+    check.add_argument("files", nargs="+", metavar="FILE")
+    args = parser.parse_args(argv)
+    try:
+        if args.verb == "list":
+            for name in task_names():
+                task = task_named(name)
+                seconds = task.trials.ticks / 2
+                print(
+                    f"{name}: {seconds:g} s trials, {task.robots.count} robots, objectives "
+                    f"{', '.join(task.objectives) or 'none'}"
+                )
+            return 0
+        if args.verb == "show":
+            sys.stdout.write(task_to_yaml(resolve_task(args.task)))
+            return 0
+        bad = 0
+        for path in args.files:
+            try:
+                task = read_task_file(Path(path))
+            except TaskError as error:
+                print(f"task: {error}", file=sys.stderr)
+                bad += 1
+                continue
+            print(f"{path}: task {task.name!r}, ok")
+        return EXIT_BAD if bad else 0
+    except TaskError as error:
+        print(f"task: {error}", file=sys.stderr)
+        return EXIT_BAD
+
+
+if __name__ == "__main__":
+    sys.exit(main())
