@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from bt_controller.perception import PerceptionParams
 from bt_controller.timeline import PROFILES, Timeline, arena_of_trial, profile_number
@@ -301,3 +301,18 @@ def default_config(profile: str) -> Config:
     """The model's default configuration (the 2023 primitives' world) under ``profile`` (``paper`` or
     ``clean``, docs/model.md); a task's world is ``swarm_sim.tasks.TaskSpec.config``."""
     return replace(DEFAULT, profile=profile)
+
+
+def config_from_dict(data: object) -> Config:
+    """The configuration ``Config.as_dict`` wrote (a JSON object: gaps as a list); ``ConfigError`` naming an
+    unknown parameter or a bad value."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"a configuration must be an object of parameters, got {data!r}")
+    known = [f.name for f in fields(Config)]
+    for name in data:
+        if name not in known:
+            raise ConfigError(f"unknown model parameter {name!r}; expected among {', '.join(known)}")
+    values: dict[str, Any] = dict(data)
+    if isinstance(values.get("gaps"), list):
+        values["gaps"] = tuple(values["gaps"])
+    return Config(**values)

@@ -159,7 +159,7 @@ def test_an_edited_task_changes_the_world_and_both_roads_agree():
     assert (config.n_robots, config.ticks, config.arena_half, config.nest_radius, config.gaps) == (
         5, 14, 1800.0, 400.0, (500.0,),
     )  # fmt: skip
-    texts = random_trees(7, 6)
+    texts = random_trees(7, 4)
     requests = [EvaluationRequest(t, 50 + k, 3) for k, t in enumerate(texts)]
     batch = BatchEvaluator(config).evaluate_trials(requests)
     unedited = BatchEvaluator(FORAGING.config("paper")).evaluate(requests)

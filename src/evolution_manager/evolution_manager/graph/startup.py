@@ -11,6 +11,7 @@ process it starts dies with the process that started it, whatever kills that one
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -87,7 +88,7 @@ class Graph:
         for params_file in params_files:
             command += ["--params-file", str(params_file)]
         for key, value in (parameters or {}).items():
-            command += ["-p", f"{key}:={value}"]
+            command += ["-p", f"{key}:={parameter_text(value)}"]
         output: IO[str] | int = subprocess.DEVNULL
         env = domain_environment(self.domain)
         if self.log_dir is not None:
@@ -185,6 +186,14 @@ class NodeSpec:
     """Parameters that override the parameter files."""
     remaps: dict[str, str] = field(default_factory=dict)
     """Topic remappings (name -> new name)."""
+
+
+def parameter_text(value: object) -> str:
+    """A parameter's value as ``-p NAME:=VALUE`` takes it (YAML): lists and tuples as ``[a, b]``, booleans as
+    ``true``/``false``, anything else as its text."""
+    if isinstance(value, (bool, list, tuple)):
+        return json.dumps(list(value) if isinstance(value, tuple) else value)
+    return str(value)
 
 
 def trial_graph_nodes(

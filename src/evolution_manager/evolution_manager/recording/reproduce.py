@@ -14,14 +14,16 @@ heterogeneous swarm's trial is re-run with each robot's own tree.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from bt_controller.errors import TreeError
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node, parse
 from evolution_manager.recording.bags import BagError, read_bag
-from swarm_sim.config import DEFAULT, default_config
+from swarm_sim.config import DEFAULT, Config, config_from_dict, default_config
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
 from swarm_sim.swarm_layout import LayoutError, layout_of_label
 from swarm_sim.trial_data import VALUE_NAMES
@@ -50,6 +52,19 @@ class Verification:
         if self.reproduced:
             return f"reproduced: {what}: {self.steps_compared} steps of poses and every value identical"
         return f"NOT reproduced: {what}: {self.first_divergence}"
+
+
+def recorded_world(start: Any, profile: str) -> Config:
+    """The world a trial bag's ``/trial_start`` says its trial ran in: its ``world`` (every model parameter:
+    the task's world, the profile, any conditions) or, in bags recorded before it, the model under
+    ``profile`` with the recorded trial length (before tasks: the primitives' trials)."""
+    text = getattr(start, "world", "")
+    if not text:
+        return replace(default_config(profile), ticks=int(getattr(start, "ticks", 0) or DEFAULT.ticks))
+    try:
+        return config_from_dict(json.loads(text))
+    except (ValueError, TypeError) as error:  # not JSON, or not a world the model can run
+        raise BagError(f"the recorded world (/trial_start) cannot be rebuilt: {error}") from None
 
 
 def verify_trial_bag(path: Path | str) -> Verification:
@@ -99,8 +114,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         if not divergences and world.step in cargo and cargo[world.step] != carried:
             divergences.append(f"the carrying flags or deliveries differ at step {world.step}")
 
-    # the trial's length (bags recorded before tasks: the primitives' trials)
-    config = replace(default_config(profile), ticks=int(getattr(start, "ticks", 0) or DEFAULT.ticks))
+    config = recorded_world(start, profile)
     record = run_with_controllers(tree, seed, trial, config, on_step=compare)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -164,8 +164,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     """The frames of the trial recorded in the bag at ``path`` (``trial --bag``): trial K's steps only (the
     bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
     from evolution_manager.recording.bags import BagError, read_bag
-    from evolution_manager.recording.reproduce import RESULT_TOPIC
-    from swarm_sim.config import DEFAULT, default_config
+    from evolution_manager.recording.reproduce import RESULT_TOPIC, recorded_world
+    from swarm_sim.config import DEFAULT
 
     try:
         messages = list(read_bag(path))
@@ -176,8 +176,10 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         raise AnimationError(f"{path} holds no /trial_start: not a trial bag (record one with `trial --bag`)")
     result = next((m.message for m in messages if m.topic == RESULT_TOPIC), None)
     profile = getattr(result, "profile", "") or DEFAULT.profile  # bags recorded before profiles: the default
-    # the trial's length (bags recorded before tasks: the primitives' trials)
-    config = replace(default_config(profile), ticks=int(getattr(start, "ticks", 0) or DEFAULT.ticks))
+    try:
+        config = recorded_world(start, profile)
+    except BagError as error:
+        raise AnimationError(str(error)) from None
     trial = int(start.trial)
     states = {
         m.message.step: m.message

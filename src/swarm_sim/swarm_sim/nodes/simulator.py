@@ -58,6 +58,7 @@ step, so results do not depend on the machine's speed. The world itself is ``swa
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 from dataclasses import dataclass
@@ -416,6 +417,7 @@ class SimulatorNode(ManagedNode):
                 robots=self.robots,
                 tree_keys=[int(k) for k in world.setup.tree_keys],
                 ticks=world.p.ticks,
+                world=json.dumps(self.config.as_dict()),
             )
         )
         record: TrialRecord | None = None

@@ -72,7 +72,7 @@ from swarm_sim.conditions import apply_conditions
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.swarm_layout import LayoutError, SwarmLayout, load_layout
-from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, task_named, world_parameters
+from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
 from swarm_sim.trial_data import TrialRecord
 
 MAX_DOMAIN = 232
@@ -300,12 +300,12 @@ class TrialGraph:
         profile: str = DEFAULT.profile,
         clock: str = "/clock",
         library: Path | None = None,
-        task: TaskSpec | None = None,
+        task: TaskSpec | str | None = None,
     ) -> None:
         self.conditions = list(conditions)
         self.clock = clock
         self.library = library
-        self.task = task_named(DEFAULT_TASK) if task is None else task
+        self.task = resolve_task(DEFAULT_TASK if task is None else task)
         world = self.task.config(profile)
         self.world = world if robots is None else replace(world, n_robots=robots)
         self.config, _ = apply_conditions(self.conditions, self.world)
@@ -456,7 +456,7 @@ def run_recorded_trial(
     profile: str = DEFAULT.profile,
     clock: str = "/clock",
     library: Path | None = None,
-    task: TaskSpec | None = None,
+    task: TaskSpec | str | None = None,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
     node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other

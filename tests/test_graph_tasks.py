@@ -1,0 +1,39 @@
+"""A task travels whole through the node graph: an edited task's world (trial length, chain, arena, robot
+count, regions) runs in the simulator node as on the batch road, its bag says that world, and a replay and an
+animation rebuild it from the bag alone."""
+
+from dataclasses import replace
+
+import numpy as np
+
+from evolution_manager.graph.nodes.trial import TrialGraph
+from evolution_manager.recording.reproduce import verify_trial_bag
+from evolution_manager.viewing.frames import frames_from_bag
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.tasks import FORAGING, Arena, Region, Robots, Trials
+
+SMALL = replace(
+    FORAGING,
+    name="small-foraging",
+    arena=Arena(half_size=1800.0),
+    regions=(Region("nest", "disc", (400.0,)), Region("food", "beyond", (700.0, 900.0))),
+    trials=Trials(ticks=14, chain_trials=2),
+    robots=Robots(count=5, start_half_size=800.0),
+)
+TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
+
+
+def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(tmp_path):
+    config = SMALL.config("paper")
+    evaluator = BatchEvaluator(config)
+    seed, trial, bag = 11, 3, tmp_path / "bag"  # trial 3: the second chain's second, the food at 900 mm
+    with TrialGraph(timeout=120.0, task=SMALL) as graph:
+        assert graph.robots == 5
+        record = graph.run(TREE, seed, trial, bag)
+    _, records = evaluator.evaluate_trials([EvaluationRequest(TREE, seed, trial + 1)])[0]
+    assert record.values == records[trial].values
+    assert np.array_equal(record.end_poses, records[trial].end_poses)
+    replay = verify_trial_bag(bag)
+    assert replay.reproduced, replay
+    frames = frames_from_bag(bag)
+    assert len(frames.steps) == SMALL.trials.ticks * 4 and frames.poses.shape[1] == 5
