@@ -15,6 +15,7 @@ from evolution_manager.studies.evolve import evolve
 from swarm_sim.evaluation import BatchEvaluator
 
 QUIET = ["--no-progress", "--checkpoint-every", "0"]
+NEVER_WRITTEN = {"config.json"}  # read through a link (the run's own copy, outside), never written
 
 
 @pytest.fixture(scope="module")
@@ -46,3 +47,76 @@ def test_a_planted_lock_link_is_refused_and_its_target_kept(unfinished, tmp_path
     error = capsys.readouterr().err.strip()
     assert "\n" not in error and ".lock is a symbolic link" in error, error
     assert precious.read_text() == "keep me\n"
+
+
+@pytest.fixture(scope="module")
+def written(unfinished, tmp_path_factory) -> list[str]:
+    """Every path (file or folder) that ``evolve --resume`` writes in the run folder, figures included."""
+    run = _copy(unfinished, tmp_path_factory.mktemp("finished"))
+    assert evolve(["--out", str(run), "--resume", *QUIET]) == 0
+    return sorted(str(p.relative_to(run)) for p in run.rglob("*"))
+
+
+def _tree(folder: Path) -> dict[str, bytes | None]:
+    return {str(p.relative_to(folder)): p.read_bytes() if p.is_file() else None for p in folder.rglob("*")}
+
+
+def test_a_link_planted_at_any_path_evolve_writes_is_never_written_through(
+    unfinished, written, tmp_path, capsys
+):
+    expected = {
+        ".lock",
+        "evaluations.csv",
+        "progress.csv",
+        "checkpoint.json",
+        "summary.json",
+        "best",
+        "figures",
+    }
+    assert expected <= set(written), written
+    assert any(p.startswith("best/") for p in written) and any(p.startswith("figures/") for p in written)
+    shown = []
+    for index, name in enumerate(written):
+        case = tmp_path / str(index)
+        run = _copy(unfinished, case)
+        outside = case / "outside"
+        outside.mkdir()
+        planted = run / name
+        original = planted.read_bytes() if planted.is_file() else None
+        if planted.is_dir():
+            shutil.rmtree(planted)
+        planted.unlink(missing_ok=True)
+        planted.parent.mkdir(parents=True, exist_ok=True)
+        if name in ("best", "figures"):
+            planted.symlink_to(outside, target_is_directory=True)
+        elif original is not None:  # the file as it was, outside: what is read is fine, a write is refused
+            (outside / "target").write_bytes(original)
+            planted.symlink_to(outside / "target")
+        elif index % 2:  # a dangling link: its target must not be created
+            planted.symlink_to(outside / "target")
+        else:
+            (outside / "target").write_text("keep me\n")
+            planted.symlink_to(outside / "target")
+        before = _tree(outside)
+        status = evolve(["--out", str(run), "--resume", *QUIET])
+        error = capsys.readouterr().err.strip()
+        shown.append(f"{name}: {status} {error}")
+        assert _tree(outside) == before, (name, error)
+        if name in NEVER_WRITTEN:
+            assert status == 0, (name, error)
+            continue
+        assert status in (2, 74), (name, status, error)
+        assert "\n" not in error and "symbolic link" in error, (name, error)
+    with capsys.disabled():  # shown with pytest -s: the refusal of each planted link
+        print("\n" + "\n".join(shown))
+
+
+@pytest.mark.parametrize("damage", ["{", "[]", '{"format": NaN}'])
+def test_a_damaged_heldout_file_is_refused_before_any_evaluation(unfinished, tmp_path, capsys, damage):
+    run = _copy(unfinished, tmp_path)
+    (run / "heldout.json").write_text(damage)
+    before = {name: data for name, data in _tree(run).items() if name != ".lock"}  # .lock: our PID
+    assert evolve(["--out", str(run), "--resume", *QUIET]) == 2
+    error = capsys.readouterr().err.strip()
+    assert "\n" not in error and "heldout.json" in error and "remove it" in error, error
+    assert {n: d for n, d in _tree(run).items() if n != ".lock"} == before  # nothing run, nothing lost

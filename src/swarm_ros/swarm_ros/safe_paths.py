@@ -125,11 +125,12 @@ def check_output(path: Path | str, force: bool = False, option: str = "--out") -
 
 def replace_file(path: Path | str, write: Callable[[Path], object]) -> Path:
     """Write ``path`` whole: ``write(temporary)`` (a callable taking a ``Path``, e.g. an image's ``save``)
-    writes a new file beside it, which is then renamed over ``path``; a link at ``path`` is replaced, never
-    followed, and a failed write leaves ``path`` as it was. Returns ``path``."""
+    writes a new file beside it, which is then renamed over ``path``; a link at ``path`` is refused
+    (:class:`UnsafePathError`), and a failed write leaves ``path`` as it was. Returns ``path``."""
     import tempfile
 
     path = Path(path)
+    refuse_links(path)
     descriptor, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
     os.close(descriptor)
     temporary = Path(name)
