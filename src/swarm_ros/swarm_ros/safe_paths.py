@@ -96,6 +96,19 @@ def not_a_folder(path: Path | str) -> str:
     return "a part of the path is a file, not a folder"
 
 
+def describe(path: Path | str, error: OSError) -> str:
+    """One line for ``error``, raised writing ``path``: a refusal's own message, "... is a file, not a
+    folder" for a place under a file (``ENOTDIR``, or the ``EEXIST`` of making a folder where a file is),
+    else the path and the system's reason."""
+    if isinstance(error, UnsafePathError):
+        return str(error)
+    if error.errno in (errno.ENOTDIR, errno.EEXIST):
+        for parent in [Path(path), *Path(path).parents]:
+            if parent.exists() and not parent.is_dir():
+                return f"{path}: {parent} is a file, not a folder"
+    return f"{path}: {error.strerror or error}"
+
+
 def check_output(path: Path | str, force: bool = False, option: str = "--out") -> Path:
     """The rule for a command's output file: refuse (:class:`UnsafePathError`, one line naming ``option``)
     a symbolic link, even with ``force``; a folder; a file that exists unless ``force``; a place under a
@@ -105,7 +118,7 @@ def check_output(path: Path | str, force: bool = False, option: str = "--out") -
         raise UnsafePathError(errno.ELOOP, f"{option} {_link_error(path)}", path)
     if path.is_dir():
         raise UnsafePathError(
-            errno.EISDIR, f"{option} {path} is a folder: name a file (e.g. {path / 'out'}...)", path
+            errno.EISDIR, f"{option} {path} is a folder: name the file to write (e.g. {path / 'NAME'})", path
         )
     if path.exists() and not force:
         raise UnsafePathError(

@@ -42,7 +42,7 @@ from evolution_manager.evolution.options import (
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.files import read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
-from swarm_ros.safe_paths import UnsafePathError
+from swarm_ros.safe_paths import UnsafePathError, describe
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
     from distributed import Client
@@ -221,11 +221,8 @@ def _could_not_start(error: Exception, out: Path | None) -> int:
     if isinstance(error, (UsageError, EvolutionError)):  # a ClusterError too: no scheduler, no SLURM
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    assert isinstance(error, OSError)  # an --out that cannot be created or written
-    if isinstance(error, UnsafePathError):  # a link planted in the run folder: its message names it
-        print(f"evolve: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    print(f"evolve: error: {out}: {error.strerror or error}", file=sys.stderr)
+    assert isinstance(error, OSError)  # an --out that cannot be created or written, a planted link
+    print(f"evolve: error: {describe(out or '--out', error)}", file=sys.stderr)
     return EXIT_USAGE
 
 
