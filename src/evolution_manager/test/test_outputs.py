@@ -123,3 +123,26 @@ def test_a_full_or_read_only_place_is_one_line(bag, tmp_path, command, place):
     assert "\n" not in error and "Traceback" not in error, error
     reason = "No space left on device" if place == "full" else "Read-only file system"
     assert reason in error and str(out) in error, error
+
+
+def test_a_place_under_a_file_is_named_as_such_by_evolve_trial_and_bags(tmp_path, capsys):
+    """It was "File exists" (the EEXIST of making a folder where a file is) or a traceback."""
+    from evolution_manager.errors import BagError
+    from evolution_manager.graph.nodes import trial
+    from evolution_manager.studies.evolve import evolve
+
+    (tmp_path / "file").write_text("")
+    run = ["--algorithm", "qd", "--objective", "food", "--evaluations", "10", "--no-progress"]
+    for main, argv in (
+        (evolve, [*run, "--out", str(tmp_path / "file" / "run")]),
+        (evolve, [*run, "--out", str(tmp_path / "file" / "deeper" / "run")]),
+        (trial.main, ["--tree", "forward", "--seed", "1", "--bag", str(tmp_path / "file" / "x.bag")]),
+    ):
+        assert main(argv) == 2
+        error = capsys.readouterr().err.strip()
+        assert "\n" not in error and "file is a file, not a folder" in error and "File exists" not in error
+    with (
+        pytest.raises(BagError, match="file is a file, not a folder"),
+        BagRecorder(tmp_path / "file" / "b.bag"),
+    ):
+        pass
