@@ -120,3 +120,26 @@ def test_a_damaged_heldout_file_is_refused_before_any_evaluation(unfinished, tmp
     error = capsys.readouterr().err.strip()
     assert "\n" not in error and "heldout.json" in error and "remove it" in error, error
     assert {n: d for n, d in _tree(run).items() if n != ".lock"} == before  # nothing run, nothing lost
+
+
+@pytest.mark.parametrize("planted", ["trial.bag.logs", "trial.bag.logs/simulator.log", "trial.bag.logs/ros"])
+def test_a_planted_node_log_link_is_refused_before_a_node_starts(tmp_path, planted):
+    """``trial --bag B`` writes the node logs in ``B.logs`` (``--logs``): a link there is refused."""
+    from evolution_manager.errors import GraphError
+    from evolution_manager.graph.startup import Graph
+
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "target").write_text("keep me\n")
+    logs = tmp_path / "trial.bag.logs"
+    if planted != logs.name:
+        logs.mkdir()
+    (tmp_path / planted).symlink_to(
+        outside if planted != "trial.bag.logs/simulator.log" else outside / "target"
+    )
+    with Graph(domain=0, log_dir=logs) as graph:
+        with pytest.raises(GraphError, match="is a symbolic link") as refused:
+            graph.start("simulator", "swarm_sim", "simulator")
+        assert not graph.processes
+    assert "\n" not in str(refused.value)
+    assert _tree(outside) == {"target": b"keep me\n"}
