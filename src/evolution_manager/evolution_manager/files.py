@@ -29,7 +29,7 @@ def writing(path: Path) -> Iterator[None]:
         raise WriteError.of(path, error) from error
 
 
-_APPEND = os.O_WRONLY | os.O_APPEND
+_APPEND = os.O_WRONLY | os.O_APPEND | os.O_CREAT
 
 
 def write_atomic(path: Path, data: str | bytes) -> None:
