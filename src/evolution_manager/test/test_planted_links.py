@@ -4,6 +4,7 @@ left as it was (issue 41)."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from evolution_manager.studies.evolve import evolve
 from swarm_sim.evaluation import BatchEvaluator
 
 QUIET = ["--no-progress", "--checkpoint-every", "0"]
-NEVER_WRITTEN = {"config.json"}  # read through a link (the run's own copy, outside), never written
+NEVER_WRITTEN = {"config.json", "cells.json"}  # read through a link (a copy, outside), never written
 
 
 @pytest.fixture(scope="module")
@@ -61,23 +62,13 @@ def _tree(folder: Path) -> dict[str, bytes | None]:
     return {str(p.relative_to(folder)): p.read_bytes() if p.is_file() else None for p in folder.rglob("*")}
 
 
-def test_a_link_planted_at_any_path_evolve_writes_is_never_written_through(
-    unfinished, written, tmp_path, capsys
-):
-    expected = {
-        ".lock",
-        "evaluations.csv",
-        "progress.csv",
-        "checkpoint.json",
-        "summary.json",
-        "best",
-        "figures",
-    }
-    assert expected <= set(written), written
-    assert any(p.startswith("best/") for p in written) and any(p.startswith("figures/") for p in written)
+def _plant_everywhere(unfinished: Path, written: list[str], where: Path, capsys) -> list[str]:
+    """For each path of ``written``: a copy of ``unfinished`` with a link planted there (to a copy of the
+    file outside, to text, to nothing, or to a folder), resumed with ``evolve --resume``; nothing outside
+    may change, and the resume must be refused in one line naming the link. Returns each case's line."""
     shown = []
     for index, name in enumerate(written):
-        case = tmp_path / str(index)
+        case = where / str(index)
         run = _copy(unfinished, case)
         outside = case / "outside"
         outside.mkdir()
@@ -87,7 +78,7 @@ def test_a_link_planted_at_any_path_evolve_writes_is_never_written_through(
             shutil.rmtree(planted)
         planted.unlink(missing_ok=True)
         planted.parent.mkdir(parents=True, exist_ok=True)
-        if name in ("best", "figures"):
+        if "." not in name:  # a folder (best, figures)
             planted.symlink_to(outside, target_is_directory=True)
         elif original is not None:  # the file as it was, outside: what is read is fine, a write is refused
             (outside / "target").write_bytes(original)
@@ -107,7 +98,41 @@ def test_a_link_planted_at_any_path_evolve_writes_is_never_written_through(
             continue
         assert status in (2, 74), (name, status, error)
         assert "\n" not in error and "symbolic link" in error, (name, error)
+    return shown
+
+
+def test_a_link_planted_at_any_path_evolve_writes_is_never_written_through(
+    unfinished, written, tmp_path, capsys
+):
+    expected = {".lock", "evaluations.csv", "progress.csv", "checkpoint.json", "summary.json", "heldout.json"}
+    expected |= {"sessions.json", "explorer.html", "best", "figures"}
+    assert expected <= set(written), written
+    assert any(p.startswith("best/") for p in written) and any(p.startswith("figures/") for p in written)
+    shown = _plant_everywhere(unfinished, written, tmp_path, capsys)
     with capsys.disabled():  # shown with pytest -s: the refusal of each planted link
+        print("\n" + "\n".join(shown))
+
+
+def test_a_link_planted_at_any_path_of_a_composition_run_is_never_written_through(tmp_path, capsys):
+    """The same for a run of compositions (``evolve --swarm-from``): its own files (cells.json, best/)."""
+    from evolution_manager.evolution.compositions import CompositionConfig, CompositionRun, read_sources
+
+    source = tmp_path / "source"
+    args = ["--algorithm", "qd", "--objective", "food", "--evaluations", "10", "--trials", "1"]
+    assert evolve([*args, "--out", str(source), "--no-figures", *QUIET]) == 0
+    finished = tmp_path / "finished"
+    compose = ["--task", "foraging", "--swarm-from", str(source), "--algorithm", "ga", "--trials", "1"]
+    assert evolve([*compose, "--evaluations", "40", "--seed", "5", "--out", str(finished), *QUIET]) == 0
+    written = sorted(str(p.relative_to(finished)) for p in finished.rglob("*"))
+    assert {"cells.json", "best", "evaluations.csv", ".lock"} <= set(written), written
+    config = CompositionConfig.from_json(json.loads((finished / "config.json").read_text()))
+    unfinished = tmp_path / "unfinished" / "run"
+    run = CompositionRun.start(config, read_sources([source])[0], unfinished, BatchEvaluator(config.world()))
+    run.execute(checkpoint_interval=0, stop_after=1)
+    assert run.lock is not None
+    run.lock.release()
+    shown = _plant_everywhere(unfinished, written, tmp_path / "cases", capsys)
+    with capsys.disabled():
         print("\n" + "\n".join(shown))
 
 
