@@ -5,6 +5,7 @@ traceback (issue 41)."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -146,3 +147,28 @@ def test_a_place_under_a_file_is_named_as_such_by_evolve_trial_and_bags(tmp_path
         BagRecorder(tmp_path / "file" / "b.bag"),
     ):
         pass
+
+
+def test_measure_json_follows_the_same_rule(tmp_path, capsys):
+    """``measure --json`` and ``measure-services --json`` (refused before the graph starts)."""
+    from evolution_manager.graph.nodes import measure_services
+    from evolution_manager.studies.measure import measure
+
+    out = tmp_path / "m.json"
+    out.write_text("mine")
+    precious = tmp_path / "precious"
+    precious.write_text("keep me\n")
+    link = tmp_path / "link.json"
+    link.symlink_to(precious)
+    quick = ["--evaluations", "1", "--algorithms", "qd"]
+    for main, args in ((measure, quick), (measure_services.main, [])):
+        for path, force, says in (
+            (out, [], "already exists: add --force"),
+            (link, ["--force"], "symbolic link"),
+        ):
+            assert main([*args, "--json", str(path), *force]) == 2
+            error = capsys.readouterr().err.strip()
+            assert "\n" not in error and says in error, error
+    assert out.read_text() == "mine" and precious.read_text() == "keep me\n"
+    assert measure([*quick, "--json", str(out), "--force"]) == 0
+    assert json.loads(out.read_text())[0]["evaluations"] > 0
