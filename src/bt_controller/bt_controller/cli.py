@@ -12,7 +12,8 @@ branch lines), tree (the canonical one-line text), xml (BehaviorTree.CPP v4), do
 A simplified tree drives the wheels exactly as the tree does, tick for tick (bt_controller.simplify); a
 probabilistic node it moves keeps its draw with an explicit key, prob@K. Any depth --max-depth allows is
 handled; simplify takes at most 2000 nodes, and a PNG what matplotlib can hold. Bad input gives one line on
-standard error and exit status 2.
+standard error and exit status 2. An --output that exists is refused unless --force, a symbolic link always
+(swarm_ros.safe_paths: the workspace's rule for outputs).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from bt_controller.render import RENDER_FORMATS, render
 from bt_controller.simplify import simplify
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
+from swarm_ros.safe_paths import UnsafePathError, check_output, replace_file
 
 FORMATS = ("text", "tree", "xml", "dot", "svg", "png")
 _SUFFIX_FORMAT = {".txt": "tree", ".bt": "tree", ".xml": "xml", ".dot": "dot", ".gv": "dot", ".svg": "svg",
@@ -83,7 +85,8 @@ def _emit(tree: Node, fmt: str, output: str | None) -> None:
     elif output is None or output == "-":
         sys.stdout.write(_formatted(tree, fmt))
     else:
-        Path(output).write_text(_formatted(tree, fmt), encoding="utf-8")
+        text = _formatted(tree, fmt)
+        replace_file(output, lambda temporary: temporary.write_text(text, encoding="utf-8"))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -107,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
         if name in ("show", "export"):
             sub.add_argument("--format", "-f", choices=FORMATS, help="output format")
             sub.add_argument("--output", "-o", required=name == "export", help="output file ('-': stdout)")
+            sub.add_argument("--force", action="store_true", help="overwrite an --output that exists")
         if name == "simplify":
             sub.add_argument(
                 "--keep-positions",
@@ -136,6 +140,8 @@ def run(argv: list[str]) -> int:
             raise UsageError(f"{label}: {error}") from None
         print(to_text(simple))
         return 0
+    if args.output not in (None, "-"):  # refused before anything is drawn: a link, a folder, a file there
+        check_output(args.output, args.force, "--output")
     fmt = args.format
     if fmt is None:
         suffix = Path(args.output).suffix.lower() if args.output not in (None, "-") else ""
@@ -152,6 +158,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return run(sys.argv[1:] if argv is None else argv)
     except UsageError as error:
+        print(f"bt: error: {error}", file=sys.stderr)
+        return 2
+    except UnsafePathError as error:  # a link, a folder or an existing file as --output
         print(f"bt: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:

@@ -28,6 +28,7 @@ from pathlib import Path
 
 from bt_controller.errors import TreeError
 from bt_controller.tree import Composite, Node, parse, to_text, without_draw_keys
+from bt_controller.validate import strict_json
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, DECORATORS
 
 LIBRARY_FORMAT = 1
@@ -201,9 +202,11 @@ def load_library(path: str | Path) -> Library:
     except (OSError, UnicodeDecodeError) as error:
         raise LibraryError(f"library {path}: cannot be read ({error})") from None
     try:
-        document = json.loads(text)
+        document = strict_json(text)  # NaN, Infinity and a key twice refused: the library is written back
     except json.JSONDecodeError as error:
         raise LibraryError(f"library {path}: not JSON ({error})") from None
+    except ValueError as error:
+        raise LibraryError(f"library {path}: {error}") from None
     return library_from_json(document, str(path))
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 from bt_controller.errors import TreeLimitError
 from bt_controller.formats import COMPOSITE_FILL, composite_label
 from bt_controller.tree import Composite, Condition, Node, leaf_name
+from swarm_ros.safe_paths import replace_file
 
 RENDER_FORMATS = ("svg", "png")
 DPI = 120
@@ -128,5 +129,10 @@ def render(
         axes.text(x, -level, label, ha="center", va="center", fontsize=8, zorder=3)
     # no date and a fixed salt for the SVG's element ids: the same tree gives the same bytes
     with matplotlib.rc_context({"svg.hashsalt": "bt_controller.render"}):
-        figure.savefig(path, format=fmt, dpi=DPI, metadata={"Date": None} if fmt == "svg" else None)
+        metadata = {"Date": None} if fmt == "svg" else None
+
+        def save(temporary: Path) -> None:  # beside ``path``, then renamed; a link at ``path`` is refused
+            figure.savefig(temporary, format=fmt, dpi=DPI, metadata=metadata)
+
+        replace_file(path, save)
     return path

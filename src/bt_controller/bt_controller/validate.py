@@ -8,6 +8,7 @@ and saying what was expected.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -63,3 +64,32 @@ def number(
     if positive and value <= 0:
         raise error(f"{name} must be positive, got {value!r}")
     return float(value)
+
+
+def strict_json(text: str) -> object:
+    """``json.loads`` of a file a user hands in, refusing what ``json.loads`` lets through silently:
+    ``NaN``, ``Infinity`` and ``-Infinity`` (not JSON; they cannot be written back), numbers beyond a float
+    (``1e400``) and a key given twice in one object (JSON keeps the last without a word). Raises
+    ``json.JSONDecodeError`` for text that is not JSON and ``ValueError`` (one line, naming the value or the
+    key) for the others."""
+    return json.loads(text, parse_constant=_no_constant, parse_float=_finite, object_pairs_hook=_unique_keys)
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a JSON number (expected a finite number)")
+
+
+def _finite(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"the number {text} is out of range (expected a finite number)")
+    return value
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    document: dict[str, object] = {}
+    for key, value in pairs:
+        if key in document:
+            raise ValueError(f"the key {key!r} appears twice in one object (expected each key once)")
+        document[key] = value
+    return document

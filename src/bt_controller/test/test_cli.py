@@ -37,6 +37,32 @@ def test_export_by_suffix_and_read_back(tmp_path, capsys):
     assert capsys.readouterr().out.count("ok: 6 nodes") == 2
 
 
+@pytest.mark.parametrize("fmt", ["xml", "png"])
+def test_an_existing_output_is_refused_unless_forced_and_a_link_always(tmp_path, capsys, fmt):
+    out = tmp_path / f"tree.{fmt}"
+    out.write_text("mine")
+    assert main(["export", TREE, "--output", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "already exists: add --force" in error, error
+    assert out.read_text() == "mine"
+    assert main(["export", TREE, "--output", str(out), "--force"]) == 0
+    assert out.read_bytes() != b"mine"
+    precious = tmp_path / "precious"
+    precious.write_text("keep me\n")
+    link = tmp_path / f"link.{fmt}"
+    link.symlink_to(precious)
+    dangling = tmp_path / f"dangling.{fmt}"
+    dangling.symlink_to(tmp_path / "nowhere")
+    for path in (link, dangling):
+        for command in (["export", TREE], ["show", TREE, "--format", fmt]):
+            assert main([*command, "--output", str(path), "--force"]) == 2
+            error = capsys.readouterr().err
+            assert error.count("\n") == 1 and "is a symbolic link" in error, error
+    assert precious.read_text() == "keep me\n" and not (tmp_path / "nowhere").exists()
+    assert main(["export", TREE, "--output", str(tmp_path), "--force"]) == 2
+    assert "is a folder" in capsys.readouterr().err
+
+
 def test_stdin(monkeypatch, capsys):
     monkeypatch.setattr("sys.stdin", __import__("io").StringIO("seq(\n on_food,\n stop)\n"))
     assert main(["check", "-"]) == 0

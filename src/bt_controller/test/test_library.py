@@ -102,6 +102,26 @@ def test_files_round_trip_and_bad_files(tmp_path):
         load_library(tmp_path / "bad.json")
 
 
+@pytest.mark.parametrize(
+    ("source", "fragment"),
+    [
+        ('{"fitness": NaN}', "NaN is not a JSON number"),
+        ('{"fitness": Infinity}', "Infinity is not a JSON number"),
+        ('{"fitness": -Infinity}', "-Infinity is not a JSON number"),
+        ('{"fitness": 1e999}', "1e999 is out of range"),
+        ('{"fitness": 1, "fitness": 2}', "the key 'fitness' appears twice"),
+    ],
+)
+def test_a_library_with_nan_or_a_key_twice_is_refused_at_load(tmp_path, source, fragment):
+    """NaN in a primitive's source was accepted, then crashed evolve and explorer writing it back."""
+    path = tmp_path / "lib.json"
+    entry = '{"name": "a", "tree": "stop", "source": ' + source + "}"
+    path.write_text('{"format": 1, "primitives": [' + entry + "]}")
+    with pytest.raises(LibraryError, match=fragment) as info:
+        load_library(path)
+    assert str(info.value).startswith(f"library {path}: ") and "\n" not in str(info.value)
+
+
 def test_limits_bound_the_tree_as_written_a_name_one_node():
     # as the authors' GP counts a primitive (gp/ea.py:949-959) and evolution's static limits see it
     lib = library(("p", FOOD))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import signal
 
 from bt_controller.errors import UsageError
+from swarm_ros.safe_paths import UnsafePathError
 from swarm_sim.errors import ConfigError as WorldConfigError
 
 __all__ = [
@@ -75,7 +76,10 @@ class WriteError(EvolutionError):
 
     @classmethod
     def of(cls, path: object, error: OSError) -> WriteError:
-        """The error of writing ``path`` (its message survives pickling, e.g. from a worker process)."""
+        """The error of writing ``path`` (its message survives pickling, e.g. from a worker process); a
+        refused path (a planted link, ``swarm_ros.safe_paths``) says so itself."""
+        if isinstance(error, UnsafePathError):
+            return cls(str(error))
         return cls(f"cannot write {path}: {error.strerror or error}")
 
 

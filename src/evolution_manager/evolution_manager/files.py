@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from evolution_manager.errors import RunDirectoryError, WriteError
+from swarm_ros.safe_paths import open_no_follow, refuse_links
 
 
 @contextlib.contextmanager
@@ -28,13 +29,18 @@ def writing(path: Path) -> Iterator[None]:
         raise WriteError.of(path, error) from error
 
 
+_APPEND = os.O_WRONLY | os.O_APPEND | os.O_CREAT
+
+
 def write_atomic(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` so that a reader (or a killed writer) sees the old file or the new one,
     never a mixture: a temporary file in the same folder, flushed to disk, then renamed over ``path``. A
-    failed write (``WriteError``, naming the file) leaves the old file as it was."""
+    failed write (``WriteError``, naming the file) leaves the old file as it was; so does a symbolic link at
+    ``path`` (planted in a shared run folder), refused (``swarm_ros.safe_paths``)."""
     path = Path(path)
     raw = data.encode() if isinstance(data, str) else data
     with writing(path):
+        refuse_links(path)
         _write_atomic(path, raw)
 
 
@@ -123,8 +129,9 @@ class CsvLog:
 
     def append(self, rows: Sequence[Sequence[str]]) -> int:
         """Append rows; return the new length in bytes. A failed write (``WriteError``) may leave part of a
-        row at the end: a resume cuts the file back to its checkpoint."""
-        with writing(self.path), open(self.path, "ab") as handle:
+        row at the end: a resume cuts the file back to its checkpoint. A symbolic link in place of the file
+        is refused, never appended to."""
+        with writing(self.path), os.fdopen(open_no_follow(self.path, _APPEND), "ab") as handle:
             handle.write(self._rows(rows).encode())
             handle.flush()
             return handle.tell()
@@ -140,7 +147,7 @@ class CsvLog:
             raise RunDirectoryError(
                 f"{self.path} ({actual} bytes) cannot be cut back to the {size} bytes its checkpoint says"
             )
-        with open(self.path, "r+b") as handle:
+        with writing(self.path), os.fdopen(open_no_follow(self.path, os.O_RDWR), "r+b") as handle:
             handle.truncate(size)
 
     def read(self) -> list[dict[str, str]]:

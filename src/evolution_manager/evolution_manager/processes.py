@@ -26,6 +26,7 @@ from types import FrameType
 from typing import IO
 
 from evolution_manager.errors import Interrupted, LockHeldError
+from swarm_ros.safe_paths import open_no_follow, private_folder
 
 _PR_SET_PDEATHSIG = 1
 _libc = ctypes.CDLL(None, use_errno=True)  # loaded before any fork: preexec_fn only calls into it
@@ -73,15 +74,17 @@ def _key(path: Path) -> str:
 
 
 def exclusive_lock(path: Path, what: str) -> Lock:
-    """Take the exclusive lock of ``path`` (created if missing, never deleted: deleting a lock file races
-    with a process opening it); write our PID into it. ``what`` names the locked thing in the error, e.g.
+    """Take the exclusive lock of ``path`` (created if missing, mode 0600, never deleted: deleting a lock
+    file races with a process opening it); write our PID into it. A symbolic link at ``path`` (planted in a
+    shared run folder) is refused, never followed: ``swarm_ros.safe_paths.UnsafePathError``, an ``OSError``
+    whose message is one line. ``what`` names the locked thing in the error, e.g.
     ``"the run directory runs/qd"``. Within one process a lock taken again is handed over to the new taker
     (the lock keeps other processes out)."""
     path = Path(path)
     previous = _held.get(_key(path))
     if previous is not None:
         previous.release()
-    handle = path.open("a+")
+    handle = os.fdopen(open_no_follow(path, os.O_RDWR | os.O_CREAT, 0o600), "r+")  # never a link's target
     try:
         fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError as error:
@@ -105,8 +108,7 @@ def exclusive_lock(path: Path, what: str) -> Lock:
 def lock_path_for(thing: Path, kind: str) -> Path:
     """A lock file for ``thing`` kept outside it, in a folder of this user's under the machine's temporary
     folder, named by ``thing``'s full path: for things that must hold nothing but their own files."""
-    folder = Path(tempfile.gettempdir()) / f"swarm-bt-qd-locks-{os.getuid()}"
-    folder.mkdir(mode=0o700, exist_ok=True)
+    folder = private_folder(Path(tempfile.gettempdir()) / f"swarm-bt-qd-locks-{os.getuid()}")
     digest = hashlib.sha256(str(thing.resolve()).encode()).hexdigest()[:32]
     return folder / f"{kind}-{digest}.lock"
 

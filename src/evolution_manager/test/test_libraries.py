@@ -171,7 +171,8 @@ def test_draw_keys_are_dropped_so_each_copy_draws_on_its_own():
     [
         ("no-repertoire", "has no repertoire of food (repertoire_food.json)"),
         ("blocks", "--blocks must be 1, 8 or 64, got 27"),
-        ("exists", "already exists"),
+        ("exists", "already exists: add --force"),
+        ("link", "is a symbolic link"),
         ("profiles", "the runs mix profiles clean and paper"),
         ("not-a-run", "is not a run directory (no config.json)"),
         ("foraging", "no primitive objective"),
@@ -188,6 +189,8 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, message):
         blocks = "27"
     elif case == "exists":
         out.write_text("{}")
+    elif case == "link":  # a dangling link: its target is never created
+        out.symlink_to(tmp_path / "elsewhere.json")
     elif case == "profiles":
         runs.append(make_run(tmp_path, "clean", 2, {"food": [((0, 0, 0), SHORT, 0.5)]}, profile="clean"))
     elif case == "not-a-run":

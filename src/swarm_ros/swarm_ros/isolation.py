@@ -1,8 +1,11 @@
 """Give each ROS 2 graph its own DDS domain, so that graphs started side by side never see each other.
 
 ``reserved_domain()`` holds an exclusive lock on one of the domain ids 1-101 (safe on Linux) as long as the
-context lasts; every process on this machine that reserves through it gets a different id. Tests use it to run
-in parallel (colcon runs packages at once); the launcher uses it for graphs started by a user command.
+context lasts; every process of this user on this machine that reserves through it gets a different id. Tests
+use it to run in parallel (colcon runs packages at once); the launcher uses it for graphs started by a user
+command. The lock files lie in a folder of the user's own (``swarm-bt-qd-ros-domains-<uid>`` under the
+temporary folder, mode 0700; one that is another user's or open to others is refused) and are opened without
+following links (``swarm_ros.safe_paths``).
 """
 
 from __future__ import annotations
@@ -15,20 +18,24 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from swarm_ros.safe_paths import open_no_follow, private_folder
+
 FIRST_DOMAIN = 1
 LAST_DOMAIN = 101
-LOCK_DIR = Path(tempfile.gettempdir()) / "swarm-bt-qd-ros-domains"
+LOCK_DIR = Path(tempfile.gettempdir()) / f"swarm-bt-qd-ros-domains-{os.getuid()}"
 
 
 @contextlib.contextmanager
 def reserved_domain() -> Iterator[int]:
-    """Reserve a ROS_DOMAIN_ID that no other reservation on this machine holds; yield it."""
-    LOCK_DIR.mkdir(parents=True, exist_ok=True)
+    """Reserve a ROS_DOMAIN_ID that no other reservation of this user on this machine holds; yield it. A
+    lock folder or lock file that is unsafe (a link, another user's folder) raises
+    ``swarm_ros.safe_paths.UnsafePathError``, an ``OSError`` whose message is one line."""
+    folder = private_folder(LOCK_DIR)
     count = LAST_DOMAIN - FIRST_DOMAIN + 1
     start = os.getpid() % count  # spread concurrent callers over the range
     for offset in range(count):
         domain = FIRST_DOMAIN + (start + offset) % count
-        handle = (LOCK_DIR / f"{domain}.lock").open("w")
+        handle = os.fdopen(open_no_follow(folder / f"{domain}.lock", os.O_WRONLY | os.O_CREAT, 0o600), "w")
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

@@ -36,20 +36,26 @@ given, so that ``dead-robots`` and ``weak-wheel`` are checked against the swarm 
 _ORDER = ("robots", "gap", "message-loss", "dead-robots", "weak-wheel")
 
 
-def _integer(name: str, text: str) -> int:
+def _integer(name: str, text: str, piece: str | None = None, what: str = "") -> int:
+    """``piece`` (default: the whole ``text``; for a part of it, such as weak-wheel's K) as an int; the
+    error names the condition as given, ``name=text``, and the piece that is wrong."""
+    piece = text if piece is None else piece
     try:
-        return int(text)
+        return int(piece)
     except ValueError:
-        raise ConditionError(f"condition {name}={text}: expected an integer, got {text!r}") from None
+        raise ConditionError(f"condition {name}={text}: expected {what}an integer, got {piece!r}") from None
 
 
-def _real(name: str, text: str) -> float:
+def _real(name: str, text: str, piece: str | None = None, what: str = "") -> float:
+    """``piece`` (default: the whole ``text``) as a finite float; the error names ``name=text`` and the
+    piece (``weak-wheel=3:inf`` was reported as ``weak-wheel=inf``)."""
+    piece = text if piece is None else piece
     try:
-        value = float(text)
+        value = float(piece)
     except ValueError:
-        raise ConditionError(f"condition {name}={text}: expected a number, got {text!r}") from None
+        raise ConditionError(f"condition {name}={text}: expected {what}a number, got {piece!r}") from None
     if not math.isfinite(value):
-        raise ConditionError(f"condition {name}={text}: expected a finite number, got {text!r}")
+        raise ConditionError(f"condition {name}={text}: expected {what}a finite number, got {piece!r}")
     return value
 
 
@@ -91,8 +97,8 @@ def _weak_wheel(config: Config, text: str) -> tuple[Config, object]:
     parts = text.split(":")
     if len(parts) != 2:
         raise ConditionError(f"condition weak-wheel={text}: expected K:GAIN, e.g. weak-wheel=3:0.5")
-    k = _integer("weak-wheel", parts[0])
-    gain = _real("weak-wheel", parts[1])
+    k = _integer("weak-wheel", text, parts[0], "K, ")
+    gain = _real("weak-wheel", text, parts[1], "GAIN, ")
     if not 0 <= k <= config.n_robots:
         raise ConditionError(
             f"condition weak-wheel={text}: expected K, a number of robots in [0, {config.n_robots}], got {k}"

@@ -22,6 +22,7 @@ from pathlib import Path
 from bt_controller.errors import TreeError
 from bt_controller.library import Library
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
+from bt_controller.validate import strict_json
 
 EXPECTED_SHAPE = '{"trees": ["tree text", ...] (one per robot)} or {"tree": "tree text"} (every robot)'
 """The file format, as error messages spell it."""
@@ -156,11 +157,13 @@ def layout_of_label(label: str, n_robots: int, library: Library | None = None) -
 def load_layout(path: str | Path, n_robots: int, library: Library | None = None) -> SwarmLayout:
     """The checked layout in file ``path``; ``LayoutError`` (naming the file) if it cannot be read or used."""
     try:
-        document = json.loads(Path(path).read_text())
+        document = strict_json(Path(path).read_text())
     except (OSError, UnicodeDecodeError) as error:
         raise LayoutError(f"swarm layout {path}: cannot read it: {error}") from None
     except json.JSONDecodeError as error:
         raise LayoutError(f"swarm layout {path}: not JSON ({error}); expected {EXPECTED_SHAPE}") from None
+    except ValueError as error:  # NaN, a key twice (JSON keeps the last without a word)
+        raise LayoutError(f"swarm layout {path}: {error}; expected {EXPECTED_SHAPE}") from None
     try:
         return layout_from_json(document, n_robots, library)
     except LayoutError as error:  # its message names the file

@@ -41,6 +41,7 @@ from typing import NoReturn
 
 from bt_controller.authors import from_authors, is_authors_syntax
 from bt_controller.library import Library, library_option
+from swarm_ros.safe_paths import refuse_links, replace_file
 from swarm_sim import transfer, validation
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.errors import UsageError
@@ -179,6 +180,12 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     """Parse ``argv`` and evaluate: (options, report markdown, our statistics or the transfer table as TSV).
     Raise UsageError."""
     args = _parser().parse_args(argv)
+    for option, path in (("--out", args.out), ("--tsv", args.tsv)):
+        try:  # before anything is evaluated: a report regenerated in place, never through a planted link
+            if path is not None:
+                refuse_links(path)
+        except OSError as error:
+            raise UsageError(f"{option} {error}") from None
     if args.transfer is not None:
         return args, *run_transfer(args, argv)
     for option in ("tree", "argos_eval", "argos_raw"):
@@ -349,12 +356,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args, report, tsv = run(argv)
-        args.out.write_text(report)
+        # written beside and renamed (swarm_ros.safe_paths): a symbolic link there is refused, not followed
+        replace_file(args.out, lambda temporary: temporary.write_text(report))
         tsv_path = args.tsv
         if tsv_path is None and args.transfer is not None:
             tsv_path = args.out.with_suffix(".tsv")
         if tsv_path is not None:
-            tsv_path.write_text(tsv)
+            replace_file(tsv_path, lambda temporary: temporary.write_text(tsv))
     except UsageError as error:
         print(f"validate: error: {' '.join(str(error).split())}", file=sys.stderr)
         return EXIT_USAGE

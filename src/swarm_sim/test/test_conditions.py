@@ -120,6 +120,8 @@ def test_roads_agree_under_every_condition_at_once():
         (["robots=4", "dead-robots=5"], "in [0, 4]"),
         (["weak-wheel=2"], "expected K:GAIN"),
         (["weak-wheel=2:1.5"], "GAIN in [0, 1]"),
+        (["weak-wheel=3:inf"], "condition weak-wheel=3:inf: expected GAIN, a finite number, got 'inf'"),
+        (["weak-wheel=x:0.5"], "condition weak-wheel=x:0.5: expected K, an integer, got 'x'"),
         (["message-loss=1.5"], "probability in [0, 1]"),
         (["message-loss=nan"], "finite"),
         (["robots=0"], "at least 1"),

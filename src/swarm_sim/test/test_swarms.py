@@ -154,3 +154,21 @@ def test_layout_files(tmp_path):
         load_layout(path, 9)
     with pytest.raises(LayoutError, match="cannot read"):
         load_layout(tmp_path / "missing.json", 9)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('{"tree": "stop", "tree": "forward"}', "the key 'tree' appears twice"),
+        ('{"trees": ["stop"], "trees": ["forward"]}', "the key 'trees' appears twice"),
+        ('{"tree": "stop", "n": NaN}', "NaN is not a JSON number"),
+        ('{"tree": "stop", "n": 1e400}', "1e400 is out of range"),
+    ],
+)
+def test_a_layout_with_a_key_twice_or_nan_is_refused_naming_it(tmp_path, text, message):
+    """JSON keeps the last of two keys without a word, and Python reads NaN: both refused, in one line."""
+    path = tmp_path / "swarm.json"
+    path.write_text(text)
+    with pytest.raises(LayoutError, match=message) as caught:
+        load_layout(path, 9)
+    assert "\n" not in str(caught.value) and str(path) in str(caught.value)

@@ -113,6 +113,26 @@ def test_validate_command_refuses_bad_input_in_one_line_and_writes_nothing(tmp_p
     assert validate_main(["--reference", str(ref), "--seeds", "1", "--out", str(out)]) == 2
 
 
+def test_validate_refuses_a_link_as_its_report_before_evaluating(tmp_path, capsys):
+    """A report regenerated in place (docs/validation.md in a clone, which stores links) is never written
+    through a planted link."""
+    ref = tmp_path / "ref.tsv"
+    ref.write_text(HEADER + _row("stop", [(0.5, 0.01)] * 3 + [(0.0, 0.0)] * 3))
+    precious = tmp_path / "precious"
+    precious.write_text("keep me\n")
+    for option in ("--out", "--tsv"):
+        link = tmp_path / f"link{option}"
+        link.symlink_to(precious)
+        other = tmp_path / "other.md"
+        args = ["--reference", str(ref), "--seeds", "2", "--trials", "1", "--out", str(other)]
+        args += [option, str(link)]
+        assert validate_main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert f"validate: error: {option} {link} is a symbolic link" in err and "\n" not in err, err
+        assert not other.exists()
+    assert precious.read_text() == "keep me\n"
+
+
 def test_foraging_references_run_100_s_trials_with_the_library_and_the_authors_syntax(tmp_path, capsys):
     # A foraging reference file: only the quantities it measured (foraging and the descriptors, raw in
     # [-200, 200] for 200 ticks); a tree naming a primitive of --library and one in the authors' syntax.

@@ -142,11 +142,18 @@ def read_slurm_settings(path: Path) -> SlurmSettings:
 
     where = f"--cluster-config {path}"
     try:
-        text = Path(path).read_text()
+        text = Path(path).read_text(encoding="utf-8")
     except OSError as error:
         raise ClusterError(f"{where}: cannot read it ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise ClusterError(
+            f"{where}: not UTF-8 text (byte {error.object[error.start]:#04x} at offset {error.start}); "
+            "expected a YAML file of settings"
+        ) from None
     try:
-        data = yaml.safe_load(text)
+        data = _safe_load_unique(text)
+    except _DuplicateKeyError as error:
+        raise ClusterError(f"{where}: {error}") from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         at = f" at line {mark.line + 1}" if mark is not None else ""
@@ -156,6 +163,35 @@ def read_slurm_settings(path: Path) -> SlurmSettings:
     if not isinstance(data, dict):
         raise ClusterError(f"{where}: expected a mapping of settings (key: value), got {type(data).__name__}")
     return slurm_settings(data, where)
+
+
+class _DuplicateKeyError(ValueError):
+    """A YAML mapping gives a key twice (YAML keeps the last without a word)."""
+
+
+def _safe_load_unique(text: str) -> object:
+    """``yaml.safe_load`` that refuses a key given twice in one mapping (:class:`_DuplicateKeyError`, naming
+    the key and its line)."""
+    import yaml
+
+    class UniqueKeyLoader(yaml.SafeLoader):
+        def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+            seen: set[object] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=deep)
+                if key in seen:
+                    raise _DuplicateKeyError(
+                        f"the key {key!r} appears twice (line {key_node.start_mark.line + 1}); "
+                        "expected each setting once"
+                    )
+                seen.add(key)
+            return super().construct_mapping(node, deep=deep)
+
+    loader = UniqueKeyLoader(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
 
 
 def slurm_settings(data: dict, where: str = "--cluster-config") -> SlurmSettings:

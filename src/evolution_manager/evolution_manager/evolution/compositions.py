@@ -54,8 +54,10 @@ from evolution_manager.files import (
     read_json_object,
     write_atomic,
     write_json,
+    writing,
 )
 from evolution_manager.processes import Lock, exclusive_lock
+from swarm_ros.safe_paths import make_folder
 from swarm_sim.objectives import OBJECTIVES
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates
@@ -791,7 +793,8 @@ class CompositionRun:
         write_json(directory.summary, summary)
         written.append(directory.summary)
         if self.best is not None:
-            directory.best.mkdir(exist_ok=True)
+            with writing(directory.best):  # a link planted in the run folder is refused, never followed
+                make_folder(directory.best, directory.root)
             layout = layout_of(self.best.genome, self.cells)
             path = directory.best / f"{OBJECTIVE}_swarm.json"
             write_json(path, layout.as_json())

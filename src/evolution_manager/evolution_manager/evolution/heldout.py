@@ -35,7 +35,7 @@ HELDOUT_FORMAT = 1
 
 def heldout_path(run: Run) -> Path:
     """Where a run's held-out scores are written."""
-    return run.directory.root / "heldout.json"
+    return run.directory.heldout
 
 
 def _trees(run: Run) -> list[str]:

@@ -54,6 +54,7 @@ from evolution_manager.errors import EvolutionError, RunDirectoryError, UsageErr
 from evolution_manager.evolution.operators import selection_fitness
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.files import read_json, read_json_object, write_json
+from swarm_ros.safe_paths import check_output
 from swarm_sim.objectives import FAMILIES
 
 BLOCKS: dict[int, int] = {1: 1, 8: 2, 64: 4}
@@ -297,7 +298,10 @@ def build_parser() -> Parser:
         "--blocks", type=int, default=8, metavar="1|8|64",
         help="blocks per grid: one primitive per block and family (default 8, the authors' qd8)",
     )  # fmt: skip
-    parser.add_argument("--out", type=Path, required=True, metavar="LIB.json", help="the library file (new)")
+    parser.add_argument(
+        "--out", type=Path, required=True, metavar="LIB.json", help="the library file (new, unless --force)"
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite an --out that exists")
     return parser
 
 
@@ -307,8 +311,10 @@ def library_command(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         if args.blocks not in BLOCKS:
             raise UsageError(f"--blocks must be 1, 8 or 64, got {args.blocks}")
-        if args.out.exists():
-            raise UsageError(f"--out {args.out} already exists; remove it or name a new file")
+        try:  # the workspace's rule for outputs: a link never, a file there only with --force
+            check_output(args.out, args.force)
+        except OSError as error:
+            raise UsageError(str(error)) from None
         if not args.out.parent.is_dir():
             raise UsageError(f"--out {args.out}: no folder {args.out.parent}")
         named = [str(p) for p in args.runs]

@@ -62,6 +62,7 @@ from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
 from evolution_manager.processes import Lock, exclusive_lock, is_locked
+from swarm_ros.safe_paths import refuse_links
 from swarm_sim.objectives import fitness_ceiling
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates, not to read a run
@@ -203,6 +204,26 @@ class RunDirectory:
             raise RunDirectoryError(f"{self.library} is not the library the run started with")
         return library
 
+    @property
+    def heldout(self) -> Path:
+        return self.root / "heldout.json"
+
+    def check_heldout(self) -> None:
+        """Raise ``RunDirectoryError`` (one line) if ``heldout.json`` is there but is a symbolic link or no
+        JSON object: a resumed run reads it, or writes it, only once every evaluation is done."""
+        if not (self.heldout.exists() or self.heldout.is_symlink()):
+            return
+        try:
+            refuse_links(self.heldout)
+        except OSError as error:
+            raise RunDirectoryError(str(error)) from None
+        try:
+            read_json_object(self.heldout)
+        except RunDirectoryError as error:
+            raise RunDirectoryError(
+                f"{error}; remove it (the held-out scores are computed again when the run ends)"
+            ) from None
+
     def temporary_files(self) -> list[Path]:
         """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
         if not self.root.is_dir():
@@ -310,6 +331,8 @@ class Run:
         lock = exclusive_lock(directory.root / LOCK_NAME, f"the run directory {root}") if cut else None
         try:
             run = cls._load(directory, evaluator)
+            if cut:
+                directory.check_heldout()  # read when the run ends: checked before anything is run
         except BaseException:
             if lock is not None:
                 lock.release()

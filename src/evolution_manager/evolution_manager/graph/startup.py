@@ -30,6 +30,7 @@ from evolution_manager.errors import GraphError
 from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
+from swarm_ros.safe_paths import UnsafePathError, make_folder, open_no_follow
 from swarm_sim.config import DEFAULT
 
 
@@ -92,9 +93,15 @@ class Graph:
         output: IO[str] | int = subprocess.DEVNULL
         env = domain_environment(self.domain)
         if self.log_dir is not None:
-            self.log_dir.mkdir(parents=True, exist_ok=True)
-            self._log_paths[name] = self.log_dir / f"{name.replace('/', '_')}.log"
-            output = self._log_paths[name].open("w")
+            log = self.log_dir / f"{name.replace('/', '_')}.log"
+            try:  # a link planted at the folder, a log or ros/ (a shared run folder) is refused
+                make_folder(self.log_dir / "ros", self.log_dir.parent)
+                output = os.fdopen(open_no_follow(log, os.O_WRONLY | os.O_CREAT | os.O_TRUNC), "w")
+            except UnsafePathError as error:
+                raise GraphError(str(error)) from None
+            except OSError as error:
+                raise GraphError(f"cannot write the node log {log}: {error.strerror or error}") from None
+            self._log_paths[name] = log
             self._logs.append(output)
             env["ROS_LOG_DIR"] = str(self.log_dir / "ros")
         process = subprocess.Popen(

@@ -28,6 +28,7 @@ from rosbags.typesys.store import Typestore
 
 from evolution_manager.errors import BagError
 from evolution_manager.processes import Lock, exclusive_lock, is_locked, lock_holder, lock_path_for
+from swarm_ros.safe_paths import describe
 
 INTERFACE_PACKAGE = "swarm_msgs"
 
@@ -112,9 +113,9 @@ class BagRecorder:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
             self._writer.open()  # creates the directory, or fails if another writer did
-        except OSError as error:
+        except OSError as error:  # a place under a file said as such (it was "File exists")
             self._writer = None
-            raise BagError(f"cannot write a bag at {self.path}: {error.strerror or error}") from None
+            raise BagError(f"cannot write a bag at {describe(self.path, error)}") from None
         except Exception as error:  # rosbags' WriterError: the directory appeared meanwhile
             self._writer = None
             check_new_bag(self.path)

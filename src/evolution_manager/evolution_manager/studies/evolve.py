@@ -42,6 +42,7 @@ from evolution_manager.evolution.options import (
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.files import read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
+from swarm_ros.safe_paths import UnsafePathError, describe
 from swarm_sim.tasks import TaskSpec, registered_name
 
 if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
@@ -221,8 +222,8 @@ def _could_not_start(error: Exception, out: Path | None) -> int:
     if isinstance(error, (UsageError, EvolutionError)):  # a ClusterError too: no scheduler, no SLURM
         print(f"evolve: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    assert isinstance(error, OSError)  # an --out that cannot be created or written
-    print(f"evolve: error: {out}: {error.strerror or error}", file=sys.stderr)
+    assert isinstance(error, OSError)  # an --out that cannot be created or written, a planted link
+    print(f"evolve: error: {describe(out or '--out', error)}", file=sys.stderr)
     return EXIT_USAGE
 
 
@@ -261,7 +262,8 @@ def _execute(
     except WriteError as error:  # a full disk: what was saved is whole (atomic files, logs cut on resume)
         if bar is not None:
             bar.close()
-        print(f"evolve: error: {error}; make room, then {resume}", file=sys.stderr)
+        remedy = "then" if isinstance(error.__cause__, UnsafePathError) else "make room, then"
+        print(f"evolve: error: {error}; {remedy} {resume}", file=sys.stderr)
         return EXIT_IO
     except DispatchError as error:  # the cluster's workers could not finish a chunk
         if bar is not None:

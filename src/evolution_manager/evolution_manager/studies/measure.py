@@ -18,10 +18,11 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from swarm_ros.safe_paths import check_output, describe, replace_file
 
 
 def measure_one(
@@ -60,11 +61,17 @@ def measure(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--objective", default="food", help="objective of gp and qd (default food)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
-    parser.add_argument("--json", type=Path, help="also write the measurements to this file")
+    parser.add_argument("--json", type=Path, help="also write the measurements to this file (new)")
+    parser.add_argument("--force", action="store_true", help="overwrite a --json file that exists")
     try:
         args = parser.parse_args(argv)
+        if args.json is not None:  # refused before anything is measured: a link, a folder, a file there
+            check_output(args.json, args.force, "--json")
     except UsageError as error:
         print(f"measure: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as error:
+        print(f"measure: error: {describe(args.json, error)}", file=sys.stderr)
         return EXIT_USAGE
     rows = []
     with tempfile.TemporaryDirectory(prefix="measure-") as folder:
@@ -84,7 +91,12 @@ def measure(argv: Sequence[str] | None = None) -> int:
             f"| {r['evaluations_per_second']:.1f} |"
         )
     if args.json:
-        args.json.write_text(json.dumps(rows, indent=1) + "\n")
+        text = json.dumps(rows, indent=1) + "\n"
+        try:
+            replace_file(args.json, lambda temporary: temporary.write_text(text))
+        except OSError as error:
+            print(f"measure: error: {describe(args.json, error)}", file=sys.stderr)
+            return EXIT_IO
     return 0
 
 

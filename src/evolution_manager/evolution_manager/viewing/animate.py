@@ -27,6 +27,7 @@ from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import Parser
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
+from swarm_ros.safe_paths import check_output, describe, replace_file
 from swarm_sim.objectives import OBJECTIVES, PAPER_OBJECTIVES
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
@@ -209,22 +210,37 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16, every: 
     encoder = shutil.which("ffmpeg") or ""
     if suffix == ".mp4" and not encoder:
         raise AnimationError("writing .mp4 needs ffmpeg, which is not installed: write a .gif instead")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    images = [render_frame(frames, k) for k in range(0, len(frames.steps), every)]
-    if suffix == ".gif":
-        paletted = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=64) for im in images]
-        paletted[0].save(
-            out, save_all=True, append_images=paletted[1:], duration=int(1000 / fps), loop=0, optimize=False
-        )
-        return out
-    with tempfile.TemporaryDirectory(prefix="swarm-animation-") as folder:
-        for k, image in enumerate(images):
-            image.save(Path(folder) / f"{k:05d}.png")
-        command = [encoder, "-y", "-loglevel", "error", "-framerate", str(fps), "-i", f"{folder}/%05d.png",
-                   "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", str(out)]  # fmt: skip
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
-        if done.returncode != 0:
-            raise AnimationError(f"ffmpeg could not write {out}: {done.stderr.strip()[-300:]}")
+    try:  # written beside ``out``, then renamed over it: a link at ``out`` is refused, never followed
+        out.parent.mkdir(parents=True, exist_ok=True)
+        images = [render_frame(frames, k) for k in range(0, len(frames.steps), every)]
+        if suffix == ".gif":
+            paletted = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=64) for im in images]
+            duration = int(1000 / fps)
+
+            def save(temporary: Path) -> None:
+                paletted[0].save(
+                    temporary, format="GIF", save_all=True, append_images=paletted[1:], duration=duration,
+                    loop=0, optimize=False,
+                )  # fmt: skip
+
+            replace_file(out, save)
+            return out
+        with tempfile.TemporaryDirectory(prefix="swarm-animation-") as folder:
+            for k, image in enumerate(images):
+                image.save(Path(folder) / f"{k:05d}.png")
+
+            def encode(temporary: Path) -> None:
+                pad = "pad=ceil(iw/2)*2:ceil(ih/2)*2"
+                command = [encoder, "-y", "-loglevel", "error", "-framerate", str(fps), "-i",
+                           f"{folder}/%05d.png", "-pix_fmt", "yuv420p", "-vf", pad,
+                           str(temporary)]  # fmt: skip
+                done = subprocess.run(command, capture_output=True, text=True, check=False)
+                if done.returncode != 0:
+                    raise AnimationError(f"ffmpeg could not write {out}: {done.stderr.strip()[-300:]}")
+
+            replace_file(out, encode)
+    except OSError as error:  # a read-only or full place, a planted link
+        raise AnimationError(describe(out, error)) from None
     return out
 
 
@@ -265,7 +281,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--library", type=Path, help="with --tree or --swarm: a primitive library whose names the trees use"
     )
-    parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4")
+    parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4 (new, unless --force)")
+    parser.add_argument("--force", action="store_true", help="overwrite an --out that exists")
     parser.add_argument("--fps", type=int, default=16, help="frames per second (default 16: 2x real time)")
     parser.add_argument(
         "--every",
@@ -281,6 +298,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         started = time.monotonic()
+        try:  # a link, a folder, a file there: refused before anything is simulated or read
+            check_output(args.out, args.force)
+        except OSError as error:
+            raise AnimationError(str(error)) from None
         if args.bag is not None:
             if any(v is not None for v in (args.seed, args.profile, args.task, args.library)) or args.trial:
                 raise AnimationError(

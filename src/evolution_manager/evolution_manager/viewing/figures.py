@@ -15,6 +15,8 @@ from matplotlib.figure import Figure
 
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES
+from evolution_manager.files import writing
+from swarm_ros.safe_paths import make_folder, replace_file
 
 _SAVE: dict[str, Any] = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Software": None}}
 
@@ -31,8 +33,9 @@ def subplots(
 
 def _save(figure: Figure, path: Path) -> Path:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, **_SAVE)
+    with writing(path):  # a link planted at the file or its folder is refused (swarm_ros.safe_paths)
+        make_folder(path.parent)
+        replace_file(path, lambda temporary: figure.savefig(temporary, **_SAVE))
     return path
 
 

@@ -41,7 +41,8 @@ from bt_controller.tree import Node, parse, to_indented, to_text
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS
 from evolution_manager.evolution.run import Run, RunDirectory
-from evolution_manager.files import write_atomic, write_json
+from evolution_manager.files import write_atomic, write_json, writing
+from swarm_ros.safe_paths import make_folder
 
 if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are computed
     from swarm_sim.evaluation import Evaluator
@@ -195,7 +196,8 @@ def write_best_trees(run: Run) -> list[Path]:
     offers (text, indented, XML, DOT, SVG, PNG), and the original text. Any failure raises."""
     written = []
     directory = run.directory.best
-    directory.mkdir(exist_ok=True)
+    with writing(directory):  # a link planted in the run folder is refused, never followed
+        make_folder(directory, run.directory.root)
     for objective in run.config.objectives:
         best = run.best(objective)
         if best is None:
@@ -220,7 +222,8 @@ def write_best_trees(run: Run) -> list[Path]:
             written.append(path)
         for fmt in ("svg", "png"):
             name_of = None if run.library is None else run.library.shown_name_of  # primitives by name
-            written.append(Path(render(tree, directory / f"{objective}.{fmt}", fmt, name_of)))
+            with writing(directory / f"{objective}.{fmt}"):
+                written.append(Path(render(tree, directory / f"{objective}.{fmt}", fmt, name_of)))
     return written
 
 
@@ -232,6 +235,8 @@ def write_figures(run: Run, heldout: dict | None = None) -> list[Path]:
     )
 
     folder = run.directory.figures
+    with writing(folder):  # a link planted in the run folder is refused, never followed
+        make_folder(folder, run.directory.root)
     written = []
     for objective in run.config.objectives:
         written.append(

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from evolution_manager.recording.bags import BagError, read_bag
+from swarm_ros.safe_paths import check_output, describe, replace_file
 
 # visualization_msgs/Marker types drawn here
 ARROW, CYLINDER, LINE_STRIP, TRIANGLE_LIST, TEXT_VIEW_FACING = 0, 3, 4, 11, 9
@@ -73,7 +74,8 @@ def draw(arena: list, robots: list, title: str, out: Path) -> None:
     axes.set_ylabel("y (m)")
     axes.set_title(title)
     out.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(out, dpi=110, bbox_inches="tight")
+    fmt = out.suffix.lstrip(".").lower() or "png"  # written beside ``out``, then renamed over it
+    replace_file(out, lambda temporary: figure.savefig(temporary, format=fmt, dpi=110, bbox_inches="tight"))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -81,13 +83,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="snapshot", description=__doc__.split("\n\n")[0])
     parser.add_argument("bag", type=Path, help="a trial bag (trial --bag)")
     parser.add_argument("--step", type=int, default=-1, help="sensing step to draw (default -1: the last)")
-    parser.add_argument("--out", type=Path, required=True, help="the PNG file to write")
+    parser.add_argument("--out", type=Path, required=True, help="the PNG file to write (new, unless --force)")
+    parser.add_argument("--force", action="store_true", help="overwrite an --out that exists")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     try:
+        check_output(args.out, args.force)  # a link, a folder, a file there: refused before the bag is read
         arena, robots, step = scene(args.bag, args.step)
         draw(arena, robots, f"{args.bag.name}: step {step}", args.out)
     except BagError as error:
         print(f"snapshot: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:  # a read-only or full place, a link, an output that exists
+        print(f"snapshot: {describe(args.out, error)}", file=sys.stderr)
+        return 2
+    except ValueError as error:  # a suffix matplotlib cannot write
+        print(f"snapshot: --out {args.out}: {error}", file=sys.stderr)
         return 2
     print(f"snapshot: wrote {args.out}", file=sys.stderr)
     return 0

@@ -38,6 +38,7 @@ from evolution_manager.graph.dispatch import Timeouts
 from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.graph.startup import Graph
 from swarm_ros.isolation import reserved_domain
+from swarm_ros.safe_paths import check_output, describe, replace_file
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
 _TICKS = os.sysconf("SC_CLK_TCK")
@@ -159,7 +160,7 @@ def measure(args: argparse.Namespace) -> dict:
     }
 
 
-def main(argv: Sequence[str] | None = None) -> None:
+def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point of ``measure-services``."""
     parser = argparse.ArgumentParser(prog="measure-services", description=__doc__.split("\n")[0])
     parser.add_argument("--evaluations", type=int, default=2000, help="size of the run measured")
@@ -167,8 +168,15 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--chunk", type=int, default=50, help="most requests per service call (default 50)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds over every configuration (default 3)")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--json", type=Path, help="also write the measurements to this file")
+    parser.add_argument("--json", type=Path, help="also write the measurements to this file (new)")
+    parser.add_argument("--force", action="store_true", help="overwrite a --json file that exists")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    try:  # refused before the graph starts: a link, a folder, a file there (unless --force)
+        if args.json is not None:
+            check_output(args.json, args.force, "--json")
+    except OSError as error:
+        print(f"measure-services: error: {describe(args.json, error)}", file=sys.stderr)
+        return 2
     report = measure(args)
     print(
         f"\n{report['evaluations']} evaluations ({report['trials']} trials each) in {report['batches']} "
@@ -187,8 +195,14 @@ def main(argv: Sequence[str] | None = None) -> None:
         f"{report['speedup_2_nodes']:.2f}x the in-process 1-thread throughput"
     )
     if args.json:
-        args.json.write_text(json.dumps(report, indent=1) + "\n")
+        text = json.dumps(report, indent=1) + "\n"
+        try:
+            replace_file(args.json, lambda temporary: temporary.write_text(text))
+        except OSError as error:
+            print(f"measure-services: error: {describe(args.json, error)}", file=sys.stderr)
+            return 74
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

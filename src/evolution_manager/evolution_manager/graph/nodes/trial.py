@@ -66,6 +66,7 @@ from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
 from swarm_ros.names import robot_namespaces
 from swarm_ros.parameters import read_parameter_file
+from swarm_ros.safe_paths import describe
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
@@ -605,7 +606,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.trial < 0:
             raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
         check_new_bag(args.bag)
-        args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)  # an unusable place fails here, at once
+        try:  # an unusable place fails here, at once
+            args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)
+        except OSError as error:  # a place under a file said as such (it was "File exists")
+            raise ValueError(f"--bag {describe(args.bag, error)}") from None
         if args.params_file is not None and not args.params_file.is_file():
             raise ValueError(f"--params-file {args.params_file}: no such file")
         domain = caller_domain() if args.domain is None else args.domain
