@@ -38,7 +38,7 @@ from evolution_manager.viewing import figures
 from swarm_sim import transfer, validation
 from swarm_sim.config import Config
 from swarm_sim.errors import UsageError as SimUsageError
-from swarm_sim.objectives import PAPER_OBJECTIVES as OBJECTIVES
+from swarm_sim.objectives import PAPER_OBJECTIVES
 
 RAW_FILE = "argos_raw.tsv"
 CSV_FILE = "transfer.csv"
@@ -114,7 +114,7 @@ def best_trees(runs: Sequence[RunLike]) -> list[BestTree]:
     """Every run's best tree per objective it is compared on, in the runs' order."""
     picked = []
     for run in runs:
-        for objective in OBJECTIVES:
+        for objective in PAPER_OBJECTIVES:
             if run.objective not in (None, objective):
                 continue
             m = run.summary["objectives"][objective]
@@ -215,7 +215,9 @@ def _labels(objective: str) -> list[str]:
 
 
 def _losses(rows: Sequence[Transferred]) -> dict[str, dict[str, list[float]]]:
-    losses: dict[str, dict[str, list[float]]] = {o: {label: [] for label in _labels(o)} for o in OBJECTIVES}
+    losses: dict[str, dict[str, list[float]]] = {
+        o: {label: [] for label in _labels(o)} for o in PAPER_OBJECTIVES
+    }
     for r in rows:
         losses[r.best.objective][r.best.label].append(r.loss)
     return losses
@@ -235,7 +237,7 @@ def comparisons(rows: Sequence[Transferred]) -> list[Comparison]:
     """The algorithms' losses against each other per objective (the three pairs), Holm over them."""
     losses = _losses(rows)
     out = []
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         gp, fnd, qd = _labels(objective)
         for first, second in ((gp, fnd), (gp, qd), (fnd, qd)):
             a, b = losses[objective][first], losses[objective][second]
@@ -279,7 +281,7 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
         "| indistinguishable | largest abs(z) | Wilcoxon p |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         for label in _labels(objective):
             group = [r for r in rows if r.best.objective == objective and r.best.label == label]
             loss = [r.loss for r in group]
@@ -302,7 +304,7 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
         ]
     if rows:
         points: dict[str, dict[str, list[tuple[float, float]]]] = {
-            o: {label: [] for label in _labels(o)} for o in OBJECTIVES
+            o: {label: [] for label in _labels(o)} for o in PAPER_OBJECTIVES
         }
         for r in rows:
             points[r.best.objective][r.best.label].append((r.ours, r.argos))

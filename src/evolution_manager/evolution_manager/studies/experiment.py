@@ -63,7 +63,7 @@ from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
-from swarm_sim.objectives import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
+from swarm_sim.objectives import PAPER_OBJECTIVES
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
@@ -102,10 +102,10 @@ def plan(
         scenario_seed = shared_scenario_seed(seed)
     planned = []
     for a, algorithm in enumerate(ALGORITHMS):
-        objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else OBJECTIVES
+        objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else PAPER_OBJECTIVES
         budget = 3 * evaluations if algorithm == "gp-fnd" else evaluations
         for objective in objectives:
-            o = -1 if objective is None else OBJECTIVES.index(objective)
+            o = -1 if objective is None else PAPER_OBJECTIVES.index(objective)
             for r in range(runs):
                 run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
                 config = RunConfig.make(

@@ -34,7 +34,7 @@ from evolution_manager.studies import argos_transfer
 from evolution_manager.studies.argos_transfer import measure as argos_measure
 from evolution_manager.studies.significance import ALPHA, Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
-from swarm_sim.objectives import PAPER_OBJECTIVES as OBJECTIVES  # the paper's study: its three objectives
+from swarm_sim.objectives import PAPER_OBJECTIVES
 
 METRICS = (("best_fitness", "best fitness", 4), ("coverage", "coverage", 5), ("qd_score", "QD score", 6))
 """(summary key, name, figure number in the paper)."""
@@ -65,7 +65,7 @@ PAPER_TABLE_6 = {
     **{
         (m, o, a): ("< 0.0001", "T-test")
         for m in ("coverage", "QD score")
-        for o in OBJECTIVES
+        for o in PAPER_OBJECTIVES
         for a in ("fnd", "qd")
     },
 }
@@ -144,9 +144,11 @@ def _labels(objective: str) -> list[str]:
 
 
 def _samples(runs: Sequence[FinishedRun], key: str) -> dict[str, dict[str, list[float]]]:
-    samples: dict[str, dict[str, list[float]]] = {o: {label: [] for label in _labels(o)} for o in OBJECTIVES}
+    samples: dict[str, dict[str, list[float]]] = {
+        o: {label: [] for label in _labels(o)} for o in PAPER_OBJECTIVES
+    }
     for run in runs:
-        for objective in OBJECTIVES:
+        for objective in PAPER_OBJECTIVES:
             if run.objective not in (None, objective):
                 continue
             value = run.summary["objectives"][objective][key]
@@ -166,7 +168,7 @@ def _comparisons(runs: Sequence[FinishedRun], pairs: str = "paper") -> list[Comp
     rows = []
     for key, name, _ in METRICS:
         samples = _samples(runs, key)
-        for objective in OBJECTIVES:
+        for objective in PAPER_OBJECTIVES:
             gp, fnd, qd = _labels(objective)
             chosen = ((gp, fnd), (gp, qd)) if pairs == "paper" else ((fnd, qd),)
             for first, second in chosen:
@@ -183,7 +185,7 @@ def _heldout_comparisons(runs: Sequence[FinishedRun]) -> dict[tuple[str, str, st
         if key not in HELDOUT:
             continue
         samples = _samples(runs, HELDOUT[key])
-        for objective in OBJECTIVES:
+        for objective in PAPER_OBJECTIVES:
             gp, fnd, qd = _labels(objective)
             for first, second in ((gp, fnd), (gp, qd)):
                 a, b = samples[objective][first], samples[objective][second]
@@ -252,7 +254,7 @@ def write_runs_csv(root: Path, runs: Sequence[FinishedRun]) -> Path:
     order = {a: i for i, a in enumerate(("gp", "gp-fnd", "qd"))}
     rows = []
     for run in sorted(runs, key=lambda r: (order[r.algorithm], r.objective or "", r.index)):
-        for objective in OBJECTIVES:
+        for objective in PAPER_OBJECTIVES:
             if run.objective not in (None, objective):
                 continue
             m = run.summary["objectives"][objective]
@@ -285,7 +287,7 @@ def _summary_table(runs: Sequence[FinishedRun]) -> str:
     ]
     keys = ["best_fitness", "heldout_best_fitness", "coverage", "qd_score", "heldout_qd_score"]
     columns = [_samples(runs, key) for key in keys] + [_samples(runs, "repertoire_size")]
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         for label in _labels(objective):
             cells = []
             for samples in columns:
@@ -363,7 +365,7 @@ def _sizes_table(first: dict, runs: Sequence[FinishedRun]) -> str:
         "| objective | algorithm | paper (one run) | ours (run shown) | ours, mean ± sd over runs |",
         "|---|---|---|---|---|",
     ]
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         for label in _labels(objective):
             algorithm = "gp-fnd" if label == "GP_fnd" else ("gp" if label.startswith("GP") else "qd")
             run = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
@@ -446,7 +448,7 @@ def build_report(
     for run in runs:
         first.setdefault((run.algorithm, run.objective), run)
     histogram_rows = {}
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         row = {}
         for algorithm in ("gp", "gp-fnd", "qd"):
             one = first.get((algorithm, None if algorithm == "gp-fnd" else objective))
@@ -459,7 +461,7 @@ def build_report(
         f"![histograms](figures/{path.name})\n\nRepertoire sizes (filled bins) beside the paper's:\n\n"
         + _sizes_table(first, runs)
     )
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         qd_run = first.get(("qd", objective))
         if qd_run is None:
             continue
@@ -472,7 +474,7 @@ def build_report(
             f"### Fig. 7-style: MAP-Elites grid, {objective} (run {qd_run.index})\n\n"
             f"![grid](figures/{path.name})\n"
         )
-    for objective in OBJECTIVES:
+    for objective in PAPER_OBJECTIVES:
         curves = {}
         held = {}
         for run in first.values():
