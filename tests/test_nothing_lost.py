@@ -366,6 +366,7 @@ def _small_trial_bag(path: Path) -> None:
                 robots=9,
                 tree_keys=np.arange(9, dtype=np.uint64),
                 ticks=40,
+                world="",
             )
             bag.write("/trial_start", msg, step + 1)
 

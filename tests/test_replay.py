@@ -1,6 +1,7 @@
 """Replay: a trial bag is republished in order for ROS tools; --verify accepts a faithful recording and names
 the first step where a tampered one differs."""
 
+import json
 import subprocess
 import time
 
@@ -52,6 +53,7 @@ def write_trial_bag(path, tamper_step=None, tamper_carrying=None):
             robots=9,
             tree_keys=np.zeros(9, dtype=np.uint64),
             ticks=DEFAULT.ticks,
+            world=json.dumps(DEFAULT.as_dict()),
         )
         bag.write("/trial_start", start, 0)
         for step, poses, (carrying, deliveries) in states:
