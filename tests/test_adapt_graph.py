@@ -8,6 +8,7 @@ from evolution_manager.adaptation.adapt import adapt
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.graph.nodes.trial import RESULT_TOPIC
 from evolution_manager.recording.bags import read_bag
+from swarm_sim.result_messages import named_values
 
 ITEMS = [
     {"bin": [2, 4, 7], "tree": "reverse", "fitness": 0.95, "descriptors": [0.3, 0.55, 0.9], "evaluation": 1},
@@ -41,5 +42,7 @@ def test_graph_and_batch_roads_choose_the_same_tree(tmp_path):
         results = [m for m in read_bag(bag) if m.topic == RESULT_TOPIC]
         assert len(results) == 1
         assert results[0].message.tree == tried["tree"]
-        assert results[0].message.food == tried["fitness"]  # one trial: the evaluation is that trial
+        assert (
+            named_values(results[0].message)["food"] == tried["fitness"]
+        )  # one trial: the evaluation is that trial
         assert results[0].message.profile == "clean"

@@ -17,6 +17,7 @@ from evolution_manager.graph.startup import Graph, executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.studies.evolve import evolve
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.result_messages import named_values
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here
 SEED = 5
@@ -90,7 +91,9 @@ def test_a_killed_evaluator_loses_nothing_and_counts_nothing_twice(tmp_path, wor
     assert [(m.tree, m.seed) for m in evaluations] == [(r["tree"], int(r["seed"])) for r in rows]
     assert [m.seed for m in evaluations] == [evaluation_seed(SEED, i) for i in range(len(rows))]
     assert len({m.seed for m in evaluations}) == len(rows) > BUDGET // 2
-    assert all(m.food == float(r["food"]) for m, r in zip(evaluations, rows, strict=True) if m.ok)
+    assert all(
+        named_values(m)["food"] == float(r["food"]) for m, r in zip(evaluations, rows, strict=True) if m.ok
+    )
     progress = [m.message for m in messages if m.topic == "/progress"]
     assert len(progress) == 3 * batches_done(out)
     assert progress[-1].evaluations == len(rows)

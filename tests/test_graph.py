@@ -22,6 +22,7 @@ from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.result_messages import named_values, values_of
 from swarm_sim.tasks import FORAGING
 
 PARITY_TREES = 20
@@ -61,7 +62,9 @@ def test_under_the_clean_profile_the_graph_equals_the_batch_evaluator_too(tmp_pa
     messages = list(read_bag(tmp_path / "trial0"))
     (result,) = [m.message for m in messages if m.topic == RESULT_TOPIC]
     assert result.profile == "clean"
-    assert result.movement == pytest.approx((14 - 26 + 40) / 80, abs=1e-12)  # docs/model.md, by hand
+    assert named_values(result)["movement"] == pytest.approx(
+        (14 - 26 + 40) / 80, abs=1e-12
+    )  # docs/model.md, by hand
     assert len([m for m in messages if m.topic == "/swarm_state"]) == 176  # 16 settling steps, then 160
 
 
@@ -87,7 +90,7 @@ def test_a_recorded_trial_reads_back_whole_and_in_order(graph, tmp_path):
     start = per_topic["/trial_start"][0].message
     assert (start.seed, start.trial) == (7, 3)
     result = per_topic[RESULT_TOPIC][0].message
-    assert (result.density, result.nest, result.food) == record.values[:3]
+    assert values_of(result) == record.values
     assert result.profile == "paper"
     final_poses = [[p.x, p.y, p.theta] for p in per_topic["/swarm_state"][-1].message.poses]
     assert final_poses == record.end_poses.tolist()

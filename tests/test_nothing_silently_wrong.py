@@ -15,6 +15,8 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_prefix
 
+from swarm_sim.result_messages import named_values
+
 QUIET = ["--no-figures", "--no-progress"]
 QD_FOOD = ["--algorithm", "qd", "--objective", "food"]
 EVERY_BATCH = ["--checkpoint-every", "0", *QUIET]
@@ -232,7 +234,9 @@ def test_the_run_bag_holds_every_evaluation_once_in_order_cached_ones_marked(tmp
         rows = list(csv.DictReader(handle))
     messages = [m.message for m in read_bag(out / "run.bag") if m.topic == "/evaluations"]
     assert [(m.tree, m.seed) for m in messages] == [(r["tree"], int(r["seed"])) for r in rows]
-    assert [m.food for m in messages if m.ok] == [float(r["food"]) for r in rows if not r["error"]]
+    assert [named_values(m)["food"] for m in messages if m.ok] == [
+        float(r["food"]) for r in rows if not r["error"]
+    ]
     summary = json.loads((out / "summary.json").read_text())
     assert sum(m.cached for m in messages) == summary["simulations_saved"] > 0
     # exactly those the run answered without simulating, as its files replayed say
@@ -241,7 +245,10 @@ def test_the_run_bag_holds_every_evaluation_once_in_order_cached_ones_marked(tmp
     forms = SimplifiedForms()
     simulated: dict[str, set] = {}
     for m in messages:  # a cached answer: the values of an earlier simulation of its tree, or (paper) of a
-        values = (m.density, m.nest, m.food, m.movement, m.rotation, m.conditionality)  # simplified clone
+        values = tuple(
+            named_values(m)[name]
+            for name in ("density", "nest", "food", "movement", "rotation", "conditionality")
+        )  # simplified clone
         if m.cached:
             assert values in simulated[forms(m.tree)]
         else:

@@ -27,6 +27,7 @@ from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.result_messages import named_values
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 
@@ -179,7 +180,7 @@ def test_evaluate_reports_evaluations_done_and_a_cancel_returns_what_it_finished
             again = BatchEvaluator().evaluate(
                 [EvaluationRequest(t, s, 10) for t, s in zip(trees[: len(finished)], range(60), strict=False)]
             )
-            assert [(r.seed, r.nest, r.movement) for r in finished] == [
+            assert [(r.seed, named_values(r)["nest"], named_values(r)["movement"]) for r in finished] == [
                 (s, r.fitness[1], r.descriptors[0]) for s, r in enumerate(again)
             ]
 
@@ -188,7 +189,9 @@ def test_evaluate_reports_evaluations_done_and_a_cancel_returns_what_it_finished
             spin_until(sent.done)
             result = sent.result().get_result_async()
             spin_until(result.done)
-            got = [(r.food, r.movement) for r in result.result().result.results]
+            got = [
+                (named_values(r)["food"], named_values(r)["movement"]) for r in result.result().result.results
+            ]
             expected = BatchEvaluator().evaluate(
                 [EvaluationRequest(t, s, 2) for t, s in zip(trees[:3], [1, 2, 3], strict=True)]
             )

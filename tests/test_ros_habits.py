@@ -24,6 +24,7 @@ from swarm_ros.qos import RELIABLE
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.result_messages import named_values
 
 LONG = 300.0
 """Seconds to wait for anything a node does (starting Python processes is slow on a loaded machine)."""
@@ -118,7 +119,7 @@ def test_the_evaluator_is_driven_through_its_lifecycle_and_reports_it_on_diagnos
     expected = BatchEvaluator().evaluate(
         [EvaluationRequest(t, s, 2) for t, s in zip(goal.trees, goal.seeds, strict=True)]
     )
-    assert [r.nest for r in result.result.results] == [r.fitness[1] for r in expected]
+    assert [named_values(r)["nest"] for r in result.result.results] == [r.fitness[1] for r in expected]
     ros.spin_until(
         lambda: value(statuses[-1], "state") == "active" and value(statuses[-1], "evaluations") == "2",
         "diagnostics counting the two evaluations",

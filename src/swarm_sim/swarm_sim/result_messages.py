@@ -4,8 +4,10 @@ the recorder and the bags.
 Nothing here imports ROS: a message is filled from (and read into) plain field values, so the same functions
 serve rclpy's message classes (``EvaluationResult(**result_fields(...))``), rosbags' (``bag.message(type,
 **result_fields(...))``) and any object with the fields. Fields follow ``swarm_msgs``: ``EvaluationResult``,
-the ``RunTrial`` action's result and service response (``success``, ``message``, ``gap``, every value of
-``VALUE_NAMES``, ``start_poses``, ``end_poses``) and ``RobotPose`` (``x``, ``y`` in mm, ``theta`` in rad).
+the ``RunTrial`` action's result and service response (``success``, ``message``, ``gap``, ``names`` and
+``values``: every value of ``VALUE_NAMES`` by name, ``start_poses``, ``end_poses``) and ``RobotPose`` (``x``,
+``y`` in mm, ``theta`` in rad). Messages recorded before names and values held a field per value; they are
+read all the same (``named_values``).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from swarm_sim.evaluation import EvaluationResult, failed
 from swarm_sim.objectives import N_OBJECTIVES, OBJECTIVES
 from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
-__all__ = ["OBJECTIVES", "evaluation_fields", "result_fields", "trial_fields", "values_of"]
+__all__ = ["OBJECTIVES", "evaluation_fields", "named_values", "result_fields", "trial_fields", "values_of"]
 
 
 class ResultValues(Protocol):
@@ -89,9 +91,14 @@ def result_fields(
         "cached": cached,
     }
     if values is None:
-        return {**fields, "ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
+        failure = {"ok": False, "error": error or "no fitness or descriptors", "fitness": 0.0}
+        return {**fields, **failure, "names": [], "values": []}
     named = {name: float(v) for name, v in zip(VALUE_NAMES, values, strict=True)}
-    return {**fields, "ok": True, "error": "", "fitness": named[objective], **named}
+    return {**fields, "ok": True, "error": "", "fitness": named[objective], **_by_name(named)}
+
+
+def _by_name(named: dict[str, float]) -> dict[str, Any]:
+    return {"names": list(named), "values": list(named.values())}
 
 
 def evaluation_fields(
@@ -112,9 +119,26 @@ def evaluation_fields(
     return result_fields(tree, seed, trials, values, objective, profile=profile, cached=cached)
 
 
+def named_values(msg: object) -> dict[str, float]:
+    """Every value a message holds, by name: its ``names`` and ``values``, or, in a message recorded before
+    them, its fields named after ``VALUE_NAMES`` (as many as it has: bags before the six primitives hold the
+    paper's three objectives)."""
+    names = getattr(msg, "names", None)
+    if names is None:
+        return {name: float(getattr(msg, name)) for name in VALUE_NAMES if hasattr(msg, name)}
+    values = list(getattr(msg, "values", ()))
+    if len(values) != len(names):
+        raise ValueError(f"the message has {len(names)} value names but {len(values)} values")
+    return {str(name): float(value) for name, value in zip(names, values, strict=True)}
+
+
 def values_of(msg: object) -> tuple[float, ...]:
-    """The values of a message with the ``VALUE_NAMES`` fields, in order."""
-    return tuple(float(getattr(msg, name)) for name in VALUE_NAMES)
+    """The values of a message, ``VALUE_NAMES`` order; ValueError naming a value it lacks."""
+    named = named_values(msg)
+    missing = [name for name in VALUE_NAMES if name not in named]
+    if missing:
+        raise ValueError(f"the message holds no value for {missing[0]}")
+    return tuple(named[name] for name in VALUE_NAMES)
 
 
 def evaluation_result_of(msg: EvaluationMessage) -> EvaluationResult:
@@ -131,7 +155,7 @@ def trial_fields(record: TrialRecord, pose: Callable[..., object]) -> dict[str, 
         "success": True,
         "message": "",
         "gap": float(record.gap),
-        **dict(zip(VALUE_NAMES, (float(v) for v in record.values), strict=True)),
+        **_by_name(dict(zip(VALUE_NAMES, (float(v) for v in record.values), strict=True))),
         "start_poses": [pose(x=x, y=y, theta=t) for x, y, t in record.start_poses.tolist()],
         "end_poses": [pose(x=x, y=y, theta=t) for x, y, t in record.end_poses.tolist()],
     }

@@ -21,7 +21,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+import numpy as np
+from rosbags.interfaces import (
+    Nodetype,
+    Qos,
+    QosDurability,
+    QosHistory,
+    QosLiveliness,
+    QosReliability,
+    QosTime,
+)
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
@@ -89,6 +98,24 @@ def swarm_typestore() -> Typestore:
         types.update(get_types_from_msg(text, name))
     store.register(types)
     return store
+
+
+_NUMBER_TYPES: dict[str, type] = {
+    name: getattr(np, name)
+    for name in (
+        "float32",
+        "float64",
+        "int8",
+        "uint8",
+        "int16",
+        "uint16",
+        "int32",
+        "uint32",
+        "int64",
+        "uint64",
+    )
+}
+"""The ROS number types by name, as numpy's (rosbags serializes sequences of them from numpy arrays)."""
 
 
 class BagRecorder:
@@ -167,7 +194,15 @@ class BagRecorder:
         self.write_cdr(topic, msgtype, timestamp_ns, self.typestore.serialize_cdr(msg, msgtype))
 
     def message(self, msgtype: str, **fields: Any) -> Any:
-        """A message object of type ``msgtype`` (e.g. ``swarm_msgs/msg/EvaluationResult``)."""
+        """A message object of type ``msgtype`` (e.g. ``swarm_msgs/msg/EvaluationResult``). A sequence or
+        array of numbers may be given as a list, as rclpy takes it: it becomes the numpy array rosbags
+        serializes."""
+        for name, (kind, detail) in self.typestore.fielddefs[msgtype][1]:
+            value = fields.get(name)
+            if kind in (Nodetype.SEQUENCE, Nodetype.ARRAY) and isinstance(value, (list, tuple)):
+                element: Any = detail[0]  # (kind, (type name, bound)) of the elements
+                if element[0] == Nodetype.BASE and element[1][0] in _NUMBER_TYPES:
+                    fields[name] = np.asarray(value, dtype=_NUMBER_TYPES[element[1][0]])
         return self.typestore.types[msgtype](**fields)
 
 

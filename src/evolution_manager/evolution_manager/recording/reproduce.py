@@ -25,6 +25,7 @@ from bt_controller.tree import Node, parse
 from evolution_manager.recording.bags import BagError, read_bag
 from swarm_sim.config import DEFAULT, Config, config_from_dict, default_config
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
+from swarm_sim.result_messages import named_values
 from swarm_sim.swarm_layout import LayoutError, layout_of_label
 from swarm_sim.trial_data import VALUE_NAMES
 
@@ -118,8 +119,12 @@ def verify_trial_bag(path: Path | str) -> Verification:
     record = run_with_controllers(tree, seed, trial, config, on_step=compare)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
+    try:
+        recorded_values = named_values(result)  # bags recorded before the six primitives: the paper's values
+    except ValueError as error:
+        raise BagError(f"{RESULT_TOPIC}: {error}") from None
     for name, value in zip(VALUE_NAMES, record.values, strict=True):
-        was = getattr(result, name, None)  # bags recorded before the six primitives: the paper's values
+        was = recorded_values.get(name)
         if not divergences and was is not None and was != value:
             divergences.append(f"{name} was {was!r}, the re-run gives {value!r}")
     return Verification(result.tree, seed, trial, len(recorded), divergences[0] if divergences else None)
