@@ -157,7 +157,14 @@ def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
     file that has none or is damaged, or the runs whose libraries differ."""
     cells: list[Cell] = []
     libraries: dict[str, tuple[Path, Library]] = {}
+    seen: dict[Path, Path] = {}
     for directory in map(Path, run_dirs):
+        same = seen.setdefault(directory.resolve(), directory)
+        if same is not directory:
+            raise ConfigError(
+                f"--swarm-from: {directory} is given twice ({same} is the same run): every cell would be "
+                "duplicated; give each run once"
+            )
         library = _run_library(directory)
         if library is not None:
             libraries.setdefault(library.digest, (directory, library))

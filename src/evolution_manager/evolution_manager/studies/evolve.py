@@ -35,6 +35,7 @@ from evolution_manager.evolution.options import (
     add_scenario_options,
     add_task_options,
     check_resume_options,
+    check_scenario_seed,
     config_from_args,
     library_from_args,
     progress_bar,
@@ -49,6 +50,7 @@ if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not ev
 
     from bt_controller.library import Library
     from evolution_manager.cluster.settings import ClusterSettings
+    from evolution_manager.evolution.compositions import CompositionParameters
     from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
 
@@ -142,6 +144,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         args = build_parser().parse_args(argv)
         out = args.out
         cluster = settings_from_args(args)
+        check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
         if args.homogeneous is not None:
@@ -324,6 +327,25 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
         )
 
 
+def _check_homogeneous(algorithm: str, parameters: CompositionParameters, cells: int) -> None:
+    """Refuse ``--homogeneous K`` with more seeds than the runs' cells or the initial population (ga) or
+    batch (qd) hold, in one line (it was cut to the smaller silently)."""
+    k = parameters.homogeneous
+    initial, what = (
+        (parameters.population, "population") if algorithm == "ga" else (parameters.init_batch, "batch")
+    )
+    if k > cells:
+        raise UsageError(
+            f"--homogeneous {k}: the runs hold {cells} cells, so there are only {cells} homogeneous swarms; "
+            f"give K of at most {min(cells, initial)}"
+        )
+    if k > initial:
+        raise UsageError(
+            f"--homogeneous {k}: the initial {what} of --algorithm {algorithm} has {initial} genomes; give K "
+            f"of at most {min(cells, initial)}"
+        )
+
+
 def _evolve_compositions(
     args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
 ) -> int:
@@ -354,6 +376,8 @@ def _evolve_compositions(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
             cells, library = comp.read_sources(args.swarm_from)
+            parameters = comp.CompositionParameters(homogeneous=args.homogeneous or 0)
+            _check_homogeneous(args.algorithm, parameters, len(cells))
             config = comp.CompositionConfig(
                 args.algorithm,
                 args.evaluations or comp.DEFAULT_EVALUATIONS[args.algorithm],
@@ -364,7 +388,7 @@ def _evolve_compositions(
                 tuple(str(p) for p in args.swarm_from),
                 len(cells),
                 comp.cells_digest(cells),
-                comp.CompositionParameters(homogeneous=args.homogeneous or 0),
+                parameters,
                 library_digest="" if library is None else library.digest,
             )
         from swarm_sim.evaluation import BatchEvaluator
