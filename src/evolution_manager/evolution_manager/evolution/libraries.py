@@ -53,7 +53,9 @@ from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser
 from evolution_manager.errors import EvolutionError, RunDirectoryError, UsageError, WriteError
 from evolution_manager.evolution.operators import selection_fitness
 from evolution_manager.evolution.run import RunDirectory
+from evolution_manager.evolution.run_config import DEFAULT_PROFILE
 from evolution_manager.files import read_json, read_json_object, write_json
+from swarm_sim.config import DEFAULT_TASK, default_config
 
 FAMILIES: dict[str, str] = {
     "density": "increaseDensity",
@@ -104,6 +106,8 @@ class RunRepertoires:
     shape: dict[str, tuple[int, ...]]
     items: dict[str, tuple[Item, ...]]
     heldout: dict[str, dict[tuple[tuple[int, ...], str], float]]
+    task: str = DEFAULT_TASK
+    """The run's task: its trial length (``swarm_sim.config.TASKS``), which its raw fitness depends on."""
 
 
 def read_run(path: Path) -> RunRepertoires:
@@ -141,7 +145,9 @@ def read_run(path: Path) -> RunRepertoires:
         except (RunDirectoryError, TreeError, ValueError, TypeError, KeyError) as error:
             raise LibraryBuildError(f"{file} is damaged: {error}") from None
         heldout[objective] = _heldout_fitness(heldout_document, objective)
-    return RunRepertoires(Path(path), config.seed, config.algorithm, config.profile, shapes, items, heldout)
+    return RunRepertoires(
+        Path(path), config.seed, config.algorithm, config.profile, shapes, items, heldout, config.task
+    )
 
 
 def _repertoire(file: Path, objective: str) -> tuple[tuple[int, ...], tuple[Item, ...]]:
@@ -243,6 +249,13 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
         named = ", ".join(f"{run.path} ({run.profile})" for run in runs)
         raise LibraryBuildError(f"the runs mix profiles {' and '.join(profiles)}: {named}; give runs of one")
     profile = profiles[0]
+    tasks = sorted({run.task for run in runs})
+    if len(tasks) > 1:
+        named = ", ".join(f"{run.path} ({run.task}, {_trial_seconds(run.task):g} s)" for run in runs)
+        raise LibraryBuildError(
+            f"the runs mix tasks of different trial lengths, {' and '.join(tasks)}: {named}; their fitness "
+            "is not comparable: give runs of one task"
+        )
     bins = BLOCKS[blocks]
     for run in runs:
         for objective, shape in run.shape.items():
@@ -289,7 +302,19 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
             }
             tree = library_entry_tree(winner.tree)
             entries.append({"name": f"{family}{k}", "tree": tree, "source": source})
+    if not entries:
+        named = ", ".join(str(run.path) for run in runs)
+        raise LibraryBuildError(
+            f"the repertoires of {named} hold no tree (every block is empty), so the library would have 0 "
+            "primitives: give runs whose repertoires have filled bins"
+        )
     return library_from_json({"format": LIBRARY_FORMAT, "primitives": entries}, label)
+
+
+def _trial_seconds(task: str) -> float:
+    """The trial length of ``task`` in seconds."""
+    world = default_config(DEFAULT_PROFILE, task)
+    return world.ticks * world.steps_per_tick * world.step_dt
 
 
 def build_parser() -> Parser:
