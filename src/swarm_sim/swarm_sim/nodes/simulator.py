@@ -60,8 +60,9 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -97,7 +98,14 @@ from swarm_msgs.msg import (
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
-from swarm_ros.parameters import declare, declare_dataclass, descriptor, field_names, start_node
+from swarm_ros.parameters import (
+    check_file_values,
+    declare,
+    declare_dataclass,
+    descriptor,
+    field_names,
+    start_node,
+)
 from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
 from swarm_ros.services import call_until_answered
 from swarm_ros.spinning import spin_until_shutdown
@@ -112,6 +120,8 @@ from swarm_sim.trial_data import TrialRecord
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
+ANSWER_TIMEOUT_RANGE = (0.1, 86400.0)
+"""Seconds the ``answer_timeout`` parameter may be."""
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
 recorder that has just joined), so that none misses the trial's first messages."""
@@ -177,7 +187,7 @@ class SimulatorNode(ManagedNode):
             descriptor(
                 "seconds of wall time to wait for the controllers at any step (detects dead nodes)",
                 read_only=False,
-                value_range=(0.1, 86400.0),
+                value_range=ANSWER_TIMEOUT_RANGE,
             ),
         )
         self.sim_time_ns = 0
@@ -605,6 +615,30 @@ class SimulatorNode(ManagedNode):
 
 SHARED = field_names(EvaluatorSettings) | field_names(ControllerSettings)
 """Parameters of the graph's other nodes that a ``/**`` section of a shared parameter file may hold."""
+
+
+def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) -> Config:
+    """Check, before any node starts, what the parameter file ``path`` gives the simulator node
+    ``fully_qualified_name`` whose world would otherwise be ``config``: every value of a parameter it
+    declares, its type and range, the world it makes (``Config``'s checks), and names it does not declare,
+    as the node checks them when it starts (``ParameterError`` or ``ConfigError`` in one line); return
+    that world."""
+    declared: dict[str, tuple[Any, tuple[float, float] | None]] = {
+        f.name: (getattr(config, f.name), WORLD_RANGES.get(f.name)) for f in fields(config)
+    }
+    declared["conditions"] = ("", None)
+    declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
+    declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
+    given = check_file_values(path, fully_qualified_name, declared, SHARED)
+    world: dict[str, Any] = {
+        name: tuple(value) if isinstance(value, list) else value
+        for name, value in given.items()
+        if name in {f.name for f in fields(config)}
+    }
+    try:
+        return replace(config, **world)
+    except ConfigError as error:
+        raise ConfigError(f"{path}: {error}") from None
 
 
 def main(args: list[str] | None = None) -> None:
