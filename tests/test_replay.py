@@ -149,3 +149,35 @@ def test_replay_of_a_missing_bag_is_a_clear_error(tmp_path, extra):
 
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+@pytest.mark.parametrize("named", ["planted/msg/Payload", "os/msg/system", "swarm_msgs/msg/../../planted"])
+def test_replay_loads_message_types_of_the_allowed_packages_only(tmp_path, named):
+    """Issue 41, item 9: replay imported whatever module a bag's metadata named as a message type. A bag
+    naming a type outside the allowed packages (here a module planted on the path, which would leave a mark
+    if imported) is refused in one line, status 2, before anything is imported or published."""
+    import os
+
+    planted = tmp_path / "lib" / "planted" / "msg"
+    planted.mkdir(parents=True)
+    (planted.parent / "__init__.py").write_text("")
+    mark = tmp_path / "imported"
+    (planted / "__init__.py").write_text(f"open({str(mark)!r}, 'w').close()\nPayload = object\n")
+    bag = tmp_path / "bag"
+    with BagRecorder(bag) as recorder:
+        recorder.write("/chatter", recorder.message("std_msgs/msg/String", data="hi"), 1000)
+    metadata = bag / "metadata.yaml"
+    metadata.write_text(metadata.read_text().replace("type: std_msgs/msg/String", f"type: {named}"))
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path / 'lib'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    replay = str(executable("evolution_manager", "replay"))
+    done = subprocess.run(
+        [replay, str(bag), "--rate", "0", "--delay", "0"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"topic /chatter has message type '{named}', which replay does not load" in done.stderr
+    assert not mark.exists(), "the planted module was imported"
