@@ -175,7 +175,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 )
             assert config is not None  # made from the options when not resuming
             library = library_from_args(args)
-        client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
+        with signals_as_interrupts():  # Ctrl-C or SIGTERM while waiting for a cluster's workers: one line
+            client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
         evaluator = _evaluator(args.workers, config, library, client)
         if args.resume:
             run = Run.resume(args.out, evaluator)
@@ -183,6 +184,9 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             run = Run.start(config, args.out, evaluator, library)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, out)
+    except KeyboardInterrupt as interruption:  # before the run started (waiting for a cluster's workers)
+        print("evolve: interrupted before the run started; nothing was written", file=sys.stderr)
+        return exit_status(interruption)
     bar = progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
