@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from functools import partial
 from pathlib import Path
@@ -418,15 +419,7 @@ class SimulatorNode(ManagedNode):
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
         self._trial_start.publish(
-            TrialStart(
-                header=self._header("arena"),
-                seed=seed,
-                trial=trial,
-                arena_configuration=self.arena_of(trial),
-                robots=self.robots,
-                tree_keys=[int(k) for k in world.setup.tree_keys],
-                ticks=world.p.ticks,
-            )
+            trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
         record: TrialRecord | None = None
         while not world.done:
@@ -526,59 +519,15 @@ class SimulatorNode(ManagedNode):
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
-        poses = world.poses()
-        self._state.publish(
-            SwarmState(
-                header=Header(stamp=stamp, frame_id="arena"),
-                seed=seed,
-                trial=world.trial,
-                step=world.step,
-                poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in poses.tolist()],
-                carrying=[bool(c) for c in world.carrying],
-                deliveries=[int(d) for d in world.deliveries],
-            )
-        )
-        listed = poses.tolist()
-        self._poses.publish(
-            PoseArray(
-                header=Header(stamp=stamp, frame_id=visualisation.FRAME),
-                poses=[visualisation.pose_in_metres(*q) for q in listed],
-            )
-        )
-        for publisher, q in zip(self._pose, listed, strict=True):
-            publisher.publish(visualisation.pose_stamped(stamp, *q))
-        self._robot_markers.publish(
-            visualisation.robot_markers(
-                self.config,
-                stamp,
-                listed,
-                self.namespaces,
-                self._actions,
-                [bool(c) for c in world.carrying],
-                [int(d) for d in world.deliveries],
-            )
-        )
-        for i, readings in enumerate(world.readings()):
-            header = Header(stamp=stamp, frame_id=self.namespaces[i])
-            self._ground[i].publish(
-                GroundSensor(
-                    header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food
-                )
-            )
-            messages = [
-                RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
-                for s, r, b, n, f in zip(
-                    readings.senders.tolist(),
-                    readings.ranges.tolist(),
-                    readings.bearings.tolist(),
-                    readings.nest.tolist(),
-                    readings.food.tolist(),
-                    strict=True,
-                )
-            ]
-            self._readings[i].publish(
-                RangeAndBearingReadings(header=header, step=world.step, readings=messages)
-            )
+        messages = step_messages(world, stamp, seed, self.namespaces, self._actions, self.config)
+        self._state.publish(messages.state)
+        self._poses.publish(messages.poses)
+        for publisher, pose in zip(self._pose, messages.pose, strict=True):
+            publisher.publish(pose)
+        self._robot_markers.publish(messages.robot_markers)
+        for i in range(len(self.namespaces)):
+            self._ground[i].publish(messages.ground[i])
+            self._readings[i].publish(messages.readings[i])
 
     def _await_answers(self, step: int) -> list[WheelCommand]:
         with self._lock:
@@ -611,6 +560,98 @@ class SimulatorNode(ManagedNode):
 
     def _header(self, frame: str) -> Header:
         return Header(stamp=self._stamp(), frame_id=frame)
+
+
+@dataclass(frozen=True)
+class StepMessages:
+    """What the simulator publishes at one step besides the clock: the swarm's state, its poses (all, and
+    per robot), the robots' markers, and each robot's ground sensor and range-and-bearing readings."""
+
+    state: SwarmState
+    poses: PoseArray
+    pose: list[PoseStamped]
+    robot_markers: MarkerArray
+    ground: list[GroundSensor]
+    readings: list[RangeAndBearingReadings]
+
+
+def step_messages(
+    world: LockstepChain,
+    stamp: Time,
+    seed: int,
+    namespaces: Sequence[str],
+    actions: Sequence[str],
+    config: Config,
+) -> StepMessages:
+    """The messages of the step ``world`` is at, stamped ``stamp``; ``actions``: each robot's action of the
+    step before (its marker's label). The node publishes these; ``replay --verify`` compares a recording
+    with those of a re-run."""
+    poses = world.poses()
+    listed = poses.tolist()
+    state = SwarmState(
+        header=Header(stamp=stamp, frame_id="arena"),
+        seed=seed,
+        trial=world.trial,
+        step=world.step,
+        poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in listed],
+        carrying=[bool(c) for c in world.carrying],
+        deliveries=[int(d) for d in world.deliveries],
+    )
+    arena_poses = PoseArray(
+        header=Header(stamp=stamp, frame_id=visualisation.FRAME),
+        poses=[visualisation.pose_in_metres(*q) for q in listed],
+    )
+    markers = visualisation.robot_markers(
+        config,
+        stamp,
+        listed,
+        list(namespaces),
+        list(actions),
+        [bool(c) for c in world.carrying],
+        [int(d) for d in world.deliveries],
+    )
+    ground: list[GroundSensor] = []
+    readings_of: list[RangeAndBearingReadings] = []
+    for i, readings in enumerate(world.readings()):
+        header = Header(stamp=stamp, frame_id=namespaces[i])
+        ground.append(
+            GroundSensor(header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food)
+        )
+        messages = [
+            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
+            for s, r, b, n, f in zip(
+                readings.senders.tolist(),
+                readings.ranges.tolist(),
+                readings.bearings.tolist(),
+                readings.nest.tolist(),
+                readings.food.tolist(),
+                strict=True,
+            )
+        ]
+        readings_of.append(RangeAndBearingReadings(header=header, step=world.step, readings=messages))
+    return StepMessages(
+        state,
+        arena_poses,
+        [visualisation.pose_stamped(stamp, *q) for q in listed],
+        markers,
+        ground,
+        readings_of,
+    )
+
+
+def trial_start_message(
+    world: LockstepChain, stamp: Time, seed: int, trial: int, robots: int, config: Config
+) -> TrialStart:
+    """The latched message that opens trial ``trial`` of ``seed`` (published before its first step)."""
+    return TrialStart(
+        header=Header(stamp=stamp, frame_id="arena"),
+        seed=seed,
+        trial=trial,
+        arena_configuration=timeline.arena_of_trial(config.timeline, trial, len(config.gaps)),
+        robots=robots,
+        tree_keys=[int(k) for k in world.setup.tree_keys],
+        ticks=world.p.ticks,
+    )
 
 
 SHARED = field_names(EvaluatorSettings) | field_names(ControllerSettings)

@@ -28,7 +28,14 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
-from evolution_manager.recording.bags import BagError, check_bag, is_latched, read_bag, recover_bag
+from evolution_manager.recording.bags import (
+    BagError,
+    check_bag,
+    is_latched,
+    promised_messages,
+    read_bag,
+    recover_bag,
+)
 from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_ros.qos import NO_PUBLISHER_EVENTS, RECORDING, RECORDING_LATCHED
 
@@ -174,9 +181,18 @@ def recover_main(argv: Sequence[str] | None = None) -> int:
     try:
         if not args.damaged.exists():
             raise BagError(f"no bag at {args.damaged}")
+        promised = promised_messages(args.damaged) if args.damaged.is_dir() else None
         count = recover_bag(args.damaged, args.recovered)
     except BagError as error:
         print(f"recover: {error}", file=sys.stderr)
         return 2
-    print(f"recovered {count} messages into {args.recovered}")
+    if promised is None:
+        print(f"recovered {count} messages into {args.recovered} (no count in a metadata.yaml to compare)")
+    elif count < promised:
+        print(
+            f"recovered {count} of the {promised} messages its metadata.yaml counts into {args.recovered}: "
+            f"{promised - count} lost (a damaged or truncated MCAP file)"
+        )
+    else:
+        print(f"recovered {count} of the {promised} messages its metadata.yaml counts into {args.recovered}")
     return 0
