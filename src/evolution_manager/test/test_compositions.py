@@ -21,6 +21,7 @@ from evolution_manager.evolution.compositions import (
     CompositionParameters,
     CompositionRun,
     bin_of,
+    check_distinct_sources,
     evaluate_genomes,
     mutate,
     read_sources,
@@ -303,7 +304,12 @@ def test_homogeneous_beyond_the_cells_or_the_initial_population_is_refused(sourc
 def test_a_run_given_twice_to_swarm_from_is_refused(source, tmp_path, capsys):
     (tmp_path / "link").symlink_to(source)
     with pytest.raises(ConfigError, match="given twice"):
-        read_sources([source, tmp_path / "link"])
+        check_distinct_sources([source, tmp_path / "link"])
+    capsys.readouterr()
+    argv = ["--task", "foraging", "--algorithm", "ga", "--swarm-from", str(source), str(tmp_path / "link")]
+    assert evolve([*argv, "--out", str(tmp_path / "out"), "--no-progress"]) == 2
+    error = capsys.readouterr().err
+    assert "is given twice" in error and error.count("\n") == 1 and not (tmp_path / "out").exists()
 
 
 def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, capsys):

@@ -149,14 +149,9 @@ class Cell:
         )
 
 
-def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
-    """The cells of the repertoires in ``run_dirs``: directory by directory (as given), objective by objective
-    (``OBJECTIVES`` order: ``repertoire_<objective>.json``), bin by bin (index order), each bin's fittest
-    item (the first in the file among equals); and the primitive library their trees name (a run's copy,
-    ``library.json``: the runs that have one must share it), or None. ``ConfigError`` naming the directory or
-    file that has none or is damaged, or the runs whose libraries differ."""
-    cells: list[Cell] = []
-    libraries: dict[str, tuple[Path, Library]] = {}
+def check_distinct_sources(run_dirs: Sequence[Path]) -> None:
+    """Refuse a run directory given twice to ``--swarm-from`` (by its resolved path: a link to it counts), in
+    one line: every one of its cells would be in the run twice."""
     seen: dict[Path, Path] = {}
     for directory in map(Path, run_dirs):
         same = seen.setdefault(directory.resolve(), directory)
@@ -165,6 +160,17 @@ def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
                 f"--swarm-from: {directory} is given twice ({same} is the same run): every cell would be "
                 "duplicated; give each run once"
             )
+
+
+def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
+    """The cells of the repertoires in ``run_dirs``: directory by directory (as given), objective by objective
+    (``OBJECTIVES`` order: ``repertoire_<objective>.json``), bin by bin (index order), each bin's fittest
+    item (the first in the file among equals); and the primitive library their trees name (a run's copy,
+    ``library.json``: the runs that have one must share it), or None. ``ConfigError`` naming the directory or
+    file that has none or is damaged, or the runs whose libraries differ."""
+    cells: list[Cell] = []
+    libraries: dict[str, tuple[Path, Library]] = {}
+    for directory in map(Path, run_dirs):
         library = _run_library(directory)
         if library is not None:
             libraries.setdefault(library.digest, (directory, library))

@@ -379,6 +379,7 @@ def _evolve_compositions(
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
+            comp.check_distinct_sources(args.swarm_from)
             cells, library = comp.read_sources(args.swarm_from)
             parameters = comp.CompositionParameters(homogeneous=args.homogeneous or 0)
             _check_homogeneous(args.algorithm, parameters, len(cells))
