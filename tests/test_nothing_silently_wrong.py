@@ -258,6 +258,43 @@ def test_the_run_bag_holds_every_evaluation_once_in_order_cached_ones_marked(tmp
 @pytest.mark.parametrize(
     ("parameters", "says"),
     [
+        (
+            '/**:\n  ros__parameters:\n    wheel_speed: "fast"\n',
+            "parameter wheel_speed: 'fast': expected a floating",
+        ),
+        ("/**:\n  ros__parameters:\n    wheel_speed: 50\n", "(write 80.0, not 80)"),
+        (
+            "/**:\n  ros__parameters:\n    gain_low: 50.0\n",
+            "gain_low: 50.0: expected a number in [0.0, 10.0]",
+        ),
+        ("/**:\n  ros__parameters:\n    arena_half: -5.0\n", "arena_half must be positive"),
+        ("/**:\n  ros__parameters:\n    wheel_sped: 50.0\n", "did you mean wheel_speed?"),
+        ("/simulator:\n  ros__parameters:\n    answer_timeout: 0.0\n", "answer_timeout: 0.0: expected"),
+    ],
+)
+def test_trial_refuses_a_mistyped_parameter_before_the_graph_starts(tmp_path, workspace, parameters, says):
+    """Issue 41, item 18: a mistyped value in --params-file was refused only once the graph was up (32 s
+    cold); the trial command now checks the simulator's values first: one line, status 2, no node started
+    (no node logs), no bag."""
+    params = tmp_path / "params.yaml"
+    params.write_text(parameters)
+    where = ["--bag", str(tmp_path / "t.bag"), "--domain", str(workspace.domain)]
+    done = subprocess.run(
+        [exe("trial"), "--tree", "forward", "--seed", "1", *where, "--params-file", str(params)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    line = one_line_error(done.stderr)
+    assert says in line and str(params) in line, line
+    assert "graph in ROS domain" not in done.stderr
+    assert not (tmp_path / "t.bag.logs").exists() and not (tmp_path / "t.bag").exists()
+
+
+@pytest.mark.parametrize(
+    ("parameters", "says"),
+    [
         ('/**:\n  ros__parameters:\n    wheel_speed: "fast"\n', "wheel_speed"),
         ("/**:\n  ros__parameters:\n    n_robots: -3\n", "n_robots -3"),
         ("/**:\n  ros__parameters:\n    wheel_sped: 50.0\n", "wheel_sped"),

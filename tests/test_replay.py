@@ -1,11 +1,11 @@
 """Replay: a trial bag is republished in order for ROS tools; --verify accepts a faithful recording and names
 the first step where a tampered one differs."""
 
-import json
+import re
+import shutil
 import subprocess
 import time
 
-import numpy as np
 import pytest
 import rclpy
 from rclpy.node import Node
@@ -27,54 +27,37 @@ STEP_NS = 125_000_000
 
 
 def write_trial_bag(path, tamper_step=None, tamper_carrying=None):
-    """The bag `trial --bag` would write for (TREE, SEED, TRIAL), from the in-process twin of the graph:
-    /trial_start, one /swarm_state per step (poses, carrying flags, deliveries), /trial_result; optionally
-    with one pose moved by 1 mm, or one robot's carrying flag flipped."""
-    states = []
+    """The /trial_start, /swarm_state and /trial_result messages `trial --bag` would record for (TREE, SEED,
+    TRIAL), built by the simulator's own code from the in-process twin of the graph; optionally with one
+    pose moved by 1 mm, or one robot's carrying flag flipped."""
+    from builtin_interfaces.msg import Time
+    from rclpy.serialization import serialize_message
+
+    from swarm_ros.names import robot_namespaces
+    from swarm_sim.nodes.simulator import step_messages, trial_start_message
+
+    names = robot_namespaces(DEFAULT.n_robots)
+    written = []
 
     def keep(world):
-        cargo = ([bool(c) for c in world.carrying], [int(d) for d in world.deliveries])
-        states.append((world.step, world.poses().tolist(), cargo))
+        at = sum(1 for w in written if w[0] == "/swarm_state") * STEP_NS
+        stamp = Time(sec=at // 1_000_000_000, nanosec=at % 1_000_000_000)
+        if not written:
+            start = trial_start_message(world, stamp, SEED, TRIAL, DEFAULT.n_robots, DEFAULT)
+            written.append(("/trial_start", "swarm_msgs/msg/TrialStart", 0, serialize_message(start)))
+        state = step_messages(world, stamp, SEED, names, ["stop"] * DEFAULT.n_robots, DEFAULT).state
+        if world.step == tamper_step:
+            state.poses[4].x += 1.0
+        if world.step == tamper_carrying:
+            state.carrying[4] = not state.carrying[4]
+        written.append(("/swarm_state", "swarm_msgs/msg/SwarmState", at, serialize_message(state)))
 
     record = run_with_controllers(parse(TREE), SEED, TRIAL, on_step=keep)
     with BagRecorder(path) as bag:
-        types = bag.typestore.types
-
-        def header(step):
-            stamp = types["builtin_interfaces/msg/Time"](sec=step // 8, nanosec=(step % 8) * STEP_NS)
-            return types["std_msgs/msg/Header"](stamp=stamp, frame_id="arena")
-
-        start = bag.message(
-            "swarm_msgs/msg/TrialStart",
-            header=header(0),
-            seed=SEED,
-            trial=TRIAL,
-            arena_configuration=TRIAL % 2,
-            robots=9,
-            tree_keys=np.zeros(9, dtype=np.uint64),
-            ticks=DEFAULT.ticks,
-            world=json.dumps(DEFAULT.as_dict()),
-        )
-        bag.write("/trial_start", start, 0)
-        for step, poses, (carrying, deliveries) in states:
-            if step == tamper_step:
-                poses[4][0] += 1.0
-            if step == tamper_carrying:
-                carrying[4] = not carrying[4]
-            robots = [bag.message("swarm_msgs/msg/RobotPose", x=x, y=y, theta=t) for x, y, t in poses]
-            state = bag.message(
-                "swarm_msgs/msg/SwarmState",
-                header=header(step),
-                seed=SEED,
-                trial=TRIAL,
-                step=step,
-                poses=robots,
-                carrying=np.array(carrying, dtype=bool),
-                deliveries=np.array(deliveries, dtype=np.uint32),
-            )
-            bag.write("/swarm_state", state, step * STEP_NS)
-        write_result(bag, TREE, SEED, record, len(states) * STEP_NS)
-    return len(states)
+        for topic, msgtype, at, data in written:
+            bag.write_cdr(topic, msgtype, at, data)
+        write_result(bag, TREE, SEED, record, (len(written) - 1) * STEP_NS)
+    return len(written) - 1
 
 
 def test_verify_accepts_a_faithful_recording(tmp_path):
@@ -151,3 +134,115 @@ def test_replay_of_a_missing_bag_is_a_clear_error(tmp_path, extra):
 
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+@pytest.mark.parametrize("named", ["planted/msg/Payload", "os/msg/system", "swarm_msgs/msg/../../planted"])
+def test_replay_loads_message_types_of_the_allowed_packages_only(tmp_path, named):
+    """Issue 41, item 9: replay imported whatever module a bag's metadata named as a message type. A bag
+    naming a type outside the allowed packages (here a module planted on the path, which would leave a mark
+    if imported) is refused in one line, status 2, before anything is imported or published."""
+    import os
+
+    planted = tmp_path / "lib" / "planted" / "msg"
+    planted.mkdir(parents=True)
+    (planted.parent / "__init__.py").write_text("")
+    mark = tmp_path / "imported"
+    (planted / "__init__.py").write_text(f"open({str(mark)!r}, 'w').close()\nPayload = object\n")
+    bag = tmp_path / "bag"
+    with BagRecorder(bag) as recorder:
+        recorder.write("/chatter", recorder.message("std_msgs/msg/String", data="hi"), 1000)
+    metadata = bag / "metadata.yaml"
+    metadata.write_text(metadata.read_text().replace("type: std_msgs/msg/String", f"type: {named}"))
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path / 'lib'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    replay = str(executable("evolution_manager", "replay"))
+    done = subprocess.run(
+        [replay, str(bag), "--rate", "0", "--delay", "0"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"topic /chatter has message type '{named}', which replay does not load" in done.stderr
+    assert not mark.exists(), "the planted module was imported"
+
+
+def _copy_with(source, target, change):
+    """A copy of the bag ``source`` at ``target``, each message's CDR bytes passed through
+    ``change(topic, index_on_topic, data)``."""
+    from evolution_manager.recording.bags import read_bag
+
+    seen: dict[str, int] = {}
+    with BagRecorder(target) as bag:
+        for m in read_bag(source):
+            k = seen[m.topic] = seen.get(m.topic, 0) + 1
+            bag.write_cdr(m.topic, m.msgtype, m.timestamp_ns, change(m.topic, k, m.data))
+
+
+def test_verify_compares_every_topic_of_a_real_recording_checks_its_crcs_and_recover_counts(tmp_path):
+    """Issue 41, item 11: --verify compared only /swarm_state and /trial_result, so altered wheels or poses
+    "reproduced", and a flipped bit went unnoticed (no CRCs). Now every topic the re-run produces is
+    compared and named, the MCAP CRCs are written and checked, and recover says how many messages of the
+    metadata's count it got back."""
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    from swarm_msgs.msg import WheelCommand
+
+    bag = tmp_path / "trial.bag"
+    with reserved_domain() as domain:
+        done = subprocess.run(
+            [str(executable("evolution_manager", "trial")), "--tree", TREE, "--seed", str(SEED),
+             "--trial", "0", "--bag", str(bag), "--domain", str(domain)],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    replay = str(executable("evolution_manager", "replay"))
+
+    def verify(path):
+        return subprocess.run([replay, str(path), "--verify"], capture_output=True, text=True, timeout=300)
+
+    faithful = verify(bag)
+    assert faithful.returncode == 0, faithful.stdout + faithful.stderr
+    assert (
+        faithful.stdout.startswith("reproduced: ")
+        and "52 topics compared (/clock, /footbot_0/ground" in faithful.stdout
+    )
+    for topic in ("/footbot_8/wheels", "/footbot_8/tree_status", "/poses", "/robot_markers", "/markers"):
+        assert topic in faithful.stdout
+    assert "MCAP CRCs checked" in faithful.stdout and "no MCAP CRCs" not in faithful.stdout
+
+    def faster(topic, k, data):  # one wheel command of robot 3 a nanometre per second faster
+        if topic != "/footbot_3/wheels" or k != 10:
+            return data
+        message = deserialize_message(data, WheelCommand)
+        message.left += 1e-9
+        return serialize_message(message)
+
+    _copy_with(bag, tmp_path / "wheels.bag", faster)
+    altered = verify(tmp_path / "wheels.bag")
+    assert altered.returncode == 1 and altered.stdout.startswith("NOT reproduced: "), altered.stdout
+    assert "/footbot_3/wheels differs from the re-run at its message 10 of 160" in altered.stdout
+
+    flipped = tmp_path / "flipped.bag"
+    shutil.copytree(bag, flipped)
+    mcap = next(flipped.glob("*.mcap"))
+    data = bytearray(mcap.read_bytes())
+    data[len(data) * 3 // 5] ^= 0x10  # one bit inside the messages, past the first chunk
+    mcap.write_bytes(data)
+    damaged = verify(flipped)
+    assert damaged.returncode == 2 and "Traceback" not in damaged.stderr, damaged.stderr
+    assert damaged.stderr.count("\n") == 1 and f"{mcap} is damaged" in damaged.stderr
+
+    recover = str(executable("evolution_manager", "recover"))
+    out = subprocess.run(
+        [recover, str(flipped), str(tmp_path / "recovered.bag")], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    assert re.fullmatch(
+        rf"recovered \d+ of the \d+ messages its metadata.yaml counts into {tmp_path / 'recovered.bag'}: \d+ "
+        r"lost \(a damaged or truncated MCAP file\)\n",
+        out.stdout,
+    ), out.stdout

@@ -61,11 +61,18 @@ def _attribute(value: str) -> str:
     return f'"{value}"'
 
 
+XML_INDENT_LEVELS = 64
+"""Levels of the XML document indented two spaces each; deeper elements are indented as this level is, so
+that the document grows with the tree's size, not with its size times its depth (whitespace between
+elements means nothing to BehaviorTree.CPP, Groot2 or ``from_xml``)."""
+
+
 def to_xml(tree: Node, tree_id: str = "MainTree") -> str:
     """The tree as a BehaviorTree.CPP v4 XML document, with a TreeNodesModel for Groot2.
 
     Written line by line (two spaces per level, ``<leaf />``), byte for byte what ElementTree's ``indent`` and
-    ``tostring`` wrote before, without their recursion."""
+    ``tostring`` wrote before, without their recursion, for trees of up to ``XML_INDENT_LEVELS`` levels;
+    deeper elements keep that level's indentation (linear size at any depth)."""
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<root BTCPP_format="4" main_tree_to_execute={_attribute(tree_id)}>',
@@ -75,7 +82,7 @@ def to_xml(tree: Node, tree_id: str = "MainTree") -> str:
     stack: list[tuple[Node | str, int]] = [(tree, 2)]  # a node, or a closing tag, with its level
     while stack:
         item, level = stack.pop()
-        pad = "  " * level
+        pad = "  " * min(level, XML_INDENT_LEVELS)
         if isinstance(item, str):
             lines.append(f"{pad}</{item}>")
         elif isinstance(item, Composite):

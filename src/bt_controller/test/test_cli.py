@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bt_controller.cli import main
-from bt_controller.formats import from_xml
+from bt_controller.formats import XML_INDENT_LEVELS, from_xml
 from bt_controller.tree import parse
 
 TREE = "sel3(seq(in_nest,stop), forward, reverse)"
@@ -118,6 +118,13 @@ def test_deep_trees(tmp_path, capsys):
     assert main(["show", str(path), "-f", "xml", *limits]) == 0
     xml = capsys.readouterr().out
     assert xml.count("<Sequence>") == 5_000 and xml.count("<Fallback>") == 5_000
+    # Issue 41, item 18: the document grows with the tree's size, not size x depth (two spaces a level made
+    # 300 MB of 10,000 levels); indentation stops at XML_INDENT_LEVELS, and the document reads back.
+    indents = [len(line) - len(line.lstrip(" ")) for line in xml.splitlines()]
+    assert max(indents) == 2 * XML_INDENT_LEVELS and len(xml) < 10_000_000
+    assert from_xml(xml, max_depth=100_000, max_nodes=100_000) == parse(
+        path.read_text(), max_depth=100_000, max_nodes=100_000
+    )
     assert main(["simplify", str(path), *limits]) == 2
     assert (
         capsys.readouterr().err == f"bt: error: {path}: tree has 20001 nodes; simplify takes at most 2000\n"

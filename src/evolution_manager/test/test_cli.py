@@ -52,6 +52,10 @@ def files(root: Path) -> dict[str, bytes]:
             "positive integer",
         ),
         (["--algorithm", "gp", "--objective", "food", "--seed", "-3", "--out", "X"], "seed must be"),
+        (
+            ["--algorithm", "gp", "--objective", "food", "--scenario-seed", "-1", "--out", "X"],
+            "--scenario-seed must be in [0, ",
+        ),
         (["--algorithm", "gp", "--objective", "food", "--workers", "999", "--out", "X"], "threads must be"),
         (["--out", "X", "--resume"], "no run to continue"),
         (["--algorithm", "qd", "--objective", "food"], "--out"),

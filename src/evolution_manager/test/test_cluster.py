@@ -170,7 +170,8 @@ def test_the_job_script_starts_one_worker_process_per_core_inside_the_container(
         container="apptainer exec --bind /scratch swarm.sif",
     )
     options = slurm_cluster_options(settings)
-    with SLURMCluster(**options, scheduler_options={"dashboard_address": None}) as slurm:
+    options["scheduler_options"]["dashboard_address"] = None
+    with SLURMCluster(**options) as slurm:
         script = slurm.job_script()
     for line in ("#SBATCH -p compute", "#SBATCH -A proj", "#SBATCH -t 02:00:00", "#SBATCH --cpus-per-task=2"):
         assert line in script

@@ -14,11 +14,14 @@ import time
 
 import pytest
 
+from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.compositions import (
     Cell,
     CompositionConfig,
+    CompositionParameters,
     CompositionRun,
     bin_of,
+    check_distinct_sources,
     evaluate_genomes,
     mutate,
     read_sources,
@@ -258,6 +261,11 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
          "not on --objective food"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
          "fixed scenarios"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "SOURCE"], "is given twice"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--homogeneous", "100000"],
+         "--homogeneous 100000: the runs hold"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenario-seed", "-1"],
+         "--scenario-seed must be in [0, "),
     ],
 )  # fmt: skip
 def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, extra, words):
@@ -276,6 +284,32 @@ def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, 
     error = capsys.readouterr().err
     assert words in error and error.count("\n") == 1 and "Traceback" not in error
     assert not (tmp_path / "out").exists()
+
+
+def test_homogeneous_beyond_the_cells_or_the_initial_population_is_refused(source, tmp_path, capsys):
+    """--homogeneous K with K above the cells, or above the GA's population or MAP-Elites' first batch, was
+    cut silently; now refused in one line naming the bound, before anything is written."""
+    cells = len(read_sources([source])[0])
+    parameters = CompositionParameters()
+    for algorithm, initial in (("ga", parameters.population), ("qd", parameters.init_batch)):
+        bound = min(cells, initial)
+        capsys.readouterr()
+        assert _compose(source, tmp_path / "out", algorithm, "--homogeneous", str(bound + 1)) == 2
+        error = capsys.readouterr().err
+        assert f"--homogeneous {bound + 1}:" in error and f"at most {bound}" in error
+        assert error.count("\n") == 1 and "Traceback" not in error
+        assert not (tmp_path / "out").exists()
+
+
+def test_a_run_given_twice_to_swarm_from_is_refused(source, tmp_path, capsys):
+    (tmp_path / "link").symlink_to(source)
+    with pytest.raises(ConfigError, match="given twice"):
+        check_distinct_sources([source, tmp_path / "link"])
+    capsys.readouterr()
+    argv = ["--task", "foraging", "--algorithm", "ga", "--swarm-from", str(source), str(tmp_path / "link")]
+    assert evolve([*argv, "--out", str(tmp_path / "out"), "--no-progress"]) == 2
+    error = capsys.readouterr().err
+    assert "is given twice" in error and error.count("\n") == 1 and not (tmp_path / "out").exists()
 
 
 def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, capsys):

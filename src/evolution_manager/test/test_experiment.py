@@ -14,7 +14,14 @@ from pathlib import Path
 import pytest
 
 from evolution_manager.cluster.settings import ClusterSettings
-from evolution_manager.studies.experiment import experiment, plan, record_session, shared_scenario_seed
+from evolution_manager.studies.experiment import (
+    _paper_study,
+    build_parser,
+    experiment,
+    plan,
+    record_session,
+    shared_scenario_seed,
+)
 from evolution_manager.studies.report import report
 from evolution_manager.studies.significance import compare, holm
 
@@ -68,7 +75,7 @@ def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsy
     assert {c["scenario_seed"] for c in configs} == {document["scenario_seed"]}
     assert "every run on one shared scenario" in (out / "report.md").read_text()
     assert experiment([*args, "--design", "per-run"]) == 2  # another design is another experiment
-    assert "other options" in capsys.readouterr().err
+    assert 'other options (design "shared" there, "per-run" given' in capsys.readouterr().err
     committed = Path(__file__).resolve().parents[3] / "docs/results/paper/per-run-design/runs.csv"
     beside = out / "per-run" / "runs.csv"
     beside.parent.mkdir()
@@ -110,6 +117,52 @@ def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tm
     assert experiment(["--runs", "3", "--evaluations", "150", "--out", str(out), "--no-progress"]) == 2
     assert "other options" in capsys.readouterr().err
     assert (out / "report.md").read_text() == before
+
+
+def test_other_options_are_named_in_the_refusal(tmp_path, capsys):
+    """An experiment folder continued with other options: the one line says which options differ."""
+    out = tmp_path / "experiment"
+    out.mkdir()
+    saved = ["--runs", "2", "--evaluations", "150", "--out", str(out)]
+    document = _paper_study(build_parser().parse_args(saved), "fixed", "shared")[0]
+    (out / "experiment.json").write_text(json.dumps(document))
+    before = (out / "experiment.json").read_bytes()
+    assert experiment(["--runs", "3", "--evaluations", "300", "--out", str(out), "--no-progress"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1, error
+    assert (
+        "holds an experiment with other options (runs 2 there, 3 given; evaluations 150 there, 300 given"
+        in error
+    )
+    assert (out / "experiment.json").read_bytes() == before and [p.name for p in out.iterdir()] == [
+        "experiment.json"
+    ]
+
+
+def test_a_second_experiment_on_a_folder_in_use_is_refused_up_front(tmp_path):
+    """Two experiment commands on one folder collided (both exit 1, the second breaking the first); the
+    second is now refused in one line, status 2, as evolve refuses a run directory in use, and the first
+    goes on."""
+    out = tmp_path / "experiment"
+    args = ["--runs", "1", "--evaluations", "5000", "--processes", "1", "--no-progress", "--out", str(out)]
+    code = "import sys; from evolution_manager.studies.experiment import experiment; "
+    code += f"sys.exit(experiment({args!r}))"
+    first = subprocess.Popen([sys.executable, "-c", code], start_new_session=True, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / "experiment.json").exists():
+            assert first.poll() is None and time.monotonic() < deadline, "the first experiment did not start"
+            time.sleep(0.1)
+        plan_before = (out / "experiment.json").read_bytes()
+        second = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+        assert second.returncode == 2, second.stderr
+        assert second.stderr.startswith("experiment: error: the experiment folder ")
+        assert f"is in use by process {first.pid}" in second.stderr and second.stderr.count("\n") == 1
+        assert first.poll() is None, "the second command stopped the first"
+        assert (out / "experiment.json").read_bytes() == plan_before
+    finally:
+        os.killpg(first.pid, signal.SIGKILL)
+        first.wait()
 
 
 def test_tests_follow_the_papers_rule_and_holm_corrects():

@@ -38,15 +38,18 @@ def make_run(
     profile: str = "paper",
     algorithm: str = "qd",
     heldout: dict[str, list[tuple[tuple[int, int, int], str, float]]] | None = None,
+    task: str = "primitives",
 ) -> Path:
     """A run directory holding config.json, a repertoire file per objective and optionally heldout.json."""
     path = root / name
     path.mkdir()
     objectives = tuple(repertoires)
     if algorithm == "gp-fnd":
-        config = RunConfig.make("gp-fnd", None, 100, seed, profile=profile, fnd_objectives=objectives)
+        config = RunConfig.make(
+            "gp-fnd", None, 100, seed, profile=profile, fnd_objectives=objectives, task=task
+        )
     else:
-        config = RunConfig.make(algorithm, objectives[0], 100, seed, profile=profile)
+        config = RunConfig.make(algorithm, objectives[0], 100, seed, profile=profile, task=task)
     (path / "config.json").write_text(json.dumps(config.to_json()))
     for objective, items in repertoires.items():
         document = {
@@ -177,6 +180,8 @@ def test_draw_keys_are_dropped_so_each_copy_draws_on_its_own():
         ("not-a-run", "is not a run directory (no config.json)"),
         ("foraging", "no primitive objective"),
         ("twice", "names"),
+        ("tasks", "the runs mix tasks, foraging and primitives"),
+        ("empty", "hold no tree (every block is empty), so the library would have 0 primitives"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, message):
@@ -199,6 +204,10 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, message):
         runs.append(make_run(tmp_path, "forager", 2, {"foraging": [((0, 0, 0), SHORT, 0.5)]}))
     elif case == "twice":
         runs.append(good)
+    elif case == "tasks":  # 100 s trials beside 20 s ones: raw fitness not comparable
+        runs.append(make_run(tmp_path, "long", 2, {"food": [((0, 0, 0), SHORT, 0.5)]}, task="foraging"))
+    elif case == "empty":
+        runs = [make_run(tmp_path, "empty", 2, {"food": []})]
     before = out.read_text() if out.exists() else None
     assert library_command(["--from", *map(str, runs), "--blocks", blocks, "--out", str(out)]) == 2
     error = capsys.readouterr().err

@@ -314,6 +314,41 @@ def check_overrides(node: Node, files: Sequence[Path], shared: Collection[str] |
             raise ParameterError(unknown(node, name) + " (given with -p)")
 
 
+def check_file_values(
+    path: Path,
+    fully_qualified_name: str,
+    declared: Mapping[str, tuple[Any, tuple[float, float] | None]],
+    shared: Collection[str] = frozenset(),
+) -> dict[str, object]:
+    """Check, without starting a node, what the parameter file ``path`` gives the node
+    ``fully_qualified_name`` that declares ``declared`` (name -> default and closed range, as
+    :func:`declare_dataclass` declares them): ``ParameterError`` for a value of the wrong type or out of
+    range, or for a name the node does not declare (in a ``/**`` section, one of ``shared`` is left to the
+    graph's other nodes); the values the file gives the node's declared parameters, by name."""
+    given: dict[str, object] = {}
+    for section in read_parameter_file(path):
+        if not section.names(fully_qualified_name):
+            continue
+        for name, value in section.parameters.items():
+            if name in declared:
+                default, value_range = declared[name]
+                default = list(default) if isinstance(default, tuple) else default
+                integer = isinstance(default, int) and not isinstance(default, bool)
+                expected = descriptor(name, read_only=True, value_range=value_range, integer=integer)
+                expected.type = Parameter.Type.from_parameter_value(default).value
+                problem = value_problem(value, expected)
+                if problem:
+                    raise ParameterError(f"{path}: parameter {name}: {_shown(value)}: {problem}")
+                given[name] = value
+            elif not (section.wildcard and name in shared):
+                near = difflib.get_close_matches(name, sorted(declared), n=1)
+                hint = f"did you mean {near[0]}?" if near else f"it takes {', '.join(sorted(declared))}"
+                raise ParameterError(
+                    f"{path}: unknown parameter {name} for node {fully_qualified_name}: {hint}"
+                )
+    return given
+
+
 def unknown(node: Node, name: str) -> str:
     """The line for a parameter ``name`` that ``node`` does not declare, with the nearest names it does."""
     declared = sorted(node._parameters)  # rclpy keeps no public list of the declared names

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_controller import timeline
-from bt_controller.controller import FootbotController
+from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.motors import movement_of, rotation_of
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
@@ -224,13 +224,15 @@ def run_chain_with_controllers(
     config: Config = DEFAULT,
     on_step: Callable[[LockstepChain], None] | None = None,
     on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
+    on_outcomes: Callable[[LockstepChain, Sequence[StepOutcome]], None] | None = None,
 ) -> list[TrialRecord]:
     """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
     lockstep world and one ``FootbotController`` per robot, exchanging readings and answers. ``tree``: every
     robot's tree, or one per robot (``robot_trees``).
     ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
     simulator node would publish); ``on_answers(chain, answers)`` with the robots' answers to the step,
-    before the world takes them."""
+    before the world takes them; ``on_outcomes(chain, outcomes)`` with the controllers' own answers (what
+    their nodes publish)."""
     sim = LockstepChain(seed, chain, trials, config)
     controllers = []
     for key, own in zip(sim.setup.tree_keys, robot_trees(tree, sim.p.n_robots), strict=True):
@@ -242,8 +244,10 @@ def run_chain_with_controllers(
         if on_step is not None:
             on_step(sim)
         answers = []
+        outcomes = []
         for controller, readings in zip(controllers, sim.readings(), strict=True):
             outcome = controller.on_step(sim.step, readings)
+            outcomes.append(outcome)
             tick = outcome.tick
             answers.append(
                 RobotAnswer(
@@ -258,6 +262,8 @@ def run_chain_with_controllers(
             )
         if on_answers is not None:
             on_answers(sim, answers)
+        if on_outcomes is not None:
+            on_outcomes(sim, outcomes)
         sim.advance(answers)
     return sim.records
 
@@ -269,11 +275,14 @@ def run_with_controllers(
     config: Config = DEFAULT,
     on_step: Callable[[LockstepChain], None] | None = None,
     on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
+    on_outcomes: Callable[[LockstepChain, Sequence[StepOutcome]], None] | None = None,
 ) -> TrialRecord:
     """Trial ``trial`` of ``seed`` as the node graph runs it: its chain is run from its first trial up to
     ``trial`` (the earlier trials set the state ``trial`` starts from); the record of ``trial``."""
     chain, position = timeline.chain_of_trial(config.timeline, trial)
-    return run_chain_with_controllers(tree, seed, chain, position + 1, config, on_step, on_answers)[-1]
+    return run_chain_with_controllers(
+        tree, seed, chain, position + 1, config, on_step, on_answers, on_outcomes
+    )[-1]
 
 
 def warm_up(config: Config = DEFAULT) -> None:

@@ -44,8 +44,9 @@ from dataclasses import dataclass
 import numpy as np
 from geometry_msgs.msg import Twist, Vector3
 from rclpy.node import Node as RosNode
+from std_msgs.msg import Header
 
-from bt_controller.controller import FootbotController
+from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.perception import PerceptionParams, Readings, warm_up
@@ -210,44 +211,54 @@ class FootbotControllerNode(RosNode):
                 food=np.array([m.food_estimate for m in rab], dtype=np.float64),
             )
             outcome = controller.on_step(ground.step, readings)
-            if outcome.tick is not None:
-                self._status.publish(
-                    TreeStatus(
-                        header=ground.header,
-                        robot=self.robot,
-                        step=outcome.step,
-                        tick=outcome.tick.tick,
-                        status=outcome.tick.status,
-                        action=outcome.tick.started,
-                        condition_ticks=outcome.tick.condition_ticks,
-                    )
-                )
-            nest, food, density = outcome.smoothed
-            left, right = float(outcome.wheels[0]), float(outcome.wheels[1])
-            action = int(outcome.action)
-            left, right = left * self.wheel_speed, right * self.wheel_speed
+            status, wheels = answer_messages(outcome, ground.header, self.robot, self.wheel_speed)
+            if status is not None:
+                self._status.publish(status)
             if self._cmd_vel is not None:
-                self._cmd_vel.publish(twist(left, right, self.wheel_separation))
+                self._cmd_vel.publish(twist(wheels.left, wheels.right, self.wheel_separation))
             if self._wheels is None:
                 continue
-            self._wheels.publish(
-                WheelCommand(
-                    header=ground.header,
-                    robot=self.robot,
-                    step=outcome.step,
-                    action=action,
-                    action_name=ACTIONS[action],
-                    left=left,
-                    right=right,
-                    nest_estimate=outcome.broadcast[0],
-                    food_estimate=outcome.broadcast[1],
-                    smoothed_nest=nest,
-                    smoothed_food=food,
-                    smoothed_density=density,
-                    carrying=outcome.carrying,
-                    deliveries=outcome.deliveries,
-                )
-            )
+            self._wheels.publish(wheels)
+
+
+def answer_messages(
+    outcome: StepOutcome, header: Header, robot: int, wheel_speed: float
+) -> tuple[TreeStatus | None, WheelCommand]:
+    """What a controller publishes of its answer to a step (``header``: the step's ground reading's): the
+    tree's status when it ticked, and the wheel command (``wheel_speed`` in m/s). The node publishes these;
+    ``replay --verify`` compares a recording with those of a re-run."""
+    status = None
+    if outcome.tick is not None:
+        status = TreeStatus(
+            header=header,
+            robot=robot,
+            step=outcome.step,
+            tick=outcome.tick.tick,
+            status=outcome.tick.status,
+            action=outcome.tick.started,
+            condition_ticks=outcome.tick.condition_ticks,
+        )
+    nest, food, density = outcome.smoothed
+    left, right = float(outcome.wheels[0]), float(outcome.wheels[1])
+    action = int(outcome.action)
+    left, right = left * wheel_speed, right * wheel_speed
+    wheels = WheelCommand(
+        header=header,
+        robot=robot,
+        step=outcome.step,
+        action=action,
+        action_name=ACTIONS[action],
+        left=left,
+        right=right,
+        nest_estimate=outcome.broadcast[0],
+        food_estimate=outcome.broadcast[1],
+        smoothed_nest=nest,
+        smoothed_food=food,
+        smoothed_density=density,
+        carrying=outcome.carrying,
+        deliveries=outcome.deliveries,
+    )
+    return status, wheels
 
 
 class InitialTreeError(ValueError):

@@ -24,10 +24,11 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 from urllib.parse import urlsplit
 
-from evolution_manager.cluster.settings import ClusterError, ClusterSettings, SlurmSettings
+from evolution_manager.cluster.settings import LOOPBACK, ClusterError, ClusterSettings, SlurmSettings
 
 if TYPE_CHECKING:
     from distributed import Client
+    from distributed.security import Security
 
 CONNECT_TIMEOUT = 10.0
 """Seconds to wait for a scheduler to answer (``dask://``)."""
@@ -92,8 +93,13 @@ def check_slurm() -> None:
 
 def slurm_cluster_options(settings: SlurmSettings, python: str = sys.executable) -> dict[str, Any]:
     """The arguments of dask-jobqueue's ``SLURMCluster`` for ``settings``: one Dask worker process of one
-    thread per core (the kernels run on one thread each), the container command before the worker's Python."""
-    return {
+    thread per core (the kernels run on one thread each), the container command before the worker's Python.
+
+    The scheduler (in this process) and the workers listen on the interface the settings name, else on
+    loopback only (workers on this machine); its dashboard where ``dashboard`` says (loopback by default);
+    with ``tls_*`` files, every connection is TLS with those certificates (``distributed.security``)."""
+    scheduler: dict[str, Any] = {"dashboard_address": settings.dashboard}
+    options: dict[str, Any] = {
         "cores": settings.cores,
         "processes": settings.cores,
         "memory": settings.memory,
@@ -105,7 +111,119 @@ def slurm_cluster_options(settings: SlurmSettings, python: str = sys.executable)
         "log_directory": settings.log_directory,
         "job_name": JOB_NAME,
         "death_timeout": 120,
+        "scheduler_options": scheduler,
     }
+    if settings.interface is None:  # nothing named: nobody beyond this machine may connect
+        scheduler["host"] = LOOPBACK
+        options["worker_extra_args"] = ["--host", LOOPBACK]
+    if settings.tls:
+        options["security"] = cluster_security(settings)
+    return options
+
+
+def cluster_security(settings: SlurmSettings) -> Security:
+    """TLS for the client, the scheduler and the workers, each presenting the settings' certificate, every
+    connection encrypted and checked against their CA."""
+    from distributed.security import Security
+
+    return Security(
+        tls_ca_file=settings.tls_ca_file,
+        tls_client_cert=settings.tls_cert,
+        tls_client_key=settings.tls_key,
+        tls_scheduler_cert=settings.tls_cert,
+        tls_scheduler_key=settings.tls_key,
+        tls_worker_cert=settings.tls_cert,
+        tls_worker_key=settings.tls_key,
+        require_encryption=True,
+    )
+
+
+def check_sbatch(cluster: Any, timeout: float = 60.0) -> None:
+    """Raise :class:`ClusterError` unless ``sbatch`` would accept the cluster's worker job: the job script is
+    given to ``sbatch --test-only``, which asks SLURM's controller and submits nothing. A controller that
+    does not answer, a partition or account that does not exist, or a broken ``sbatch`` is one line here,
+    before anything is written, rather than a retry with a traceback every few seconds for ever."""
+    try:
+        done = subprocess.run(
+            ["sbatch", "--test-only"],
+            input=cluster.job_script(),
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
+    except subprocess.TimeoutExpired:
+        raise ClusterError(
+            f"--cluster slurm: sbatch did not answer in {timeout:g} s: is SLURM's controller reachable?"
+        ) from None
+    except OSError as error:
+        raise ClusterError(f"--cluster slurm: sbatch cannot be run ({error.strerror or error})") from None
+    if done.returncode != 0:
+        lines = [line.strip() for line in (done.stderr or done.stdout).splitlines() if line.strip()]
+        said = lines[-1] if lines else f"exit status {done.returncode}"
+        raise ClusterError(f"--cluster slurm: sbatch refuses the worker jobs: {said}")
+
+
+def wait_for_workers(
+    client: Client, settings: ClusterSettings, address: str, say: Callable[[str], None] | None
+) -> None:
+    """Wait up to ``settings.worker_wait`` seconds for the first worker to join the scheduler at ``address``,
+    having said so; raise :class:`ClusterError` in one line when none came."""
+    if client.scheduler_info().get("workers"):
+        return
+    wait = settings.worker_wait
+    where = "SLURM's jobs to start their workers" if settings.kind == "slurm" else "a worker to join"
+    if say is not None:
+        say(f"cluster: waiting up to {wait:g} s for {where} (scheduler {address}; --worker-wait SECONDS)")
+    try:
+        client.wait_for_workers(1, timeout=wait)
+    except TimeoutError:
+        if settings.kind == "slurm":
+            hint = (
+                "their jobs may wait in SLURM's queue (squeue --me), or cannot reach the scheduler (name "
+                "the network interface the nodes share: interface in --cluster-config)"
+            )
+        else:
+            hint = f"start workers (dask worker {address}) or give a longer --worker-wait"
+        raise ClusterError(
+            f"--cluster {settings.describe_option()}: no worker joined the scheduler at {address} in "
+            f"{wait:g} s; {hint}"
+        ) from None
+
+
+def _quiet(loop: Any, context: dict[str, Any]) -> None:
+    """The exception handler of the client's event loop: Dask's own tasks that end with the client (its
+    gathers, its reconnection) when a command is interrupted or loses its scheduler are dropped; the command
+    has said why in one line. Anything else goes to asyncio's default handler."""
+    from distributed.client import AllExit
+    from distributed.comm import CommClosedError
+
+    error = context.get("exception")
+    if isinstance(error, (AllExit, asyncio.CancelledError, CommClosedError)):
+        return
+    loop.default_exception_handler(context)
+
+
+class _LostScheduler(logging.Filter):
+    """Drops distributed's "Failed to reconnect to scheduler" line: the command says in one line that the
+    scheduler was lost (``DaskEvaluator``, ``map_runs``) and how to continue."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith("Failed to reconnect to scheduler")
+
+
+_LOST_SCHEDULER = _LostScheduler()
+
+
+@contextmanager
+def _silenced() -> Iterator[None]:
+    """Log records up to ERROR dropped within the block (distributed's loggers set their own levels, so
+    raising a parent's level would not do)."""
+    previous = logging.root.manager.disable
+    logging.disable(logging.ERROR)
+    try:
+        yield
+    finally:
+        logging.disable(previous)
 
 
 def dashboard_link(client: Client, local_scheduler: bool) -> str | None:
@@ -197,38 +315,56 @@ def open_client(
     logging.getLogger("distributed").setLevel(logging.WARNING)  # its INFO lines are not for a terminal
     cluster = None
     keeper = None
+    client = None
     with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
         try:
             if settings.kind == "dask":
                 client = Client(settings.address, timeout=timeout)
+                address = str(settings.address)
             else:
                 from dask_jobqueue import SLURMCluster
 
                 assert settings.slurm is not None  # set by parse_cluster
                 cluster = SLURMCluster(**slurm_cluster_options(settings.slurm))
+                check_sbatch(cluster)  # before any job is submitted or anything written
                 cluster.scale(jobs=settings.slurm.jobs)
                 keeper = JobKeeper(cluster, settings.slurm.jobs)
                 keeper.start()
-                client = Client(cluster)
-        except (OSError, TimeoutError) as error:
-            if keeper is not None:
-                keeper.stop()
-            if cluster is not None:
-                cluster.close()
-            if settings.kind == "dask":
-                where = str(settings.address).replace("tcp://", "dask://")
-                raise ClusterError(f"--cluster {where}: the scheduler does not answer ({error})") from None
-            raise ClusterError(f"--cluster slurm: the jobs' Dask scheduler did not start ({error})") from None
-        try:
+                security = cluster_security(settings.slurm) if settings.slurm.tls else None
+                client = Client(cluster, security=security)
+                address = str(cluster.scheduler_address)
+            loop = getattr(client.loop, "asyncio_loop", None)  # tornado's IOLoop over asyncio's
+            if loop is not None:
+                loop.set_exception_handler(_quiet)
             if say is not None:
                 say(f"cluster: work goes to {settings.describe()}")
                 link = dashboard_link(client, local_scheduler=cluster is not None)
                 if link:
                     say(f"cluster: Dask dashboard at {link}")
+            wait_for_workers(client, settings, address, say)
+        except BaseException as error:  # ClusterError, Ctrl-C while waiting: close what was opened, quietly
+            _close(client, cluster, keeper)
+            if not isinstance(error, (OSError, TimeoutError)) or isinstance(error, ClusterError):
+                raise
+            if settings.kind == "dask":
+                where = str(settings.address).replace("tcp://", "dask://")
+                raise ClusterError(f"--cluster {where}: the scheduler does not answer ({error})") from None
+            raise ClusterError(f"--cluster slurm: the jobs' Dask scheduler did not start ({error})") from None
+        logging.getLogger("distributed.client").addFilter(_LOST_SCHEDULER)
+        try:
             yield client
         finally:
-            if keeper is not None:
-                keeper.stop()
+            _close(client, cluster, keeper)
+            logging.getLogger("distributed.client").removeFilter(_LOST_SCHEDULER)
+
+
+def _close(client: Client | None, cluster: Any, keeper: JobKeeper | None) -> None:
+    """Close what :func:`open_client` opened, without Dask's log lines and tracebacks of a client closed
+    mid-work or after losing its scheduler (the command has said what happened in one line)."""
+    with _silenced():
+        if keeper is not None:
+            keeper.stop()
+        if client is not None:
             client.close()
-            if cluster is not None:
-                cluster.close()
+        if cluster is not None:
+            cluster.close()

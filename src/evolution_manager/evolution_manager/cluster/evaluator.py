@@ -185,10 +185,17 @@ class DaskEvaluator:
         self.tasks += len(futures)
         try:
             answers = self.client.gather(futures)  # waits: one round trip per chunk
-        except FutureCancelledError as error:
-            raise DispatchError(f"a chunk of evaluations was cancelled: {error}") from None
+        except FutureCancelledError as error:  # Dask's reason may span lines: one line here
+            if self.client.status != "running":  # the scheduler died, or cannot be reached any more
+                address = getattr(self.client.scheduler, "address", "?")
+                raise DispatchError(
+                    f"the Dask scheduler at {address} was lost mid-run (the client could not reconnect to it)"
+                ) from None
+            reason = " ".join(str(error).split())
+            raise DispatchError(f"a chunk of evaluations was cancelled: {reason}") from None
         except KilledWorker as error:  # the chunk's workers died more often than the scheduler allows
-            raise DispatchError(f"a chunk of evaluations killed each worker it went to: {error}") from None
+            reason = " ".join(str(error).split())
+            raise DispatchError(f"a chunk of evaluations killed each worker it went to: {reason}") from None
         for piece, answer in zip(pieces, answers, strict=True):
             if len(answer) != len(piece):
                 raise DispatchError(f"a worker answered {len(answer)} of {len(piece)} requests")

@@ -14,8 +14,16 @@ The YAML file of ``--cluster slurm`` (every key optional; ``docs/cluster.md`` sa
     jobs: 8                   # jobs kept running (a cancelled or expired job is replaced)
     container: apptainer exec --bind /scratch swarm-bt-qd.sif   # put before the worker's Python
     python: /workspace/ws/python   # the worker's Python (default: this one; in a container the image's)
-    interface: ib0            # the network interface of workers and scheduler (default: the hostname's)
+    interface: ib0            # the network interface of the scheduler and workers (default: loopback, for
+                              # workers on this machine; name one where they run on other nodes)
     log_directory: logs/dask  # the jobs' output files (default: sbatch's, in the working directory)
+    dashboard: 127.0.0.1:8787 # where the scheduler's dashboard listens, HOST:PORT, or none (default loopback)
+    tls_ca_file: ca.pem       # TLS between client, scheduler and workers: the CA, and the certificate and
+    tls_cert: cert.pem        # key every party presents (all three, readable files; default: no TLS, see
+    tls_key: key.pem          # docs/cluster.md on who may reach the scheduler)
+
+``--worker-wait SECONDS`` (default ``WORKER_WAIT``) bounds the wait for the first worker, on a ``dask://``
+scheduler as under ``slurm``: the command says what it waits for, and gives up in one line.
 """
 
 from __future__ import annotations
@@ -23,7 +31,7 @@ from __future__ import annotations
 import argparse
 import re
 import shlex
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -45,6 +53,16 @@ _UNITS["tib"] = 2**40
 _MEMORY = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([kmgt]i?b)\s*$", re.IGNORECASE)
 _WALLTIME = re.compile(r"^(?:(\d+)-)?(\d{1,3}):([0-5]\d):([0-5]\d)$")
 _NAME = re.compile(r"^[A-Za-z0-9_.@+-]+$")  # a partition, account or interface name: no spaces, no quotes
+_HOST_PORT = re.compile(r"^(?P<host>[A-Za-z0-9_.-]+|\[[0-9A-Fa-f:.]+\]):(?P<port>\d{1,5})$")
+
+LOOPBACK = "127.0.0.1"
+"""Where the in-process scheduler of ``--cluster slurm`` listens when the settings name no interface."""
+
+DASHBOARD = f"{LOOPBACK}:8787"
+"""Where its dashboard listens by default."""
+
+WORKER_WAIT = 300.0
+"""Seconds a command waits for the first worker of a cluster before giving up (``--worker-wait``)."""
 
 
 class ClusterError(EvolutionError):
@@ -65,6 +83,16 @@ class SlurmSettings:
     python: str | None = None
     interface: str | None = None
     log_directory: str | None = None
+    dashboard: str | None = DASHBOARD
+    """``HOST:PORT`` of the scheduler's dashboard, or None for none (``dashboard: none``)."""
+    tls_ca_file: str | None = None
+    tls_cert: str | None = None
+    tls_key: str | None = None
+
+    @property
+    def tls(self) -> bool:
+        """Whether client, scheduler and workers talk over TLS (the three files given)."""
+        return self.tls_ca_file is not None
 
     def worker_python(self, default: str) -> str:
         """The command that starts the worker's Python in a job: the container's command, then the Python
@@ -82,6 +110,8 @@ class ClusterSettings:
     address: str | None = None
     """``tcp://HOST:PORT`` of the scheduler, for ``dask``."""
     slurm: SlurmSettings | None = None
+    worker_wait: float = WORKER_WAIT
+    """Seconds to wait for the first worker (``--worker-wait``); not recorded with the settings."""
 
     @property
     def is_local(self) -> bool:
@@ -91,6 +121,12 @@ class ClusterSettings:
         """The settings as recorded beside the results (a session's record, not the run's configuration)."""
         slurm = asdict(self.slurm) if self.slurm else None
         return {"kind": self.kind, "address": self.address, "slurm": slurm}
+
+    def describe_option(self) -> str:
+        """The ``--cluster`` option of these settings, as given: ``dask://HOST:PORT`` or ``slurm``."""
+        if self.kind == "dask":
+            return str(self.address).replace("tcp://", "dask://")
+        return self.kind
 
     def describe(self) -> str:
         """One line for the terminal: where the work goes."""
@@ -214,6 +250,18 @@ def slurm_settings(data: dict, where: str = "--cluster-config") -> SlurmSettings
     for key in ("container", "python"):
         if values.get(key) is not None:
             values[key] = _command(values[key], f"{where}: {key}")
+    if "dashboard" in values:
+        values["dashboard"] = _dashboard(values["dashboard"], f"{where}: dashboard")
+    tls = {key: values.get(key) for key in ("tls_ca_file", "tls_cert", "tls_key")}
+    if any(v is not None for v in tls.values()):
+        for key, value in tls.items():
+            if value is None:
+                raise ClusterError(
+                    f"{where}: {key} is missing; TLS takes tls_ca_file, tls_cert and tls_key together"
+                )
+            if not isinstance(value, str) or not Path(value).is_file():
+                raise ClusterError(f"{where}: {key} must be a readable file (PEM), got {value!r}")
+            values[key] = str(Path(value).absolute())
     log_directory = values.get("log_directory")
     if log_directory is not None and (not isinstance(log_directory, str) or not log_directory.strip()):
         raise ClusterError(f"{where}: log_directory must be a directory path, got {log_directory!r}")
@@ -225,6 +273,15 @@ def slurm_settings(data: dict, where: str = "--cluster-config") -> SlurmSettings
             f"{per_worker / 2**20:.0f} MiB each; give at least 512 MiB per core"
         )
     return settings
+
+
+def _dashboard(value: object, what: str) -> str | None:
+    if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
+        return None
+    match = _HOST_PORT.match(value) if isinstance(value, str) else None
+    if match is None or int(match["port"]) > 65535:
+        raise ClusterError(f"{what} must be HOST:PORT such as 127.0.0.1:8787, or none, got {value!r}")
+    return str(value)
 
 
 def _count(value: object, what: str) -> int:
@@ -285,10 +342,34 @@ def add_cluster_options(parser: argparse.ArgumentParser) -> None:
         type=Path,
         metavar="FILE",
         help="with --cluster slurm: a YAML file of cores, memory, walltime, partition, account, jobs, "
-        "container, python, interface, log_directory (docs/cluster.md)",
+        "container, python, interface, log_directory, dashboard, tls_ca_file, tls_cert, tls_key "
+        "(docs/cluster.md)",
+    )
+    parser.add_argument(
+        "--worker-wait",
+        type=_worker_wait,
+        metavar="SECONDS",
+        help=f"with a cluster: how long to wait for its first worker before giving up (default "
+        f"{WORKER_WAIT:g})",
     )
 
 
 def settings_from_args(args: argparse.Namespace) -> ClusterSettings:
-    """The :class:`ClusterSettings` of parsed ``--cluster`` and ``--cluster-config``."""
-    return parse_cluster(args.cluster, args.cluster_config)
+    """The :class:`ClusterSettings` of parsed ``--cluster``, ``--cluster-config`` and ``--worker-wait``."""
+    settings = parse_cluster(args.cluster, args.cluster_config)
+    wait = getattr(args, "worker_wait", None)
+    if wait is None:
+        return settings
+    if settings.is_local:
+        raise ClusterError("--worker-wait applies to --cluster dask://HOST:PORT or slurm, not to local")
+    return replace(settings, worker_wait=wait)
+
+
+def _worker_wait(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
+    return value

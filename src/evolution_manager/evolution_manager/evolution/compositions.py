@@ -151,6 +151,19 @@ class Cell:
         )
 
 
+def check_distinct_sources(run_dirs: Sequence[Path]) -> None:
+    """Refuse a run directory given twice to ``--swarm-from`` (by its resolved path: a link to it counts), in
+    one line: every one of its cells would be in the run twice."""
+    seen: dict[Path, Path] = {}
+    for directory in map(Path, run_dirs):
+        same = seen.setdefault(directory.resolve(), directory)
+        if same is not directory:
+            raise ConfigError(
+                f"--swarm-from: {directory} is given twice ({same} is the same run): every cell would be "
+                "duplicated; give each run once"
+            )
+
+
 def read_sources(run_dirs: Sequence[Path]) -> tuple[list[Cell], Library | None]:
     """The cells of the repertoires in ``run_dirs``: directory by directory (as given), objective by objective
     (``OBJECTIVES`` order: ``repertoire_<objective>.json``), bin by bin (index order), each bin's fittest

@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_controller.errors import TreeError
@@ -56,6 +56,7 @@ from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.files import read_json, read_json_object, write_json
 from swarm_ros.safe_paths import check_output
 from swarm_sim.objectives import FAMILIES
+from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, task_label, task_named
 
 BLOCKS: dict[int, int] = {1: 1, 8: 2, 64: 4}
 """Blocks per grid -> bins per descriptor (``bins``^3 blocks)."""
@@ -95,6 +96,8 @@ class RunRepertoires:
     shape: dict[str, tuple[int, ...]]
     items: dict[str, tuple[Item, ...]]
     heldout: dict[str, dict[tuple[tuple[int, ...], str], float]]
+    task: TaskSpec = field(default_factory=lambda: task_named(DEFAULT_TASK))
+    """The run's task (``swarm_sim.tasks``), which its raw fitness depends on."""
 
 
 def read_run(path: Path) -> RunRepertoires:
@@ -132,7 +135,9 @@ def read_run(path: Path) -> RunRepertoires:
         except (RunDirectoryError, TreeError, ValueError, TypeError, KeyError) as error:
             raise LibraryBuildError(f"{file} is damaged: {error}") from None
         heldout[objective] = _heldout_fitness(heldout_document, objective)
-    return RunRepertoires(Path(path), config.seed, config.algorithm, config.profile, shapes, items, heldout)
+    return RunRepertoires(
+        Path(path), config.seed, config.algorithm, config.profile, shapes, items, heldout, config.task
+    )
 
 
 def _repertoire(file: Path, objective: str) -> tuple[tuple[int, ...], tuple[Item, ...]]:
@@ -234,6 +239,15 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
         named = ", ".join(f"{run.path} ({run.profile})" for run in runs)
         raise LibraryBuildError(f"the runs mix profiles {' and '.join(profiles)}: {named}; give runs of one")
     profile = profiles[0]
+    tasks = sorted({task_label(run.task) for run in runs})
+    if len({run.task for run in runs}) > 1:
+        named = ", ".join(
+            f"{run.path} ({task_label(run.task)}, {_trial_seconds(run.task):g} s)" for run in runs
+        )
+        raise LibraryBuildError(
+            f"the runs mix tasks, {' and '.join(tasks)}: {named}; their fitness is not comparable: give runs "
+            "of one task"
+        )
     bins = BLOCKS[blocks]
     for run in runs:
         for objective, shape in run.shape.items():
@@ -280,7 +294,19 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
             }
             tree = library_entry_tree(winner.tree)
             entries.append({"name": f"{family}{k}", "tree": tree, "source": source})
+    if not entries:
+        named = ", ".join(str(run.path) for run in runs)
+        raise LibraryBuildError(
+            f"the repertoires of {named} hold no tree (every block is empty), so the library would have 0 "
+            "primitives: give runs whose repertoires have filled bins"
+        )
     return library_from_json({"format": LIBRARY_FORMAT, "primitives": entries}, label)
+
+
+def _trial_seconds(task: TaskSpec) -> float:
+    """The trial length of ``task`` in seconds."""
+    world = task.config()
+    return world.ticks * world.steps_per_tick * world.step_dt
 
 
 def build_parser() -> Parser:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
@@ -40,6 +41,13 @@ def add_scenario_options(parser: argparse.ArgumentParser) -> None:
         type=seed_int,
         help="the scenario seed of fixed scenarios (default: derived from the run seed; in config.json)",
     )
+
+
+def check_scenario_seed(args: argparse.Namespace) -> None:
+    """Refuse a ``--scenario-seed`` outside [0, MAX_SEED] in one line (a negative one is not "derive it")."""
+    value = getattr(args, "scenario_seed", None)
+    if value is not None and not 0 <= value <= MAX_SEED:
+        raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {value}")
 
 
 def add_task_options(parser: argparse.ArgumentParser) -> None:
@@ -86,6 +94,7 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
         raise UsageError(f"--objectives is for gp-fnd; --algorithm {args.algorithm} takes --objective")
     fnd = tuple(o.strip() for o in objectives_text.split(",")) if objectives_text is not None else ()
     seed = 0 if args.seed is None else args.seed
+    check_scenario_seed(args)
     if args.scenario_seed is not None and args.scenarios == "fresh":
         raise UsageError("--scenario-seed applies to --scenarios fixed; leave it out with fresh")
     library = library_from_args(args)

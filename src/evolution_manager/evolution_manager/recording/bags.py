@@ -12,6 +12,7 @@ reads such a file as a stream and writes a whole bag holding every message of th
 
 from __future__ import annotations
 
+import binascii
 import os
 import shutil
 import struct
@@ -154,6 +155,8 @@ class BagRecorder:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
+            for file in sorted(self.path.glob("*.mcap")):  # rosbags writes none: a flipped bit would pass
+                add_crcs(file)
         if self._lock is not None:
             self._lock.release()
             self._lock = None
@@ -215,6 +218,73 @@ class BagMessage:
     timestamp_ns: int
     data: bytes
     message: Any
+
+
+_CHUNK, _DATA_END = 0x06, 0x0F
+
+
+def add_crcs(file: Path) -> None:
+    """Write into the MCAP ``file``, in place, the CRC-32 of each uncompressed chunk's records and of the
+    data section, where the writer left 0 ("no CRC"; rosbags does), so that readers that validate CRCs
+    (``check_crcs``, the ``mcap`` tools) notice a changed byte. Nothing else of the file changes."""
+    data = bytearray(Path(file).read_bytes())
+    changed = False
+    position = 8  # after the magic
+    while position + 9 <= len(data):
+        opcode = data[position]
+        (length,) = struct.unpack_from("<Q", data, position + 1)
+        content = position + 9
+        if opcode == _CHUNK:
+            (crc, name_length) = struct.unpack_from("<II", data, content + 24)
+            compression = bytes(data[content + 32 : content + 32 + name_length])
+            (records_length,) = struct.unpack_from("<Q", data, content + 32 + name_length)
+            records_at = content + 32 + name_length + 8
+            if crc == 0 and compression == b"":
+                records = data[records_at : records_at + records_length]
+                struct.pack_into("<I", data, content + 24, binascii.crc32(records))
+                changed = True
+        elif opcode == _DATA_END:
+            (crc,) = struct.unpack_from("<I", data, content)
+            if crc == 0:  # over the whole data section, the chunks' CRCs just written included
+                struct.pack_into("<I", data, content, binascii.crc32(data[:position]))
+                changed = True
+            break
+        position = content + length
+    if changed:
+        with open(file, "r+b") as handle:
+            handle.write(data)
+
+
+def check_crcs(path: Path | str) -> int:
+    """Validate the CRCs of every MCAP file of the bag at ``path`` (each chunk's and the data section's, where
+    the file has them); return how many CRCs were checked; ``BagError`` naming the file for one that does not
+    match (a changed byte) or a file that cannot be read whole."""
+    from mcap.exceptions import McapError
+    from mcap.records import Chunk, DataEnd
+    from mcap.stream_reader import StreamReader
+
+    checked = 0
+    for file in sorted(Path(path).glob("*.mcap")):
+        try:
+            with file.open("rb") as stream:
+                for record in StreamReader(stream, emit_chunks=True, validate_crcs=True).records:
+                    if isinstance(record, Chunk) and record.uncompressed_crc:
+                        _chunk_records(record)  # StreamReader checks a chunk's CRC as it opens it
+                        checked += 1
+                    elif isinstance(record, DataEnd) and record.data_section_crc:
+                        checked += 1
+        except (McapError, ValueError, EOFError, OSError, struct.error) as error:
+            raise BagError(f"{file} is damaged: {error}") from None
+    return checked
+
+
+def _chunk_records(chunk: Any) -> None:
+    """Raise McapError unless ``chunk``'s records match its CRC."""
+    from mcap.exceptions import McapError
+
+    if chunk.compression == "" and binascii.crc32(chunk.data) != chunk.uncompressed_crc:
+        found = binascii.crc32(chunk.data)
+        raise McapError(f"a chunk's CRC is {chunk.uncompressed_crc:#010x}, its records' {found:#010x}")
 
 
 def read_bag(path: Path | str, typestore: Typestore | None = None) -> Iterator[BagMessage]:
@@ -299,7 +369,8 @@ def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
         channels: dict[int, tuple[str, str]] = {}
         with file.open("rb") as stream:
             try:
-                for record in StreamReader(stream, emit_chunks=False).records:
+                # CRCs checked where the file has them: a damaged chunk ends what is recovered
+                for record in StreamReader(stream, emit_chunks=False, validate_crcs=True).records:
                     if isinstance(record, Schema):
                         schemas[record.id] = record.name
                     elif isinstance(record, Channel):
@@ -309,6 +380,18 @@ def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
                         yield topic, msgtype, record.log_time, bytes(record.data)
             except (McapError, EOFError, ValueError, OSError, AssertionError, struct.error):
                 pass  # the truncated tail: everything before it is kept
+
+
+def promised_messages(path: Path | str) -> int | None:
+    """How many messages the ``metadata.yaml`` of the bag at ``path`` counts, or None (no readable count)."""
+    import yaml
+
+    try:
+        document = yaml.safe_load((Path(path) / "metadata.yaml").read_text())
+        count = document["rosbag2_bagfile_information"]["message_count"]
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError):
+        return None
+    return count if isinstance(count, int) and not isinstance(count, bool) and count >= 0 else None
 
 
 def recover_bag(damaged: Path | str, recovered: Path | str) -> int:

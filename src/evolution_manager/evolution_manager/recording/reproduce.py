@@ -10,11 +10,20 @@ re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_wi
 recorded profile and trial length, and every recorded pose, carrying flag, delivery count and value is
 compared with the re-run's, bit for bit (a bag recorded before foraging has none of these to compare). A
 heterogeneous swarm's trial is re-run with each robot's own tree.
+
+Then every other topic the re-run produces is compared byte for byte with the recording: the messages the
+simulator and the controllers publish are built by their own code (``swarm_sim.nodes.simulator.step_messages``
+and ``trial_start_message``, ``bt_controller.nodes.footbot_controller.answer_messages``, the arena's markers)
+from the re-run, and compared field by field with the recorded ones (CDR padding bytes are not part of a
+message); the clock's stamps start at the recording's first
+and advance one step at a time. The MCAP files' CRCs are checked first (``recording.bags.check_crcs``). The
+verdict names the topics compared, and those of the bag the re-run does not produce.
 """
 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -22,7 +31,7 @@ from typing import Any
 from bt_controller.errors import TreeError
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node, parse
-from evolution_manager.recording.bags import BagError, read_bag
+from evolution_manager.recording.bags import BagError, check_crcs, read_bag
 from swarm_sim.config import DEFAULT, Config, config_from_dict, default_config
 from swarm_sim.lockstep import LockstepChain, run_with_controllers
 from swarm_sim.result_messages import named_values
@@ -43,6 +52,12 @@ class Verification:
     steps_compared: int
     first_divergence: str | None
     """None when the re-run reproduced the recording; else what first differed."""
+    topics_compared: tuple[str, ...] = ()
+    """The bag's topics compared with the re-run (every message of each)."""
+    topics_not_compared: tuple[str, ...] = ()
+    """The bag's topics the re-run does not produce."""
+    crcs_checked: int = 0
+    """CRCs of the bag's MCAP files checked (0: a bag written without them)."""
 
     @property
     def reproduced(self) -> bool:
@@ -50,9 +65,25 @@ class Verification:
 
     def summary(self) -> str:
         what = f"trial {self.trial} of seed {self.seed} with {self.tree}"
+        compared = (
+            f"{len(self.topics_compared)} topics compared ({', '.join(self.topics_compared)})"
+            + (
+                f"; not produced by the re-run: {', '.join(self.topics_not_compared)}"
+                if self.topics_not_compared
+                else ""
+            )
+            + (
+                f"; {self.crcs_checked} MCAP CRCs checked"
+                if self.crcs_checked
+                else "; the bag has no MCAP CRCs"
+            )
+        )
         if self.reproduced:
-            return f"reproduced: {what}: {self.steps_compared} steps of poses and every value identical"
-        return f"NOT reproduced: {what}: {self.first_divergence}"
+            return (
+                f"reproduced: {what}: {self.steps_compared} steps of poses and every value identical, and "
+                f"every message of {compared}"
+            )
+        return f"NOT reproduced: {what}: {self.first_divergence}; {compared}"
 
 
 def recorded_world(start: Any, profile: str) -> Config:
@@ -69,12 +100,18 @@ def recorded_world(start: Any, profile: str) -> Config:
 
 
 def verify_trial_bag(path: Path | str) -> Verification:
-    """Re-run the trial recorded in the bag at ``path`` and compare it with the recording."""
+    """Re-run the trial recorded in the bag at ``path`` and compare it with the recording: every topic the
+    re-run produces, after the MCAP files' CRCs."""
+    crcs = check_crcs(path)
     starts, results, states = [], [], []
+    by_topic: dict[str, list[bytes]] = {}
+    prefix = ""
     for message in read_bag(path):
+        by_topic.setdefault(message.topic, []).append(message.data)
         name = "/" + message.topic.rsplit("/", 1)[-1]  # the topic's name below the graph's namespace
         if name == "/trial_start":
             starts.append(message.message)
+            prefix = message.topic[: -len(name)]
         elif name == RESULT_TOPIC:
             results.append(message.message)
         elif name == "/swarm_state":
@@ -116,7 +153,14 @@ def verify_trial_bag(path: Path | str) -> Verification:
             divergences.append(f"the carrying flags or deliveries differ at step {world.step}")
 
     config = recorded_world(start, profile)
-    record = run_with_controllers(tree, seed, trial, config, on_step=compare)
+    first = states[0].header.stamp if states else None
+    published = _Published(prefix, int(start.robots) or config.n_robots, config, seed, trial, first)
+
+    def on_step(world: LockstepChain) -> None:
+        compare(world)
+        published.step(world)
+
+    record = run_with_controllers(tree, seed, trial, config, on_step=on_step, on_outcomes=published.answers)
     if not divergences and sorted(recorded) != visited:
         divergences.append(f"/swarm_state has {len(recorded)} steps; the trial has {len(visited)}")
     try:
@@ -124,7 +168,112 @@ def verify_trial_bag(path: Path | str) -> Verification:
     except ValueError as error:
         raise BagError(f"{RESULT_TOPIC}: {error}") from None
     for name, value in zip(VALUE_NAMES, record.values, strict=True):
-        was = recorded_values.get(name)
-        if not divergences and was is not None and was != value:
-            divergences.append(f"{name} was {was!r}, the re-run gives {value!r}")
-    return Verification(result.tree, seed, trial, len(recorded), divergences[0] if divergences else None)
+        kept = recorded_values.get(name)
+        if not divergences and kept is not None and kept != value:
+            divergences.append(f"{name} was {kept!r}, the re-run gives {value!r}")
+    from rclpy.serialization import deserialize_message
+
+    compared, other = [], []
+    for topic in sorted(by_topic):
+        if topic == prefix + RESULT_TOPIC:  # the values, compared above
+            compared.append(topic)
+            continue
+        expected = published.messages.get(topic)
+        if expected is None:
+            other.append(topic)
+            continue
+        compared.append(topic)
+        found = by_topic[topic]
+        if topic == prefix + "/markers":  # latched: the last one is the trial's (an earlier, the start's)
+            found = found[-1:]
+        if divergences:
+            continue
+        if len(found) != len(expected):
+            divergences.append(f"{topic} has {len(found)} messages; the re-run publishes {len(expected)}")
+            continue
+        for k, (was, now) in enumerate(zip(found, expected, strict=True)):
+            if deserialize_message(was, type(now)) != now:  # every field, bit for bit
+                divergences.append(f"{topic} differs from the re-run at its message {k + 1} of {len(found)}")
+                break
+    return Verification(
+        result.tree,
+        seed,
+        trial,
+        len(recorded),
+        divergences[0] if divergences else None,
+        tuple(compared),
+        tuple(other),
+        crcs,
+    )
+
+
+class _Published:
+    """What the trial graph publishes, built from a re-run by the nodes' own code (rclpy messages, compared
+    field by field with the recording's, deserialised), by absolute topic."""
+
+    def __init__(
+        self, prefix: str, robots: int, config: Config, seed: int, trial: int, first_stamp: Any
+    ) -> None:
+        from swarm_ros.names import robot_namespaces
+
+        self.prefix = prefix
+        self.namespaces = robot_namespaces(robots)
+        self.config = config
+        self.seed = seed
+        self.trial = trial
+        self.base_ns = 0 if first_stamp is None else first_stamp.sec * 1_000_000_000 + first_stamp.nanosec
+        self.step_ns = round(config.step_dt * 1e9)
+        self.index = 0
+        self.actions = ["stop"] * robots
+        self.headers: list[Any] = []
+        self.messages: dict[str, list[Any]] = {}
+
+    def _add(self, topic: str, message: Any) -> None:
+        from rclpy.serialization import deserialize_message, serialize_message
+
+        # through CDR and back, as a subscriber sees it: float32 fields rounded as on the wire
+        self.messages.setdefault(topic, []).append(
+            deserialize_message(serialize_message(message), type(message))
+        )
+
+    def step(self, world: LockstepChain) -> None:
+        from builtin_interfaces.msg import Time
+        from rosgraph_msgs.msg import Clock
+
+        from swarm_sim.nodes import visualisation
+        from swarm_sim.nodes.simulator import step_messages, trial_start_message
+
+        at = self.base_ns + self.index * self.step_ns
+        stamp = Time(sec=at // 1_000_000_000, nanosec=at % 1_000_000_000)
+        p = self.prefix
+        if self.index == 0:  # the trial's start: its markers and its latched announcement
+            self.wheel_speed = world.p.wheel_speed * visualisation.MM
+            self._add(f"{p}/markers", visualisation.arena_markers(self.config, world.setup.gap, stamp))
+            start = trial_start_message(
+                world, stamp, self.seed, self.trial, len(self.namespaces), self.config
+            )
+            self._add(f"{p}/trial_start", start)
+        self.index += 1
+        self._add("/clock", Clock(clock=stamp))
+        messages = step_messages(world, stamp, self.seed, self.namespaces, self.actions, self.config)
+        self._add(f"{p}/swarm_state", messages.state)
+        self._add(f"{p}/poses", messages.poses)
+        self._add(f"{p}/robot_markers", messages.robot_markers)
+        for ns, pose, ground, readings in zip(
+            self.namespaces, messages.pose, messages.ground, messages.readings, strict=True
+        ):
+            self._add(f"{p}/{ns}/pose", pose)
+            self._add(f"{p}/{ns}/ground", ground)
+            self._add(f"{p}/{ns}/range_and_bearing", readings)
+        self.headers = [ground.header for ground in messages.ground]
+
+    def answers(self, world: LockstepChain, outcomes: Sequence[Any]) -> None:
+        from bt_controller.nodes.footbot_controller import answer_messages
+        from bt_controller.vocabulary import ACTIONS
+
+        for i, (ns, outcome) in enumerate(zip(self.namespaces, outcomes, strict=True)):
+            status, wheels = answer_messages(outcome, self.headers[i], i, self.wheel_speed)
+            if status is not None:
+                self._add(f"{self.prefix}/{ns}/tree_status", status)
+            self._add(f"{self.prefix}/{ns}/wheels", wheels)
+        self.actions = [ACTIONS[int(o.action)] for o in outcomes]

@@ -35,6 +35,7 @@ from evolution_manager.evolution.options import (
     add_scenario_options,
     add_task_options,
     check_resume_options,
+    check_scenario_seed,
     config_from_args,
     library_from_args,
     progress_bar,
@@ -51,6 +52,7 @@ if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not ev
 
     from bt_controller.library import Library
     from evolution_manager.cluster.settings import ClusterSettings
+    from evolution_manager.evolution.compositions import CompositionParameters
     from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
 
@@ -144,6 +146,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         args = build_parser().parse_args(argv)
         out = args.out
         cluster = settings_from_args(args)
+        check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
         if args.homogeneous is not None:
@@ -174,7 +177,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 )
             assert config is not None  # made from the options when not resuming
             library = library_from_args(args)
-        client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
+        with signals_as_interrupts():  # Ctrl-C or SIGTERM while waiting for a cluster's workers: one line
+            client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
         evaluator = _evaluator(args.workers, config, library, client)
         if args.resume:
             run = Run.resume(args.out, evaluator)
@@ -182,6 +186,9 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             run = Run.start(config, args.out, evaluator, library)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, out)
+    except KeyboardInterrupt as interruption:  # before the run started (waiting for a cluster's workers)
+        print("evolve: interrupted before the run started; nothing was written", file=sys.stderr)
+        return exit_status(interruption)
     bar = progress_bar(run.config, run.evaluations, not args.no_progress)
 
     def on_batch(done: int, total: int) -> None:
@@ -335,6 +342,25 @@ def _is_foraging(task: TaskSpec) -> bool:
     return registered_name(task) == "foraging"
 
 
+def _check_homogeneous(algorithm: str, parameters: CompositionParameters, cells: int) -> None:
+    """Refuse ``--homogeneous K`` with more seeds than the runs' cells or the initial population (ga) or
+    batch (qd) hold, in one line (it was cut to the smaller silently)."""
+    k = parameters.homogeneous
+    initial, what = (
+        (parameters.population, "population") if algorithm == "ga" else (parameters.init_batch, "batch")
+    )
+    if k > cells:
+        raise UsageError(
+            f"--homogeneous {k}: the runs hold {cells} cells, so there are only {cells} homogeneous swarms; "
+            f"give K of at most {min(cells, initial)}"
+        )
+    if k > initial:
+        raise UsageError(
+            f"--homogeneous {k}: the initial {what} of --algorithm {algorithm} has {initial} genomes; give K "
+            f"of at most {min(cells, initial)}"
+        )
+
+
 def _evolve_compositions(
     args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
 ) -> int:
@@ -364,7 +390,10 @@ def _evolve_compositions(
                 raise UsageError(
                     f"{args.out} already holds a run: add --resume to continue it, or use another --out"
                 )
+            comp.check_distinct_sources(args.swarm_from)
             cells, library = comp.read_sources(args.swarm_from)
+            parameters = comp.CompositionParameters(homogeneous=args.homogeneous or 0)
+            _check_homogeneous(args.algorithm, parameters, len(cells))
             config = comp.CompositionConfig(
                 args.algorithm,
                 args.evaluations or comp.DEFAULT_EVALUATIONS[args.algorithm],
@@ -375,7 +404,7 @@ def _evolve_compositions(
                 tuple(str(p) for p in args.swarm_from),
                 len(cells),
                 comp.cells_digest(cells),
-                comp.CompositionParameters(homogeneous=args.homogeneous or 0),
+                parameters,
                 library_digest="" if library is None else library.digest,
             )
         from swarm_sim.evaluation import BatchEvaluator

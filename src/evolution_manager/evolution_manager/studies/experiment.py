@@ -62,7 +62,13 @@ from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
-from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
+from evolution_manager.processes import (
+    die_with_parent,
+    exclusive_lock,
+    exit_status,
+    lock_path_for,
+    signals_as_interrupts,
+)
 from swarm_sim.objectives import PAPER_OBJECTIVES
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
@@ -434,6 +440,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             raise UsageError("--scenario-seed applies to --scenarios fixed; leave it out with fresh")
         if args.scenario_seed is not None and not 0 <= args.scenario_seed <= MAX_SEED:
             raise UsageError(f"--scenario-seed must be in [0, {MAX_SEED}], got {args.scenario_seed}")
+        # One experiment command per folder, refused up front as evolve refuses a second run on its folder:
+        # two would plan, run and report into one folder at once. The lock is kept outside the folder (it
+        # may not exist yet; nothing is written into it before the options are checked), for this process's
+        # life.
+        exclusive_lock(lock_path_for(args.out, "experiment"), f"the experiment folder {args.out}")
         scenarios = args.scenarios or "fixed"
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
         if args.study == "foraging":
@@ -449,11 +460,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         plan_path = args.out / PLAN_FILE
         if plan_path.exists():
             saved = read_json(plan_path)
-            if saved != json.loads(json.dumps(document)):
+            given = json.loads(json.dumps(document))
+            if saved != given:
                 raise UsageError(
-                    f"{args.out} holds an experiment with other options; "
-                    "use the same options to continue it, "
-                    "or another --out"
+                    f"{args.out} holds an experiment with other options ({differences(saved, given)}); "
+                    "use the same options to continue it, or another --out"
                 )
         elif args.out.exists() and any(args.out.iterdir()):
             raise UsageError(f"{args.out} exists and is not an experiment folder; choose another --out")
@@ -474,6 +485,42 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         return 1
     print(f"experiment: {sum(1 for _ in budgets)} runs in {args.out}; report: {written}")
     return 0
+
+
+def differences(saved: object, given: object, shown: int = 3) -> str:
+    """What differs between an experiment's saved plan document and the one the options make, for a
+    message: the options first (``evaluations 150 there, 300 given``), the planned runs only when no option
+    differs; at most ``shown`` of them, then how many more."""
+    found: list[tuple[str, str]] = []
+    _differ(saved, given, "", found)
+    options = [text for where, text in found if not any(c in where for c in ".[")]
+    listed = options or [text for _, text in found] or ["the documents differ"]
+    more = f" and {len(listed) - shown} more" if len(listed) > shown else ""
+    return "; ".join(listed[:shown]) + more
+
+
+def _differ(saved: object, given: object, where: str, found: list[tuple[str, str]]) -> None:
+    if isinstance(saved, dict) and isinstance(given, dict):
+        for key in [*given, *(k for k in saved if k not in given)]:
+            name = f"{where}.{key}" if where else str(key)
+            if key not in saved:
+                found.append((name, f"{name} absent there, {_shown(given[key])} given"))
+            elif key not in given:
+                found.append((name, f"{name} {_shown(saved[key])} there, absent now"))
+            else:
+                _differ(saved[key], given[key], name, found)
+    elif isinstance(saved, list) and isinstance(given, list) and len(saved) == len(given):
+        for i, (a, b) in enumerate(zip(saved, given, strict=True)):
+            _differ(a, b, f"{where}[{i}]", found)
+    elif isinstance(saved, list) and isinstance(given, list):
+        found.append((where, f"{where}: {len(saved)} entries there, {len(given)} given"))
+    elif saved != given:
+        found.append((where, f"{where} {_shown(saved)} there, {_shown(given)} given"))
+
+
+def _shown(value: object, width: int = 40) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def _paper_study(

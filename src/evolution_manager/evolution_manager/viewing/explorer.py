@@ -175,10 +175,14 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
             continue
         document = _read(path)
         bins: dict[str, list[dict]] = {}
-        for item in document.get("items", []):
+        for k, item in enumerate(_items(document, path)):
             tree = item["tree"]
             if tree not in simplified:  # the repertoire file holds it (simplified when it was written)
-                simplified[tree] = item.get("simplified") or simplified_text(tree, library)
+                _check_tree(tree, library, f"{path}: item {k}: tree")
+                shown = item.get("simplified")
+                if shown is not None:
+                    _check_tree(shown, library, f"{path}: item {k}: simplified tree")
+                simplified[tree] = shown or simplified_text(tree, library)
             entry = {
                 "tree": tree,
                 "simplified": simplified[tree],
@@ -251,6 +255,41 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     }
 
 
+def _items(document: dict, path: Path) -> list[dict]:
+    """The items of a repertoire document, each with the fields the page shows; ExplorerError naming the
+    file and the item otherwise."""
+    items = document.get("items", [])
+    if not isinstance(items, list):
+        raise ExplorerError(f"{path}: items must be a list, got {type(items).__name__}")
+    for k, item in enumerate(items):
+        missing = [
+            f
+            for f in ("tree", "bin", "fitness", "descriptors")
+            if not isinstance(item, dict) or f not in item
+        ]
+        if missing:
+            raise ExplorerError(
+                f"{path}: item {k} has no {', '.join(missing)}: not a repertoire file of a run"
+            )
+    return items
+
+
+def _check_tree(text: object, library: Library | None, where: str) -> None:
+    """Refuse a tree text that does not parse (as ``library``, ``adapt`` and ``--swarm-from`` refuse it),
+    naming where it is and why."""
+    from bt_controller.errors import TreeError
+    from bt_controller.tree import parse
+
+    if not isinstance(text, str):
+        raise ExplorerError(f"{where} must be tree text, got {type(text).__name__}")
+    try:
+        parse(text, library=library)
+    except (TreeError, LibraryError) as error:
+        raise ExplorerError(
+            f"{where} does not parse: {error}; expected tree text of the run's nodes"
+        ) from None
+
+
 def _library(root: Path, config: dict) -> Library | None:
     """The run's copy of its primitive library (``library.json``), or None for a run without one."""
     path = root / "library.json"
@@ -289,10 +328,14 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
     it resolved it, or against the library file's folder, where such commands are often run).
     ExplorerError when a primitive lacks that, when the primitives disagree on the block
     count, or when none is of an objective this run shows."""
-    from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, variant
+    from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, block_of, variant
 
     here_path = Path(root).resolve()
     label = library.label
+    config = _read(Path(root) / "config.json") if (Path(root) / "config.json").exists() else {}
+    config_seed = config.get("seed")
+    grids: dict[str, tuple[tuple[int, ...], dict[str, set[str]]] | None] = {}
+    checks: list[tuple[dict[str, Any], tuple[tuple[int, ...], dict[str, set[str]]] | None, str]] = []
 
     def is_here(run: str) -> bool:
         bases = [Path.cwd(), Path(label).parent]  # the label of a library read from a file is its path
@@ -328,6 +371,19 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
             )
         if isinstance(source["fitness"], bool) or not isinstance(source["fitness"], (int, float)):
             raise ExplorerError(f"{where}: source fitness must be a number, got {source['fitness']!r}")
+        grid_of = grids.setdefault(str(objective), _grid_trees(root, str(objective)))
+        shape = grid_of[0] if grid_of is not None else (8, 8, 8)
+        if not all(b < n for b, n in zip(bins, shape, strict=True)):
+            raise ExplorerError(f"{where}: source bin {bins} is outside the grid {list(shape)}")
+        inside = list(block_of(bins, shape, BLOCKS[int(count)]))
+        if inside != list(block):
+            raise ExplorerError(
+                f"{where}: source bin {bins} is outside its block {list(block)} (with {count} blocks that "
+                f"bin lies in block {inside}): the source does not describe the primitive"
+            )
+        here = is_here(str(source["run"]))
+        if here:  # checked once the library is known to be of this run's objectives
+            checks.append((source, grid_of, where))
         entry = {
             "name": primitive.name,
             "block": list(block),
@@ -337,7 +393,7 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
             "derated_fitness": source.get("derated_fitness"),
             "run": str(source["run"]),
         }
-        side = "here" if is_here(str(source["run"])) else "other"
+        side = "here" if here else "other"
         grid = by_objective.setdefault(str(objective), {"here": [], "other": []})
         grid[side].append(entry)
     if len(blocks) > 1:
@@ -350,6 +406,8 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
             f"library {label} holds primitives of {', '.join(covered) or 'no objective'}; the run {root} "
             f"shows {', '.join(objectives) or 'no objective'}: none in common"
         )
+    for source, grid_of, where in checks:
+        _check_source_here(source, config_seed, grid_of, root, where)
     count = blocks.pop()
     rivals = _block_winners(root, BLOCKS[count])
     for o, grid in by_objective.items():
@@ -363,6 +421,56 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
             o: {"family": FAMILIES[o], **by_objective[o]} for o in objectives if o in by_objective
         },
     }
+
+
+def _grid_trees(root: Path, objective: str) -> tuple[tuple[int, ...], dict[str, set[str]]] | None:
+    """The shape of the run's grid of ``objective`` and the trees each filled bin holds (by "i,j,k"), or
+    None when the run has no repertoire of it."""
+    path = Path(root) / f"repertoire_{objective}.json"
+    if not path.exists():
+        return None
+    document = _read(path)
+    shape = document.get("shape", [8, 8, 8])
+    if not (isinstance(shape, list) and len(shape) == 3 and all(isinstance(n, int) and n > 0 for n in shape)):
+        raise ExplorerError(f"{path}: shape must be 3 positive integers, got {shape!r}")
+    trees: dict[str, set[str]] = {}
+    for item in _items(document, path):
+        trees.setdefault(",".join(str(b) for b in item["bin"]), set()).add(str(item["tree"]))
+    return tuple(shape), trees
+
+
+def _check_source_here(
+    source: dict[str, Any],
+    seed: object,
+    grid: tuple[tuple[int, ...], dict[str, set[str]]] | None,
+    root: Path,
+    where: str,
+) -> None:
+    """Refuse a primitive said to come from the run in ``root`` that this run does not hold: another seed,
+    no repertoire of its objective, or its source bin empty or holding other trees (the run directory was
+    replaced by another run since the library was built)."""
+    rebuild = "the library was built from another run: rebuild it from this one, or show it with that run"
+    if "seed" in source and seed is not None and source["seed"] != seed:
+        raise ExplorerError(
+            f"{where} comes from a run of seed {source['seed']}; the run {root} has seed {seed}: {rebuild}"
+        )
+    bin_key = ",".join(str(b) for b in source["bin"])
+    if grid is None:
+        raise ExplorerError(
+            f"{where} comes from {source['objective']} of the run {root}, which has no repertoire of it: "
+            f"{rebuild}"
+        )
+    trees = grid[1].get(bin_key)
+    if not trees:
+        raise ExplorerError(
+            f"{where} comes from bin {bin_key} of {source['objective']} of the run {root}, which is empty "
+            f"there: {rebuild}"
+        )
+    if "tree" in source and source["tree"] not in trees:
+        raise ExplorerError(
+            f"{where} comes from bin {bin_key} of {source['objective']} of the run {root}, which holds other "
+            f"trees there: {rebuild}"
+        )
 
 
 def _block_winners(root: Path, bins: int) -> dict[str, dict[int, dict]]:

@@ -61,8 +61,10 @@ from __future__ import annotations
 import json
 import threading
 import time
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields, replace
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -98,7 +100,14 @@ from swarm_msgs.msg import (
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
-from swarm_ros.parameters import declare, declare_dataclass, descriptor, field_names, start_node
+from swarm_ros.parameters import (
+    check_file_values,
+    declare,
+    declare_dataclass,
+    descriptor,
+    field_names,
+    start_node,
+)
 from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
 from swarm_ros.services import call_until_answered
 from swarm_ros.spinning import spin_until_shutdown
@@ -113,6 +122,8 @@ from swarm_sim.trial_data import TrialRecord
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
+ANSWER_TIMEOUT_RANGE = (0.1, 86400.0)
+"""Seconds the ``answer_timeout`` parameter may be."""
 MATCH_WAIT = 2.0
 """Seconds a trial's start waits for the publishers to match every subscriber the graph knows of (a
 recorder that has just joined), so that none misses the trial's first messages."""
@@ -178,7 +189,7 @@ class SimulatorNode(ManagedNode):
             descriptor(
                 "seconds of wall time to wait for the controllers at any step (detects dead nodes)",
                 read_only=False,
-                value_range=(0.1, 86400.0),
+                value_range=ANSWER_TIMEOUT_RANGE,
             ),
         )
         self.sim_time_ns = 0
@@ -409,16 +420,7 @@ class SimulatorNode(ManagedNode):
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
         self._trial_start.publish(
-            TrialStart(
-                header=self._header("arena"),
-                seed=seed,
-                trial=trial,
-                arena_configuration=self.arena_of(trial),
-                robots=self.robots,
-                tree_keys=[int(k) for k in world.setup.tree_keys],
-                ticks=world.p.ticks,
-                world=json.dumps(self.config.as_dict()),
-            )
+            trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
         record: TrialRecord | None = None
         while not world.done:
@@ -518,59 +520,15 @@ class SimulatorNode(ManagedNode):
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
-        poses = world.poses()
-        self._state.publish(
-            SwarmState(
-                header=Header(stamp=stamp, frame_id="arena"),
-                seed=seed,
-                trial=world.trial,
-                step=world.step,
-                poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in poses.tolist()],
-                carrying=[bool(c) for c in world.carrying],
-                deliveries=[int(d) for d in world.deliveries],
-            )
-        )
-        listed = poses.tolist()
-        self._poses.publish(
-            PoseArray(
-                header=Header(stamp=stamp, frame_id=visualisation.FRAME),
-                poses=[visualisation.pose_in_metres(*q) for q in listed],
-            )
-        )
-        for publisher, q in zip(self._pose, listed, strict=True):
-            publisher.publish(visualisation.pose_stamped(stamp, *q))
-        self._robot_markers.publish(
-            visualisation.robot_markers(
-                self.config,
-                stamp,
-                listed,
-                self.namespaces,
-                self._actions,
-                [bool(c) for c in world.carrying],
-                [int(d) for d in world.deliveries],
-            )
-        )
-        for i, readings in enumerate(world.readings()):
-            header = Header(stamp=stamp, frame_id=self.namespaces[i])
-            self._ground[i].publish(
-                GroundSensor(
-                    header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food
-                )
-            )
-            messages = [
-                RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
-                for s, r, b, n, f in zip(
-                    readings.senders.tolist(),
-                    readings.ranges.tolist(),
-                    readings.bearings.tolist(),
-                    readings.nest.tolist(),
-                    readings.food.tolist(),
-                    strict=True,
-                )
-            ]
-            self._readings[i].publish(
-                RangeAndBearingReadings(header=header, step=world.step, readings=messages)
-            )
+        messages = step_messages(world, stamp, seed, self.namespaces, self._actions, self.config)
+        self._state.publish(messages.state)
+        self._poses.publish(messages.poses)
+        for publisher, pose in zip(self._pose, messages.pose, strict=True):
+            publisher.publish(pose)
+        self._robot_markers.publish(messages.robot_markers)
+        for i in range(len(self.namespaces)):
+            self._ground[i].publish(messages.ground[i])
+            self._readings[i].publish(messages.readings[i])
 
     def _await_answers(self, step: int) -> list[WheelCommand]:
         with self._lock:
@@ -605,8 +563,125 @@ class SimulatorNode(ManagedNode):
         return Header(stamp=self._stamp(), frame_id=frame)
 
 
+@dataclass(frozen=True)
+class StepMessages:
+    """What the simulator publishes at one step besides the clock: the swarm's state, its poses (all, and
+    per robot), the robots' markers, and each robot's ground sensor and range-and-bearing readings."""
+
+    state: SwarmState
+    poses: PoseArray
+    pose: list[PoseStamped]
+    robot_markers: MarkerArray
+    ground: list[GroundSensor]
+    readings: list[RangeAndBearingReadings]
+
+
+def step_messages(
+    world: LockstepChain,
+    stamp: Time,
+    seed: int,
+    namespaces: Sequence[str],
+    actions: Sequence[str],
+    config: Config,
+) -> StepMessages:
+    """The messages of the step ``world`` is at, stamped ``stamp``; ``actions``: each robot's action of the
+    step before (its marker's label). The node publishes these; ``replay --verify`` compares a recording
+    with those of a re-run."""
+    poses = world.poses()
+    listed = poses.tolist()
+    state = SwarmState(
+        header=Header(stamp=stamp, frame_id="arena"),
+        seed=seed,
+        trial=world.trial,
+        step=world.step,
+        poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in listed],
+        carrying=[bool(c) for c in world.carrying],
+        deliveries=[int(d) for d in world.deliveries],
+    )
+    arena_poses = PoseArray(
+        header=Header(stamp=stamp, frame_id=visualisation.FRAME),
+        poses=[visualisation.pose_in_metres(*q) for q in listed],
+    )
+    markers = visualisation.robot_markers(
+        config,
+        stamp,
+        listed,
+        list(namespaces),
+        list(actions),
+        [bool(c) for c in world.carrying],
+        [int(d) for d in world.deliveries],
+    )
+    ground: list[GroundSensor] = []
+    readings_of: list[RangeAndBearingReadings] = []
+    for i, readings in enumerate(world.readings()):
+        header = Header(stamp=stamp, frame_id=namespaces[i])
+        ground.append(
+            GroundSensor(header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food)
+        )
+        messages = [
+            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
+            for s, r, b, n, f in zip(
+                readings.senders.tolist(),
+                readings.ranges.tolist(),
+                readings.bearings.tolist(),
+                readings.nest.tolist(),
+                readings.food.tolist(),
+                strict=True,
+            )
+        ]
+        readings_of.append(RangeAndBearingReadings(header=header, step=world.step, readings=messages))
+    return StepMessages(
+        state,
+        arena_poses,
+        [visualisation.pose_stamped(stamp, *q) for q in listed],
+        markers,
+        ground,
+        readings_of,
+    )
+
+
+def trial_start_message(
+    world: LockstepChain, stamp: Time, seed: int, trial: int, robots: int, config: Config
+) -> TrialStart:
+    """The latched message that opens trial ``trial`` of ``seed`` (published before its first step)."""
+    return TrialStart(
+        header=Header(stamp=stamp, frame_id="arena"),
+        seed=seed,
+        trial=trial,
+        arena_configuration=timeline.arena_of_trial(config.timeline, trial, len(config.gaps)),
+        robots=robots,
+        tree_keys=[int(k) for k in world.setup.tree_keys],
+        ticks=world.p.ticks,
+        world=json.dumps(config.as_dict()),
+    )
+
+
 SHARED = field_names(EvaluatorSettings) | field_names(ControllerSettings)
 """Parameters of the graph's other nodes that a ``/**`` section of a shared parameter file may hold."""
+
+
+def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) -> Config:
+    """Check, before any node starts, what the parameter file ``path`` gives the simulator node
+    ``fully_qualified_name`` whose world would otherwise be ``config``: every value of a parameter it
+    declares, its type and range, the world it makes (``Config``'s checks), and names it does not declare,
+    as the node checks them when it starts (``ParameterError`` or ``ConfigError`` in one line); return
+    that world."""
+    declared: dict[str, tuple[Any, tuple[float, float] | None]] = {
+        f.name: (getattr(config, f.name), WORLD_RANGES.get(f.name)) for f in fields(config)
+    }
+    declared["conditions"] = ("", None)
+    declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
+    declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
+    given = check_file_values(path, fully_qualified_name, declared, SHARED)
+    world: dict[str, Any] = {
+        name: tuple(value) if isinstance(value, list) else value
+        for name, value in given.items()
+        if name in {f.name for f in fields(config)}
+    }
+    try:
+        return replace(config, **world)
+    except ConfigError as error:
+        raise ConfigError(f"{path}: {error}") from None
 
 
 def main(args: list[str] | None = None) -> None:

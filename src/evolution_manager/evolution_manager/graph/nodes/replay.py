@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import signal
 import sys
 import threading
@@ -27,17 +28,59 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
-from evolution_manager.recording.bags import BagError, check_bag, is_latched, read_bag, recover_bag
+from evolution_manager.recording.bags import (
+    BagError,
+    check_bag,
+    is_latched,
+    promised_messages,
+    read_bag,
+    recover_bag,
+)
 from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_ros.qos import NO_PUBLISHER_EVENTS, RECORDING, RECORDING_LATCHED
 
 RELIABLE = RECORDING
 
 
+MESSAGE_PACKAGES = (
+    "swarm_msgs",
+    "std_msgs",
+    "geometry_msgs",
+    "visualization_msgs",
+    "rosgraph_msgs",
+    "builtin_interfaces",
+    "diagnostic_msgs",
+    "lifecycle_msgs",
+    "rcl_interfaces",
+)
+"""The packages whose message types ``replay`` loads: the project's and the standard ROS ones its graph
+publishes. A bag names its types as text (``metadata.yaml``, the MCAP schemas); loading one means importing a
+Python module of that name, so a type of any other package is refused, never imported."""
+
+_MESSAGE_TYPE = re.compile(r"(?P<package>[a-z][a-z0-9_]*)/msg/(?P<name>[A-Z][A-Za-z0-9]*)")
+
+
+def check_message_type(msgtype: str, topic: str = "") -> tuple[str, str]:
+    """The package and name of the message type ``msgtype`` (``swarm_msgs/msg/WheelCommand``); ``BagError``
+    in one line for a type that is not ``PACKAGE/msg/Name`` of one of ``MESSAGE_PACKAGES``."""
+    where = f"topic {topic} has " if topic else ""
+    match = _MESSAGE_TYPE.fullmatch(msgtype)
+    if match is None or match["package"] not in MESSAGE_PACKAGES:
+        raise BagError(
+            f"{where}message type {msgtype!r}, which replay does not load: expected PACKAGE/msg/Name of "
+            f"{', '.join(MESSAGE_PACKAGES)}"
+        )
+    return match["package"], match["name"]
+
+
 def message_class(msgtype: str) -> type:
-    """The rclpy message class of a type name such as ``swarm_msgs/msg/WheelCommand``."""
-    package, kind, name = msgtype.split("/")
-    return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    """The rclpy message class of a type name such as ``swarm_msgs/msg/WheelCommand``, of the allowed
+    packages only (``check_message_type``)."""
+    package, name = check_message_type(msgtype)
+    cls = getattr(importlib.import_module(f"{package}.msg"), name, None)
+    if not isinstance(cls, type):
+        raise BagError(f"message type {msgtype!r} is not a message of the installed {package}")
+    return cls
 
 
 def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
@@ -87,9 +130,15 @@ def bag_topics(bag: Path) -> dict[str, str]:
     check_bag(bag)
     try:
         with Reader(bag) as reader:
-            return {connection.topic: connection.msgtype for connection in reader.connections}
+            topics = {connection.topic: connection.msgtype for connection in reader.connections}
     except Exception as error:  # rosbags' ReaderError: a truncated or empty MCAP, a damaged metadata.yaml
         raise BagError(f"{bag} is not a readable bag ({type(error).__name__}: {error})") from None
+    for topic, msgtype in topics.items():  # every type checked before any is loaded
+        try:
+            check_message_type(msgtype, topic)
+        except BagError as error:
+            raise BagError(f"{bag}: {error}") from None
+    return topics
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -132,9 +181,18 @@ def recover_main(argv: Sequence[str] | None = None) -> int:
     try:
         if not args.damaged.exists():
             raise BagError(f"no bag at {args.damaged}")
+        promised = promised_messages(args.damaged) if args.damaged.is_dir() else None
         count = recover_bag(args.damaged, args.recovered)
     except BagError as error:
         print(f"recover: {error}", file=sys.stderr)
         return 2
-    print(f"recovered {count} messages into {args.recovered}")
+    if promised is None:
+        print(f"recovered {count} messages into {args.recovered} (no count in a metadata.yaml to compare)")
+    elif count < promised:
+        print(
+            f"recovered {count} of the {promised} messages its metadata.yaml counts into {args.recovered}: "
+            f"{promised - count} lost (a damaged or truncated MCAP file)"
+        )
+    else:
+        print(f"recovered {count} of the {promised} messages its metadata.yaml counts into {args.recovered}")
     return 0

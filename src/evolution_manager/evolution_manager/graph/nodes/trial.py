@@ -70,7 +70,7 @@ from swarm_ros.safe_paths import describe
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.result_messages import result_fields, trial_record_of
 from swarm_sim.swarm_layout import LayoutError, SwarmLayout, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
@@ -325,17 +325,8 @@ class TrialGraph:
         self._temporary_logs: Path | None = None
 
     def _check_params_file(self, path: Path) -> None:
-        """Refuse, before any node starts, a parameter file that cannot be read or whose robot count is not
-        the graph's: the graph starts one controller per robot and gives the simulator ``n_robots`` on its
-        command line, which would silently win over the file's. The nodes check every other value."""
-        simulator = f"{self.namespace}/simulator"
-        for section in read_parameter_file(path):
-            count = section.parameters.get("n_robots")
-            if count is not None and section.names(simulator) and count != self.robots:
-                raise ValueError(
-                    f"--params-file {path}: n_robots {count!r} differs from this trial's {self.robots} "
-                    "robots; leave n_robots out of the file (the trial sets it: the condition robots=N)"
-                )
+        """Refuse, before any node starts, a parameter file the graph cannot take (``check_params_file``)."""
+        check_params_file(path, self.namespace, self.config)
 
     def __enter__(self) -> TrialGraph:
         stack = self._stack.__enter__()
@@ -440,6 +431,29 @@ class TrialGraph:
         finally:
             runner.executor.remove_node(node)
             node.destroy_node()
+
+
+def check_params_file(path: Path, namespace: str, config: Config) -> None:
+    """Refuse, before any node starts, a parameter file that cannot be read, whose robot count is not the
+    graph's (``config.n_robots``: the graph starts one controller per robot and gives the simulator
+    ``n_robots`` on its command line, which would silently win over the file's), or that gives the
+    simulator a value it would refuse at start-up (a mistyped value, one out of range, a world its checks
+    refuse, an unknown name): one line, rather than a graph started to fail. The controllers check their
+    own values as they start."""
+    from swarm_sim.nodes.simulator import check_parameter_file
+
+    simulator = f"{graph_namespace(namespace)}/simulator"
+    for section in read_parameter_file(path):
+        count = section.parameters.get("n_robots")
+        if count is not None and section.names(simulator) and count != config.n_robots:
+            raise ValueError(
+                f"--params-file {path}: n_robots {count!r} differs from this trial's {config.n_robots} "
+                "robots; leave n_robots out of the file (the trial sets it: the condition robots=N)"
+            )
+    try:
+        check_parameter_file(path, simulator, config)
+    except ConfigError as error:
+        raise ValueError(f"--params-file {error}") from None
 
 
 def run_recorded_trial(
@@ -612,6 +626,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"--bag {describe(args.bag, error)}") from None
         if args.params_file is not None and not args.params_file.is_file():
             raise ValueError(f"--params-file {args.params_file}: no such file")
+        if args.params_file is not None:  # before the graph starts, as the simulator would check it
+            check_params_file(args.params_file, args.namespace, args.task.config(args.profile))
         domain = caller_domain() if args.domain is None else args.domain
         logs = args.logs or args.bag.with_name(args.bag.name + ".logs")
         namespace = graph_namespace(args.namespace)
