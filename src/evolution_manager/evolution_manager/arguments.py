@@ -4,6 +4,7 @@ status 2), argument types that say what they expected, and the exit statuses."""
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import NoReturn
 
 from evolution_manager.errors import UsageError
@@ -17,6 +18,15 @@ EXIT_IO = 74
 class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:  # argparse prints usage and exits 2; we keep 2, in one line
         raise UsageError(message)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's parser for commands that have no error handling of their own around parsing: a bad option
+    is one line, ``PROG: error: MESSAGE``, and exit status 2 (argparse prints its usage block first)."""
+
+    def error(self, message: str) -> NoReturn:
+        print(f"{self.prog}: error: {' '.join(message.split())}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
 
 
 def positive_int(text: str) -> int:

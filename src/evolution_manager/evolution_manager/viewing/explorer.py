@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
+from evolution_manager.arguments import OneLineParser
 from evolution_manager.errors import ExplorerError
 from evolution_manager.files import write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
@@ -570,9 +571,8 @@ def write_explorer(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``explorer RUN_DIR``: (re)build a run directory's explorer.html."""
-    import argparse
 
-    parser = argparse.ArgumentParser(prog="explorer", description="Build RUN_DIR/explorer.html.")
+    parser = OneLineParser(prog="explorer", description="Build RUN_DIR/explorer.html.")
     parser.add_argument("run", type=Path, help="a run directory (with repertoire_<objective>.json files)")
     parser.add_argument("--no-animations", action="store_true", help="leave the trial animations out")
     parser.add_argument(

@@ -8,12 +8,12 @@ show from the same bag; it is no viewer, and not a replacement for one (``docs/v
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from evolution_manager.arguments import OneLineParser
 from evolution_manager.recording.bags import BagError, read_bag
 from swarm_ros.safe_paths import check_output, describe, replace_file
 
@@ -80,7 +80,7 @@ def draw(arena: list, robots: list, title: str, out: Path) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``snapshot``: one step of a trial bag as a top-down picture."""
-    parser = argparse.ArgumentParser(prog="snapshot", description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="snapshot", description=__doc__.split("\n\n")[0])
     parser.add_argument("bag", type=Path, help="a trial bag (trial --bag)")
     parser.add_argument("--step", type=int, default=-1, help="sensing step to draw (default -1: the last)")
     parser.add_argument("--out", type=Path, required=True, help="the PNG file to write (new, unless --force)")

@@ -14,7 +14,6 @@ clock. The ``GraphRecorder`` class is also used in-process by ``trial``.
 
 from __future__ import annotations
 
-import argparse
 import signal
 import struct
 import sys
@@ -31,6 +30,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from visualization_msgs.msg import MarkerArray
 
+from evolution_manager.arguments import OneLineParser
 from evolution_manager.recording.bags import BagError, BagRecorder, is_latched
 from swarm_msgs.msg import (
     GroundSensor,
@@ -145,7 +145,7 @@ class GraphRecorder:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``record``: record a trial graph's topics until SIGINT or SIGTERM."""
-    parser = argparse.ArgumentParser(prog="record", description=__doc__.split("\n\n")[1])
+    parser = OneLineParser(prog="record", description=__doc__.split("\n\n")[1])
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to write")
     parser.add_argument(
         "--robots",

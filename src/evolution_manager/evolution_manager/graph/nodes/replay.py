@@ -11,7 +11,6 @@ seed and reports whether it reproduces the recording bit for bit (exit code 0) o
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import re
 import signal
@@ -28,6 +27,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
+from evolution_manager.arguments import OneLineParser
 from evolution_manager.recording.bags import (
     BagError,
     check_bag,
@@ -143,7 +143,7 @@ def bag_topics(bag: Path) -> dict[str, str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``replay``: republish a bag, or ``--verify`` a recorded trial."""
-    parser = argparse.ArgumentParser(prog="replay", description=__doc__.split("\n\n")[1])
+    parser = OneLineParser(prog="replay", description=__doc__.split("\n\n")[1])
     parser.add_argument("bag", type=Path, help="the bag directory")
     parser.add_argument("--rate", type=float, default=1.0, help="playback speed; 0 = as fast as possible")
     parser.add_argument("--delay", type=float, default=1.0, help="seconds to wait for discovery first")
@@ -170,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def recover_main(argv: Sequence[str] | None = None) -> int:
     """``recover DAMAGED NEW_BAG``: write a whole bag from what a killed recorder left."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="recover",
         description="Write a whole bag at NEW_BAG from every message that reached the disk in DAMAGED, a bag "
         "whose recorder was killed (no metadata.yaml, no MCAP summary).",
