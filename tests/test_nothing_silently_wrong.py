@@ -270,6 +270,8 @@ def test_the_run_bag_holds_every_evaluation_once_in_order_cached_ones_marked(tmp
         ("/**:\n  ros__parameters:\n    arena_half: -5.0\n", "arena_half must be positive"),
         ("/**:\n  ros__parameters:\n    wheel_sped: 50.0\n", "did you mean wheel_speed?"),
         ("/simulator:\n  ros__parameters:\n    answer_timeout: 0.0\n", "answer_timeout: 0.0: expected"),
+        ("/**:\n  ros__parameters:\n    n_robots: -3\n", "n_robots -3"),
+        ("/**:\n  ros__parameters:\n    wheel_speed: [50.0\n", "line"),
     ],
 )
 def test_trial_refuses_a_mistyped_parameter_before_the_graph_starts(tmp_path, workspace, parameters, says):
@@ -290,28 +292,3 @@ def test_trial_refuses_a_mistyped_parameter_before_the_graph_starts(tmp_path, wo
     assert says in line and str(params) in line, line
     assert "graph in ROS domain" not in done.stderr
     assert not (tmp_path / "t.bag.logs").exists() and not (tmp_path / "t.bag").exists()
-
-
-@pytest.mark.parametrize(
-    ("parameters", "says"),
-    [
-        ('/**:\n  ros__parameters:\n    wheel_speed: "fast"\n', "wheel_speed"),
-        ("/**:\n  ros__parameters:\n    n_robots: -3\n", "n_robots -3"),
-        ("/**:\n  ros__parameters:\n    wheel_sped: 50.0\n", "wheel_sped"),
-        ("/**:\n  ros__parameters:\n    wheel_speed: [50.0\n", "line"),
-    ],
-)
-def test_trial_refuses_a_bad_parameter_file_in_one_line(tmp_path, workspace, parameters, says):
-    params = tmp_path / "params.yaml"
-    params.write_text(parameters)
-    where = ["--bag", str(tmp_path / "t.bag"), "--domain", str(workspace.domain)]
-    done = subprocess.run(
-        [exe("trial"), "--tree", "forward", "--seed", "1", *where, "--params-file", str(params)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert done.returncode == 2, done.stdout + done.stderr
-    lines = [line for line in done.stderr.splitlines() if not line.startswith("trial: graph in ROS domain")]
-    line = one_line_error("\n".join(lines))
-    assert (says in line and str(params) in line) or says in line, line

@@ -142,6 +142,8 @@ def test_a_cluster_config_file_gives_every_setting(tmp_path):
         ("log_directory: 5\n", "log_directory must be a directory path"),
         ("- cores\n", "expected a mapping of settings (key: value), got list"),
         ("cores: [\n", "not valid YAML at line"),
+        ("cores: 4\ncores: 8\n", "the key 'cores' appears twice (line 2); expected each setting once"),
+        ("jobs: 2\nmemory: 8GB\njobs: 3\n", "the key 'jobs' appears twice (line 3)"),
     ],
 )
 def test_a_bad_cluster_config_is_one_line_naming_the_file_and_key(tmp_path, text, expected):

@@ -1,5 +1,5 @@
-"""A ``--cluster-config`` file that is not UTF-8, or that gives a key twice, is refused in one line naming the
-file (a UnicodeDecodeError traceback, and a silent last-wins, before issue 41)."""
+"""A ``--cluster-config`` file that is not UTF-8 is refused in one line naming the file (a UnicodeDecodeError
+traceback before issue 41); a key given twice is among test_cluster's bad settings."""
 
 from __future__ import annotations
 
@@ -7,22 +7,6 @@ import pytest
 
 from evolution_manager.cluster.settings import ClusterError, parse_cluster
 from evolution_manager.studies.evolve import evolve
-
-
-@pytest.mark.parametrize(
-    "text,expected",
-    [
-        ("cores: 4\ncores: 8\n", "the key 'cores' appears twice (line 2); expected each setting once"),
-        ("jobs: 2\nmemory: 8GB\njobs: 3\n", "the key 'jobs' appears twice (line 3)"),
-    ],
-)
-def test_a_key_given_twice_is_refused_naming_it(tmp_path, text, expected):
-    config = tmp_path / "cluster.yaml"
-    config.write_text(text)
-    with pytest.raises(ClusterError) as caught:
-        parse_cluster("slurm", config)
-    message = str(caught.value)
-    assert message.startswith(f"--cluster-config {config}: ") and expected in message and "\n" not in message
 
 
 def test_a_config_that_is_not_utf8_is_one_line_and_exit_2(tmp_path, capsys):
