@@ -85,6 +85,7 @@ from swarm_msgs.msg import ArchiveProgress, EvaluationResult
 from swarm_ros.parameters import declare_dataclass
 from swarm_sim.evaluation import Evaluator
 from swarm_sim.result_messages import evaluation_fields
+from swarm_sim.tasks import world_parameters
 
 EXIT_FAILED = 1
 FLUSH_PERIOD = 1.0  # seconds between flushes of the run bag
@@ -267,9 +268,14 @@ class OwnedEvaluators:
     def __init__(self, graph: Graph, log: Callable[[str, str], None], run: Run) -> None:
         self.graph = graph
         self.log = log
-        # the run's model (profile, trial length) and its copy of the primitive library
+        # the run's model (profile, its task's world: every parameter the task sets, the trial length always)
+        # and its copy of the primitive library
         world = run.config.world()
-        self.parameters: dict[str, object] = {"profile": world.profile, "ticks": world.ticks}
+        self.parameters: dict[str, object] = {
+            "profile": world.profile,
+            "ticks": world.ticks,
+            **world_parameters(world),
+        }
         if run.library is not None:
             self.parameters["library"] = str(run.directory.library.absolute())
         self.lives: dict[str, int] = {}  # process name -> its base name
