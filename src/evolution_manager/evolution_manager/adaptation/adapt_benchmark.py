@@ -56,12 +56,13 @@ from evolution_manager.adaptation.search import (
     repertoire_profile,
     run_picker,
 )
-from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterError, add_cluster_options, settings_from_args
-from evolution_manager.errors import DispatchError, UsageError
+from evolution_manager.errors import DispatchError, UsageError, WriteError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_atomic, write_json
+from swarm_ros.safe_paths import make_folder
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -177,7 +178,7 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
         except ConditionError as error:
             raise UsageError(f"--condition-set {text}: {error}") from None
     repertoires = {str(path): load_candidates(path, args.objective) for path in args.repertoires}
-    args.out.mkdir(parents=True, exist_ok=True)
+    make_folder(args.out)
     ceilings_path = args.out / "ceilings.csv"
     ceilings = _read_ceilings(ceilings_path, profile)
     k = OBJECTIVES.index(args.objective)
@@ -274,7 +275,7 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
     summary = summarise(worlds, curves, ceiling_of, stops, args)
     write_json(args.out / "summary.json", summary)
     curves_figure(summary, curves, ceiling_of, args.out / "curves.png", args.objective)
-    (args.out / "report.md").write_text(report_text(summary, args))
+    write_atomic(args.out / "report.md", report_text(summary, args))
     say(f"done: {args.out / 'report.md'}")
     return summary
 
@@ -460,4 +461,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     except DispatchError as error:  # the cluster's workers could not finish a chunk
         print(f"adapt-benchmark: error: {error}; the ceilings found so far are kept", file=sys.stderr)
         sys.exit(1)
+    except (WriteError, OSError) as error:  # a link planted in --out, a full disk, a read-only folder
+        print(f"adapt-benchmark: error: {error}", file=sys.stderr)
+        sys.exit(EXIT_IO)
     sys.exit(0)

@@ -9,6 +9,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from evolution_manager.graph.nodes.trial import TrialGraph
+from swarm_ros.safe_paths import make_folder
 from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
 from swarm_sim.trial_data import combine
@@ -48,5 +49,5 @@ def graph_evaluator(
     as an evaluator whose trials are recorded under ``bags`` when given."""
     with TrialGraph(conditions=conditions, timeout=timeout, profile=profile) as graph:
         if bags is not None:
-            bags.mkdir(parents=True, exist_ok=True)
+            make_folder(bags)
         yield GraphEvaluator(graph, bags)

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import io
 import json
 import os
@@ -56,6 +57,7 @@ if TYPE_CHECKING:
     from evolution_manager.evolution.compositions import CompositionConfig
 from evolution_manager.files import CsvLog, read_json, write_atomic, write_json
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
+from swarm_ros.safe_paths import make_folder, replace_file
 from swarm_sim.tasks import task_named
 
 PRIMITIVES: tuple[str, ...] = tuple(FAMILIES)
@@ -494,8 +496,9 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
         )
         drawing = top.directory / "best" / "foraging.png"
         if drawing.exists():
-            figure_dir.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(drawing, figure_dir / f"best_{arm}.png")
+            make_folder(figure_dir)
+            copy = figure_dir / f"best_{arm}.png"
+            replace_file(copy, functools.partial(shutil.copyfile, drawing))
             parts.append(f"![best forager of {arm}](figures/best_{arm}.png)\n")
     return "\n".join(parts)
 
