@@ -363,7 +363,10 @@ def run_locally(
     """Every ``(config_data, root)`` of ``runs`` with :func:`run_one` in ``processes`` processes of this
     machine; yield ``(root, None)`` as each run finishes, ``(root, error)`` for one that failed (the others go
     on), as ``cluster.runs.map_runs`` does on a cluster. ``on_progress(root, produced)`` between results."""
-    with SyncManager() as manager:
+    # The manager's server process is spawned, not forked: a forked one would share the experiment
+    # folder's lock (flock holds while any process has the file open) and could outlive a killed experiment
+    # by a moment, so that continuing it at once was refused as "in use".
+    with SyncManager(ctx=get_context("spawn")) as manager:
         progress = manager.Queue()
         workers = manager.list()
         pool = ProcessPoolExecutor(
