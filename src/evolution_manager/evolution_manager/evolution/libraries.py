@@ -242,7 +242,7 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
     tasks = sorted({task_label(run.task) for run in runs})
     if len({run.task for run in runs}) > 1:
         named = ", ".join(
-            f"{run.path} ({task_label(run.task)}, {_trial_seconds(run.task):g} s)" for run in runs
+            f"{run.path} ({task_label(run.task)}, {run.task.trial_seconds:g} s)" for run in runs
         )
         raise LibraryBuildError(
             f"the runs mix tasks, {' and '.join(tasks)}: {named}; their fitness is not comparable: give runs "
@@ -301,12 +301,6 @@ def build_library(runs: Sequence[RunRepertoires], blocks: int, label: str = "lib
             "primitives: give runs whose repertoires have filled bins"
         )
     return library_from_json({"format": LIBRARY_FORMAT, "primitives": entries}, label)
-
-
-def _trial_seconds(task: TaskSpec) -> float:
-    """The trial length of ``task`` in seconds."""
-    world = task.config()
-    return world.ticks * world.steps_per_tick * world.step_dt
 
 
 def build_parser() -> Parser:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from swarm_sim.tasks._registry import DEFAULT_TASK, resolve_task, task_names
+from swarm_sim.tasks._registry import DEFAULT_TASK, registered_name, resolve_task, task_names
 from swarm_sim.tasks._spec import TaskError, TaskSpec
 
 
@@ -36,6 +36,4 @@ def add_task_option(
 
 def task_label(task: TaskSpec) -> str:
     """How messages name a task: its name, marked when it is not exactly the registered task of that name."""
-    from swarm_sim.tasks._registry import registered_name
-
     return task.name if registered_name(task) is not None else f"{task.name} (from a task file)"

@@ -161,6 +161,12 @@ class TaskSpec:
         """How many arena configurations the task's regions go through."""
         return max(len(r.radius) for r in self.regions)
 
+    @property
+    def trial_seconds(self) -> float:
+        """A trial's length in simulated seconds (its ticks at the model's control rate)."""
+        world = self.config()
+        return world.ticks * world.steps_per_tick * world.step_dt
+
     def config(self, profile: str | None = None) -> Config:
         """The world model's configuration for this task under ``profile`` (None: the model's default)."""
         nest, food = self.region("nest"), self.region("food")

@@ -30,9 +30,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.verb == "list":
             for name in task_names():
                 task = task_named(name)
-                seconds = task.trials.ticks / 2
                 print(
-                    f"{name}: {seconds:g} s trials, {task.robots.count} robots, objectives "
+                    f"{name}: {task.trial_seconds:g} s trials, {task.robots.count} robots, objectives "
                     f"{', '.join(task.objectives) or 'none'}"
                 )
             return 0
