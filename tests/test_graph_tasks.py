@@ -10,7 +10,8 @@ from evolution_manager.graph.nodes.trial import TrialGraph
 from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.tasks import FORAGING, Arena, Region, Robots, Trials
+from swarm_sim.objectives import N_OBJECTIVES, OBJECTIVES
+from swarm_sim.tasks import AGGREGATION, FORAGING, Arena, Region, Robots, Trials
 
 SMALL = replace(
     FORAGING,
@@ -37,3 +38,19 @@ def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_
     assert replay.reproduced, replay
     frames = frames_from_bag(bag)
     assert len(frames.steps) == SMALL.trials.ticks * 4 and frames.poses.shape[1] == 5
+    # Every objective, the newest (aggregation) included, as the animation scores the bag's last step.
+    assert frames.fitness[-1].tolist() == list(record.values[:N_OBJECTIVES])
+
+
+def test_the_aggregation_task_runs_through_the_graph_and_replays_from_its_bag(tmp_path):
+    """This project's own task, registered by name, with its own objective, as docs/tasks.md walks it."""
+    short = replace(AGGREGATION, trials=Trials(ticks=16, chain_trials=1))
+    tree = "sel(seq(robot_left, forward_left), seq(robot_right, forward_right), forward)"
+    seed, trial, bag = 3, 0, tmp_path / "bag"
+    with TrialGraph(timeout=120.0, task=short) as graph:
+        record = graph.run(tree, seed, trial, bag)
+    _, records = BatchEvaluator(short.config("paper")).evaluate_trials([EvaluationRequest(tree, seed, 1)])[0]
+    assert record.values == records[0].values
+    assert 0.0 < record.values[OBJECTIVES.index("aggregation")] < 1.0
+    replay = verify_trial_bag(bag)
+    assert replay.reproduced, replay

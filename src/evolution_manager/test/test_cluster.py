@@ -33,6 +33,7 @@ from evolution_manager.studies.experiment import run_one
 from evolution_manager.viewing.results import write_results
 from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.objectives import OBJECTIVES
 from swarm_sim.tasks import FORAGING
 
 VARYING = {"timing.json", "checkpoint.json", ".lock"}
@@ -291,7 +292,8 @@ def test_a_foraging_world_and_a_library_travel_to_the_workers(client):
     requests = [EvaluationRequest(tree, 4, 2) for tree in trees] + [EvaluationRequest("toNest", 4, 2)]
     results = DaskEvaluator(client, world, chunk=2, library=library).evaluate(requests)
     assert results == BatchEvaluator(world, library=library).evaluate(requests)
-    assert len(results[0].fitness) == 7 and results[0].fitness[6] >= 0.0
+    foraging = OBJECTIVES.index("foraging")
+    assert len(results[0].fitness) == len(OBJECTIVES) and results[0].fitness[foraging] >= 0.0
     assert "toNest" in results[-1].error and "hand-made" in results[-1].error
 
 

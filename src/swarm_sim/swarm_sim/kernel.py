@@ -39,6 +39,7 @@ from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
 from swarm_sim import fast_world, world
 from swarm_sim._numba_cache import drop_stale_cache
 from swarm_sim.config import Config, Params
+from swarm_sim.objectives import N_PROBES
 from swarm_sim.trial_data import chain_plan
 
 drop_stale_cache(
@@ -209,9 +210,9 @@ class Cargo(NamedTuple):
     """(n,) bool: whether each robot carries food (``perception.carry``)."""
     deliveries: np.ndarray
     """(n,) int64: each robot's deliveries in the current trial."""
-    food: np.ndarray
-    """(n, 2) each robot's true distance from the food region at the current trial's first step and, once
-    taken, its last (``world.food_distance``: the inverse food objective)."""
+    probes: np.ndarray
+    """(n, 2, ``N_PROBES``) each robot's probes (``world.take_probes``) at the current trial's first step and,
+    once taken, its last."""
 
 
 class Inbox(NamedTuple):
@@ -302,7 +303,7 @@ def _record_step(
     senders: np.ndarray,
     carrying: np.ndarray,
     deliveries: np.ndarray,
-    food: np.ndarray,
+    probes: np.ndarray,
 ) -> None:
     """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
     what the simulator publishes and what the robots answered to it."""
@@ -327,11 +328,9 @@ def _record_step(
         rec.initial[:, :] = initial
     if row + 1 >= p.initial_step:
         # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
-        # robots' distances from food now and their deliveries so far.
-        now = np.empty((n, 2))
-        for i in range(n):
-            now[i, 0] = food[i, 0]
-            now[i, 1] = world.food_distance(x[i], y[i], gap, p)
+        # robots' probes now and their deliveries so far.
+        now = probes.copy()
+        world.take_all_probes(x, y, gap, p, now, 1)
         values = world.trial_values(
             initial,
             smooth,
@@ -385,7 +384,7 @@ def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p:
 
 @numba.njit(cache=True, error_model="numpy")
 def _new_cargo(n: int) -> Cargo:
-    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2)))
+    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2, N_PROBES)))
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -452,7 +451,7 @@ def _score_trial(
     """Write a finished trial's values into ``values_out[position]`` (``world.trial_values``, which makes an
     array: called from ``_steps``, which cannot own one, as a function of its own)."""
     values = world.trial_values(
-        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.food, cargo.deliveries, gap, p
+        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.probes, cargo.deliveries, gap, p
     )
     for c in range(values.shape[0]):
         values_out[position, c] = values[c]
@@ -492,7 +491,7 @@ def _steps(
      window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
      initial) = swarm  # fmt: skip
     counts_in, senders, ranges, nest_values, food_values = inbox
-    carrying, deliveries, food = cargo
+    carrying, deliveries, probes = cargo
     samples = 0
     # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
     shared = tree_at(trees, robot_tree[0])
@@ -528,12 +527,13 @@ def _steps(
                 food_values,
             )
         if not sensing:
-            # A trial's first step: the start pose's ground sets the carrying flag, and its distance from
-            # food is the inverse food objective's first (footbot_bt.cpp:134-137, 495-496 at a73e4af).
+            # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
+            # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
+            # a73e4af).
             for i in range(n):
                 in_nest, on_food = world.ground(x[i], y[i], gap, p)
                 carrying[i] = world.start_carrying(carrying[i], on_food)
-                food[i, 0] = world.food_distance(x[i], y[i], gap, p)
+                world.take_probes(x, y, i, gap, p, probes, 0)
         if sensing:
             for i in range(n):
                 in_nest, on_food = world.ground(x[i], y[i], gap, p)
@@ -606,11 +606,10 @@ def _steps(
                 senders,
                 carrying,
                 deliveries,
-                food,
+                probes,
             )
         if timeline.is_final(p, k):
-            for i in range(n):
-                food[i, 1] = world.food_distance(x[i], y[i], gap, p)
+            world.take_all_probes(x, y, gap, p, probes, 1)
             _score_trial(swarm, cargo, gap, p, values_out, position)
             for i in range(n):
                 poses_out[position, 1, i, 0] = x[i]

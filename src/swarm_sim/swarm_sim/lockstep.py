@@ -23,6 +23,7 @@ from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
 from swarm_sim import world
 from swarm_sim.config import DEFAULT, Config
+from swarm_sim.objectives import N_PROBES
 from swarm_sim.sensing import Readings, sense_swarm
 from swarm_sim.trial_data import TrialRecord, setup_chain
 
@@ -79,8 +80,8 @@ class LockstepChain:
         self.counts = np.zeros((n, 1 + len(ACTIONS)), dtype=np.int64)
         self.motion = np.zeros((n, 2), dtype=np.int64)
         self.initial = np.zeros((n, 3))
-        self.food = np.zeros((n, 2))
-        """Each robot's true distance from the food region at the trial's first step, and at its last."""
+        self.probes = np.zeros((n, 2, N_PROBES))
+        """Each robot's probes (``world.take_probes``) at the trial's first step, and at its last."""
         self.carrying = np.zeros(n, dtype=np.bool_)
         """Each robot's carrying flag, as it answered the last step (for viewers: swarm_state)."""
         self.deliveries = np.zeros(n, dtype=np.int64)
@@ -138,14 +139,13 @@ class LockstepChain:
             self.initial = smoothed
         record = None
         if timeline.is_final(self.line, k):
-            for i in range(self.p.n_robots):
-                self.food[i, 1] = world.food_distance(self.x[i], self.y[i], self.setup.gap, self.p)
+            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 1)
             values = world.trial_values(
                 self.initial,
                 smoothed,
                 self.counts,
                 self.motion,
-                self.food,
+                self.probes,
                 self.deliveries,
                 self.setup.gap,
                 self.p,
@@ -190,8 +190,7 @@ class LockstepChain:
             self._pairs,
         )
         if timeline.step_in_trial(self.line, k) == 1:
-            for i in range(self.p.n_robots):
-                self.food[i, 0] = world.food_distance(self.x[i], self.y[i], self.setup.gap, self.p)
+            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 0)
         return sense_swarm(
             self.x,
             self.y,
@@ -295,7 +294,7 @@ def warm_up(config: Config = DEFAULT) -> None:
     n = config.n_robots
     counts = np.zeros((n, 1 + len(ACTIONS)), np.int64)
     world.trial_values(
-        np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64), np.zeros((n, 2)),
-        np.zeros(n, np.int64), 500.0, sim.p,
+        np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64),
+        np.zeros((n, 2, N_PROBES)), np.zeros(n, np.int64), 500.0, sim.p,
     )  # fmt: skip
-    world.food_distance(0.0, 0.0, 500.0, sim.p)
+    world.take_all_probes(sim.x, sim.y, 500.0, sim.p, np.zeros((n, 2, N_PROBES)), 0)

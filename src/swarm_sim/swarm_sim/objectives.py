@@ -16,10 +16,12 @@ __all__ = [
     "DESCRIPTOR_TABLE",
     "FAMILIES",
     "N_OBJECTIVES",
+    "N_PROBES",
     "N_VALUES",
     "OBJECTIVES",
     "OBJECTIVE_TABLE",
     "PAPER_OBJECTIVES",
+    "PROBES",
     "VALUE_NAMES",
     "Objective",
     "fitness_ceiling",
@@ -91,9 +93,23 @@ OBJECTIVE_TABLE: tuple[Objective, ...] = (
         math.inf,
         "",
     ),
+    Objective(
+        "aggregation",
+        "true mean distance from the other robots at the first and last steps",
+        "((first - last) / first + 1) / 2, clipped to [0, 1]; 0.5 for a robot alone",
+        1.0,
+        "",
+    ),
 )
 """Every objective, in fitness order: the paper's three, the 2024 follow-up's three inverse primitives,
-foraging."""
+foraging, and aggregation (the ``aggregation`` task's, which neither paper has). A new objective is a row
+appended here and its mapping appended to ``world.robot_objectives`` (``docs/tasks.md``)."""
+
+PROBES: tuple[str, ...] = ("food_distance", "neighbour_distance")
+"""What every road measures of each robot's true state at a trial's first and last steps
+(``world.take_probes``), for the objectives that score the world rather than the robot's own estimates: the
+distance from the food region (mm, 0 on food) and the mean distance from the other robots (mm)."""
+N_PROBES = len(PROBES)
 
 DESCRIPTOR_TABLE: tuple[Objective, ...] = (
     Objective("movement", "each tick's movement of the action run", "(sum + ticks) / (2 ticks)", 1.0, ""),

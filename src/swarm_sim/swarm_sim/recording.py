@@ -198,11 +198,10 @@ def record_trial_reference(
         if timeline.step_in_trial(line, sim.step) < line.initial_step:
             fitness.append(np.full(world.N_OBJECTIVES, np.nan))
         else:
-            food = sim.food.copy()
-            for i in range(n):
-                food[i, 1] = world.food_distance(sim.x[i], sim.y[i], sim.setup.gap, p)
+            probes = sim.probes.copy()
+            world.take_all_probes(sim.x, sim.y, sim.setup.gap, p, probes, 1)
             gap = sim.setup.gap
-            values = world.trial_values(initial, smoothed, no_counts, no_motion, food, delivered, gap, p)
+            values = world.trial_values(initial, smoothed, no_counts, no_motion, probes, delivered, gap, p)
             fitness.append(values[: world.N_OBJECTIVES])
 
     record = run_with_controllers(parsed, seed, trial, config, on_answers=on_answers)

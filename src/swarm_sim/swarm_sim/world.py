@@ -6,8 +6,8 @@
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
-(d) objectives and descriptors: ``food_distance``, ``robot_objectives``, ``robot_descriptors``,
-``trial_values``, ``mean_values``.
+(d) objectives and descriptors: ``food_distance``, ``neighbour_distance``, ``take_probes``,
+``take_all_probes``, ``robot_objectives``, ``robot_descriptors``, ``trial_values``, ``mean_values``.
 
 Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
 kernels call them inline and the reference road and the nodes call the very same compiled code from Python,
@@ -681,34 +681,72 @@ def food_distance(x: float, y: float, gap: float, p: Params) -> float:
     return 0.0 if r >= radius else radius - r
 
 
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def neighbour_distance(x: np.ndarray, y: np.ndarray, i: int) -> float:
+    """Robot ``i``'s mean true distance from the other robots (0 when it is alone)."""
+    n = x.shape[0]
+    if n < 2:
+        return 0.0
+    total = 0.0
+    for j in range(n):
+        if j != i:
+            total += math.sqrt((x[j] - x[i]) ** 2 + (y[j] - y[i]) ** 2)
+    return total / (n - 1)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def take_probes(
+    x: np.ndarray, y: np.ndarray, i: int, gap: float, p: Params, probes: np.ndarray, when: int
+) -> None:
+    """Write robot ``i``'s probes (``objectives.PROBES``, true quantities of the world) into
+    ``probes[i, when]``, ``when`` 0 at a trial's first step and 1 at its last (or the step being scored).
+    Every road calls this at those steps, so a probe added here reaches every road's objectives."""
+    probes[i, when, 0] = food_distance(x[i], y[i], gap, p)
+    probes[i, when, 1] = neighbour_distance(x, y, i)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def take_all_probes(
+    x: np.ndarray, y: np.ndarray, gap: float, p: Params, probes: np.ndarray, when: int
+) -> None:
+    """``take_probes`` for every robot."""
+    for i in range(x.shape[0]):
+        take_probes(x, y, i, gap, p, probes, when)
+
+
 @numba.njit(cache=True, error_model="numpy")
 def robot_objectives(
     initial: np.ndarray,
     final: np.ndarray,
-    food_initial: float,
-    food_final: float,
+    first: np.ndarray,
+    last: np.ndarray,
     deliveries: int,
     food_radius: float,
     p: Params,
 ) -> tuple:
     """The objectives of one robot in one trial, ``OBJECTIVES`` order (``CBlackBoard.cpp:85-96, 224-235,
     343-347`` at 6c65001; the inverse ones and foraging ``CBlackBoard.cpp:98-104, 247-261, 355-359`` and
-    ``footbot_bt.cpp:563-566`` at a73e4af).
+    ``footbot_bt.cpp:563-566`` at a73e4af). The mapping column of ``objectives.OBJECTIVE_TABLE``, row by row.
 
-    ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps.
+    ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps;
+    ``first`` and ``last`` the robot's probes (``take_probes``) at the trial's first and last steps.
     Density: (final - initial + 1) / 2, clipped to [0, 1]; nest and food: distances normalised by the cap,
     ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0. Inverse density: (initial -
     final + 1) / 2, clipped; inverse nest: ((final - initial) / cap + 1) / 2, with no rule for the nest;
     inverse food: from the true distances from the food region at the trial's first and last steps
     (``food_distance``), (final - initial + R) / (2 R) with R = ``food_radius``. Foraging: the deliveries.
+    Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
+    ((first - last) / first + 1) / 2, clipped to [0, 1]; 0.5 for a robot alone.
     """
     density = min(max(0.5 * (final[2] - initial[2] + 1.0), 0.0), 1.0)
     nest = 1.0 if final[0] == 0.0 else 0.5 * ((initial[0] - final[0]) / p.estimate_cap + 1.0)
     food = 1.0 if final[1] == 0.0 else 0.5 * ((initial[1] - final[1]) / p.estimate_cap + 1.0)
     idensity = min(max(0.5 * (initial[2] - final[2] + 1.0), 0.0), 1.0)
     inest = 0.5 * ((final[0] - initial[0]) / p.estimate_cap + 1.0)
-    ifood = (food_final - food_initial + food_radius) / (2.0 * food_radius)
-    return density, nest, food, idensity, inest, ifood, float(deliveries)
+    ifood = (last[0] - first[0] + food_radius) / (2.0 * food_radius)
+    spread = first[1]
+    aggregation = 0.5 if spread == 0.0 else min(max(0.5 * ((spread - last[1]) / spread + 1.0), 0.0), 1.0)
+    return density, nest, food, idensity, inest, ifood, float(deliveries), aggregation
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -736,20 +774,20 @@ def trial_values(
     final: np.ndarray,
     counts: np.ndarray,
     motion: np.ndarray,
-    food: np.ndarray,
+    probes: np.ndarray,
     deliveries: np.ndarray,
     gap: float,
     p: Params,
 ) -> np.ndarray:
     """A trial's values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in id
     order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x ``N_COUNTS`` tick counts; ``motion``:
-    n x 2 (movement, rotation) sums; ``food``: n x 2 true distances from the food region at the trial's first
-    and last steps; ``deliveries``: n; ``gap``: the trial's nest-food gap."""
+    n x 2 (movement, rotation) sums; ``probes``: n x 2 x ``objectives.N_PROBES``, each robot's probes at the
+    trial's first and last steps (``take_probes``); ``deliveries``: n; ``gap``: the trial's nest-food gap."""
     n = initial.shape[0]
     radius = p.nest_radius + gap
     out = np.zeros(N_VALUES)
     for i in range(n):
-        o = robot_objectives(initial[i], final[i], food[i, 0], food[i, 1], deliveries[i], radius, p)
+        o = robot_objectives(initial[i], final[i], probes[i, 0], probes[i, 1], deliveries[i], radius, p)
         d = robot_descriptors(counts[i], motion[i, 0], motion[i, 1], p)
         for k in range(N_OBJECTIVES):
             out[k] += o[k]

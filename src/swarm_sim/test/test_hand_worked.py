@@ -204,7 +204,7 @@ def test_nest_side_needs_an_estimate_strictly_inside_the_cap():
 def test_nest_objective_is_one_when_the_final_smoothed_nest_value_is_zero():
     p = PAPER_CONFIG.params()
     density, nest, food, *_ = world.robot_objectives(
-        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), 0.0, 0.0, 0, 1000.0, p
+        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), np.zeros(2), np.zeros(2), 0, 1000.0, p
     )
     assert nest == 1.0
     assert food == pytest.approx(0.5 * ((2000.0 - 4000.0) / 5000.0 + 1.0))

@@ -9,6 +9,7 @@ from bt_controller.tree import parse
 from swarm_sim import reference_road, world
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.objectives import PROBES
 
 TRIALS = 4
 MOVEMENT = world.VALUE_NAMES.index("movement")
@@ -23,17 +24,20 @@ def both_roads(tree, seed, config, trials=TRIALS):
     return values, records
 
 
-def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0):
+def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0, spread=(0.0, 0.0)):
+    """One robot's objectives; ``food`` and ``spread``: its food and neighbour distances (``PROBES``) at the
+    trial's first and last steps."""
     p = DEFAULT.params()
     initial, final = np.array(initial, float), np.array(final, float)
-    return world.robot_objectives(initial, final, food[0], food[1], deliveries, radius, p)
+    first, last = np.array([food[0], spread[0]]), np.array([food[1], spread[1]])
+    return world.robot_objectives(initial, final, first, last, deliveries, radius, p)
 
 
 def test_objective_formulas():
     initial, final = [4000.0, 1000.0, 0.2], [1500.0, 3000.0, 0.5]
     # 300 mm from food at the start, on food at the end; food radius 1200 mm (gap 700); 3 deliveries.
-    values = objectives(initial, final, (300.0, 0.0), 3, 1200.0)
-    density, nest, food, idensity, inest, ifood, foraging = values
+    values = objectives(initial, final, (300.0, 0.0), 3, 1200.0, (1600.0, 400.0))
+    density, nest, food, idensity, inest, ifood, foraging, aggregation = values
     assert density == pytest.approx((0.5 - 0.2 + 1) / 2)
     assert nest == pytest.approx(((4000 - 1500) / 5000 + 1) / 2)
     assert food == pytest.approx(((1000 - 3000) / 5000 + 1) / 2)
@@ -42,6 +46,11 @@ def test_objective_formulas():
     assert inest == pytest.approx(((1500 - 4000) / 5000 + 1) / 2)
     assert ifood == pytest.approx((0.0 - 300.0 + 1200.0) / 2400.0)
     assert foraging == 3.0
+    # Aggregation: the mean distance from the others fell from 1600 to 400 mm.
+    assert aggregation == pytest.approx(((1600 - 400) / 1600 + 1) / 2)
+    assert objectives(initial, final, spread=(500.0, 1500.0))[7] == 0.0  # spread out threefold: clipped
+    assert objectives(initial, final, spread=(0.0, 0.0))[7] == 0.5  # alone
+    assert len(values) == len(world.OBJECTIVES)
     # A final smoothed value of 0 (7 samples in the region) scores 1; the inverse nest has no such rule.
     assert objectives(initial, [0.0, 0.0, 0.5])[1:3] == (1.0, 1.0)
     assert objectives(initial, [0.0, 0.0, 0.5])[4] == pytest.approx(((0 - 4000) / 5000 + 1) / 2)
@@ -54,6 +63,23 @@ def test_food_distance_is_the_true_distance_from_the_food_region():
     assert world.food_distance(600.0, 800.0, 500.0, p) == 0.0  # r = 1000 = 500 + 500: on food
     assert world.food_distance(300.0, 400.0, 700.0, p) == pytest.approx(1200.0 - 500.0)
     assert world.food_distance(0.0, 0.0, 500.0, p) == 1000.0
+
+
+def test_neighbour_distance_is_the_mean_true_distance_from_the_others():
+    x, y = np.array([0.0, 300.0, 0.0]), np.array([0.0, 0.0, 400.0])
+    assert world.neighbour_distance(x, y, 0) == pytest.approx((300 + 400) / 2)
+    assert world.neighbour_distance(x, y, 1) == pytest.approx((300 + 500) / 2)
+    assert world.neighbour_distance(x[:1], y[:1], 0) == 0.0
+
+
+def test_take_probes_writes_every_probe_of_a_robot_at_the_step_asked():
+    p = DEFAULT.params()
+    x, y = np.array([300.0, 0.0]), np.array([400.0, 0.0])
+    probes = np.zeros((2, 2, len(PROBES)))
+    world.take_all_probes(x, y, 700.0, p, probes, 1)
+    assert probes[:, 0].tolist() == [[0.0, 0.0], [0.0, 0.0]]  # the first step's row untouched
+    assert probes[0, 1].tolist() == [world.food_distance(300.0, 400.0, 700.0, p), 500.0]
+    assert probes[1, 1].tolist() == [world.food_distance(0.0, 0.0, 700.0, p), 500.0]
 
 
 def test_descriptor_formulas():

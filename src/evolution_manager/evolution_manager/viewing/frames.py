@@ -22,6 +22,7 @@ import numpy as np
 
 from bt_controller import timeline
 from evolution_manager.errors import AnimationError
+from swarm_sim.objectives import N_PROBES
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
@@ -105,16 +106,21 @@ def arena_fields(config: Config, trial: int) -> dict[str, float]:
 
 
 def _fitness_so_far(
-    initial: np.ndarray, current: np.ndarray, food: np.ndarray, deliveries: np.ndarray, gap: float, p: Params
+    initial: np.ndarray,
+    current: np.ndarray,
+    probes: np.ndarray,
+    deliveries: np.ndarray,
+    gap: float,
+    p: Params,
 ) -> np.ndarray:
-    """Every objective as if the trial ended now: from the smoothed values, the distances from food at the
-    trial's first step and now (``food``, n x 2) and the deliveries so far."""
+    """Every objective as if the trial ended now: from the smoothed values, the probes at the trial's first
+    step and now (``probes``, n x 2 x ``N_PROBES``: ``world.take_probes``) and the deliveries so far."""
     from bt_controller.compiled import N_COUNTS
     from swarm_sim import world
 
     n = initial.shape[0]
     counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
-    values = world.trial_values(initial, current, counts, motion, food, deliveries, gap, p)
+    values = world.trial_values(initial, current, counts, motion, probes, deliveries, gap, p)
     return values[: world.N_OBJECTIVES]
 
 
@@ -222,8 +228,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
 
     p = config.params()
     gap = config.gap(trial)
-    food = np.zeros((n, 2))
-    food[:, 0] = [world.food_distance(x, y, gap, p) for x, y, _ in poses[0]]  # at the trial's first step
+    probes = np.zeros((n, 2, N_PROBES))
+    world.take_all_probes(poses[0][:, 0], poses[0][:, 1], gap, p, probes, 0)  # at the trial's first step
     ticks, actions = [], np.full((len(steps), n), -1, np.int64)
     fitness = np.full((len(steps), world.N_OBJECTIVES), np.nan)
     # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
@@ -237,8 +243,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
-            food[:, 1] = [world.food_distance(x, y, gap, p) for x, y, _ in poses[k]]
-            fitness[k] = _fitness_so_far(initial, smoothed[k], food, deliveries[k], gap, p)
+            world.take_all_probes(poses[k][:, 0], poses[k][:, 1], gap, p, probes, 1)
+            fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], gap, p)
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
     trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()

@@ -18,6 +18,7 @@ from swarm_sim.tasks._files import (
 )
 from swarm_sim.tasks._option import add_task_option, task_argument, task_label
 from swarm_sim.tasks._registry import (
+    AGGREGATION,
     DEFAULT_TASK,
     FORAGING,
     PRIMITIVES,
@@ -46,6 +47,7 @@ from swarm_sim.tasks._spec import (
 )
 
 __all__ = [
+    "AGGREGATION",
     "DEFAULT_TASK",
     "FORAGING",
     "PRIMITIVES",

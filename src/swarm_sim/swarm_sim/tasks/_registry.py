@@ -36,6 +36,20 @@ FORAGING = replace(
 )
 """The 2024 foraging task (``footbot_bt.cpp:493,538,546,551`` at a73e4af: 200 ticks, 800 steps)."""
 
+AGGREGATION = replace(
+    PRIMITIVES,
+    name="aggregation",
+    description="A task of this project's own, which neither paper has: nine footbots scattered over the "
+    "arena (start square of 2000 mm half-side) gather into one group in trials of 60 s, sensing only each "
+    "other (robot_left, robot_right); scored by the fall of each robot's true mean distance from the others. "
+    "The nest and food of the 2023 arena stay on the ground, unread.",
+    trials=Trials(ticks=120),
+    robots=replace(PRIMITIVES.robots, start_half_size=2000.0),
+    objectives=("aggregation",),
+    nodes=Nodes(conditions=("robot_left", "robot_right")),
+)
+"""Aggregation, this project's own task (``docs/tasks.md`` works through it)."""
+
 _REGISTRY: dict[str, TaskSpec] = {}
 
 DEFAULT_TASK = "primitives"
@@ -52,6 +66,7 @@ def register(task: TaskSpec) -> TaskSpec:
 
 register(PRIMITIVES)
 register(FORAGING)
+register(AGGREGATION)
 
 
 def task_names() -> tuple[str, ...]:
