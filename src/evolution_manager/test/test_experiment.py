@@ -113,10 +113,26 @@ def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tm
     assert experiment(args) == 0
     assert report([str(out)]) == 0
     assert (out / "report.md").read_text() == before
-    # another experiment's options are refused, nothing is lost
-    assert experiment(["--runs", "3", "--evaluations", "150", "--out", str(out), "--no-progress"]) == 2
+    # another experiment's options are refused, nothing is lost (fewer runs too: they would drop some)
+    assert experiment(["--runs", "1", "--evaluations", "150", "--out", str(out), "--no-progress"]) == 2
     assert "other options" in capsys.readouterr().err
     assert (out / "report.md").read_text() == before
+
+
+def test_more_runs_continue_an_experiment_and_leave_its_finished_runs_as_they_are(tmp_path, capsys):
+    """``--runs`` raised on an experiment folder: the runs it planned keep their seeds, folders and files,
+    and only the new ones run (issue 38's scenarios grow from 10 to 20 runs per group this way)."""
+    out = tmp_path / "experiment"
+    args = ["--evaluations", "50", "--out", str(out), "--processes", "2", "--no-progress"]
+    assert experiment(["--runs", "1", *args]) == 0
+    first = {p: p.read_bytes() for p in sorted(out.glob("runs/*/run00/*.json"))}
+    plan = json.loads((out / "experiment.json").read_text())["plan"]
+    assert experiment(["--runs", "2", *args]) == 0
+    assert "grows to 2 runs per group" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in first} == first
+    grown = json.loads((out / "experiment.json").read_text())
+    assert grown["runs"] == 2 and all(entry in grown["plan"] for entry in plan)
+    assert len(list(out.glob("runs/*/run01/summary.json"))) == 7
 
 
 def test_other_options_are_named_in_the_refusal(tmp_path, capsys):

@@ -464,7 +464,13 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if plan_path.exists():
             saved = read_json(plan_path)
             given = json.loads(json.dumps(document))
-            if saved != given:
+            if saved != given and more_runs(saved, given):
+                print(
+                    f"experiment: {args.out} grows to {args.runs} runs per group; "
+                    "the runs it planned keep their seeds and folders",
+                    file=sys.stderr,
+                )
+            elif saved != given:
                 raise UsageError(
                     f"{args.out} holds an experiment with other options ({differences(saved, given)}); "
                     "use the same options to continue it, or another --out"
@@ -488,6 +494,24 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         return 1
     print(f"experiment: {sum(1 for _ in budgets)} runs in {args.out}; report: {written}")
     return 0
+
+
+def more_runs(saved: object, given: object) -> bool:
+    """Whether the plan document ``given`` only adds runs to ``saved``: more runs per group, every other
+    option the same, and every run ``saved`` planned planned again with the same folder and configuration
+    (run seeds are derived from the run's index, so raising ``--runs`` keeps the first runs as they were)."""
+    if not (isinstance(saved, dict) and isinstance(given, dict)) or saved.keys() != given.keys():
+        return False
+    if any(saved[key] != given[key] for key in saved if key not in ("runs", "plan")):
+        return False
+    old_runs, new_runs = saved.get("runs"), given.get("runs")
+    old_plan, new_plan = saved.get("plan"), given.get("plan")
+    if not (isinstance(old_runs, int) and isinstance(new_runs, int) and new_runs > old_runs):
+        return False
+    if not (isinstance(old_plan, list) and isinstance(new_plan, list)):
+        return False
+    planned = {json.dumps(entry, sort_keys=True) for entry in new_plan}
+    return all(json.dumps(entry, sort_keys=True) in planned for entry in old_plan)
 
 
 def differences(saved: object, given: object, shown: int = 3) -> str:
