@@ -80,7 +80,12 @@ class WriteError(EvolutionError):
         refused path (a planted link, ``swarm_ros.safe_paths``) says so itself."""
         if isinstance(error, UnsafePathError):
             return cls(str(error))
-        return cls(f"cannot write {path}: {error.strerror or error}")
+        # The file the system names may be another (a temporary beside it, a font, a module being
+        # reinstalled): said too, so a missing file elsewhere is not taken for the output's folder.
+        other = error.filename is not None and str(error.filename) != str(path)
+        return cls(
+            f"cannot write {path}: {error.strerror or error}" + (f" ({error.filename})" if other else "")
+        )
 
 
 class LockHeldError(EvolutionError):
