@@ -249,8 +249,18 @@ def _short(test: str) -> str:
 
 
 def write_runs_csv(root: Path, runs: Sequence[FinishedRun]) -> Path:
-    """``runs.csv``: one row per run and evolved objective, in the experiment plan's order (algorithm,
-    objective, run index); floats as exact decimal text."""
+    """``runs.csv``: one row per run and evolved objective (``runs_rows``)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerows([RUNS_HEADER, *runs_rows(runs)])
+    path = Path(root) / "runs.csv"
+    write_atomic(path, buffer.getvalue())
+    return path
+
+
+def runs_rows(runs: Sequence[FinishedRun]) -> list[list[str]]:
+    """The rows of ``runs.csv`` (``RUNS_HEADER``): one per run and evolved objective, in the experiment
+    plan's order (algorithm, objective, run index); floats as exact decimal text."""
     order = {a: i for i, a in enumerate(("gp", "gp-fnd", "qd"))}
     rows = []
     for run in sorted(runs, key=lambda r: (order[r.algorithm], r.objective or "", r.index)):
@@ -271,12 +281,7 @@ def write_runs_csv(root: Path, runs: Sequence[FinishedRun]) -> Path:
                     str(m["repertoire_size"]),
                 ]
             )
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerows([RUNS_HEADER, *rows])
-    path = Path(root) / "runs.csv"
-    write_atomic(path, buffer.getvalue())
-    return path
+    return rows
 
 
 def _summary_table(runs: Sequence[FinishedRun]) -> str:
@@ -527,7 +532,12 @@ def _study(root: Path) -> str | None:
 def report(argv: Sequence[str] | None = None) -> int:
     """Run ``report``; return the exit status."""
     parser = Parser(prog="report", description=__doc__.split("\n")[0])
-    parser.add_argument("dir", type=Path, help="an experiment folder or a run directory")
+    parser.add_argument(
+        "dir",
+        type=Path,
+        help="an experiment folder, a run directory, or a folder of scenario experiments (seed-K/; "
+        "table 6 across scenarios)",
+    )
     parser.add_argument(
         "--beside",
         type=Path,
@@ -551,8 +561,14 @@ def report(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f"report: error: {error}", file=sys.stderr)
         return EXIT_USAGE
+    from evolution_manager.studies import scenarios  # (it builds on this module: imported when run)
+
     try:
-        if _study(args.dir) == "foraging":
+        if scenarios.is_scenarios_folder(args.dir):
+            if args.beside is not None or args.argos_eval is not None:
+                raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
+            print(scenarios.build_scenarios_report(args.dir))
+        elif _study(args.dir) == "foraging":
             from evolution_manager.studies.foraging_study import build_report as build_foraging_report
 
             if args.beside is not None:
@@ -570,7 +586,10 @@ def report(argv: Sequence[str] | None = None) -> int:
             for path in rebuild_run(args.dir):
                 print(path)
         else:
-            raise UsageError(f"{args.dir} is neither an experiment folder nor a run directory")
+            raise UsageError(
+                f"{args.dir} is neither an experiment folder, a run directory nor a folder of scenario "
+                "experiments (seed-K/experiment.json)"
+            )
     except (UsageError, EvolutionError, OSError, KeyError, ValueError) as error:
         print(f"report: error: {error!s} (is {args.dir} a finished run or experiment?)", file=sys.stderr)
         return EXIT_USAGE

@@ -1,0 +1,67 @@
+"""Table 6 across training scenarios (``studies.scenarios``): the report from scenario experiments, its
+tables recomputed from its ``runs.csv``, and the pooled mixed model on data of known effect."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evolution_manager.studies import scenarios
+from evolution_manager.studies.report import report
+
+PAPER = Path(__file__).resolve().parents[3] / "experiments" / "paper"
+COMMITTED = Path(__file__).resolve().parents[3] / "docs" / "results" / "paper" / "scenarios"
+
+
+def _scenario(root: Path, name: str, scenario_seed: int, runs: range) -> None:
+    """A scenario experiment folder from runs of the committed paper experiment (its files only)."""
+    folder = root / name
+    folder.mkdir(parents=True)
+    document = json.loads((PAPER / "experiment.json").read_text())
+    (folder / "experiment.json").write_text(json.dumps({**document, "scenario_seed": scenario_seed}))
+    for group in (PAPER / "runs").iterdir():
+        for r in runs:
+            shutil.copytree(group / f"run{r:02d}", folder / "runs" / group.name / f"run{r:02d}")
+
+
+def test_the_report_of_two_scenarios_has_both_tables_and_recomputes_from_its_csv(tmp_path, capsys):
+    _scenario(tmp_path, "seed-0", 11, range(0, 4))
+    _scenario(tmp_path, "seed-1", 22, range(4, 8))
+    assert scenarios.is_scenarios_folder(tmp_path) and not scenarios.is_scenarios_folder(PAPER)
+    assert report([str(tmp_path)]) == 0
+    rows = scenarios.read_scenarios_csv(tmp_path / "runs.csv")
+    assert len(rows) == 2 * 4 * (3 + 3 + 3)  # scenarios x runs x (GP_o, GP_fnd on three, QD_o)
+    assert {row["scenario_seed"] for row in rows} == {"11", "22"}
+    text = (tmp_path / "report.md").read_text()
+    per_scenario, pooled = scenarios.tables_from_rows(rows)
+    assert per_scenario in text and pooled in text
+    assert "1. scenario seed 11: 28 finished runs" in text
+    assert pooled.count("\n") == 2 + 18  # header, rule, table 6's 18 rows
+    # --beside is the paper experiment's option: refused in one line, nothing written
+    before = (tmp_path / "report.md").read_bytes()
+    assert report([str(tmp_path), "--beside", str(tmp_path / "runs.csv")]) == 2
+    assert capsys.readouterr().err.count("\n") == 1 and (tmp_path / "report.md").read_bytes() == before
+
+
+def test_the_mixed_model_recovers_a_known_difference_with_scenario_offsets():
+    rng = np.random.default_rng(4)
+    first, second = {}, {}
+    for s, offset in enumerate((0.0, 0.3, -0.2, 0.1, 0.5)):
+        first[str(s)] = list(offset + rng.normal(0.0, 0.05, 20))
+        second[str(s)] = list(offset + 0.08 + rng.normal(0.0, 0.05, 20))
+    estimate, low, high, p = scenarios._mixed(first, second)
+    assert low < 0.08 < high and estimate == pytest.approx(0.08, abs=0.02) and p < 1e-6
+    same = {s: list(v) for s, v in first.items()}
+    shifted = {s: list(np.array(v)[::-1]) for s, v in same.items()}  # the same values: no difference
+    assert scenarios._mixed(same, shifted)[3] > 0.5
+
+
+def test_the_committed_scenarios_report_recomputes_from_its_runs_csv():
+    rows = scenarios.read_scenarios_csv(COMMITTED / "runs.csv")
+    per_scenario, pooled = scenarios.tables_from_rows(rows)
+    text = (COMMITTED / "report.md").read_text()
+    assert per_scenario in text and pooled in text
