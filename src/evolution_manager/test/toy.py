@@ -53,7 +53,8 @@ class ToyEvaluator:
             for c in ("robot_right", "nest_right", "food_left")
         ]
         foraging = (words["got_food"] + words["forward_right"]) / total
-        fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food, *inverse, foraging))
+        aggregation = (words["robot_left"] + words["robot_right"]) / total
+        fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food, *inverse, foraging, aggregation))
         a = max(1, actions)
         movement = 0.5 + 0.5 * (words["forward"] - words["reverse"]) / a
         rotation = (
