@@ -13,6 +13,7 @@ import pytest
 
 from evolution_manager.studies.evolve import evolve
 from swarm_ros.isolation import Workspace
+from swarm_sim.objectives import VALUE_NAMES
 
 COMPARED = [
     "config.json",
@@ -154,7 +155,9 @@ def test_the_profile_is_the_runs_recorded_and_reproduced_by_evaluate(tmp_path, c
         seed = str(config["scenario_seed"])
         clean = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed, "--profile", "clean"]))
         values = {**clean["fitness"], **clean["descriptors"]}
-        assert len(values) == 10 and all(float(row[k]) == v for k, v in values.items())  # all, exactly
+        assert list(values) == list(VALUE_NAMES) and all(
+            float(row[k]) == v for k, v in values.items()
+        )  # all, exactly
         paper = json.loads(evaluate_command(["--tree", row["tree"], "--seed", seed]))
         differs += any(float(row[k]) != v for k, v in {**paper["fitness"], **paper["descriptors"]}.items())
     assert differs > 0  # the run did not run the default profile
