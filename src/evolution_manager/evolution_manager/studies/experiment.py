@@ -78,7 +78,7 @@ PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
 COMPOSITIONS = "compositions"
 """``config.json``'s ``kind`` of a composition run (``evolution.compositions.KIND``, without importing it)."""
-STUDIES = ("paper", "foraging")
+STUDIES = ("paper", "foraging", "replication")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
 
@@ -347,7 +347,13 @@ def build_parser() -> argparse.ArgumentParser:
         choices=STUDIES,
         default="paper",
         help="paper: the 2023 paper's three algorithms on its three objectives (default); foraging: the 2024 "
-        "study, primitives, libraries and foragers (docs/algorithms.md)",
+        "study, primitives, libraries and foragers; replication: the 2024 comparison with a library per "
+        "primitive seed, from --primitives-from (docs/algorithms.md)",
+    )
+    parser.add_argument(
+        "--primitives-from",
+        metavar="FOLDER",
+        help="with --study replication: the foraging study whose primitive runs give the libraries",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
@@ -450,11 +456,18 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         exclusive_lock(lock_path_for(args.out, "experiment"), f"the experiment folder {args.out}")
         scenarios = args.scenarios or "fixed"
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
+        if args.primitives_from is not None and args.study != "replication":
+            raise UsageError("--primitives-from applies to --study replication only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study
 
             document, stages, budgets = foraging_study.plan_study(args, scenarios, design)
             report: Callable[[Path], Path] = foraging_study.build_report
+        elif args.study == "replication":
+            from evolution_manager.studies import replication_study
+
+            document, stages, budgets = replication_study.plan_study(args, scenarios, design)
+            report = replication_study.build_report
         else:
             from evolution_manager.studies import report as paper_report
 

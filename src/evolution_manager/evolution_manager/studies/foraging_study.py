@@ -271,16 +271,22 @@ def plan_study(
 def _library(out: Path, name: str, primitives: Sequence[tuple[RunConfig, str]]) -> Library:
     """The library ``name`` of the study in ``out``: the file when an earlier session built it, else built
     from the stage's finished primitive runs and written."""
-    path = out / "libraries" / f"{name}.json"
+    source, blocks = LIBRARIES[name]
+    runs = [out / rel for made, rel in primitives if made.algorithm == source]
+    return study_library(out / "libraries" / f"{name}.json", runs, blocks)
+
+
+def study_library(path: Path, runs: Sequence[Path], blocks: int) -> Library:
+    """The library at ``path``: the file when an earlier session built it, else built from the finished
+    primitive runs ``runs`` (``blocks`` per grid) and written, each primitive's source run relative to the
+    library's folder, so that the study folder can move."""
     if path.exists():
         try:
             return load_library(path)
         except LibraryError as error:
             raise EvolutionError(f"{error}; remove it to build it again from the primitive runs") from None
-    source, blocks = LIBRARIES[name]
-    runs = [read_run(out / rel) for made, rel in primitives if made.algorithm == source]
-    built = build_library(runs, blocks, str(path))
-    entries = [  # each source run relative to the library's folder, so that the study folder can move
+    built = build_library([read_run(run) for run in runs], blocks, str(path))
+    entries = [
         {
             "name": p.name,
             "tree": p.text,

@@ -568,6 +568,12 @@ def report(argv: Sequence[str] | None = None) -> int:
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
             print(scenarios.build_scenarios_report(args.dir))
+        elif _study(args.dir) == "replication":
+            from evolution_manager.studies.replication_study import build_report as build_replication_report
+
+            if args.beside is not None or args.argos_eval is not None:
+                raise UsageError("--beside and --argos-eval apply to the paper's and the foraging study")
+            print(build_replication_report(args.dir))
         elif _study(args.dir) == "foraging":
             from evolution_manager.studies.foraging_study import build_report as build_foraging_report
 

@@ -1,0 +1,264 @@
+"""``experiment --study replication``: the 2024 comparison replicated at the level of libraries.
+
+    ws/run evolution_manager experiment --study replication --primitives-from experiments/foraging \\
+        --runs 3 --out experiments/foraging-replication
+
+The foraging study builds one library per kind from all its primitive runs, so that its ten runs per arm
+share one library and measure only the high-level GP's variance. Here each seed of the primitive runs gives
+its own library (``docs/algorithms.md``, "Library-level replication"): library ``qd8-sK`` from run ``K`` of
+each of the six QD primitive runs, ``gpfnd8-sK`` from GP_fnd's run ``K`` (8 blocks per grid, the ``library``
+command's rules), and ``--runs`` hierarchical GP runs of 100 s foraging trials on each (``arms/<library>/``).
+The primitive runs are read from the foraging study ``--primitives-from``, whose profile, trials, scenario
+design and seed this study takes; seeds: run ``r`` on library ``l`` gets ``derive_seed(--seed, RUN_STUDY,
+REPLICATION_STAGE, l, r)``.
+
+The report (``report.md``, ``runs.csv`` with ``arm, library, seed, best_fitness, heldout_best_fitness``)
+gives each library's runs, then QD against GP_fnd libraries on the held-out best fitness: a linear mixed
+model with the library as a random intercept (statsmodels ``MixedLM``), its estimate with a 95 % confidence
+interval, and an equivalence test (two one-sided tests on that estimate, at ``EQUIVALENCE_MARGIN``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import math
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+from bt_controller.draws import RUN_STUDY, derive_seed
+from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.files import read_json, write_atomic
+from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
+
+REPLICATION_STAGE = 4
+"""The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
+seed with a run of the foraging study of the same ``--seed``."""
+
+KINDS: tuple[tuple[str, str], ...] = (("qd8", "qd"), ("gpfnd8", "gp-fnd"))
+"""Library kind -> the algorithm of the primitive runs it is built from (8 blocks per grid each)."""
+
+BLOCKS = 8
+
+EQUIVALENCE_MARGIN = 0.1
+"""Deliveries per robot per trial within which QD and GP_fnd libraries count as equivalent (about 4 % of an
+ideal robot's 2.6): chosen before any run, as small as the study's ten runs per arm could hope to resolve."""
+
+CSV_HEADER = ["arm", "library", "seed", "best_fitness", "heldout_best_fitness"]
+
+
+def _source_plan(source: Path) -> dict:
+    document = read_json(source / "experiment.json")
+    if not isinstance(document, dict) or document.get("study") != "foraging":
+        raise UsageError(f"--primitives-from {source} is not a foraging study folder (experiment.json)")
+    return document
+
+
+def plan_study(
+    args: argparse.Namespace, scenarios: str, design: str | None
+) -> tuple[dict, list, dict[str, int]]:
+    """The study's plan document, its one stage and the budget of every run, from the command line."""
+    if args.primitives_from is None:
+        raise UsageError("--study replication needs --primitives-from FOLDER, a foraging study's folder")
+    source_folder = Path(args.primitives_from)
+    source = _source_plan(source_folder)
+    for option, value in (("profile", args.profile), ("trials", args.trials)):
+        if value is not None and value != source[option]:
+            raise UsageError(f"--{option} {value} differs from the primitives' study ({source[option]})")
+    scenario_seed = source["scenario_seed"] if source["design"] == "shared" else None
+    primitive_runs = [
+        (RunConfig.from_json(entry["config"]), str(entry["dir"])) for entry in source["primitives"]
+    ]
+    seeds = sorted({int(Path(rel).name.removeprefix("run")) for _, rel in primitive_runs})
+    libraries: dict[str, dict] = {}
+    for kind, algorithm in KINDS:
+        for k in seeds:
+            runs = [
+                rel
+                for made, rel in primitive_runs
+                if made.algorithm == algorithm and rel.endswith(f"run{k:02d}")
+            ]
+            expected = len(PRIMITIVES) if algorithm == "qd" else 1
+            if len(runs) != expected:
+                raise UsageError(
+                    f"{source_folder} has {len(runs)} {algorithm} primitive runs of seed {k}, not {expected}"
+                )
+            libraries[f"{kind}-s{k}"] = {"kind": kind, "from": runs, "blocks": BLOCKS}
+    arms = [
+        {
+            "arm": f"hier-{name}",
+            "library": name,
+            "dir": f"arms/{name}/run{r:02d}",
+            "evaluations": args.evaluations,
+            "seed": derive_seed(args.seed, RUN_STUDY, REPLICATION_STAGE, index, r),
+        }
+        for index, name in enumerate(libraries)
+        for r in range(args.runs)
+    ]
+    document = {
+        "study": "replication",
+        "primitives_from": str(source_folder),
+        "profile": source["profile"],
+        "runs": args.runs,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": source["trials"],
+        "scenarios": scenarios,
+        "design": source["design"],
+        "scenario_seed": scenario_seed,
+        "libraries": libraries,
+        "arms": arms,
+    }
+    out = Path(args.out).absolute()
+    primitives_folder = source_folder.absolute()
+
+    def foragers() -> list[tuple[RunConfig, str]]:
+        planned = []
+        for entry in arms:
+            spec = libraries[entry["library"]]
+            path = out / "libraries" / f"{entry['library']}.json"
+            library = study_library(path, [primitives_folder / rel for rel in spec["from"]], spec["blocks"])
+            made = RunConfig.make(
+                "gp",
+                "foraging",
+                int(entry["evaluations"]),
+                int(entry["seed"]),
+                source["trials"],
+                scenarios,
+                scenario_seed,
+                source["profile"],
+                task="foraging",
+                library=str(path),
+                library_digest=library.digest,
+            )
+            planned.append((made, str(entry["dir"])))
+        return planned
+
+    budgets = {str(entry["dir"]): int(entry["evaluations"]) for entry in arms}
+    return document, [foragers], budgets
+
+
+def rows(root: Path) -> list[dict[str, str]]:
+    """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order."""
+    document = read_json(Path(root) / "experiment.json")
+    if not isinstance(document, dict) or document.get("study") != "replication":
+        raise EvolutionError(f"{root} is not a replication study (experiment.json)")
+    found = []
+    for entry in document["arms"]:
+        summary_path = Path(root) / entry["dir"] / "summary.json"
+        summary = read_json(summary_path) if summary_path.exists() else None
+        if not isinstance(summary, dict) or not summary.get("finished"):
+            continue
+        scores = summary["objectives"]["foraging"]
+        held = scores.get("heldout_best_fitness")
+        found.append(
+            {
+                "arm": entry["arm"],
+                "library": entry["library"],
+                "seed": str(entry["seed"]),
+                "best_fitness": repr(float(scores["best_fitness"])),
+                "heldout_best_fitness": "" if held is None else repr(float(held)),
+            }
+        )
+    return found
+
+
+def mixed_comparison(
+    table: Sequence[dict[str, str]], key: str
+) -> tuple[float, float, float, float, int] | None:
+    """GP_fnd libraries against QD libraries on ``key``: the mixed model's estimate (gpfnd8 minus qd8),
+    its 95 % CI, the p-value, and the TOST p-value of equivalence within ``EQUIVALENCE_MARGIN``; None with
+    fewer than two libraries of a kind."""
+    import statsmodels.formula.api as smf
+    from pandas import DataFrame
+    from scipy import stats
+
+    data = [
+        (float(row[key]), float(row["library"].startswith("gpfnd8")), row["library"])
+        for row in table
+        if row[key] != ""
+    ]
+    kinds = {(gp, library) for _, gp, library in data}
+    if sum(1 for gp, _ in kinds if gp) < 2 or sum(1 for gp, _ in kinds if not gp) < 2:
+        return None
+    frame = DataFrame(data, columns=["value", "gpfnd", "library"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a near-zero library variance: the fit stands, its note does not
+        fit = smf.mixedlm("value ~ gpfnd", frame, groups=frame["library"]).fit(reml=True)
+    estimate, error = float(fit.params["gpfnd"]), float(fit.bse["gpfnd"])
+    low, high = estimate - 1.959964 * error, estimate + 1.959964 * error
+    # TOST on the Wald statistic: both one-sided tests must reject a difference beyond the margin.
+    p_lower = 1.0 - stats.norm.cdf((estimate + EQUIVALENCE_MARGIN) / error)
+    p_upper = stats.norm.cdf((estimate - EQUIVALENCE_MARGIN) / error)
+    return estimate, low, high, float(fit.pvalues["gpfnd"]), max(p_lower, p_upper)
+
+
+def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
+    """The report's per-library table and its QD-against-GP_fnd verdicts, from ``runs.csv`` rows."""
+    lines = [
+        "| library | runs | best fitness (median) | held-out best fitness (median) |",
+        "|---|---|---|---|",
+    ]
+    for library in dict.fromkeys(row["library"] for row in table):
+        mine = [row for row in table if row["library"] == library]
+        best = sorted(float(row["best_fitness"]) for row in mine)
+        held = sorted(float(row["heldout_best_fitness"]) for row in mine if row["heldout_best_fitness"])
+        lines.append(
+            f"| {library} | {len(mine)} | {_median(best):.4g} | {_median(held):.4g} |"
+            if held
+            else f"| {library} | {len(mine)} | {_median(best):.4g} | n/a |"
+        )
+    verdicts = []
+    for key, name in (
+        ("heldout_best_fitness", "held-out best fitness"),
+        ("best_fitness", "in-run best fitness"),
+    ):
+        result = mixed_comparison(table, key)
+        if result is None:
+            verdicts.append(f"- {name}: fewer than two libraries of a kind have runs; no model yet.")
+            continue
+        estimate, low, high, p, p_tost = result
+        equivalent = "equivalent" if p_tost <= 0.05 else "not shown equivalent"
+        verdicts.append(
+            f"- {name}: GP_fnd libraries minus QD libraries {estimate:+.3f} deliveries per robot per trial "
+            f"(95 % CI {low:+.3f} to {high:+.3f}), p = {p:.3g}; TOST at +/-{EQUIVALENCE_MARGIN}: "
+            f"p = {p_tost:.3g}, {equivalent}."
+        )
+    return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
+
+
+def _median(values: Sequence[float]) -> float:
+    n = len(values)
+    return math.nan if n == 0 else (values[n // 2] if n % 2 else (values[n // 2 - 1] + values[n // 2]) / 2)
+
+
+def build_report(root: Path) -> Path:
+    """Write ``runs.csv`` and ``report.md`` of the replication study in ``root``; return the report's path."""
+    root = Path(root)
+    table = rows(root)
+    if not table:
+        raise EvolutionError(f"{root} has no finished forager runs yet")
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, CSV_HEADER, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(table)
+    write_atomic(root / "runs.csv", buffer.getvalue())
+    per_library, verdicts = tables_from_rows(table)
+    text = (
+        "# Library-level replication of the 2024 comparison\n\n"
+        f"{len(table)} finished forager runs (hierarchical GP, 100 s foraging trials), one row per run in "
+        "[runs.csv](runs.csv). Each library is built from one seed of the primitive runs.\n\n"
+        "## Per library\n\n"
+        f"{per_library}\n"
+        "## QD against GP_fnd libraries\n\n"
+        "A linear mixed model: the score against the library's kind, with a random intercept per library "
+        "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
+        f"two one-sided tests of equivalence within +/-{EQUIVALENCE_MARGIN} deliveries per robot per trial, "
+        "chosen before the runs.\n\n"
+        f"{verdicts}"
+    )
+    write_atomic(root / "report.md", text)
+    return root / "report.md"
