@@ -34,6 +34,8 @@ ROSDEP_KEYS = {
     "dask": "python3-dask",
     "distributed": "python3-distributed",
     "dask_jobqueue": "python3-dask-jobqueue",
+    "statsmodels": "python3-statsmodels",
+    "pandas": "python3-pandas",
 }
 """Python libraries by import name, with the key their package.xml dependency uses."""
 RUN_DEPENDENCIES = ("depend", "exec_depend")
