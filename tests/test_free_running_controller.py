@@ -8,12 +8,14 @@ import time
 
 import pytest
 import rclpy
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rcl_interfaces.msg import Log
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
+from rosgraph_msgs.msg import Clock
 
 from bt_controller.nodes.footbot_controller import FootbotControllerNode
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
@@ -214,3 +216,33 @@ def test_a_lockstep_controller_stays_reliable_by_default(context):
         assert [i.qos_profile.reliability.name for i in infos] == ["RELIABLE"]
     finally:
         node.destroy_node()
+
+
+def test_under_use_sim_time_it_ticks_and_times_out_in_simulated_time(context):
+    bench = Bench(context, controller(context, robot=7, use_sim_time=True, **FREE))
+    clock = bench.node.create_publisher(Clock, "/clock", 10)
+    try:
+        bench.spin_until(bench.connected, "the controller's topics")
+        bench.spin_until(lambda: clock.get_subscription_count(), "the controller on /clock")
+
+        def at(seconds):
+            clock.publish(Clock(clock=Time(sec=int(seconds), nanosec=round(seconds % 1 * 1e9))))
+            bench.spin_for(0.05)
+
+        at(100.0)  # the simulated clock starts at 100 s: the timeout counts from there, not from 0
+        bench.send(1)
+        bench.spin_for(0.2)
+        for k in range(1, 6):  # half a simulated second at 10 Hz
+            at(100.0 + 0.1 * k)
+        bench.spin_until(lambda: bench.ticks, "a tick in simulated time")
+        ticks, wheels = len(bench.ticks), len(bench.wheels)
+        bench.spin_for(1.0)  # a wall second with the simulated clock still: no tick, no timeout
+        assert (len(bench.ticks), len(bench.wheels)) == (ticks, wheels)
+        assert not bench.warnings
+        for k in range(6, 14):  # the simulated clock runs on without readings: a timeout after 0.5 s
+            at(100.0 + 0.1 * k)
+        bench.spin_until(lambda: any("sensing timeout" in w for w in bench.warnings), "the timeout")
+        assert (bench.wheels[-1][1].left, bench.wheels[-1][1].right) == (0.0, 0.0)
+        assert bench.wheels[-1][1].header.stamp.sec == 101  # stamped in simulated time
+    finally:
+        bench.close()

@@ -22,7 +22,8 @@ it. This one is driven by two calls from outside, each with the time ``now`` in 
   newest used step, and the motors follow (``motors.motors_after_tick``). Otherwise the sensing has *timed
   out*: the tree is not ticked (its memory is kept for when the readings come back) and the motors stop; the
   outcome says so, and the node warns and reports it on ``/diagnostics``. Before the first reading the timeout
-  counts from the controller's start.
+  counts from the controller's start (``now`` None: from the first time it is given, e.g. once a simulated
+  clock has started).
 
 No ROS here: ``bt_controller.nodes.footbot_controller`` (``timing:=free``) calls it from its subscriptions and
 its timer.
@@ -93,7 +94,7 @@ class FreeRunningController:
         tree_key: int,
         perception: PerceptionParams,
         sensing_timeout: float,
-        now: float,
+        now: float | None,
     ) -> None:
         if not sensing_timeout > 0:
             raise ValueError(f"sensing_timeout must be positive, got {sensing_timeout!r}")
@@ -104,7 +105,8 @@ class FreeRunningController:
         self.action = STOP
         self.resumed = -1
         self.newest = 0
-        self.last_used = float(now)
+        self.last_used: float | None = None if now is None else float(now)
+        """When the newest step was used (the start before any); None: not yet known."""
         self._ground: dict[int, _Ground] = {}
         self._rab: dict[int, Readings] = {}
 
@@ -153,14 +155,20 @@ class FreeRunningController:
             for old in [s for s in pending if s <= step]:
                 del pending[old]
 
+    def silence(self, now: float) -> float:
+        """Seconds since the newest step was used (since the start when none was) at ``now``."""
+        if self.last_used is None:  # the clock was not known at the start: it starts now
+            self.last_used = float(now)
+        return float(now) - self.last_used
+
     def timed_out(self, now: float) -> bool:
         """Whether no step was used within the timeout before ``now``."""
-        return now - self.last_used > self.sensing_timeout
+        return self.silence(now) > self.sensing_timeout
 
     def tick(self, now: float) -> FreeTick:
         """The timer's tick at ``now``: tick the tree on the latest sensing, or stop after a timeout."""
-        silence = float(now - self.last_used)
-        timed_out = self.timed_out(now)
+        silence = self.silence(now)
+        timed_out = silence > self.sensing_timeout
         if timed_out or self.view.latest is None:  # nothing sensed yet: stopped too, not yet timed out
             self.action = STOP  # the tree's memory, and the action it left running, wait for the readings
             return FreeTick(

@@ -80,3 +80,10 @@ def test_readings_arrays_reach_the_estimates():
     offer(c, 1, 0.0, in_nest=True)
     c.tick(0.1)
     assert c.view.smoothed()[0] == 0.0  # in the nest: the nest estimate is 0 mm
+
+
+def test_a_clock_not_started_counts_the_timeout_from_the_first_tick():
+    c = FreeRunningController(parse("forward"), 0, PerceptionParams(), 1.0, now=None)
+    assert not c.tick(100.0).timed_out  # a simulated clock that started at 100 s: not 100 s of silence
+    assert not c.tick(100.9).timed_out
+    assert c.tick(101.1).timed_out

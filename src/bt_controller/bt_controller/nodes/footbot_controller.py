@@ -208,10 +208,12 @@ class FootbotControllerNode(RosNode):
             self._start_free(0, PerceptionParams())
 
     def _start_free(self, tree_key: int, perception: PerceptionParams) -> None:
-        """Free timing: a fresh controller on the loaded tree, its timeout counted from now."""
+        """Free timing: a fresh controller on the loaded tree, its timeout counted from now (from the first
+        tick or reading when a simulated clock has not started yet: its time is then 0)."""
         if self._tree is not None:
+            now = self._now()
             self.free = FreeRunningController(
-                self._tree, tree_key, perception, self.settings.sensing_timeout, self._now()
+                self._tree, tree_key, perception, self.settings.sensing_timeout, now if now > 0 else None
             )
 
     def _now(self) -> float:
@@ -332,7 +334,7 @@ class FootbotControllerNode(RosNode):
                 "readings late": str(counts.late),
                 "readings duplicated": str(counts.duplicated),
                 "newest step": str(free.newest),
-                "seconds since it": f"{now - free.last_used:.3f}",
+                "seconds since it": f"{free.silence(now):.3f}",
             }
             if free.timed_out(now):
                 level, message = DiagnosticStatus.WARN, "sensing timeout: the robot is stopped"
