@@ -180,33 +180,60 @@ def test_a_free_controller_takes_reliable_publishers_too_and_a_lockstep_one_best
     lockstep = Bench(context, controller(context, robot=5, tree="forward", sensor_qos="best_effort"))
     try:
         lockstep.spin_until(lockstep.connected, "the controller's topics")
-        start = lockstep.node.create_client(StartTrial, "/footbot_5/start_trial")
-        lockstep.spin_until(start.service_is_ready, "start_trial")
-        future = start.call_async(
-            StartTrial.Request(
-                tree_key=1,
-                profile="paper",
-                steps_per_tick=4,
-                ticks=40,
-                initial_step=1,
-                chain_trials=5,
-                trials=1,
-                window=7,
-                estimate_cap=5000.0,
-                density_range=10000.0,
-                density_divisor=6642.0,
-                wheel_speed=SPEED,
-                wheel_separation=0.14,
-            )
-        )
-        lockstep.spin_until(future.done, "start_trial's answer")
-        assert future.result().success, future.result().message
+        start_lockstep(lockstep)
         for step in range(1, 9):
             lockstep.send(step)
         lockstep.spin_until(lambda: len(lockstep.wheels) == 8, "an answer to each of 8 steps")
         assert [m.step for _, m in lockstep.wheels] == list(range(1, 9))
     finally:
         lockstep.close()
+
+
+def start_lockstep(bench):
+    """Start a one-trial chain on the bench's lockstep controller, as the simulator does."""
+    ns = bench.controller.get_namespace()
+    start = bench.node.create_client(StartTrial, f"{ns}/start_trial")
+    bench.spin_until(start.service_is_ready, "start_trial")
+    future = start.call_async(
+        StartTrial.Request(
+            tree_key=1,
+            profile="paper",
+            steps_per_tick=4,
+            ticks=40,
+            initial_step=1,
+            chain_trials=5,
+            trials=1,
+            window=7,
+            estimate_cap=5000.0,
+            density_range=10000.0,
+            density_divisor=6642.0,
+            wheel_speed=SPEED,
+            wheel_separation=0.14,
+        )
+    )
+    bench.spin_until(future.done, "start_trial's answer")
+    assert future.result().success, future.result().message
+
+
+def test_a_lockstep_controller_says_when_a_lost_reading_stalls_it(context):
+    bench = Bench(context, controller(context, robot=8, tree="forward"), sensor_qos=RELIABLE)
+    try:
+        bench.spin_until(bench.connected, "the controller's topics")
+        start_lockstep(bench)
+        bench.send(1)
+        bench.spin_until(lambda: len(bench.wheels) == 1, "the answer to step 1")
+        bench.send(2, rab=False)  # step 2's range-and-bearing reading is lost
+        bench.send(3)
+        bench.send(4)
+        bench.spin_until(lambda: bench.warnings, "a warning")
+        assert bench.warnings == [
+            "lockstep stalled at step 2: its range_and_bearing reading never came, and step 3 has; a "
+            "lockstep controller answers steps in order (timing:=free takes lost readings)"
+        ]
+        bench.spin_for(0.5)
+        assert len(bench.wheels) == 1 and len(bench.warnings) == 1  # stalled, and said once
+    finally:
+        bench.close()
 
 
 def test_a_lockstep_controller_stays_reliable_by_default(context):

@@ -32,8 +32,9 @@ with one line, exit status 2):
 
 Subscriptions (relative names, in the robot's namespace):
     ground (swarm_msgs/GroundSensor) and range_and_bearing (swarm_msgs/RangeAndBearingReadings): the
-        simulator's readings; in lockstep a step is answered once both of its messages have arrived; free, a
-        step is sensed once both are in and the tree ticks on the timer.
+        simulator's readings; in lockstep a step is answered once both of its messages have arrived (a
+        reading of a later step while one is missing is logged as a stall, once); free, a step is sensed once
+        both are in and the tree ticks on the timer.
 
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
@@ -177,6 +178,7 @@ class FootbotControllerNode(RosNode):
         self.free: FreeRunningController | None = None  # free timing: made when a tree is loaded
         self._tree: Node | None = None
         self._timed_out = False
+        self._stall_warned = 0  # lockstep: the step a stall was last reported at
         warm_up()  # compile before offering services, so no step waits for numba
         self._ground: dict[int, GroundSensor] = {}
         self._readings: dict[int, RangeAndBearingReadings] = {}
@@ -272,6 +274,7 @@ class FootbotControllerNode(RosNode):
         self.wheel_separation = float(request.wheel_separation)
         self._ground.clear()
         self._readings.clear()
+        self._stall_warned = 0
         if self.settings.free:
             self._start_free(int(request.tree_key), perception)
         response.success = True
@@ -371,6 +374,29 @@ class FootbotControllerNode(RosNode):
             if self._wheels is None:
                 continue
             self._wheels.publish(wheels)
+        self._warn_if_stalled()
+
+    def _warn_if_stalled(self) -> None:
+        """Lockstep: a reading of a later step while step N is incomplete means a reading of step N was lost
+        (the simulator publishes a step only once every robot answered the one before): the lockstep stalls
+        here. Say so once per stalled step, rather than wait without a word."""
+        controller = self.controller
+        waiting = controller.next_step
+        if not controller.in_trial or waiting == self._stall_warned:
+            return
+        later = [s for s in (*self._ground, *self._readings) if s > waiting]
+        if later:
+            self._stall_warned = waiting
+            missing = [
+                name
+                for name, pending in (("ground", self._ground), ("range_and_bearing", self._readings))
+                if waiting not in pending
+            ]
+            self.get_logger().warning(
+                f"lockstep stalled at step {waiting}: its {' and '.join(missing)} reading never came, and "
+                f"step {min(later)} has; a lockstep controller answers steps in order (timing:=free takes "
+                "lost readings)"
+            )
 
 
 def readings_of(in_nest: bool, on_food: bool, msg: RangeAndBearingReadings) -> Readings:
