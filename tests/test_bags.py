@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import pytest
+import yaml
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
@@ -56,6 +57,48 @@ def test_recorded_messages_read_back_in_order_with_rosbags_and_mcap(tmp_path, ty
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         decoded = [(channel.topic, msg.step) for _, channel, _, msg in reader.iter_decoded_messages()]
     assert decoded == [(f"/footbot_{s % 9}/wheels", s) for s in range(2000)]
+
+
+def test_bags_carry_the_ros_distro_and_each_channel_its_type_hash_as_rosbag2_writes_them(
+    tmp_path, typestore, monkeypatch
+):
+    monkeypatch.delenv("ROS_DISTRO", raising=False)
+    bag = tmp_path / "bag"
+    with BagRecorder(bag, typestore) as recorder:
+        for step in range(20):
+            recorder.write(f"/footbot_{step % 2}/wheels", wheel_command(typestore, step), step * 125_000_000)
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info["ros_distro"] == "kilted"  # the wheels' distribution, not "rosbags"
+    hashes = {
+        t["topic_metadata"]["name"]: t["topic_metadata"]["type_description_hash"]
+        for t in info["topics_with_message_count"]
+    }
+    assert set(hashes) == {"/footbot_0/wheels", "/footbot_1/wheels"}
+    assert all(h.startswith("RIHS01_") and len(h) == 7 + 64 for h in hashes.values())
+
+    (mcap_file,) = bag.glob("*.mcap")
+    with mcap_file.open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        header, summary = reader.get_header(), reader.get_summary()
+        assert header.profile == "ros2"
+        # the MCAP ros2 profile: cdr messages, ros2msg schemas named pkg/msg/Type, offered QoS per channel;
+        # and, as rosbag2's MCAP storage writes it, the type hash per channel
+        for channel in summary.channels.values():
+            assert channel.message_encoding == "cdr"
+            assert summary.schemas[channel.schema_id].encoding == "ros2msg"
+            assert summary.schemas[channel.schema_id].name == "swarm_msgs/msg/WheelCommand"
+            assert "offered_qos_profiles" in channel.metadata
+            assert channel.metadata["topic_type_hash"] == hashes[channel.topic]
+        (record,) = [m for m in reader.iter_metadata() if m.name == "rosbag2"]
+        assert record.metadata["ros_distro"] == "kilted"
+        assert "ros_distro: kilted" in record.metadata["serialized_metadata"]
+        assert [msg.step for _, _, _, msg in reader.iter_decoded_messages()] == list(range(20))
+    assert [m.message.step for m in read_bag(bag, typestore)] == list(range(20))  # rosbags reads it too
+
+    monkeypatch.setenv("ROS_DISTRO", "jazzy")  # a full ROS 2 install's
+    with BagRecorder(tmp_path / "jazzy", typestore) as recorder:
+        recorder.write("/footbot_0/wheels", wheel_command(typestore, 1), 0)
+    assert "ros_distro: jazzy" in (tmp_path / "jazzy" / "metadata.yaml").read_text()
 
 
 def test_recorder_refuses_to_overwrite(tmp_path, typestore):

@@ -178,12 +178,19 @@ def test_the_simulator_is_managed_its_clock_is_at_the_root_and_bad_goals_are_rej
         "swarm_sim",
         "simulator",
         namespace="/swarm_a",
-        parameters={"autostart": "false", "n_robots": 2, "answer_timeout": 1.0},
+        parameters={"autostart": "false", "n_robots": 2, "answer_timeout": 1.0, "use_sim_time": "true"},
     )
     statuses = ros.diagnostics("/swarm_a/simulator")
+    stamps = []
+    ros.node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: stamps.append(m.header.stamp), 10)
     life = LifecycleClient(ros.node, "/swarm_a/simulator")
     action = ActionClient(ros.node, RunTrial, "/swarm_a/simulator/run_trial")
     ros.spin_until(life.ready, "the simulator's lifecycle services")
+    # under use_sim_time, with no /clock ticking yet, the diagnostics still come (a steady timer), stamped in
+    # simulated time (0 before any trial), not wall time
+    ros.spin_until(lambda: len(statuses) >= 2, "diagnostics while unconfigured under use_sim_time")
+    assert value(statuses[0], "state") == "unconfigured"
+    assert (stamps[0].sec, stamps[0].nanosec) == (0, 0)
     life.drive(["configure", "activate"], ros.wait, LONG)
     ros.spin_until(action.server_is_ready, "the run_trial action")
 
@@ -196,7 +203,8 @@ def test_the_simulator_is_managed_its_clock_is_at_the_root_and_bad_goals_are_rej
     # trial 5 opens the second block of chain_trials (5) trials: arena configuration 1 (docs/model.md)
     assert not ros.send(action, RunTrial.Goal(seed=1, trial=5, arena_configuration=0)).accepted
     assert not ros.send(action, RunTrial.Goal(seed=1, trial=0, arena_configuration=2)).accepted
-    handle = ros.send(action, RunTrial.Goal(seed=1, trial=5, arena_configuration=1))
+    assert RunTrial.Goal().arena_configuration == -1  # the trial's own, when a goal leaves it out
+    handle = ros.send(action, RunTrial.Goal(seed=1, trial=5))
     assert handle.accepted  # then abandoned: no controller answers start_trial
     result = ros.answer(handle.get_result_async(), "the abandoned trial's result").result
     assert not result.success and "start_trial service" in result.message
@@ -206,6 +214,7 @@ def test_the_simulator_is_managed_its_clock_is_at_the_root_and_bad_goals_are_rej
     assert value(statuses[-1], "state") == "active" and "steps per second" in {
         kv.key for kv in statuses[-1].values
     }
+    assert stamps[-1].sec < 3600  # simulated time (the trial was abandoned before its first steps)
 
     life.transition("deactivate", ros.wait, LONG)
     assert not ros.send(action, RunTrial.Goal(seed=1, trial=0, arena_configuration=-1)).accepted

@@ -3,13 +3,19 @@
     ros2 launch evolution_manager trial_graph.launch.py tree:="sel(seq(in_nest, stop), forward)"
     ros2 action send_goal /simulator/run_trial swarm_msgs/action/RunTrial "{seed: 1, trial: 0}" --feedback
 
-Arguments: ``robots`` (default 9), ``namespace`` (e.g. ``/swarm_a``; default the root), ``tree`` (loaded into
-every controller), ``swarm`` (instead of ``tree``: a swarm layout file, ``swarm_sim.swarm_layout``, each
-controller loading its own robot's tree), ``profile`` (the simulator's model profile; default: its parameter
-file's) and ``params_file`` (a parameter file for every node, after the packages' own ``config/*.yaml``).
+Arguments (``evolution_manager.graph.startup.LAUNCH_ARGUMENTS``, the options of ``trial`` that shape the
+graph): ``robots`` (default: the task's), ``namespace`` (e.g. ``/swarm_a``; default the root), ``tree``
+(loaded into every controller), ``swarm`` (instead of ``tree``: a swarm layout file,
+``swarm_sim.swarm_layout``, each controller loading its own robot's tree), ``profile`` (the simulator's model
+profile; default: its parameter file's), ``task`` (a registered task or a task file), ``library`` (a primitive
+library file for every controller), ``clock`` (the graph's clock topic: ``/swarm_a/clock`` for a second graph
+in one domain), ``commands`` (the controllers' ``wheels``, ``cmd_vel`` or ``both``), ``use_sim_time``
+(``true``: every node follows the graph's clock) and ``params_file`` (a parameter file for every node, after
+the packages' own ``config/*.yaml``).
 
-The node set is ``evolution_manager.graph.startup.trial_graph_nodes``, the same that
-``ws/run evolution_manager trial`` starts on the PyPI-wheel workspace (no ``launch`` there).
+The node set is ``evolution_manager.graph.startup.launch_graph_nodes``, built on the same
+``trial_graph_nodes`` that ``ws/run evolution_manager trial`` starts on the PyPI-wheel workspace (no
+``launch`` there).
 """
 
 from launch import LaunchContext, LaunchDescription
@@ -17,19 +23,12 @@ from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
-from evolution_manager.graph.startup import package_config, trial_graph_nodes
-from swarm_sim.swarm_layout import load_layout
+from evolution_manager.graph.startup import LAUNCH_ARGUMENTS, launch_graph_nodes, package_config
 
 
 def nodes(context: LaunchContext) -> list[Node]:
-    def argument(name: str) -> str:
-        return LaunchConfiguration(name).perform(context)
-
-    user_file = argument("params_file")
-    robots = int(argument("robots"))
-    swarm = argument("swarm")
-    tree = load_layout(swarm, robots).trees if swarm else argument("tree")
-    specs = trial_graph_nodes(robots, argument("namespace"), tree=tree, profile=argument("profile"))
+    arguments = {name: LaunchConfiguration(name).perform(context) for name in LAUNCH_ARGUMENTS}
+    user_file = arguments["params_file"]
     return [
         Node(
             package=spec.package,
@@ -43,22 +42,16 @@ def nodes(context: LaunchContext) -> list[Node]:
             remappings=list(spec.remaps.items()),
             output="screen",
         )
-        for spec in specs
+        for spec in launch_graph_nodes(arguments)
     ]
 
 
 def generate_launch_description() -> LaunchDescription:
     return LaunchDescription(
         [
-            DeclareLaunchArgument("robots", default_value="9", description="number of footbots"),
-            DeclareLaunchArgument("namespace", default_value="", description="namespace of the whole graph"),
-            DeclareLaunchArgument("tree", default_value="", description="tree loaded into every controller"),
-            DeclareLaunchArgument(
-                "swarm", default_value="", description="a swarm layout file: each controller its robot's tree"
-            ),
-            DeclareLaunchArgument("profile", default_value="", description="model profile (paper or clean)"),
-            DeclareLaunchArgument(
-                "params_file", default_value="", description="parameter file for every node"
+            *(
+                DeclareLaunchArgument(name, default_value=default, description=description)
+                for name, (default, description) in LAUNCH_ARGUMENTS.items()
             ),
             OpaqueFunction(function=nodes),
         ]

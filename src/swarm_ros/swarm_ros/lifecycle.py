@@ -8,7 +8,9 @@ launch file or on another host serves at once; a starter that drives the transit
 starts it with ``-p autostart:=false`` and calls ``<node>/change_state`` through a :class:`LifecycleClient`.
 
 Every managed node publishes ``diagnostic_msgs/DiagnosticArray`` on ``/diagnostics`` once a second, in every
-state: its lifecycle state and the figures its class adds (``diagnostic_values``).
+state: its lifecycle state and the figures its class adds (``diagnostic_values``). The period runs on a steady
+clock, so the reports go on under ``use_sim_time`` while no ``/clock`` ticks; each is stamped with
+``diagnostics_stamp`` (the node's ROS time; the simulator's: its simulated time).
 """
 
 from __future__ import annotations
@@ -17,11 +19,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.client import Client
+from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.task import Future
@@ -75,8 +79,12 @@ class ManagedNode(LifecycleNode):
         )
         self.active = False
         self._diagnostics = self.create_publisher(DiagnosticArray, DIAGNOSTICS_TOPIC, 10)
+        # a steady clock: a timer on the node's clock stops with simulated time (use_sim_time, no /clock yet)
         self.create_timer(
-            DIAGNOSTICS_PERIOD, self.publish_diagnostics, callback_group=MutuallyExclusiveCallbackGroup()
+            DIAGNOSTICS_PERIOD,
+            self.publish_diagnostics,
+            callback_group=MutuallyExclusiveCallbackGroup(),
+            clock=Clock(clock_type=ClockType.STEADY_TIME),
         )
 
     @property
@@ -116,6 +124,11 @@ class ManagedNode(LifecycleNode):
         """Figures for the diagnostics beside the state, by name (the subclass's)."""
         return {}
 
+    def diagnostics_stamp(self) -> Time:
+        """The stamp of a diagnostics message: the node's ROS time (simulated under ``use_sim_time``); the
+        simulator stamps its own simulated time."""
+        return self.get_clock().now().to_msg()
+
     def publish_diagnostics(self) -> None:
         """Publish one ``DiagnosticArray`` with this node's status."""
         state = self.state
@@ -129,7 +142,7 @@ class ManagedNode(LifecycleNode):
             ],
         )
         self._diagnostics.publish(
-            DiagnosticArray(header=Header(stamp=self.get_clock().now().to_msg()), status=[status])
+            DiagnosticArray(header=Header(stamp=self.diagnostics_stamp()), status=[status])
         )
 
 

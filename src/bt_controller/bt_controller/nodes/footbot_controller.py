@@ -14,10 +14,27 @@ with one line, exit status 2):
         other parameters; a library that cannot be read stops the node with one line, exit status 2.
     commands (string, read-only): what each step's answer is published as: ``wheels`` (default; what the
         simulator waits for), ``cmd_vel``, or ``both``.
+    timing (string, read-only): ``lockstep`` (default): answer every sensing step of the simulator, exactly;
+        ``free``: tick on the node's own timer at ``tick_rate`` against the latest sensing, as on a robot
+        (``bt_controller.free_running``: the policy for lost, late and duplicated readings), the timer on the
+        node's clock (simulated time under ``use_sim_time``, else wall time).
+    tick_rate (float, Hz, read-only, free only): the tree's ticks per second (default 2.0).
+    sensing_timeout (float, s, read-only, free only): after this long without a complete sensing step the
+        robot is stopped (zero command every tick), with a warning and a WARN on ``/diagnostics`` (default
+        1.0: eight sensing periods).
+    sensor_qos (string, read-only): reliability of the ``ground`` and ``range_and_bearing`` subscriptions:
+        ``reliable``, ``best_effort`` (takes both reliable and best-effort publishers, e.g. a driver's
+        ``qos_profile_sensor_data``), or ``auto`` (default: reliable in lockstep, where no reading may be
+        lost; best-effort when free).
+    default_wheel_speed, default_wheel_separation (float, m/s and m, read-only, free only): the wheels'
+        speed and separation until a ``start_trial`` gives the trial's (defaults 0.05 and 0.14, the
+        footbot's; not ``wheel_speed``, the simulator's, in mm/s).
 
 Subscriptions (relative names, in the robot's namespace):
     ground (swarm_msgs/GroundSensor) and range_and_bearing (swarm_msgs/RangeAndBearingReadings): the
-        simulator's readings; a step is answered once both of its messages have arrived.
+        simulator's readings; in lockstep a step is answered once both of its messages have arrived (a
+        reading of a later step while one is missing is logged as a stall, once); free, a step is sensed once
+        both are in and the tree ticks on the timer.
 
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
@@ -28,6 +45,9 @@ Publishers:
         ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise positive, with the wheel
         separation the trial's ``start_trial`` gives; a differential-drive robot can be driven by it.
     tree_status (swarm_msgs/TreeStatus): the result of every tick (2 Hz in simulated time).
+    /diagnostics (diagnostic_msgs/DiagnosticArray, free only): every second of steady time, and at once when
+        the sensing times out: OK while sensing, WARN when timed out or before the first reading; the steps
+        used, lost, late and duplicated, and the seconds since the newest one.
 
 Services:
     load_tree (swarm_msgs/LoadTree): parse, validate and load a tree (a clear error for a bad one).
@@ -40,14 +60,19 @@ interpreter; the logic is ``bt_controller.controller``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Twist, Vector3
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node as RosNode
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 
 from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.errors import TreeError
+from bt_controller.free_running import FreeRunningController, FreeTick
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.perception import PerceptionParams, Readings, warm_up
 from bt_controller.timeline import Timeline, profile_number
@@ -62,6 +87,13 @@ from swarm_ros.spinning import spin_until_shutdown
 
 COMMANDS = ("wheels", "cmd_vel", "both")
 """What a controller can publish each step's answer as (its ``commands`` parameter)."""
+TIMINGS = ("lockstep", "free")
+"""How a controller is clocked (its ``timing`` parameter)."""
+SENSOR_QOS = ("auto", "reliable", "best_effort")
+"""The reliability of its sensor subscriptions (its ``sensor_qos`` parameter)."""
+
+BEST_EFFORT_SENSING = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""Free-running sensor subscriptions: best effort matches reliable and best-effort publishers alike."""
 
 
 @dataclass(frozen=True)
@@ -78,15 +110,47 @@ class ControllerSettings:
     commands: str = "wheels"
     """What each step's answer is published as: wheels (swarm_msgs/WheelCommand, what the simulator waits
     for), cmd_vel (geometry_msgs/Twist, REP 103 units, to drive a differential-drive robot) or both."""
+    timing: str = "lockstep"
+    """lockstep: answer every sensing step of the simulator (exact); free: tick on the node's own timer
+    against the latest sensing (simulated time under use_sim_time, else wall time), stopping after a sensing
+    timeout."""
+    tick_rate: float = 2.0
+    """Free timing: the tree's ticks per second."""
+    sensing_timeout: float = 1.0
+    """Free timing: seconds without a complete sensing step after which the robot is stopped, with a
+    warning."""
+    sensor_qos: str = "auto"
+    """Reliability of the sensor subscriptions: reliable, best_effort (takes reliable and best-effort
+    publishers), or auto (reliable in lockstep, best_effort when free)."""
+    default_wheel_speed: float = 0.05
+    """Free timing: the wheel speed in m/s until a start_trial gives the trial's."""
+    default_wheel_separation: float = 0.14
+    """Free timing: the wheel separation in m until a start_trial gives the trial's."""
 
     def __post_init__(self) -> None:
-        if self.commands not in COMMANDS:
-            raise ParameterError(
-                f"parameter commands := {self.commands!r}: expected one of {', '.join(COMMANDS)}"
-            )
+        for name, allowed in (("commands", COMMANDS), ("timing", TIMINGS), ("sensor_qos", SENSOR_QOS)):
+            value = getattr(self, name)
+            if value not in allowed:
+                raise ParameterError(f"parameter {name} := {value!r}: expected one of {', '.join(allowed)}")
+
+    @property
+    def free(self) -> bool:
+        """Whether the controller ticks on its own timer."""
+        return self.timing == "free"
+
+    @property
+    def best_effort(self) -> bool:
+        """Whether the sensor subscriptions are best effort."""
+        return self.sensor_qos == "best_effort" or (self.sensor_qos == "auto" and self.free)
 
 
-CONTROLLER_RANGES = {"robot": (-1, 2**31 - 1)}
+CONTROLLER_RANGES = {
+    "robot": (-1, 2**31 - 1),
+    "tick_rate": (0.01, 1000.0),
+    "sensing_timeout": (0.001, 3600.0),
+    "default_wheel_speed": (0.0, 100.0),
+    "default_wheel_separation": (0.001, 100.0),
+}
 """Closed ranges of the controller's parameters."""
 
 
@@ -99,8 +163,9 @@ def twist(left: float, right: float, separation: float) -> Twist:
 class FootbotControllerNode(RosNode):
     """One footbot's controller: answers every sensing step, ticks at the schedule's steps."""
 
-    def __init__(self) -> None:
-        super().__init__("footbot_controller")
+    def __init__(self, **node_options: Any) -> None:
+        """``node_options``: rclpy's (``context``, ``parameter_overrides``, ...), for tests."""
+        super().__init__("footbot_controller", **node_options)
         self.settings = declare_dataclass(
             self, ControllerSettings(), read_only=True, ranges=CONTROLLER_RANGES
         )
@@ -108,8 +173,12 @@ class FootbotControllerNode(RosNode):
         self.library: Library | None = load_library(self.settings.library) if self.settings.library else None
         initial_tree = self.settings.tree
         self.controller = FootbotController()
-        self.wheel_speed = 0.0  # m/s, from each trial's StartTrial
-        self.wheel_separation = 0.0  # m, from each trial's StartTrial
+        self.wheel_speed = self.settings.default_wheel_speed  # m/s, from each trial's StartTrial
+        self.wheel_separation = self.settings.default_wheel_separation  # m, from each trial's StartTrial
+        self.free: FreeRunningController | None = None  # free timing: made when a tree is loaded
+        self._tree: Node | None = None
+        self._timed_out = False
+        self._stall_warned = 0  # lockstep: the step a stall was last reported at
         warm_up()  # compile before offering services, so no step waits for numba
         self._ground: dict[int, GroundSensor] = {}
         self._readings: dict[int, RangeAndBearingReadings] = {}
@@ -119,15 +188,39 @@ class FootbotControllerNode(RosNode):
         )
         self._cmd_vel = self.create_publisher(Twist, "cmd_vel", RELIABLE) if commands != "wheels" else None
         self._status = self.create_publisher(TreeStatus, "tree_status", RELIABLE)
-        self.create_subscription(GroundSensor, "ground", self._on_ground, RELIABLE)
-        self.create_subscription(RangeAndBearingReadings, "range_and_bearing", self._on_readings, RELIABLE)
+        sensing = BEST_EFFORT_SENSING if self.settings.best_effort else RELIABLE
+        self.create_subscription(GroundSensor, "ground", self._on_ground, sensing)
+        self.create_subscription(RangeAndBearingReadings, "range_and_bearing", self._on_readings, sensing)
+        if self.settings.free:
+            self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+            self.create_timer(1.0 / self.settings.tick_rate, self._on_tick)  # the node's clock
+            self.create_timer(1.0, self._publish_diagnostics, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.create_service(LoadTree, "load_tree", self._on_load_tree)
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
         self.loaded = ""
         if initial_tree:
             tree = parse(initial_tree, library=self.library)
-            self.controller.load(tree)
+            self._load(tree)
             self.loaded = self._text(tree)
+
+    def _load(self, tree: Node) -> None:
+        self.controller.load(tree)
+        self._tree = tree
+        if self.settings.free:
+            self._start_free(0, PerceptionParams())
+
+    def _start_free(self, tree_key: int, perception: PerceptionParams) -> None:
+        """Free timing: a fresh controller on the loaded tree, its timeout counted from now (from the first
+        tick or reading when a simulated clock has not started yet: its time is then 0)."""
+        if self._tree is not None:
+            now = self._now()
+            self.free = FreeRunningController(
+                self._tree, tree_key, perception, self.settings.sensing_timeout, now if now > 0 else None
+            )
+
+    def _now(self) -> float:
+        """The node's clock in seconds (simulated under use_sim_time)."""
+        return self.get_clock().now().nanoseconds / 1e9
 
     def _text(self, tree: Node) -> str:
         """The canonical text of ``tree``, with the library's names where it has one."""
@@ -148,7 +241,7 @@ class FootbotControllerNode(RosNode):
             response.message = str(error)
             self.get_logger().error(f"refused a tree: {error}")
             return response
-        self.controller.load(tree)
+        self._load(tree)
         response.success = True
         response.canonical_tree = self._text(tree)
         return response
@@ -181,16 +274,87 @@ class FootbotControllerNode(RosNode):
         self.wheel_separation = float(request.wheel_separation)
         self._ground.clear()
         self._readings.clear()
+        self._stall_warned = 0
+        if self.settings.free:
+            self._start_free(int(request.tree_key), perception)
         response.success = True
         return response
 
     def _on_ground(self, msg: GroundSensor) -> None:
+        if self.settings.free:
+            if self.free is not None:
+                self.free.offer_ground(msg.step, msg.in_nest, msg.on_food, self._now())
+            return
         self._ground[msg.step] = msg
         self._answer_ready_steps()
 
     def _on_readings(self, msg: RangeAndBearingReadings) -> None:
+        if self.settings.free:
+            if self.free is not None:
+                self.free.offer_range_and_bearing(msg.step, readings_of(False, False, msg), self._now())
+            return
         self._readings[msg.step] = msg
         self._answer_ready_steps()
+
+    def _on_tick(self) -> None:
+        """Free timing: one tick of the tree on the latest sensing, or a stop after a sensing timeout."""
+        if self.free is None:
+            return
+        now = self.get_clock().now()
+        outcome = self.free.tick(now.nanoseconds / 1e9)
+        if outcome.timed_out and not self._timed_out:
+            self._timed_out = True
+            self.get_logger().warning(
+                f"sensing timeout: no complete sensing step for {outcome.silence:.2f} s (newest step "
+                f"{outcome.step}); the robot is stopped until readings come back"
+            )
+            self._publish_diagnostics()
+        elif not outcome.timed_out and self._timed_out and outcome.tick >= 0:
+            self._timed_out = False
+            self.get_logger().info(f"sensing back at step {outcome.step}: ticking again")
+            self._publish_diagnostics()
+        header = Header(stamp=now.to_msg(), frame_id=self.get_namespace().rsplit("/", 1)[-1])
+        status, wheels = free_messages(outcome, self.free, header, self.robot, self.wheel_speed)
+        if status is not None:
+            self._status.publish(status)
+        if self._cmd_vel is not None:
+            self._cmd_vel.publish(twist(wheels.left, wheels.right, self.wheel_separation))
+        if self._wheels is not None:
+            self._wheels.publish(wheels)
+
+    def _publish_diagnostics(self) -> None:
+        """Free timing: the sensing's state on /diagnostics."""
+        free = self.free
+        if free is None:
+            level, message, values = DiagnosticStatus.WARN, "no tree loaded", {}
+        else:
+            now = self._now()
+            counts = free.counts
+            values = {
+                "timing": "free",
+                "steps used": str(counts.used),
+                "steps lost": str(counts.lost),
+                "readings late": str(counts.late),
+                "readings duplicated": str(counts.duplicated),
+                "newest step": str(free.newest),
+                "seconds since it": f"{free.silence(now):.3f}",
+            }
+            if free.timed_out(now):
+                level, message = DiagnosticStatus.WARN, "sensing timeout: the robot is stopped"
+            elif free.view.latest is None:
+                level, message = DiagnosticStatus.WARN, "waiting for the first sensing step"
+            else:
+                level, message = DiagnosticStatus.OK, "sensing"
+        status = DiagnosticStatus(
+            level=level,
+            name=self.get_fully_qualified_name(),
+            message=message,
+            hardware_id=f"footbot {self.robot}",
+            values=[KeyValue(key=k, value=v) for k, v in values.items()],
+        )
+        self._diagnostics.publish(
+            DiagnosticArray(header=Header(stamp=self.get_clock().now().to_msg()), status=[status])
+        )
 
     def _answer_ready_steps(self) -> None:
         controller = self.controller
@@ -200,16 +364,7 @@ class FootbotControllerNode(RosNode):
             and controller.next_step in self._readings
         ):
             ground = self._ground.pop(controller.next_step)
-            rab = self._readings.pop(controller.next_step).readings
-            readings = Readings(
-                in_nest=ground.in_nest,
-                on_food=ground.on_food,
-                senders=np.array([m.sender for m in rab], dtype=np.int64),
-                ranges=np.array([m.range for m in rab], dtype=np.float64),
-                bearings=np.array([m.bearing for m in rab], dtype=np.float64),
-                nest=np.array([m.nest_estimate for m in rab], dtype=np.float64),
-                food=np.array([m.food_estimate for m in rab], dtype=np.float64),
-            )
+            readings = readings_of(ground.in_nest, ground.on_food, self._readings.pop(controller.next_step))
             outcome = controller.on_step(ground.step, readings)
             status, wheels = answer_messages(outcome, ground.header, self.robot, self.wheel_speed)
             if status is not None:
@@ -219,6 +374,79 @@ class FootbotControllerNode(RosNode):
             if self._wheels is None:
                 continue
             self._wheels.publish(wheels)
+        self._warn_if_stalled()
+
+    def _warn_if_stalled(self) -> None:
+        """Lockstep: a reading of a later step while step N is incomplete means a reading of step N was lost
+        (the simulator publishes a step only once every robot answered the one before): the lockstep stalls
+        here. Say so once per stalled step, rather than wait without a word."""
+        controller = self.controller
+        waiting = controller.next_step
+        if not controller.in_trial or waiting == self._stall_warned:
+            return
+        later = [s for s in (*self._ground, *self._readings) if s > waiting]
+        if later:
+            self._stall_warned = waiting
+            missing = [
+                name
+                for name, pending in (("ground", self._ground), ("range_and_bearing", self._readings))
+                if waiting not in pending
+            ]
+            self.get_logger().warning(
+                f"lockstep stalled at step {waiting}: its {' and '.join(missing)} reading never came, and "
+                f"step {min(later)} has; a lockstep controller answers steps in order (timing:=free takes "
+                "lost readings)"
+            )
+
+
+def readings_of(in_nest: bool, on_food: bool, msg: RangeAndBearingReadings) -> Readings:
+    """The perception's readings of one step: its ground values and its range-and-bearing message."""
+    rab = msg.readings
+    return Readings(
+        in_nest=in_nest,
+        on_food=on_food,
+        senders=np.array([m.sender for m in rab], dtype=np.int64),
+        ranges=np.array([m.range for m in rab], dtype=np.float64),
+        bearings=np.array([m.bearing for m in rab], dtype=np.float64),
+        nest=np.array([m.nest_estimate for m in rab], dtype=np.float64),
+        food=np.array([m.food_estimate for m in rab], dtype=np.float64),
+    )
+
+
+def free_messages(
+    outcome: FreeTick, free: FreeRunningController, header: Header, robot: int, wheel_speed: float
+) -> tuple[TreeStatus | None, WheelCommand]:
+    """What a free-running controller publishes at a timer tick: the tree's status when it ticked, and the
+    wheel command (zero after a sensing timeout); ``step`` is the newest sensing step used."""
+    status = None
+    if outcome.tick >= 0:
+        status = TreeStatus(
+            header=header,
+            robot=robot,
+            step=outcome.step,
+            tick=outcome.tick,
+            status=outcome.status,
+            action=outcome.started,
+            condition_ticks=outcome.condition_ticks,
+        )
+    nest, food, density = outcome.smoothed
+    wheels = WheelCommand(
+        header=header,
+        robot=robot,
+        step=outcome.step,
+        action=outcome.action,
+        action_name=ACTIONS[outcome.action],
+        left=float(outcome.wheels[0]) * wheel_speed,
+        right=float(outcome.wheels[1]) * wheel_speed,
+        nest_estimate=outcome.broadcast[0],
+        food_estimate=outcome.broadcast[1],
+        smoothed_nest=nest,
+        smoothed_food=food,
+        smoothed_density=density,
+        carrying=free.view.carrying,
+        deliveries=free.view.deliveries,
+    )
+    return status, wheels
 
 
 def answer_messages(

@@ -26,12 +26,15 @@ from ament_index_python.packages import (
     get_package_share_directory,
 )
 
+from bt_controller.library import load_library
 from evolution_manager.errors import GraphError
 from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
 from swarm_ros.safe_paths import UnsafePathError, make_folder, open_no_follow
 from swarm_sim.config import DEFAULT
+from swarm_sim.swarm_layout import load_layout
+from swarm_sim.tasks import resolve_task, world_parameters
 
 
 def executable(package: str, name: str) -> Path:
@@ -234,6 +237,7 @@ def trial_graph_nodes(
     trees = [tree] * robots if isinstance(tree, str) else list(tree)
     if len(trees) != robots:
         raise GraphError(f"{len(trees)} trees for {robots} robots: give one tree, or one per robot")
+    # every node's /clock is the graph's: the simulator publishes it, a node with use_sim_time follows it
     remaps = {"/clock": clock} if clock != "/clock" else {}
     nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
     for robot, own in zip(robot_namespaces(robots), trees, strict=True):
@@ -244,8 +248,66 @@ def trial_graph_nodes(
                 "footbot_controller",
                 f"{prefix}/{robot}",
                 {**controller, "tree": own} if own else dict(controller),
+                dict(remaps),
             )
         )
+    return nodes
+
+
+LAUNCH_ARGUMENTS: dict[str, tuple[str, str]] = {
+    "robots": ("", "number of footbots (default: the task's)"),
+    "namespace": ("", "namespace of the whole graph, e.g. /swarm_a (default: the root)"),
+    "tree": ("", "tree loaded into every controller"),
+    "swarm": ("", "a swarm layout file: each controller loads its robot's tree"),
+    "profile": ("", "model profile, paper or clean (default: the parameter file's)"),
+    "task": ("", "a registered task or a task file (default: the parameter file's world)"),
+    "library": ("", "a primitive library file every controller reads"),
+    "clock": ("/clock", "the graph's clock topic; give each graph in a domain its own, e.g. /swarm_a/clock"),
+    "commands": ("", "what the controllers publish: wheels, cmd_vel or both (default: wheels)"),
+    "use_sim_time": ("false", "every node follows the graph's clock (true or false)"),
+    "params_file": ("", "a parameter file for every node, after the packages' own"),
+}
+"""The arguments of ``trial_graph.launch.py``: name -> (default, description). The options of ``trial`` that
+shape the graph, and the controllers' ``commands`` and every node's ``use_sim_time``; the seed, trial and
+bag are a goal's and a recorder's, not the graph's."""
+
+
+def launch_graph_nodes(arguments: Mapping[str, str]) -> list[NodeSpec]:
+    """The nodes ``trial_graph.launch.py`` starts for its ``arguments`` (texts, by the names of
+    ``LAUNCH_ARGUMENTS``; a missing one takes its default), as ``trial`` would start them; ``GraphError``
+    for a value that cannot be used. The parameter files are the launch file's."""
+    unknown = sorted(set(arguments) - set(LAUNCH_ARGUMENTS))
+    if unknown:
+        raise GraphError(
+            f"unknown launch arguments {', '.join(unknown)}; known: {', '.join(LAUNCH_ARGUMENTS)}"
+        )
+    value = {name: arguments.get(name, default) for name, (default, _) in LAUNCH_ARGUMENTS.items()}
+    if value["use_sim_time"] not in ("true", "false"):
+        raise GraphError(f"use_sim_time:={value['use_sim_time']}: expected true or false")
+    try:
+        task = resolve_task(value["task"]) if value["task"] else None
+        robots = int(value["robots"]) if value["robots"] else task.robots.count if task else DEFAULT.n_robots
+        library = load_library(value["library"]) if value["library"] else None
+        tree: str | Sequence[str] = (
+            load_layout(value["swarm"], robots, library).trees if value["swarm"] else value["tree"]
+        )
+    except (ValueError, OSError) as error:
+        raise GraphError(f"launch arguments: {error}") from None
+    nodes = trial_graph_nodes(
+        robots,
+        value["namespace"],
+        tree=tree,
+        profile=value["profile"],
+        clock=value["clock"],
+        library=value["library"],
+        world=world_parameters(task.config(value["profile"] or None)) if task else None,
+    )
+    sim_time = {"use_sim_time": True} if value["use_sim_time"] == "true" else {}
+    commands = {"commands": value["commands"]} if value["commands"] else {}
+    for spec in nodes:
+        spec.parameters.update(sim_time)
+        if spec.executable == "footbot_controller":
+            spec.parameters.update(commands)
     return nodes
 
 

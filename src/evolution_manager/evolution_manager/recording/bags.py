@@ -3,8 +3,12 @@ killed.
 
 Bags are written with ``rosbags`` (pure Python): rosbag2 format version 9, MCAP storage, CDR serialisation,
 and the message definitions of ``swarm_msgs`` embedded, so ``ros2 bag``, Foxglove and the ``mcap`` tools can
-open them. Nothing here imports ``rclpy``: nodes hand the recorder the CDR bytes they received (``raw=True``
-subscriptions), and the manager hands it message objects of the ``rosbags`` typestore.
+open them. When a bag is closed its MCAP file is rewritten as ``ros2 bag record`` writes one
+(``as_rosbag2_mcap``): each channel's ``topic_type_hash`` beside its ``offered_qos_profiles``, and the ROS
+distribution (``ROS_DISTRO``, else the wheels', ``kilted``) in place of ``rosbags`` as ``ros_distro``, in the
+``rosbag2`` metadata record and in ``metadata.yaml``. Nothing here imports ``rclpy``: nodes hand the recorder
+the CDR bytes they received (``raw=True`` subscriptions), and the manager hands it message objects of the
+``rosbags`` typestore.
 
 A writer killed with SIGKILL leaves an MCAP file without its summary and no ``metadata.yaml``; ``recover_bag``
 reads such a file as a stream and writes a whole bag holding every message of the chunks that were flushed.
@@ -23,6 +27,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
+from mcap.reader import make_reader
+from mcap.writer import CompressionType
+from mcap.writer import Writer as McapWriter
 from rosbags.interfaces import (
     Nodetype,
     Qos,
@@ -119,6 +127,78 @@ _NUMBER_TYPES: dict[str, type] = {
 """The ROS number types by name, as numpy's (rosbags serializes sequences of them from numpy arrays)."""
 
 
+WHEELS_DISTRO = "kilted"
+"""The ROS 2 distribution of the PyPI wheels this workspace runs on (``ws/requirements.in``)."""
+
+
+def ros_distro() -> str:
+    """The ROS distribution bags name: ``ROS_DISTRO`` where a ROS 2 install set it, else the wheels'."""
+    return os.environ.get("ROS_DISTRO") or WHEELS_DISTRO
+
+
+def as_rosbag2_mcap(bag: Path, distro: str) -> None:
+    """Rewrite the MCAP file and ``metadata.yaml`` of the closed bag ``bag`` as rosbag2's own MCAP storage
+    writes them: each channel's metadata holds ``topic_type_hash`` (the type's RIHS01 hash, which rosbags
+    keeps only in ``metadata.yaml``) beside ``offered_qos_profiles``, and ``ros_distro`` is ``distro``
+    (rosbags writes ``rosbags``) in ``metadata.yaml`` and in the ``rosbag2`` metadata record, which also gets
+    the ``ros_distro`` key. Messages, channels, schemas and their order are kept; chunks stay uncompressed,
+    with CRCs."""
+    metadata_file = bag / "metadata.yaml"
+    text = metadata_file.read_text()
+    hashes = {
+        topic["topic_metadata"]["name"]: topic["topic_metadata"].get("type_description_hash", "")
+        for topic in _yaml_topics(text)
+    }
+    text = text.replace("ros_distro: rosbags", f"ros_distro: {distro}")
+    for file in sorted(bag.glob("*.mcap")):
+        rewritten = file.with_name(file.name + ".tmp")
+        with file.open("rb") as source, rewritten.open("wb") as sink:
+            reader = make_reader(source)
+            header = reader.get_header()
+            summary = reader.get_summary()
+            assert summary is not None  # rosbags writes a summary
+            writer = McapWriter(sink, compression=CompressionType.NONE)
+            writer.start(profile=header.profile, library=header.library)
+            schema_ids = {
+                schema.id: writer.register_schema(schema.name, schema.encoding, schema.data)
+                for schema in sorted(summary.schemas.values(), key=lambda s: s.id)
+            }
+            channel_ids = {}
+            for channel in sorted(summary.channels.values(), key=lambda c: c.id):
+                metadata = dict(channel.metadata)
+                metadata["topic_type_hash"] = hashes.get(channel.topic, "")
+                channel_ids[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schema_ids[channel.schema_id], metadata
+                )
+            for _, channel, message in reader.iter_messages(log_time_order=False):
+                writer.add_message(
+                    channel_ids[channel.id],
+                    message.log_time,
+                    message.data,
+                    message.publish_time,
+                    message.sequence,
+                )
+            for record in reader.iter_metadata():
+                data = dict(record.metadata)
+                if record.name == "rosbag2":
+                    data["serialized_metadata"] = data.get("serialized_metadata", "").replace(
+                        "ros_distro: rosbags", f"ros_distro: {distro}"
+                    )
+                    data["ros_distro"] = distro
+                writer.add_metadata(record.name, data)
+            writer.finish()
+        rewritten.replace(file)
+    temporary = metadata_file.with_name("metadata.yaml.tmp")
+    temporary.write_text(text)
+    temporary.replace(metadata_file)
+
+
+def _yaml_topics(text: str) -> list[Any]:
+    """The ``topics_with_message_count`` of a ``metadata.yaml`` text."""
+    document = yaml.safe_load(text)
+    return list(document["rosbag2_bagfile_information"]["topics_with_message_count"])
+
+
 class BagRecorder:
     """Write messages to a new rosbag2 bag with MCAP storage.
 
@@ -155,6 +235,7 @@ class BagRecorder:
         if self._writer is not None:
             self._writer.close()
             self._writer = None
+            as_rosbag2_mcap(self.path, ros_distro())
             for file in sorted(self.path.glob("*.mcap")):  # rosbags writes none: a flipped bit would pass
                 add_crcs(file)
         if self._lock is not None:

@@ -26,8 +26,9 @@ stops the node with one line, exit status 2):
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
         ``use_sim_time`` looks (remap it with ``-r /clock:=/swarm_a/clock`` to run two graphs in one domain).
-    /diagnostics (diagnostic_msgs/DiagnosticArray): every second, the lifecycle state, the trial under way,
-        steps per second (over the last second), trials run and goals waiting.
+    /diagnostics (diagnostic_msgs/DiagnosticArray): every second of steady (wall) time, stamped in simulated
+        time: the lifecycle state, the trial under way, steps per second (over the last second), trials run
+        and goals waiting.
     trial_start (swarm_msgs/TrialStart, transient-local): each trial's seed, index and the robots' stream
         keys.
     markers (visualization_msgs/MarkerArray, transient-local): walls, nest and food region of the trial's
@@ -276,6 +277,10 @@ class SimulatorNode(ManagedNode):
             else:
                 self.destroy_service(entity)
         self._made.clear()
+
+    def diagnostics_stamp(self) -> Time:
+        """Diagnostics are stamped in simulated time, as everything else the simulator publishes."""
+        return self._stamp()
 
     def diagnostic_values(self) -> dict[str, str]:
         now = time.monotonic()
