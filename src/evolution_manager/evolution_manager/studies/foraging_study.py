@@ -38,12 +38,10 @@ from __future__ import annotations
 
 import argparse
 import csv
-import functools
 import io
 import json
 import math
 import os
-import shutil
 import statistics as stats
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -58,10 +56,10 @@ from evolution_manager.evolution.run_config import RunConfig
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.compositions import CompositionConfig
-from evolution_manager.files import read_json, write_atomic, write_json
+from evolution_manager.files import read_json, write_atomic, write_json, writing
 from evolution_manager.studies import foraging_tables
 from evolution_manager.studies.foraging_tables import Claim, Test
-from swarm_ros.safe_paths import make_folder, replace_file
+from swarm_ros.safe_paths import make_folder
 from swarm_sim.tasks import task_named
 
 PRIMITIVES: tuple[str, ...] = tuple(FAMILIES)
@@ -578,17 +576,20 @@ def _runs_of(runs: Sequence[ArmRun], arm: str, metric: str) -> dict[int, float]:
 
 
 def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
-    """Each arm's best forager as text and its drawing (copied to ``figure_dir``). An arm over a library
-    shows the tree as evolved, its primitives by name: the simplifier keeps a moved copy's draws with
-    ``prob@K`` keys, so its text (``best/foraging.txt``) writes such copies out in full, while the drawing
-    names them. The flat arm shows its simplified tree."""
+    """Each arm's best forager as text and, for a tree, drawn into ``figure_dir`` for a page's width: the
+    simplified tree as an outline, a row per node, its primitives as named boxes (``render``'s vertical
+    layout; an SVG where a PNG would be too tall). An arm over a library shows the tree as evolved, its
+    primitives by name: the simplifier keeps a moved copy's draws with ``prob@K`` keys, so its text
+    (``best/foraging.txt``) writes such copies out in full, while the drawing names them. The flat arm shows
+    its simplified tree."""
     libraries = {arm.name: arm.library for arm in (*ARMS, *SWARM_ARMS)}
     parts = []
     for arm in dict.fromkeys(run.arm for run in runs):
         top = max((run for run in runs if run.arm == arm), key=lambda run: run.best_fitness)
         simplified = top.directory / "best" / "foraging.txt"
         what = "as evolved, primitives by name; drawn simplified"
-        if (top.directory / "best" / "foraging_swarm.json").exists():  # a heterogeneous swarm
+        swarm = (top.directory / "best" / "foraging_swarm.json").exists()
+        if swarm:  # a heterogeneous swarm
             text = "\n".join(f"robot {i}: {tree}" for i, tree in enumerate(json.loads(top.best_tree)))
             what = "a tree per robot"
         elif libraries.get(arm) or not simplified.exists():
@@ -600,13 +601,32 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
             f"**{arm}**, run {top.index} ({top.best_fitness:.3f} deliveries per robot per trial; {what}):\n\n"
             f"```\n{text}\n```\n"
         )
-        drawing = top.directory / "best" / "foraging.png"
-        if drawing.exists():
-            make_folder(figure_dir)
-            copy = figure_dir / f"best_{arm}.png"
-            replace_file(copy, functools.partial(shutil.copyfile, drawing))
-            parts.append(f"![best forager of {arm}](figures/best_{arm}.png)\n")
+        if not swarm:
+            drawing = _draw(top, figure_dir / f"best_{arm}")
+            parts.append(f"![best forager of {arm}](figures/{drawing.name})\n")
     return "\n".join(parts)
+
+
+def _draw(run: ArmRun, stem: Path) -> Path:
+    """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
+    from bt_controller.errors import TreeLimitError
+    from bt_controller.render import render
+    from bt_controller.tree import parse
+    from evolution_manager.viewing.results import simplified_tree
+
+    library = (
+        load_library(run.directory / "library.json") if (run.directory / "library.json").exists() else None
+    )
+    tree = simplified_tree(parse(run.best_tree, library=library), library)
+    name_of = None if library is None else library.shown_name_of
+    with writing(stem.parent):  # a link planted at the folder or the file is refused, never followed
+        make_folder(stem.parent)
+    try:
+        with writing(stem.with_suffix(".png")):
+            return render(tree, stem.with_suffix(".png"), "png", name_of, vertical=True)
+    except TreeLimitError:
+        with writing(stem.with_suffix(".svg")):
+            return render(tree, stem.with_suffix(".svg"), "svg", name_of, vertical=True)
 
 
 def _progress_curve(directory: Path) -> tuple[list[float], list[float]]:
@@ -726,7 +746,14 @@ def build_report(
             "reached.\n\n"
         )
         parts += [f"![{path.stem}](figures/{path.name})\n" for path in shown]
-        parts += ["\n## Best forager of each arm\n", _best_trees(runs, figure_dir)]
+        parts += [
+            "\n## Best forager of each arm\n",
+            "Each arm's run of highest in-run fitness. The drawings show the simplified tree as an outline, "
+            "a row per node indented by depth: selectors orange (sel ?), sequences blue (seq →), "
+            "probabilistic nodes green (prob %), conditions white (ending in ?), actions grey, a library's "
+            "primitives purple boxes by name.\n\n",
+            _best_trees(runs, figure_dir),
+        ]
     if list(root.glob("argos_raw_*.tsv")):
         transferred, missing = foraging_transfer.scored(root, foragers, argos_seeds)
         parts.append(
