@@ -109,7 +109,7 @@ def test_a_study_builds_libraries_from_its_primitive_runs_and_runs_every_arm_wit
         assert summary["finished"] and summary["heldout_best_fitness"] is not None
 
 
-def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: Path, capsys):
+def test_the_report_has_a_row_per_run_every_arm_and_the_2024_paper_beside_ours(study: Path, capsys):
     with (study / "runs.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert list(rows[0]) == CSV_HEADER
