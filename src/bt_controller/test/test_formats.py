@@ -274,3 +274,31 @@ def test_drawings_are_the_same_bytes_every_time(tmp_path):
     for fmt in ("svg", "png"):
         first = render(EXAMPLE, tmp_path / f"a.{fmt}").read_bytes()
         assert render(EXAMPLE, tmp_path / f"b.{fmt}").read_bytes() == first
+
+
+def _bushy(depth: int, leaf: str) -> str:
+    """A tree of ``sel`` with four children at every level, ``4 ** depth`` leaves."""
+    return leaf if depth == 0 else f"sel({', '.join([_bushy(depth - 1, leaf)] * 4)})"
+
+
+def test_the_vertical_drawing_grows_down_with_the_nodes_and_across_only_with_the_depth(tmp_path):
+    """An outline, a row per node: a tree with many leaves stays narrow enough for a page."""
+    from PIL import Image
+
+    wide = parse(_bushy(3, "forward_left"))  # 64 leaves, 85 nodes
+    width, height = Image.open(render(wide, tmp_path / "wide.png", vertical=True)).size
+    top_down = Image.open(render(wide, tmp_path / "top_down.png")).size
+    assert width < 400 and top_down[0] > 8000 and height > 85 * 0.3 * 120 * 0.95  # a row per node
+    deeper = Image.open(render(parse(_bushy(2, "forward_left")), tmp_path / "deep.png", vertical=True))
+    shallow = Image.open(render(parse(_bushy(1, "forward_left")), tmp_path / "shallow.png", vertical=True))
+    assert deeper.size[0] > shallow.size[0]
+    library = library_from_json(
+        {"format": LIBRARY_FORMAT, "primitives": [{"name": "wander1", "tree": "prob(forward, stop)"}]}, "lib"
+    )
+    named = parse("sel(on_food, wander1)", library=library)
+    svg = render(named, tmp_path / "named.svg", name_of=library.shown_name_of, vertical=True).read_text()
+    assert "wander1" in svg and "forward" not in svg  # the primitive as one named box
+    first = render(EXAMPLE, tmp_path / "a.svg", vertical=True).read_bytes()
+    assert render(EXAMPLE, tmp_path / "b.svg", vertical=True).read_bytes() == first
+    with pytest.raises(TreeLimitError, match="a vertical PNG drawing takes at most 1820"):
+        render(parse(_bushy(6, "stop"), max_nodes=10_000), tmp_path / "many.png", vertical=True)  # 5461 nodes

@@ -12,12 +12,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bt_controller.library import load_library
 from bt_controller.tree import parse
 from evolution_manager.evolution.libraries import FAMILIES
-from evolution_manager.studies import foraging_transfer
+from evolution_manager.studies import foraging_tables, foraging_transfer
 from evolution_manager.studies.experiment import experiment
 from evolution_manager.studies.foraging_study import (
     ARMS,
@@ -28,9 +29,16 @@ from evolution_manager.studies.foraging_study import (
     SWARM_SOURCE,
     flat_budget,
     load_arm_runs,
+    scores,
+    tables,
+    write_runs_csv,
 )
 from evolution_manager.studies.report import report
 from swarm_sim import transfer
+
+REPOSITORY = Path(__file__).resolve().parents[3]
+COMMITTED = REPOSITORY / "docs/results/foraging"
+"""The published report of the study committed in ``experiments/foraging``."""
 
 TINY = ["--study", "foraging", "--runs", "1", "--evaluations", "10", "--trials", "1", "--processes", "1"]
 
@@ -101,7 +109,7 @@ def test_a_study_builds_libraries_from_its_primitive_runs_and_runs_every_arm_wit
         assert summary["finished"] and summary["heldout_best_fitness"] is not None
 
 
-def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: Path, capsys):
+def test_the_report_has_a_row_per_run_every_arm_and_the_2024_paper_beside_ours(study: Path, capsys):
     with (study / "runs.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert list(rows[0]) == CSV_HEADER
@@ -123,16 +131,14 @@ def test_the_report_has_a_row_per_run_every_arm_and_the_2024_conclusions(study: 
         if not arm.library:
             shown = (study / "arms" / arm.name / "run00" / "best" / "foraging.txt").read_text().strip()
         assert f"```\n{shown}\n```" in text
-    assert "## The 2024 conclusions" in text and "Hierarchical beats flat" in text
-    assert "A heterogeneous swarm at least as good as the homogeneous foragers" in text
-    best = {row["arm"]: float(row["best_fitness"]) for row in rows}
-    held = {row["arm"]: float(row["heldout_best_fitness"]) for row in rows}
-    top = max((arm.name for arm in SWARM_ARMS), key=lambda name: best[name])  # one run per arm here
-    verdict = "yes" if held[top] >= held["foragers-qd"] else "no"
-    assert (
-        f"on held-out scenarios **{verdict}** ({top} {held[top]:.3f} against foragers-qd "
-        f"{held['foragers-qd']:.3f})" in text
-    )
+    assert "## The 2024 paper beside ours" in text and "Hierarchical beats flat" in text
+    compared, claims = tables(foraging_tables.read_scores(study / "runs.csv"))  # from runs.csv alone
+    assert compared in text and claims in text
+    assert "Holm's correction runs over one family: the 26 rows of this table (13 comparisons" in text
+    for arm in SWARM_ARMS:  # paired with the runs they are made of; one run per arm here
+        assert f"| {arm.name} vs {SWARM_SOURCE} | 1 pairs |" in text
+        assert f"- {arm.name} against {SWARM_SOURCE}, run by run" in text
+    assert "![progress](figures/progress.png)" in text
     assert "--study foraging" in text  # the reproduce command
     before = text
     assert report([str(study)]) == 0  # the report command rebuilds the same report
@@ -276,3 +282,37 @@ def test_a_library_becomes_the_drivers_sub_behaviours_file_without_draw_keys():
         [("gotoNest1", "sel(prob@56(forward, stop), in_nest)"), ("gotoFood2", "forward")]
     )
     assert text == "gotoNest1 sel(prob(forward, stop), in_nest)\ngotoFood2 forward\n"
+
+
+def test_the_committed_report_recomputes_from_its_runs_csv_and_its_runs(tmp_path: Path):
+    """The published comparisons, the 2024 table and every arm's median with its interval recompute from
+    the published ``runs.csv``, and that file from the committed runs of ``experiments/foraging``."""
+    text = (COMMITTED / "report.md").read_text()
+    scored = foraging_tables.read_scores(COMMITTED / "runs.csv")
+    compared, claims = tables(scored)
+    assert compared in text and claims in text
+    assert "the 26 rows of this table (13 comparisons on 2 metrics" in text
+    for metric, name in (("best fitness", "best"), ("held-out best fitness", "held-out")):
+        for arm, by_run in scored[metric].items():
+            values = [by_run[k] for k in sorted(by_run)]
+            median = foraging_tables.with_interval(
+                float(np.median(values)), foraging_tables.median_interval(values), sign=False
+            )
+            row = next(line for line in text.splitlines() if line.startswith(f"| {arm} | "))
+            assert f"| {median} |" in row, f"{arm}'s {name} median"
+    # one interval by hand: hier-qd8 against flat in-run, a Mann-Whitney row, so the difference of medians
+    a = np.array(list(scored["best fitness"]["hier-qd8"].values()))
+    b = np.array(list(scored["best fitness"]["flat"].values()))
+    rng = np.random.default_rng(foraging_tables.BOOTSTRAP_SEED)
+    draws = np.median(a[rng.integers(0, 10, (10_000, 10))], axis=1)
+    draws = draws - np.median(b[rng.integers(0, 10, (10_000, 10))], axis=1)
+    low, high = np.quantile(draws, [0.025, 0.975])
+    by_hand = f"| Mann-Whitney U | Δ median | {np.median(a) - np.median(b):+.3f} [{low:+.3f}, {high:+.3f}] |"
+    assert by_hand in next(
+        line for line in text.splitlines() if line.startswith("| best fitness | **hier-qd8 vs flat")
+    )
+    # the published runs.csv is the committed runs' own
+    _, runs = load_arm_runs(REPOSITORY / "experiments/foraging")
+    assert scores(runs) == scored
+    write_runs_csv(tmp_path, runs)
+    assert (tmp_path / "runs.csv").read_bytes() == (COMMITTED / "runs.csv").read_bytes()

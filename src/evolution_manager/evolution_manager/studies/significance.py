@@ -7,6 +7,11 @@ gets Mann-Whitney. A sample whose values are all equal cannot be tested for norm
 Mann-Whitney too. Effect sizes: Cohen's d (pooled standard deviation) and Vargha-Delaney A (the
 probability that a value of the first sample beats one of the second, ties counting half). p-values of the
 whole table are corrected for multiple comparisons with Holm's step-down method.
+
+For two paired samples (run k of one arm made from run k of the other, :func:`compare_paired`): Shapiro-Wilk
+on the run-by-run differences, the paired t-test's assumption; if it does not reject normality at ``alpha``,
+a two-sided paired t-test, else a two-sided Wilcoxon signed-rank test (scipy's default: zero differences
+dropped). The effect sizes stay those of the unpaired rows, so that the rows of one table compare.
 """
 
 from __future__ import annotations
@@ -105,6 +110,48 @@ def compare(
         sum(b) / len(b),
         pa,
         pb,
+        test,
+        p,
+        cohens_d(a, b),
+        vargha_delaney(a, b),
+    )
+
+
+def compare_paired(
+    metric: str, objective: str, first: str, a: Sequence[float], second: str, b: Sequence[float]
+) -> Comparison:
+    """Compare two paired samples, ``a[k]`` with ``b[k]`` (see the module docstring for the choice of test).
+    The row's ``shapiro_first`` is the Shapiro-Wilk p of the differences ``a[k] - b[k]``, ``shapiro_second``
+    None."""
+    a = [float(x) for x in a]
+    b = [float(x) for x in b]
+    if len(a) != len(b):
+        raise ValueError(
+            f"cannot pair {first} ({len(a)} values) with {second} ({len(b)} values) on {metric}/{objective}"
+        )
+    if not a:
+        raise ValueError(f"cannot compare {first} and {second} on {metric}/{objective}: a sample is empty")
+    differences = [x - y for x, y in zip(a, b, strict=True)]
+    normal_p = shapiro(differences)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if not any(differences):
+            test, p = "identical samples", 1.0
+        elif normal_p is not None and normal_p > ALPHA:
+            test, p = "t-test (paired)", float(stats.ttest_rel(a, b).pvalue)
+        else:
+            test, p = "Wilcoxon signed-rank", float(stats.wilcoxon(a, b).pvalue)
+    return Comparison(
+        metric,
+        objective,
+        first,
+        second,
+        len(a),
+        len(b),
+        sum(a) / len(a),
+        sum(b) / len(b),
+        normal_p,
+        None,
         test,
         p,
         cohens_d(a, b),

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,12 +23,17 @@ _SAVE: dict[str, Any] = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Softw
 
 
 def subplots(
-    *grid: int, figsize: tuple[float, float], constrained_layout: bool = False, squeeze: bool = True
+    *grid: int,
+    figsize: tuple[float, float],
+    constrained_layout: bool = False,
+    squeeze: bool = True,
+    sharex: bool = False,
+    sharey: bool = False,
 ) -> tuple[Figure, Any]:
     """A figure and its axes, as ``pyplot.subplots`` makes them, without pyplot (whose import costs half a
     second, and which keeps every figure until closed): the same pixels."""
     figure = Figure(figsize=figsize, layout="constrained" if constrained_layout else None)
-    axes: Axes | np.ndarray = figure.subplots(*grid, squeeze=squeeze)
+    axes: Axes | np.ndarray = figure.subplots(*grid, squeeze=squeeze, sharex=sharex, sharey=sharey)
     return figure, axes
 
 
@@ -166,6 +172,51 @@ def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, pat
     return _save(figure, path)
 
 
+@dataclass(frozen=True)
+class Band:
+    """A metric over runs against evaluations: its median and quartiles at each point of ``evaluations``."""
+
+    evaluations: Sequence[float]
+    low: Sequence[float]
+    """The first quartile."""
+    median: Sequence[float]
+    high: Sequence[float]
+    """The third quartile."""
+    runs: int
+
+
+def progress_bands(bands: Mapping[str, Band], metric: str, path: Path, note: str = "") -> Path:
+    """Small multiples, a panel per label (four to a row, axes shared): the label's median over runs as a
+    line and its interquartile range as a band of the line's colour, every other label's median in grey for
+    reference. ``note``: a line under the title."""
+    columns = min(4, max(1, len(bands)))
+    rows = max(1, math.ceil(len(bands) / columns))
+    figure, axes = subplots(
+        rows, columns, figsize=(3.6 * columns, 2.9 * rows + 0.6), squeeze=False, sharex=True, sharey=True
+    )
+    palette = [f"C{k}" for k in range(10) if k != 7]  # C7 is grey, the colour of the reference lines
+    colours = [palette[k % len(palette)] for k in range(len(bands))]
+    for k, (axis, (label, band)) in enumerate(zip(axes.flat, bands.items(), strict=False)):
+        for name, reference in bands.items():
+            if name != label:
+                axis.plot(reference.evaluations, reference.median, color="0.75", linewidth=0.8, zorder=1)
+        axis.fill_between(band.evaluations, band.low, band.high, color=colours[k], alpha=0.25, linewidth=0)
+        axis.plot(band.evaluations, band.median, color=colours[k], linewidth=1.6, zorder=3)
+        axis.set_title(f"{label} ({band.runs} runs)", fontsize=9)
+        axis.grid(alpha=0.3)
+        axis.tick_params(labelsize=8)
+    for axis in list(axes.flat)[len(bands) :]:
+        axis.set_visible(False)
+    for axis in axes[-1]:
+        axis.set_xlabel("evaluations", fontsize=8)
+    for axis in axes[:, 0]:
+        axis.set_ylabel(metric, fontsize=8)
+    title = "median over runs, interquartile range shaded; the other arms' medians in grey"
+    figure.suptitle(title + (f"\n{note}" if note else ""), fontsize=10)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
 def transfer_scatter(points: Mapping[str, Mapping[str, Sequence[tuple[float, float]]]], path: Path) -> Path:
     """One panel per objective: each run's best tree as (our score, ARGoS's score) on fresh scenarios, one
     marker per algorithm, and the diagonal where both simulators agree. ``points[objective][label]``."""
@@ -195,4 +246,13 @@ def transfer_scatter(points: Mapping[str, Mapping[str, Sequence[tuple[float, flo
     return _save(figure, path)
 
 
-__all__ = ["OBJECTIVES", "boxes", "heatmaps", "histograms", "progress", "transfer_scatter"]
+__all__ = [
+    "OBJECTIVES",
+    "Band",
+    "boxes",
+    "heatmaps",
+    "histograms",
+    "progress",
+    "progress_bands",
+    "transfer_scatter",
+]
