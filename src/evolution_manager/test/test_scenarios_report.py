@@ -65,3 +65,12 @@ def test_the_committed_scenarios_report_recomputes_from_its_runs_csv():
     per_scenario, pooled = scenarios.tables_from_rows(rows)
     text = (COMMITTED / "report.md").read_text()
     assert per_scenario in text and pooled in text
+
+
+def test_the_committed_paper_report_has_table_6_with_intervals_recomputed_from_its_runs_csv():
+    from evolution_manager.studies.report import _table6, runs_from_csv
+
+    paper = COMMITTED.parent
+    table = _table6(runs_from_csv(paper / "runs.csv"))
+    assert table in (paper / "report.md").read_text()
+    assert "difference (95 % CI)" in table and table.count(" [") >= 18
