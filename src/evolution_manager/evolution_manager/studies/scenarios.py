@@ -23,7 +23,7 @@ import io
 import math
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from evolution_manager.errors import EvolutionError
@@ -37,7 +37,7 @@ from evolution_manager.studies.report import (
     runs_rows,
     verdict,
 )
-from evolution_manager.studies.significance import compare
+from evolution_manager.studies.significance import compare, holm_adjusted
 from swarm_sim.objectives import PAPER_OBJECTIVES
 
 SCENARIOS_HEADER = ["scenario_seed", *RUNS_HEADER]
@@ -185,13 +185,8 @@ def tables_from_rows(rows: Sequence[dict[str, str]]) -> tuple[str, str]:
 
 
 def _holm(rows: Sequence[Pooled]) -> list[Pooled]:
-    order = sorted(range(len(rows)), key=lambda i: (rows[i].p_value, i))
-    corrected = [math.nan] * len(rows)
-    running = 0.0
-    for rank, i in enumerate(order):
-        running = max(running, min(1.0, (len(rows) - rank) * rows[i].p_value))
-        corrected[i] = running
-    return [Pooled(**{**r.__dict__, "p_holm": p}) for r, p in zip(rows, corrected, strict=True)]
+    corrected = holm_adjusted([r.p_value for r in rows])
+    return [replace(r, p_holm=p) for r, p in zip(rows, corrected, strict=True)]
 
 
 def _pooled_table(rows: Sequence[Pooled]) -> str:

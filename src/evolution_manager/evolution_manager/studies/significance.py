@@ -99,6 +99,19 @@ def compare(
             test, p = "t-test (Welch)", float(stats.ttest_ind(a, b, equal_var=False).pvalue)
         else:
             test, p = "Mann-Whitney U", float(stats.mannwhitneyu(a, b, alternative="two-sided").pvalue)
+    return _row(metric, objective, (first, a, pa), (second, b, pb), test, p)
+
+
+def _row(
+    metric: str,
+    objective: str,
+    one: tuple[str, list[float], float | None],
+    other: tuple[str, list[float], float | None],
+    test: str,
+    p: float,
+) -> Comparison:
+    """A table row: each sample as (name, values, Shapiro-Wilk p), the test and its p, the effect sizes."""
+    (first, a, pa), (second, b, pb) = one, other
     return Comparison(
         metric,
         objective,
@@ -141,33 +154,24 @@ def compare_paired(
             test, p = "t-test (paired)", float(stats.ttest_rel(a, b).pvalue)
         else:
             test, p = "Wilcoxon signed-rank", float(stats.wilcoxon(a, b).pvalue)
-    return Comparison(
-        metric,
-        objective,
-        first,
-        second,
-        len(a),
-        len(b),
-        sum(a) / len(a),
-        sum(b) / len(b),
-        normal_p,
-        None,
-        test,
-        p,
-        cohens_d(a, b),
-        vargha_delaney(a, b),
-    )
+    return _row(metric, objective, (first, a, normal_p), (second, b, None), test, p)
 
 
 def holm(rows: Sequence[Comparison]) -> list[Comparison]:
     """The rows with Holm-corrected p-values (same order)."""
-    order = sorted(range(len(rows)), key=lambda i: (rows[i].p_value, i))
-    corrected = [math.nan] * len(rows)
+    corrected = holm_adjusted([row.p_value for row in rows])
+    return [replace(row, p_holm=p) for row, p in zip(rows, corrected, strict=True)]
+
+
+def holm_adjusted(p_values: Sequence[float]) -> list[float]:
+    """Holm's step-down adjusted p-values of one family, in the order given."""
+    order = sorted(range(len(p_values)), key=lambda i: (p_values[i], i))
+    corrected = [math.nan] * len(p_values)
     running = 0.0
     for rank, i in enumerate(order):
-        running = max(running, min(1.0, (len(rows) - rank) * rows[i].p_value))
+        running = max(running, min(1.0, (len(p_values) - rank) * p_values[i]))
         corrected[i] = running
-    return [replace(row, p_holm=p) for row, p in zip(rows, corrected, strict=True)]
+    return corrected
 
 
 def _p(value: float) -> str:
