@@ -34,7 +34,8 @@ def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
     assert document["conditions"] == {}
     assert document["tree"] == "sel(seq(in_nest, stop), forward)"
     assert (document["seed"], document["trials"]) == (5, 4)
-    assert list(document["fitness"]) == ["density", "nest", "food", "idensity", "inest", "ifood", "foraging"]
+    names = ["density", "nest", "food", "idensity", "inest", "ifood", "foraging", "aggregation"]
+    assert list(document["fitness"]) == names
     assert list(document["descriptors"]) == ["movement", "rotation", "conditionality"]
 
 
