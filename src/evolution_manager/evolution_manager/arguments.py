@@ -55,13 +55,13 @@ def seconds(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
+    if not 0 <= value < math.inf:  # NaN and infinity too: "never" is not a number of seconds
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds >= 0, got {text!r}")
     return value
 
 
-def trial_seed(text: str) -> int:
-    """A trial's seed: an integer in [0, 2**63 - 1], the range the model draws from (``evaluate``'s)."""
+def seed_in_range(text: str) -> int:
+    """A seed of a run or a trial: an integer in [0, 2**63 - 1], the range the model draws from."""
     try:
         value = int(text)
     except ValueError:

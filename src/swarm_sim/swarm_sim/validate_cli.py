@@ -177,9 +177,11 @@ def _read_notes(path: Path | None) -> str | None:
     if path is None:
         return None
     try:
-        return path.read_text()
+        return path.read_text(encoding="utf-8")
     except OSError as error:
         raise UsageError(f"--notes {path}: {error.strerror or error}") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"--notes {path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
 
 
 def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
@@ -370,16 +372,22 @@ def run_transfer(args: argparse.Namespace, argv: Sequence[str]) -> tuple[str, st
     return transfer.render_markdown(rows, header), transfer.transfer_tsv(rows)
 
 
+def _write_text(path: Path, text: str) -> None:
+    """UTF-8, a file name's bytes that are not UTF-8 (the command line quoted in the report) as ``\\xNN``."""
+    shown = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    path.write_text(shown, encoding="utf-8")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point of ``validate``."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args, report, tsv = run(argv)
         # written beside and renamed (swarm_ros.safe_paths): a symbolic link there is refused, not followed
-        replace_file(args.out, lambda temporary: temporary.write_text(report))
+        replace_file(args.out, lambda temporary: _write_text(temporary, report))
         tsv_path = table_path(args)
         if tsv_path is not None:
-            replace_file(tsv_path, lambda temporary: temporary.write_text(tsv))
+            replace_file(tsv_path, lambda temporary: _write_text(temporary, tsv))
     except UsageError as error:
         print(f"validate: error: {' '.join(str(error).split())}", file=sys.stderr)
         return EXIT_USAGE

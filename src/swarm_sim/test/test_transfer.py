@@ -298,3 +298,28 @@ def test_the_reference_report_adds_a_transfer_tables_summary(tmp_path, capsys):
     table.write_text("not\ta table\n")
     assert validate_main([*args, "--force"]) == 2
     assert "not a transfer table" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "text,message",
+    [
+        (RAW_HEADER + "stop\t1\tx\t0.5\tnan\t0\t0\t0\t0\t0\n", "finite"),
+        (RAW_HEADER + "stop\t1\tx\t0.5\tinf\t0\t0\t0\t0\t0\n", "finite"),
+        (RAW_HEADER.encode() + b"st\xffop\t1\tx\t0.5\t0\t0\t0\t0\t0\t0\n", "not UTF-8 text"),
+    ],
+)
+def test_argos_raw_rows_that_are_not_finite_or_not_utf8_are_refused(tmp_path, text, message):
+    """NaN rows were taken as measurements; bytes that are not UTF-8 were a traceback."""
+    raw = tmp_path / "raw.tsv"
+    raw.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(UsageError, match=message) as refused:
+        transfer.read_argos_raw(raw)
+    assert "\n" not in str(refused.value)
+
+
+def test_a_runs_repertoire_is_read_strictly_by_the_transfer_check(tmp_path):
+    run = _run_dir(tmp_path, "run", ["food"], {"food": [((0, 0, 0), "stop", 0.5)]})
+    path = run / "repertoire_food.json"
+    path.write_text(path.read_text()[:-1] + ', "objective": "food"}')
+    with pytest.raises(UsageError, match="appears twice"):
+        transfer.pick_trees([run], 1)

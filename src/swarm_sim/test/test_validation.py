@@ -211,3 +211,28 @@ def test_foraging_references_run_100_s_trials_with_the_library_and_the_authors_s
     assert validate_main([*args, "--force"]) == 2  # ours.tsv is there
     err = capsys.readouterr().err.strip()
     assert "behind" in err and str(library) in err and "\n" not in err and not out.exists()
+
+
+@pytest.mark.parametrize("option", ["--reference", "--notes"])
+def test_a_file_that_is_not_utf8_is_one_line(tmp_path, capsys, option):
+    """It was a UnicodeDecodeError traceback (found by ws/probe-hostile)."""
+    bad = tmp_path / "bad"
+    bad.write_bytes(b"tree\tdensity_mean\n\xff\xfe\t0.5\n")
+    args = ["--reference", str(bad if option == "--reference" else _reference(tmp_path)), "--seeds", "2"]
+    args += ["--notes", str(bad)] if option == "--notes" else []
+    assert validate_main([*args, "--out", str(tmp_path / "v.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not UTF-8 text" in err and str(bad) in err, err
+    assert not (tmp_path / "v.md").exists()
+
+
+def test_a_report_whose_name_is_not_utf8_is_written(tmp_path, monkeypatch):
+    """The report quotes its command line: writing the name's surrogates was a UnicodeEncodeError."""
+    import io
+    import sys
+
+    # standard error as Python opens it: what cannot be encoded is written with backslashes
+    monkeypatch.setattr(sys, "stderr", io.TextIOWrapper(io.BytesIO(), "utf-8", errors="backslashreplace"))
+    out = tmp_path / "v-\udcff\udcfe.md"
+    assert validate_main(["--reference", str(_reference(tmp_path)), "--seeds", "2", "--out", str(out)]) == 0
+    assert "v-\\xff\\xfe.md" in out.read_text()

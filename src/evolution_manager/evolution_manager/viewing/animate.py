@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.vocabulary import ACTIONS
-from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, trial_seed
+from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from swarm_ros.safe_paths import check_output, describe, replace_file
@@ -285,7 +285,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         help='a tree per robot: {"trees": [...]} (the trial runs in-process)',
     )
     parser.add_argument(
-        "--seed", type=trial_seed, help="seed of the trial, in [0, 2**63 - 1] (with --tree or --swarm)"
+        "--seed", type=seed_in_range, help="seed of the trial, in [0, 2**63 - 1] (with --tree or --swarm)"
     )
     parser.add_argument(
         "--trial", type=non_negative_int, default=0, help="trial index (with --tree; default 0)"

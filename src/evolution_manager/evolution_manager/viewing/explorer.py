@@ -39,7 +39,7 @@ from bt_controller.library import Library, LibraryError, library_from_json, load
 from bt_controller.validate import strict_json
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
-from evolution_manager.files import write_atomic
+from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
 from evolution_manager.viewing.results import simplified as simplified_text
@@ -247,7 +247,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
                         entry["animation"] = key
                     entry["seed"] = str(_seed_of(entry, seeds, run_seed))
     return {
-        "run": config.get("label") or root.name,
+        "run": config.get("label") or printable(root.name),  # a name's bytes that are not UTF-8 as \xNN
         "seed": str(run_seed),
         "evaluations": summary.get("evaluations"),
         "evolved": evolved,
@@ -605,7 +605,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_IO
     print(file=sys.stderr)
     size = path.stat().st_size
-    print(f"{path}: {size / 1e6:.2f} MB in {time.monotonic() - started:.1f} s")
+    print(f"{printable(path)}: {size / 1e6:.2f} MB in {time.monotonic() - started:.1f} s")
     return 0
 
 

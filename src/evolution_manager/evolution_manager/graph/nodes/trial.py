@@ -52,7 +52,7 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
-from evolution_manager.arguments import Parser, finite, non_negative_int, trial_seed
+from evolution_manager.arguments import Parser, finite, non_negative_int, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
@@ -545,7 +545,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         help='a tree per robot: a JSON file {"trees": ["tree text", ...]} (one per robot, robot 0 first)',
     )
     parser.add_argument(
-        "--seed", type=trial_seed, default=0, help="seed of the evaluation, in [0, 2**63 - 1] (default 0)"
+        "--seed", type=seed_in_range, default=0, help="seed of the evaluation, in [0, 2**63 - 1] (default 0)"
     )
     parser.add_argument(
         "--trial",
