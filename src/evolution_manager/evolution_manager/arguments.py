@@ -4,9 +4,12 @@ status 2), argument types that say what they expected, and the exit statuses."""
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from collections.abc import Callable, Sequence
 from typing import NoReturn
 
+from bt_controller.draws import MAX_SEED
 from evolution_manager.errors import UsageError
 
 EXIT_USAGE = 2
@@ -52,6 +55,83 @@ def seconds(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
+    if not 0 <= value < math.inf:  # NaN and infinity too: "never" is not a number of seconds
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds >= 0, got {text!r}")
     return value
+
+
+def seed_in_range(text: str) -> int:
+    """A seed of a run or a trial: an integer in [0, 2**63 - 1], the range the model draws from."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer seed in [0, {MAX_SEED}], got {text!r}"
+        ) from None
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"expected an integer seed in [0, {MAX_SEED}], got {value}")
+    return value
+
+
+def non_negative_int(text: str) -> int:
+    """An index counted from 0 (a trial, a step): an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def int_in(low: int, high: int, what: str = "an integer") -> Callable[[str], int]:
+    """An argument type: an integer in [low, high] (``what`` names it in the message)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what} in [{low}, {high}], got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {what} in [{low}, {high}], got {value}")
+        return value
+
+    parse.__name__ = what  # argparse names the type in "invalid ... value" messages
+    return parse
+
+
+def finite(low: float, strictly: bool = False, what: str = "a number") -> Callable[[str], float]:
+    """An argument type: a finite number >= ``low`` (> ``low`` when ``strictly``); NaN and the infinities
+    are refused, as Python's ``float`` would take them."""
+    relation = ">" if strictly else ">="
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what} {relation} {low:g}, got {text!r}") from None
+        if not math.isfinite(value) or value < low or (strictly and value == low):
+            raise argparse.ArgumentTypeError(f"expected a finite {what} {relation} {low:g}, got {text!r}")
+        return value
+
+    parse.__name__ = what
+    return parse
+
+
+def without_ros_args(argv: Sequence[str]) -> list[str]:
+    """``argv`` without the ROS arguments (``--ros-args ... [--]``), as ``rclpy.utilities.remove_ros_args``
+    gives it, which raises ``UnicodeEncodeError`` on an argument that is not UTF-8 (a file name's bytes,
+    which Python keeps as surrogates): such an argument is kept as it is, for the parser to refuse or use."""
+    from rclpy.utilities import remove_ros_args
+
+    argv = list(argv)
+    if "--ros-args" not in argv:
+        return argv
+    kept: dict[str, str] = {}
+    for k, argument in enumerate(argv):
+        try:
+            argument.encode()
+        except UnicodeEncodeError:
+            kept[f"swarm-bt-qd-argument-{k}"] = argument
+            argv[k] = f"swarm-bt-qd-argument-{k}"
+    return [kept.get(argument, argument) for argument in remove_ros_args(argv)]

@@ -58,7 +58,15 @@ class NoEvaluatorError(DispatchError):
 
 
 class BagError(RuntimeError):
-    """A bag could not be written, read or recovered; the message says which and why."""
+    """A bag could not be written, read or recovered; the message says which and why, in one line: the
+    message of a library it carries (a YAML parser's runs over many lines and may quote a whole file) is
+    joined into one and cut at ``LIMIT`` characters."""
+
+    LIMIT = 400
+
+    def __init__(self, message: object) -> None:
+        text = " ".join(str(message).split())
+        super().__init__(text if len(text) <= self.LIMIT else text[: self.LIMIT - 4] + " ...")
 
 
 class GraphError(RuntimeError):

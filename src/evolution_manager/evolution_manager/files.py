@@ -13,6 +13,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from bt_controller.validate import strict_json
 from evolution_manager.errors import RunDirectoryError, WriteError
 from swarm_ros.safe_paths import open_no_follow, refuse_links
 
@@ -32,13 +33,21 @@ def writing(path: Path) -> Iterator[None]:
 _APPEND = os.O_WRONLY | os.O_APPEND | os.O_CREAT
 
 
+def printable(path: object) -> str:
+    """``path`` (or any text) as text every stream and file can take: the bytes of a name that are not UTF-8
+    (Python keeps them as surrogates, which a strict stream refuses with a traceback) shown as ``\\xNN``."""
+    return str(path).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
 def write_atomic(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` so that a reader (or a killed writer) sees the old file or the new one,
     never a mixture: a temporary file in the same folder, flushed to disk, then renamed over ``path``. A
     failed write (``WriteError``, naming the file) leaves the old file as it was; so does a symbolic link at
-    ``path`` (planted in a shared run folder), refused (``swarm_ros.safe_paths``)."""
+    ``path`` (planted in a shared run folder), refused (``swarm_ros.safe_paths``). Text is written as UTF-8;
+    the bytes of a file name that are not UTF-8 (which Python keeps as surrogates), e.g. a run folder's name
+    quoted in a report, are written as ``\\xNN``."""
     path = Path(path)
-    raw = data.encode() if isinstance(data, str) else data
+    raw = printable(data).encode() if isinstance(data, str) else data
     with writing(path):
         refuse_links(path)
         _write_atomic(path, raw)
@@ -77,9 +86,11 @@ def write_json(path: Path, data: object, indent: int | None = 1) -> None:
 
 
 def read_json(path: Path) -> object:
-    """Read a JSON file, saying which file is damaged when it cannot be read."""
+    """Read a JSON file strictly (``bt_controller.validate.strict_json``: no NaN or infinities, no key given
+    twice, which JSON would let the last win without a word), saying which file is damaged when it cannot be
+    read."""
     try:
-        return json.loads(Path(path).read_text(), parse_constant=_reject_constant, parse_float=_finite_float)
+        return strict_json(Path(path).read_text())
     except FileNotFoundError as error:
         raise RunDirectoryError(f"{path} does not exist") from error
     except (OSError, ValueError) as error:
@@ -92,17 +103,6 @@ def read_json_object(path: Path) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise RunDirectoryError(f"{path} is not a JSON object (it holds a {type(data).__name__})")
     return data
-
-
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"{name} is not allowed in our JSON files")
-
-
-def _finite_float(text: str) -> float:
-    value = float(text)
-    if not math.isfinite(value):  # JSON allows 1e400; no value of ours is that large
-        raise ValueError(f"the number {text} is out of range")
-    return value
 
 
 def number(value: float | None) -> str:

@@ -109,7 +109,7 @@ def lock_path_for(thing: Path, kind: str) -> Path:
     """A lock file for ``thing`` kept outside it, in a folder of this user's under the machine's temporary
     folder, named by ``thing``'s full path: for things that must hold nothing but their own files."""
     folder = private_folder(Path(tempfile.gettempdir()) / f"swarm-bt-qd-locks-{os.getuid()}")
-    digest = hashlib.sha256(str(thing.resolve()).encode()).hexdigest()[:32]
+    digest = hashlib.sha256(os.fsencode(thing.resolve())).hexdigest()[:32]  # a name's bytes, UTF-8 or not
     return folder / f"{kind}-{digest}.lock"
 
 

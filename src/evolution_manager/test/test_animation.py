@@ -115,8 +115,13 @@ def test_mp4_needs_ffmpeg(frames, tmp_path):
         ),
         (["--tree", "wander1", "--seed", "1", "--out", "x.gif"], "unknown node 'wander1'"),
         (["--tree", "forward", "--seed", "1", "--library", "none.json", "--out", "x.gif"], "--library"),
-        (["--tree", "forward", "--seed", "1", "--every", "0", "--out", "x.gif"], "--every must be"),
-        (["--tree", "forward", "--seed", "1", "--fps", "0", "--out", "x.gif"], "--fps must be"),
+        (
+            ["--tree", "forward", "--seed", "1", "--every", "0", "--out", "x.gif"],
+            "--every: expected a positive",
+        ),
+        (["--tree", "forward", "--seed", "1", "--fps", "0", "--out", "x.gif"], "--fps: expected a number of"),
+        (["--tree", "forward", "--seed", "-1", "--out", "x.gif"], "--seed: expected an integer seed in [0, "),
+        (["--tree", "forward", "--seed", "1", "--trial", "-1", "--out", "x.gif"], "--trial: expected an"),
     ],
 )
 def test_bad_input_is_one_line(args, message, capsys, tmp_path, monkeypatch):

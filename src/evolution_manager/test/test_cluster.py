@@ -447,18 +447,11 @@ def test_evolve_on_a_dask_scheduler_writes_the_bytes_of_a_local_run(cluster, tmp
 
 
 def test_adapt_benchmark_on_a_dask_scheduler_writes_the_files_of_a_local_one(cluster, tmp_path):
+    from small_repertoires import adapt_benchmark_argv, food_repertoire
+
     from evolution_manager.adaptation.adapt_benchmark import main as adapt_benchmark
 
-    repertoire = tmp_path / "repertoire"
-    repertoire.mkdir()
-    items = [
-        {"bin": [k, 4, 2], "tree": tree, "fitness": 0.5 + k / 20, "descriptors": [k / 8, 0.5, 0.3]}
-        for k, tree in enumerate(random_trees(3, 6))
-    ]
-    (repertoire / "repertoire_food.json").write_text(json.dumps({"objective": "food", "items": items}))
-    (repertoire / "config.json").write_text(json.dumps(RunConfig.make("qd", "food", 50, 0).to_json()))
-    common = ["--repertoires", str(repertoire), "--condition-set", "dead-robots=3", "--seeds", "1"]
-    common += ["--budget", "3", "--ceiling", "30", "--trials", "2", "--no-progress"]
+    common = adapt_benchmark_argv(food_repertoire(tmp_path / "repertoire", 6), budget=3, ceiling=30, trials=2)
     for where, options in (("local", []), ("dask", ["--cluster", dask_option(cluster)])):
         with pytest.raises(SystemExit) as ended:
             adapt_benchmark([*common, "--out", str(tmp_path / where), *options])

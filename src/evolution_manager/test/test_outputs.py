@@ -172,3 +172,26 @@ def test_measure_json_follows_the_same_rule(tmp_path, capsys):
     assert out.read_text() == "mine" and precious.read_text() == "keep me\n"
     assert measure([*quick, "--json", str(out), "--force"]) == 0
     assert json.loads(out.read_text())[0]["evaluations"] > 0
+
+
+def test_a_new_bag_is_never_a_link_not_even_a_dangling_one(tmp_path):
+    """``trial --bag`` and ``record --bag`` took a dangling link for a new bag and started their graph."""
+    from evolution_manager.errors import BagError
+    from evolution_manager.recording.bags import check_new_bag
+
+    (tmp_path / "bag").symlink_to(tmp_path / "made")
+    with pytest.raises(BagError, match="is a symbolic link"):
+        check_new_bag(tmp_path / "bag")
+    (tmp_path / "file").write_text("")
+    with pytest.raises(BagError, match="file is a file, not a folder"):
+        check_new_bag(tmp_path / "file" / "bag")
+    assert not (tmp_path / "made").exists()
+
+
+def test_a_bag_error_is_one_line_whatever_it_carries():
+    """A YAML parser's error (a damaged metadata.yaml) runs over many lines and quotes the file."""
+    from evolution_manager.errors import BagError
+
+    error = BagError("not a readable bag (ReaderError: while constructing\n  a mapping\n" + "x" * 1000)
+    assert "\n" not in str(error) and str(error).startswith("not a readable bag (ReaderError: while")
+    assert len(str(error)) <= BagError.LIMIT and str(error).endswith(" ...")

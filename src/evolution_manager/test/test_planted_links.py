@@ -171,35 +171,18 @@ def test_a_planted_node_log_link_is_refused_before_a_node_starts(tmp_path, plant
 
 
 def test_adapt_benchmark_never_writes_its_report_through_a_planted_link(tmp_path, capsys):
-    from bt_controller.random_trees import random_trees
-    from evolution_manager.adaptation.adapt_benchmark import main as adapt_benchmark
-    from evolution_manager.evolution.run_config import RunConfig
+    from small_repertoires import adapt_benchmark_argv, food_repertoire
 
-    repertoire = tmp_path / "repertoire"
-    repertoire.mkdir()
-    items = [
-        {"bin": [k, 4, 2], "tree": tree, "fitness": 0.5 + k / 20, "descriptors": [k / 8, 0.5, 0.3]}
-        for k, tree in enumerate(random_trees(3, 4))
-    ]
-    (repertoire / "repertoire_food.json").write_text(json.dumps({"objective": "food", "items": items}))
-    (repertoire / "config.json").write_text(json.dumps(RunConfig.make("qd", "food", 50, 0).to_json()))
+    from evolution_manager.adaptation.adapt_benchmark import main as adapt_benchmark
+
+    repertoire = food_repertoire(tmp_path / "repertoire", 4)
     out, precious = tmp_path / "out", tmp_path / "precious.txt"
     out.mkdir()
     precious.write_text("keep me\n")
     (out / "report.md").symlink_to(precious)
-    argv = [
-        "--repertoires",
-        str(repertoire),
-        "--condition-set",
-        "dead-robots=3",
-        "--seeds",
-        "1",
-        "--budget",
-        "2",
-    ]
-    argv += ["--ceiling", "10", "--trials", "1", "--no-progress", "--out", str(out)]
+    argv = adapt_benchmark_argv(repertoire, budget=2, ceiling=10, trials=1)
     with pytest.raises(SystemExit) as ended:
-        adapt_benchmark(argv)
+        adapt_benchmark([*argv, "--out", str(out)])
     error = capsys.readouterr().err
     assert ended.value.code == 74 and error.count("\n") == 1 and "report.md" in error, error
     assert precious.read_text() == "keep me\n" and (out / "report.md").is_symlink()

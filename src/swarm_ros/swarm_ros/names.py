@@ -19,6 +19,37 @@ class NamespaceError(ValueError):
     """A namespace or robot index that does not fit the graph; the message says what was expected."""
 
 
+_TOKEN = "[A-Za-z_][A-Za-z0-9_]*"
+_ABSOLUTE = re.compile(rf"(/{_TOKEN})+")
+_TOPIC = re.compile(rf"/?{_TOKEN}(/{_TOKEN})*")
+
+
+def graph_namespace(namespace: str) -> str:
+    """``namespace`` as an absolute ROS namespace without a trailing slash ("" for the root, given as "" or
+    "/"; "swarm_a" is "/swarm_a"); ``NamespaceError`` for one that is not a ROS name (each part letters,
+    digits and '_', not starting with a digit), before any node is started in it."""
+    if not namespace.strip("/"):
+        return ""
+    absolute = "/" + namespace.strip("/")
+    if not _ABSOLUTE.fullmatch(absolute):
+        raise NamespaceError(
+            f"namespace {namespace!r} is not a ROS namespace: expected names of letters, digits and '_' "
+            "(not starting with a digit) separated by single '/', e.g. /swarm_a"
+        )
+    return absolute
+
+
+def check_topic(topic: str, what: str = "topic") -> str:
+    """``topic`` if it is a ROS topic name (absolute or relative: parts of letters, digits and '_', not
+    starting with a digit, separated by single '/'); ``NamespaceError`` otherwise."""
+    if not _TOPIC.fullmatch(topic):
+        raise NamespaceError(
+            f"{what} {topic!r} is not a ROS topic name: expected names of letters, digits and '_' (not "
+            "starting with a digit) separated by single '/', e.g. /clock or /swarm_a/clock"
+        )
+    return topic
+
+
 def robot_namespaces(robots: int) -> list[str]:
     """The default namespaces of ``robots`` robots: ``footbot_0`` .. ``footbot_<robots - 1>``."""
     return [f"{ROBOT_PREFIX}{i}" for i in range(robots)]

@@ -136,6 +136,25 @@ def check_output(path: Path | str, force: bool = False, option: str = "--out") -
     return path
 
 
+def check_folder(path: Path | str, option: str = "--out") -> Path:
+    """The rule for a folder a command writes in, which may exist (node logs): refuse
+    (:class:`UnsafePathError`, one line naming ``option``) a symbolic link at it, a file there, a place
+    under a file. Returns ``path``; create it with :func:`make_folder`."""
+    path = Path(path)
+    if path.is_symlink():
+        raise UnsafePathError(errno.ELOOP, f"{option} {_link_error(path)}", path)
+    if path.exists() and not path.is_dir():
+        raise UnsafePathError(errno.ENOTDIR, f"{option} {path} is a file, not a folder", path)
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise UnsafePathError(
+                    errno.ENOTDIR, f"{option} {path}: {parent} is a file, not a folder", path
+                )
+            break
+    return path
+
+
 def replace_file(path: Path | str, write: Callable[[Path], object]) -> Path:
     """Write ``path`` whole: ``write(temporary)`` (a callable taking a ``Path``, e.g. an image's ``save``)
     writes a new file beside it, which is then renamed over ``path``; a link at ``path`` is refused

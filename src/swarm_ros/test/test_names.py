@@ -5,6 +5,8 @@ import pytest
 from swarm_ros.names import (
     NamespaceError,
     check_robot_namespaces,
+    check_topic,
+    graph_namespace,
     index_from_namespace,
     robot_index,
     robot_namespaces,
@@ -54,3 +56,27 @@ def test_another_namespace_needs_the_index():
 def test_bad_robot_namespaces_are_refused(namespaces, problem):
     with pytest.raises(NamespaceError, match=problem):
         check_robot_namespaces(namespaces)
+
+
+@pytest.mark.parametrize(
+    "given,namespace",
+    [("", ""), ("/", ""), ("swarm_a", "/swarm_a"), ("/swarm_a/", "/swarm_a"), ("/a/b_2", "/a/b_2")],
+)
+def test_a_graph_namespace_is_absolute_without_a_trailing_slash(given, namespace):
+    assert graph_namespace(given) == namespace
+
+
+@pytest.mark.parametrize("given", ["bad name", "/1x", "/a//b", "/a\nb", "\udcff", "/a-b"])
+def test_a_namespace_ros_refuses_is_refused_before_a_node_starts(given):
+    """trial and record said nothing and started their graph in it (issue 41)."""
+    with pytest.raises(NamespaceError, match="is not a ROS namespace") as refused:
+        graph_namespace(given)
+    assert "\n" not in str(refused.value)
+
+
+@pytest.mark.parametrize("topic", ["/clock", "clock", "/swarm_a/clock", "_x/y1"])
+def test_topic_names(topic):
+    assert check_topic(topic) == topic
+    for bad in ("", "/", "a b", "/a//b", "1x", "/a/", "\udcff"):
+        with pytest.raises(NamespaceError, match="is not a ROS topic name"):
+            check_topic(bad, "--clock")

@@ -8,7 +8,14 @@ import os
 import pytest
 
 from swarm_ros import isolation
-from swarm_ros.safe_paths import UnsafePathError, check_output, open_no_follow, private_folder, refuse_links
+from swarm_ros.safe_paths import (
+    UnsafePathError,
+    check_folder,
+    check_output,
+    open_no_follow,
+    private_folder,
+    refuse_links,
+)
 
 
 def test_a_planted_link_is_never_opened_for_writing(tmp_path):
@@ -94,3 +101,22 @@ def test_a_lock_folder_open_to_others_or_a_link_is_refused_in_one_line(tmp_path,
     if os.getuid() != 0 and os.path.isdir("/") and os.stat("/").st_uid != os.getuid():
         with pytest.raises(UnsafePathError, match="belongs to user id"):
             private_folder("/")
+
+
+def test_a_folder_to_write_in_may_exist_but_is_never_a_link_or_a_file(tmp_path):
+    (tmp_path / "logs").mkdir()
+    assert check_folder(tmp_path / "logs") == tmp_path / "logs"
+    assert check_folder(tmp_path / "new" / "logs") == tmp_path / "new" / "logs"
+    (tmp_path / "file").write_text("mine\n")
+    (tmp_path / "link").symlink_to(tmp_path / "logs")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    for path, reason in (
+        (tmp_path / "link", "is a symbolic link"),
+        (tmp_path / "dangling", "is a symbolic link"),
+        (tmp_path / "file", "file is a file, not a folder"),
+        (tmp_path / "file" / "logs", "file is a file, not a folder"),
+    ):
+        with pytest.raises(UnsafePathError, match=reason) as refused:
+            check_folder(path, "--logs")
+        assert str(refused.value).startswith("--logs ") and "\n" not in str(refused.value)
+    assert not (tmp_path / "nowhere").exists()

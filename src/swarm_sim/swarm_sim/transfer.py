@@ -21,6 +21,7 @@ there the driver is not needed at all. Everything here but ``run_driver`` is pur
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -30,6 +31,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from bt_controller.validate import strict_json
 from swarm_sim import validation
 from swarm_sim.errors import UsageError
 from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
@@ -129,12 +131,16 @@ def parse_seeds(text: str) -> list[int]:
 
 
 def _read_json(path: Path) -> dict:
-    try:
-        document = json.loads(path.read_text())
+    try:  # strictly: NaN, infinities and a key given twice refused (bt_controller.validate.strict_json)
+        document = strict_json(path.read_text(encoding="utf-8"))
     except OSError as error:
         raise UsageError(f"{path}: cannot read ({error.strerror or error})") from None
     except json.JSONDecodeError as error:
         raise UsageError(f"{path}: not JSON ({error.msg} at line {error.lineno})") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
+    except ValueError as error:  # strict_json's refusals
+        raise UsageError(f"{path}: {error}") from None
     if not isinstance(document, dict):
         raise UsageError(f"{path}: expected a JSON object")
     return document
@@ -342,13 +348,30 @@ def _without_keys(tree: str) -> str:
     return re.sub(r"prob@\d+\(", "prob(", tree)
 
 
+def _raw_text(raw: Path) -> str:
+    """The text of the driver's raw TSV ``raw``; ``UsageError`` when it cannot be read or is not UTF-8."""
+    try:
+        return raw.read_text(encoding="utf-8")
+    except OSError as error:
+        raise UsageError(f"{raw}: cannot read the ARGoS rows ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"{raw}: not UTF-8 text (byte {error.start}: {error.reason})") from None
+
+
+def _finite(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text!r} is not a finite number")
+    return value
+
+
 def read_foraging_raw(raw: Path) -> dict[tuple[str, int], float]:
     """The driver's raw TSV of the foraging build: per (tree, seed), the mean deliveries per robot per
     trial."""
     if not raw.is_file():
         return {}
     rows: dict[tuple[str, int], float] = {}
-    with raw.open(newline="") as f:
+    with io.StringIO(_raw_text(raw), newline="") as f:
         reader = csv.DictReader(f, delimiter="\t")
         missing = [q for q in ("tree", "seed", "foraging", "build") if q not in (reader.fieldnames or ())]
         if missing:
@@ -358,9 +381,11 @@ def read_foraging_raw(raw: Path) -> dict[tuple[str, int], float]:
             )
         for line, row in enumerate(reader, start=2):
             try:
-                rows[(row["tree"], int(row["seed"]))] = float(row["foraging"])
+                rows[(row["tree"], int(row["seed"]))] = _finite(row["foraging"])
             except (TypeError, ValueError):
-                raise UsageError(f"{raw}:{line}: expected numbers in the seed and foraging columns") from None
+                raise UsageError(
+                    f"{raw}:{line}: expected numbers in the seed and foraging columns (finite ones)"
+                ) from None
     return rows
 
 
@@ -369,17 +394,19 @@ def read_argos_raw(raw: Path) -> dict[tuple[str, int], tuple[float, ...]]:
     if not raw.is_file():
         return {}
     rows: dict[tuple[str, int], tuple[float, ...]] = {}
-    with raw.open(newline="") as f:
+    with io.StringIO(_raw_text(raw), newline="") as f:
         reader = csv.DictReader(f, delimiter="\t")
         missing = [q for q in ("tree", "seed", *QUANTITIES) if q not in (reader.fieldnames or ())]
         if missing:
             raise UsageError(f"{raw}: not the ARGoS driver's raw TSV: missing column(s) {', '.join(missing)}")
         for line, row in enumerate(reader, start=2):
             try:
-                values = [float(row[q]) for q in QUANTITIES]
+                values = [_finite(row[q]) for q in QUANTITIES]
                 seed = int(row["seed"])
             except (TypeError, ValueError):
-                raise UsageError(f"{raw}:{line}: expected numbers in the seed and value columns") from None
+                raise UsageError(
+                    f"{raw}:{line}: expected numbers in the seed and value columns (finite ones)"
+                ) from None
             for i, q in enumerate(QUANTITIES):
                 if q in ("movement", "rotation"):
                     values[i] = (values[i] + RAW_HALF_RANGE) / (2 * RAW_HALF_RANGE)
@@ -451,9 +478,11 @@ def transfer_tsv(rows: Sequence[TransferRow]) -> str:
 def read_transfer_tsv(path: Path) -> list[TransferRow]:
     """The rows of a ``transfer_tsv`` file (UsageError naming the file and line when it is not one)."""
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise UsageError(f"{path}: cannot read the transfer table ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
     reader = csv.DictReader(text.splitlines(), delimiter="\t")
     if tuple(reader.fieldnames or ()) != TSV_COLUMNS:
         raise UsageError(f"{path}: not a transfer table (expected the columns {', '.join(TSV_COLUMNS)})")

@@ -6,6 +6,7 @@
              --out docs/validation.md
     validate --transfer RUN_DIR [RUN_DIR ...] [--per-run 4] [--evaluations 20] [--seeds 1-20]
              [--tree TREE ...] [--argos-eval argos_eval.py] [--argos-raw RAW.tsv] --out T.md [--tsv T.tsv]
+    (either mode) [--force]: replace a report or table that exists
 
 Reference mode: each tree of the reference files (ARGoS statistics measured by the harness) is evaluated
 with seeds 1..N (one evaluation of ``--trials`` trials per seed, all in one batch); our mean and standard
@@ -25,7 +26,11 @@ raw rows go to ``--argos-raw`` (default: the report's name with ``_argos_raw.tsv
 as a cache. Writes the report (markdown) and the table (``--tsv``, default the report's name with ``.tsv``).
 
 Bad input, or an ARGoS build that is not there when rows are missing: one line on stderr, exit status 2;
-nothing is written then (but the raw rows ARGoS produced).
+nothing is written then (but the raw rows ARGoS produced). The report and the table follow the workspace's
+rule for outputs (``swarm_ros.safe_paths``): one that exists is refused unless ``--force`` (regenerating
+``docs/validation.md`` in place takes it), a symbolic link, a folder or a place under a file always, all
+before anything is evaluated; ``--argos-raw``, a cache read and appended, is refused only as a link. The
+command a report names as its maker leaves ``--force`` out: the same inputs give the same report.
 """
 
 from __future__ import annotations
@@ -41,7 +46,7 @@ from typing import NoReturn
 
 from bt_controller.authors import from_authors, is_authors_syntax
 from bt_controller.library import Library, library_option
-from swarm_ros.safe_paths import refuse_links, replace_file
+from swarm_ros.safe_paths import check_output, refuse_links, replace_file
 from swarm_sim import transfer, validation
 from swarm_sim.config import DEFAULT, Config
 from swarm_sim.errors import UsageError
@@ -88,6 +93,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--argos-jobs", type=int, default=1, help="transfer: ARGoS evaluations at once (1)")
     parser.add_argument("--tsv", type=Path, help="also write our statistics (transfer: the table) as a TSV")
     parser.add_argument("--out", type=Path, required=True, help="the markdown report to write")
+    parser.add_argument("--force", action="store_true", help="replace a report or table (--tsv) that exists")
     return parser
 
 
@@ -171,23 +177,27 @@ def _read_notes(path: Path | None) -> str | None:
     if path is None:
         return None
     try:
-        return path.read_text()
+        return path.read_text(encoding="utf-8")
     except OSError as error:
         raise UsageError(f"--notes {path}: {error.strerror or error}") from None
+    except UnicodeDecodeError as error:
+        raise UsageError(f"--notes {path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
 
 
 def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     """Parse ``argv`` and evaluate: (options, report markdown, our statistics or the transfer table as TSV).
     Raise UsageError."""
     args = _parser().parse_args(argv)
-    for option, path in (("--out", args.out), ("--tsv", args.tsv)):
-        try:  # before anything is evaluated: a report regenerated in place, never through a planted link
-            if path is not None:
-                refuse_links(path)
-        except OSError as error:
-            raise UsageError(f"{option} {error}") from None
+    shown = [argument for argument in argv if argument != "--force"]  # the report is the same without it
+    try:  # before anything is evaluated: regenerated in place only with --force, never through a link
+        check_output(args.out, args.force, "--out")
+        table = table_path(args)
+        if table is not None:
+            check_output(table, args.force, "--tsv" if args.tsv is not None else "the table")
+    except OSError as error:
+        raise UsageError(str(error)) from None
     if args.transfer is not None:
-        return args, *run_transfer(args, argv)
+        return args, *run_transfer(args, shown)
     for option in ("tree", "argos_eval", "argos_raw"):
         if getattr(args, option):
             raise UsageError(f"--{option.replace('_', '-')} belongs to --transfer")
@@ -217,7 +227,7 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
         labelled = {f"[{group}] {t}" if group else t: e for t, e in estimates.items()}
         tables.append(stats_tsv(labelled, world.ticks))
     profile = getattr(config, "profile", None)
-    command = "ws/run swarm_sim validate " + shlex.join(argv)
+    command = "ws/run swarm_sim validate " + shlex.join(shown)
     tolerance = f"3 sqrt(2) SE_ARGoS + {validation.TOLERANCE_ABSOLUTE}"
     z_rule = f"|z| <= {validation.MAX_Z:g}, z = diff / sqrt(SE_ours² + SE_ARGoS²)"
     header = [
@@ -238,6 +248,13 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
         notes = "\n".join([*_transfer_section(transfer_rows, args.transfer_table), "", notes or ""])
     tsv = tables[0] + "".join(t.split("\n", 1)[1] for t in tables[1:])
     return args, validation.render(comparisons, header, notes), tsv
+
+
+def table_path(args: argparse.Namespace) -> Path | None:
+    """Where the TSV goes: ``--tsv``, else in transfer mode the report's name with ``.tsv``, else nowhere."""
+    if args.tsv is not None:
+        return Path(args.tsv)
+    return Path(args.out).with_suffix(".tsv") if args.transfer is not None else None
 
 
 def _references(
@@ -309,6 +326,10 @@ def run_transfer(args: argparse.Namespace, argv: Sequence[str]) -> tuple[str, st
     ours_seeds = [s for s in range(1, args.evaluations + len(used) + 1) if s not in used][: args.evaluations]
     trees = [p.tree for p in picks]
     raw_path = args.argos_raw or args.out.with_name(args.out.stem + "_argos_raw.tsv")
+    try:
+        refuse_links(raw_path)  # a cache, read and appended by the driver: never through a link
+    except OSError as error:
+        raise UsageError(f"--argos-raw {error}") from None
     argos, missing = transfer.argos_estimates(transfer.read_argos_raw(raw_path), trees, argos_seeds)
     if missing:
         harness = transfer.ArgosHarness.from_environment(args.argos_eval)
@@ -351,18 +372,22 @@ def run_transfer(args: argparse.Namespace, argv: Sequence[str]) -> tuple[str, st
     return transfer.render_markdown(rows, header), transfer.transfer_tsv(rows)
 
 
+def _write_text(path: Path, text: str) -> None:
+    """UTF-8, a file name's bytes that are not UTF-8 (the command line quoted in the report) as ``\\xNN``."""
+    shown = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    path.write_text(shown, encoding="utf-8")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point of ``validate``."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args, report, tsv = run(argv)
         # written beside and renamed (swarm_ros.safe_paths): a symbolic link there is refused, not followed
-        replace_file(args.out, lambda temporary: temporary.write_text(report))
-        tsv_path = args.tsv
-        if tsv_path is None and args.transfer is not None:
-            tsv_path = args.out.with_suffix(".tsv")
+        replace_file(args.out, lambda temporary: _write_text(temporary, report))
+        tsv_path = table_path(args)
         if tsv_path is not None:
-            replace_file(tsv_path, lambda temporary: temporary.write_text(tsv))
+            replace_file(tsv_path, lambda temporary: _write_text(temporary, tsv))
     except UsageError as error:
         print(f"validate: error: {' '.join(str(error).split())}", file=sys.stderr)
         return EXIT_USAGE

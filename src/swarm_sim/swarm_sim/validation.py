@@ -138,9 +138,11 @@ def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]
     """The reference statistics of a TSV, per tree (file order) and each quantity it measured, descriptors
     mapped to [0, 1] (raw ones with trials of ``ticks`` ticks)."""
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise ReferenceFileError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
     reader = csv.DictReader(text.splitlines(), delimiter="\t")
     columns = set(reader.fieldnames or ())
     measured = [q for q in QUANTITIES if f"{q}_mean" in columns or f"{q}_sem" in columns]

@@ -204,7 +204,23 @@ def test_command_against_rows_of_our_own_model_finds_every_quantity_indistinguis
         for c in row.comparisons:
             assert abs(c.diff) <= 5e-7 and c.verdict == validation.INDISTINGUISHABLE
     assert table[0].own_fitness is not None and table[0].own_fitness.quantity == "density"
-    assert validate_main(args) == 0 and out.read_text() == report  # seeded: the same report again
+    assert validate_main(args) == 2  # the report and the table exist: refused without --force
+    assert "already exists: add --force" in capsys.readouterr().err
+    assert validate_main([*args, "--force"]) == 0 and out.read_text() == report  # seeded: the same report
+
+
+@pytest.mark.parametrize("planted", ["table", "raw rows"])
+def test_the_transfer_table_and_raw_rows_are_never_written_through_a_link(tmp_path, capsys, planted):
+    run = _run_dir(tmp_path, "run", ["food"], {"food": [((0, 0, 0), "stop", 0.5)]})
+    precious = tmp_path / "precious"
+    precious.write_text("keep me\n")
+    out = tmp_path / "transfer.md"
+    link = tmp_path / ("transfer.tsv" if planted == "table" else "transfer_argos_raw.tsv")
+    link.symlink_to(precious)
+    assert validate_main(["--transfer", str(run), "--out", str(out), "--force"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{link} is a symbolic link" in err, err
+    assert precious.read_text() == "keep me\n" and not out.exists()
 
 
 def test_a_missing_argos_build_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
@@ -280,5 +296,30 @@ def test_the_reference_report_adds_a_transfer_tables_summary(tmp_path, capsys):
     assert "**6 of 6** quantities over 1 trees agree" in report
     assert "| 1 | run7 | food | 0,1,2 | best | `forward` | ✓ | ✓ | ✓ | ✓ | ✓ | ✓ |" in report
     table.write_text("not\ta table\n")
-    assert validate_main(args) == 2
+    assert validate_main([*args, "--force"]) == 2
     assert "not a transfer table" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "text,message",
+    [
+        (RAW_HEADER + "stop\t1\tx\t0.5\tnan\t0\t0\t0\t0\t0\n", "finite"),
+        (RAW_HEADER + "stop\t1\tx\t0.5\tinf\t0\t0\t0\t0\t0\n", "finite"),
+        (RAW_HEADER.encode() + b"st\xffop\t1\tx\t0.5\t0\t0\t0\t0\t0\t0\n", "not UTF-8 text"),
+    ],
+)
+def test_argos_raw_rows_that_are_not_finite_or_not_utf8_are_refused(tmp_path, text, message):
+    """NaN rows were taken as measurements; bytes that are not UTF-8 were a traceback."""
+    raw = tmp_path / "raw.tsv"
+    raw.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(UsageError, match=message) as refused:
+        transfer.read_argos_raw(raw)
+    assert "\n" not in str(refused.value)
+
+
+def test_a_runs_repertoire_is_read_strictly_by_the_transfer_check(tmp_path):
+    run = _run_dir(tmp_path, "run", ["food"], {"food": [((0, 0, 0), "stop", 0.5)]})
+    path = run / "repertoire_food.json"
+    path.write_text(path.read_text()[:-1] + ', "objective": "food"}')
+    with pytest.raises(UsageError, match="appears twice"):
+        transfer.pick_trees([run], 1)

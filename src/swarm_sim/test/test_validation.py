@@ -97,7 +97,13 @@ def test_validate_command_writes_the_report_and_our_statistics(tmp_path, capsys)
     ours = validation.read_reference(tsv)
     assert ours["stop"]["movement"] == ours["stop"]["rotation"] == Estimate(0.5, 0.0, 3)
     assert ours["stop"]["conditionality"] == Estimate(0.0, 0.0, 3)  # an action only: no condition ticks
-    assert validate_main(args) == 0 and out.read_text() == report  # seeded: the same report again
+    capsys.readouterr()
+    assert validate_main(args) == 2  # it exists: refused, as it was
+    err = capsys.readouterr().err.strip()
+    expected = f"--out {out} already exists: add --force to overwrite it, or name a new file"
+    assert err == f"validate: error: {expected}"
+    assert out.read_text() == report
+    assert validate_main([*args, "--force"]) == 0 and out.read_text() == report  # seeded: the same report
 
 
 def test_validate_command_refuses_bad_input_in_one_line_and_writes_nothing(tmp_path, capsys):
@@ -133,6 +139,42 @@ def test_validate_refuses_a_link_as_its_report_before_evaluating(tmp_path, capsy
     assert precious.read_text() == "keep me\n"
 
 
+def _reference(tmp_path):
+    ref = tmp_path / "ref.tsv"
+    ref.write_text(HEADER + _row("stop", [(0.5, 0.01)] * 3 + [(0.0, 0.0)] * 3))
+    return ref
+
+
+@pytest.mark.parametrize("option", ["--out", "--tsv"])
+def test_validate_refuses_an_output_that_exists_unless_forced_before_evaluating(tmp_path, capsys, option):
+    """The workspace's rule for outputs (README, docs/security.md): never overwrite without --force."""
+    out, tsv = tmp_path / "validation.md", tmp_path / "ours.tsv"
+    args = ["--reference", str(_reference(tmp_path)), "--seeds", "2", "--trials", "1"]
+    args += ["--out", str(out), "--tsv", str(tsv)]
+    {"--out": out, "--tsv": tsv}[option].write_text("mine\n")
+    assert validate_main(args) == 2
+    err = capsys.readouterr().err  # one line: nothing evaluated (that says "validate: 1 trees x ...")
+    assert err.count("\n") == 1 and f"{option} " in err and "already exists: add --force" in err, err
+    assert {"--out": out, "--tsv": tsv}[option].read_text() == "mine\n"
+    assert not {"--out": tsv, "--tsv": out}[option].exists()  # nothing written
+    assert validate_main([*args, "--force"]) == 0
+    report = out.read_text()
+    assert "--force" not in report and "--out" in report  # the maker's command: the same report either way
+    assert tsv.read_text().startswith("tree\t")
+
+
+@pytest.mark.parametrize("place", ["folder", "under a file"])
+def test_validate_refuses_a_folder_or_a_place_under_a_file_even_with_force(tmp_path, capsys, place):
+    (tmp_path / "place").mkdir() if place == "folder" else (tmp_path / "place").write_text("mine\n")
+    out = tmp_path / "place" if place == "folder" else tmp_path / "place" / "validation.md"
+    args = ["--reference", str(_reference(tmp_path)), "--seeds", "2", "--out", str(out), "--force"]
+    assert validate_main(args) == 2
+    err = capsys.readouterr().err
+    expected = "is a folder" if place == "folder" else "place is a file, not a folder"
+    assert err.count("\n") == 1 and expected in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["place", "ref.tsv"]
+
+
 def test_foraging_references_run_100_s_trials_with_the_library_and_the_authors_syntax(tmp_path, capsys):
     # A foraging reference file: only the quantities it measured (foraging and the descriptors, raw in
     # [-200, 200] for 200 ticks); a tree naming a primitive of --library and one in the authors' syntax.
@@ -166,6 +208,31 @@ def test_foraging_references_run_100_s_trials_with_the_library_and_the_authors_s
     out.unlink()
     capsys.readouterr()
     ref.write_text(header + "sel(seq(got_food, behind), ahead)\t" + values)
-    assert validate_main(args) == 2
+    assert validate_main([*args, "--force"]) == 2  # ours.tsv is there
     err = capsys.readouterr().err.strip()
     assert "behind" in err and str(library) in err and "\n" not in err and not out.exists()
+
+
+@pytest.mark.parametrize("option", ["--reference", "--notes"])
+def test_a_file_that_is_not_utf8_is_one_line(tmp_path, capsys, option):
+    """It was a UnicodeDecodeError traceback (found by ws/probe-hostile)."""
+    bad = tmp_path / "bad"
+    bad.write_bytes(b"tree\tdensity_mean\n\xff\xfe\t0.5\n")
+    args = ["--reference", str(bad if option == "--reference" else _reference(tmp_path)), "--seeds", "2"]
+    args += ["--notes", str(bad)] if option == "--notes" else []
+    assert validate_main([*args, "--out", str(tmp_path / "v.md")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not UTF-8 text" in err and str(bad) in err, err
+    assert not (tmp_path / "v.md").exists()
+
+
+def test_a_report_whose_name_is_not_utf8_is_written(tmp_path, monkeypatch):
+    """The report quotes its command line: writing the name's surrogates was a UnicodeEncodeError."""
+    import io
+    import sys
+
+    # standard error as Python opens it: what cannot be encoded is written with backslashes
+    monkeypatch.setattr(sys, "stderr", io.TextIOWrapper(io.BytesIO(), "utf-8", errors="backslashreplace"))
+    out = tmp_path / "v-\udcff\udcfe.md"
+    assert validate_main(["--reference", str(_reference(tmp_path)), "--seeds", "2", "--out", str(out)]) == 0
+    assert "v-\\xff\\xfe.md" in out.read_text()

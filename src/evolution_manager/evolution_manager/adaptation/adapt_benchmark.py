@@ -62,7 +62,7 @@ from evolution_manager.cluster.settings import ClusterError, add_cluster_options
 from evolution_manager.errors import DispatchError, UsageError, WriteError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_atomic, write_json
-from swarm_ros.safe_paths import make_folder
+from swarm_ros.safe_paths import make_folder, refuse_links
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -151,6 +151,10 @@ def trials_to_target(curve: Sequence[float], bar: float) -> float:
     return math.inf
 
 
+OUTPUTS = ("runs.csv", "ceilings.csv", "summary.json", "curves.png", "report.md")
+"""The files the benchmark writes in ``--out``."""
+
+
 def benchmark(args: argparse.Namespace) -> dict:
     """Run every method (on the cluster of ``--cluster``); write the files; return the summary."""
     cluster = settings_from_args(args)
@@ -179,6 +183,8 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
             raise UsageError(f"--condition-set {text}: {error}") from None
     repertoires = {str(path): load_candidates(path, args.objective) for path in args.repertoires}
     make_folder(args.out)
+    for name in OUTPUTS:  # a link planted at one: refused before the benchmark's minutes, not after them
+        refuse_links(args.out / name)
     ceilings_path = args.out / "ceilings.csv"
     ceilings = _read_ceilings(ceilings_path, profile)
     k = OBJECTIVES.index(args.objective)

@@ -45,7 +45,7 @@ from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
-from evolution_manager.evolution.run import LOCK_NAME, create_whole
+from evolution_manager.evolution.run import LOCK_NAME, create_whole, refuse_planted_links
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
 from evolution_manager.files import (
     CsvLog,
@@ -581,6 +581,7 @@ class CompositionRun:
             directory.read_library(config)  # the evaluator was made with it
             run = cls(config, cells, root, evaluator)
             run.restore(read_json_object(directory.checkpoint))
+            refuse_planted_links(directory.root)  # before anything is evaluated
         except (ConfigError, KeyError, TypeError, ValueError) as error:
             lock.release()
             raise RunDirectoryError(f"{root}: the run cannot be continued, it is damaged: {error}") from error

@@ -157,6 +157,39 @@ class Timing:
         return cls(**seconds)
 
 
+WRITTEN = (
+    "checkpoint.json",
+    "summary.json",
+    "evaluations.csv",
+    "progress.csv",
+    "heldout.json",
+    "archive.json",
+    "timing.json",
+    "sessions.json",
+    "explorer.html",
+    "best",
+    "figures",
+)
+"""What a run writes in its folder, besides ``repertoire_<objective>.json`` and the files in ``best/`` and
+``figures/`` (``config.json``, ``cells.json`` and ``library.json`` are only read once a run has started)."""
+
+
+def refuse_planted_links(root: Path) -> None:
+    """Raise ``RunDirectoryError`` (one line) for a symbolic link at a path a run writes in ``root``
+    (``WRITTEN``, the repertoires, what ``best/`` and ``figures/`` hold): a resume or a rebuild refuses it
+    before anything is evaluated or written, rather than when it reaches that file."""
+    root = Path(root)
+    paths = [root / name for name in WRITTEN] + sorted(root.glob("repertoire_*.json"))
+    for folder in (root / "best", root / "figures"):
+        if folder.is_dir() and not folder.is_symlink():
+            paths += sorted(folder.iterdir())
+    for path in paths:
+        try:
+            refuse_links(path)
+        except OSError as error:
+            raise RunDirectoryError(str(error)) from None
+
+
 class RunDirectory:
     """The paths of a run directory."""
 
@@ -333,6 +366,7 @@ class Run:
             run = cls._load(directory, evaluator)
             if cut:
                 directory.check_heldout()  # read when the run ends: checked before anything is run
+                refuse_planted_links(directory.root)
         except BaseException:
             if lock is not None:
                 lock.release()

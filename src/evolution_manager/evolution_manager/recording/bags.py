@@ -379,8 +379,18 @@ def read_bag(path: Path | str, typestore: Typestore | None = None) -> Iterator[B
 
 def check_new_bag(path: Path) -> None:
     """Raise ``BagError`` when ``path`` cannot be a new bag: it exists (naming the process that is writing it,
-    if one is)."""
+    if one is), or a symbolic link stands there (a dangling one too: its target would be made), or it lies
+    under a file."""
+    if path.is_symlink():
+        raise BagError(
+            f"{path} is a symbolic link: refusing to write a bag through it; choose a new bag directory"
+        )
     if not path.exists():
+        for parent in path.parents:
+            if parent.exists():
+                if not parent.is_dir():
+                    raise BagError(f"cannot write a bag at {path}: {parent} is a file, not a folder")
+                break
         return
     lock = bag_lock(path)
     if is_locked(lock):

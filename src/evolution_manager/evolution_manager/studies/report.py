@@ -538,9 +538,10 @@ def build_report(
 
 def rebuild_run(root: Path) -> list[Path]:
     """Rewrite a run directory's results from its last checkpoint (its logs are left as they are)."""
-    from evolution_manager.evolution.run import Run
+    from evolution_manager.evolution.run import Run, refuse_planted_links
     from evolution_manager.viewing.results import write_results
 
+    refuse_planted_links(root)  # before the first result is rewritten
     return write_results(Run.resume(root, None, cut=False))
 
 

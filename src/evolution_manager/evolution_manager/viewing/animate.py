@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.vocabulary import ACTIONS
-from evolution_manager.arguments import Parser
+from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from swarm_ros.safe_paths import check_output, describe, replace_file
@@ -53,6 +53,8 @@ CARRY_COLOUR = (30, 130, 30)
 
 
 DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
+MAX_FPS = 100
+"""The most frames per second: a GIF counts each frame's time in hundredths of a second."""
 """DejaVu Sans from Debian's fonts-dejavu-core (ws/setup installs it); matplotlib ships the same file."""
 
 
@@ -196,6 +198,18 @@ def _light(colour: tuple[int, int, int]) -> tuple[int, int, int]:
     return red, green, blue
 
 
+def check_animation_output(out: Path) -> str:
+    """The encoder ``out`` needs ("" for a GIF, ffmpeg's path for an MP4); ``AnimationError`` for another
+    suffix, or an MP4 without ffmpeg. ``main`` asks before anything is simulated or read."""
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise AnimationError(f"{out}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
+    encoder = shutil.which("ffmpeg") or ""
+    if suffix == ".mp4" and not encoder:
+        raise AnimationError("writing .mp4 needs ffmpeg, which is not installed: write a .gif instead")
+    return encoder
+
+
 def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16, every: int = 1) -> Path:
     """Write every ``every``-th frame (the first included) to ``out``: an animated GIF, or an MP4 when
     ``out`` ends in .mp4 (needs ffmpeg). A foraging trial's 800 frames make a GIF of about 12 MB;
@@ -205,11 +219,7 @@ def write_animation(frames: TrialFrames, out: Path | str, fps: int = 16, every: 
             raise AnimationError(f"{name} must be a whole number of {unit} >= 1, got {value}")
     out = Path(out)
     suffix = out.suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise AnimationError(f"{out}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
-    encoder = shutil.which("ffmpeg") or ""
-    if suffix == ".mp4" and not encoder:
-        raise AnimationError("writing .mp4 needs ffmpeg, which is not installed: write a .gif instead")
+    encoder = check_animation_output(out)
     try:  # written beside ``out``, then renamed over it: a link at ``out`` is refused, never followed
         out.parent.mkdir(parents=True, exist_ok=True)
         images = [render_frame(frames, k) for k in range(0, len(frames.steps), every)]
@@ -274,8 +284,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="FILE",
         help='a tree per robot: {"trees": [...]} (the trial runs in-process)',
     )
-    parser.add_argument("--seed", type=int, help="seed of the trial (with --tree or --swarm)")
-    parser.add_argument("--trial", type=int, default=0, help="trial index (with --tree; default 0)")
+    parser.add_argument(
+        "--seed", type=seed_in_range, help="seed of the trial, in [0, 2**63 - 1] (with --tree or --swarm)"
+    )
+    parser.add_argument(
+        "--trial", type=non_negative_int, default=0, help="trial index (with --tree; default 0)"
+    )
     parser.add_argument("--profile", help="model profile (with --tree; default: the model's default)")
     add_task_option(parser, default=None, what="; with --tree or --swarm")
     parser.add_argument(
@@ -283,10 +297,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--out", type=Path, required=True, help="F.gif or F.mp4 (new, unless --force)")
     parser.add_argument("--force", action="store_true", help="overwrite an --out that exists")
-    parser.add_argument("--fps", type=int, default=16, help="frames per second (default 16: 2x real time)")
+    parser.add_argument(
+        "--fps",
+        type=int_in(1, MAX_FPS, "a number of frames per second"),
+        default=16,
+        help=f"frames per second, 1 to {MAX_FPS} (default 16: 2x real time)",
+    )
     parser.add_argument(
         "--every",
-        type=int,
+        type=positive_int,
         default=1,
         metavar="K",
         help="one frame every K sensing steps (default 1; 4: one per tick, a quarter of the file)",
@@ -302,6 +321,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_output(args.out, args.force)
         except OSError as error:
             raise AnimationError(str(error)) from None
+        check_animation_output(args.out)  # .gif, or .mp4 with ffmpeg there
         if args.bag is not None:
             if any(v is not None for v in (args.seed, args.profile, args.task, args.library)) or args.trial:
                 raise AnimationError(

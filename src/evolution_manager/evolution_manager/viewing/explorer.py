@@ -36,12 +36,14 @@ from typing import Any
 import numpy as np
 
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
-from evolution_manager.arguments import OneLineParser
-from evolution_manager.errors import ExplorerError
-from evolution_manager.files import write_atomic
+from bt_controller.validate import strict_json
+from evolution_manager.arguments import EXIT_IO, OneLineParser
+from evolution_manager.errors import ExplorerError, WriteError
+from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
 from evolution_manager.viewing.results import simplified as simplified_text
+from swarm_ros.safe_paths import refuse_links
 
 STRIDE = 2
 """One animation frame per this many sensing steps."""
@@ -245,7 +247,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
                         entry["animation"] = key
                     entry["seed"] = str(_seed_of(entry, seeds, run_seed))
     return {
-        "run": config.get("label") or root.name,
+        "run": config.get("label") or printable(root.name),  # a name's bytes that are not UTF-8 as \xNN
         "seed": str(run_seed),
         "evaluations": summary.get("evaluations"),
         "evolved": evolved,
@@ -533,8 +535,8 @@ def _actions() -> list[str]:
 
 
 def _read(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text())
+    try:  # strict: NaN, Infinity and a key given twice are refused (the page could not be written)
+        data = strict_json(path.read_text())
     except (OSError, ValueError) as error:
         raise ExplorerError(f"{path} is not a readable JSON file: {error}") from None
     if not isinstance(data, dict):
@@ -549,6 +551,12 @@ def write_explorer(
     the ``library`` command) the page also shows that library's primitives on the grids (``library_view``);
     without it the page is what it always was, byte for byte."""
     root = Path(root)
+    try:  # the page's place: a link planted there is refused before the animations' minutes
+        refuse_links(root / "explorer.html")
+    except OSError as error:
+        raise ExplorerError(str(error)) from None
+    if (root / "explorer.html").is_dir():
+        raise ExplorerError(f"{root / 'explorer.html'} is a folder: the page cannot be written there")
     shown = None
     if library is not None:
         chosen = load_library_file(library)  # its errors before the animations' minutes
@@ -592,9 +600,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ExplorerError as error:
         print(f"explorer: error: {error}", file=sys.stderr)
         return 2
+    except WriteError as error:  # a full disk, a read-only folder
+        print(f"explorer: error: {error}", file=sys.stderr)
+        return EXIT_IO
     print(file=sys.stderr)
     size = path.stat().st_size
-    print(f"{path}: {size / 1e6:.2f} MB in {time.monotonic() - started:.1f} s")
+    print(f"{printable(path)}: {size / 1e6:.2f} MB in {time.monotonic() - started:.1f} s")
     return 0
 
 

@@ -78,6 +78,18 @@ def draw(arena: list, robots: list, title: str, out: Path) -> None:
     replace_file(out, lambda temporary: figure.savefig(temporary, format=fmt, dpi=110, bbox_inches="tight"))
 
 
+def check_format(out: Path) -> str:
+    """The picture format of ``out`` (its suffix; PNG without one); ``ValueError`` naming the formats
+    matplotlib writes for another, before the bag is read."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    fmt = out.suffix.lstrip(".").lower() or "png"
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if fmt not in formats:
+        raise ValueError(f"Format {fmt!r} is not supported (supported formats: {', '.join(sorted(formats))})")
+    return fmt
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``snapshot``: one step of a trial bag as a top-down picture."""
     parser = OneLineParser(prog="snapshot", description=__doc__.split("\n\n")[0])
@@ -88,6 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     try:
         check_output(args.out, args.force)  # a link, a folder, a file there: refused before the bag is read
+        check_format(args.out)
         arena, robots, step = scene(args.bag, args.step)
         draw(arena, robots, f"{args.bag.name}: step {step}", args.out)
     except BagError as error:

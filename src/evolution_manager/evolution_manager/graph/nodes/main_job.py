@@ -36,12 +36,15 @@ from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 
+from evolution_manager.arguments import Parser, positive_int, seed_in_range
+from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, PROFILES, SCENARIOS
 from evolution_manager.graph.nodes.trial import TrialFailedError, run_recorded_trial
 from evolution_manager.graph.startup import GraphError, executable
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError
 from swarm_ros.isolation import domain_environment, reserved_domain
+from swarm_ros.safe_paths import check_folder
 from swarm_sim.objectives import OBJECTIVES
 
 DEFAULT_EVALUATIONS = 25_000  # the paper's budget per run; about two minutes here
@@ -54,16 +57,20 @@ def default_out() -> Path:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="ws/run",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--evaluations", type=int, default=DEFAULT_EVALUATIONS, help="evaluation budget")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the run (default 1)")
+    parser.add_argument(
+        "--evaluations", type=positive_int, default=DEFAULT_EVALUATIONS, help="evaluation budget"
+    )
+    parser.add_argument(
+        "--seed", type=seed_in_range, default=1, help="seed of the run, in [0, 2**63 - 1] (default 1)"
+    )
     parser.add_argument(
         "--evaluators",
-        type=int,
+        type=positive_int,
         default=None,
         help=f"evaluator nodes to start (default {DEFAULT_EVALUATORS}; not with a --cluster)",
     )
@@ -71,7 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--scenarios", choices=SCENARIOS, default="fixed", help="fixed (default) or fresh scenarios"
     )
     parser.add_argument(
-        "--scenario-seed", type=int, default=None, help="scenario seed (default: derived from --seed)"
+        "--scenario-seed",
+        type=seed_in_range,
+        default=None,
+        help="scenario seed, in [0, 2**63 - 1] (default: derived from --seed)",
     )
     parser.add_argument(
         "--profile",
@@ -146,12 +156,19 @@ def run_manager(command: list[str], env: dict[str, str]) -> tuple[int, int]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the main job; return the exit status."""
-    args = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        args = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    except UsageError as error:
+        print(f"main: {error}", file=sys.stderr)
+        return 2
     if args.resume and args.out is None:
         print("main: --resume needs the --out of the job to continue", file=sys.stderr)
         return 2
+    if args.resume and not args.out.is_dir():  # it started a new job of 25,000 evaluations there
+        print(f"main: --resume --out {args.out}: no job there to continue (no such folder)", file=sys.stderr)
+        return 2
     out = args.out or default_out()
-    if out.exists() and not args.resume:
+    if (out.exists() or out.is_symlink()) and not args.resume:
         print(
             f"main: {out} exists already: choose a new --out, or continue its job with --resume --out {out} "
             "(nothing there is touched)",
@@ -164,6 +181,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         refused = f"--evaluators applies to --cluster local only, not to --cluster {args.cluster}"
     if args.cluster_config is not None and args.cluster != "slurm":
         refused = f"--cluster-config applies to --cluster slurm only, not to --cluster {args.cluster}"
+    try:  # a link or a place under a file, before the job starts (the cluster's settings: evolve checks them)
+        check_folder(out, "--out")
+    except OSError as error:
+        refused = refused or str(error)
     if refused:
         print(f"main: {refused}", file=sys.stderr)
         return 2

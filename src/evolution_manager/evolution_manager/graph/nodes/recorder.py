@@ -30,8 +30,8 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from visualization_msgs.msg import MarkerArray
 
-from evolution_manager.arguments import OneLineParser
-from evolution_manager.recording.bags import BagError, BagRecorder, is_latched
+from evolution_manager.arguments import OneLineParser, int_in, without_ros_args
+from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from swarm_msgs.msg import (
     GroundSensor,
     RangeAndBearingReadings,
@@ -40,7 +40,7 @@ from swarm_msgs.msg import (
     TrialStart,
     WheelCommand,
 )
-from swarm_ros.names import robot_namespaces
+from swarm_ros.names import NamespaceError, check_topic, graph_namespace, robot_namespaces
 from swarm_ros.qos import NO_SUBSCRIPTION_EVENTS, RECORDING, RECORDING_LATCHED
 from swarm_sim.config import DEFAULT
 
@@ -143,21 +143,33 @@ class GraphRecorder:
         return all(subscription.get_publisher_count() > 0 for subscription in self.subscriptions)
 
 
+MAX_ROBOTS = 1000
+"""The most robots ``record --robots`` takes: the subscriptions of a graph of more (five topics a robot) are
+not a graph anyone runs, and a mistyped count must not make millions."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``record``: record a trial graph's topics until SIGINT or SIGTERM."""
     parser = OneLineParser(prog="record", description=__doc__.split("\n\n")[1])
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to write")
     parser.add_argument(
         "--robots",
-        type=int,
+        type=int_in(1, MAX_ROBOTS, "a number of robots"),
         default=DEFAULT.n_robots,
-        help=f"footbots in the graph (default {DEFAULT.n_robots})",
+        help=f"footbots in the graph, 1 to {MAX_ROBOTS} (default {DEFAULT.n_robots})",
     )
     parser.add_argument(
         "--namespace", default="", help="the graph's namespace, e.g. /swarm_a (default: the root)"
     )
     parser.add_argument("--clock", default="/clock", help="the graph's clock topic (default /clock)")
-    args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
+    args = parser.parse_args(without_ros_args(sys.argv[1:] if argv is None else argv))
+    try:  # before the node starts: a name ROS refuses, a bag that cannot be new
+        namespace = graph_namespace(args.namespace)
+        check_topic(args.clock, "--clock")
+        check_new_bag(args.bag)
+    except (NamespaceError, BagError) as error:
+        print(f"record: {error}", file=sys.stderr)
+        return 2
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
@@ -168,9 +180,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             node = Node("recorder", context=context)
             executor = SingleThreadedExecutor(context=context)
             executor.add_node(node)
-            recorder = GraphRecorder(node, bag, trial_topics(args.robots, args.namespace, args.clock))
+            recorder = GraphRecorder(node, bag, trial_topics(args.robots, namespace, args.clock))
             print(f"recording to {args.bag}; stop with Ctrl-C", flush=True)
-            node.get_logger().info(f"ready: recording {args.namespace or '/'} to {args.bag}")
+            node.get_logger().info(f"ready: recording {namespace or '/'} to {args.bag}")
             matched = False
             while not stop.is_set():
                 executor.spin_once(timeout_sec=0.1)

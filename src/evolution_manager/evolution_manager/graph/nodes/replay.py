@@ -27,10 +27,11 @@ from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Reader
 from rosgraph_msgs.msg import Clock
 
-from evolution_manager.arguments import OneLineParser
+from evolution_manager.arguments import OneLineParser, finite, without_ros_args
 from evolution_manager.recording.bags import (
     BagError,
     check_bag,
+    check_crcs,
     is_latched,
     promised_messages,
     read_bag,
@@ -84,8 +85,11 @@ def message_class(msgtype: str) -> type:
 
 
 def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
-    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many."""
+    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many. A bag whose
+    types are not all allowed (``check_message_type``) or whose MCAP files fail their CRCs is refused
+    (``BagError``) before the node starts."""
     topics = bag_topics(bag)
+    check_crcs(bag)  # a damaged chunk: refused, not half published
     context = rclpy.Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
@@ -145,13 +149,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``replay``: republish a bag, or ``--verify`` a recorded trial."""
     parser = OneLineParser(prog="replay", description=__doc__.split("\n\n")[1])
     parser.add_argument("bag", type=Path, help="the bag directory")
-    parser.add_argument("--rate", type=float, default=1.0, help="playback speed; 0 = as fast as possible")
-    parser.add_argument("--delay", type=float, default=1.0, help="seconds to wait for discovery first")
+    parser.add_argument(
+        "--rate", type=finite(0.0, what="speed"), default=1.0, help="playback speed; 0 = as fast as possible"
+    )
+    parser.add_argument(
+        "--delay",
+        type=finite(0.0, what="number of seconds"),
+        default=1.0,
+        help="seconds to wait for discovery first",
+    )
     parser.add_argument("--verify", action="store_true", help="re-run the recorded trial and compare")
-    args = parser.parse_args(rclpy.utilities.remove_ros_args(list(sys.argv[1:] if argv is None else argv)))
-    if args.rate < 0 or args.delay < 0:
-        print(f"replay: --rate and --delay must not be negative: {args.rate}, {args.delay}", file=sys.stderr)
-        return 2
+    args = parser.parse_args(without_ros_args(sys.argv[1:] if argv is None else argv))
     try:
         if args.verify:
             verification = verify_trial_bag(args.bag)

@@ -52,7 +52,7 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.timeline import PROFILES
 from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
-from evolution_manager.arguments import Parser
+from evolution_manager.arguments import Parser, finite, non_negative_int, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
@@ -64,9 +64,9 @@ from swarm_msgs.msg import TreeStatus, TrialStart
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
-from swarm_ros.names import robot_namespaces
+from swarm_ros.names import check_topic, graph_namespace, robot_namespaces
 from swarm_ros.parameters import read_parameter_file
-from swarm_ros.safe_paths import describe
+from swarm_ros.safe_paths import check_folder, describe
 from swarm_ros.services import call_until_answered
 from swarm_sim.cli import evaluation_json
 from swarm_sim.conditions import apply_conditions
@@ -105,13 +105,6 @@ def expected_messages(
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
         for topic, msg_class in trial_topics(robots, namespace, clock)
     }
-
-
-def graph_namespace(namespace: str) -> str:
-    """``namespace`` as an absolute ROS namespace without a trailing slash ("" for the root)."""
-    if not namespace.strip("/"):
-        return ""
-    return "/" + namespace.strip("/")
 
 
 class TrialRunner:
@@ -551,10 +544,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="FILE",
         help='a tree per robot: a JSON file {"trees": ["tree text", ...]} (one per robot, robot 0 first)',
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the evaluation (default 0)")
+    parser.add_argument(
+        "--seed", type=seed_in_range, default=0, help="seed of the evaluation, in [0, 2**63 - 1] (default 0)"
+    )
     parser.add_argument(
         "--trial",
-        type=int,
+        type=non_negative_int,
         default=0,
         help="index of the trial (default 0); the earlier trials of its chain run (and are recorded) first",
     )
@@ -570,7 +565,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--bag", required=True, type=Path, help="new bag directory to record the trial to")
     parser.add_argument(
-        "--timeout", type=float, default=60.0, help="seconds to wait for any step of the graph"
+        "--timeout",
+        type=finite(0.0, strictly=True, what="number of seconds"),
+        default=60.0,
+        help="seconds to wait for any step of the graph (default 60)",
     )
     parser.add_argument(
         "--domain",
@@ -617,8 +615,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             shown = canonical(parse(tree_argument(args.tree), library=library))
             ran = shown
-        if args.trial < 0:
-            raise ValueError(f"--trial must be a non-negative integer, got {args.trial}")
+        namespace = graph_namespace(args.namespace)  # a name ROS refuses: before any node starts
+        check_topic(args.clock, "--clock")
         check_new_bag(args.bag)
         try:  # an unusable place fails here, at once
             args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)
@@ -630,7 +628,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_params_file(args.params_file, args.namespace, args.task.config(args.profile))
         domain = caller_domain() if args.domain is None else args.domain
         logs = args.logs or args.bag.with_name(args.bag.name + ".logs")
-        namespace = graph_namespace(args.namespace)
+        check_folder(logs, "--logs")  # a link, a file or a place under a file: refused before the graph
         print(
             f"trial: graph in ROS domain {domain}, namespace {namespace or '/'}; node logs in {logs}",
             file=sys.stderr,
