@@ -1,5 +1,6 @@
-"""Fixtures of the system tests: ``workspace`` (tests that start processes) and ``slurm``, a real one-node
-SLURM on this machine (slurm_cluster)."""
+"""Fixtures of the system tests: ``workspace`` (tests that start processes), ``graph``, one trial graph under
+the defaults for every test that needs one, and ``slurm``, a real one-node SLURM on this machine
+(slurm_cluster)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,22 @@ from pathlib import Path
 import pytest
 from slurm_cluster import OneNodeSlurm
 
+from evolution_manager.graph.nodes.trial import TrialGraph
 from swarm_ros import isolation
 
 workspace = pytest.fixture(isolation.workspace)  # the shared fixture of tests that start processes
+
+
+@pytest.fixture(scope="session")
+def graph() -> Iterator[TrialGraph]:
+    """A trial graph under the defaults (paper profile, primitives task, nine robots) in a domain of its own,
+    shared by every system test that runs trials through such a graph: starting its ten node processes and
+    stopping them costs about 20 s of two cores each time. A trial loads its trees into every controller
+    and runs its chain from the start, so a test sees no trace of the trials before it; a test must leave
+    the graph running (one that kills or reconfigures nodes starts its own). The timeout (seconds without a
+    step or an answer before a trial fails) is the largest any of its tests used."""
+    with TrialGraph(timeout=240.0) as running:
+        yield running
 
 
 @pytest.fixture(scope="session")

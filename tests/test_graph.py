@@ -29,12 +29,6 @@ PARITY_TREES = 20
 CLEAN_PARITY_TREES = 20
 
 
-@pytest.fixture(scope="module")
-def graph():
-    with TrialGraph(timeout=120.0) as running:
-        yield running
-
-
 def test_trials_through_the_graph_equal_the_batch_evaluator(graph):
     trees = ["forward", "sel(seq(in_nest, stop), forward)", *random_trees(seed=2023, count=PARITY_TREES - 2)]
     evaluator = BatchEvaluator()

@@ -7,7 +7,7 @@ import subprocess
 
 import numpy as np
 
-from evolution_manager.graph.nodes.trial import RESULT_TOPIC, TrialGraph
+from evolution_manager.graph.nodes.trial import RESULT_TOPIC
 from evolution_manager.graph.startup import executable, trial_graph_nodes
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
@@ -29,22 +29,19 @@ def _same(record, expected):
     )
 
 
-def test_a_heterogeneous_swarm_through_the_graph_equals_the_batch_evaluator():
+def test_a_heterogeneous_swarm_through_the_graph_equals_the_batch_evaluator(graph):
     layout = of_trees(MIXED, 9)
     swapped = of_trees((FOOD, NEST, *MIXED[2:]), 9)  # robots 0 and 1 exchange their trees
     evaluator = BatchEvaluator()
-    with TrialGraph(timeout=120.0) as graph:
-        for swarm, seed, trial in ((layout, 31, 0), (layout, 32, 3), (swapped, 32, 3)):
-            record = graph.run(swarm, seed, trial)  # trial 3 runs trials 0-2 of its chain first
-            [(_, records)] = evaluator.evaluate_trials([SwarmRequest(swarm, seed, trial + 1)])
-            assert _same(record, records[trial]), (swarm.trees, seed, trial)
-        assert (
-            record.values != graph.run(layout, 32, 3).values
-        )  # who runs which tree matters in the graph too
-        # back to one tree for all: every controller loads it again
-        record = graph.run(NEST, 33, 1)
-        [(_, records)] = evaluator.evaluate_trials([EvaluationRequest(NEST, 33, 2)])
-        assert _same(record, records[1])
+    for swarm, seed, trial in ((layout, 31, 0), (layout, 32, 3), (swapped, 32, 3)):
+        record = graph.run(swarm, seed, trial)  # trial 3 runs trials 0-2 of its chain first
+        [(_, records)] = evaluator.evaluate_trials([SwarmRequest(swarm, seed, trial + 1)])
+        assert _same(record, records[trial]), (swarm.trees, seed, trial)
+    assert record.values != graph.run(layout, 32, 3).values  # who runs which tree matters in the graph too
+    # back to one tree for all: every controller loads it again
+    record = graph.run(NEST, 33, 1)
+    [(_, records)] = evaluator.evaluate_trials([EvaluationRequest(NEST, 33, 2)])
+    assert _same(record, records[1])
 
 
 def test_each_controller_node_gets_its_own_tree_parameter():

@@ -38,12 +38,6 @@ def batch_trial(text, seed, trial, config=DEFAULT):
     return records[trial]
 
 
-@pytest.fixture(scope="module")
-def graph():
-    with TrialGraph(timeout=120.0) as running:
-        yield running
-
-
 # --- visualisation ------------------------------------------------------------------------------------------
 def test_a_trial_bag_shows_the_arena_and_labelled_robots_in_si_units(graph, tmp_path):
     bag = tmp_path / "trial"

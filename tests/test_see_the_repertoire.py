@@ -17,7 +17,6 @@ from PIL import Image
 from bt_controller import timeline
 from bt_controller.simplify import simplify
 from bt_controller.tree import parse, to_text
-from evolution_manager.graph.nodes.trial import TrialGraph
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
@@ -29,10 +28,9 @@ STEPS = timeline.trial_steps(DEFAULT.timeline)
 """Control steps of one trial (160 under the paper profile)."""
 
 
-def test_animation_frames_are_the_poses_the_graph_recorded(tmp_path):
+def test_animation_frames_are_the_poses_the_graph_recorded(graph, tmp_path):
     bag = tmp_path / "trial.bag"
-    with TrialGraph(timeout=240) as graph:
-        graph.run(TREE, SEED, TRIAL, bag)
+    graph.run(TREE, SEED, TRIAL, bag)
     states = [m.message for m in read_bag(bag) if m.topic == "/swarm_state"]
     recorded = {state.step: state for state in states if state.trial == TRIAL}
     assert len(states) == (TRIAL + 1) * len(recorded)  # the chain's earlier trial is in the bag, not drawn
