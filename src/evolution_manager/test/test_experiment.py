@@ -197,7 +197,7 @@ def test_tests_follow_the_papers_rule_and_holm_corrects():
 
 def test_report_on_a_folder_without_runs_says_so(tmp_path, capsys):
     assert report([str(tmp_path)]) == 2
-    assert "neither an experiment folder nor a run directory" in capsys.readouterr().err
+    assert "neither an experiment folder, a run directory nor a folder of scenario" in capsys.readouterr().err
     assert report([]) == 2
 
 
