@@ -169,11 +169,12 @@ def _links_shape(links: np.ndarray) -> np.ndarray:
 def frames_from_bag(path: Path | str) -> TrialFrames:
     """The frames of the trial recorded in the bag at ``path`` (``trial --bag``): trial K's steps only (the
     bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
-    from evolution_manager.recording.bags import BagError, read_bag
+    from evolution_manager.recording.bags import BagError, check_crcs, read_bag
     from evolution_manager.recording.reproduce import RESULT_TOPIC, recorded_world
     from swarm_sim.config import DEFAULT
 
     try:
+        check_crcs(path)  # a changed byte is refused, never drawn (as replay and replay --verify refuse it)
         messages = list(read_bag(path))
     except BagError as error:
         raise AnimationError(str(error)) from None

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from evolution_manager.arguments import OneLineParser
-from evolution_manager.recording.bags import BagError, read_bag
+from evolution_manager.recording.bags import BagError, check_crcs, read_bag
 from swarm_ros.safe_paths import check_output, describe, replace_file
 
 # visualization_msgs/Marker types drawn here
@@ -24,6 +24,7 @@ ARROW, CYLINDER, LINE_STRIP, TRIANGLE_LIST, TEXT_VIEW_FACING = 0, 3, 4, 11, 9
 def scene(bag: Path, step: int) -> tuple[list, list, int]:
     """The arena's markers and the robots' markers at sensing step ``step`` (-1: the last), and that step."""
     arena, robots = [], []
+    check_crcs(bag)  # a changed byte is refused, never drawn
     for message in read_bag(bag):
         name = message.topic.rsplit("/", 1)[-1]
         if name == "markers":
