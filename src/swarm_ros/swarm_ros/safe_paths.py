@@ -126,13 +126,7 @@ def check_output(path: Path | str, force: bool = False, option: str = "--out") -
             f"{option} {path} already exists: add --force to overwrite it, or name a new file",
             path,
         )
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise UnsafePathError(
-                    errno.ENOTDIR, f"{option} {path}: {parent} is a file, not a folder", path
-                )
-            break
+    _refuse_a_place_under_a_file(path, option)
     return path
 
 
@@ -145,14 +139,19 @@ def check_folder(path: Path | str, option: str = "--out") -> Path:
         raise UnsafePathError(errno.ELOOP, f"{option} {_link_error(path)}", path)
     if path.exists() and not path.is_dir():
         raise UnsafePathError(errno.ENOTDIR, f"{option} {path} is a file, not a folder", path)
+    _refuse_a_place_under_a_file(path, option)
+    return path
+
+
+def _refuse_a_place_under_a_file(path: Path, option: str) -> None:
+    """Refuse ``path`` when its nearest existing parent is a file, not a folder."""
     for parent in path.parents:
         if parent.exists():
             if not parent.is_dir():
                 raise UnsafePathError(
                     errno.ENOTDIR, f"{option} {path}: {parent} is a file, not a folder", path
                 )
-            break
-    return path
+            return
 
 
 def replace_file(path: Path | str, write: Callable[[Path], object]) -> Path:
