@@ -30,11 +30,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from geometry_msgs.msg import Point
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from marker_bags import write_snapshot_markers
 from rclpy.serialization import serialize_message
-from visualization_msgs.msg import Marker, MarkerArray
 
 from evolution_manager.graph.nodes import recorder, replay, trial
 from evolution_manager.recording.bags import BagRecorder
@@ -48,7 +47,6 @@ FUZZ = settings(
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
-ARRAY = "visualization_msgs/msg/MarkerArray"
 SOURCE = {
     "run": "elsewhere",
     "objective": "food",
@@ -83,17 +81,10 @@ def shared(tmp_path_factory) -> Path:
     from evolution_manager.studies.evolve import evolve
 
     root = tmp_path_factory.mktemp("shared")
-    corners = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0))
-    arena = Marker(type=Marker.LINE_STRIP, points=[Point(x=x, y=y) for x, y in corners])
-    arena.color.a = 1.0
-    robot = Marker(type=Marker.CYLINDER)
-    robot.scale.x = 0.17
-    robot.color.r = robot.color.a = 1.0
     start = TrialStart(seed=1, trial=0, robots=9, ticks=DEFAULT.ticks, world=json.dumps(DEFAULT.as_dict()))
     poses = [RobotPose(x=0.1 * k, y=0.0, theta=0.0) for k in range(9)]
     with BagRecorder(root / "trial.bag") as bag:
-        bag.write_cdr("/markers", ARRAY, 1, serialize_message(MarkerArray(markers=[arena])))
-        bag.write_cdr("/robot_markers", ARRAY, 2, serialize_message(MarkerArray(markers=[robot])))
+        write_snapshot_markers(bag)
         bag.write_cdr("/trial_start", "swarm_msgs/msg/TrialStart", 1, serialize_message(start))
         for step in (0, 1):
             state = SwarmState(seed=1, trial=0, step=step, poses=poses)

@@ -11,14 +11,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from geometry_msgs.msg import Point
-from rclpy.serialization import serialize_message
-from visualization_msgs.msg import Marker, MarkerArray
+from marker_bags import write_snapshot_markers
 
 from evolution_manager.recording.bags import BagRecorder
 from evolution_manager.viewing import animate, snapshot
 
-ARRAY = "visualization_msgs/msg/MarkerArray"
 TREE = ["--tree", "forward", "--seed", "1", "--every", "50"]  # a few frames: seconds
 
 
@@ -26,15 +23,8 @@ TREE = ["--tree", "forward", "--seed", "1", "--every", "50"]  # a few frames: se
 def bag(tmp_path_factory) -> Path:
     """A trial bag as ``snapshot`` reads it: an arena's outline and one robot (the markers topics)."""
     path = tmp_path_factory.mktemp("bag") / "trial.bag"
-    corners = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0))
-    arena = Marker(type=Marker.LINE_STRIP, points=[Point(x=x, y=y) for x, y in corners])
-    arena.color.a = 1.0
-    robot = Marker(type=Marker.CYLINDER)
-    robot.scale.x = 0.17
-    robot.color.r = robot.color.a = 1.0
     with BagRecorder(path) as recorder:
-        recorder.write_cdr("/markers", ARRAY, 1, serialize_message(MarkerArray(markers=[arena])))
-        recorder.write_cdr("/robot_markers", ARRAY, 2, serialize_message(MarkerArray(markers=[robot])))
+        write_snapshot_markers(recorder)
     return path
 
 
