@@ -23,10 +23,10 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import math
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from statistics import median
 
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
@@ -204,13 +204,10 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     ]
     for library in dict.fromkeys(row["library"] for row in table):
         mine = [row for row in table if row["library"] == library]
-        best = sorted(float(row["best_fitness"]) for row in mine)
-        held = sorted(float(row["heldout_best_fitness"]) for row in mine if row["heldout_best_fitness"])
-        lines.append(
-            f"| {library} | {len(mine)} | {_median(best):.4g} | {_median(held):.4g} |"
-            if held
-            else f"| {library} | {len(mine)} | {_median(best):.4g} | n/a |"
-        )
+        best = median(float(row["best_fitness"]) for row in mine)
+        held = [float(row["heldout_best_fitness"]) for row in mine if row["heldout_best_fitness"]]
+        held_text = f"{median(held):.4g}" if held else "n/a"
+        lines.append(f"| {library} | {len(mine)} | {best:.4g} | {held_text} |")
     verdicts = []
     for key, name in (
         ("heldout_best_fitness", "held-out best fitness"),
@@ -228,11 +225,6 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
             f"p = {p_tost:.3g}, {equivalent}."
         )
     return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
-
-
-def _median(values: Sequence[float]) -> float:
-    n = len(values)
-    return math.nan if n == 0 else (values[n // 2] if n % 2 else (values[n // 2 - 1] + values[n // 2]) / 2)
 
 
 def build_report(root: Path) -> Path:
