@@ -34,7 +34,7 @@ from evolution_manager.studies.foraging_study import (
     write_runs_csv,
 )
 from evolution_manager.studies.report import report
-from swarm_sim import transfer
+from swarm_sim.validation import transfer
 
 REPOSITORY = Path(__file__).resolve().parents[3]
 COMMITTED = REPOSITORY / "docs/results/foraging"

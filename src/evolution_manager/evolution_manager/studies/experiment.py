@@ -69,7 +69,7 @@ from evolution_manager.processes import (
     lock_path_for,
     signals_as_interrupts,
 )
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory

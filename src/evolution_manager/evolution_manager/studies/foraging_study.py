@@ -56,6 +56,8 @@ from evolution_manager.evolution.run_config import RunConfig
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.compositions import CompositionConfig
+from bt_controller.errors import TreeLimitError
+from bt_controller.tree import parse
 from evolution_manager.files import read_json, write_atomic, write_json, writing
 from evolution_manager.studies import foraging_tables
 from evolution_manager.studies.foraging_tables import Claim, Test
@@ -615,9 +617,7 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
 
 def _draw(run: ArmRun, stem: Path) -> Path:
     """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
-    from bt_controller.errors import TreeLimitError
     from bt_controller.render import render
-    from bt_controller.tree import parse
     from evolution_manager.viewing.results import simplified_tree
 
     library = (

@@ -36,7 +36,7 @@ from evolution_manager.studies import argos_transfer, intervals
 from evolution_manager.studies.argos_transfer import measure as argos_measure
 from evolution_manager.studies.significance import ALPHA, Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES
 
 METRICS = (("best_fitness", "best fitness", 4), ("coverage", "coverage", 5), ("qd_score", "QD score", 6))
 """(summary key, name, figure number in the paper)."""

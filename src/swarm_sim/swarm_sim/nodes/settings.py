@@ -1,5 +1,6 @@
-"""The parameters the simulator and the evaluator declare beside the world's (``swarm_sim.config.Config``):
-one home, so that each node knows which names of a shared parameter file (``/**``) belong to the other."""
+"""The parameters the simulator and the evaluator declare beside the world's
+(``swarm_sim.model.config.Config``): one home, so that each node knows which names of a shared parameter file
+(``/**``) belong to the other."""
 
 from __future__ import annotations
 

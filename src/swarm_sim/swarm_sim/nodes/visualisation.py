@@ -19,7 +19,7 @@ from geometry_msgs.msg import Point, Pose, PoseStamped
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swarm_sim.config import Config
+from swarm_sim.model import Config
 
 FRAME = "arena"
 """The fixed frame of every pose and marker: the arena, centre at the origin, metres."""

@@ -23,11 +23,11 @@ from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.library import Library
+from bt_controller.model_settings import chain_of_trial
 from bt_controller.tree import parse
 from bt_controller.validate import integer
-from swarm_sim import kernel, world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.swarm_layout import SwarmLayout
+from swarm_sim.core import kernel, world
+from swarm_sim.model import DEFAULT, Config, SwarmLayout
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ def _check(seed: int, trial: int) -> int:
 
 def _steps(config: Config, trial: int) -> np.ndarray:
     """The chain steps of trial ``trial``: its position in its chain times the trial's length, plus 1 .. T."""
-    _, position = timeline.chain_of_trial(config.timeline, trial)
+    _, position = chain_of_trial(config.timeline, trial)
     return position * config.trial_steps + np.arange(1, config.trial_steps + 1, dtype=np.int64)
 
 
@@ -111,7 +111,7 @@ def record_trial(
     trial = _check(seed, trial)
     layout = _layout(tree, config)
     trees = pack([parse(text, library=library) for text in layout.distinct])
-    chain, position = timeline.chain_of_trial(config.timeline, trial)
+    chain, position = chain_of_trial(config.timeline, trial)
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots)
     gap = config.gap(trial)  # the gap of its chain (a chain's trials share one)
@@ -148,7 +148,7 @@ def record_trial_reference(
 ) -> RecordedTrial:
     """``record_trial`` through the reference road (``lockstep.run_with_controllers``: the simulator's side
     and one ``FootbotController`` per robot, as the node graph runs them), from the robots' answers."""
-    from swarm_sim.lockstep import (
+    from swarm_sim.roads.lockstep import (
         LockstepChain,
         RobotAnswer,
         run_with_controllers,

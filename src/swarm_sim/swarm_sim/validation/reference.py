@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from swarm_sim.errors import ReferenceFileError
-from swarm_sim.objectives import VALUE_NAMES
+from swarm_sim.model import VALUE_NAMES
 
 QUANTITIES: tuple[str, ...] = VALUE_NAMES
 """The quantities of an evaluation, in the evaluator's order (the objectives, then the three descriptors)."""

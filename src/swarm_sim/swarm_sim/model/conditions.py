@@ -1,9 +1,9 @@
 """Conditions: named, validated changes to the world (damage, a harder radio, another swarm or arena).
 
 A condition is written ``NAME=VALUE`` (``evaluate --condition``, ``adapt --condition``, the simulator node's
-``conditions`` parameter) and is nothing but a setting of ``swarm_sim.config.Config``, so it holds in the
-reference road, the batch kernels and the node graph alike; damage acts through the wheel gains a trial starts
-with (``world.wheel_gains``), never inside the kernels' loops.
+``conditions`` parameter) and is nothing but a setting of ``swarm_sim.model.config.Config``, so it holds in
+the reference road, the batch kernels and the node graph alike; damage acts through the wheel gains a trial
+starts with (``world.wheel_gains``), never inside the kernels' loops.
 
 ``dead-robots=K``
     robots 0 .. K-1 never drive or turn (both wheel gains 0: ``Config.dead_robots``). They **still
@@ -26,8 +26,8 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from swarm_sim.config import DEFAULT, Config
 from swarm_sim.errors import ConditionError, ConfigError
+from swarm_sim.model.config import DEFAULT, Config
 
 CONDITION_NAMES: tuple[str, ...] = ("dead-robots", "weak-wheel", "message-loss", "robots", "gap")
 """Every condition name, in the order they are applied (``robots`` is applied first, whatever the order

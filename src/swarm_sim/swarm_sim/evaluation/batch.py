@@ -6,8 +6,8 @@ inverse primitives' three and foraging) and its descriptors (movement, rotation,
 averaged over robots and trials and each in [0, 1] but foraging (deliveries per robot per trial). A result
 depends only on its request.
 
-A ``SwarmRequest`` evaluates a heterogeneous swarm (``swarm_sim.swarm_layout``: a tree per robot) the same
-way; a layout of one tree on every robot gives the very bits of the ``EvaluationRequest`` of that tree.
+A ``SwarmRequest`` evaluates a heterogeneous swarm (``swarm_sim.model.swarm_layout``: a tree per robot) the
+same way; a layout of one tree on every robot gives the very bits of the ``EvaluationRequest`` of that tree.
 """
 
 from __future__ import annotations
@@ -26,10 +26,8 @@ from bt_controller.errors import TreeError
 from bt_controller.library import Library
 from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
 from bt_controller.validate import integer
-from swarm_sim import kernel, world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.swarm_layout import SwarmLayout
-from swarm_sim.trial_data import TrialRecord, combine
+from swarm_sim.core import TrialRecord, combine, kernel, world
+from swarm_sim.model import DEFAULT, Config, SwarmLayout
 
 MAX_TRIALS = 10_000
 """Most trials one request may ask for."""

@@ -1,9 +1,9 @@
 """Transfer check: do trees evolved here behave in the authors' ARGoS simulation as they do here?
 
-``ws/run swarm_sim validate --transfer RUN_DIR ...`` (``swarm_sim.validate_cli``) takes evolution run
+``ws/run swarm_sim validate --transfer RUN_DIR ...`` (``swarm_sim.validation.cli``) takes evolution run
 directories (as ``ws/run evolution_manager evolve`` writes them), picks trees from their repertoires, scores
 each here on fresh scenarios and in ARGoS through the project's ARGoS harness, and sets the six quantities
-side by side with the tolerance rule of ``swarm_sim.validation``.
+side by side with the tolerance rule of ``swarm_sim.validation.reference``.
 
 **Which trees.** From each run, the grid of every objective the run evolved (``summary.json``:
 ``objectives.<o>.evolved``; without a summary, every ``repertoire_<objective>.json`` present). A grid's
@@ -32,10 +32,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bt_controller.validate import strict_json
-from swarm_sim import validation
 from swarm_sim.errors import UsageError
-from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
-from swarm_sim.validation import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate
+from swarm_sim.model import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
+from swarm_sim.validation import reference as validation
+from swarm_sim.validation.reference import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate
 
 __all__ = [
     "ArgosHarness",

@@ -16,11 +16,10 @@ import sys
 import time
 from collections.abc import Sequence
 
+from bt_controller.model_settings import PROFILES
 from bt_controller.random_trees import random_trees
-from bt_controller.timeline import PROFILES
-from swarm_sim.config import DEFAULT, default_config
-from swarm_sim.lockstep import warm_up
-from swarm_sim.recording import record_trial, record_trial_reference
+from swarm_sim.model import DEFAULT, default_config
+from swarm_sim.roads import record_trial, record_trial_reference, warm_up
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,9 +1,10 @@
 """The reference road: chains run step by step in plain Python, robot by robot, with the reference tree
 interpreter. Slow and plain; the oracle that the batch evaluator is tested against.
 
-It is orchestrated the way the ROS 2 node graph is: the simulator's side (``swarm_sim.lockstep``: teleports,
-physics, message delivery, ground sensing, scoring) and one ``bt_controller.controller.FootbotController`` per
-robot (perception, the tree, the motors), exchanging only readings and answers.
+It is orchestrated the way the ROS 2 node graph is: the simulator's side (``swarm_sim.roads.lockstep``:
+teleports, physics, message delivery, ground sensing, scoring) and one
+``bt_controller.controller.FootbotController`` per robot (perception, the tree, the motors), exchanging only
+readings and answers.
 """
 
 from __future__ import annotations
@@ -11,9 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from bt_controller.tree import Node
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.lockstep import run_chain_with_controllers
-from swarm_sim.trial_data import TrialRecord, chain_plan, combine
+from swarm_sim.core import TrialRecord, chain_plan, combine
+from swarm_sim.model import DEFAULT, Config
+from swarm_sim.roads.lockstep import run_chain_with_controllers
 
 
 def run_chain(

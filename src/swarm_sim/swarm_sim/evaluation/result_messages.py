@@ -17,11 +17,11 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from swarm_sim.evaluation import EvaluationResult, failed
-from swarm_sim.objectives import N_OBJECTIVES, OBJECTIVES
-from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
+from swarm_sim.core import TrialRecord
+from swarm_sim.evaluation.batch import EvaluationResult, failed
+from swarm_sim.model import N_OBJECTIVES, OBJECTIVES, VALUE_NAMES
 
-__all__ = ["OBJECTIVES", "evaluation_fields", "named_values", "result_fields", "trial_fields", "values_of"]
+__all__ = ["evaluation_fields", "named_values", "result_fields", "trial_fields", "values_of"]
 
 
 class ResultValues(Protocol):

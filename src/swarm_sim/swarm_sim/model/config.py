@@ -12,8 +12,7 @@ import math
 from dataclasses import dataclass, fields, replace
 from typing import Any, NamedTuple
 
-from bt_controller.perception import PerceptionParams
-from bt_controller.timeline import PROFILES, Timeline, arena_of_trial, profile_number
+from bt_controller.model_settings import PROFILES, PerceptionParams, Timeline, arena_of_trial, profile_number
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
 
@@ -148,8 +147,8 @@ class Config:
     """Largest angular acceleration of a robot's drive: ARGoS's 150 N m over the footbot's moment of inertia,
     1.6 kg x (2 x 85.036758 mm)^2 / 2 (rad/s^2)."""
     dead_robots: int = 0
-    """Damage (``swarm_sim.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they never
-    drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
+    """Damage (``swarm_sim.model.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they
+    never drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
     weak_robots: int = 0
     """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
     weak_gain: float = 1.0

@@ -1,8 +1,8 @@
 """A swarm layout: which behaviour tree each robot runs. The one home of heterogeneous swarms.
 
 A homogeneous swarm runs one tree on every robot; a heterogeneous one gives robot ``i`` (in id order) tree
-``trees[i]``. Both roads (``swarm_sim.reference_road``, ``swarm_sim.evaluation.BatchEvaluator``) and the node
-graph (one controller node per robot, each loading its own tree) take a layout.
+``trees[i]``. Both roads (``swarm_sim.roads.reference_road``, ``swarm_sim.evaluation.batch.BatchEvaluator``)
+and the node graph (one controller node per robot, each loading its own tree) take a layout.
 
 The file format (JSON) is one object, either
 

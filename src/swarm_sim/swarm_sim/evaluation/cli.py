@@ -6,14 +6,14 @@
 
 Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": {every objective},
 "descriptors": {movement, rotation, conditionality}}`` (``conditions``: the world's changes,
-``swarm_sim.conditions``, ``{}`` for none; ``task``: the task's name (``primitives``, 20 s trials, or
+``swarm_sim.model.conditions``, ``{}`` for none; ``task``: the task's name (``primitives``, 20 s trials, or
 ``foraging``, 100 s trials) or, for a task file's or an edited task, every key of it (``swarm_sim.tasks``);
 ``"per_trial"`` added with ``--per-trial``: each
 trial's values, gap and the robots' start and end poses as [x, y, heading]). The tree is printed in canonical
 form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) the tree may name its
 primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
-"digest"}`` is added. ``--swarm FILE`` (a swarm layout, ``swarm_sim.swarm_layout``: ``{"trees": [one tree
-text per robot]}`` or ``{"tree": TREE}``) gives each robot its own tree; ``"trees"`` (each robot's tree,
+"digest"}`` is added. ``--swarm FILE`` (a swarm layout, ``swarm_sim.model.swarm_layout``: ``{"trees": [one
+tree text per robot]}`` or ``{"tree": TREE}``) gives each robot its own tree; ``"trees"`` (each robot's tree,
 robot 0 first, canonical) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status 2.
 """
 
@@ -27,16 +27,28 @@ from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, library_option
-from bt_controller.timeline import PROFILES
+from bt_controller.model_settings import PROFILES
 from bt_controller.tree import Node, to_text
-from swarm_sim.conditions import CONDITION_NAMES, ConditionError, apply_conditions
-from swarm_sim.config import DEFAULT
-from swarm_sim.errors import UsageError
-from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
-from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES
-from swarm_sim.swarm_layout import LayoutError, load_layout
+from swarm_sim.core import TrialRecord
+from swarm_sim.errors import ConditionError, UsageError
+from swarm_sim.evaluation.batch import (
+    MAX_TRIALS,
+    BatchEvaluator,
+    EvaluationRequest,
+    SwarmRequest,
+    check_request,
+)
+from swarm_sim.model import (
+    CONDITION_NAMES,
+    DEFAULT,
+    DESCRIPTORS,
+    OBJECTIVES,
+    VALUE_NAMES,
+    LayoutError,
+    apply_conditions,
+    load_layout,
+)
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, task_named, task_to_record
-from swarm_sim.trial_data import VALUE_NAMES, TrialRecord
 
 EXIT_USAGE = 2
 
@@ -149,7 +161,7 @@ def run(argv: Sequence[str] | None = None) -> str:
         except ValueError as error:
             raise UsageError(str(error)) from None
     if args.engine == "reference":
-        from swarm_sim import reference_road  # (the controllers' modules: only for this engine)
+        from swarm_sim.roads import reference_road  # (the controllers' modules: only for this engine)
 
         values, records = reference_road.evaluate(trees, args.seed, args.trials, config)
     else:

@@ -30,13 +30,12 @@ import numpy as np
 from bt_controller import perception
 from bt_controller.draws import uniform
 from bt_controller.vocabulary import ACTION_WHEELS
-from swarm_sim._numba_cache import drop_stale_cache
-from swarm_sim.config import Params
-from swarm_sim.objectives import N_OBJECTIVES, N_VALUES
-from swarm_sim.objectives import (
+from swarm_sim.core._numba_cache import drop_stale_cache
+from swarm_sim.model import N_OBJECTIVES, N_VALUES, Params
+from swarm_sim.model import (
     OBJECTIVES as OBJECTIVES,
 )  # re-exported: the values' order, for world.X readers
-from swarm_sim.objectives import VALUE_NAMES as VALUE_NAMES
+from swarm_sim.model import VALUE_NAMES as VALUE_NAMES
 
 drop_stale_cache(
     __file__,
@@ -45,8 +44,8 @@ drop_stale_cache(
         "bt_controller.perception",
         "bt_controller.timeline",
         "bt_controller.vocabulary",
-        "swarm_sim.config",
-        "swarm_sim.objectives",
+        "swarm_sim.model.config",
+        "swarm_sim.model.objectives",
     ),
 )
 
@@ -130,10 +129,10 @@ def wheel_gains(gain_keys: np.ndarray, p: Params) -> np.ndarray:
     gain_levels - 1} (``footbot_bt.cpp:73-80``: (90 + rand() % 20) / 100, the right wheel first: draw 0 of
     the robot's gain stream is the right wheel's, draw 1 the left's) (n_robots x 2).
 
-    Damage acts here, on what a trial starts from (``swarm_sim.conditions``): robots below ``dead_robots``
-    get gains 0 (they never drive or turn, though others can still push them), and the left wheel of the last
-    ``weak_robots`` robots is scaled by ``weak_gain``. Every draw is made either way, so the undamaged robots'
-    gains do not depend on the damage.
+    Damage acts here, on what a trial starts from (``swarm_sim.model.conditions``): robots below
+    ``dead_robots`` get gains 0 (they never drive or turn, though others can still push them), and the left
+    wheel of the last ``weak_robots`` robots is scaled by ``weak_gain``. Every draw is made either way, so the
+    undamaged robots' gains do not depend on the damage.
     """
     n = p.n_robots
     gains = np.empty((n, 2))
@@ -458,7 +457,7 @@ def physics_step(
     across teleports too.
 
     This is the readable statement of the physics, which the reference road runs; the batch kernels run
-    ``swarm_sim.fast_world.physics_step``, which gives the same bits with less work.
+    ``swarm_sim.core.fast_world.physics_step``, which gives the same bits with less work.
     """
     n = x.shape[0]
     substeps = p.physics_substeps

@@ -15,13 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys, check_seed, root_key
-from bt_controller.timeline import chain_of_trial
+from bt_controller.model_settings import chain_of_trial
 from bt_controller.validate import integer
-from swarm_sim import world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES, VALUE_NAMES
+from swarm_sim.core import world
+from swarm_sim.model import DEFAULT, DESCRIPTORS, OBJECTIVES, VALUE_NAMES, Config
 
-__all__ = ["VALUE_NAMES", "ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]
+__all__ = ["ChainSetup", "TrialRecord", "chain_plan", "combine", "setup_chain"]
 
 
 @dataclass(frozen=True)

@@ -3,18 +3,18 @@
 ``sense_swarm`` produces every robot's ``Readings`` (what the simulator node publishes). ``Readings`` and
 ``RobotView`` (raw estimates, smoothing window, blackboard) are robot-side software and live in
 ``bt_controller.perception``; they are re-exported here. The batch kernels inline the same functions
-(``swarm_sim.world``, section (c)).
+(``swarm_sim.core.world``, section (c)).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from bt_controller.perception import Readings, RobotView
-from swarm_sim import world
-from swarm_sim.config import Params
+from bt_controller.perception import Readings
+from swarm_sim.core import world
+from swarm_sim.model import Params
 
-__all__ = ["Readings", "RobotView", "sense_swarm"]
+__all__ = ["sense_swarm"]
 
 
 def sense_swarm(

@@ -3,8 +3,8 @@
 ``simulate_chain`` runs the trials of one chain (``bt_controller.timeline``: 5 trials as one simulation under
 ``paper``, one trial under ``clean``), each robot with its own tree of a pack (the same for every robot in a
 homogeneous swarm), exactly as the reference road
-(``swarm_sim.reference_road``: the simulator of ``swarm_sim.lockstep`` with one
-``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.world``,
+(``swarm_sim.roads.reference_road``: the simulator of ``swarm_sim.roads.lockstep`` with one
+``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.core.world``,
 ``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
 order; it only skips work whose result is never read (a bearing is computed for the three senders the
 blackboard needs, at ticks, rather than for every message) or known (``fast_world.physics_step``, the
@@ -13,7 +13,7 @@ physics to the same bits).
 own output rows (one per trial), so a job's result never depends on the others, their order or their number.
 ``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
 one of its trials looks like (``Recording``: poses, actions, messages, smoothed values, fitness so far), for
-animations (``swarm_sim.recording``); the batch road asks for none and pays two comparisons a step.
+animations (``swarm_sim.roads.recording``); the batch road asks for none and pays two comparisons a step.
 
 The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
 ``Jobs`` (what to run), ``Outputs`` (where results go), ``Recording`` (one trial, step by step); inside a
@@ -36,11 +36,10 @@ from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_me
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
 from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
-from swarm_sim import fast_world, world
-from swarm_sim._numba_cache import drop_stale_cache
-from swarm_sim.config import Config, Params
-from swarm_sim.objectives import N_PROBES
-from swarm_sim.trial_data import chain_plan
+from swarm_sim.core import fast_world, world
+from swarm_sim.core._numba_cache import drop_stale_cache
+from swarm_sim.core.trial_data import chain_plan
+from swarm_sim.model import N_PROBES, Config, Params
 
 drop_stale_cache(
     __file__,
@@ -51,9 +50,9 @@ drop_stale_cache(
         "bt_controller.perception",
         "bt_controller.timeline",
         "bt_controller.vocabulary",
-        "swarm_sim.config",
-        "swarm_sim.fast_world",
-        "swarm_sim.world",
+        "swarm_sim.model.config",
+        "swarm_sim.core.fast_world",
+        "swarm_sim.core.world",
     ),
 )
 
@@ -229,8 +228,8 @@ class Inbox(NamedTuple):
 
 class Recording(NamedTuple):
     """One trial of a chain, step by step (row ``r``: the trial's step ``r + 1``), as the simulator and the
-    robots' answers show it (``swarm_sim.lockstep``): what ``simulate_chain`` writes when asked to record.
-    ``new_recording`` makes one."""
+    robots' answers show it (``swarm_sim.roads.lockstep``): what ``simulate_chain`` writes when asked to
+    record. ``new_recording`` makes one."""
 
     poses: np.ndarray
     """(steps, n, 3): x, y, heading after the step's teleport and move."""

@@ -18,14 +18,13 @@ import numpy as np
 
 from bt_controller import timeline
 from bt_controller.controller import FootbotController, StepOutcome
+from bt_controller.model_settings import chain_of_trial
 from bt_controller.motors import movement_of, rotation_of
+from bt_controller.perception import Readings
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
-from swarm_sim import world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.objectives import N_PROBES
-from swarm_sim.sensing import Readings, sense_swarm
-from swarm_sim.trial_data import TrialRecord, setup_chain
+from swarm_sim.core import TrialRecord, sense_swarm, setup_chain, world
+from swarm_sim.model import DEFAULT, N_PROBES, Config
 
 
 @dataclass(frozen=True)
@@ -206,7 +205,7 @@ class LockstepChain:
 
 def robot_trees(tree: Node | Sequence[Node], n_robots: int) -> list[Node]:
     """Each robot's tree: ``tree`` on every robot (a homogeneous swarm), or one tree per robot in id order
-    (``swarm_sim.swarm_layout.SwarmLayout.parsed``); ValueError for a count that is not ``n_robots``."""
+    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); ValueError for a count that is not ``n_robots``."""
     if isinstance(tree, Node):
         return [tree] * n_robots
     trees = list(tree)
@@ -278,7 +277,7 @@ def run_with_controllers(
 ) -> TrialRecord:
     """Trial ``trial`` of ``seed`` as the node graph runs it: its chain is run from its first trial up to
     ``trial`` (the earlier trials set the state ``trial`` starts from); the record of ``trial``."""
-    chain, position = timeline.chain_of_trial(config.timeline, trial)
+    chain, position = chain_of_trial(config.timeline, trial)
     return run_chain_with_controllers(
         tree, seed, chain, position + 1, config, on_step, on_answers, on_outcomes
     )[-1]

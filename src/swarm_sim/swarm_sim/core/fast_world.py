@@ -29,9 +29,9 @@ from llvmlite import ir as llvm_ir
 from numba import types
 from numba.extending import intrinsic
 
-from swarm_sim import world
-from swarm_sim._numba_cache import drop_stale_cache
-from swarm_sim.config import Params
+from swarm_sim.core import world
+from swarm_sim.core._numba_cache import drop_stale_cache
+from swarm_sim.model import Params
 
 drop_stale_cache(
     __file__,
@@ -40,8 +40,8 @@ drop_stale_cache(
         "bt_controller.perception",
         "bt_controller.timeline",
         "bt_controller.vocabulary",
-        "swarm_sim.config",
-        "swarm_sim.world",
+        "swarm_sim.model.config",
+        "swarm_sim.core.world",
     ),
 )
 

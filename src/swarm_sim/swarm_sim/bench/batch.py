@@ -21,11 +21,11 @@ from collections.abc import Sequence
 
 import numba
 
+from bt_controller.model_settings import PROFILES
 from bt_controller.random_trees import random_trees
-from bt_controller.timeline import PROFILES
-from swarm_sim import reference_road
-from swarm_sim.config import DEFAULT, Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.model import DEFAULT, Config
+from swarm_sim.roads import reference_road
 from swarm_sim.tasks import add_task_option
 
 
