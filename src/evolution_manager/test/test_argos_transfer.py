@@ -15,7 +15,8 @@ import pytest
 
 from evolution_manager.studies import argos_transfer
 from evolution_manager.studies.experiment import experiment
-from evolution_manager.studies.report import load_runs, report
+from evolution_manager.studies.report import load_runs
+from evolution_manager.studies.report_command import report
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import OBJECTIVES, default_config
 

@@ -45,7 +45,7 @@ from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
-from evolution_manager.viewing.results import simplified as simplified_text
+from evolution_manager.viewing.shown_trees import simplified as simplified_text
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.tasks import task_from_record
