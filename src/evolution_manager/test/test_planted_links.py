@@ -242,3 +242,35 @@ def test_adapt_benchmark_never_writes_its_report_through_a_planted_link(tmp_path
     error = capsys.readouterr().err
     assert ended.value.code == 74 and error.count("\n") == 1 and "report.md" in error, error
     assert precious.read_text() == "keep me\n" and (out / "report.md").is_symlink()
+
+
+def test_adapt_refuses_a_link_planted_at_any_path_it_writes_before_its_trials(tmp_path, capsys):
+    """``adapt --out DIR`` writes adaptation.json and adaptation.png in DIR: a link planted at either (a
+    dangling one too) is refused in one line, status 2, before any trial, and nothing outside changes. It ran
+    every trial, then ended in a WriteError traceback (status 1)."""
+    from small_repertoires import food_repertoire
+
+    from evolution_manager.adaptation.adapt import adapt
+
+    repertoire = food_repertoire(tmp_path / "repertoire", 4)
+    argv = ["--repertoire", str(repertoire), "--objective", "food", "--condition", "dead-robots=3"]
+    argv += ["--budget", "2", "--trials", "1"]
+    assert adapt([*argv, "--out", str(tmp_path / "done")]) == 0
+    capsys.readouterr()
+    written = sorted(str(p.relative_to(tmp_path / "done")) for p in (tmp_path / "done").rglob("*"))
+    assert written == ["adaptation.json", "adaptation.png"], written
+    for index, name in enumerate(written):
+        for dangling in (False, True):
+            case = tmp_path / f"{index}-{dangling}"
+            out, outside = case / "out", case / "outside"
+            out.mkdir(parents=True)
+            outside.mkdir()
+            if not dangling:
+                (outside / "target").write_text("keep me\n")
+            (out / name).symlink_to(outside / "target")
+            before = _tree(outside)
+            status = adapt([*argv, "--out", str(out)])
+            error = capsys.readouterr().err.strip()
+            assert status == 2 and "\n" not in error, (name, status, error)
+            assert f"{name} is a symbolic link" in error, (name, error)
+            assert _tree(outside) == before and [p.name for p in out.iterdir()] == [name], name
