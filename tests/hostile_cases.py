@@ -369,6 +369,10 @@ def _adapt() -> list[Case]:
         _case("--out under a file", c, *quick, "--out", "{case}/file/adapt",
               plant=(Write("file", b"a file\n"),)),
         _case("--out a file", c, *quick, "--out", "{saved}"),
+        _case("--out/adaptation.json a dangling link", c, *quick, "--out", "{case}/adapt",
+              plant=(Link("adapt/adaptation.json", "{outside}/made"),)),
+        _case("--out/adaptation.png a link to a saved file", c, *quick, "--out", "{case}/adapt",
+              plant=(Link("adapt/adaptation.png", "{saved}"),)),
     ]  # fmt: skip
 
 

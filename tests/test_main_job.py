@@ -83,10 +83,16 @@ def test_main_job_refuses_bad_cluster_settings_in_one_line(tmp_path):
         port = s.getsockname()[1]
     main = str(executable("evolution_manager", "main"))
     out = tmp_path / "run"
+    slurm_only = tmp_path / "slurm.yaml"
+    slurm_only.write_text("cores: 2\n")
     for options, said in (
         (["--cluster", "slurm", "--evaluators", "2"], "main: --evaluators applies to --cluster local only"),
         (["--cluster-config", str(tmp_path / "c.yaml")], "main: --cluster-config applies to --cluster slurm"),
         (["--cluster", f"dask://127.0.0.1:{port}"], "evolve: error: --cluster dask://127.0.0.1:"),
+        (  # with dask://, the settings file gives TLS alone; evolve checks it
+            ["--cluster", f"dask://127.0.0.1:{port}", "--cluster-config", str(slurm_only)],
+            "'cores' applies to --cluster slurm; with --cluster dask://HOST:PORT the file gives tls_ca_file",
+        ),
     ):
         done = subprocess.run(
             [main, "--out", str(out), *options], capture_output=True, text=True, timeout=120

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import socket
 import threading
@@ -91,13 +92,33 @@ def test_a_bad_cluster_option_is_one_line_naming_it(option, expected):
     assert message.startswith("--cluster") and expected in message and "\n" not in message
 
 
-def test_a_cluster_config_goes_with_slurm_only(tmp_path):
+def test_a_cluster_config_goes_with_slurm_and_with_dask_for_tls_only(tmp_path):
     config = tmp_path / "cluster.yaml"
     config.write_text("cores: 2\n")
-    for option in ("local", "dask://host:8786"):
-        with pytest.raises(ClusterError, match="--cluster-config applies to --cluster slurm only"):
-            parse_cluster(option, config)
+    with pytest.raises(ClusterError, match="--cluster-config applies to --cluster slurm or dask://HOST:PORT"):
+        parse_cluster("local", config)
+    with pytest.raises(
+        ClusterError, match="'cores' applies to --cluster slurm; with --cluster dask://HOST:PORT"
+    ):
+        parse_cluster("dask://host:8786", config)
     assert parse_cluster("slurm", config).slurm == SlurmSettings(cores=2)
+    pem = tmp_path / "x.pem"
+    pem.write_text("not read here\n")
+    config.write_text(f"tls_ca_file: {pem}\ntls_cert: {pem}\ntls_key: {pem}\n")
+    settings = parse_cluster("dask://host:8786", config)
+    assert settings.address == "tls://host:8786" and settings.describe_option() == "dask://host:8786"
+    assert settings.tls is not None and settings.tls.tls_key == str(pem)
+    assert settings.to_json()["tls"] == {"tls_ca_file": str(pem), "tls_cert": str(pem), "tls_key": str(pem)}
+    assert "tls" not in parse_cluster("dask://host:8786").to_json()  # plain: recorded as before
+    for text, expected in (
+        ("", "expected tls_ca_file, tls_cert and tls_key (TLS with the scheduler), got no key"),
+        (f"tls_ca_file: {pem}\n", "tls_cert is missing; TLS takes tls_ca_file, tls_cert and tls_key"),
+        (f"tls_ca_file: {pem}\ntls_cert: {pem}\ntls_key: nowhere.pem\n", "tls_key must be a readable file"),
+    ):
+        config.write_text(text)
+        with pytest.raises(ClusterError, match=re.escape(expected)) as caught:
+            parse_cluster("dask://host:8786", config)
+        assert str(caught.value).startswith(f"--cluster-config {config}: ") and "\n" not in str(caught.value)
 
 
 def test_a_cluster_config_file_gives_every_setting(tmp_path):

@@ -285,3 +285,58 @@ def test_with_certificates_the_slurm_scheduler_speaks_tls_only(tmp_path):
         plain = slurm.scheduler_address.replace("tls://", "tcp://")
         with pytest.raises((OSError, TimeoutError)):  # no TLS, no certificate: refused
             Client(plain, timeout=3)
+
+
+@pytest.mark.skipif(not Path("/usr/bin/openssl").exists(), reason="openssl makes the test's certificate")
+def test_a_dask_scheduler_that_speaks_tls_is_reached_with_the_settings_certificates(tmp_path):
+    """``--cluster dask://HOST:PORT --cluster-config`` with the three ``tls_*`` keys: the command reaches a
+    scheduler (and its worker) started with ``--tls-*`` over TLS and runs there. Without the certificates it
+    is one line naming what is missing, before anything is written. ``--cluster-config`` was refused with
+    ``dask://``, so a scheduler that speaks TLS could not be used at all."""
+    cert, key = _certificate(tmp_path)
+    tls = ["--tls-ca-file", str(cert), "--tls-cert", str(cert), "--tls-key", str(key)]
+    port = free_port()
+    scheduler = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", str(port),
+         "--protocol", "tls", "--no-dashboard", *tls],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", f"tls://127.0.0.1:{port}", "--nthreads", "1",
+         "--nworkers", "1", "--no-dashboard", *tls],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        config = tmp_path / "tls.yaml"
+        config.write_text(f"tls_ca_file: {cert}\ntls_cert: {cert}\ntls_key: {key}\n")
+        cluster = ["--cluster", f"dask://127.0.0.1:{port}", "--worker-wait", "120"]
+        deadline = time.monotonic() + 120
+        while True:  # the scheduler takes a while to listen under load
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert scheduler.poll() is None and time.monotonic() < deadline, "the scheduler did not start"
+                time.sleep(0.2)
+        plain = evolve(tmp_path / "plain", "--evaluations", "10", "--trials", "1", *cluster)
+        _, err = plain.communicate(timeout=300)
+        assert plain.returncode == 2 and errors(err) == [
+            f"evolve: error: --cluster dask://127.0.0.1:{port}: something answers there, but not as a Dask "
+            "scheduler (a scheduler that speaks TLS needs tls_ca_file, tls_cert and tls_key in "
+            "--cluster-config)"
+        ], err
+        assert not (tmp_path / "plain").exists()
+        out = tmp_path / "run"
+        run = evolve(out, "--evaluations", "10", "--trials", "1", *cluster, "--cluster-config", str(config))
+        _, err = run.communicate(timeout=600)
+        no_traceback(err)
+        assert run.returncode == 0, err
+        assert f"cluster: work goes to the Dask scheduler at tls://127.0.0.1:{port}" in err
+        assert (out / "summary.json").exists()
+    finally:
+        for process in (worker, scheduler):
+            if process.poll() is None:
+                process.kill()
+            process.wait()

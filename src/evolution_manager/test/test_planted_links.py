@@ -136,6 +136,62 @@ def test_a_link_planted_at_any_path_of_a_composition_run_is_never_written_throug
         print("\n" + "\n".join(shown))
 
 
+EXPERIMENT = ["--runs", "1", "--evaluations", "2", "--trials", "1", "--processes", "2", "--no-progress"]
+"""The smallest paper experiment: its seven groups, one run each, of two evaluations of one trial."""
+
+
+@pytest.fixture(scope="module")
+def experiment_folder(tmp_path_factory) -> Path:
+    """A finished experiment folder: its plan, sessions, runs.csv, report, figures and seven run folders."""
+    from evolution_manager.studies.experiment import experiment
+
+    out = tmp_path_factory.mktemp("experiment") / "exp"
+    assert experiment([*EXPERIMENT, "--out", str(out)]) == 0
+    return out
+
+
+def test_a_link_planted_at_any_path_of_an_experiment_folder_is_never_written_through(
+    experiment_folder, tmp_path, capsys
+):
+    """``experiment`` continued on a folder with a link planted at any of its paths: the experiment's own
+    files (experiment.json, sessions.json, runs.csv, report.md, figures/ and each figure), the folders its
+    runs go in (runs/, runs/GROUP/, runs/GROUP/runNN, each planted as a link to an empty folder outside,
+    so that the run is to be run again) and every file and folder of the runs. Each is refused in one line,
+    status 2, before anything is run or written: nothing outside and nothing in the folder changes. A link
+    at runs/ or runs/GROUP/ made the experiment run its runs outside the folder, exit status 0."""
+    from evolution_manager.studies.experiment import experiment
+
+    written = sorted(str(p.relative_to(experiment_folder)) for p in experiment_folder.rglob("*"))
+    expected = {"experiment.json", "sessions.json", "runs.csv", "report.md", "figures", "runs"}
+    expected |= {"runs/QD_food", "runs/QD_food/run00", "runs/QD_food/run00/evaluations.csv"}
+    assert expected <= set(written), written
+    shown = []
+    for index, name in enumerate(written):
+        case = tmp_path / str(index)
+        folder = case / "exp"
+        shutil.copytree(experiment_folder, folder, symlinks=True)
+        outside = case / "outside"
+        outside.mkdir()
+        planted = folder / name
+        if planted.is_dir():  # a folder: runs (or what they write) would go outside
+            shutil.rmtree(planted)
+            planted.symlink_to(outside, target_is_directory=True)
+        else:  # the file as it was, outside: what is read is fine, a write is refused
+            (outside / "target").write_bytes(planted.read_bytes())
+            planted.unlink()
+            planted.symlink_to(outside / "target")
+        before, inside = _tree(outside), _tree(folder)
+        status = experiment([*EXPERIMENT, "--out", str(folder)])
+        error = capsys.readouterr().err.strip()
+        shown.append(f"{name}: {status} {error}")
+        assert _tree(outside) == before, (name, error)
+        assert _tree(folder) == inside, (name, error)
+        assert status == 2 and "\n" not in error, (name, status, error)
+        assert f"{name} is a symbolic link" in error, (name, error)
+    with capsys.disabled():
+        print("\n" + "\n".join(shown))
+
+
 @pytest.mark.parametrize("damage", ["{", "[]", '{"format": NaN}'])
 def test_a_damaged_heldout_file_is_refused_before_any_evaluation(unfinished, tmp_path, capsys, damage):
     run = _copy(unfinished, tmp_path)
@@ -186,3 +242,35 @@ def test_adapt_benchmark_never_writes_its_report_through_a_planted_link(tmp_path
     error = capsys.readouterr().err
     assert ended.value.code == 74 and error.count("\n") == 1 and "report.md" in error, error
     assert precious.read_text() == "keep me\n" and (out / "report.md").is_symlink()
+
+
+def test_adapt_refuses_a_link_planted_at_any_path_it_writes_before_its_trials(tmp_path, capsys):
+    """``adapt --out DIR`` writes adaptation.json and adaptation.png in DIR: a link planted at either (a
+    dangling one too) is refused in one line, status 2, before any trial, and nothing outside changes. It ran
+    every trial, then ended in a WriteError traceback (status 1)."""
+    from small_repertoires import food_repertoire
+
+    from evolution_manager.adaptation.adapt import adapt
+
+    repertoire = food_repertoire(tmp_path / "repertoire", 4)
+    argv = ["--repertoire", str(repertoire), "--objective", "food", "--condition", "dead-robots=3"]
+    argv += ["--budget", "2", "--trials", "1"]
+    assert adapt([*argv, "--out", str(tmp_path / "done")]) == 0
+    capsys.readouterr()
+    written = sorted(str(p.relative_to(tmp_path / "done")) for p in (tmp_path / "done").rglob("*"))
+    assert written == ["adaptation.json", "adaptation.png"], written
+    for index, name in enumerate(written):
+        for dangling in (False, True):
+            case = tmp_path / f"{index}-{dangling}"
+            out, outside = case / "out", case / "outside"
+            out.mkdir(parents=True)
+            outside.mkdir()
+            if not dangling:
+                (outside / "target").write_text("keep me\n")
+            (out / name).symlink_to(outside / "target")
+            before = _tree(outside)
+            status = adapt([*argv, "--out", str(out)])
+            error = capsys.readouterr().err.strip()
+            assert status == 2 and "\n" not in error, (name, status, error)
+            assert f"{name} is a symbolic link" in error, (name, error)
+            assert _tree(outside) == before and [p.name for p in out.iterdir()] == [name], name

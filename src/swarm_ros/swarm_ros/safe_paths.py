@@ -2,7 +2,8 @@
 tarballs, ``git clone`` of ``experiments/``, the machine's temporary folder):
 
 - never write through a symbolic link: a link planted where a command writes (a lock file, a log, a result
-  folder, an output) is refused in one line, never followed (:func:`open_no_follow`, :func:`refuse_links`);
+  folder, an output) is refused in one line, never followed (:func:`open_no_follow`, :func:`refuse_links`,
+  :func:`refuse_links_within`);
 - a command's output that exists is refused unless the command was given ``--force`` (:func:`check_output`);
 - a folder of lock files is this user's own, mode 0700 (:func:`private_folder`).
 
@@ -71,6 +72,24 @@ def refuse_links(path: Path | str, root: Path | str | None = None) -> None:
     for part in parts:
         if part.is_symlink():
             raise _link_error(part)
+
+
+def refuse_links_within(folder: Path | str) -> None:
+    """Raise :class:`UnsafePathError` for the first symbolic link (in name order, depth first) at any depth
+    in ``folder``: for a folder that holds nothing but what a command made there (an experiment's), where a
+    planted link would send what the command writes elsewhere. ``folder`` itself may be a link (the user's
+    own layout), or missing; links are never followed."""
+
+    def walk(path: str) -> None:
+        with os.scandir(path) as entries:
+            for entry in sorted(entries, key=lambda e: e.name):
+                if entry.is_symlink():
+                    raise _link_error(entry.path)
+                if entry.is_dir(follow_symlinks=False):
+                    walk(entry.path)
+
+    with contextlib.suppress(FileNotFoundError, NotADirectoryError):
+        walk(os.fspath(folder))
 
 
 def make_folder(path: Path | str, root: Path | str | None = None) -> Path:

@@ -15,6 +15,7 @@ from swarm_ros.safe_paths import (
     open_no_follow,
     private_folder,
     refuse_links,
+    refuse_links_within,
 )
 
 
@@ -120,3 +121,25 @@ def test_a_folder_to_write_in_may_exist_but_is_never_a_link_or_a_file(tmp_path):
             check_folder(path, "--logs")
         assert str(refused.value).startswith("--logs ") and "\n" not in str(refused.value)
     assert not (tmp_path / "nowhere").exists()
+
+
+def test_a_link_anywhere_within_a_folder_is_refused_the_folder_itself_may_be_one(tmp_path):
+    """A folder that holds nothing but what a command made (an experiment's): a link at any depth in it is
+    refused, the first in name order, one line; the folder itself may be a link (the user's own layout)."""
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    folder = tmp_path / "exp"
+    (folder / "runs" / "a" / "run00").mkdir(parents=True)
+    (folder / "runs" / "a" / "run00" / "summary.json").write_text("{}")
+    refuse_links_within(folder)  # nothing planted
+    (tmp_path / "linked").symlink_to(folder, target_is_directory=True)
+    refuse_links_within(tmp_path / "linked")
+    refuse_links_within(tmp_path / "missing")  # nothing there, nothing to refuse
+    (folder / "runs" / "b").symlink_to(outside, target_is_directory=True)
+    (folder / "runs" / "a" / "run00" / "z.csv").symlink_to(outside / "nowhere")
+    with pytest.raises(UnsafePathError, match=r"exp/runs/a/run00/z\.csv is a symbolic link") as refused:
+        refuse_links_within(folder)
+    assert "\n" not in str(refused.value) and not (outside / "nowhere").exists()
+    (folder / "runs" / "a" / "run00" / "z.csv").unlink()
+    with pytest.raises(UnsafePathError, match=r"exp/runs/b is a symbolic link \(to .*outside\)"):
+        refuse_links_within(folder)

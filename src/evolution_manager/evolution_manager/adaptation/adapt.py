@@ -35,10 +35,11 @@ from evolution_manager.adaptation.search import (
     repertoire_profile,
     run_picker,
 )
-from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int, seed_int
-from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seed_int
+from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_json
+from swarm_ros.safe_paths import refuse_links
 from swarm_sim.errors import ConditionError
 from swarm_sim.model import apply_conditions, default_config
 
@@ -173,6 +174,11 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         except EvolutionError as error:
             raise UsageError(str(error)) from None
         candidates = load_candidates(args.repertoire, args.objective)
+        for name in (RESULT, FIGURE):  # a planted link is refused before any trial, never written through
+            try:
+                refuse_links(args.out / name)
+            except OSError as error:
+                raise UsageError(str(error)) from None
         if (args.out / RESULT).exists():
             raise UsageError(f"{args.out} already holds an adaptation ({RESULT}): choose another --out")
         if not 0 <= args.seed <= 2**63 - 1:
@@ -217,8 +223,12 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         trials=args.trials,
         road="graph" if args.graph else "batch",
     )
-    write_json(args.out / RESULT, document)
-    adaptation_figure(document, args.out / FIGURE)
+    try:
+        write_json(args.out / RESULT, document)
+        adaptation_figure(document, args.out / FIGURE)
+    except WriteError as error:  # a full disk, a link planted meanwhile: one line
+        print(f"adapt: error: {error}", file=sys.stderr)
+        return EXIT_IO
     print(
         f"adapt: {document['trials_used']} trials ({document['stopped']}); chose bin {document['bin']} "
         f"with {args.objective} {document['fitness']:.4f}; wrote {args.out / RESULT}"

@@ -47,10 +47,11 @@ ALLOWED_FAILURES = 10
 a whole run may outlive several jobs' walltimes (Dask's default is 3)."""
 
 
-def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
-    """Raise :class:`ClusterError` unless a Dask scheduler answers at ``address`` (``tcp://HOST:PORT``) within
-    ``timeout`` seconds: first a TCP connection, then Dask's ``identity`` request (a port that accepts but
-    never speaks Dask would otherwise keep a client waiting for ever)."""
+def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT, security: Security | None = None) -> None:
+    """Raise :class:`ClusterError` unless a Dask scheduler answers at ``address`` (``tcp://HOST:PORT``, or
+    ``tls://HOST:PORT`` with ``security``) within ``timeout`` seconds: first a TCP connection, then Dask's
+    ``identity`` request (a port that accepts but never speaks Dask would otherwise keep a client waiting for
+    ever)."""
     parts = urlsplit(address)
     option = f"--cluster dask://{parts.netloc}"
     try:
@@ -64,16 +65,23 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
         ) from None
     from distributed.comm import connect  # imported before the clock starts
 
+    arguments = security.get_connection_args("client") if security is not None else {}
     try:
-        identity = asyncio.run(asyncio.wait_for(_identity(connect, address), timeout))
+        identity = asyncio.run(asyncio.wait_for(_identity(connect, address, arguments), timeout))
     except (OSError, TimeoutError, ValueError, TypeError) as error:
         identity = {"error": str(error) or type(error).__name__}
     if not isinstance(identity, dict) or identity.get("type") != "Scheduler":
-        raise ClusterError(f"{option}: something answers there, but not as a Dask scheduler")
+        if security is None:
+            expected = (
+                "a scheduler that speaks TLS needs tls_ca_file, tls_cert and tls_key in --cluster-config"
+            )
+        else:
+            expected = "a Dask scheduler over TLS whose certificate the CA of tls_ca_file signed"
+        raise ClusterError(f"{option}: something answers there, but not as a Dask scheduler ({expected})")
 
 
-async def _identity(connect: Callable, address: str) -> object:
-    comm = await connect(address)
+async def _identity(connect: Callable, address: str, arguments: dict[str, Any]) -> object:
+    comm = await connect(address, **arguments)
     try:
         await comm.write({"op": "identity"})
         return await comm.read()
@@ -119,6 +127,21 @@ def slurm_cluster_options(settings: SlurmSettings, python: str = sys.executable)
     if settings.tls:
         options["security"] = cluster_security(settings)
     return options
+
+
+def dask_security(settings: ClusterSettings) -> Security | None:
+    """TLS for the client of a ``dask://`` scheduler, as its settings give it (None: plain TCP): the settings'
+    certificate presented, the scheduler's checked against their CA, every connection encrypted."""
+    if settings.tls is None:
+        return None
+    from distributed.security import Security
+
+    return Security(
+        tls_ca_file=settings.tls.tls_ca_file,
+        tls_client_cert=settings.tls.tls_cert,
+        tls_client_key=settings.tls.tls_key,
+        require_encryption=True,
+    )
 
 
 def cluster_security(settings: SlurmSettings) -> Security:
@@ -183,7 +206,8 @@ def wait_for_workers(
                 "the network interface the nodes share: interface in --cluster-config)"
             )
         else:
-            hint = f"start workers (dask worker {address}) or give a longer --worker-wait"
+            tls = " with the --tls-* options of its certificates" if settings.tls is not None else ""
+            hint = f"start workers (dask worker {address}{tls}) or give a longer --worker-wait"
         raise ClusterError(
             f"--cluster {settings.describe_option()}: no worker joined the scheduler at {address} in "
             f"{wait:g} s; {hint}"
@@ -306,7 +330,7 @@ def open_client(
         return
     if settings.kind == "dask":
         assert settings.address is not None  # set by parse_cluster
-        check_scheduler(settings.address, timeout)
+        check_scheduler(settings.address, timeout, dask_security(settings))
     else:
         check_slurm()
     import dask
@@ -319,7 +343,7 @@ def open_client(
     with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
         try:
             if settings.kind == "dask":
-                client = Client(settings.address, timeout=timeout)
+                client = Client(settings.address, timeout=timeout, security=dask_security(settings))
                 address = str(settings.address)
             else:
                 from dask_jobqueue import SLURMCluster
@@ -347,7 +371,7 @@ def open_client(
             if not isinstance(error, (OSError, TimeoutError)) or isinstance(error, ClusterError):
                 raise
             if settings.kind == "dask":
-                where = str(settings.address).replace("tcp://", "dask://")
+                where = settings.describe_option()
                 raise ClusterError(f"--cluster {where}: the scheduler does not answer ({error})") from None
             raise ClusterError(f"--cluster slurm: the jobs' Dask scheduler did not start ({error})") from None
         logging.getLogger("distributed.client").addFilter(_LOST_SCHEDULER)

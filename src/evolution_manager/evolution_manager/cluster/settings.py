@@ -22,6 +22,10 @@ The YAML file of ``--cluster slurm`` (every key optional; ``docs/cluster.md`` sa
     tls_cert: cert.pem        # key every party presents (all three, readable files; default: no TLS, see
     tls_key: key.pem          # docs/cluster.md on who may reach the scheduler)
 
+With ``--cluster dask://HOST:PORT`` the file may give the three ``tls_*`` keys alone: the command then reaches
+the scheduler over TLS (``tls://HOST:PORT``), presenting that certificate and checking the scheduler's against
+that CA (a scheduler started with ``dask scheduler --tls-*``).
+
 ``--worker-wait SECONDS`` (default ``WORKER_WAIT``) bounds the wait for the first worker, on a ``dask://``
 scheduler as under ``slurm``: the command says what it waits for, and gives up in one line.
 """
@@ -101,6 +105,20 @@ class SlurmSettings:
         return f"{self.container} {python}" if self.container else python
 
 
+TLS_KEYS = ("tls_ca_file", "tls_cert", "tls_key")
+"""The settings of TLS, given all three or none: the CA, and the certificate and key this side presents."""
+
+
+@dataclass(frozen=True)
+class TlsFiles:
+    """The PEM files of TLS with a ``dask://`` scheduler: the CA that signs the scheduler's certificate, and
+    the certificate and key the command presents (absolute paths)."""
+
+    tls_ca_file: str
+    tls_cert: str
+    tls_key: str
+
+
 @dataclass(frozen=True)
 class ClusterSettings:
     """Where the work runs: ``local`` (this machine's processes), ``dask`` (the scheduler at ``address``) or
@@ -108,8 +126,10 @@ class ClusterSettings:
 
     kind: str = "local"
     address: str | None = None
-    """``tcp://HOST:PORT`` of the scheduler, for ``dask``."""
+    """``tcp://HOST:PORT`` of the scheduler, for ``dask`` (``tls://HOST:PORT`` with ``tls``)."""
     slurm: SlurmSettings | None = None
+    tls: TlsFiles | None = None
+    """For ``dask``: TLS with these files (``--cluster-config``), else plain TCP."""
     worker_wait: float = WORKER_WAIT
     """Seconds to wait for the first worker (``--worker-wait``); not recorded with the settings."""
 
@@ -120,12 +140,15 @@ class ClusterSettings:
     def to_json(self) -> dict:
         """The settings as recorded beside the results (a session's record, not the run's configuration)."""
         slurm = asdict(self.slurm) if self.slurm else None
-        return {"kind": self.kind, "address": self.address, "slurm": slurm}
+        recorded = {"kind": self.kind, "address": self.address, "slurm": slurm}
+        if self.tls is not None:
+            recorded["tls"] = asdict(self.tls)
+        return recorded
 
     def describe_option(self) -> str:
         """The ``--cluster`` option of these settings, as given: ``dask://HOST:PORT`` or ``slurm``."""
         if self.kind == "dask":
-            return str(self.address).replace("tcp://", "dask://")
+            return re.sub(r"^(tcp|tls)://", "dask://", str(self.address))
         return self.kind
 
     def describe(self) -> str:
@@ -149,11 +172,52 @@ def parse_cluster(option: str, config_file: Path | None = None) -> ClusterSettin
         return ClusterSettings("slurm", slurm=slurm)
     if option != "local" and not option.startswith("dask://"):
         raise ClusterError(f"--cluster must be local, dask://HOST:PORT or slurm, got {option!r}")
-    if config_file is not None:
-        raise ClusterError(f"--cluster-config applies to --cluster slurm only, not to --cluster {option}")
     if option == "local":
+        if config_file is not None:
+            raise ClusterError(
+                "--cluster-config applies to --cluster slurm or dask://HOST:PORT, not to --cluster local"
+            )
         return ClusterSettings()
-    return ClusterSettings("dask", address=scheduler_address(option))
+    address = scheduler_address(option)
+    if config_file is None:
+        return ClusterSettings("dask", address=address)
+    tls = dask_tls(read_settings_file(config_file), f"--cluster-config {config_file}")
+    return ClusterSettings("dask", address=address.replace("tcp://", "tls://", 1), tls=tls)
+
+
+def dask_tls(data: dict, where: str) -> TlsFiles:
+    """The TLS files of a ``dask://`` scheduler's settings: the three ``tls_*`` keys and nothing else (the
+    other keys say how SLURM's jobs are made); raise :class:`ClusterError`."""
+    for key in data:
+        if key not in TLS_KEYS:
+            raise ClusterError(
+                f"{where}: {key!r} applies to --cluster slurm; with --cluster dask://HOST:PORT the file "
+                f"gives {', '.join(TLS_KEYS)} only (TLS with a scheduler started with dask scheduler --tls-*)"
+            )
+    files = _tls_files(data, where)
+    if files is None:
+        raise ClusterError(
+            f"{where}: expected tls_ca_file, tls_cert and tls_key (TLS with the scheduler), got no key"
+        )
+    return TlsFiles(**files)
+
+
+def _tls_files(values: dict, where: str) -> dict[str, str] | None:
+    """The ``tls_*`` files of ``values`` as absolute paths, all three readable, or None when none is given;
+    raise :class:`ClusterError` for a missing one or one that is not a readable file."""
+    tls = {key: values.get(key) for key in TLS_KEYS}
+    if all(value is None for value in tls.values()):
+        return None
+    files = {}
+    for key, value in tls.items():
+        if value is None:
+            raise ClusterError(
+                f"{where}: {key} is missing; TLS takes tls_ca_file, tls_cert and tls_key together"
+            )
+        if not isinstance(value, str) or not Path(value).is_file():
+            raise ClusterError(f"{where}: {key} must be a readable file (PEM), got {value!r}")
+        files[key] = str(Path(value).absolute())
+    return files
 
 
 def scheduler_address(option: str) -> str:
@@ -174,6 +238,12 @@ def scheduler_address(option: str) -> str:
 
 def read_slurm_settings(path: Path) -> SlurmSettings:
     """The settings of a ``--cluster-config`` YAML file, every key checked; raise :class:`ClusterError`."""
+    return slurm_settings(read_settings_file(path), f"--cluster-config {path}")
+
+
+def read_settings_file(path: Path) -> dict:
+    """The mapping of a ``--cluster-config`` YAML file (UTF-8, each key once), its values not yet checked;
+    raise :class:`ClusterError`."""
     import yaml
 
     where = f"--cluster-config {path}"
@@ -198,7 +268,7 @@ def read_slurm_settings(path: Path) -> SlurmSettings:
         data = {}
     if not isinstance(data, dict):
         raise ClusterError(f"{where}: expected a mapping of settings (key: value), got {type(data).__name__}")
-    return slurm_settings(data, where)
+    return data
 
 
 class _DuplicateKeyError(ValueError):
@@ -252,16 +322,7 @@ def slurm_settings(data: dict, where: str = "--cluster-config") -> SlurmSettings
             values[key] = _command(values[key], f"{where}: {key}")
     if "dashboard" in values:
         values["dashboard"] = _dashboard(values["dashboard"], f"{where}: dashboard")
-    tls = {key: values.get(key) for key in ("tls_ca_file", "tls_cert", "tls_key")}
-    if any(v is not None for v in tls.values()):
-        for key, value in tls.items():
-            if value is None:
-                raise ClusterError(
-                    f"{where}: {key} is missing; TLS takes tls_ca_file, tls_cert and tls_key together"
-                )
-            if not isinstance(value, str) or not Path(value).is_file():
-                raise ClusterError(f"{where}: {key} must be a readable file (PEM), got {value!r}")
-            values[key] = str(Path(value).absolute())
+    values.update(_tls_files(values, where) or {})
     log_directory = values.get("log_directory")
     if log_directory is not None and (not isinstance(log_directory, str) or not log_directory.strip()):
         raise ClusterError(f"{where}: log_directory must be a directory path, got {log_directory!r}")
@@ -342,8 +403,8 @@ def add_cluster_options(parser: argparse.ArgumentParser) -> None:
         type=Path,
         metavar="FILE",
         help="with --cluster slurm: a YAML file of cores, memory, walltime, partition, account, jobs, "
-        "container, python, interface, log_directory, dashboard, tls_ca_file, tls_cert, tls_key "
-        "(docs/cluster.md)",
+        "container, python, interface, log_directory, dashboard, tls_ca_file, tls_cert, tls_key; with "
+        "--cluster dask://HOST:PORT: tls_ca_file, tls_cert and tls_key alone (docs/cluster.md)",
     )
     parser.add_argument(
         "--worker-wait",

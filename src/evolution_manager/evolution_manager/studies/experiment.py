@@ -78,6 +78,7 @@ from evolution_manager.studies.planning import (
     more_runs,
     paper_study,
 )
+from swarm_ros.safe_paths import refuse_links_within
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
@@ -444,6 +445,10 @@ def experiment(argv: Sequence[str] | None = None) -> int:
                 )
         elif args.out.exists() and any(args.out.iterdir()):
             raise UsageError(f"{args.out} exists and is not an experiment folder; choose another --out")
+        # The folder holds nothing but what experiments made, and they make no links: a link planted at any
+        # depth (runs/, a group's folder, a run, the report, figures/) is refused before anything is run or
+        # written; a link at runs/ or a group's folder sent its runs outside the folder.
+        refuse_links_within(args.out)
     except (UsageError, EvolutionError) as error:  # a ClusterError too
         print(f"experiment: error: {error}", file=sys.stderr)
         return EXIT_USAGE

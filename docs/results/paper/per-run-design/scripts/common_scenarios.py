@@ -16,7 +16,7 @@ from pathlib import Path
 from scipy import stats
 
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.world import OBJECTIVES
+from swarm_sim.model import OBJECTIVES
 
 NEST = OBJECTIVES.index("nest")
 

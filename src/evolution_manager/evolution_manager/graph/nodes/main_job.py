@@ -179,8 +179,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     refused = None
     if on_cluster and args.evaluators is not None:
         refused = f"--evaluators applies to --cluster local only, not to --cluster {args.cluster}"
-    if args.cluster_config is not None and args.cluster != "slurm":
-        refused = f"--cluster-config applies to --cluster slurm only, not to --cluster {args.cluster}"
+    if args.cluster_config is not None and not on_cluster:  # dask://: its TLS files (evolve checks them)
+        refused = "--cluster-config applies to --cluster slurm or dask://HOST:PORT, not to --cluster local"
     try:  # a link or a place under a file, before the job starts (the cluster's settings: evolve checks them)
         check_folder(out, "--out")
     except OSError as error:
