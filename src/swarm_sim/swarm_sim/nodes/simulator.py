@@ -22,6 +22,10 @@ stops the node with one line, exit status 2):
         controllers at any step before the trial is abandoned with an error (default 60): it detects dead
         nodes; it is no speed limit.
     autostart (bool, read-only, default true): configure and activate at start.
+    timing (string, read-only): ``lockstep`` (default): every step waits for every controller's answer, so a
+        trial is bit-exact with the batch evaluator; ``free``: the world steps on its own, ``rate`` times real
+        time, and each step takes every robot's latest answer, whatever step it answered (below).
+    rate (float, read-only, free only): simulated seconds per second of wall time (default 1.0: real time).
 
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
@@ -55,6 +59,15 @@ Actions and services:
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
 step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.lockstep``.
+
+Free (``timing:=free``, for free-running controllers, ``bt_controller``'s ``timing:=free`` under
+``use_sim_time``): step ``j`` of a chain is published at ``j * step_dt / rate`` seconds of wall time after its
+first, and the world then advances with each robot's latest ``wheels`` (its motors, broadcast and smoothed
+values, carrying flag) whatever step it answered; a robot that has not answered yet is stopped and broadcasts
+the model's initial values (``FreeAnswers``). The tree statuses received since the last tick step count at the
+next tick step. Deliveries count from each trial's first step (a free controller keeps counting across a
+chain's trials). A step the machine could not publish in time is published at once (``late steps`` on
+``/diagnostics``, and a warning at the trial's end). The results depend on the machine's speed and load.
 """
 
 from __future__ import annotations
@@ -102,6 +115,7 @@ from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
 from swarm_ros.parameters import (
+    ParameterError,
     check_file_values,
     declare,
     declare_dataclass,
@@ -115,9 +129,10 @@ from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.conditions import ConditionError, apply_conditions
 from swarm_sim.config import DEFAULT, Config, ConfigError
 from swarm_sim.errors import TrialAbandonedError
+from swarm_sim.free_timing import FreeAnswers
 from swarm_sim.lockstep import LockstepChain, RobotAnswer, warm_up
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.settings import EvaluatorSettings
+from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
 from swarm_sim.result_messages import fill, trial_fields
 from swarm_sim.trial_data import TrialRecord
 
@@ -193,6 +208,30 @@ class SimulatorNode(ManagedNode):
                 value_range=ANSWER_TIMEOUT_RANGE,
             ),
         )
+        self.timing: str = declare(
+            self,
+            "timing",
+            "lockstep",
+            descriptor(
+                "lockstep: wait for every controller's answer to every step (exact); free: step at rate "
+                "times real time with each robot's latest answer",
+                read_only=True,
+            ),
+        )
+        if self.timing not in TIMINGS:
+            raise ParameterError(f"parameter timing := {self.timing!r}: expected one of {', '.join(TIMINGS)}")
+        self.rate: float = declare(
+            self,
+            "rate",
+            1.0,
+            descriptor(
+                "free timing: simulated seconds per second of wall time",
+                read_only=True,
+                value_range=RATE_RANGE,
+            ),
+        )
+        self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
+        self.late_steps = 0
         self.sim_time_ns = 0
         self.step_ns = round(self.config.step_dt * 1e9)
         self._lock = threading.Condition()
@@ -291,7 +330,10 @@ class SimulatorNode(ManagedNode):
                 "trial": self.trial_under_way or "none",
                 "trials run": str(self.trials),
                 "goals waiting": str(self.goals_waiting),
+                "timing": self.timing if self.timing == "lockstep" else f"free at {self.rate} x real time",
             }
+            if self.timing == "free":
+                values["late steps"] = str(self.late_steps)
         rate = (steps - before) / (now - then) if now > then else 0.0
         return {**values, "steps per second": f"{rate:.1f}"}
 
@@ -315,6 +357,10 @@ class SimulatorNode(ManagedNode):
             return
         with self._lock:
             inbox = self._inbox
+            if self.timing == "free":
+                if inbox.answers is not None:  # a chain is under way
+                    self.free.answer(robot, robot_answer(msg))
+                return
             if inbox.answers is not None and msg.step == inbox.step:
                 inbox.answers[robot] = msg
                 self._lock.notify_all()
@@ -325,6 +371,10 @@ class SimulatorNode(ManagedNode):
             return
         with self._lock:
             inbox = self._inbox
+            if self.timing == "free":
+                if inbox.statuses is not None:
+                    self.free.status(robot, msg.condition_ticks, msg.action)
+                return
             if inbox.statuses is not None and msg.step == inbox.step:
                 inbox.statuses[robot] = msg
                 self._lock.notify_all()
@@ -424,10 +474,14 @@ class SimulatorNode(ManagedNode):
         self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
+            self.free.start_chain()
         self._trial_start.publish(
             trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
         record: TrialRecord | None = None
+        late = 0
+        started = time.monotonic()
+        published = 0
         while not world.done:
             if goal is not None and goal.is_cancel_requested:
                 with self._lock:
@@ -440,39 +494,67 @@ class SimulatorNode(ManagedNode):
                     f"trial {trial} of seed {seed} abandoned at step {world.step}: the simulator was "
                     "deactivated"
                 )
+            if self.timing == "free" and timeline.step_in_trial(world.line, world.step) == 1:
+                with self._lock:
+                    self.free.begin_trial()
             self._publish_step(world, seed)
+            published += 1
             if goal is not None:
                 goal.publish_feedback(RunTrialAction.Feedback(step=world.step, steps=steps))
-            answers = self._await_answers(world.step)
-            statuses = self._await_statuses(world.step) if world.ticks_now() else None
-            for i, answer in enumerate(answers):
-                if answer.action >= len(ACTIONS):
+            if self.timing == "free":
+                late += not self._sleep_until(started + published * self.config.step_dt / self.rate)
+                with self._lock:
+                    robot_answers = self.free.answers(world.ticks_now())
+            else:
+                robot_answers = self._lockstep_answers(world.step, world.ticks_now())
+            for i, answer in enumerate(robot_answers):
+                if not 0 <= answer.action < len(ACTIONS):
                     raise TrialAbandonedError(
                         f"{self.namespaces[i]} answered step {world.step} with action {answer.action}; "
                         f"expected 0..{len(ACTIONS) - 1}"
                     )
-            self._actions = [ACTIONS[a.action] for a in answers]
-            record = world.advance(
-                [
-                    RobotAnswer(
-                        action=a.action,
-                        broadcast=(a.nest_estimate, a.food_estimate),
-                        smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
-                        condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
-                        started=statuses[i].action if statuses is not None else -1,
-                        carrying=a.carrying,
-                        deliveries=a.deliveries,
-                    )
-                    for i, a in enumerate(answers)
-                ]
-            )
+            self._actions = [ACTIONS[a.action] for a in robot_answers]
+            record = world.advance(robot_answers)
             self.sim_time_ns += self.step_ns
             with self._figures:
                 self.steps += 1
             with self._lock:
                 self._inbox = _Inbox(step=world.step, answers={}, statuses={}) if not world.done else _Inbox()
         assert record is not None and record.trial == trial, "the chain's last record is the trial asked for"
+        if late:
+            with self._figures:
+                self.late_steps += late
+            self.get_logger().warning(
+                f"free timing: {late} of {published} steps of trial {trial} of seed {seed} were published "
+                f"late (this machine did not keep {self.rate} times real time)"
+            )
         return record
+
+    def _lockstep_answers(self, step: int, ticks: bool) -> list[RobotAnswer]:
+        """Lockstep: every robot's answer to ``step`` (and its tree status at a tick step), waited for."""
+        answers = self._await_answers(step)
+        statuses = self._await_statuses(step) if ticks else None
+        return [
+            RobotAnswer(
+                action=a.action,
+                broadcast=(a.nest_estimate, a.food_estimate),
+                smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
+                condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
+                started=statuses[i].action if statuses is not None else -1,
+                carrying=a.carrying,
+                deliveries=a.deliveries,
+            )
+            for i, a in enumerate(answers)
+        ]
+
+    def _sleep_until(self, deadline: float) -> bool:
+        """Free timing: wait until ``deadline`` (``time.monotonic``); whether it was still ahead."""
+        ahead = deadline - time.monotonic()
+        if ahead <= 0:
+            return False
+        with self._lock:  # woken early by nothing: the answers come in under the same lock meanwhile
+            self._lock.wait_for(lambda: time.monotonic() >= deadline, ahead)
+        return True
 
     # --- steps
     def _start_controllers(self, world: LockstepChain, seed: int) -> None:
@@ -566,6 +648,17 @@ class SimulatorNode(ManagedNode):
 
     def _header(self, frame: str) -> Header:
         return Header(stamp=self._stamp(), frame_id=frame)
+
+
+def robot_answer(msg: WheelCommand) -> RobotAnswer:
+    """A controller's ``wheels`` message as the world takes it (without a tick's status)."""
+    return RobotAnswer(
+        action=int(msg.action),
+        broadcast=(msg.nest_estimate, msg.food_estimate),
+        smoothed=(msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density),
+        carrying=bool(msg.carrying),
+        deliveries=int(msg.deliveries),
+    )
 
 
 @dataclass(frozen=True)
@@ -677,6 +770,8 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     declared["conditions"] = ("", None)
     declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
     declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
+    declared["timing"] = ("lockstep", None)
+    declared["rate"] = (1.0, RATE_RANGE)
     given = check_file_values(path, fully_qualified_name, declared, SHARED)
     world: dict[str, Any] = {
         name: tuple(value) if isinstance(value, list) else value
