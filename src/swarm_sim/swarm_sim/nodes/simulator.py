@@ -42,6 +42,12 @@ Publishers:
     <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
         (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
     <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
+    <robot>/odom (nav_msgs/Odometry): each robot's pose in its frame ``<robot>/odom`` (which coincides with
+        ``arena``: the simulator's odometry is exact) and its velocity over the last step in
+        ``<robot>/base_link`` (REP 105; ``<robot>``: the robot's full namespace without the leading slash).
+    /tf (tf2_msgs/TFMessage): every step, each robot's ``<robot>/base_link`` in its ``<robot>/odom``; at the
+        root, as tf2 expects, the frames being namespaced.
+    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity).
     swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step, with whether each robot
         carries food and its deliveries in the trial, as it answered the step before.
     poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
@@ -83,6 +89,7 @@ from typing import Any
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseArray, PoseStamped
+from nav_msgs.msg import Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
@@ -113,7 +120,7 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
-from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
+from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frame, robot_namespaces
 from swarm_ros.parameters import (
     ParameterError,
     check_file_values,
@@ -135,6 +142,7 @@ from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
 from swarm_sim.result_messages import fill, trial_fields
 from swarm_sim.trial_data import TrialRecord
+from tf2_msgs.msg import TFMessage
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
@@ -231,6 +239,13 @@ class SimulatorNode(ManagedNode):
             ),
         )
         self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
+        graph = self.get_namespace().rstrip("/")
+        self.frames = [
+            (robot_frame(f"{graph}/{ns}", "odom"), robot_frame(f"{graph}/{ns}", "base_link"))
+            for ns in self.namespaces
+        ]
+        """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
+        self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
         self.late_steps = 0
         self.sim_time_ns = 0
         self.step_ns = round(self.config.step_dt * 1e9)
@@ -258,14 +273,18 @@ class SimulatorNode(ManagedNode):
         self._robot_markers = publisher(MarkerArray, "robot_markers")
         self._state = publisher(SwarmState, "swarm_state")
         self._poses = publisher(PoseArray, "poses")
+        self._tf = publisher(TFMessage, "/tf")
+        self._tf_static = publisher(TFMessage, "/tf_static", LATCHED)
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
         self._pose: list[Publisher] = []
+        self._odom: list[Publisher] = []
         self._start_clients: list[Client] = []
         for i, ns in enumerate(self.namespaces):
             self._ground.append(publisher(GroundSensor, f"{ns}/ground"))
             self._readings.append(publisher(RangeAndBearingReadings, f"{ns}/range_and_bearing"))
             self._pose.append(publisher(PoseStamped, f"{ns}/pose"))
+            self._odom.append(publisher(Odometry, f"{ns}/odom"))
             for msg_class, topic, callback in (
                 (WheelCommand, f"{ns}/wheels", self._on_wheels),
                 (TreeStatus, f"{ns}/tree_status", self._on_status),
@@ -297,6 +316,14 @@ class SimulatorNode(ManagedNode):
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
         self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
+        self._tf_static.publish(
+            TFMessage(
+                transforms=[
+                    visualisation.transform(self._stamp(), visualisation.FRAME, odom, 0.0, 0.0, 0.0)
+                    for odom, _ in self.frames
+                ]
+            )
+        )
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
@@ -612,6 +639,23 @@ class SimulatorNode(ManagedNode):
         self._poses.publish(messages.poses)
         for publisher, pose in zip(self._pose, messages.pose, strict=True):
             publisher.publish(pose)
+        poses: list[tuple[float, float, float]] = [(x, y, t) for x, y, t in world.poses().tolist()]
+        placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
+        for i, publisher in enumerate(self._odom):
+            previous = None if placed or self._previous is None else self._previous[i]
+            odom, base = self.frames[i]
+            publisher.publish(
+                visualisation.odometry(stamp, poses[i], previous, self.config.step_dt, odom, base)
+            )
+        self._previous = poses
+        self._tf.publish(
+            TFMessage(
+                transforms=[
+                    visualisation.transform(stamp, odom, base, *pose)
+                    for (odom, base), pose in zip(self.frames, poses, strict=True)
+                ]
+            )
+        )
         self._robot_markers.publish(messages.robot_markers)
         for i in range(len(self.namespaces)):
             self._ground[i].publish(messages.ground[i])
