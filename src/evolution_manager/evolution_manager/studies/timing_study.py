@@ -191,6 +191,21 @@ def markdown(rows: Sequence[dict], trees: Sequence[StudyTree], ci_seed: int, not
         "steps were published late (the machine did not keep the rate), and that trial measures the machine",
         "as well as the timing.",
         "",
+        "What differs, free: each controller ticks when its 2 Hz timer fires (at a phase the model does not",
+        "fix) rather than at the model's tick steps; it senses every step whose two readings it received,",
+        "its answers (motors, broadcast estimates, smoothed values) are published at its ticks, and the",
+        "simulator moves each robot with the latest answer it has. A difference measures these together.",
+    ]
+    small = [row["task"] for row in table(rows, ci_seed) if row["n"] < 10]
+    if small:
+        lines += [
+            "",
+            f"Few trials ({', '.join(small)}: n < 10): a percentile bootstrap of so few pairs is rough",
+            "(three pairs give at most ten distinct resampled means); read such a row as a direction, not an",
+            "estimate.",
+        ]
+    lines += [
+        "",
         "Trees:",
         "",
     ]
