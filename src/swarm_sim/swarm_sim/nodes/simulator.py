@@ -247,6 +247,7 @@ class SimulatorNode(ManagedNode):
         """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
         self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
         self.late_steps = 0
+        self._chain_start_ns = 0
         self.sim_time_ns = 0
         self.step_ns = round(self.config.step_dt * 1e9)
         self._lock = threading.Condition()
@@ -385,7 +386,7 @@ class SimulatorNode(ManagedNode):
         with self._lock:
             inbox = self._inbox
             if self.timing == "free":
-                if inbox.answers is not None:  # a chain is under way
+                if inbox.answers is not None and self._of_this_chain(msg.header):  # a chain is under way
                     self.free.answer(robot, robot_answer(msg))
                 return
             if inbox.answers is not None and msg.step == inbox.step:
@@ -399,12 +400,18 @@ class SimulatorNode(ManagedNode):
         with self._lock:
             inbox = self._inbox
             if self.timing == "free":
-                if inbox.statuses is not None:
+                if inbox.statuses is not None and self._of_this_chain(msg.header):
                     self.free.status(robot, msg.condition_ticks, msg.action)
                 return
             if inbox.statuses is not None and msg.step == inbox.step:
                 inbox.statuses[robot] = msg
                 self._lock.notify_all()
+
+    def _of_this_chain(self, header: Header) -> bool:
+        """Free timing: whether an answer was stamped in the chain under way (a free controller stamps with
+        its clock, the graph's simulated time, which the chain's first step sets to its start): an answer of
+        an earlier chain still in flight, its deliveries counted from that chain's start, is dropped."""
+        return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec >= self._chain_start_ns
 
     def _wrong_robot(self, robot: int, claimed: int) -> None:
         self.get_logger().error(
@@ -502,6 +509,7 @@ class SimulatorNode(ManagedNode):
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
             self.free.start_chain()
+            self._chain_start_ns = self.sim_time_ns
         self._trial_start.publish(
             trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
