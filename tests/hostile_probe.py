@@ -421,7 +421,7 @@ def _trial_bag(path: Path) -> Path:
 
     from evolution_manager.recording.bags import BagRecorder
     from swarm_msgs.msg import RobotPose, SwarmState, TrialStart
-    from swarm_sim.config import DEFAULT
+    from swarm_sim.model import DEFAULT
 
     array = "visualization_msgs/msg/MarkerArray"
     corners = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0))

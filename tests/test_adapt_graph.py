@@ -8,7 +8,7 @@ from evolution_manager.adaptation.adapt import adapt
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.graph.nodes.trial import RESULT_TOPIC
 from evolution_manager.recording.bags import read_bag
-from swarm_sim.result_messages import named_values
+from swarm_sim.evaluation import named_values
 
 ITEMS = [
     {"bin": [2, 4, 7], "tree": "reverse", "fitness": 0.95, "descriptors": [0.3, 0.55, 0.9], "evaluation": 1},

@@ -16,8 +16,7 @@ from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceS
 from evolution_manager.graph.startup import Graph, executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.studies.evolve import evolve
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.result_messages import named_values
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values
 
 BUDGET = 1000  # QD: a batch of 100, then batches of 50; about 3 ms an evaluation here
 SEED = 5

@@ -20,9 +20,8 @@ from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
-from swarm_sim.config import DEFAULT
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.result_messages import named_values, values_of
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values, values_of
+from swarm_sim.model import DEFAULT
 from swarm_sim.tasks import FORAGING
 
 PARITY_TREES = 20

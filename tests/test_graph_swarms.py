@@ -13,7 +13,7 @@ from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
-from swarm_sim.swarm_layout import of_trees
+from swarm_sim.model import of_trees
 
 NEST = "sel(seq(in_nest, stop), seq(nest_left, forward_left), seq(nest_right, forward_right), forward)"
 FOOD = "sel(seq(on_food, stop), seq(food_left, forward_left), seq(food_right, forward_right), reverse)"

@@ -10,7 +10,7 @@ from evolution_manager.graph.nodes.trial import TrialGraph
 from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import N_OBJECTIVES, OBJECTIVES
+from swarm_sim.model import N_OBJECTIVES, OBJECTIVES
 from swarm_sim.tasks import AGGREGATION, FORAGING, Arena, Region, Robots, Trials
 
 SMALL = replace(

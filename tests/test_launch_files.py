@@ -20,7 +20,7 @@ from evolution_manager.graph.startup import (
     package_config,
     trial_graph_nodes,
 )
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT
 from swarm_sim.nodes.settings import SIMULATOR_PARAMETERS, EvaluatorSettings
 from swarm_sim.tasks import resolve_task, world_parameters
 

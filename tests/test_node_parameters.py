@@ -128,7 +128,7 @@ def test_each_node_declares_the_names_the_others_leave_to_it():
 
     import rclpy
 
-    from swarm_sim.config import Config
+    from swarm_sim.model import Config
     from swarm_sim.nodes.evaluator import EvaluatorNode
     from swarm_sim.nodes.settings import SIMULATOR_PARAMETERS, EvaluatorSettings
     from swarm_sim.nodes.simulator import SimulatorNode

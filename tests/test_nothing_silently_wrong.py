@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_prefix
 
-from swarm_sim.result_messages import named_values
+from swarm_sim.evaluation import named_values
 
 QUIET = ["--no-figures", "--no-progress"]
 QD_FOOD = ["--algorithm", "qd", "--objective", "food"]

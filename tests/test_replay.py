@@ -18,8 +18,8 @@ from evolution_manager.recording.bags import BagRecorder
 from evolution_manager.recording.reproduce import verify_trial_bag
 from swarm_msgs.msg import SwarmState
 from swarm_ros.isolation import domain_environment, reserved_domain
-from swarm_sim.config import DEFAULT
-from swarm_sim.lockstep import run_with_controllers
+from swarm_sim.model import DEFAULT
+from swarm_sim.roads import run_with_controllers
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 SEED, TRIAL = 21, 2

@@ -25,9 +25,8 @@ from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED, RELIABLE
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.result_messages import named_values
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values
+from swarm_sim.model import DEFAULT, Config
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 

@@ -24,10 +24,8 @@ from swarm_msgs.srv import StartTrial
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient
 from swarm_ros.qos import RELIABLE
-from swarm_sim.config import DEFAULT
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
-from swarm_sim.result_messages import named_values
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values
+from swarm_sim.model import DEFAULT, OBJECTIVES
 
 LONG = 300.0
 """Seconds to wait for anything a node does (starting Python processes is slow on a loaded machine)."""

@@ -20,7 +20,7 @@ from bt_controller.tree import parse, to_text
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, in_nest, stop))"
 SEED, TRIAL = 13, 1

@@ -74,8 +74,8 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
     from evolution_manager.evolution.run_config import RunConfig
     from evolution_manager.studies.experiment import run_one
     from evolution_manager.viewing.results import write_results
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
+    from swarm_sim.model import default_config
 
     monkeypatch.setenv("SLURM_CONF", str(slurm.conf))  # the client commands and the jobs find this cluster
     configs = [

@@ -12,7 +12,7 @@ import subprocess
 import pytest
 
 from evolution_manager.graph.startup import executable
-from swarm_sim import transfer
+from swarm_sim.validation import transfer
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ export AMENT_PREFIX_PATH="$_ws_dir/.venv${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH
 export CMAKE_PREFIX_PATH="$_ws_dir/.venv${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
 export RMW_IMPLEMENTATION="${RMW_IMPLEMENTATION:-rmw_fastrtps_cpp}"
 # numba caches compiled kernels next to the installed modules (ws/install/...): swarm_sim's stale-cache guard
-# (swarm_sim/_numba_cache.py) looks there, so do not point NUMBA_CACHE_DIR elsewhere.
+# (swarm_sim/core/_numba_cache.py) looks there, so do not point NUMBA_CACHE_DIR elsewhere.
 unset NUMBA_CACHE_DIR
 set +u
 # shellcheck disable=SC1091

@@ -38,7 +38,7 @@ setup(
             "measure-graph = evolution_manager.graph.nodes.measure_graph:main",
             "evolve = evolution_manager.studies.evolve:main",
             "experiment = evolution_manager.studies.experiment:main",
-            "report = evolution_manager.studies.report:main",
+            "report = evolution_manager.studies.report_command:main",
             "library = evolution_manager.evolution.libraries:main",
             "measure = evolution_manager.studies.measure:main",
             "timing-study = evolution_manager.studies.timing_study:main",

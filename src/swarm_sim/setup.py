@@ -28,10 +28,10 @@ setup(
     entry_points={
         "console_scripts": [
             # "EXECUTABLE = swarm_sim.MODULE:main": run with `ws/run swarm_sim EXECUTABLE`.
-            "evaluate = swarm_sim.cli:evaluate_main",
-            "bench = swarm_sim.batch_bench:main",
-            "record-bench = swarm_sim.recording_bench:main",
-            "validate = swarm_sim.validate_cli:main",
+            "evaluate = swarm_sim.evaluation.cli:evaluate_main",
+            "bench = swarm_sim.bench.batch:main",
+            "record-bench = swarm_sim.bench.recording:main",
+            "validate = swarm_sim.validation.cli:main",
             "task = swarm_sim.tasks.cli:main",
             "simulator = swarm_sim.nodes.simulator:main",
             "evaluator = swarm_sim.nodes.evaluator:main",

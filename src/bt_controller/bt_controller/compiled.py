@@ -34,7 +34,7 @@ from numba.extending import intrinsic
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.draws import choose, derive
-from bt_controller.timeline import PAPER
+from bt_controller.model_settings import PAPER
 from bt_controller.tree import (
     MAX_TICK_DEPTH,
     Action,

@@ -13,10 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bt_controller import timeline
+from bt_controller.model_settings import PerceptionParams, Timeline
 from bt_controller.motors import motors_after_tick, running_action
-from bt_controller.perception import PerceptionParams, Readings, RobotView
+from bt_controller.perception import Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
-from bt_controller.timeline import Timeline
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, STOP
 

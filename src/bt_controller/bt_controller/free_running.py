@@ -35,8 +35,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from bt_controller.model_settings import PerceptionParams
 from bt_controller.motors import motors_after_tick, running_action
-from bt_controller.perception import PerceptionParams, Readings, RobotView
+from bt_controller.perception import Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, STOP

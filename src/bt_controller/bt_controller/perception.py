@@ -9,55 +9,20 @@ counts its deliveries (``carry``: foraging), and fills the blackboard its behavi
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
 ``njit`` functions inline, and the controller node and the reference road call them from Python, so both roads
 compute every number with the same operations in the same order. Arguments ``p`` are any named tuple with the
-fields of ``PerceptionParams`` (``PerceptionSettings``; ``swarm_sim.config.Params`` has them all).
+fields of ``PerceptionParams`` (``PerceptionSettings``; ``swarm_sim.model.config.Params`` has them all).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple, Protocol
 
 import numba
 import numpy as np
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
-from bt_controller.timeline import PAPER
+from bt_controller.model_settings import PAPER, PerceptionParams, PerceptionSettings
 from bt_controller.vocabulary import N_CONDITIONS
-
-
-class PerceptionParams(NamedTuple):
-    """The parameters of a robot's perception, with the model's defaults (``docs/model.md``, "One step")."""
-
-    window: int = 7
-    """Raw samples averaged into a smoothed value (``CBlackBoard.cpp:45``: at most 7 kept)."""
-    estimate_cap: float = 5000.0
-    """Largest nest/food distance estimate, and the estimate when nothing better was heard: 500 cm
-    (``footbot_bt.cpp:281-282``) (mm)."""
-    density_range: float = 10_000.0
-    """A neighbour at range r adds 1 / (pi (r / density_range)^2) to the density sum: ARGoS's range in cm
-    divided by 1000 (``footbot_bt.cpp:334``) is the range in mm divided by 10000 (mm)."""
-    density_divisor: float = 1107.0 * 6.0
-    """The density sum is divided by this: 1107 per touching neighbour, 6 neighbours
-    (``CBlackBoard.cpp:295``)."""
-    profile: int = PAPER
-    """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard
-    (A2)."""
-
-
-class PerceptionSettings(Protocol):
-    """What perception reads of its parameters: ``PerceptionParams`` or any named tuple with its fields."""
-
-    @property
-    def window(self) -> int: ...
-    @property
-    def estimate_cap(self) -> float: ...
-    @property
-    def density_range(self) -> float: ...
-    @property
-    def density_divisor(self) -> float: ...
-    @property
-    def profile(self) -> int: ...
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -20,7 +20,7 @@ import numpy as np
 import py_trees
 
 from bt_controller.draws import choose, derive
-from bt_controller.timeline import PAPER
+from bt_controller.model_settings import PAPER
 from bt_controller.tree import Action, Composite, Condition, Node, check_tick_depth, draw_key_at
 from bt_controller.vocabulary import ACTIONS, CONDITIONS, FAILURE, RUNNING, SUCCESS
 

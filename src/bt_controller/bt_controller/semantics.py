@@ -39,7 +39,7 @@ from collections.abc import MutableSequence, Sequence
 import numpy as np
 
 from bt_controller.draws import choose, derive
-from bt_controller.timeline import PAPER
+from bt_controller.model_settings import PAPER
 from bt_controller.tree import Action, Composite, Condition, Node, check_tick_depth, draw_key_at
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, FAILURE, RUNNING, STOP, SUCCESS
 

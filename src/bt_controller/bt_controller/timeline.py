@@ -16,59 +16,16 @@ control step"):
 
 Objectives take their initial values at a trial's ``initial_step`` (``is_initial``) and their final values at
 its last step (``is_final``). Every function takes ``t``, any object with the fields of ``Timeline``
-(``swarm_sim.config.Params`` has them all), and is an ``njit`` function so that the batch kernels, the
+(``swarm_sim.model.config.Params`` has them all), and is an ``njit`` function so that the batch kernels, the
 reference road and the nodes all run this very code.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple, Protocol
-
 import numba
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
-
-PAPER, CLEAN = 0, 1
-PROFILES: tuple[str, ...] = ("paper", "clean")
-"""Profile names, indexed by the profile number (``PAPER``, ``CLEAN``)."""
-
-
-def profile_number(name: str) -> int:
-    """The number of profile ``name``; ValueError naming the choices for anything else."""
-    if name not in PROFILES:
-        raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {name!r}")
-    return PROFILES.index(name)
-
-
-class Timeline(NamedTuple):
-    """The timeline's parameters with the model's defaults."""
-
-    profile: int = PAPER
-    """``PAPER`` (the authors' experiment) or ``CLEAN`` (artefacts A1-A4 removed)."""
-    steps_per_tick: int = 4
-    """Control steps per behaviour-tree tick: 8 Hz steps, 2 Hz ticks (paper, section 4)."""
-    ticks: int = 40
-    """Ticks per trial: a 20 s trial (paper, section 4)."""
-    initial_step: int = 16
-    """A trial's step at which the objectives' initial values are taken (``footbot_bt.cpp:539``)."""
-    chain_trials: int = 5
-    """Trials run as one simulation under ``paper`` (the authors' ``iterations``, ``params.py``)."""
-
-
-class TimelineSettings(Protocol):
-    """What the timeline reads of its parameters: ``Timeline`` or any named tuple with its fields
-    (``swarm_sim.config.Params``)."""
-
-    @property
-    def profile(self) -> int: ...
-    @property
-    def steps_per_tick(self) -> int: ...
-    @property
-    def ticks(self) -> int: ...
-    @property
-    def initial_step(self) -> int: ...
-    @property
-    def chain_trials(self) -> int: ...
+from bt_controller.model_settings import CLEAN, PAPER, TimelineSettings
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -148,16 +105,3 @@ def is_initial(t: TimelineSettings, k: int) -> bool:
 def is_final(t: TimelineSettings, k: int) -> bool:
     """Whether step ``k`` is a trial's last: final values, descriptors, counters reset."""
     return step_in_trial(t, k) == trial_steps(t)
-
-
-def chain_of_trial(t: TimelineSettings, trial: int) -> tuple[int, int]:
-    """``(chain, position)``: the chain that trial ``trial`` of an evaluation belongs to, and its place
-    in it."""
-    length = t.chain_trials if t.profile == PAPER else 1
-    return trial // length, trial % length
-
-
-def arena_of_trial(t: TimelineSettings, trial: int, n_arenas: int) -> int:
-    """The arena configuration (gap) of trial ``trial``: trial k belongs to block k // chain_trials, and
-    blocks alternate arenas (``utilities.py:59-71`` runs one chain per gap), under both profiles."""
-    return (trial // t.chain_trials) % n_arenas

@@ -19,8 +19,8 @@ from bt_controller.compiled import (
     start_memory,
     tick,
 )
+from bt_controller.model_settings import CLEAN, PAPER
 from bt_controller.random_trees import random_blackboards, random_tree
-from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 
 

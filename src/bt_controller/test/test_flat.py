@@ -7,7 +7,7 @@ import pytest
 
 from bt_controller.compiled import MAX_COMPILED_DEPTH, CompiledRobot, flatten, new_memory, pack, reset_memory
 from bt_controller.errors import TreeLimitError
-from bt_controller.timeline import CLEAN, PAPER
+from bt_controller.model_settings import CLEAN, PAPER
 from bt_controller.tree import parse
 
 

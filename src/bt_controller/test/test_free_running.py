@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bt_controller.free_running import FreeRunningController, empty_readings
-from bt_controller.perception import PerceptionParams
+from bt_controller.model_settings import PerceptionParams
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
 

@@ -9,10 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bt_controller.agreement import random_forest
+from bt_controller.model_settings import CLEAN, PAPER
 from bt_controller.pytrees import PyTreesRobot
 from bt_controller.random_trees import random_blackboards
 from bt_controller.semantics import ReferenceRobot
-from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import parse
 
 

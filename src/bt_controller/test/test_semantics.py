@@ -8,8 +8,8 @@ import pytest
 from bt_controller.compiled import CompiledRobot
 from bt_controller.draws import choose, derive
 from bt_controller.errors import TreeLimitError
+from bt_controller.model_settings import CLEAN, PAPER
 from bt_controller.semantics import ReferenceRobot, wheels
-from bt_controller.timeline import CLEAN, PAPER
 from bt_controller.tree import MAX_TICK_DEPTH, parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, FAILURE, RUNNING, SUCCESS
 

@@ -23,9 +23,8 @@ from evolution_manager.adaptation.search import (
 from evolution_manager.errors import AskTellError
 from evolution_manager.evolution.deap_trees import ACTIONS
 from evolution_manager.evolution.run_config import RunConfig
-from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator
+from swarm_sim.model import DEFAULT, apply_conditions
 
 
 def _grid_candidates(count=60, seed=0):

@@ -25,10 +25,8 @@ from evolution_manager.viewing.animate import (
     write_animation,
 )
 from evolution_manager.viewing.frames import frames_from_tree
-from swarm_sim.config import DEFAULT
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
-from swarm_sim.swarm_layout import load_layout
+from swarm_sim.model import DEFAULT, OBJECTIVES, load_layout
 
 TREE = "sel(seq(on_food, stop), prob(forward, forward_left), reverse_right)"
 SEED, TRIAL = 5, 1
@@ -151,7 +149,7 @@ MIXED = (NEST, TREE, FLOCK, TREE, NEST, NEST, FLOCK, TREE, NEST)
 def test_a_heterogeneous_swarm_is_animated_with_each_robots_tree_named(frames, tmp_path):
     from evolution_manager.viewing.animate import tree_legend, tree_letters
     from swarm_sim.evaluation import SwarmRequest
-    from swarm_sim.swarm_layout import of_trees
+    from swarm_sim.model import of_trees
 
     layout = of_trees(MIXED, 9)
     mixed = frames_from_tree(layout, SEED, TRIAL)

@@ -8,7 +8,7 @@ import random
 import pytest
 
 from evolution_manager.evolution.archive import Repertoire
-from swarm_sim.objectives import fitness_ceiling
+from swarm_sim.model import fitness_ceiling
 
 
 def test_a_full_bin_replaces_its_worst_only_with_a_strictly_better_tree():

@@ -1,8 +1,8 @@
 """The report's transfer section: each run's best tree beside its ARGoS score, read from the driver's rows.
 
 ARGoS is not built where the tests run, so the driver's raw rows are written here in its format (the same
-columns ``swarm_sim.transfer.read_argos_raw`` reads from real runs); that the missing build stops the
-command in one line, with the report and runs.csv as they were, is tested against the real harness path.
+columns ``swarm_sim.validation.transfer.read_argos_raw`` reads from real runs); that the missing build stops
+the command in one line, with the report and runs.csv as they were, is tested against the real harness path.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ import pytest
 
 from evolution_manager.studies import argos_transfer
 from evolution_manager.studies.experiment import experiment
-from evolution_manager.studies.report import load_runs, report
-from swarm_sim.config import default_config
+from evolution_manager.studies.report import load_runs
+from evolution_manager.studies.report_command import report
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import OBJECTIVES, default_config
 
 RAW_COLUMNS = ["tree", "seed", "chromosome", "argos_wall_s", "density", "nest", "food", "movement",
                "rotation", "conditionality"]  # fmt: skip

@@ -13,7 +13,7 @@ import pytest
 
 from evolution_manager.studies.evolve import evolve
 from swarm_ros.isolation import Workspace
-from swarm_sim.objectives import VALUE_NAMES
+from swarm_sim.model import VALUE_NAMES
 
 COMPARED = [
     "config.json",
@@ -140,7 +140,7 @@ def test_the_profile_is_the_runs_recorded_and_reproduced_by_evaluate(tmp_path, c
     import csv
     import json
 
-    from swarm_sim.cli import run as evaluate_command
+    from swarm_sim.evaluation.cli import run as evaluate_command
 
     out = tmp_path / "clean"
     common = ["--algorithm", "qd", "--objective", "food", "--evaluations", "20", "--seed", "4"]
@@ -243,7 +243,7 @@ def test_a_foraging_run_with_a_library_as_a_user_runs_it(tmp_path, capsys):
 
     from evolution_manager.evolution.run_config import RunConfig
     from evolution_manager.viewing.explorer import explorer_data
-    from swarm_sim.cli import run as evaluate_command
+    from swarm_sim.evaluation.cli import run as evaluate_command
 
     library = tmp_path / "primitives.json"
     library.write_text(json.dumps(LIBRARY))

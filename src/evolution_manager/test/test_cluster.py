@@ -31,9 +31,8 @@ from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.studies.experiment import run_one
 from evolution_manager.viewing.results import write_results
-from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import OBJECTIVES, default_config
 from swarm_sim.tasks import FORAGING
 
 VARYING = {"timing.json", "checkpoint.json", ".lock"}
@@ -267,7 +266,7 @@ def test_the_dask_evaluator_answers_exactly_as_the_in_process_one(client):
 
 
 def test_a_changed_world_travels_whole_to_the_workers(client):
-    from swarm_sim.conditions import apply_conditions
+    from swarm_sim.model import apply_conditions
 
     world, _ = apply_conditions(["dead-robots=3", "weak-wheel=2:0.5"], default_config("paper"))
     requests = [EvaluationRequest(tree, 9, 4) for tree in random_trees(8, 6)]
@@ -298,7 +297,7 @@ def test_a_foraging_world_and_a_library_travel_to_the_workers(client):
 
 
 def test_every_worker_builds_the_evaluator_of_a_world_once(client):
-    from swarm_sim.conditions import apply_conditions
+    from swarm_sim.model import apply_conditions
 
     def built() -> int:  # evaluators built so far in this worker process
         from evolution_manager.cluster.evaluator import worker_evaluator

@@ -31,10 +31,9 @@ from evolution_manager.evolution.compositions import (
 from evolution_manager.evolution.parameters import GPParameters
 from evolution_manager.studies.evolve import evolve
 from evolution_manager.studies.experiment import produced_so_far
-from swarm_sim.cli import evaluate_main
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
-from swarm_sim.swarm_layout import load_layout
+from swarm_sim.evaluation.cli import evaluate_main
+from swarm_sim.model import OBJECTIVES, load_layout
 from swarm_sim.tasks import FORAGING
 
 COMPARED = [

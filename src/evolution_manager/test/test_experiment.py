@@ -14,15 +14,9 @@ from pathlib import Path
 import pytest
 
 from evolution_manager.cluster.settings import ClusterSettings
-from evolution_manager.studies.experiment import (
-    _paper_study,
-    build_parser,
-    experiment,
-    plan,
-    record_session,
-    shared_scenario_seed,
-)
-from evolution_manager.studies.report import report
+from evolution_manager.studies.experiment import build_parser, experiment, record_session
+from evolution_manager.studies.planning import paper_study, plan, shared_scenario_seed
+from evolution_manager.studies.report_command import report
 from evolution_manager.studies.significance import compare, holm
 
 RUNS_HEADER = (
@@ -140,7 +134,7 @@ def test_other_options_are_named_in_the_refusal(tmp_path, capsys):
     out = tmp_path / "experiment"
     out.mkdir()
     saved = ["--runs", "2", "--evaluations", "150", "--out", str(out)]
-    document = _paper_study(build_parser().parse_args(saved), "fixed", "shared")[0]
+    document = paper_study(build_parser().parse_args(saved), "fixed", "shared")[0]
     (out / "experiment.json").write_text(json.dumps(document))
     before = (out / "experiment.json").read_bytes()
     assert experiment(["--runs", "3", "--evaluations", "300", "--out", str(out), "--no-progress"]) == 2

@@ -33,8 +33,8 @@ from evolution_manager.studies.foraging_study import (
     tables,
     write_runs_csv,
 )
-from evolution_manager.studies.report import report
-from swarm_sim import transfer
+from evolution_manager.studies.report_command import report
+from swarm_sim.validation import transfer
 
 REPOSITORY = Path(__file__).resolve().parents[3]
 COMMITTED = REPOSITORY / "docs/results/foraging"
@@ -227,7 +227,7 @@ def test_the_report_sets_each_arms_best_forager_beside_its_argos_score(study: Pa
     before = (copy / "report.md").read_bytes()
     env_home = tmp_path / "home"
     code = (
-        "import os, sys; from evolution_manager.studies.report import report; "
+        "import os, sys; from evolution_manager.studies.report_command import report; "
         f"sys.exit(report([{str(copy)!r}, '--argos-eval', {str(tmp_path / 'argos_eval.py')!r}]))"
     )
     env = {k: v for k, v in os.environ.items() if not k.startswith(("ARGOS_", "BT_ARGOS", "SRAND"))}

@@ -39,7 +39,7 @@ from evolution_manager.graph.nodes import recorder, replay, trial
 from evolution_manager.recording.bags import BagRecorder
 from evolution_manager.viewing import animate, explorer, snapshot
 from swarm_msgs.msg import RobotPose, SwarmState, TrialStart
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT
 
 FUZZ = settings(
     max_examples=40,

@@ -19,7 +19,7 @@ from bt_controller.library import LibraryError, load_library
 from evolution_manager.cluster.settings import ClusterError, parse_cluster
 from evolution_manager.errors import UsageError
 from swarm_ros.parameters import ParameterError, read_parameter_file
-from swarm_sim.swarm_layout import LayoutError, load_layout
+from swarm_sim.model import LayoutError, load_layout
 from swarm_sim.tasks import FORAGING, TaskError, read_task_file, task_to_mapping
 
 FUZZ = settings(

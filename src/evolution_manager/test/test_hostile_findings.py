@@ -76,7 +76,7 @@ def test_a_resume_refuses_a_planted_link_before_it_evaluates_anything(unfinished
 def test_a_rebuild_of_a_runs_results_refuses_a_planted_link_before_it_writes(tmp_path, capsys):
     """``report RUN`` rewrote summary.json and timing.json, then refused the planted figures/ link."""
     from evolution_manager.studies.evolve import evolve
-    from evolution_manager.studies.report import report
+    from evolution_manager.studies.report_command import report
 
     run = tmp_path / "run"
     args = ["--algorithm", "qd", "--objective", "food", "--evaluations", "2", "--seed", "1"]

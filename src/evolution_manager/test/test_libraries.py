@@ -217,7 +217,7 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, case, message):
 
 def test_a_library_from_a_small_real_run_is_read_by_evaluate(tmp_path, capsys):
     from evolution_manager.studies.evolve import evolve
-    from swarm_sim.cli import evaluate_main
+    from swarm_sim.evaluation.cli import evaluate_main
 
     run = tmp_path / "qd_food"
     common = ["--algorithm", "qd", "--objective", "food", "--evaluations", "300", "--seed", "3"]

@@ -15,7 +15,7 @@ from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
 from evolution_manager.viewing.results import write_results
-from swarm_sim.objectives import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
+from swarm_sim.model import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
 
 RESULT_FILES = [
     "evaluations.csv",
@@ -172,8 +172,8 @@ def test_fixed_scenarios_give_one_fitness_per_tree_and_fresh_ones_a_seed_per_eva
 
 
 def test_evaluate_with_the_runs_scenario_seed_reproduces_every_stored_fitness(tmp_path):
-    from swarm_sim.cli import run as evaluate_command
     from swarm_sim.evaluation import BatchEvaluator
+    from swarm_sim.evaluation.cli import run as evaluate_command
 
     run = _finish(Run.start(RunConfig.make("qd", "food", 50, 16), tmp_path / "r", BatchEvaluator()))
     rows = run.directory.evaluations.read()
@@ -217,8 +217,8 @@ def test_clean_grids_refuse_a_tree_whose_simplified_form_is_in_its_bin(tmp_path)
     from recompute import grids_from_log
 
     from evolution_manager.evolution.archive import SimplifiedForms
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
+    from swarm_sim.model import default_config
 
     root = tmp_path / "clean"
     evaluator = BatchEvaluator(default_config("clean"))

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from evolution_manager.studies import scenarios
-from evolution_manager.studies.report import report
+from evolution_manager.studies.report_command import report
 
 PAPER = Path(__file__).resolve().parents[3] / "experiments" / "paper"
 COMMITTED = Path(__file__).resolve().parents[3] / "docs" / "results" / "paper" / "scenarios"

@@ -12,8 +12,8 @@ class ConfigError(ValueError):
 
 
 class ConditionError(ValueError):
-    """A condition (``swarm_sim.conditions``) that cannot be applied; the message names it and says what was
-    expected."""
+    """A condition (``swarm_sim.model.conditions``) that cannot be applied; the message names it and says what
+    was expected."""
 
 
 class TrialAbandonedError(RuntimeError):

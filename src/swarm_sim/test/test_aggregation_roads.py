@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference_road
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import OBJECTIVES
-from swarm_sim.recording import record_trial, record_trial_reference
+from swarm_sim.model import OBJECTIVES
+from swarm_sim.roads import record_trial, record_trial_reference, reference_road
 from swarm_sim.tasks import AGGREGATION, Robots, Trials, task_named
 
 # A short aggregation task (five robots, 12-tick trials in chains of two): the registered one, edited.

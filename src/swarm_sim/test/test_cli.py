@@ -6,14 +6,14 @@ import sys
 
 import pytest
 
-from swarm_sim.cli import evaluate_main
+from swarm_sim.evaluation.cli import evaluate_main
 
 TREE = "sel2(seq2(in_nest, stop), forward)"
 
 
 def _run(*args):
     return subprocess.run(
-        [sys.executable, "-m", "swarm_sim.cli", *args],
+        [sys.executable, "-m", "swarm_sim.evaluation.cli", *args],
         capture_output=True,
         text=True,
         check=False,

@@ -6,13 +6,12 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference_road, world
-from swarm_sim.cli import evaluate_main
-from swarm_sim.conditions import ConditionError, apply_conditions, condition_texts
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.core import setup_chain, world
+from swarm_sim.errors import ConditionError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.lockstep import run_with_controllers
-from swarm_sim.trial_data import setup_chain
+from swarm_sim.evaluation.cli import evaluate_main
+from swarm_sim.model import DEFAULT, Config, apply_conditions, condition_texts
+from swarm_sim.roads import reference_road, run_with_controllers
 
 SHORT = Config(ticks=12)
 """A short trial keeps the hand-worked checks quick; the conditions do not depend on its length."""

@@ -4,7 +4,8 @@ import dataclasses
 
 import pytest
 
-from swarm_sim.config import DEFAULT, Config, ConfigError
+from swarm_sim.errors import ConfigError
+from swarm_sim.model import DEFAULT, Config
 
 
 def test_defaults_follow_the_model():

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from bt_controller.vocabulary import ACTION_INDEX
-from swarm_sim import fast_world, world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.trial_data import setup_chain
+from swarm_sim.core import fast_world, setup_chain, world
+from swarm_sim.model import DEFAULT, Config
 
 P = DEFAULT.params()
 STOP = ACTION_INDEX["stop"]

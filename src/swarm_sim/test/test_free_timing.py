@@ -1,14 +1,14 @@
-"""The free-stepping simulator's answers (swarm_sim.free_timing), without ROS: each robot's latest answer,
-statuses credited at tick steps, deliveries counted per trial, and a free-run chain the world accepts."""
+"""The free-stepping simulator's answers (swarm_sim.roads.free_timing), without ROS: each robot's latest
+answer, statuses credited at tick steps, deliveries counted per trial, and a free-run chain the world
+accepts."""
 
 from __future__ import annotations
 
 import pytest
 
 from bt_controller.vocabulary import STOP
-from swarm_sim.config import DEFAULT
-from swarm_sim.free_timing import FreeAnswers
-from swarm_sim.lockstep import LockstepChain, RobotAnswer
+from swarm_sim.model import DEFAULT
+from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer
 
 CAP = DEFAULT.params().estimate_cap
 

@@ -11,12 +11,13 @@ import pytest
 
 from bt_controller.controller import FootbotController
 from bt_controller.draws import DROPS, stream_key
-from bt_controller.perception import PerceptionParams, Readings, blackboard
-from bt_controller.timeline import CLEAN, PAPER, Timeline
+from bt_controller.model_settings import CLEAN, PAPER, PerceptionParams, Timeline
+from bt_controller.perception import Readings, blackboard
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, N_CONDITIONS
-from swarm_sim import reference_road, world
-from swarm_sim.config import Config
+from swarm_sim.core import world
+from swarm_sim.model import Config
+from swarm_sim.roads import reference_road
 
 PAPER_CONFIG = Config(profile="paper")
 CLEAN_CONFIG = Config(profile="clean")

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim.config import Config
-from swarm_sim.lockstep import (
+from swarm_sim.model import Config
+from swarm_sim.roads import (
     LockstepChain,
     RobotAnswer,
     action_of_wheels,

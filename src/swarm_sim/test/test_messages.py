@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 
 from bt_controller.draws import DROPS, stream_key, uniform
-from swarm_sim import world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.sensing import Readings, RobotView, sense_swarm
-from swarm_sim.trial_data import setup_chain
+from bt_controller.perception import Readings, RobotView
+from swarm_sim.core import sense_swarm, setup_chain, world
+from swarm_sim.model import DEFAULT, Config
 
 P = DEFAULT.params()
 OPEN = Config(occlusion=False).params()

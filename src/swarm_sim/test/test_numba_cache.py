@@ -1,6 +1,6 @@
 """Stale numba caches are dropped when a module a kernel depends on changes."""
 
-from swarm_sim._numba_cache import drop_stale_cache
+from swarm_sim.core._numba_cache import drop_stale_cache
 
 
 def test_cache_dropped_once_per_change_of_dependencies(tmp_path, monkeypatch):

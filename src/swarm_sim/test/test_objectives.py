@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference_road, world
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import PROBES
+from swarm_sim.model import DEFAULT, PROBES, Config
+from swarm_sim.roads import reference_road
 
 TRIALS = 4
 MOVEMENT = world.VALUE_NAMES.index("movement")

@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from bt_controller.vocabulary import ACTION_INDEX
-from swarm_sim import world
-from swarm_sim.config import DEFAULT, Config
-from swarm_sim.trial_data import setup_chain
+from swarm_sim.core import setup_chain, world
+from swarm_sim.model import DEFAULT, Config
 
 P = DEFAULT.params()
 STEPS_PER_SECOND = round(1 / DEFAULT.step_dt)

@@ -6,8 +6,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarm_sim import world
-from swarm_sim.config import DEFAULT
+from swarm_sim.core import world
+from swarm_sim.model import DEFAULT
 
 P = DEFAULT.params()
 

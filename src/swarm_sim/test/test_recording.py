@@ -8,11 +8,10 @@ import pytest
 
 from bt_controller.errors import TreeError
 from bt_controller.random_trees import random_trees
-from swarm_sim import world
-from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT, default_config
+from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.recording import RecordedTrial, record_trial, record_trial_reference
+from swarm_sim.model import DEFAULT, apply_conditions, default_config
+from swarm_sim.roads import RecordedTrial, record_trial, record_trial_reference
 from swarm_sim.tasks import FORAGING
 
 ARRAYS = ("steps", "poses", "actions", "ticks", "smoothed", "ground", "initial", "carrying", "deliveries")

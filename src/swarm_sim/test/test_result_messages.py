@@ -5,9 +5,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from swarm_sim.evaluation import EvaluationResult
-from swarm_sim.objectives import N_OBJECTIVES, VALUE_NAMES
-from swarm_sim.result_messages import (
+from swarm_sim.core import TrialRecord
+from swarm_sim.evaluation import (
+    EvaluationResult,
     evaluation_result_of,
     named_values,
     result_fields,
@@ -15,7 +15,7 @@ from swarm_sim.result_messages import (
     trial_record_of,
     values_of,
 )
-from swarm_sim.trial_data import TrialRecord
+from swarm_sim.model import N_OBJECTIVES, VALUE_NAMES
 
 VALUES = tuple(0.1 * (k + 1) for k in range(len(VALUE_NAMES)))
 

@@ -5,9 +5,10 @@ import pytest
 
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
-from swarm_sim import reference_road, world
-from swarm_sim.config import Config
+from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
+from swarm_sim.model import Config
+from swarm_sim.roads import reference_road
 from swarm_sim.tasks import FORAGING
 
 # CI size; `ws/run swarm_sim bench --parity 300` runs the large comparison.

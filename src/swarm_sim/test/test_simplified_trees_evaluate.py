@@ -8,12 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bt_controller.model_settings import PROFILES
 from bt_controller.random_trees import random_tree_grow
 from bt_controller.simplify import simplify
-from bt_controller.timeline import PROFILES
 from bt_controller.tree import Composite, Node, to_text
-from swarm_sim.config import default_config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.model import default_config
 
 
 def shrinking_pairs(seed: int, n: int, keep_positions: bool) -> list[tuple[Node, Node]]:

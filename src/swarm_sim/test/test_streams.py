@@ -4,9 +4,8 @@ rule."""
 import numpy as np
 
 from bt_controller.draws import DROPS, PURPOSES, TREE, chain_keys, root_key, stream_key
-from swarm_sim import world
-from swarm_sim.config import DEFAULT
-from swarm_sim.trial_data import chain_plan, setup_chain
+from swarm_sim.core import chain_plan, setup_chain, world
+from swarm_sim.model import DEFAULT
 
 
 def test_chain_keys_match_the_documented_derivation():

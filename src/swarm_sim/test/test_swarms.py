@@ -1,4 +1,4 @@
-"""Heterogeneous swarms (``swarm_sim.swarm_layout``): a tree per robot, in both roads, bit for bit."""
+"""Heterogeneous swarms (``swarm_sim.model.swarm_layout``): a tree per robot, in both roads, bit for bit."""
 
 import json
 
@@ -6,11 +6,9 @@ import numpy as np
 import pytest
 
 from bt_controller.tree import parse
-from swarm_sim import reference_road
-from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
-from swarm_sim.recording import record_trial, record_trial_reference
-from swarm_sim.swarm_layout import LayoutError, SwarmLayout, layout_from_json, load_layout, of_trees
+from swarm_sim.model import Config, LayoutError, SwarmLayout, layout_from_json, load_layout, of_trees
+from swarm_sim.roads import record_trial, record_trial_reference, reference_road
 from swarm_sim.tasks import FORAGING
 
 NEST = "sel(seq(in_nest, stop), seq(nest_left, forward_left), seq(nest_right, forward_right), forward)"

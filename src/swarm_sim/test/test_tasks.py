@@ -17,10 +17,11 @@ from bt_controller.compiled import pack
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
 from bt_controller.vocabulary import CONDITION_TABLE, CONDITIONS, CONDITIONS_2023, SIDES
-from swarm_sim import kernel, reference_road
-from swarm_sim.cli import run as evaluate_run
-from swarm_sim.config import DEFAULT, Config
+from swarm_sim.core import kernel
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+from swarm_sim.evaluation.cli import run as evaluate_run
+from swarm_sim.model import DEFAULT, Config
+from swarm_sim.roads import reference_road
 from swarm_sim.tasks import (
     FORAGING,
     PRIMITIVES,

@@ -5,12 +5,12 @@ import math
 
 import pytest
 
-from swarm_sim import transfer, validation
 from swarm_sim.errors import UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.objectives import PAPER_OBJECTIVES
-from swarm_sim.transfer import GridItem
-from swarm_sim.validate_cli import main as validate_main
+from swarm_sim.model import PAPER_OBJECTIVES
+from swarm_sim.validation import GridItem, transfer
+from swarm_sim.validation import reference as validation
+from swarm_sim.validation.cli import main as validate_main
 
 SHAPE = (8, 8, 8)
 

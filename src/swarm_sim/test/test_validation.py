@@ -4,9 +4,9 @@ import math
 
 import pytest
 
-from swarm_sim import validation
-from swarm_sim.validate_cli import main as validate_main
 from swarm_sim.validation import AGREES, INDISTINGUISHABLE, OUTSIDE, Comparison, Estimate
+from swarm_sim.validation import reference as validation
+from swarm_sim.validation.cli import main as validate_main
 
 SIX = ("density", "nest", "food", "movement", "rotation", "conditionality")
 """The quantities of the 2023 reference files (the paper's three objectives and the descriptors)."""

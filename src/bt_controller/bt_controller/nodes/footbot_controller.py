@@ -78,8 +78,8 @@ from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.errors import TreeError
 from bt_controller.free_running import FreeRunningController, FreeTick
 from bt_controller.library import Library, LibraryError, load_library
-from bt_controller.perception import PerceptionParams, Readings, warm_up
-from bt_controller.timeline import Timeline, profile_number
+from bt_controller.model_settings import PerceptionParams, Timeline, profile_number
+from bt_controller.perception import Readings, warm_up
 from bt_controller.tree import Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand

@@ -4,11 +4,11 @@
         --budget 20 --out DIR [--seed S] [--trials 10] [--graph] [--no-stop]
 
 Each adaptation trial evaluates one tree of the repertoire in the changed world (``--condition``, repeatable:
-``swarm_sim.conditions``), every tree on the same scenario (``--seed``), so ``ws/run swarm_sim evaluate --tree
-T --seed S --condition ...`` reproduces any fitness it reports. ``--graph`` runs each trial through the node
-graph instead (the simulator node in the changed world and one controller node per robot, each tree loaded
-with ``load_tree``), recording every simulated trial to a bag under ``DIR/bags/``; it chooses the same tree
-with the same fitness as the batch road.
+``swarm_sim.model.conditions``), every tree on the same scenario (``--seed``), so ``ws/run swarm_sim evaluate
+--tree T --seed S --condition ...`` reproduces any fitness it reports. ``--graph`` runs each trial through the
+node graph instead (the simulator node in the changed world and one controller node per robot, each tree
+loaded with ``load_tree``), recording every simulated trial to a bag under ``DIR/bags/``; it chooses the same
+tree with the same fitness as the batch road.
 
 Writes ``DIR/adaptation.json`` (the chosen ``tree`` and its ``fitness``, ``tried``: every tried tree with its
 fitness in order, ``seed``, ``conditions``, why it stopped, the parameters) and ``DIR/adaptation.png`` (the
@@ -39,6 +39,8 @@ from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int, seed_i
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_json
+from swarm_sim.errors import ConditionError
+from swarm_sim.model import apply_conditions, default_config
 
 RESULT = "adaptation.json"
 FIGURE = "adaptation.png"
@@ -157,8 +159,6 @@ def adaptation_figure(document: dict, path: Path) -> Path:
 
 def adapt(argv: Sequence[str] | None = None) -> int:
     """Run ``adapt``; return the exit status."""
-    from swarm_sim.conditions import ConditionError, apply_conditions
-    from swarm_sim.config import default_config
 
     try:
         args = build_parser().parse_args(argv)

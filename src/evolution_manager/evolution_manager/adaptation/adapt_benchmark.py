@@ -63,6 +63,8 @@ from evolution_manager.errors import DispatchError, UsageError, WriteError
 from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_atomic, write_json
 from swarm_ros.safe_paths import make_folder, refuse_links
+from swarm_sim.errors import ConditionError
+from swarm_sim.model import apply_conditions, default_config
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -163,8 +165,6 @@ def benchmark(args: argparse.Namespace) -> dict:
 
 
 def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
-    from swarm_sim.conditions import ConditionError, apply_conditions
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator
 
     profiles = {str(path): repertoire_profile(path) for path in args.repertoires}

@@ -279,7 +279,7 @@ class RandomPicks(_Picker):
 class ConditionEvaluation:
     """Evaluations in the changed world: every tree with the same seed (one fixed scenario, so each tree has
     one exact fitness and a tree seen before is not simulated again) through any evaluator of the contract
-    (``swarm_sim.evaluation.BatchEvaluator`` built with the condition's config, or the node graph)."""
+    (``swarm_sim.evaluation.batch.BatchEvaluator`` built with the condition's config, or the node graph)."""
 
     def __init__(self, evaluator: Evaluator, seed: int, trials: int = 10) -> None:
         self.evaluator = evaluator

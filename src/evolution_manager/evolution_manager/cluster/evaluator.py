@@ -33,8 +33,8 @@ from distributed.scheduler import KilledWorker
 from bt_controller.library import Library, library_from_json
 from evolution_manager.cluster.settings import CHUNK
 from evolution_manager.errors import DispatchError
-from swarm_sim.config import Config
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, failed
+from swarm_sim.model import Config, default_config
 
 if TYPE_CHECKING:
     from distributed import Client, Worker
@@ -72,7 +72,6 @@ def library_text(library: Library | None) -> LibraryText:
 def worker_evaluator(world: World, library: LibraryText = NO_LIBRARY) -> BatchEvaluator:
     """This process's evaluator of ``world`` with ``library`` (one per process, world and library, kept: the
     kernels load once)."""
-    from swarm_sim.config import default_config
 
     label, text = library
     return BatchEvaluator(
@@ -126,7 +125,7 @@ def _warm_up(world: World, library: LibraryText) -> None:
 
 
 class DaskEvaluator:
-    """The evaluator contract (``swarm_sim.evaluation.Evaluator``) over the workers of ``client``, in
+    """The evaluator contract (``swarm_sim.evaluation.batch.Evaluator``) over the workers of ``client``, in
     ``world`` (a model profile's name, or a Config) with ``library`` (a primitive library whose names the
     trees may use, or None): every batch cut into one chunk per worker thread, of
     at least ``chunk`` evaluations; the threads are counted by the scheduler at most every ``recount`` s.

@@ -36,7 +36,7 @@ from evolution_manager.evolution.deap_trees import (
 )
 from evolution_manager.evolution.operators import best_of, full_tree, tournament, vary
 from evolution_manager.evolution.parameters import DERATINGS, GPParameters, QDParameters
-from swarm_sim.objectives import fitness_ceiling
+from swarm_sim.model import fitness_ceiling
 
 FAILED = -1.0
 """The fitness given, on every objective, to a tree whose evaluation failed: below every real fitness."""
@@ -44,7 +44,8 @@ FAILED = -1.0
 
 @dataclass(frozen=True)
 class Outcome:
-    """What an algorithm needs to know of one evaluation (see ``swarm_sim.evaluation.EvaluationResult``)."""
+    """What an algorithm needs to know of one evaluation (see
+    ``swarm_sim.evaluation.batch.EvaluationResult``)."""
 
     fitness: tuple[float, ...] | None
     """Every objective (``OBJECTIVES`` order), or None for a failed evaluation."""

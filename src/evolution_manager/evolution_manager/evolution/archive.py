@@ -169,7 +169,8 @@ class Repertoire:
         self.items_per_bin = items_per_bin
         self.forms = forms
         self.fitness_max = fitness_max
-        """The largest fitness offered (``swarm_sim.world.fitness_ceiling``: 1, or unbounded for a count)."""
+        """The largest fitness offered (``swarm_sim.core.world.fitness_ceiling``: 1, or unbounded for a
+        count)."""
         self.grid = _Grid(
             shape=self.shape,
             max_items_per_bin=items_per_bin,

@@ -5,7 +5,7 @@
 found in the given run directories, listed in a fixed order (:func:`read_sources`): directory by directory
 as given, then the objectives in ``OBJECTIVES`` order (``repertoire_<objective>.json``), then the bins
 in index order. A *genome* is one cell index per robot (robot 0 first); it is evaluated as a heterogeneous
-swarm (``swarm_sim.swarm_layout``) on the foraging task, every evaluation on the run's scenario seed.
+swarm (``swarm_sim.model.swarm_layout``) on the foraging task, every evaluation on the run's scenario seed.
 
 ``ga``: a population of ``population`` genomes; each generation keeps ``elites`` best and fills the rest with
 tournament winners (``tournament``), varied pairwise by two-point crossover (probability ``crossover``) and
@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_HELDOUT, derive_seed
 from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
-from bt_controller.timeline import PROFILES
+from bt_controller.model_settings import PROFILES
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
@@ -58,13 +58,13 @@ from evolution_manager.files import (
 )
 from evolution_manager.processes import Lock, exclusive_lock
 from swarm_ros.safe_paths import make_folder
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.tasks import task_named
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates
     from evolution_manager.evolution.archive import Repertoire
-    from swarm_sim.config import Config
     from swarm_sim.evaluation import Evaluator
-    from swarm_sim.swarm_layout import SwarmLayout
+    from swarm_sim.model import Config, SwarmLayout
 
 KIND = "compositions"
 """``config.json``'s ``kind``: what tells a composition run from a tree run."""
@@ -393,7 +393,6 @@ class CompositionConfig:
 
     def world(self) -> Config:
         """The model of every evaluation: the run's profile, the foraging task's trials."""
-        from swarm_sim.tasks import task_named
 
         return task_named(TASK).config(self.profile)
 
@@ -442,7 +441,6 @@ def is_composition_run(root: Path) -> bool:
 
 def layout_of(genome: Genome, cells: Sequence[Cell]) -> SwarmLayout:
     """The swarm a genome stands for: robot ``i`` runs the tree of cell ``genome[i]``."""
-    from swarm_sim.swarm_layout import SwarmLayout
 
     return SwarmLayout(tuple(cells[k].tree for k in genome))
 

@@ -23,7 +23,7 @@ from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, is_decorator, le
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS_2023, MAX_CHILDREN, MIN_CHILDREN
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.parameters import HIERARCHICAL_CONDITIONS, MAX_TREE_NODES, NODE_SETS
-from swarm_sim.objectives import DESCRIPTORS, OBJECTIVES
+from swarm_sim.model import DESCRIPTORS, OBJECTIVES
 
 __all__ = [
     "DESCRIPTORS",

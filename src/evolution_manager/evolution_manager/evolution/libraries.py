@@ -55,7 +55,7 @@ from evolution_manager.evolution.operators import selection_fitness
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.files import read_json, read_json_object, write_json
 from swarm_ros.safe_paths import check_output
-from swarm_sim.objectives import FAMILIES
+from swarm_sim.model import FAMILIES
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, task_label, task_named
 
 BLOCKS: dict[int, int] = {1: 1, 8: 2, 64: 4}

@@ -63,7 +63,7 @@ from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
 from evolution_manager.processes import Lock, exclusive_lock, is_locked
 from swarm_ros.safe_paths import refuse_links
-from swarm_sim.objectives import fitness_ceiling
+from swarm_sim.model import fitness_ceiling
 
 if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates, not to read a run
     from swarm_sim.evaluation import EvaluationRequest, Evaluator

@@ -38,7 +38,7 @@ from bt_controller.draws import (
     derive_seed,
 )
 from bt_controller.library import Library
-from bt_controller.timeline import PROFILES, Timeline
+from bt_controller.model_settings import PROFILES, Timeline
 from bt_controller.validate import integer
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
@@ -48,8 +48,7 @@ from evolution_manager.evolution.parameters import (
     GPParameters,
     QDParameters,
 )
-from swarm_sim.config import Config
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import OBJECTIVES, Config
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, resolve_task, task_from_record, task_named, task_to_record
 
 if TYPE_CHECKING:

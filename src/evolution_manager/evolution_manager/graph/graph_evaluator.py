@@ -10,9 +10,9 @@ from pathlib import Path
 
 from evolution_manager.graph.nodes.trial import TrialGraph
 from swarm_ros.safe_paths import make_folder
-from swarm_sim.config import DEFAULT
+from swarm_sim.core import combine
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
-from swarm_sim.trial_data import combine
+from swarm_sim.model import DEFAULT
 
 
 class GraphEvaluator:

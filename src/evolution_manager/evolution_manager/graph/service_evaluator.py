@@ -33,8 +33,8 @@ from bt_controller.validate import integer
 from evolution_manager.errors import NoEvaluatorError
 from evolution_manager.graph.dispatch import Chunk, Dispatcher, Timeouts, WorkerState
 from swarm_msgs.action import EvaluateBatch
-from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, failed
-from swarm_sim.result_messages import OBJECTIVES, evaluation_result_of
+from swarm_sim.evaluation import MAX_TRIALS, EvaluationRequest, EvaluationResult, evaluation_result_of, failed
+from swarm_sim.model import OBJECTIVES
 
 SERVICE_TYPE = "swarm_msgs/action/EvaluateBatch"
 """The type by which evaluators are found (their ``~/evaluate`` action; a service of that name wraps it)."""

@@ -32,9 +32,8 @@ from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
 from swarm_ros.safe_paths import UnsafePathError, make_folder, open_no_follow
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT, load_layout
 from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS
-from swarm_sim.swarm_layout import load_layout
 from swarm_sim.tasks import resolve_task, world_parameters
 
 
@@ -224,8 +223,8 @@ def trial_graph_nodes(
     namespace). ``tree`` is loaded into every controller when given (a sequence: robot ``i``'s controller
     loads ``tree[i]``, a heterogeneous swarm's trees); ``profile`` sets the simulator's model
     profile when given (else its parameter file's); ``conditions`` (``NAME=VALUE`` texts,
-    ``swarm_sim.conditions``) change the simulator's world; ``clock``: the topic of the simulator's clock
-    (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
+    ``swarm_sim.model.conditions``) change the simulator's world; ``clock``: the topic of the simulator's
+    clock (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
     primitive library file every controller reads (its ``library`` parameter); ``world``: the simulator's
     world parameters a task sets (``swarm_sim.tasks.world_parameters``; ``n_robots`` is ``robots``'s);
     ``timing``: ``lockstep`` (the default: the nodes' own defaults, bit-exact) or ``free`` (the simulator

@@ -2,14 +2,15 @@
 
 A trial's bag (``trial --bag``) begins with ``/trial_start`` (seed, trial index and the trial's length in
 ticks) and ends with ``/trial_result`` (the tree, with any primitives written out, or for a heterogeneous
-swarm the JSON list of the robots' trees, ``swarm_sim.swarm_layout.SwarmLayout.label``; the model's profile
-and every value); ``/swarm_state`` holds the exact poses, and each robot's carrying flag and deliveries, of
-every step of the trial's chain up to the trial (the earlier trials of the chain are run, and recorded,
-first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The trial is
-re-run in-process exactly as the node graph runs it (``swarm_sim.lockstep.run_with_controllers``), under the
-recorded profile and trial length, and every recorded pose, carrying flag, delivery count and value is
-compared with the re-run's, bit for bit (a bag recorded before foraging has none of these to compare). A
-heterogeneous swarm's trial is re-run with each robot's own tree.
+swarm the JSON list of the robots' trees, ``swarm_sim.model.swarm_layout.SwarmLayout.label``; the model's
+profile and every value); ``/swarm_state`` holds the exact poses, and each robot's carrying flag and
+deliveries, of every step of the trial's chain up to the trial (the earlier trials of the chain are run, and
+recorded, first). A graph run under a namespace (``/swarm_a/trial_start``, ...) is read the same way. The
+trial is re-run in-process exactly as the node graph runs it
+(``swarm_sim.roads.lockstep.run_with_controllers``), under the recorded profile and trial length, and every
+recorded pose, carrying flag, delivery count and value is compared with the re-run's, bit for bit (a bag
+recorded before foraging has none of these to compare). A heterogeneous swarm's trial is re-run with each
+robot's own tree.
 
 Then every other topic the re-run produces is compared byte for byte with the recording: the messages the
 simulator and the controllers publish are built by their own code (``swarm_sim.nodes.simulator.step_messages``
@@ -29,14 +30,21 @@ from pathlib import Path
 from typing import Any
 
 from bt_controller.errors import TreeError
-from bt_controller.timeline import PROFILES
+from bt_controller.model_settings import PROFILES
 from bt_controller.tree import Node, parse
+from bt_controller.vocabulary import ACTIONS
 from evolution_manager.recording.bags import BagError, check_crcs, read_bag
-from swarm_sim.config import DEFAULT, Config, config_from_dict, default_config
-from swarm_sim.lockstep import LockstepChain, run_with_controllers
-from swarm_sim.result_messages import named_values
-from swarm_sim.swarm_layout import LayoutError, layout_of_label
-from swarm_sim.trial_data import VALUE_NAMES
+from swarm_sim.evaluation import named_values
+from swarm_sim.model import (
+    DEFAULT,
+    VALUE_NAMES,
+    Config,
+    LayoutError,
+    config_from_dict,
+    default_config,
+    layout_of_label,
+)
+from swarm_sim.roads import LockstepChain, run_with_controllers
 
 RESULT_TOPIC = "/trial_result"
 """Topic of a trial bag's last message: its tree, seed and values (swarm_msgs/EvaluationResult)."""
@@ -269,7 +277,6 @@ class _Published:
 
     def answers(self, world: LockstepChain, outcomes: Sequence[Any]) -> None:
         from bt_controller.nodes.footbot_controller import answer_messages
-        from bt_controller.vocabulary import ACTIONS
 
         for i, (ns, outcome) in enumerate(zip(self.namespaces, outcomes, strict=True)):
             status, wheels = answer_messages(outcome, self.headers[i], i, self.wheel_speed)

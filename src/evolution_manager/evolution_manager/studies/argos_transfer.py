@@ -3,11 +3,11 @@
 For every finished run and every objective it is compared on (GP_o and QD_o on their own, GP_fnd on all
 three), the run's best tree (``summary.json``'s ``best_tree``, as evolved) is evaluated by the ARGoS
 harness's driver on seeds ``1..20`` (each seed one full evaluation of 10 trials on fresh start poses, wheel
-gains and message drops; ``swarm_sim.transfer``) and here on as many fresh scenarios (our seeds ``1..20``,
-the run's trials and profile), and compared as the validation compares the two simulators
-(``swarm_sim.validation``: tolerance, z and verdict). Our held-out score of the tree stands beside them: it
-is measured on 5 scenarios, which under the shared design are the same 5 for every run, so it carries their
-difficulty, common to every algorithm. The driver's rows are kept in the experiment folder as
+gains and message drops; ``swarm_sim.validation.transfer``) and here on as many fresh scenarios (our seeds
+``1..20``, the run's trials and profile), and compared as the validation compares the two simulators
+(``swarm_sim.validation.reference``: tolerance, z and verdict). Our held-out score of the tree stands beside
+them: it is measured on 5 scenarios, which under the shared design are the same 5 for every run, so it carries
+their difficulty, common to every algorithm. The driver's rows are kept in the experiment folder as
 ``argos_raw.tsv``, which doubles as a cache: rows already there are not run again, so the report is rebuilt
 anywhere from the committed file without ARGoS. ``transfer.csv`` holds one row per run and objective.
 
@@ -35,10 +35,10 @@ from evolution_manager.errors import UsageError
 from evolution_manager.files import number, write_atomic
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
-from swarm_sim import transfer, validation
-from swarm_sim.config import Config
 from swarm_sim.errors import UsageError as SimUsageError
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES, Config
+from swarm_sim.validation import reference as validation
+from swarm_sim.validation import transfer
 
 RAW_FILE = "argos_raw.tsv"
 CSV_FILE = "transfer.csv"
@@ -82,7 +82,7 @@ class Transferred:
 
     best: BestTree
     comparison: validation.Comparison
-    """Ours against ARGoS on the tree's objective (``swarm_sim.validation``)."""
+    """Ours against ARGoS on the tree's objective (``swarm_sim.validation.reference``)."""
 
     @property
     def ours(self) -> float:
@@ -159,7 +159,7 @@ def transferred(
     """The trees whose every seed is in ``root/argos_raw.tsv``, each scored here on as many fresh scenarios
     (our seeds ``1..len(seeds)``, ``trials`` trials each in ``world``'s model) and compared with ARGoS on
     its objective; and how many trees lack rows."""
-    from swarm_sim.validate_cli import our_estimates  # the simulator, loaded only when there is work
+    from swarm_sim.validation.cli import our_estimates  # the simulator, loaded only when there is work
 
     try:
         raw = transfer.read_argos_raw(Path(root) / RAW_FILE)
@@ -314,7 +314,7 @@ def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], fol
 
 
 def parse_seeds(text: str) -> list[int]:
-    """``--argos-seeds``: N, A-B or a comma-separated list (``swarm_sim.transfer.parse_seeds``)."""
+    """``--argos-seeds``: N, A-B or a comma-separated list (``swarm_sim.validation.transfer.parse_seeds``)."""
     try:
         return transfer.parse_seeds(text)
     except SimUsageError as error:

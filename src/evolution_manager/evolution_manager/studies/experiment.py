@@ -44,9 +44,9 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import get_context, managers
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
-from bt_controller.draws import MAX_SEED, RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
+from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, LibraryError, load_library
 from evolution_manager.arguments import (
     EXIT_IO,
@@ -60,7 +60,7 @@ from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
-from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -69,56 +69,22 @@ from evolution_manager.processes import (
     lock_path_for,
     signals_as_interrupts,
 )
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from evolution_manager.studies.planning import (
+    DESIGNS,
+    PLAN_FILE,
+    STUDIES,
+    Stage,
+    differences,
+    more_runs,
+    paper_study,
+)
 
 if TYPE_CHECKING:  # imported where used: the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 
-PLAN_FILE = "experiment.json"
 SESSIONS_FILE = "sessions.json"
 COMPOSITIONS = "compositions"
 """``config.json``'s ``kind`` of a composition run (``evolution.compositions.KIND``, without importing it)."""
-STUDIES = ("paper", "foraging", "replication")
-DESIGNS = ("shared", "per-run")
-"""Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
-
-
-def shared_scenario_seed(seed: int) -> int:
-    """The scenario seed every run of an experiment of seed ``seed`` shares under the ``shared`` design."""
-    return derive_seed(seed, RUN_SCENARIO)
-
-
-def plan(
-    runs: int,
-    evaluations: int,
-    seed: int,
-    trials: int = 10,
-    scenarios: str = "fixed",
-    scenario_seed: int | None = None,
-    profile: str | None = None,
-    design: str = "shared",
-) -> list[tuple[RunConfig, str]]:
-    """Every run of the experiment with its directory relative to the experiment's folder. ``design``
-    (``DESIGNS``) says whether the runs share one scenario (``scenario_seed``, or derived from ``seed``)."""
-    if design not in DESIGNS:
-        raise UsageError(f"--design must be one of {', '.join(DESIGNS)}, got {design!r}")
-    if design == "per-run" and scenario_seed is not None:
-        raise UsageError("--scenario-seed gives every run the same scenario: that is --design shared")
-    if design == "shared" and scenarios == "fixed" and scenario_seed is None:
-        scenario_seed = shared_scenario_seed(seed)
-    planned = []
-    for a, algorithm in enumerate(ALGORITHMS):
-        objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else PAPER_OBJECTIVES
-        budget = 3 * evaluations if algorithm == "gp-fnd" else evaluations
-        for objective in objectives:
-            o = -1 if objective is None else PAPER_OBJECTIVES.index(objective)
-            for r in range(runs):
-                run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
-                config = RunConfig.make(
-                    algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed, profile
-                )
-                planned.append((config, f"runs/{config.label}/run{r:02d}"))
-    return planned
 
 
 def finished(root: Path) -> bool:
@@ -419,20 +385,6 @@ class SyncManager(managers.SyncManager):
         super().start(initializer or die_with_parent, initargs)
 
 
-class Planned(Protocol):
-    """What a stage plans: a tree run's ``RunConfig`` or a composition run's ``CompositionConfig``."""
-
-    @property
-    def evaluations(self) -> int: ...
-
-    def to_json(self) -> dict: ...
-
-
-Stage = Callable[[], Sequence[tuple[Planned, str]]]
-"""A stage of a study: called when the stages before it have finished, it gives the runs to run (each with
-its directory relative to the study's folder)."""
-
-
 def experiment(argv: Sequence[str] | None = None) -> int:
     """Run ``experiment``; return the exit status."""
     try:
@@ -459,19 +411,21 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if args.primitives_from is not None and args.study != "replication":
             raise UsageError("--primitives-from applies to --study replication only")
         if args.study == "foraging":
-            from evolution_manager.studies import foraging_study
+            from evolution_manager.studies import foraging_study  # (late: only this study needs it)
 
             document, stages, budgets = foraging_study.plan_study(args, scenarios, design)
             report: Callable[[Path], Path] = foraging_study.build_report
         elif args.study == "replication":
-            from evolution_manager.studies import replication_study
+            from evolution_manager.studies import replication_study  # (late: only this study needs it)
 
             document, stages, budgets = replication_study.plan_study(args, scenarios, design)
             report = replication_study.build_report
         else:
-            from evolution_manager.studies import report as paper_report
+            from evolution_manager.studies import (
+                report as paper_report,  # (late: its figures load matplotlib)
+            )
 
-            document, stages, budgets = _paper_study(args, scenarios, design)
+            document, stages, budgets = paper_study(args, scenarios, design)
             report = paper_report.build_report
         plan_path = args.out / PLAN_FILE
         if plan_path.exists():
@@ -507,89 +461,6 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         return 1
     print(f"experiment: {sum(1 for _ in budgets)} runs in {args.out}; report: {written}")
     return 0
-
-
-def more_runs(saved: object, given: object) -> bool:
-    """Whether the plan document ``given`` only adds runs to ``saved``: more runs per group, every other
-    option the same, and every run ``saved`` planned planned again with the same folder and configuration
-    (run seeds are derived from the run's index, so raising ``--runs`` keeps the first runs as they were)."""
-    if not (isinstance(saved, dict) and isinstance(given, dict)) or saved.keys() != given.keys():
-        return False
-    if any(saved[key] != given[key] for key in saved if key not in ("runs", "plan")):
-        return False
-    old_runs, new_runs = saved.get("runs"), given.get("runs")
-    old_plan, new_plan = saved.get("plan"), given.get("plan")
-    if not (isinstance(old_runs, int) and isinstance(new_runs, int) and new_runs > old_runs):
-        return False
-    if not (isinstance(old_plan, list) and isinstance(new_plan, list)):
-        return False
-    planned = {json.dumps(entry, sort_keys=True) for entry in new_plan}
-    return all(json.dumps(entry, sort_keys=True) in planned for entry in old_plan)
-
-
-def differences(saved: object, given: object, shown: int = 3) -> str:
-    """What differs between an experiment's saved plan document and the one the options make, for a
-    message: the options first (``evaluations 150 there, 300 given``), the planned runs only when no option
-    differs; at most ``shown`` of them, then how many more."""
-    found: list[tuple[str, str]] = []
-    _differ(saved, given, "", found)
-    options = [text for where, text in found if not any(c in where for c in ".[")]
-    listed = options or [text for _, text in found] or ["the documents differ"]
-    more = f" and {len(listed) - shown} more" if len(listed) > shown else ""
-    return "; ".join(listed[:shown]) + more
-
-
-def _differ(saved: object, given: object, where: str, found: list[tuple[str, str]]) -> None:
-    if isinstance(saved, dict) and isinstance(given, dict):
-        for key in [*given, *(k for k in saved if k not in given)]:
-            name = f"{where}.{key}" if where else str(key)
-            if key not in saved:
-                found.append((name, f"{name} absent there, {_shown(given[key])} given"))
-            elif key not in given:
-                found.append((name, f"{name} {_shown(saved[key])} there, absent now"))
-            else:
-                _differ(saved[key], given[key], name, found)
-    elif isinstance(saved, list) and isinstance(given, list) and len(saved) == len(given):
-        for i, (a, b) in enumerate(zip(saved, given, strict=True)):
-            _differ(a, b, f"{where}[{i}]", found)
-    elif isinstance(saved, list) and isinstance(given, list):
-        found.append((where, f"{where}: {len(saved)} entries there, {len(given)} given"))
-    elif saved != given:
-        found.append((where, f"{where} {_shown(saved)} there, {_shown(given)} given"))
-
-
-def _shown(value: object, width: int = 40) -> str:
-    text = json.dumps(value)
-    return text if len(text) <= width else text[: width - 3] + "..."
-
-
-def _paper_study(
-    args: argparse.Namespace, scenarios: str, design: str | None
-) -> tuple[dict, list[Stage], dict[str, int]]:
-    """The 2023 paper's experiment: its plan document, its one stage, the budget of every run."""
-    planned = plan(
-        args.runs,
-        args.evaluations,
-        args.seed,
-        args.trials,
-        scenarios,
-        args.scenario_seed,
-        args.profile,
-        design or "per-run",
-    )
-    shared = {config.scenario_seed for config, _ in planned}
-    document = {
-        "profile": planned[0][0].profile,
-        "runs": args.runs,
-        "evaluations": args.evaluations,
-        "seed": args.seed,
-        "trials": args.trials,
-        "scenarios": scenarios,
-        "design": design,
-        "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
-        "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
-    }
-    return document, [lambda: planned], {path: config.evaluations for config, path in planned}
 
 
 def execute(

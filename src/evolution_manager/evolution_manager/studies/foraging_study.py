@@ -56,9 +56,12 @@ from evolution_manager.evolution.run_config import RunConfig
 
 if TYPE_CHECKING:
     from evolution_manager.evolution.compositions import CompositionConfig
+from bt_controller.errors import TreeLimitError
+from bt_controller.tree import parse
 from evolution_manager.files import read_json, write_atomic, write_json, writing
 from evolution_manager.studies import foraging_tables
 from evolution_manager.studies.foraging_tables import Claim, Test
+from evolution_manager.studies.planning import shared_scenario_seed
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.tasks import task_named
 
@@ -184,10 +187,8 @@ def _run_dir(kind: str, r: int) -> str:
 def plan_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list, dict[str, int]]:
-    """The study's plan document, its stages (``experiment.Stage``) and the budget of every run, from the
+    """The study's plan document, its stages (``planning.Stage``) and the budget of every run, from the
     ``experiment`` command line."""
-    from evolution_manager.studies.experiment import shared_scenario_seed
-
     scenario_seed = args.scenario_seed
     if design == "shared" and scenario_seed is None:
         scenario_seed = shared_scenario_seed(args.seed)
@@ -615,10 +616,8 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
 
 def _draw(run: ArmRun, stem: Path) -> Path:
     """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
-    from bt_controller.errors import TreeLimitError
     from bt_controller.render import render
-    from bt_controller.tree import parse
-    from evolution_manager.viewing.results import simplified_tree
+    from evolution_manager.viewing.shown_trees import simplified_tree
 
     library = (
         load_library(run.directory / "library.json") if (run.directory / "library.json").exists() else None

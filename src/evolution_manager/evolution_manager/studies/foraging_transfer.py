@@ -4,9 +4,9 @@ For every homogeneous arm (``foraging_study.ARMS``), the run with the highest in
 best forager (``summary.json``'s ``best_tree``, as evolved, primitives by name). The ARGoS harness's driver
 evaluates it in the authors' 2024 foraging build (``--build foraging``: 100 s trials, five per run and two
 runs per seed; deliveries per robot per trial) on seeds ``1..20``, the arm's library given to it as their
-sub-behaviours file (``swarm_sim.transfer.subs_text``), which their loop functions expand as ours do (each
-name to ``success`` of its tree). It is set beside our held-out score of the same tree (5 fresh scenarios
-of 10 trials).
+sub-behaviours file (``swarm_sim.validation.transfer.subs_text``), which their loop functions expand as ours
+do (each name to ``success`` of its tree). It is set beside our held-out score of the same tree (5 fresh
+scenarios of 10 trials).
 
 The driver's rows are kept in the study folder, one raw file per library (``argos_raw_<library>.tsv``,
 ``argos_raw_flat.tsv`` for the flat node set: the driver keeps one sub-behaviours file per raw file), with
@@ -29,8 +29,8 @@ from typing import Protocol
 from bt_controller.library import LibraryError, load_library
 from evolution_manager.errors import UsageError
 from evolution_manager.files import write_atomic
-from swarm_sim import transfer
 from swarm_sim.errors import UsageError as SimUsageError
+from swarm_sim.validation import transfer
 
 FLAT = "flat"
 """The raw file's name for foragers without a library."""

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run_config import RunConfig
+from swarm_sim.model import default_config
 
 PROFILE = "paper"
 
@@ -104,7 +105,6 @@ def run_comparison(client: Client, evaluations: int, chunk: int, work: Path, pai
     """In-process against one-worker Dask for the same run, ``pairs`` times in the order ABBA... (so that a
     load that drifts weighs on both alike); raise if any two runs' evaluation logs differ."""
     from evolution_manager.cluster.evaluator import WARM_UP_TREE, DaskEvaluator
-    from swarm_sim.config import default_config
     from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 
     local = BatchEvaluator(default_config(PROFILE))

@@ -1,16 +1,13 @@
-"""``report DIR``: rebuild the report of an experiment, or the results of a single run, from its files.
+"""The report of the 2023 paper's experiment: ``report.md``, ``runs.csv`` and figures from its run folders.
 
-For an experiment folder (``experiment.json``, ``runs/``) it writes ``report.md`` and ``runs.csv`` (one row
-per run and objective) with, beside them in ``figures/``: box plots of best fitness, coverage and QD score
-(figs. 4-6) and of the held-out scores, the histograms of the best fitness per bin of one run of each
-algorithm (fig. 8), the MAP-Elites grids of one run per objective (fig. 7) and progress curves with the
-held-out scores; the paper's table 6 row by row (its p-value and test beside ours, effect sizes, Holm's
-correction, the held-out comparison and a verdict per row) and fig. 8's repertoire sizes beside the
-paper's; with ARGoS's rows, the transfer section (``argos_transfer``); last ``notes.md`` when the folder
-has one (a person's reading of the results, kept when the report is rebuilt). Algorithms are compared per
-objective: GP_o and QD_o on their objective, GP_fnd on each of the
-three. For a run directory (``config.json``) it rewrites the run's repertoires, summary, best trees and
-figures from its last checkpoint.
+``build_report`` writes ``report.md`` and ``runs.csv`` (one row per run and objective) with, beside them in
+``figures/``: box plots of best fitness, coverage and QD score (figs. 4-6) and of the held-out scores, the
+histograms of the best fitness per bin of one run of each algorithm (fig. 8), the MAP-Elites grids of one run
+per objective (fig. 7) and progress curves with the held-out scores; the paper's table 6 row by row (its
+p-value and test beside ours, effect sizes, Holm's correction, the held-out comparison and a verdict per row)
+and fig. 8's repertoire sizes beside the paper's; with ARGoS's rows, the transfer section
+(``argos_transfer``); last ``notes.md`` when the folder has one. The ``report`` command
+(``report_command``) chooses which report a folder gets.
 """
 
 from __future__ import annotations
@@ -19,15 +16,13 @@ import csv
 import io
 import os
 import statistics as stats
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
-from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.errors import EvolutionError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import PROGRESS_HEADER
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
@@ -36,7 +31,7 @@ from evolution_manager.studies import argos_transfer, intervals
 from evolution_manager.studies.argos_transfer import measure as argos_measure
 from evolution_manager.studies.significance import ALPHA, Comparison, compare, holm, markdown_table
 from evolution_manager.viewing import figures
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES
 
 METRICS = (("best_fitness", "best fitness", 4), ("coverage", "coverage", 5), ("qd_score", "QD score", 6))
 """(summary key, name, figure number in the paper)."""
@@ -536,100 +531,4 @@ def build_report(
     return report
 
 
-def rebuild_run(root: Path) -> list[Path]:
-    """Rewrite a run directory's results from its last checkpoint (its logs are left as they are)."""
-    from evolution_manager.evolution.run import Run, refuse_planted_links
-    from evolution_manager.viewing.results import write_results
-
-    refuse_planted_links(root)  # before the first result is rewritten
-    return write_results(Run.resume(root, None, cut=False))
-
-
-def _study(root: Path) -> str | None:
-    """The study of the experiment folder ``root`` (``paper`` when its plan names none), or None."""
-    plan = Path(root) / "experiment.json"
-    if not plan.exists():
-        return None
-    document = read_json(plan)
-    return str(document.get("study", "paper")) if isinstance(document, dict) else None
-
-
-def report(argv: Sequence[str] | None = None) -> int:
-    """Run ``report``; return the exit status."""
-    parser = Parser(prog="report", description=__doc__.split("\n")[0])
-    parser.add_argument(
-        "dir",
-        type=Path,
-        help="an experiment folder, a run directory, or a folder of scenario experiments (seed-K/; "
-        "table 6 across scenarios)",
-    )
-    parser.add_argument(
-        "--beside",
-        type=Path,
-        help="another experiment's runs.csv: its table 6 is shown after this one's (a robustness check)",
-    )
-    parser.add_argument("--beside-title", default="", help="what the --beside runs are (for the report)")
-    parser.add_argument(
-        "--argos-eval",
-        metavar="DRIVER",
-        help="the ARGoS harness's argos_eval.py ($ARGOS_EVAL): score each run's best tree (a foraging "
-        "study: each arm's best forager) in the authors' ARGoS (rows kept in argos_raw*.tsv, run only when "
-        "missing); the report's transfer section",
-    )
-    parser.add_argument(
-        "--argos-seeds", default=argos_transfer.DEFAULT_SEEDS, help="ARGoS's seeds: N, A-B or a list (1-20)"
-    )
-    parser.add_argument("--argos-jobs", type=positive_int, default=1, help="ARGoS evaluations at once (1)")
-    try:
-        args = parser.parse_args(argv)
-        seeds = argos_transfer.parse_seeds(args.argos_seeds)
-    except UsageError as error:
-        print(f"report: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    from evolution_manager.studies import scenarios  # (it builds on this module: imported when run)
-
-    try:
-        if scenarios.is_scenarios_folder(args.dir):
-            if args.beside is not None or args.argos_eval is not None:
-                raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
-            print(scenarios.build_scenarios_report(args.dir))
-        elif _study(args.dir) == "replication":
-            from evolution_manager.studies.replication_study import build_report as build_replication_report
-
-            if args.beside is not None or args.argos_eval is not None:
-                raise UsageError("--beside and --argos-eval apply to the paper's and the foraging study")
-            print(build_replication_report(args.dir))
-        elif _study(args.dir) == "foraging":
-            from evolution_manager.studies.foraging_study import build_report as build_foraging_report
-
-            if args.beside is not None:
-                raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
-            print(build_foraging_report(args.dir, args.argos_eval, seeds, args.argos_jobs))
-        elif (args.dir / "experiment.json").exists() or (args.dir / "runs").is_dir():
-            print(
-                build_report(
-                    args.dir, args.beside, args.beside_title, args.argos_eval, seeds, args.argos_jobs
-                )
-            )
-        elif (args.dir / "config.json").exists():
-            if args.beside is not None or args.argos_eval is not None:
-                raise UsageError("--beside and --argos-eval apply to an experiment folder, not to a run")
-            for path in rebuild_run(args.dir):
-                print(path)
-        else:
-            raise UsageError(
-                f"{args.dir} is neither an experiment folder, a run directory nor a folder of scenario "
-                "experiments (seed-K/experiment.json)"
-            )
-    except (UsageError, EvolutionError, OSError, KeyError, ValueError) as error:
-        print(f"report: error: {error!s} (is {args.dir} a finished run or experiment?)", file=sys.stderr)
-        return EXIT_USAGE
-    return 0
-
-
-def main() -> None:
-    """Console entry point of ``report``."""
-    sys.exit(report())
-
-
-__all__ = ["build_report", "load_runs", "rebuild_run", "report", "runs_from_csv"]
+__all__ = ["build_report", "load_runs", "runs_from_csv"]

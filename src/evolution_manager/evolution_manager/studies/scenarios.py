@@ -38,7 +38,7 @@ from evolution_manager.studies.report import (
     verdict,
 )
 from evolution_manager.studies.significance import compare, holm_adjusted
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES
 
 SCENARIOS_HEADER = ["scenario_seed", *RUNS_HEADER]
 """The columns of a scenarios folder's ``runs.csv``."""

@@ -91,9 +91,8 @@ def study_trials(task: str, count: int) -> list[int]:
 def run_timing(tree: StudyTree, timing: str, rate: float, seed: int, trials: Sequence[int]) -> list[dict]:
     """Every trial of ``trials`` of ``seed`` through one graph of ``timing``; one row per trial."""
     from evolution_manager.graph.nodes.trial import TrialGraph
-    from swarm_sim.swarm_layout import SwarmLayout
+    from swarm_sim.model import VALUE_NAMES, SwarmLayout
     from swarm_sim.tasks import resolve_task
-    from swarm_sim.trial_data import VALUE_NAMES
 
     task = resolve_task(tree.task)
     config = task.config("paper")

@@ -23,18 +23,20 @@ from typing import TYPE_CHECKING
 
 from PIL import Image, ImageDraw, ImageFont
 
+from bt_controller.errors import TreeError
+from bt_controller.library import library_option
+from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from swarm_ros.safe_paths import check_output, describe, replace_file
-from swarm_sim.objectives import OBJECTIVES, PAPER_OBJECTIVES
+from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
-    from swarm_sim.config import Config
-    from swarm_sim.swarm_layout import SwarmLayout
+    from swarm_sim.model import Config, SwarmLayout
 
 
 # ----------------------------------------------------------------------------------------------- drawing
@@ -355,13 +357,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _library(path: Path | None) -> Library | None:
-    from bt_controller.library import library_option
 
     return library_option(path, AnimationError)
 
 
 def _swarm(path: Path, config: Config, library: Library | None = None) -> SwarmLayout:
-    from swarm_sim.swarm_layout import LayoutError, load_layout
 
     try:
         return load_layout(path, config.n_robots, library)
@@ -370,8 +370,6 @@ def _swarm(path: Path, config: Config, library: Library | None = None) -> SwarmL
 
 
 def _tree_text(source: str, library: Library | None = None) -> str:
-    from bt_controller.errors import TreeError
-    from bt_controller.tree import parse, to_text
 
     path = Path(source)
     text = path.read_text(encoding="utf-8") if "(" not in source and path.is_file() else source

@@ -35,15 +35,20 @@ from typing import Any
 
 import numpy as np
 
+from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
+from bt_controller.tree import parse
 from bt_controller.validate import strict_json
+from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
-from evolution_manager.viewing.results import simplified as simplified_text
+from evolution_manager.viewing.shown_trees import simplified as simplified_text
 from swarm_ros.safe_paths import refuse_links
+from swarm_sim.model import DEFAULT, OBJECTIVES
+from swarm_sim.tasks import task_from_record
 
 STRIDE = 2
 """One animation frame per this many sensing steps."""
@@ -109,7 +114,6 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
     10000, at most 65534; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255:
     none); whether each robot carries food (u8). Little-endian, packed (no padding)."""
-    from swarm_sim.objectives import OBJECTIVES
 
     columns = [OBJECTIVES.index(o) for o in objectives]
     keep = list(range(0, len(frames.steps), stride))
@@ -170,7 +174,6 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     simplified: dict[str, str] = {}
     held_out = _held_out_scores(root, config)
     library = _library(root, config)
-    from swarm_sim.objectives import OBJECTIVES
 
     for objective in OBJECTIVES:
         path = root / f"repertoire_{objective}.json"
@@ -214,8 +217,6 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     animations: dict[str, dict] = {}
     if animate:
         from evolution_manager.viewing.frames import frames_from_tree
-        from swarm_sim.config import DEFAULT
-        from swarm_sim.tasks import task_from_record
 
         # the run's model: its task's world under its profile
         try:
@@ -280,8 +281,6 @@ def _items(document: dict, path: Path) -> list[dict]:
 def _check_tree(text: object, library: Library | None, where: str) -> None:
     """Refuse a tree text that does not parse (as ``library``, ``adapt`` and ``--swarm-from`` refuse it),
     naming where it is and why."""
-    from bt_controller.errors import TreeError
-    from bt_controller.tree import parse
 
     if not isinstance(text, str):
         raise ExplorerError(f"{where} must be tree text, got {type(text).__name__}")
@@ -306,7 +305,6 @@ def _library(root: Path, config: dict) -> Library | None:
 
 def _shown_objectives(root: Path) -> list[str]:
     """The objectives whose grids the page of run directory ``root`` shows (its repertoire files)."""
-    from swarm_sim.objectives import OBJECTIVES
 
     return [o for o in OBJECTIVES if (root / f"repertoire_{o}.json").exists()]
 
@@ -517,7 +515,6 @@ def _is_index(value: object) -> bool:
 
 
 def _arena() -> dict:
-    from swarm_sim.config import DEFAULT
 
     return {
         "half": DEFAULT.arena_half,
@@ -529,7 +526,6 @@ def _arena() -> dict:
 
 
 def _actions() -> list[str]:
-    from bt_controller.vocabulary import ACTIONS
 
     return list(ACTIONS)
 

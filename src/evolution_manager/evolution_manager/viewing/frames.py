@@ -1,13 +1,13 @@
 """A trial as frames (poses, actions, messages, fitness so far), from a tree or from a bag.
 
 ``frames_from_tree`` runs the trial in-process through the compiled kernels, recorded step by step
-(``swarm_sim.recording``, equal frame for frame to the node graph's trial); ``frames_from_bag`` reads a trial
-bag written by ``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``: **one
-frame per sensing step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at that
-step, the action driving each robot's wheels after it, the messages heard at it, whether each robot carries
-food and its deliveries after it, the last tick and the fitness so far (each objective scored with the values
-of that step as if the trial ended there; undefined before the initial values are taken). No ROS here: bags
-are read with ``evolution_manager.recording.bags``.
+(``swarm_sim.roads.recording``, equal frame for frame to the node graph's trial); ``frames_from_bag`` reads a
+trial bag written by ``trial --bag`` (or the main job's ``best_trial.bag``). Both give a ``TrialFrames``:
+**one frame per sensing step** (8 a second), holding the poses the simulator published on ``/swarm_state`` at
+that step, the action driving each robot's wheels after it, the messages heard at it, whether each robot
+carries food and its deliveries after it, the last tick and the fitness so far (each objective scored with the
+values of that step as if the trial ended there; undefined before the initial values are taken). No ROS here:
+bags are read with ``evolution_manager.recording.bags``.
 """
 
 from __future__ import annotations
@@ -22,12 +22,11 @@ import numpy as np
 
 from bt_controller import timeline
 from evolution_manager.errors import AnimationError
-from swarm_sim.objectives import N_PROBES
+from swarm_sim.model import DEFAULT, N_PROBES
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
-    from swarm_sim.config import Config, Params
-    from swarm_sim.swarm_layout import SwarmLayout
+    from swarm_sim.model import Config, Params, SwarmLayout
 
 
 @dataclass(frozen=True)
@@ -116,7 +115,7 @@ def _fitness_so_far(
     """Every objective as if the trial ended now: from the smoothed values, the probes at the trial's first
     step and now (``probes``, n x 2 x ``N_PROBES``: ``world.take_probes``) and the deliveries so far."""
     from bt_controller.compiled import N_COUNTS
-    from swarm_sim import world
+    from swarm_sim.core import world
 
     n = initial.shape[0]
     counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
@@ -133,11 +132,10 @@ def frames_from_tree(
 ) -> TrialFrames:
     """Run trial ``trial`` of ``seed`` with ``tree`` on every robot (or a swarm layout's tree on each robot)
     through the compiled kernels, recorded
-    step by step (``swarm_sim.recording``: the same frames as the node graph and the reference road give,
-    tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s steps.
-    ``library``: the primitive library the tree's names come from."""
-    from swarm_sim.config import DEFAULT
-    from swarm_sim.recording import record_trial
+    step by step (``swarm_sim.roads.recording``: the same frames as the node graph and the reference road
+    give, tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s
+    steps. ``library``: the primitive library the tree's names come from."""
+    from swarm_sim.roads import record_trial
 
     config = config or DEFAULT
     recorded = record_trial(tree, seed, trial, config, library)
@@ -171,7 +169,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
     from evolution_manager.recording.bags import BagError, check_crcs, read_bag
     from evolution_manager.recording.reproduce import RESULT_TOPIC, recorded_world
-    from swarm_sim.config import DEFAULT
 
     try:
         check_crcs(path)  # a changed byte is refused, never drawn (as replay and replay --verify refuse it)
@@ -225,7 +222,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             deliveries[k, robot] = int(getattr(msg, "deliveries", 0))
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
-    from swarm_sim import world
+    from swarm_sim.core import world
 
     p = config.params()
     gap = config.gap(trial)

@@ -29,42 +29,28 @@ ones).
 
 from __future__ import annotations
 
-from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_controller.formats import to_dot, to_xml
-from bt_controller.library import Library
 from bt_controller.render import render
-from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import Node, parse, to_indented, to_text
+from bt_controller.tree import parse, to_indented, to_text
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS
 from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.files import write_atomic, write_json, writing
+from evolution_manager.viewing.explorer import write_explorer
+from evolution_manager.viewing.shown_trees import simplified, simplified_tree
 from swarm_ros.safe_paths import make_folder
 
 if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are computed
     from swarm_sim.evaluation import Evaluator
 
 
-@cache
-def simplified(tree: str, library: Library | None = None) -> str:
-    """The simplified text of a tree text (``bt_controller.simplify``); each copy of a primitive of
-    ``library`` is kept whole and written by its name."""
-    simple = simplified_tree(parse(tree, library=library), library)
-    return to_text(simple) if library is None else library.fold(simple)
-
-
 def shown_form(run: Run, tree: str) -> str:
     """``simplified(tree, run.library)``; without a library that is the run's clone key, which the run
     has mostly computed already (``run.forms``)."""
     return run.forms(tree) if run.library is None else simplified(tree, run.library)
-
-
-def simplified_tree(tree: Node, library: Library | None = None) -> Node:
-    """``tree`` simplified for people to read: each copy of a primitive of ``library`` kept whole."""
-    return simplify_if_small(tree, whole=None if library is None else library.is_copy)
 
 
 def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
@@ -185,8 +171,6 @@ def write_results(run: Run, with_figures: bool = True, evaluator: Evaluator | No
     written += write_best_trees(run)
     if with_figures:
         written += write_figures(run, heldout)
-        from evolution_manager.viewing.explorer import write_explorer
-
         written.append(write_explorer(directory.root))
     return written
 

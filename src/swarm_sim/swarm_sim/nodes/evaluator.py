@@ -7,7 +7,7 @@ results so far returned) and refuses goals, ``cleanup`` and ``shutdown`` withdra
 It configures and activates itself at start unless ``-p autostart:=false``.
 
 Parameters (``config/swarm_sim.yaml``; a bad one stops the node with one line, exit status 2):
-    every field of ``swarm_sim.config.Config`` (read-only), as the simulator's: the world evaluated.
+    every field of ``swarm_sim.model.config.Config`` (read-only), as the simulator's: the world evaluated.
     slice (int, 1..1000, default 10): evaluations between two feedback messages and cancel checks.
     library (string, default none): a primitive library file (``bt_controller.library``) whose primitives'
         names the trees may use; the manager that starts evaluators passes its run's library. A library that
@@ -52,10 +52,10 @@ from swarm_msgs.srv import EvaluateBatch
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.parameters import declare_dataclass, field_names, start_node
 from swarm_ros.spinning import spin_until_shutdown
-from swarm_sim.config import DEFAULT, ConfigError
-from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest
+from swarm_sim.errors import ConfigError
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, evaluation_fields
+from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.nodes.settings import EVALUATOR_RANGES, SIMULATOR_PARAMETERS, EvaluatorSettings
-from swarm_sim.result_messages import OBJECTIVES, evaluation_fields
 
 
 def check_batch(request: Any) -> str:  # the action's goal or the service's request (generated, untyped)

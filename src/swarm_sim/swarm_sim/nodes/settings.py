@@ -1,5 +1,6 @@
-"""The parameters the simulator and the evaluator declare beside the world's (``swarm_sim.config.Config``):
-one home, so that each node knows which names of a shared parameter file (``/**``) belong to the other."""
+"""The parameters the simulator and the evaluator declare beside the world's
+(``swarm_sim.model.config.Config``): one home, so that each node knows which names of a shared parameter file
+(``/**``) belong to the other."""
 
 from __future__ import annotations
 
@@ -24,6 +25,6 @@ SIMULATOR_PARAMETERS = frozenset({"conditions", "robot_namespaces", "answer_time
 agree)."""
 
 TIMINGS = ("lockstep", "free")
-"""How the simulator steps (its ``timing`` parameter; ``swarm_sim.free_timing``)."""
+"""How the simulator steps (its ``timing`` parameter; ``swarm_sim.roads.free_timing``)."""
 RATE_RANGE = (0.01, 100.0)
 """Simulated seconds per second of wall time the simulator's ``rate`` parameter may be (free timing)."""

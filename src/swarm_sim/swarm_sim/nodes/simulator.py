@@ -10,11 +10,11 @@ itself at start unless ``-p autostart:=false`` (the trial graph drives it).
 
 Parameters (``ros2 param describe simulator <name>``; ``config/swarm_sim.yaml``; a bad value, type or name
 stops the node with one line, exit status 2):
-    every field of ``swarm_sim.config.Config`` (read-only: world, timing and perception settings such as
+    every field of ``swarm_sim.model.config.Config`` (read-only: world, timing and perception settings such as
         ``arena_half``, ``gaps``, ``n_robots``, ``wheel_speed``, ``step_dt``, ``ticks``, ``window``), with the
         model's defaults; a bad value stops the node with a one-line error naming it.
     conditions (string, read-only): changes to the world, ``NAME=VALUE`` separated by spaces, e.g.
-        ``dead-robots=2 message-loss=0.5`` (``swarm_sim.conditions``; default none), applied after the
+        ``dead-robots=2 message-loss=0.5`` (``swarm_sim.model.conditions``; default none), applied after the
         fields above. A ``robots=N`` among them must equal ``n_robots``.
     robot_namespaces (string array, read-only): the robots' namespaces, relative to the node's; robot ``i``
         is the i-th (default ``footbot_0`` .. ``footbot_<n_robots - 1>``).
@@ -64,7 +64,7 @@ Actions and services:
     ~/run_trial (swarm_msgs/srv/RunTrial): the same without feedback or cancel, a thin wrapper.
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
-step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.lockstep``.
+step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.roads.lockstep``.
 
 Free (``timing:=free``, for free-running controllers, ``bt_controller``'s ``timing:=free`` under
 ``use_sim_time``): step ``j`` of a chain is published at ``j * step_dt / rate`` seconds of wall time after its
@@ -105,6 +105,7 @@ from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 from bt_controller import timeline
+from bt_controller.model_settings import arena_of_trial, chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.action import RunTrial as RunTrialAction
@@ -133,15 +134,13 @@ from swarm_ros.parameters import (
 from swarm_ros.qos import LATCHED, NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS, RELIABLE
 from swarm_ros.services import call_until_answered
 from swarm_ros.spinning import spin_until_shutdown
-from swarm_sim.conditions import ConditionError, apply_conditions
-from swarm_sim.config import DEFAULT, Config, ConfigError
-from swarm_sim.errors import TrialAbandonedError
-from swarm_sim.free_timing import FreeAnswers
-from swarm_sim.lockstep import LockstepChain, RobotAnswer, warm_up
+from swarm_sim.core import TrialRecord
+from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
+from swarm_sim.evaluation import fill, trial_fields
+from swarm_sim.model import DEFAULT, Config, apply_conditions
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
-from swarm_sim.result_messages import fill, trial_fields
-from swarm_sim.trial_data import TrialRecord
+from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
 from tf2_msgs.msg import TFMessage
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
@@ -424,7 +423,7 @@ class SimulatorNode(ManagedNode):
     # --- the action and the service
     def arena_of(self, trial: int) -> int:
         """The arena configuration of trial ``trial`` (``docs/model.md``: blocks of ``chain_trials``)."""
-        return timeline.arena_of_trial(self.config.timeline, trial, len(self.config.gaps))
+        return arena_of_trial(self.config.timeline, trial, len(self.config.gaps))
 
     def goal_problem(self, request: Any) -> str:  # a RunTrial goal or request (generated, untyped)
         """Why the trial ``request`` asks for cannot be run, or ""."""
@@ -484,10 +483,10 @@ class SimulatorNode(ManagedNode):
 
     def run_trial(self, seed: int, trial: int, goal: ServerGoalHandle | None = None) -> TrialRecord:
         """Run trial ``trial`` of ``seed`` through the controllers; return its record. As
-        ``swarm_sim.lockstep.run_with_controllers`` does in-process, the trial's chain is run from its first
-        trial up to ``trial``, every step published. With the action's ``goal``, publish the step as feedback
-        and stop with ``TrialCancelledError`` when it is cancelled."""
-        chain, position = timeline.chain_of_trial(self.config.timeline, trial)
+        ``swarm_sim.roads.lockstep.run_with_controllers`` does in-process, the trial's chain is run from its
+        first trial up to ``trial``, every step published. With the action's ``goal``, publish the step as
+        feedback and stop with ``TrialCancelledError`` when it is cancelled."""
+        chain, position = chain_of_trial(self.config.timeline, trial)
         world = LockstepChain(seed, chain, position + 1, self.config)
         with self._figures:
             self.trial_under_way = f"trial {trial} of seed {seed}"
@@ -798,7 +797,7 @@ def trial_start_message(
         header=Header(stamp=stamp, frame_id="arena"),
         seed=seed,
         trial=trial,
-        arena_configuration=timeline.arena_of_trial(config.timeline, trial, len(config.gaps)),
+        arena_configuration=arena_of_trial(config.timeline, trial, len(config.gaps)),
         robots=robots,
         tree_keys=[int(k) for k in world.setup.tree_keys],
         ticks=world.p.ticks,

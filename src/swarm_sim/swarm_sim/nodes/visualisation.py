@@ -24,7 +24,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swarm_sim.config import Config
+from swarm_sim.model import Config
 
 FRAME = "arena"
 """The fixed frame of every pose and marker: the arena, centre at the origin, metres."""

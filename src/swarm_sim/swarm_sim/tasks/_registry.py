@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
-from swarm_sim.objectives import PAPER_OBJECTIVES
+from swarm_sim.model import PAPER_OBJECTIVES
 from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping
 from swarm_sim.tasks._spec import Nodes, TaskError, TaskSpec, Trials
 

@@ -15,9 +15,8 @@ import re
 from dataclasses import dataclass, field, replace
 
 from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS
-from swarm_sim.config import DEFAULT, Config
 from swarm_sim.errors import ConfigError
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import DEFAULT, OBJECTIVES, Config
 
 REGION_KINDS: tuple[str, ...] = ("nest", "food")
 """The kinds of region a task can have."""

@@ -45,7 +45,7 @@ from evolution_manager.processes import die_with_parent, exit_status, signals_as
 from evolution_manager.recording.bags import BagError
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.safe_paths import check_folder
-from swarm_sim.objectives import OBJECTIVES
+from swarm_sim.model import OBJECTIVES
 
 DEFAULT_EVALUATIONS = 25_000  # the paper's budget per run; about two minutes here
 DEFAULT_EVALUATORS = 2

@@ -83,8 +83,7 @@ from evolution_manager.recording.bags import BagError, BagRecorder, finish_rewri
 from evolution_manager.viewing.results import write_results
 from swarm_msgs.msg import ArchiveProgress, EvaluationResult
 from swarm_ros.parameters import declare_dataclass
-from swarm_sim.evaluation import Evaluator
-from swarm_sim.result_messages import evaluation_fields
+from swarm_sim.evaluation import Evaluator, evaluation_fields
 from swarm_sim.tasks import world_parameters
 
 EXIT_FAILED = 1

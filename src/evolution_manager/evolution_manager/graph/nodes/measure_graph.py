@@ -22,7 +22,7 @@ from pathlib import Path
 from bt_controller import timeline
 from bt_controller.random_trees import random_trees
 from evolution_manager.graph.nodes.trial import TrialGraph
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT
 
 SIMULATED_SECONDS = timeline.trial_steps(DEFAULT.timeline) * DEFAULT.step_dt
 """Simulated time of one trial (20 s under ``paper``, 22 s under ``clean``). Only the first trial of each

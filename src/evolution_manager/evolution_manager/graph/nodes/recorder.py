@@ -42,7 +42,7 @@ from swarm_msgs.msg import (
 )
 from swarm_ros.names import NamespaceError, check_topic, graph_namespace, robot_namespaces
 from swarm_ros.qos import NO_SUBSCRIPTION_EVENTS, RECORDING, RECORDING_LATCHED
-from swarm_sim.config import DEFAULT
+from swarm_sim.model import DEFAULT
 
 
 def msgtype_name(msg_class: type) -> str:

@@ -2,7 +2,7 @@
 
 ``ws/run evolution_manager trial --tree TREE --seed S [--trial K] --bag DIR`` starts the simulator and one
 footbot controller per robot as separate processes, loads the tree into every controller (with ``--swarm
-FILE``, a swarm layout of ``swarm_sim.swarm_layout``: each controller its own tree), runs trial K of
+FILE``, a swarm layout of ``swarm_sim.model.swarm_layout``: each controller its own tree), runs trial K of
 seed S in lockstep through the simulator's ``run_trial`` action, records every topic of the graph to a rosbag2
 bag with MCAP storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
 The bag's ``/trial_result`` keeps the swarm's tree as ``SwarmLayout.label``: the tree text of a homogeneous
@@ -50,7 +50,7 @@ from rclpy.task import Future
 from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, load_library
-from bt_controller.timeline import PROFILES
+from bt_controller.model_settings import PROFILES, chain_of_trial
 from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
 from evolution_manager.arguments import Parser, finite, non_negative_int, seed_in_range
@@ -69,14 +69,13 @@ from swarm_ros.names import check_topic, graph_namespace, robot_namespaces
 from swarm_ros.parameters import read_parameter_file
 from swarm_ros.safe_paths import check_folder, describe
 from swarm_ros.services import call_until_answered
-from swarm_sim.cli import evaluation_json
-from swarm_sim.conditions import apply_conditions
-from swarm_sim.config import DEFAULT, Config, ConfigError
+from swarm_sim.core import TrialRecord
+from swarm_sim.errors import ConfigError
+from swarm_sim.evaluation import result_fields, trial_record_of
+from swarm_sim.evaluation.cli import evaluation_json
+from swarm_sim.model import DEFAULT, Config, LayoutError, SwarmLayout, apply_conditions, load_layout
 from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS
-from swarm_sim.result_messages import result_fields, trial_record_of
-from swarm_sim.swarm_layout import LayoutError, SwarmLayout, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
-from swarm_sim.trial_data import TrialRecord
 
 MAX_DOMAIN = 232
 """Largest ROS_DOMAIN_ID (Fast DDS's port arithmetic; 0-101 are safe on Linux)."""
@@ -103,11 +102,11 @@ def expected_messages(
 ) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
-    from, ``swarm_sim.lockstep.run_with_controllers``) under ``config``'s timeline. Under free ``timing`` the
-    controllers publish on their own clocks: their topics are expected to carry none (whatever came is
-    recorded)."""
+    from, ``swarm_sim.roads.lockstep.run_with_controllers``) under ``config``'s timeline. Under free
+    ``timing`` the controllers publish on their own clocks: their topics are expected to carry none (whatever
+    came is recorded)."""
     line = config.timeline
-    trials = timeline.chain_of_trial(line, trial)[1] + 1
+    trials = chain_of_trial(line, trial)[1] + 1
     steps = trials * timeline.trial_steps(line)
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     if timing == "free":
@@ -286,7 +285,7 @@ class TrialGraph:
     ``domain``: the ROS domain (default: one reserved for this graph alone, so tests run side by side);
     ``namespace``: the graph's namespace (e.g. ``/swarm_a``); ``params_file``: a ROS parameter file for every
     node; ``log_dir``: where the node logs stay (default: a temporary directory, removed on exit);
-    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.conditions``) change the simulator's world, and a
+    ``conditions`` (``NAME=VALUE`` texts, ``swarm_sim.model.conditions``) change the simulator's world, and a
     ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
     (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
     one each); ``library``: a primitive library every controller reads (a file); ``task``: the task whose

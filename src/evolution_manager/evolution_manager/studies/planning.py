@@ -1,0 +1,159 @@
+"""Planning a study: which runs an experiment makes, in which stages, and whether a saved plan may grow.
+
+``plan`` lists the 2023 paper's runs (every algorithm x objective x run, each with its seed and folder) and
+``paper_study`` makes its plan document; the foraging and replication studies plan theirs in their own
+modules with ``shared_scenario_seed`` and ``Stage``. ``more_runs`` says whether a new plan only adds runs to
+a saved one (``experiment --runs N`` grows an experiment), ``differences`` what else differs, for a message.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+from bt_controller.draws import RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
+from evolution_manager.errors import UsageError
+from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from swarm_sim.model import PAPER_OBJECTIVES
+
+PLAN_FILE = "experiment.json"
+STUDIES = ("paper", "foraging", "replication")
+DESIGNS = ("shared", "per-run")
+"""Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
+
+
+def shared_scenario_seed(seed: int) -> int:
+    """The scenario seed every run of an experiment of seed ``seed`` shares under the ``shared`` design."""
+    return derive_seed(seed, RUN_SCENARIO)
+
+
+def plan(
+    runs: int,
+    evaluations: int,
+    seed: int,
+    trials: int = 10,
+    scenarios: str = "fixed",
+    scenario_seed: int | None = None,
+    profile: str | None = None,
+    design: str = "shared",
+) -> list[tuple[RunConfig, str]]:
+    """Every run of the experiment with its directory relative to the experiment's folder. ``design``
+    (``DESIGNS``) says whether the runs share one scenario (``scenario_seed``, or derived from ``seed``)."""
+    if design not in DESIGNS:
+        raise UsageError(f"--design must be one of {', '.join(DESIGNS)}, got {design!r}")
+    if design == "per-run" and scenario_seed is not None:
+        raise UsageError("--scenario-seed gives every run the same scenario: that is --design shared")
+    if design == "shared" and scenarios == "fixed" and scenario_seed is None:
+        scenario_seed = shared_scenario_seed(seed)
+    planned = []
+    for a, algorithm in enumerate(ALGORITHMS):
+        objectives: Sequence[str | None] = [None] if algorithm == "gp-fnd" else PAPER_OBJECTIVES
+        budget = 3 * evaluations if algorithm == "gp-fnd" else evaluations
+        for objective in objectives:
+            o = -1 if objective is None else PAPER_OBJECTIVES.index(objective)
+            for r in range(runs):
+                run_seed = derive_seed(seed, RUN_EXPERIMENT, a, o + 1, r)
+                config = RunConfig.make(
+                    algorithm, objective, budget, run_seed, trials, scenarios, scenario_seed, profile
+                )
+                planned.append((config, f"runs/{config.label}/run{r:02d}"))
+    return planned
+
+
+class Planned(Protocol):
+    """What a stage plans: a tree run's ``RunConfig`` or a composition run's ``CompositionConfig``."""
+
+    @property
+    def evaluations(self) -> int: ...
+
+    def to_json(self) -> dict: ...
+
+
+Stage = Callable[[], Sequence[tuple[Planned, str]]]
+"""A stage of a study: called when the stages before it have finished, it gives the runs to run (each with
+its directory relative to the study's folder)."""
+
+
+def more_runs(saved: object, given: object) -> bool:
+    """Whether the plan document ``given`` only adds runs to ``saved``: more runs per group, every other
+    option the same, and every run ``saved`` planned planned again with the same folder and configuration
+    (run seeds are derived from the run's index, so raising ``--runs`` keeps the first runs as they were)."""
+    if not (isinstance(saved, dict) and isinstance(given, dict)) or saved.keys() != given.keys():
+        return False
+    if any(saved[key] != given[key] for key in saved if key not in ("runs", "plan")):
+        return False
+    old_runs, new_runs = saved.get("runs"), given.get("runs")
+    old_plan, new_plan = saved.get("plan"), given.get("plan")
+    if not (isinstance(old_runs, int) and isinstance(new_runs, int) and new_runs > old_runs):
+        return False
+    if not (isinstance(old_plan, list) and isinstance(new_plan, list)):
+        return False
+    planned = {json.dumps(entry, sort_keys=True) for entry in new_plan}
+    return all(json.dumps(entry, sort_keys=True) in planned for entry in old_plan)
+
+
+def differences(saved: object, given: object, shown: int = 3) -> str:
+    """What differs between an experiment's saved plan document and the one the options make, for a
+    message: the options first (``evaluations 150 there, 300 given``), the planned runs only when no option
+    differs; at most ``shown`` of them, then how many more."""
+    found: list[tuple[str, str]] = []
+    _differ(saved, given, "", found)
+    options = [text for where, text in found if not any(c in where for c in ".[")]
+    listed = options or [text for _, text in found] or ["the documents differ"]
+    more = f" and {len(listed) - shown} more" if len(listed) > shown else ""
+    return "; ".join(listed[:shown]) + more
+
+
+def _differ(saved: object, given: object, where: str, found: list[tuple[str, str]]) -> None:
+    if isinstance(saved, dict) and isinstance(given, dict):
+        for key in [*given, *(k for k in saved if k not in given)]:
+            name = f"{where}.{key}" if where else str(key)
+            if key not in saved:
+                found.append((name, f"{name} absent there, {_shown(given[key])} given"))
+            elif key not in given:
+                found.append((name, f"{name} {_shown(saved[key])} there, absent now"))
+            else:
+                _differ(saved[key], given[key], name, found)
+    elif isinstance(saved, list) and isinstance(given, list) and len(saved) == len(given):
+        for i, (a, b) in enumerate(zip(saved, given, strict=True)):
+            _differ(a, b, f"{where}[{i}]", found)
+    elif isinstance(saved, list) and isinstance(given, list):
+        found.append((where, f"{where}: {len(saved)} entries there, {len(given)} given"))
+    elif saved != given:
+        found.append((where, f"{where} {_shown(saved)} there, {_shown(given)} given"))
+
+
+def _shown(value: object, width: int = 40) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def paper_study(
+    args: argparse.Namespace, scenarios: str, design: str | None
+) -> tuple[dict, list[Stage], dict[str, int]]:
+    """The 2023 paper's experiment: its plan document, its one stage, the budget of every run."""
+    planned = plan(
+        args.runs,
+        args.evaluations,
+        args.seed,
+        args.trials,
+        scenarios,
+        args.scenario_seed,
+        args.profile,
+        design or "per-run",
+    )
+    shared = {config.scenario_seed for config, _ in planned}
+    document = {
+        "profile": planned[0][0].profile,
+        "runs": args.runs,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": args.trials,
+        "scenarios": scenarios,
+        "design": design,
+        "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
+        "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
+    }
+    return document, [lambda: planned], {path: config.evaluations for config, path in planned}

@@ -1,0 +1,1 @@
+"""Benchmarks: ``batch`` times the batch road against the reference road, ``recording`` the recordings."""

@@ -1,0 +1,678 @@
+"""The batch road: whole chains of trials in compiled kernels, with the compiled tree interpreter.
+
+``simulate_chain`` runs the trials of one chain (``bt_controller.timeline``: 5 trials as one simulation under
+``paper``, one trial under ``clean``), each robot with its own tree of a pack (the same for every robot in a
+homogeneous swarm), exactly as the reference road
+(``swarm_sim.roads.reference_road``: the simulator of ``swarm_sim.roads.lockstep`` with one
+``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.core.world``,
+``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
+order; it only skips work whose result is never read (a bearing is computed for the three senders the
+blackboard needs, at ticks, rather than for every message) or known (``fast_world.physics_step``, the
+physics to the same bits).
+``run_jobs(trees, params, jobs, out)`` runs many (robots' trees, seed, chain) jobs; each job writes only its
+own output rows (one per trial), so a job's result never depends on the others, their order or their number.
+``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
+one of its trials looks like (``Recording``: poses, actions, messages, smoothed values, fitness so far), for
+animations (``swarm_sim.roads.recording``); the batch road asks for none and pays two comparisons a step.
+
+The kernels' arguments are named tuples of arrays, which numba passes whole: ``PackedTrees`` (the trees),
+``Jobs`` (what to run), ``Outputs`` (where results go), ``Recording`` (one trial, step by step); inside a
+chain, ``Swarm`` holds every robot's state, ``Cargo`` its foraging state and ``Inbox`` the messages of one
+step. ``make_jobs`` builds
+``Jobs`` from Python.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from bt_controller import timeline
+from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_memory, tick, tree_at
+from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
+from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
+from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
+from swarm_sim.core import fast_world, world
+from swarm_sim.core._numba_cache import drop_stale_cache
+from swarm_sim.core.trial_data import chain_plan
+from swarm_sim.model import N_PROBES, Config, Params
+
+drop_stale_cache(
+    __file__,
+    (
+        "bt_controller.compiled",
+        "bt_controller.draws",
+        "bt_controller.motors",
+        "bt_controller.perception",
+        "bt_controller.timeline",
+        "bt_controller.vocabulary",
+        "swarm_sim.model.config",
+        "swarm_sim.core.fast_world",
+        "swarm_sim.core.world",
+    ),
+)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _source_bearing(
+    needed: bool, i: int, source: int, x: np.ndarray, y: np.ndarray, heading: np.ndarray
+) -> float:
+    # A bearing the tree never reads is not computed (NaN: neither side); the ticks are the same.
+    if source < 0 or not needed:
+        return math.nan
+    return world.bearing(x[i], y[i], heading[i], x[source], y[source])
+
+
+_CONDITION_SIDE = np.array(CONDITION_SIDE, dtype=np.int64)
+"""Each condition's side pair (``vocabulary.CONDITION_SIDE``: -1 for none), a constant of the kernels."""
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
+    """Which of the blackboard's side pairs (``vocabulary.SIDES``: nest, food, robot) the tree reads, from
+    its condition nodes and the conditions table."""
+    read = np.zeros(len(SIDES), dtype=np.bool_)
+    for k in range(op.shape[0]):
+        if op[k] == OP_CONDITION:
+            side = _CONDITION_SIDE[arg[k]]
+            if side >= 0:
+                read[side] = True
+    return read
+
+
+class Jobs(NamedTuple):
+    """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]``, robot ``i`` running
+    tree ``robot_tree[j, i]`` of a pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) and
+    nest-food gap ``gap[j]``, into output rows ``row[j] .. row[j] + trials[j] - 1``."""
+
+    robot_tree: np.ndarray  # int64 (jobs, n_robots)
+    seed_key: np.ndarray  # uint64
+    chain: np.ndarray  # int64
+    trials: np.ndarray  # int64
+    gap: np.ndarray  # float64
+    row: np.ndarray  # int64
+
+    @property
+    def n_jobs(self) -> int:
+        """Number of jobs."""
+        return len(self.robot_tree)
+
+    @property
+    def n_rows(self) -> int:
+        """Number of output rows: trials over all jobs."""
+        return int(self.trials.sum())
+
+
+def make_jobs(
+    seed_keys: Sequence[np.uint64],
+    trials: Sequence[int],
+    config: Config,
+    robot_trees: Sequence[Sequence[int]] | None = None,
+) -> Jobs:
+    """Trials ``0 .. trials[t] - 1`` of request ``t`` with seed key ``seed_keys[t]``, request after request,
+    as the chains of ``trial_data.chain_plan``; each request's trials take consecutive output rows in trial
+    order. Robot ``i`` of request ``t`` runs tree ``robot_trees[t][i]`` of the pack (None: every robot of
+    request ``t`` runs tree ``t``, a homogeneous swarm)."""
+    n_robots = config.n_robots
+    if robot_trees is None:
+        robot_trees = [[t] * n_robots for t in range(len(seed_keys))]
+    robot_tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
+    next_row = 0
+    for key, n, robots in zip(seed_keys, trials, robot_trees, strict=True):
+        if len(robots) != n_robots:
+            raise ValueError(f"expected a tree index for each of the {n_robots} robots, got {len(robots)}")
+        for c, count in chain_plan(int(n), config):
+            robot_tree.append(list(robots))
+            seed_key.append(key)
+            chain.append(c)
+            length.append(count)
+            gap.append(config.gap(c * config.chain_length))
+            row.append(next_row)
+            next_row += count
+    return Jobs(
+        np.array(robot_tree, dtype=np.int64).reshape(len(robot_tree), n_robots),
+        np.array(seed_key, dtype=np.uint64),
+        np.array(chain, dtype=np.int64),
+        np.array(length, dtype=np.int64),
+        np.array(gap, dtype=np.float64),
+        np.array(row, dtype=np.int64),
+    )
+
+
+class Outputs(NamedTuple):
+    """Where jobs write: one row per trial, rows ``jobs.row[j] ..`` belonging to job ``j``."""
+
+    values: np.ndarray
+    """rows x ``world.N_VALUES``: the trial's six values."""
+    poses: np.ndarray
+    """rows x 2 x n_robots x 3: start and end poses (x, y, heading)."""
+
+    @staticmethod
+    def zeros(n_rows: int, n_robots: int) -> Outputs:
+        """Zeroed outputs for ``n_rows`` trials."""
+        return Outputs(np.zeros((n_rows, world.N_VALUES)), np.zeros((n_rows, 2, n_robots, 3)))
+
+
+class Swarm(NamedTuple):
+    """Every robot's state during a chain, one row per robot (the world and the robots' minds)."""
+
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    dynamics: np.ndarray
+    """(n, ``world.MOTION_FIELDS``) velocities and drive impulses carried between physics steps."""
+    contacts: np.ndarray
+    """(n, n, ``world.CONTACT_FIELDS``) the contacts' impulses carried between physics substeps."""
+    pairs: np.ndarray
+    """Workspace of ``world.physics_step``: the pairs of robots near enough to touch in a step."""
+    solver: np.ndarray
+    """(n, 10) workspace of ``fast_world.physics_step``'s solver."""
+    gains: np.ndarray
+    """(left, right) wheel gains."""
+    broadcast_nest: np.ndarray
+    """Values each robot broadcast at the last step (heard by the others at this one)."""
+    broadcast_food: np.ndarray
+    raw_nest: np.ndarray
+    """Raw estimates of the latest sensing step."""
+    raw_food: np.ndarray
+    window: np.ndarray
+    """(n, window, 3) raw samples (nest, food, density) for smoothing."""
+    smooth: np.ndarray
+    """(n, 3) smoothed (nest, food, density), as last refreshed."""
+    ground: np.ndarray
+    """(n, 2) bool: in the nest, on food, at the latest sensing step."""
+    sources: np.ndarray
+    """(n, 3) sender ids of the nest source, food source and nearest robot (-1: none)."""
+    actions: np.ndarray
+    """The motors of each robot: the last action its last tick ticked."""
+    resumed: np.ndarray
+    """The action each robot's last tick left running, or -1."""
+    memory: np.ndarray
+    """(n, nodes) the tree interpreter's memory."""
+    counts: np.ndarray
+    """(n, N_COUNTS) the tree interpreter's counts in the current trial."""
+    motion: np.ndarray
+    """(n, 2) movement and rotation sums of the current trial."""
+    initial: np.ndarray
+    """(n, 3) the current trial's initial smoothed values."""
+
+
+class Cargo(NamedTuple):
+    """Every robot's foraging state during a chain (beside ``Swarm``): what it carries and has delivered, and
+    where the trial found it (``docs/model.md``, "Foraging")."""
+
+    carrying: np.ndarray
+    """(n,) bool: whether each robot carries food (``perception.carry``)."""
+    deliveries: np.ndarray
+    """(n,) int64: each robot's deliveries in the current trial."""
+    probes: np.ndarray
+    """(n, 2, ``N_PROBES``) each robot's probes (``world.take_probes``) at the current trial's first step and,
+    once taken, its last."""
+
+
+class Inbox(NamedTuple):
+    """The messages of one sensing step (``world.sense_step``'s outputs), per receiving robot."""
+
+    n_heard: np.ndarray
+    """(n,) messages received."""
+    sender: np.ndarray
+    """(n, n) their senders, in sender order; then their ranges, nest and food estimates."""
+    range: np.ndarray
+    nest: np.ndarray
+    food: np.ndarray
+
+
+class Recording(NamedTuple):
+    """One trial of a chain, step by step (row ``r``: the trial's step ``r + 1``), as the simulator and the
+    robots' answers show it (``swarm_sim.roads.lockstep``): what ``simulate_chain`` writes when asked to
+    record. ``new_recording`` makes one."""
+
+    poses: np.ndarray
+    """(steps, n, 3): x, y, heading after the step's teleport and move."""
+    actions: np.ndarray
+    """(steps, n) int64: the motors the last tick at or before the step set (-1 before the chain's first)."""
+    ticks: np.ndarray
+    """(steps,) int64: the number of that tick within the chain (-1 before the first)."""
+    heard: np.ndarray
+    """(steps, n) int64: messages each robot received at the step (the first ``heard`` entries of its row of
+    ``senders``); at a trial's first step the robots ignore them, as the timeline says."""
+    senders: np.ndarray
+    """(steps, n, n) int64: their senders, in sender order."""
+    smoothed: np.ndarray
+    """(steps, n, 3): each robot's smoothed (nest, food, density) as last refreshed."""
+    ground: np.ndarray
+    """(steps, n, 2) bool: in the nest, on food (the ground sensor at the step)."""
+    fitness: np.ndarray
+    """(steps, ``world.N_OBJECTIVES``): every objective scored as if the trial ended at the step (foraging:
+    the deliveries so far); NaN before the initial step."""
+    initial: np.ndarray
+    """(n, 3): the trial's initial smoothed values (taken at its initial step)."""
+    carrying: np.ndarray
+    """(steps, n) bool: whether each robot carries food after the step (what it answered)."""
+    deliveries: np.ndarray
+    """(steps, n) int64: each robot's deliveries in the trial after the step."""
+
+
+@numba.njit(cache=True, error_model="numpy")
+def new_recording(steps: int, n: int) -> Recording:
+    """A zeroed recording of ``steps`` steps of ``n`` robots (0 steps: the batch road's, which records
+    nothing)."""
+    return Recording(
+        np.zeros((steps, n, 3)),
+        np.zeros((steps, n), dtype=np.int64),
+        np.zeros(steps, dtype=np.int64),
+        np.zeros((steps, n), dtype=np.int64),
+        np.zeros((steps, n, n), dtype=np.int64),
+        np.zeros((steps, n, 3)),
+        np.zeros((steps, n, 2), dtype=np.bool_),
+        np.zeros((steps, world.N_OBJECTIVES)),
+        np.zeros((n, 3)),
+        np.zeros((steps, n), dtype=np.bool_),
+        np.zeros((steps, n), dtype=np.int64),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _last_tick(p: Params, k: int) -> int:
+    """The number of the last tick at or before chain step ``k``, or -1 if there was none."""
+    for s in range(k, 0, -1):
+        if timeline.ticks_at(p, s):
+            return timeline.tick_number(p, s)
+    return -1
+
+
+# Makes arrays: compiled with reference counting, which it would otherwise inherit from ``_steps``.
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
+def _record_step(
+    rec: Recording,
+    k: int,
+    gap: float,
+    p: Params,
+    x: np.ndarray,
+    y: np.ndarray,
+    heading: np.ndarray,
+    actions: np.ndarray,
+    smooth: np.ndarray,
+    initial: np.ndarray,
+    heard: np.ndarray,
+    senders: np.ndarray,
+    carrying: np.ndarray,
+    deliveries: np.ndarray,
+    probes: np.ndarray,
+) -> None:
+    """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
+    what the simulator publishes and what the robots answered to it."""
+    n = x.shape[0]
+    row = timeline.step_in_trial(p, k) - 1
+    last = _last_tick(p, k)
+    rec.ticks[row] = last
+    for i in range(n):
+        rec.poses[row, i, 0] = x[i]
+        rec.poses[row, i, 1] = y[i]
+        rec.poses[row, i, 2] = heading[i]
+        rec.actions[row, i] = actions[i] if last >= 0 else -1
+        rec.ground[row, i, 0], rec.ground[row, i, 1] = world.ground(x[i], y[i], gap, p)
+        rec.heard[row, i] = heard[i]
+        for c in range(heard[i]):
+            rec.senders[row, i, c] = senders[i, c]
+        for c in range(3):
+            rec.smoothed[row, i, c] = smooth[i, c]
+        rec.carrying[row, i] = carrying[i]
+        rec.deliveries[row, i] = deliveries[i]
+    if timeline.is_initial(p, k):
+        rec.initial[:, :] = initial
+    if row + 1 >= p.initial_step:
+        # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
+        # robots' probes now and their deliveries so far.
+        now = probes.copy()
+        world.take_all_probes(x, y, gap, p, now, 1)
+        values = world.trial_values(
+            initial,
+            smooth,
+            np.zeros((n, N_COUNTS), dtype=np.int64),
+            np.zeros((n, 2), dtype=np.int64),
+            now,
+            deliveries,
+            gap,
+            p,
+        )
+        for c in range(world.N_OBJECTIVES):
+            rec.fitness[row, c] = values[c]
+    else:
+        rec.fitness[row, :] = np.nan
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p: Params) -> Swarm:
+    n = p.n_robots
+    width = 1
+    for i in range(n):
+        width = max(width, tree_at(trees, robot_tree[i]).op.shape[0])
+    memory = np.zeros((n, width), dtype=np.int8)
+    for i in range(n):
+        start_memory(tree_at(trees, robot_tree[i]).op, memory[i], p.profile)
+    return Swarm(
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros((n, world.MOTION_FIELDS)),
+        np.zeros((n, n, world.CONTACT_FIELDS)),
+        np.zeros((n * (n - 1) // 2, 2), dtype=np.int64),
+        np.zeros((n, 10)),
+        gains,
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
+        np.full(n, p.estimate_cap),
+        np.zeros((n, p.window, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 2), dtype=np.bool_),
+        np.full((n, 3), -1, dtype=np.int64),
+        np.full(n, STOP, dtype=np.int64),
+        np.full(n, -1, dtype=np.int64),
+        memory,
+        np.zeros((n, N_COUNTS), dtype=np.int64),
+        np.zeros((n, 2), dtype=np.int64),
+        np.zeros((n, 3)),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _new_cargo(n: int) -> Cargo:
+    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2, N_PROBES)))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _new_inbox(n: int) -> Inbox:
+    return Inbox(
+        np.zeros(n, dtype=np.int64),
+        np.zeros((n, n), dtype=np.int64),
+        np.zeros((n, n)),
+        np.zeros((n, n)),
+        np.zeros((n, n)),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def simulate_chain(
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
+    seed_key: np.uint64,
+    chain: int,
+    trials: int,
+    gap: float,
+    p: Params,
+    values_out: np.ndarray,
+    poses_out: np.ndarray,
+    recorded: int,
+    rec: Recording,
+) -> None:
+    """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
+    ``trees``; write the chain's trial ``t``'s ``world.N_VALUES`` values into ``values_out[t]`` and its start
+    and end poses into ``poses_out[t]`` (2 x n_robots x 3), and the chain's trial ``recorded`` step by step
+    into ``rec`` (-1: none). Makes the chain's state, then runs its steps (``_steps``)."""
+    n = p.n_robots
+    keys = chain_keys(seed_key, chain, n)
+    swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
+    sides = np.zeros((n, 3), dtype=np.bool_)
+    for i in range(n):
+        own = tree_at(trees, robot_tree[i])
+        sides[i] = _sides_read(own.op, own.arg)
+    _steps(
+        trees,
+        robot_tree,
+        keys,
+        sides,
+        swarm,
+        _new_cargo(n),
+        _new_inbox(n),
+        world.drive(swarm.gains, p),
+        np.zeros(N_CONDITIONS, dtype=np.bool_),
+        trials,
+        gap,
+        p,
+        values_out,
+        poses_out,
+        recorded,
+        rec,
+    )
+
+
+# Makes an array: compiled with reference counting, which it would otherwise inherit from ``_steps``.
+@numba.njit(cache=True, error_model="numpy", _nrt=True)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
+def _score_trial(
+    swarm: Swarm, cargo: Cargo, gap: float, p: Params, values_out: np.ndarray, position: int
+) -> None:
+    """Write a finished trial's values into ``values_out[position]`` (``world.trial_values``, which makes an
+    array: called from ``_steps``, which cannot own one, as a function of its own)."""
+    values = world.trial_values(
+        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.probes, cargo.deliveries, gap, p
+    )
+    for c in range(values.shape[0]):
+        values_out[position, c] = values[c]
+
+
+# No reference counting (numba's ``_nrt=False``, an option of numba's own, pinned in ws/requirements.txt):
+# each array view this loop makes (a robot's row, a tree of the pack, an inlined helper's array arguments)
+# would otherwise cost two atomic operations, which were about a third of the kernel's time. So the loop and
+# what it inlines make no array; what needs one (``_score_trial``, ``_record_step``) is compiled apart with
+# reference counting (``_nrt=True``, else it would inherit this one's) and frees what it makes.
+@numba.njit(cache=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
+def _steps(
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
+    keys: np.ndarray,
+    sides: np.ndarray,
+    swarm: Swarm,
+    cargo: Cargo,
+    inbox: Inbox,
+    robot_drive: np.ndarray,
+    board: np.ndarray,
+    trials: int,
+    gap: float,
+    p: Params,
+    values_out: np.ndarray,
+    poses_out: np.ndarray,
+    recorded: int,
+    rec: Recording,
+) -> None:
+    """The control steps of ``simulate_chain``'s chain, from the state it made."""
+    n = p.n_robots
+    position_keys = keys[POSITION]
+    heading_keys = keys[HEADING]
+    drop_keys = keys[DROPS]
+    tree_keys = keys[TREE]
+    (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast_nest, broadcast_food, raw_nest, raw_food,
+     window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
+     initial) = swarm  # fmt: skip
+    counts_in, senders, ranges, nest_values, food_values = inbox
+    carrying, deliveries, probes = cargo
+    samples = 0
+    # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
+    shared = tree_at(trees, robot_tree[0])
+    uniform = True
+    for i in range(n):
+        uniform = uniform and robot_tree[i] == robot_tree[0]
+
+    for k in range(1, trials * timeline.trial_steps(p) + 1):
+        position = timeline.trial_in_chain(p, k)
+        if timeline.step_in_trial(p, k) == 1:
+            world.place_robots(x, y, heading, position_keys, heading_keys, position, p)
+            for i in range(n):
+                poses_out[position, 0, i, 0] = x[i]
+                poses_out[position, 0, i, 1] = y[i]
+                poses_out[position, 0, i, 2] = heading[i]
+        fast_world.physics_step(x, y, heading, actions, robot_drive, p, dynamics, contacts, pairs, solver)
+        sensing = timeline.senses(p, k)
+        if sensing or position == recorded:
+            # Every robot hears what the others broadcast at the step before (at a trial's first step the
+            # robots ignore it, and only a recording looks).
+            world.sense_step(
+                x,
+                y,
+                broadcast_nest,
+                broadcast_food,
+                drop_keys,
+                k,
+                p,
+                counts_in,
+                senders,
+                ranges,
+                nest_values,
+                food_values,
+            )
+        if not sensing:
+            # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
+            # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
+            # a73e4af).
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                carrying[i] = world.start_carrying(carrying[i], on_food)
+                world.take_probes(x, y, i, gap, p, probes, 0)
+        if sensing:
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                carrying[i], delivered = world.carry(carrying[i], in_nest, on_food)
+                deliveries[i] += 1 if delivered else 0
+                nest_raw, food_raw, density, nest_source, food_source, nearest = world.estimate(
+                    in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
+                )
+                world.push_sample(window[i], samples, nest_raw, food_raw, density)
+                raw_nest[i] = nest_raw
+                raw_food[i] = food_raw
+                ground_now[i, 0] = in_nest
+                ground_now[i, 1] = on_food
+                sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
+                sources[i, 1] = senders[i, food_source] if food_source >= 0 else -1
+                sources[i, 2] = senders[i, nearest] if nearest >= 0 else -1
+            samples += 1
+            if timeline.refreshes(p, k):
+                for i in range(n):
+                    smooth[i, 0], smooth[i, 1], smooth[i, 2] = world.smoothed(window[i], samples)
+        if timeline.ticks_at(p, k):
+            number = timeline.tick_number(p, k)
+            for i in range(n):
+                tree = shared if uniform else tree_at(trees, robot_tree[i])
+                world.blackboard(
+                    ground_now[i, 0],
+                    ground_now[i, 1],
+                    raw_nest[i],
+                    raw_food[i],
+                    _source_bearing(sides[i, 0], i, sources[i, 0], x, y, heading),
+                    _source_bearing(sides[i, 1], i, sources[i, 1], x, y, heading),
+                    sources[i, 2] >= 0,
+                    _source_bearing(sides[i, 2], i, sources[i, 2], x, y, heading),
+                    carrying[i],
+                    p,
+                    board,
+                )
+                status, started = tick(tree, memory[i], board, tree_keys[i], number, counts[i])
+                motors = motors_after_tick(status, started, resumed[i])
+                resumed[i] = running_action(status, started)
+                actions[i] = motors
+                motion[i, 0] += movement_of(motors)
+                motion[i, 1] += rotation_of(motors)
+        if timeline.region_broadcast(k):
+            for i in range(n):
+                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                broadcast_nest[i] = world.region_value(in_nest, p)
+                broadcast_food[i] = world.region_value(on_food, p)
+        else:
+            for i in range(n):
+                broadcast_nest[i] = world.broadcast_value(smooth[i, 0])
+                broadcast_food[i] = world.broadcast_value(smooth[i, 1])
+        if timeline.is_initial(p, k):
+            for i in range(n):
+                for c in range(3):
+                    initial[i, c] = smooth[i, c]
+        if position == recorded:
+            _record_step(
+                rec,
+                k,
+                gap,
+                p,
+                x,
+                y,
+                heading,
+                actions,
+                smooth,
+                initial,
+                counts_in,
+                senders,
+                carrying,
+                deliveries,
+                probes,
+            )
+        if timeline.is_final(p, k):
+            world.take_all_probes(x, y, gap, p, probes, 1)
+            _score_trial(swarm, cargo, gap, p, values_out, position)
+            for i in range(n):
+                poses_out[position, 1, i, 0] = x[i]
+                poses_out[position, 1, i, 1] = y[i]
+                poses_out[position, 1, i, 2] = heading[i]
+            for i in range(n):
+                counts[i, :] = 0
+                motion[i, 0] = 0
+                motion[i, 1] = 0
+                # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
+                carrying[i] = False
+                deliveries[i] = 0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
+    """Run job ``j`` into its rows of the outputs."""
+    a = jobs.row[j]
+    b = a + jobs.trials[j]
+    simulate_chain(
+        trees,
+        jobs.robot_tree[j],
+        jobs.seed_key[j],
+        jobs.chain[j],
+        jobs.trials[j],
+        jobs.gap[j],
+        params,
+        out.values[a:b],
+        out.poses[a:b],
+        -1,
+        new_recording(0, params.n_robots),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def run_jobs(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
+    """Run every job ``j`` of ``jobs`` (the robots' trees of ``trees``, seed key, chain, trials, gap) in world
+    ``params`` into its rows of ``out``."""
+    for j in range(jobs.robot_tree.shape[0]):
+        _run_job(j, trees, params, jobs, out)
+
+
+@numba.njit(cache=True, parallel=True)
+def run_jobs_parallel(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
+    """``run_jobs`` with the jobs spread over numba's threads; every job still writes only its own rows."""
+    for j in numba.prange(jobs.robot_tree.shape[0]):
+        _run_job(j, trees, params, jobs, out)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def record_chain(
+    trees: PackedTrees,
+    robot_tree: np.ndarray,
+    seed_key: np.uint64,
+    chain: int,
+    recorded: int,
+    gap: float,
+    p: Params,
+    rec: Recording,
+) -> np.ndarray:
+    """Run trials 0 .. ``recorded`` of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
+    ``trees`` (``simulate_chain``), recording trial ``recorded`` into ``rec`` (``new_recording(trial_steps,
+    n_robots)``); its ``world.N_VALUES`` values."""
+    values = np.zeros((recorded + 1, world.N_VALUES))
+    poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
+    simulate_chain(trees, robot_tree, seed_key, chain, recorded + 1, gap, p, values, poses, recorded, rec)
+    return values[recorded]

@@ -1,0 +1,60 @@
+"""The world model as plain data, free of compiled code: settings, objectives, conditions and swarm layouts.
+
+``Config`` (``config``) holds every parameter of the model, validated once; the objectives and descriptors
+are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``); a swarm layout
+gives each robot its tree (``swarm_layout``). Other packages import these names from here.
+"""
+
+from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
+from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
+from swarm_sim.model.objectives import (
+    DESCRIPTORS,
+    FAMILIES,
+    N_OBJECTIVES,
+    N_PROBES,
+    N_VALUES,
+    OBJECTIVE_TABLE,
+    OBJECTIVES,
+    PAPER_OBJECTIVES,
+    PROBES,
+    VALUE_NAMES,
+    Objective,
+    fitness_ceiling,
+)
+from swarm_sim.model.swarm_layout import (
+    LayoutError,
+    SwarmLayout,
+    layout_from_json,
+    layout_of_label,
+    load_layout,
+    of_trees,
+)
+
+__all__ = [
+    "CONDITION_NAMES",
+    "DEFAULT",
+    "DESCRIPTORS",
+    "FAMILIES",
+    "N_OBJECTIVES",
+    "N_PROBES",
+    "N_VALUES",
+    "OBJECTIVES",
+    "OBJECTIVE_TABLE",
+    "PAPER_OBJECTIVES",
+    "PROBES",
+    "VALUE_NAMES",
+    "Config",
+    "LayoutError",
+    "Objective",
+    "Params",
+    "SwarmLayout",
+    "apply_conditions",
+    "condition_texts",
+    "config_from_dict",
+    "default_config",
+    "fitness_ceiling",
+    "layout_from_json",
+    "layout_of_label",
+    "load_layout",
+    "of_trees",
+]

@@ -1,0 +1,317 @@
+"""Every parameter of the world model, named once, validated once (``docs/model.md``).
+
+``Config`` is the frozen, validated object users and nodes see; ``Config.params()`` turns it into ``Params``,
+the plain named tuple that compiled kernels receive (numba reads its fields as typed constants).
+
+Units: millimetres, seconds, radians.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields, replace
+from typing import Any, NamedTuple
+
+from bt_controller.model_settings import PROFILES, PerceptionParams, Timeline, arena_of_trial, profile_number
+from bt_controller.validate import integer, number
+from swarm_sim.errors import ConfigError
+
+_PERCEPTION = PerceptionParams()
+_TIMELINE = Timeline()
+
+
+class Params(NamedTuple):
+    """The configuration as compiled kernels see it (all fields float or int; ``profile`` a number)."""
+
+    profile: int
+    arena_half: float
+    nest_radius: float
+    n_robots: int
+    robot_radius: float
+    start_half: float
+    max_start_attempts: int
+    wheel_separation: float
+    wheel_speed: float
+    gain_low: float
+    gain_step: float
+    gain_levels: int
+    step_dt: float
+    steps_per_tick: int
+    ticks: int
+    initial_step: int
+    chain_trials: int
+    message_range: float
+    delivery_probability: float
+    occlusion: bool
+    estimate_cap: float
+    density_range: float
+    density_divisor: float
+    window: int
+    friction: float
+    wall_friction: float
+    physics_substeps: int
+    solver_iterations: int
+    max_drive_accel: float
+    max_turn_accel: float
+    dead_robots: int
+    weak_robots: int
+    weak_gain: float
+
+
+_INT_MINIMUM = {
+    "n_robots": 1,
+    "max_start_attempts": 1,
+    "gain_levels": 1,
+    "steps_per_tick": 1,
+    "ticks": 1,
+    "initial_step": 1,
+    "chain_trials": 1,
+    "window": 1,
+    "physics_substeps": 1,
+    "solver_iterations": 1,
+    "dead_robots": 0,
+    "weak_robots": 0,
+}
+"""The integer parameters and the least value each may take (the one list of them)."""
+
+
+@dataclass(frozen=True)
+class Config:
+    """The world model's parameters (defaults from ``docs/model.md``, which gives each one's source).
+
+    Construction validates every value and raises ``ConfigError`` naming the first bad one.
+    """
+
+    profile: str = PROFILES[_TIMELINE.profile]
+    """``paper`` (the authors' experiment, artefacts A1-A4 included) or ``clean`` (A1-A4 removed)."""
+    arena_half: float = 2450.0
+    """Half the side of the free square inside the walls (walls 100 mm thick centred at +-2500 mm) (mm)."""
+    nest_radius: float = 500.0
+    """A robot is in the nest when its centre is closer than this to the arena centre (mm)."""
+    gaps: tuple[float, ...] = (500.0, 700.0)
+    """Gap between nest and food per arena configuration (mm); see ``gap``."""
+    n_robots: int = 9
+    """Footbots in the swarm: the one place the robot count is defined."""
+    robot_radius: float = 85.036758
+    """Footbot body radius (mm): ARGoS's ``BODY_RADIUS`` (``footbot_entity.cpp``) and its dynamics2d disc."""
+    start_half: float = 1000.0
+    """Start positions are uniform in the square [-start_half, start_half]^2 (mm)."""
+    max_start_attempts: int = 10
+    """Tries per robot to find a free start position; after that it stays where it is."""
+    wheel_separation: float = 140.0
+    """Distance between the wheels (mm)."""
+    wheel_speed: float = 50.0
+    """Nominal wheel speed, one unit of an action's wheel setting (mm/s)."""
+    gain_low: float = 0.9
+    """Each wheel's gain is gain_low + gain_step * U{0 .. gain_levels - 1}, drawn once per chain."""
+    gain_step: float = 0.01
+    """Step between the possible wheel gains."""
+    gain_levels: int = 20
+    """Number of possible wheel gains."""
+    step_dt: float = 0.125
+    """Length of one control step (s): 8 Hz."""
+    steps_per_tick: int = _TIMELINE.steps_per_tick
+    """Control steps per behaviour-tree tick: 2 Hz."""
+    ticks: int = _TIMELINE.ticks
+    """Ticks per trial (20 s)."""
+    initial_step: int = _TIMELINE.initial_step
+    """A trial's step whose smoothed values are the objectives' initial values."""
+    chain_trials: int = _TIMELINE.chain_trials
+    """Trials per chain (``paper``: one simulation with teleports); also the block of trials sharing a gap."""
+    message_range: float = 1000.0
+    """Messages travel only between centres at most this far apart (mm)."""
+    delivery_probability: float = 0.95
+    """Chance that a message within range and not occluded arrives (per ordered pair, per step)."""
+    occlusion: bool = True
+    """Whether a third robot's body between two robots blocks their messages."""
+    estimate_cap: float = _PERCEPTION.estimate_cap
+    """Largest nest/food distance estimate; also the estimate when nothing was heard (mm)."""
+    density_range: float = _PERCEPTION.density_range
+    """A neighbour at range r adds 1 / (pi (r / density_range)^2) to the density sum (mm)."""
+    density_divisor: float = _PERCEPTION.density_divisor
+    """The density sum is divided by this."""
+    window: int = _PERCEPTION.window
+    """Raw samples averaged into a smoothed value."""
+    friction: float = 0.49
+    """Coulomb friction coefficient at a robot-robot contact (ARGoS: 0.7 per footbot body, multiplied)."""
+    wall_friction: float = 0.07
+    """Coulomb friction coefficient between a robot and a wall (ARGoS: 0.7 for the footbot, 0.1 for a box)."""
+    physics_substeps: int = 10
+    """Physics substeps per control step (ARGoS dynamics2d's default ``iterations``)."""
+    solver_iterations: int = 10
+    """Passes over the contacts and drives per substep while robots touch (Chipmunk's ``iterations``)."""
+    max_drive_accel: float = 9375.0
+    """Largest acceleration a robot's drive exerts to reach its target velocity: ARGoS's 15 N on a 1.6 kg
+    footbot (mm/s^2)."""
+    max_turn_accel: float = 6482.3
+    """Largest angular acceleration of a robot's drive: ARGoS's 150 N m over the footbot's moment of inertia,
+    1.6 kg x (2 x 85.036758 mm)^2 / 2 (rad/s^2)."""
+    dead_robots: int = 0
+    """Damage (``swarm_sim.model.conditions``): robots 0 .. dead_robots - 1 have both wheel gains 0, so they
+    never drive or turn; they still sense, tick their trees and broadcast, and count in the objectives."""
+    weak_robots: int = 0
+    """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
+    weak_gain: float = 1.0
+    """Factor on the weak robots' left wheel gain, in [0, 1]."""
+
+    def __post_init__(self) -> None:
+        _validate(self)
+
+    @property
+    def profile_number(self) -> int:
+        """The profile as the number compiled code reads (``timeline.PAPER`` or ``timeline.CLEAN``)."""
+        return profile_number(self.profile)
+
+    @property
+    def timeline(self) -> Timeline:
+        """The timeline's parameters."""
+        return Timeline(
+            self.profile_number, self.steps_per_tick, self.ticks, self.initial_step, self.chain_trials
+        )
+
+    @property
+    def perception(self) -> PerceptionParams:
+        """The robots' perception parameters."""
+        return PerceptionParams(
+            self.window, self.estimate_cap, self.density_range, self.density_divisor, self.profile_number
+        )
+
+    @property
+    def trial_steps(self) -> int:
+        """Control steps per trial (160 under ``paper``, 176 under ``clean``)."""
+        return self.ticks * self.steps_per_tick + (self.initial_step if self.profile == "clean" else 0)
+
+    @property
+    def chain_length(self) -> int:
+        """Trials per simulated chain: ``chain_trials`` under ``paper``, 1 under ``clean``."""
+        return self.chain_trials if self.profile == "paper" else 1
+
+    def gap(self, trial: int) -> float:
+        """The nest-food gap of trial ``trial``: trials come in blocks of ``chain_trials`` (one chain under
+        ``paper``), and the blocks alternate the gaps."""
+        return self.gaps[arena_of_trial(self.timeline, trial, len(self.gaps))]
+
+    def params(self) -> Params:
+        """The configuration as a ``Params`` named tuple for compiled kernels."""
+
+        def field(name: str) -> int | float | bool:
+            if name == "profile":
+                return self.profile_number
+            if name == "occlusion":
+                return bool(self.occlusion)
+            return (int if name in _INT_MINIMUM else float)(getattr(self, name))
+
+        return Params._make(field(f) for f in Params._fields)
+
+    def as_dict(self) -> dict[str, object]:
+        """Every parameter by name (gaps as a list), for writing next to results."""
+        out: dict[str, object] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+        return out
+
+
+def _number(config: Config, name: str) -> float:
+    return number(getattr(config, name), name, error=ConfigError)
+
+
+def _positive(config: Config, name: str) -> float:
+    return number(getattr(config, name), name, positive=True, error=ConfigError)
+
+
+def _count(config: Config, name: str, minimum: int = 1) -> int:
+    return integer(getattr(config, name), name, minimum, error=ConfigError)
+
+
+def _validate(c: Config) -> None:
+    if c.profile not in PROFILES:
+        raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {c.profile!r}")
+    for name in (
+        "arena_half",
+        "nest_radius",
+        "robot_radius",
+        "start_half",
+        "wheel_separation",
+        "wheel_speed",
+        "step_dt",
+        "message_range",
+        "estimate_cap",
+        "density_range",
+        "density_divisor",
+        "max_drive_accel",
+        "max_turn_accel",
+        "gain_low",
+    ):
+        _positive(c, name)
+    for name, least in _INT_MINIMUM.items():
+        _count(c, name, least)
+    if _number(c, "gain_step") < 0:
+        raise ConfigError(f"gain_step must not be negative, got {c.gain_step!r}")
+    friction = _number(c, "friction")
+    if not 0.0 <= friction <= 1.0:
+        raise ConfigError(f"friction must be in [0, 1], got {friction}")
+    wall_friction = _number(c, "wall_friction")
+    if not 0.0 <= wall_friction <= 1.0:
+        raise ConfigError(f"wall_friction must be in [0, 1], got {wall_friction}")
+    if not isinstance(c.occlusion, bool):
+        raise ConfigError(f"occlusion must be true or false, got {c.occlusion!r}")
+    for name in ("dead_robots", "weak_robots"):
+        if getattr(c, name) > c.n_robots:
+            raise ConfigError(f"{name} must be at most n_robots = {c.n_robots}, got {getattr(c, name)}")
+    weak_gain = _number(c, "weak_gain")
+    if not 0.0 <= weak_gain <= 1.0:
+        raise ConfigError(f"weak_gain must be in [0, 1], got {weak_gain}")
+    p = _number(c, "delivery_probability")
+    if not 0.0 <= p <= 1.0:
+        raise ConfigError(f"delivery_probability must be in [0, 1], got {p}")
+    if not isinstance(c.gaps, tuple) or not c.gaps:
+        raise ConfigError(f"gaps must be a non-empty tuple of positive numbers, got {c.gaps!r}")
+    for k, gap in enumerate(c.gaps):
+        number(gap, f"gaps[{k}]", positive=True, error=ConfigError)
+    if c.robot_radius >= c.arena_half:
+        raise ConfigError(f"robot_radius must be below arena_half, got {c.robot_radius} >= {c.arena_half}")
+    if c.start_half + c.robot_radius > c.arena_half:
+        raise ConfigError(
+            f"start_half must keep robots inside the walls: start_half + robot_radius = "
+            f"{c.start_half + c.robot_radius} > arena_half = {c.arena_half}"
+        )
+    if c.initial_step >= c.ticks * c.steps_per_tick or c.initial_step % c.steps_per_tick:
+        raise ConfigError(
+            f"initial_step must be a multiple of steps_per_tick ({c.steps_per_tick}) inside a trial's "
+            f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), "
+            f"got {c.initial_step}"
+        )
+    # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
+    area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
+    if area_ratio > 0.5:
+        raise ConfigError(
+            f"n_robots = {c.n_robots} robots of radius {c.robot_radius} do not fit easily within "
+            f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; "
+            "at most 50%)"
+        )
+
+
+DEFAULT = Config()
+"""The model of docs/model.md, under its default profile."""
+
+
+def default_config(profile: str) -> Config:
+    """The model's default configuration (the 2023 primitives' world) under ``profile`` (``paper`` or
+    ``clean``, docs/model.md); a task's world is ``swarm_sim.tasks.TaskSpec.config``."""
+    return replace(DEFAULT, profile=profile)
+
+
+def config_from_dict(data: object) -> Config:
+    """The configuration ``Config.as_dict`` wrote (a JSON object: gaps as a list); ``ConfigError`` naming an
+    unknown parameter or a bad value."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"a configuration must be an object of parameters, got {data!r}")
+    known = [f.name for f in fields(Config)]
+    for name in data:
+        if name not in known:
+            raise ConfigError(f"unknown model parameter {name!r}; expected among {', '.join(known)}")
+    values: dict[str, Any] = dict(data)
+    if isinstance(values.get("gaps"), list):
+        values["gaps"] = tuple(values["gaps"])
+    return Config(**values)

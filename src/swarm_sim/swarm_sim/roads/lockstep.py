@@ -1,0 +1,299 @@
+"""The simulator's side of one chain, advanced one control step at a time by the robots' answers.
+
+This is what the simulator node and the reference road run: it owns the world (poses, wheel gains, the radio
+channel, the ground sensor) and nothing of the robots' minds. At each step ``k`` of the chain it first
+teleports the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at
+step ``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k -
+1``); then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and,
+at a tick, what the tick did. It scores each trial from those answers (``bt_controller.timeline`` says when),
+so the node graph, the reference road and the batch evaluator compute the same numbers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from bt_controller import timeline
+from bt_controller.controller import FootbotController, StepOutcome
+from bt_controller.model_settings import chain_of_trial
+from bt_controller.motors import movement_of, rotation_of
+from bt_controller.perception import Readings
+from bt_controller.tree import Node
+from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
+from swarm_sim.core import TrialRecord, sense_swarm, setup_chain, world
+from swarm_sim.model import DEFAULT, N_PROBES, Config
+
+
+@dataclass(frozen=True)
+class RobotAnswer:
+    """One robot's answer to one control step."""
+
+    action: int
+    """The motors driving the wheels from the next step on."""
+    broadcast: tuple[float, float]
+    """The (nest, food) values the robot broadcasts at this step (mm)."""
+    smoothed: tuple[float, float, float]
+    """The robot's smoothed (nest, food, density) as last refreshed."""
+    condition_ticks: int = 0
+    """Condition nodes ticked by this step's tick (0 without a tick)."""
+    started: int = -1
+    """The action this step's tick started, or -1."""
+    carrying: bool = False
+    """Whether the robot carries food after this step (foraging)."""
+    deliveries: int = 0
+    """The robot's deliveries in the trial so far; the foraging objective is scored from them."""
+
+
+def action_of_wheels(left: float, right: float) -> int:
+    """The action whose wheel setting is (left, right); ValueError for a pair no action produces."""
+    try:
+        return ACTION_WHEELS.index((left, right))
+    except ValueError:
+        raise ValueError(
+            f"wheels ({left}, {right}) are not a footbot action; expected one of {list(ACTION_WHEELS)}"
+        ) from None
+
+
+class LockstepChain:
+    """The first ``trials`` trials of chain ``chain`` of ``seed``, the world advanced only when every robot
+    has answered."""
+
+    def __init__(self, seed: int, chain: int, trials: int, config: Config = DEFAULT) -> None:
+        self.config = config
+        self.p = config.params()
+        self.line = config.timeline
+        if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= config.chain_length:
+            raise ValueError(f"a chain has 1 to {config.chain_length} trials, got {trials!r}")
+        self.setup = setup_chain(seed, chain, config)
+        self.trials = trials
+        self.drive = world.drive(self.setup.gains, self.p)
+        n = self.p.n_robots
+        self.x, self.y, self.heading = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._motion, self._contacts, self._pairs = world.new_dynamics(n)
+        self.actions = np.full(n, STOP, dtype=np.int64)
+        self.broadcast_nest = np.full(n, self.p.estimate_cap)
+        self.broadcast_food = np.full(n, self.p.estimate_cap)
+        self.counts = np.zeros((n, 1 + len(ACTIONS)), dtype=np.int64)
+        self.motion = np.zeros((n, 2), dtype=np.int64)
+        self.initial = np.zeros((n, 3))
+        self.probes = np.zeros((n, 2, N_PROBES))
+        """Each robot's probes (``world.take_probes``) at the trial's first step, and at its last."""
+        self.carrying = np.zeros(n, dtype=np.bool_)
+        """Each robot's carrying flag, as it answered the last step (for viewers: swarm_state)."""
+        self.deliveries = np.zeros(n, dtype=np.int64)
+        """Each robot's deliveries in the trial, as it answered the last step."""
+        self.start_poses = np.zeros((n, 3))
+        self.records: list[TrialRecord] = []
+        self.last_step = trials * timeline.trial_steps(self.line)
+        self.step = 1
+        self._readings = self._begin_step()
+
+    @property
+    def done(self) -> bool:
+        """Whether the answers to the chain's last step have been taken."""
+        return len(self.records) == self.trials
+
+    @property
+    def trial(self) -> int:
+        """The evaluation's index of the trial under way."""
+        return self.setup.first_trial + timeline.trial_in_chain(self.line, self.step)
+
+    def readings(self) -> list[Readings]:
+        """Every robot's readings of the current step."""
+        return self._readings
+
+    def ticks_now(self) -> bool:
+        """Whether the robots tick their trees at the current step."""
+        return timeline.ticks_at(self.line, self.step)
+
+    def poses(self) -> np.ndarray:
+        """The robots' current poses, n x (x, y, heading)."""
+        return np.stack([self.x, self.y, self.heading], axis=1)
+
+    def advance(self, answers: Sequence[RobotAnswer]) -> TrialRecord | None:
+        """Take every robot's answer to the current step, then teleport, move and sense for the next step
+        (unless this was the last one). Returns the record of the trial this step finished, if any."""
+        if self.done:
+            raise RuntimeError("the chain is over: no step is waiting for answers")
+        if len(answers) != self.p.n_robots:
+            raise ValueError(f"expected {self.p.n_robots} answers, got {len(answers)}")
+        k = self.step
+        for i, answer in enumerate(answers):
+            self.broadcast_nest[i], self.broadcast_food[i] = answer.broadcast
+            self.actions[i] = answer.action
+            self.carrying[i] = answer.carrying
+            self.deliveries[i] = answer.deliveries
+        if timeline.ticks_at(self.line, k):
+            for i, answer in enumerate(answers):
+                self.counts[i, 0] += answer.condition_ticks
+                if answer.started >= 0:
+                    self.counts[i, 1 + answer.started] += 1
+                self.motion[i, 0] += movement_of(answer.action)
+                self.motion[i, 1] += rotation_of(answer.action)
+        smoothed = np.array([answer.smoothed for answer in answers], dtype=np.float64)
+        if timeline.is_initial(self.line, k):
+            self.initial = smoothed
+        record = None
+        if timeline.is_final(self.line, k):
+            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 1)
+            values = world.trial_values(
+                self.initial,
+                smoothed,
+                self.counts,
+                self.motion,
+                self.probes,
+                self.deliveries,
+                self.setup.gap,
+                self.p,
+            )
+            record = TrialRecord(
+                trial=self.trial,
+                gap=self.setup.gap,
+                values=tuple(float(v) for v in values),
+                start_poses=self.start_poses.copy(),
+                end_poses=self.poses(),
+            )
+            self.records.append(record)
+            self.counts[:] = 0
+            self.motion[:] = 0
+        if k < self.last_step:
+            self.step = k + 1
+            self._readings = self._begin_step()
+        return record
+
+    def _begin_step(self) -> list[Readings]:
+        k = self.step
+        if timeline.step_in_trial(self.line, k) == 1:
+            world.place_robots(
+                self.x,
+                self.y,
+                self.heading,
+                self.setup.position_keys,
+                self.setup.heading_keys,
+                timeline.trial_in_chain(self.line, k),
+                self.p,
+            )
+            self.start_poses = self.poses()
+        world.physics_step(
+            self.x,
+            self.y,
+            self.heading,
+            self.actions,
+            self.drive,
+            self.p,
+            self._motion,
+            self._contacts,
+            self._pairs,
+        )
+        if timeline.step_in_trial(self.line, k) == 1:
+            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 0)
+        return sense_swarm(
+            self.x,
+            self.y,
+            self.heading,
+            self.broadcast_nest,
+            self.broadcast_food,
+            self.setup.drop_keys,
+            k,
+            self.setup.gap,
+            self.p,
+        )
+
+
+def robot_trees(tree: Node | Sequence[Node], n_robots: int) -> list[Node]:
+    """Each robot's tree: ``tree`` on every robot (a homogeneous swarm), or one tree per robot in id order
+    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); ValueError for a count that is not ``n_robots``."""
+    if isinstance(tree, Node):
+        return [tree] * n_robots
+    trees = list(tree)
+    if len(trees) != n_robots:
+        raise ValueError(f"expected one tree per robot ({n_robots}), got {len(trees)}")
+    return trees
+
+
+def run_chain_with_controllers(
+    tree: Node | Sequence[Node],
+    seed: int,
+    chain: int,
+    trials: int,
+    config: Config = DEFAULT,
+    on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
+    on_outcomes: Callable[[LockstepChain, Sequence[StepOutcome]], None] | None = None,
+) -> list[TrialRecord]:
+    """Run the first ``trials`` trials of a chain in-process exactly as the node graph runs them: the
+    lockstep world and one ``FootbotController`` per robot, exchanging readings and answers. ``tree``: every
+    robot's tree, or one per robot (``robot_trees``).
+    ``on_step(chain)`` is called after each step's readings are out (for example to collect the poses a
+    simulator node would publish); ``on_answers(chain, answers)`` with the robots' answers to the step,
+    before the world takes them; ``on_outcomes(chain, outcomes)`` with the controllers' own answers (what
+    their nodes publish)."""
+    sim = LockstepChain(seed, chain, trials, config)
+    controllers = []
+    for key, own in zip(sim.setup.tree_keys, robot_trees(tree, sim.p.n_robots), strict=True):
+        controller = FootbotController()
+        controller.load(own)
+        controller.start_chain(int(key), config.timeline, config.perception, trials)
+        controllers.append(controller)
+    while not sim.done:
+        if on_step is not None:
+            on_step(sim)
+        answers = []
+        outcomes = []
+        for controller, readings in zip(controllers, sim.readings(), strict=True):
+            outcome = controller.on_step(sim.step, readings)
+            outcomes.append(outcome)
+            tick = outcome.tick
+            answers.append(
+                RobotAnswer(
+                    outcome.action,
+                    outcome.broadcast,
+                    outcome.smoothed,
+                    tick.condition_ticks if tick is not None else 0,
+                    tick.started if tick is not None else -1,
+                    outcome.carrying,
+                    outcome.deliveries,
+                )
+            )
+        if on_answers is not None:
+            on_answers(sim, answers)
+        if on_outcomes is not None:
+            on_outcomes(sim, outcomes)
+        sim.advance(answers)
+    return sim.records
+
+
+def run_with_controllers(
+    tree: Node | Sequence[Node],
+    seed: int,
+    trial: int,
+    config: Config = DEFAULT,
+    on_step: Callable[[LockstepChain], None] | None = None,
+    on_answers: Callable[[LockstepChain, Sequence[RobotAnswer]], None] | None = None,
+    on_outcomes: Callable[[LockstepChain, Sequence[StepOutcome]], None] | None = None,
+) -> TrialRecord:
+    """Trial ``trial`` of ``seed`` as the node graph runs it: its chain is run from its first trial up to
+    ``trial`` (the earlier trials set the state ``trial`` starts from); the record of ``trial``."""
+    chain, position = chain_of_trial(config.timeline, trial)
+    return run_chain_with_controllers(
+        tree, seed, chain, position + 1, config, on_step, on_answers, on_outcomes
+    )[-1]
+
+
+def warm_up(config: Config = DEFAULT) -> None:
+    """Compile (or load from numba's cache) every world function a lockstep chain uses, by running the first
+    steps of a chain with every robot stopped, and scoring a trial."""
+    sim = LockstepChain(0, 0, 1, config)
+    still = RobotAnswer(STOP, (config.estimate_cap, config.estimate_cap), (0.0, 0.0, 0.0))
+    for _ in range(config.steps_per_tick + 1):
+        sim.advance([still] * config.n_robots)
+    n = config.n_robots
+    counts = np.zeros((n, 1 + len(ACTIONS)), np.int64)
+    world.trial_values(
+        np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64),
+        np.zeros((n, 2, N_PROBES)), np.zeros(n, np.int64), 500.0, sim.p,
+    )  # fmt: skip
+    world.take_all_probes(sim.x, sim.y, 500.0, sim.p, np.zeros((n, 2, N_PROBES)), 0)

@@ -1,0 +1,291 @@
+"""Validation against the authors' ARGoS simulation: our statistics beside theirs, a verdict per quantity.
+
+A reference file is a TSV with one row per tree (as written by the ARGoS harness, see
+``docs/validation/README.md``): ``tree``, then ``<q>_mean`` and ``<q>_sem`` for the quantities it measured
+(of ``QUANTITIES``: the harness's 2023 build gives the paper's three objectives, its primitives build all six
+primitives' objectives, its foraging build foraging, each with the three descriptors). Movement and rotation
+are in the authors' raw units there, [-T, T] per trial for T ticks; they are mapped to [0, 1] as the model
+does, (x + T) / 2T (standard errors / 2T), unless ``movement01_mean`` etc. are given. Trees in the authors'
+syntax are read into ours (``bt_controller.authors``).
+
+Tolerance (``docs/model.md``, "validation"): our mean **agrees** with the reference when
+``|ours - theirs| <= 3 * sqrt(2) * SE + 0.03``, SE being the reference's standard error; it is
+**indistinguishable** when it agrees and, in addition, ``|z| <= 4`` with ``z = diff / sqrt(SE_ours^2 +
+SE_theirs^2)``. Everything here is pure: no simulation, no files except through the functions that say so.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from swarm_sim.errors import ReferenceFileError
+from swarm_sim.model import VALUE_NAMES
+
+QUANTITIES: tuple[str, ...] = VALUE_NAMES
+"""The quantities of an evaluation, in the evaluator's order (the objectives, then the three descriptors)."""
+RAW_DESCRIPTOR_HALF_RANGE = 40.0
+"""Movement and rotation per trial lie in [-40, 40] in the authors' code for the primitives' 40 ticks (one
+count per tick); [-200, 200] for the foraging trials' 200."""
+TOLERANCE_SE = 3.0 * math.sqrt(2.0)
+"""Multiple of the reference's standard error allowed between the means."""
+TOLERANCE_ABSOLUTE = 0.03
+"""Absolute slack added to the tolerance (model.md)."""
+MAX_Z = 4.0
+"""Largest |z| of a difference still called indistinguishable."""
+RESOLUTION = 1e-6
+"""The reference files print 6 decimals: a smaller difference is rounding (say, -26.6 / 80 computed two
+ways), not a difference, and gets z = 0 even when both standard errors are 0."""
+
+AGREES = "agrees"
+INDISTINGUISHABLE = "indistinguishable"
+OUTSIDE = "OUTSIDE"
+
+__all__ = [
+    "AGREES",
+    "INDISTINGUISHABLE",
+    "OUTSIDE",
+    "Comparison",
+    "Estimate",
+    "ReferenceFileError",
+    "compare",
+    "estimate",
+    "estimates",
+    "read_reference",
+    "render",
+]
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A mean and its standard error over ``n`` evaluations."""
+
+    mean: float
+    sem: float
+    n: int
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Our estimate of one quantity of one tree beside the reference's, and the verdict (``group``: the
+    kind of trial, e.g. ``foraging``, when a report holds more than one)."""
+
+    tree: str
+    quantity: str
+    ours: Estimate
+    theirs: Estimate
+    group: str = ""
+
+    @property
+    def diff(self) -> float:
+        """Ours minus theirs."""
+        return self.ours.mean - self.theirs.mean
+
+    @property
+    def tolerance(self) -> float:
+        """The largest |diff| that agrees: 3 sqrt(2) SE_theirs + 0.03."""
+        return TOLERANCE_SE * self.theirs.sem + TOLERANCE_ABSOLUTE
+
+    @property
+    def z(self) -> float:
+        """diff / sqrt(SE_ours^2 + SE_theirs^2); 0 for a diff within ``RESOLUTION``, infinite for exact values
+        (both SE 0) that differ by more."""
+        if abs(self.diff) <= RESOLUTION:
+            return 0.0
+        scale = math.hypot(self.ours.sem, self.theirs.sem)
+        if scale == 0.0:
+            return math.copysign(math.inf, self.diff)
+        return self.diff / scale
+
+    @property
+    def agrees(self) -> bool:
+        """|diff| within the tolerance."""
+        return abs(self.diff) <= self.tolerance
+
+    @property
+    def verdict(self) -> str:
+        """``indistinguishable``, ``agrees`` (within tolerance but |z| > 4) or ``OUTSIDE``."""
+        if not self.agrees:
+            return OUTSIDE
+        return INDISTINGUISHABLE if abs(self.z) <= MAX_Z else AGREES
+
+
+def estimate(samples: Sequence[float]) -> Estimate:
+    """Mean and standard error (sample standard deviation, ddof 1, over sqrt(n)) of at least two samples."""
+    n = len(samples)
+    if n < 2:
+        raise ValueError(f"a standard error needs at least 2 samples, got {n}")
+    if min(samples) == max(samples):  # exact: no rounding noise in the mean or a spurious tiny SE
+        return Estimate(float(samples[0]), 0.0, n)
+    mean = math.fsum(samples) / n
+    variance = math.fsum((x - mean) ** 2 for x in samples) / (n - 1)
+    return Estimate(mean, math.sqrt(variance / n), n)
+
+
+def estimates(rows: Sequence[Sequence[float]], quantities: Sequence[str] = QUANTITIES) -> dict[str, Estimate]:
+    """Per quantity, the estimate over evaluations given as rows of values (``quantities`` order: by default
+    an evaluation's, ``QUANTITIES``)."""
+    for row in rows:
+        if len(row) != len(quantities):
+            raise ValueError(f"expected {len(quantities)} values per evaluation, got {len(row)}")
+    return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(quantities)}
+
+
+def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]]:
+    """The reference statistics of a TSV, per tree (file order) and each quantity it measured, descriptors
+    mapped to [0, 1] (raw ones with trials of ``ticks`` ticks)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise ReferenceFileError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
+    reader = csv.DictReader(text.splitlines(), delimiter="\t")
+    columns = set(reader.fieldnames or ())
+    measured = [q for q in QUANTITIES if f"{q}_mean" in columns or f"{q}_sem" in columns]
+    descriptors = QUANTITIES[-3:]
+    needed = {"tree"} | {f"{q}_{s}" for q in {*measured, *descriptors} for s in ("mean", "sem")}
+    missing = sorted(needed - columns)
+    if missing or len(measured) == len(descriptors):
+        what = ", ".join(missing) if missing else "an objective's <q>_mean and <q>_sem"
+        raise ReferenceFileError(f"{path}: not a reference statistics TSV: missing column(s) {what}")
+    out: dict[str, dict[str, Estimate]] = {}
+    for line, row in enumerate(reader, start=2):
+        tree = (row["tree"] or "").strip()
+        if not tree:
+            raise ReferenceFileError(f"{path}:{line}: empty tree")
+        if tree in out:
+            raise ReferenceFileError(f"{path}:{line}: tree {tree!r} given twice")
+        n = _number(path, line, row, "n_seeds", default=0.0)
+        out[tree] = {q: _reference_estimate(path, line, row, q, int(n), ticks) for q in measured}
+    if not out:
+        raise ReferenceFileError(f"{path}: no trees in the reference")
+    return out
+
+
+def _number(path: Path, line: int, row: dict[str, str], column: str, default: float | None = None) -> float:
+    text = row.get(column)
+    if text is None or text == "":
+        if default is not None:
+            return default
+        raise ReferenceFileError(f"{path}:{line}: empty {column}")
+    try:
+        value = float(text)
+    except ValueError:
+        raise ReferenceFileError(f"{path}:{line}: {column} must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise ReferenceFileError(f"{path}:{line}: {column} must be finite, got {text!r}")
+    return value
+
+
+def _reference_estimate(
+    path: Path, line: int, row: dict[str, str], quantity: str, n: int, ticks: int
+) -> Estimate:
+    if quantity in ("movement", "rotation"):
+        if row.get(f"{quantity}01_mean"):
+            mean = _number(path, line, row, f"{quantity}01_mean")
+            sem = _number(path, line, row, f"{quantity}01_sem")
+        else:
+            raw_mean = _number(path, line, row, f"{quantity}_mean")
+            mean = (raw_mean + ticks) / (2 * ticks)
+            sem = _number(path, line, row, f"{quantity}_sem") / (2 * ticks)
+    else:
+        mean = _number(path, line, row, f"{quantity}_mean")
+        sem = _number(path, line, row, f"{quantity}_sem")
+    if sem < 0:
+        raise ReferenceFileError(f"{path}:{line}: {quantity} standard error must be >= 0, got {sem}")
+    return Estimate(mean, sem, n)
+
+
+def compare(
+    tree: str, ours: dict[str, Estimate], theirs: dict[str, Estimate], group: str = ""
+) -> list[Comparison]:
+    """One comparison per quantity the reference measured (``QUANTITIES`` order)."""
+    return [Comparison(tree, q, ours[q], theirs[q], group) for q in QUANTITIES if q in theirs]
+
+
+def _named(c: Comparison) -> str:
+    return f"[{c.group}] {c.tree}" if c.group else c.tree
+
+
+def _code(name: str) -> str:
+    """A tree's name as markdown: the tree as code, its group (``[foraging] ``) before it as text."""
+    if name.startswith("["):
+        group, tree = name.split("] ", 1)
+        return f"{group}] `{tree}`"
+    return f"`{name}`"
+
+
+def _fmt(e: Estimate) -> str:
+    return f"{e.mean:.4f} ± {e.sem:.4f}"
+
+
+def _z(c: Comparison) -> str:
+    if math.isinf(c.z):
+        return "+inf" if c.z > 0 else "-inf"
+    return f"{c.z:+.1f}" if abs(c.z) < 1000 else f"{c.z:+.1e}"
+
+
+_MARK = {INDISTINGUISHABLE: "✓", AGREES: "≈", OUTSIDE: "✗"}
+
+
+def render(
+    comparisons: Sequence[Comparison],
+    header: Iterable[str],
+    notes: str | None = None,
+) -> str:
+    """The markdown report: ``header`` lines, a summary, one verdict grid (a column per quantity any tree
+    was compared on, ``-`` where a tree was not), one table per tree, ``notes``. A tree is named with its
+    group, when it has one (``[foraging] forward``)."""
+    trees = list(dict.fromkeys(_named(c) for c in comparisons))
+    by_tree = {t: [c for c in comparisons if _named(c) == t] for t in trees}
+    columns = [q for q in QUANTITIES if any(c.quantity == q for c in comparisons)]
+    total = len(comparisons)
+    agreeing = sum(c.agrees for c in comparisons)
+    same = sum(c.verdict == INDISTINGUISHABLE for c in comparisons)
+    lines = [*header, ""]
+    lines += [
+        f"**{agreeing} of {total}** quantities over {len(trees)} trees agree with ARGoS within tolerance; "
+        f"**{same} of {total}** are also statistically indistinguishable (|z| <= {MAX_Z:g}).",
+        "",
+        f"Verdicts: {_MARK[INDISTINGUISHABLE]} indistinguishable, {_MARK[AGREES]} agrees (within tolerance, "
+        f"|z| > {MAX_Z:g}), {_MARK[OUTSIDE]} outside tolerance.",
+        "",
+        "| # | tree | " + " | ".join(columns) + " |",
+        "|---|---|" + "---|" * len(columns),
+    ]
+    for number, tree in enumerate(trees, start=1):
+        verdicts = {c.quantity: _MARK[c.verdict] for c in by_tree[tree]}
+        marks = " | ".join(verdicts.get(q, "-") for q in columns)
+        lines.append(f"| {number} | {_code(tree)} | {marks} |")
+    lines.append("")
+    for number, tree in enumerate(trees, start=1):
+        lines += [
+            f"### {number}. {_code(tree)}",
+            "",
+            "| quantity | ours (mean ± SE) | ARGoS (mean ± SE) | diff | tolerance | z | verdict |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for c in by_tree[tree]:
+            lines.append(
+                f"| {c.quantity} | {_fmt(c.ours)} | {_fmt(c.theirs)} | {c.diff:+.4f} | {c.tolerance:.4f} | "
+                f"{_z(c)} | {c.verdict} |"
+            )
+        lines.append("")
+    outside = [c for c in comparisons if c.verdict != INDISTINGUISHABLE]
+    lines += ["## Quantities not indistinguishable", ""]
+    if outside:
+        lines += [
+            f"- {_code(_named(c))} {c.quantity}: {c.verdict}, diff {c.diff:+.4f} "
+            f"(tolerance {c.tolerance:.4f}), z {_z(c)}"
+            for c in outside
+        ]
+    else:
+        lines.append("None.")
+    lines.append("")
+    if notes:
+        lines += [notes.rstrip(), ""]
+    return "\n".join(lines)
