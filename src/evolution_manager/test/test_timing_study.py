@@ -13,6 +13,7 @@ from evolution_manager.studies.timing_study import (
     best_forager_swarm,
     markdown,
     read_rows,
+    study,
     study_trials,
     table,
     write_rows,
@@ -72,3 +73,21 @@ def test_the_committed_trees_and_the_trials_first_of_their_chains() -> None:
     assert study_trials("primitives", 3) == [0, 5, 10]
     with pytest.raises(UsageError, match="no experiments"):
         best_food_tree(REPO / "docs")
+
+
+def test_the_table_is_remade_only_with_force_and_never_through_a_link(tmp_path: Path, capsys) -> None:
+    write_rows(tmp_path / "trials.csv", ROWS)
+    arguments = ["--out", str(tmp_path), "--table-only", "--repo", str(REPO)]
+    assert study(arguments) == 0
+    first = (tmp_path / "README.md").read_text()
+    assert "| primitives | food | 3 |" in first
+    assert study(arguments) == 2  # README.md exists now
+    assert "exists" in capsys.readouterr().err
+    assert study([*arguments, "--force"]) == 0
+    assert (tmp_path / "README.md").read_text() == first  # the same rows, the same table
+    (tmp_path / "README.md").unlink()
+    target = tmp_path / "elsewhere.md"
+    target.write_text("kept")
+    (tmp_path / "README.md").symlink_to(target)
+    assert study([*arguments, "--force"]) == 2
+    assert target.read_text() == "kept"

@@ -1,7 +1,7 @@
 """``timing-study``: what free-running timing does to evolved trees, against the lockstep.
 
-    ws/run evolution_manager timing-study --out docs/results/timing [--trials 6] [--foraging-trials 3]
-    ws/run evolution_manager timing-study --table-only --out docs/results/timing
+    ws/run evolution_manager timing-study --force --out docs/results/timing [--trials 6] [--foraging-trials 3]
+    ws/run evolution_manager timing-study --table-only --force --out docs/results/timing
 
 For each task it runs the committed best trees through the full node graph twice, on the same trials: in
 lockstep (every step waits for every controller: bit-exact with ``evaluate``) and free-running (``trial
@@ -19,7 +19,8 @@ wall seconds, nominal seconds) and ``README.md``: per task the mean fitness in e
 paired difference (free minus lockstep) with a 95 % percentile bootstrap interval (10,000 resamples of the
 pairs, a ``numpy.random.Generator`` seeded with ``--ci-seed`` passed explicitly:
 ``studies.intervals``), the machine's load while it ran, and the command that made it. ``--table-only``
-remakes ``README.md`` from ``trials.csv``.
+remakes ``README.md`` from ``trials.csv``. An output that exists is overwritten only with ``--force``; a
+link at one is refused.
 """
 
 from __future__ import annotations
@@ -38,12 +39,16 @@ import numpy as np
 
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, non_negative_int, positive_int
 from evolution_manager.errors import GraphError, TrialFailedError, UsageError
+from evolution_manager.graph.nodes.trial import rate_argument
 from evolution_manager.studies.intervals import RESAMPLES, interval
+from swarm_ros.safe_paths import UnsafePathError, check_folder, check_output, make_folder, replace_file
 
 FIELDS = ("task", "objective", "seed", "trial", "timing", "rate", "fitness", "wall_s", "nominal_s")
 """The columns of ``trials.csv``."""
 CI_SEED = 40
 """The default seed of the bootstrap's generator."""
+OUT = "docs/results/timing"
+"""Where the committed study lives."""
 
 
 @dataclass(frozen=True)
@@ -90,7 +95,7 @@ def study_trials(task: str, count: int) -> list[int]:
 
 def run_timing(tree: StudyTree, timing: str, rate: float, seed: int, trials: Sequence[int]) -> list[dict]:
     """Every trial of ``trials`` of ``seed`` through one graph of ``timing``; one row per trial."""
-    from evolution_manager.graph.nodes.trial import TrialGraph
+    from evolution_manager.graph.nodes.trial import TrialGraph  # rclpy: only when trials run
     from swarm_sim.model import VALUE_NAMES, SwarmLayout
     from swarm_sim.tasks import resolve_task
 
@@ -217,8 +222,8 @@ def markdown(rows: Sequence[dict], trees: Sequence[StudyTree], ci_seed: int, not
         "Made with:",
         "",
         "```bash",
-        f"ws/run evolution_manager timing-study --out docs/results/timing {notes.get('arguments', '')}",
-        "ws/run evolution_manager timing-study --table-only --out docs/results/timing   # the table again",
+        f"ws/run evolution_manager timing-study --force --out {OUT} {notes.get('arguments', '')}",
+        f"ws/run evolution_manager timing-study --table-only --force --out {OUT}   # the table again",
         "```",
         "",
         f"Machine: {notes.get('machine', 'not recorded')}",
@@ -228,10 +233,15 @@ def markdown(rows: Sequence[dict], trees: Sequence[StudyTree], ci_seed: int, not
 
 
 def write_rows(path: Path, rows: Sequence[dict]) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=FIELDS, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(rows)
+    """``trials.csv``, written whole (a link at it refused)."""
+
+    def write(temporary: Path) -> None:
+        with temporary.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=FIELDS, lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(rows)
+
+    replace_file(path, write)
 
 
 def read_rows(path: Path) -> list[dict]:
@@ -259,10 +269,13 @@ def study(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--foraging-trials", type=non_negative_int, default=3, help="foraging trials (default 3; 100 s each)"
     )
-    parser.add_argument("--rate", type=float, default=1.0, help="free timing's rate (default 1.0: real time)")
+    parser.add_argument(
+        "--rate", type=rate_argument, default=1.0, help="free timing's rate (default 1.0: real time)"
+    )
     parser.add_argument("--seed", type=non_negative_int, default=1, help="the trials' seed (default 1)")
     parser.add_argument("--ci-seed", type=non_negative_int, default=CI_SEED, help="the bootstrap's seed")
     parser.add_argument("--table-only", action="store_true", help="remake README.md from trials.csv")
+    parser.add_argument("--force", action="store_true", help="overwrite the outputs that exist")
     parser.add_argument(
         "--repo", type=Path, default=Path("."), help="the repository holding the experiments (default: here)"
     )
@@ -272,11 +285,14 @@ def study(argv: Sequence[str] | None = None) -> int:
         trees = [best_food_tree(root), best_forager_swarm(root)]
         csv_path, readme = args.out / "trials.csv", args.out / "README.md"
         notes_path = args.out / "machine.json"
+        check_folder(args.out, "--out")
+        for output in [readme] if args.table_only else [csv_path, readme, notes_path]:
+            check_output(output, args.force, "--out")
         if args.table_only:
             rows = read_rows(csv_path)
             notes = json.loads(notes_path.read_text()) if notes_path.is_file() else {}
         else:
-            args.out.mkdir(parents=True, exist_ok=True)
+            make_folder(args.out)
             before = load_average()
             rows = []
             for tree, count in ((trees[0], args.trials), (trees[1], args.foraging_trials)):
@@ -295,9 +311,14 @@ def study(argv: Sequence[str] | None = None) -> int:
                 "machine": f"{before} before the study, {load_average()} after it (other work running); "
                 f"finished {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
             }
-            notes_path.write_text(json.dumps(notes, indent=1) + "\n")
-        readme.write_text(markdown(rows, trees, args.ci_seed, notes, root))
+            text = json.dumps(notes, indent=1) + "\n"
+            replace_file(notes_path, lambda temporary: temporary.write_text(text))
+        page = markdown(rows, trees, args.ci_seed, notes, root)
+        replace_file(readme, lambda temporary: temporary.write_text(page))
     except UsageError as error:
+        print(f"timing-study: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except UnsafePathError as error:
         print(f"timing-study: {error}", file=sys.stderr)
         return EXIT_USAGE
     except (GraphError, TrialFailedError) as error:
