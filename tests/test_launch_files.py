@@ -28,6 +28,8 @@ LAUNCH_DIR = Path(get_package_share_directory("evolution_manager")) / "launch"
 ARGUMENTS = {
     # every option of `trial` that shapes the graph, and the controllers' commands and use_sim_time
     "trial_graph.launch.py": {
+        "timing",
+        "rate",
         "robots",
         "namespace",
         "tree",
@@ -110,6 +112,14 @@ def test_the_launch_arguments_give_each_graph_its_clock_sim_time_commands_task_a
     assert len(nodes) == 1 + foraging.robots.count
     assert all(n.parameters == {"library": str(library), "tree": "go"} for n in nodes[1:])
 
+    free = launch_graph_nodes({"timing": "free", "rate": "2.5", "robots": "2"})
+    assert free[0].parameters == {"n_robots": 2, "timing": "free", "rate": 2.5}
+    assert all(n.parameters == {"timing": "free", "use_sim_time": True} for n in free[1:])
+    assert "timing" not in launch_graph_nodes({"robots": "2"})[0].parameters  # lockstep: the nodes' default
+    with pytest.raises(GraphError, match="rate:=fast: expected a number"):
+        launch_graph_nodes({"timing": "free", "rate": "fast"})
+    with pytest.raises(GraphError, match="timing 'loose': expected one of lockstep, free"):
+        launch_graph_nodes({"timing": "loose"})
     with pytest.raises(GraphError, match="unknown launch arguments seed"):
         launch_graph_nodes({"seed": "1"})
     with pytest.raises(GraphError, match="use_sim_time:=yes"):

@@ -153,3 +153,14 @@ def test_a_controller_commands_parameter_names_what_it_takes():
     assert (
         line == "footbot_controller: parameter commands := 'joystick': expected one of wheels, cmd_vel, both"
     )
+
+
+def test_the_timing_and_cmd_vel_type_parameters_name_what_they_take():
+    assert refused("simulator", "-p", "timing:=fast", namespace="/") == (
+        "simulator: parameter timing := 'fast': expected one of lockstep, free"
+    )
+    line = refused("simulator", "-p", "rate:=0.0", namespace="/")
+    assert line.startswith("simulator: parameter rate := 0.0:"), line
+    line = refused("footbot_controller", "-p", "cmd_vel_type:=Twist3")
+    expected = "parameter cmd_vel_type := 'Twist3': expected one of TwistStamped, Twist"
+    assert line == f"footbot_controller: {expected}"

@@ -1,17 +1,20 @@
 """ROS 2 habits of the graph's nodes, each shown with real node processes and real clients: the simulator and
 the evaluator are managed (lifecycle) nodes driven through ``change_state``, report on ``/diagnostics``, and
 reject a goal they cannot run in the goal callback; the simulator's clock is ``/clock`` whatever its
-namespace; the footbot controller can publish ``geometry_msgs/Twist`` on ``cmd_vel`` (REP 103 units)."""
+namespace; the footbot controller can publish ``geometry_msgs/TwistStamped`` (or ``Twist``) on ``cmd_vel``
+(REP 103 units)."""
 
 import time
 
 import pytest
 import rclpy
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import Twist, TwistStamped
 from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from std_msgs.msg import Header
 
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
 from evolution_manager.graph.startup import Graph
@@ -220,21 +223,21 @@ def test_the_simulator_is_managed_its_clock_is_at_the_root_and_bad_goals_are_rej
     assert life.state(ros.wait, LONG) == "finalized"
 
 
-def test_the_controller_publishes_each_step_as_a_twist_on_cmd_vel_in_rep_103_units(ros):
-    ros.nodes.start(
-        "footbot_2",
-        "bt_controller",
-        "footbot_controller",
-        namespace="/footbot_2",
-        parameters={"commands": "both", "tree": "forward_left"},
-    )
-    wheels, twists = [], []
+def test_the_controller_publishes_each_step_on_cmd_vel_as_twist_stamped_or_twist_in_rep_103_units(ros):
+    # footbot_2 with the default type (TwistStamped), footbot_3 with cmd_vel_type:=Twist, in one graph
+    for name, extra in (("footbot_2", {}), ("footbot_3", {"cmd_vel_type": "Twist"})):
+        ros.nodes.start(
+            name,
+            "bt_controller",
+            "footbot_controller",
+            namespace=f"/{name}",
+            parameters={"commands": "both", "tree": "forward_left", **extra},
+        )
+    wheels, stamped, plain, wheels_3 = [], [], [], []
     ros.node.create_subscription(WheelCommand, "/footbot_2/wheels", wheels.append, RELIABLE)
-    ros.node.create_subscription(Twist, "/footbot_2/cmd_vel", twists.append, RELIABLE)
-    ground = ros.node.create_publisher(GroundSensor, "/footbot_2/ground", RELIABLE)
-    readings = ros.node.create_publisher(RangeAndBearingReadings, "/footbot_2/range_and_bearing", RELIABLE)
-    start = ros.node.create_client(StartTrial, "/footbot_2/start_trial")
-    ros.spin_until(start.service_is_ready, "the controller's start_trial service")
+    ros.node.create_subscription(TwistStamped, "/footbot_2/cmd_vel", stamped.append, RELIABLE)
+    ros.node.create_subscription(WheelCommand, "/footbot_3/wheels", wheels_3.append, RELIABLE)
+    ros.node.create_subscription(Twist, "/footbot_3/cmd_vel", plain.append, RELIABLE)
     c = DEFAULT
     request = StartTrial.Request(
         seed=3,
@@ -253,23 +256,38 @@ def test_the_controller_publishes_each_step_as_a_twist_on_cmd_vel_in_rep_103_uni
         wheel_speed=c.wheel_speed / 1000,
         wheel_separation=c.wheel_separation / 1000,
     )
-    assert ros.answer(start.call_async(request), "start_trial").success
-    ros.spin_until(
-        lambda: ground.get_subscription_count() and readings.get_subscription_count(), "the subscriptions"
-    )
-    ros.spin_until(lambda: ros.node.count_publishers("/footbot_2/cmd_vel"), "the cmd_vel publisher")
     steps = 3 * c.steps_per_tick
-    for step in range(1, steps + 1):
-        ground.publish(GroundSensor(step=step))
-        readings.publish(RangeAndBearingReadings(step=step))
-    ros.spin_until(lambda: len(wheels) == steps and len(twists) == steps, "every step's wheels and twist")
+    for name in ("footbot_2", "footbot_3"):
+        ground = ros.node.create_publisher(GroundSensor, f"/{name}/ground", RELIABLE)
+        readings = ros.node.create_publisher(RangeAndBearingReadings, f"/{name}/range_and_bearing", RELIABLE)
+        start = ros.node.create_client(StartTrial, f"/{name}/start_trial")
+        ros.spin_until(start.service_is_ready, f"{name}'s start_trial service")
+        assert ros.answer(start.call_async(request), "start_trial").success
+        ros.spin_until(
+            lambda g=ground, r=readings: g.get_subscription_count() and r.get_subscription_count(),
+            "the subscriptions",
+        )
+        ros.spin_until(lambda n=name: ros.node.count_publishers(f"/{n}/cmd_vel"), "the cmd_vel publisher")
+        for step in range(1, steps + 1):
+            stamp = Time(sec=step // 8, nanosec=(step % 8) * 125_000_000)
+            ground.publish(GroundSensor(header=Header(stamp=stamp), step=step))
+            readings.publish(RangeAndBearingReadings(step=step))
+    ros.spin_until(
+        lambda: len(wheels) == len(stamped) == len(wheels_3) == len(plain) == steps,
+        "every step's wheels and cmd_vel",
+    )
 
     separation = c.wheel_separation / 1000  # m
-    for wheel, twist in zip(wheels, twists, strict=True):
-        assert twist.linear.x == pytest.approx((wheel.left + wheel.right) / 2)
-        assert twist.angular.z == pytest.approx((wheel.right - wheel.left) / separation)
-        assert (twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y) == (0, 0, 0, 0)
-    turning = [t for w, t in zip(wheels, twists, strict=True) if w.action_name == "forward_left"]
+    assert [t.twist for t in stamped] == plain  # the same velocities, stamped or not
+    for wheel, twist in zip(wheels, stamped, strict=True):
+        assert twist.header.frame_id == "footbot_2/base_link"  # the robot's own base frame (REP 105)
+        assert twist.header.stamp == wheel.header.stamp  # the step's time
+        velocity = twist.twist
+        assert velocity.linear.x == pytest.approx((wheel.left + wheel.right) / 2)
+        assert velocity.angular.z == pytest.approx((wheel.right - wheel.left) / separation)
+        assert (velocity.linear.y, velocity.linear.z, velocity.angular.x, velocity.angular.y) == (0, 0, 0, 0)
+    assert [w.header.stamp.nanosec for w in wheels][1] == 250_000_000  # step 2's stamp, passed through
+    turning = [t.twist for w, t in zip(wheels, stamped, strict=True) if w.action_name == "forward_left"]
     assert turning, [w.action_name for w in wheels]
     speed = c.wheel_speed / 1000
     left, right = ACTION_WHEELS[ACTIONS.index("forward_left")]

@@ -41,6 +41,7 @@ setup(
             "report = evolution_manager.studies.report_command:main",
             "library = evolution_manager.evolution.libraries:main",
             "measure = evolution_manager.studies.measure:main",
+            "timing-study = evolution_manager.studies.timing_study:main",
             "measure-cluster = evolution_manager.studies.measure_cluster:main",
             "snapshot = evolution_manager.viewing.snapshot:main",
             "animate = evolution_manager.viewing.animate:main",

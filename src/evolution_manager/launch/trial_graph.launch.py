@@ -10,8 +10,9 @@ graph): ``robots`` (default: the task's), ``namespace`` (e.g. ``/swarm_a``; defa
 model profile; default: its parameter file's), ``task`` (a registered task or a task file), ``library`` (a
 primitive library file for every controller), ``clock`` (the graph's clock topic: ``/swarm_a/clock`` for a
 second graph in one domain), ``commands`` (the controllers' ``wheels``, ``cmd_vel`` or ``both``),
-``use_sim_time`` (``true``: every node follows the graph's clock) and ``params_file`` (a parameter file for
-every node, after the packages' own ``config/*.yaml``).
+``use_sim_time`` (``true``: every node follows the graph's clock), ``timing`` (``lockstep`` or ``free``: the
+simulator steps at ``rate`` times real time, the controllers tick on their own timers) and ``params_file`` (a
+parameter file for every node, after the packages' own ``config/*.yaml``).
 
 The node set is ``evolution_manager.graph.startup.launch_graph_nodes``, built on the same
 ``trial_graph_nodes`` that ``ws/run evolution_manager trial`` starts on the PyPI-wheel workspace (no

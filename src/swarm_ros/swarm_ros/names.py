@@ -77,6 +77,14 @@ def index_from_namespace(namespace: str) -> int | None:
     return int(match.group(1)) if match else None
 
 
+def robot_frame(namespace: str, frame: str) -> str:
+    """A robot's frame id: ``frame`` (e.g. ``base_link``, REP 105) under the robot's namespace without its
+    leading slash (``/swarm_a/footbot_3`` -> ``swarm_a/footbot_3/base_link``), so that every robot of every
+    swarm has frames of its own; ``frame`` alone at the root namespace."""
+    prefix = namespace.strip("/")
+    return f"{prefix}/{frame}" if prefix else frame
+
+
 def robot_index(namespace: str, declared: int) -> int:
     """A controller's robot index: from its namespace (``.../footbot_<i>``), checked against ``declared``
     (the ``robot`` parameter, -1 when not given). A namespace of another form needs ``declared``."""

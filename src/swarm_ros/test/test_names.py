@@ -8,6 +8,7 @@ from swarm_ros.names import (
     check_topic,
     graph_namespace,
     index_from_namespace,
+    robot_frame,
     robot_index,
     robot_namespaces,
 )
@@ -80,3 +81,16 @@ def test_topic_names(topic):
     for bad in ("", "/", "a b", "/a//b", "1x", "/a/", "\udcff"):
         with pytest.raises(NamespaceError, match="is not a ROS topic name"):
             check_topic(bad, "--clock")
+
+
+@pytest.mark.parametrize(
+    ("namespace", "frame"),
+    [
+        ("/footbot_3", "footbot_3/base_link"),
+        ("/swarm_a/footbot_3", "swarm_a/footbot_3/base_link"),
+        ("/swarm_a/footbot_3/", "swarm_a/footbot_3/base_link"),
+        ("/", "base_link"),
+    ],
+)
+def test_a_robots_frame_is_namespaced_without_a_leading_slash(namespace, frame):
+    assert robot_frame(namespace, "base_link") == frame

@@ -14,6 +14,8 @@ with one line, exit status 2):
         other parameters; a library that cannot be read stops the node with one line, exit status 2.
     commands (string, read-only): what each step's answer is published as: ``wheels`` (default; what the
         simulator waits for), ``cmd_vel``, or ``both``.
+    cmd_vel_type (string, read-only): ``TwistStamped`` (default, what ros2_control's diff_drive_controller
+        takes since Jazzy) or ``Twist`` (older bases).
     timing (string, read-only): ``lockstep`` (default): answer every sensing step of the simulator, exactly;
         ``free``: tick on the node's own timer at ``tick_rate`` against the latest sensing, as on a robot
         (``bt_controller.free_running``: the policy for lost, late and duplicated readings), the timer on the
@@ -40,10 +42,12 @@ Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
         name), its wheel speeds in m/s, the broadcast and smoothed estimates, whether it carries food and its
         deliveries in the trial so far.
-    cmd_vel (geometry_msgs/Twist, with ``commands`` cmd_vel or both): the same step's wheel speeds as a
-        velocity of the robot's base (REP 103): ``linear.x = (left + right) / 2`` in m/s and
-        ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise positive, with the wheel
-        separation the trial's ``start_trial`` gives; a differential-drive robot can be driven by it.
+    cmd_vel (geometry_msgs/TwistStamped, or Twist with ``cmd_vel_type:=Twist``; with ``commands`` cmd_vel or
+        both): the same step's wheel speeds as a velocity of the robot's base (REP 103): ``linear.x = (left +
+        right) / 2`` in m/s and ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise
+        positive, with the wheel separation the trial's ``start_trial`` gives; a differential-drive robot can
+        be driven by it. Stamped with the step's time (lockstep) or the tick's (free), in the robot's base
+        frame ``<namespace>/base_link`` (``swarm_ros.names.robot_frame``).
     tree_status (swarm_msgs/TreeStatus): the result of every tick (2 Hz in simulated time).
     /diagnostics (diagnostic_msgs/DiagnosticArray, free only): every second of steady time, and at once when
         the sensing times out: OK while sensing, WARN when timed out or before the first reading; the steps
@@ -64,7 +68,7 @@ from typing import Any
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Twist, Vector3
+from geometry_msgs.msg import Twist, TwistStamped, Vector3
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node as RosNode
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -80,7 +84,7 @@ from bt_controller.tree import Node, parse, to_text
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
-from swarm_ros.names import NamespaceError, robot_index
+from swarm_ros.names import NamespaceError, robot_frame, robot_index
 from swarm_ros.parameters import ANY, ParameterError, declare_dataclass, start_node
 from swarm_ros.qos import RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
@@ -91,6 +95,8 @@ TIMINGS = ("lockstep", "free")
 """How a controller is clocked (its ``timing`` parameter)."""
 SENSOR_QOS = ("auto", "reliable", "best_effort")
 """The reliability of its sensor subscriptions (its ``sensor_qos`` parameter)."""
+CMD_VEL_TYPES = ("TwistStamped", "Twist")
+"""The message types it can publish on ``cmd_vel`` (its ``cmd_vel_type`` parameter)."""
 
 BEST_EFFORT_SENSING = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
 """Free-running sensor subscriptions: best effort matches reliable and best-effort publishers alike."""
@@ -109,7 +115,10 @@ class ControllerSettings:
     none."""
     commands: str = "wheels"
     """What each step's answer is published as: wheels (swarm_msgs/WheelCommand, what the simulator waits
-    for), cmd_vel (geometry_msgs/Twist, REP 103 units, to drive a differential-drive robot) or both."""
+    for), cmd_vel (geometry_msgs/TwistStamped, REP 103 units, to drive a differential-drive robot) or both."""
+    cmd_vel_type: str = "TwistStamped"
+    """The type published on cmd_vel: TwistStamped (ros2_control's diff_drive_controller since Jazzy) or
+    Twist (older bases)."""
     timing: str = "lockstep"
     """lockstep: answer every sensing step of the simulator (exact); free: tick on the node's own timer
     against the latest sensing (simulated time under use_sim_time, else wall time), stopping after a sensing
@@ -128,7 +137,12 @@ class ControllerSettings:
     """Free timing: the wheel separation in m until a start_trial gives the trial's."""
 
     def __post_init__(self) -> None:
-        for name, allowed in (("commands", COMMANDS), ("timing", TIMINGS), ("sensor_qos", SENSOR_QOS)):
+        for name, allowed in (
+            ("commands", COMMANDS),
+            ("cmd_vel_type", CMD_VEL_TYPES),
+            ("timing", TIMINGS),
+            ("sensor_qos", SENSOR_QOS),
+        ):
             value = getattr(self, name)
             if value not in allowed:
                 raise ParameterError(f"parameter {name} := {value!r}: expected one of {', '.join(allowed)}")
@@ -186,7 +200,13 @@ class FootbotControllerNode(RosNode):
         self._wheels = (
             self.create_publisher(WheelCommand, "wheels", RELIABLE) if commands != "cmd_vel" else None
         )
-        self._cmd_vel = self.create_publisher(Twist, "cmd_vel", RELIABLE) if commands != "wheels" else None
+        self.base_frame = robot_frame(self.get_namespace(), "base_link")
+        stamped = self.settings.cmd_vel_type == "TwistStamped"
+        self._cmd_vel = (
+            self.create_publisher(TwistStamped if stamped else Twist, "cmd_vel", RELIABLE)
+            if commands != "wheels"
+            else None
+        )
         self._status = self.create_publisher(TreeStatus, "tree_status", RELIABLE)
         sensing = BEST_EFFORT_SENSING if self.settings.best_effort else RELIABLE
         self.create_subscription(GroundSensor, "ground", self._on_ground, sensing)
@@ -317,10 +337,21 @@ class FootbotControllerNode(RosNode):
         status, wheels = free_messages(outcome, self.free, header, self.robot, self.wheel_speed)
         if status is not None:
             self._status.publish(status)
-        if self._cmd_vel is not None:
-            self._cmd_vel.publish(twist(wheels.left, wheels.right, self.wheel_separation))
+        self._publish_cmd_vel(wheels)
         if self._wheels is not None:
             self._wheels.publish(wheels)
+
+    def _publish_cmd_vel(self, wheels: WheelCommand) -> None:
+        """The wheel command as the base's velocity on ``cmd_vel`` (when it is published), stamped as the
+        command, in the robot's base frame when the type has a header."""
+        if self._cmd_vel is None:
+            return
+        velocity = twist(wheels.left, wheels.right, self.wheel_separation)
+        if self.settings.cmd_vel_type == "Twist":
+            self._cmd_vel.publish(velocity)
+        else:
+            header = Header(stamp=wheels.header.stamp, frame_id=self.base_frame)
+            self._cmd_vel.publish(TwistStamped(header=header, twist=velocity))
 
     def _publish_diagnostics(self) -> None:
         """Free timing: the sensing's state on /diagnostics."""
@@ -369,8 +400,7 @@ class FootbotControllerNode(RosNode):
             status, wheels = answer_messages(outcome, ground.header, self.robot, self.wheel_speed)
             if status is not None:
                 self._status.publish(status)
-            if self._cmd_vel is not None:
-                self._cmd_vel.publish(twist(wheels.left, wheels.right, self.wheel_separation))
+            self._publish_cmd_vel(wheels)
             if self._wheels is None:
                 continue
             self._wheels.publish(wheels)

@@ -33,6 +33,7 @@ from swarm_ros.isolation import domain_environment
 from swarm_ros.names import robot_namespaces
 from swarm_ros.safe_paths import UnsafePathError, make_folder, open_no_follow
 from swarm_sim.model import DEFAULT, load_layout
+from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS
 from swarm_sim.tasks import resolve_task, world_parameters
 
 
@@ -214,6 +215,8 @@ def trial_graph_nodes(
     clock: str = "/clock",
     library: str = "",
     world: Mapping[str, object] | None = None,
+    timing: str = "lockstep",
+    rate: float = 1.0,
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
@@ -223,9 +226,16 @@ def trial_graph_nodes(
     ``swarm_sim.model.conditions``) change the simulator's world; ``clock``: the topic of the simulator's
     clock (``/clock``, at the root whatever the namespace, unless two graphs share a domain); ``library``: a
     primitive library file every controller reads (its ``library`` parameter); ``world``: the simulator's
-    world parameters a task sets (``swarm_sim.tasks.world_parameters``; ``n_robots`` is ``robots``'s)."""
+    world parameters a task sets (``swarm_sim.tasks.world_parameters``; ``n_robots`` is ``robots``'s);
+    ``timing``: ``lockstep`` (the default: the nodes' own defaults, bit-exact) or ``free`` (the simulator
+    steps at ``rate`` times real time with each robot's latest answer; the controllers tick on their own
+    timers in the graph's simulated time, ``timing:=free`` and ``use_sim_time:=true``)."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
+    if timing not in TIMINGS:
+        raise GraphError(f"timing {timing!r}: expected one of {', '.join(TIMINGS)}")
+    if not RATE_RANGE[0] <= rate <= RATE_RANGE[1]:
+        raise GraphError(f"rate {rate}: expected a number in {RATE_RANGE[0]}..{RATE_RANGE[1]}")
     prefix = namespace.rstrip("/")
     simulator: dict[str, object] = {**(world or {}), "n_robots": robots}
     if profile:
@@ -233,6 +243,9 @@ def trial_graph_nodes(
     if conditions:
         simulator["conditions"] = " ".join(conditions)
     controller: dict[str, object] = {"library": library} if library else {}
+    if timing == "free":
+        simulator.update(timing="free", rate=float(rate))
+        controller.update(timing="free", use_sim_time=True)
     trees = [tree] * robots if isinstance(tree, str) else list(tree)
     if len(trees) != robots:
         raise GraphError(f"{len(trees)} trees for {robots} robots: give one tree, or one per robot")
@@ -264,6 +277,12 @@ LAUNCH_ARGUMENTS: dict[str, tuple[str, str]] = {
     "clock": ("/clock", "the graph's clock topic; give each graph in a domain its own, e.g. /swarm_a/clock"),
     "commands": ("", "what the controllers publish: wheels, cmd_vel or both (default: wheels)"),
     "use_sim_time": ("false", "every node follows the graph's clock (true or false)"),
+    "timing": (
+        "lockstep",
+        "lockstep (exact) or free: the simulator steps at rate times real time, the "
+        "controllers tick on their own timers",
+    ),
+    "rate": ("1.0", "free timing: simulated seconds per second of wall time"),
     "params_file": ("", "a parameter file for every node, after the packages' own"),
 }
 """The arguments of ``trial_graph.launch.py``: name -> (default, description). The options of ``trial`` that
@@ -284,6 +303,10 @@ def launch_graph_nodes(arguments: Mapping[str, str]) -> list[NodeSpec]:
     if value["use_sim_time"] not in ("true", "false"):
         raise GraphError(f"use_sim_time:={value['use_sim_time']}: expected true or false")
     try:
+        rate = float(value["rate"])
+    except ValueError:
+        raise GraphError(f"rate:={value['rate']}: expected a number") from None
+    try:
         task = resolve_task(value["task"]) if value["task"] else None
         robots = int(value["robots"]) if value["robots"] else task.robots.count if task else DEFAULT.n_robots
         library = load_library(value["library"]) if value["library"] else None
@@ -300,6 +323,8 @@ def launch_graph_nodes(arguments: Mapping[str, str]) -> list[NodeSpec]:
         clock=value["clock"],
         library=value["library"],
         world=world_parameters(task.config(value["profile"] or None)) if task else None,
+        timing=value["timing"],
+        rate=rate,
     )
     sim_time = {"use_sim_time": True} if value["use_sim_time"] == "true" else {}
     commands = {"commands": value["commands"]} if value["commands"] else {}
@@ -321,14 +346,25 @@ def start_trial_graph(
     clock: str = "/clock",
     library: str = "",
     world: Mapping[str, object] | None = None,
+    timing: str = "lockstep",
+    rate: float = 1.0,
 ) -> None:
     """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
-    clock=clock, library=library, world=world)``, each in its own process, with its package's parameter file
-    and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``, ``profile`` (when given) the
-    simulator's model profile. The simulator, a managed node, is started unconfigured (``autostart:=false``):
-    the caller drives it through configure and activate (``TrialRunner.activate``)."""
+    clock=clock, library=library, world=world, timing=timing, rate=rate)``, each in its own process, with its
+    package's parameter file and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``,
+    ``profile`` (when given) the simulator's model profile. The simulator, a managed node, is started
+    unconfigured (``autostart:=false``): the caller drives it through configure and activate
+    (``TrialRunner.activate``)."""
     nodes = trial_graph_nodes(
-        robots, namespace, profile=profile, conditions=conditions, clock=clock, library=library, world=world
+        robots,
+        namespace,
+        profile=profile,
+        conditions=conditions,
+        clock=clock,
+        library=library,
+        world=world,
+        timing=timing,
+        rate=rate,
     )
     for spec in nodes:
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]

@@ -22,6 +22,10 @@ stops the node with one line, exit status 2):
         controllers at any step before the trial is abandoned with an error (default 60): it detects dead
         nodes; it is no speed limit.
     autostart (bool, read-only, default true): configure and activate at start.
+    timing (string, read-only): ``lockstep`` (default): every step waits for every controller's answer, so a
+        trial is bit-exact with the batch evaluator; ``free``: the world steps on its own, ``rate`` times real
+        time, and each step takes every robot's latest answer, whatever step it answered (below).
+    rate (float, read-only, free only): simulated seconds per second of wall time (default 1.0: real time).
 
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
@@ -38,6 +42,12 @@ Publishers:
     <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
         (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
     <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
+    <robot>/odom (nav_msgs/Odometry): each robot's pose in its frame ``<robot>/odom`` (which coincides with
+        ``arena``: the simulator's odometry is exact) and its velocity over the last step in
+        ``<robot>/base_link`` (REP 105; ``<robot>``: the robot's full namespace without the leading slash).
+    /tf (tf2_msgs/TFMessage): every step, each robot's ``<robot>/base_link`` in its ``<robot>/odom``; at the
+        root, as tf2 expects, the frames being namespaced.
+    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity).
     swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step, with whether each robot
         carries food and its deliveries in the trial, as it answered the step before.
     poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
@@ -55,6 +65,15 @@ Actions and services:
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
 step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.roads.lockstep``.
+
+Free (``timing:=free``, for free-running controllers, ``bt_controller``'s ``timing:=free`` under
+``use_sim_time``): step ``j`` of a chain is published at ``j * step_dt / rate`` seconds of wall time after its
+first, and the world then advances with each robot's latest ``wheels`` (its motors, broadcast and smoothed
+values, carrying flag) whatever step it answered; a robot that has not answered yet is stopped and broadcasts
+the model's initial values (``FreeAnswers``). The tree statuses received since the last tick step count at the
+next tick step. Deliveries count from each trial's first step (a free controller keeps counting across a
+chain's trials). A step the machine could not publish in time is published at once (``late steps`` on
+``/diagnostics``, and a warning at the trial's end). The results depend on the machine's speed and load.
 """
 
 from __future__ import annotations
@@ -70,6 +89,7 @@ from typing import Any
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseArray, PoseStamped
+from nav_msgs.msg import Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
@@ -84,6 +104,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
+from bt_controller import timeline
 from bt_controller.model_settings import arena_of_trial, chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
 from bt_controller.vocabulary import ACTIONS
@@ -100,8 +121,9 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
-from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_namespaces
+from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frame, robot_namespaces
 from swarm_ros.parameters import (
+    ParameterError,
     check_file_values,
     declare,
     declare_dataclass,
@@ -117,8 +139,9 @@ from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
 from swarm_sim.model import DEFAULT, Config, apply_conditions
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.settings import EvaluatorSettings
-from swarm_sim.roads import LockstepChain, RobotAnswer, warm_up
+from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
+from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
+from tf2_msgs.msg import TFMessage
 
 WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
@@ -192,6 +215,38 @@ class SimulatorNode(ManagedNode):
                 value_range=ANSWER_TIMEOUT_RANGE,
             ),
         )
+        self.timing: str = declare(
+            self,
+            "timing",
+            "lockstep",
+            descriptor(
+                "lockstep: wait for every controller's answer to every step (exact); free: step at rate "
+                "times real time with each robot's latest answer",
+                read_only=True,
+            ),
+        )
+        if self.timing not in TIMINGS:
+            raise ParameterError(f"parameter timing := {self.timing!r}: expected one of {', '.join(TIMINGS)}")
+        self.rate: float = declare(
+            self,
+            "rate",
+            1.0,
+            descriptor(
+                "free timing: simulated seconds per second of wall time",
+                read_only=True,
+                value_range=RATE_RANGE,
+            ),
+        )
+        self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
+        graph = self.get_namespace().rstrip("/")
+        self.frames = [
+            (robot_frame(f"{graph}/{ns}", "odom"), robot_frame(f"{graph}/{ns}", "base_link"))
+            for ns in self.namespaces
+        ]
+        """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
+        self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
+        self.late_steps = 0
+        self._chain_start_ns = 0
         self.sim_time_ns = 0
         self.step_ns = round(self.config.step_dt * 1e9)
         self._lock = threading.Condition()
@@ -218,14 +273,18 @@ class SimulatorNode(ManagedNode):
         self._robot_markers = publisher(MarkerArray, "robot_markers")
         self._state = publisher(SwarmState, "swarm_state")
         self._poses = publisher(PoseArray, "poses")
+        self._tf = publisher(TFMessage, "/tf")
+        self._tf_static = publisher(TFMessage, "/tf_static", LATCHED)
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
         self._pose: list[Publisher] = []
+        self._odom: list[Publisher] = []
         self._start_clients: list[Client] = []
         for i, ns in enumerate(self.namespaces):
             self._ground.append(publisher(GroundSensor, f"{ns}/ground"))
             self._readings.append(publisher(RangeAndBearingReadings, f"{ns}/range_and_bearing"))
             self._pose.append(publisher(PoseStamped, f"{ns}/pose"))
+            self._odom.append(publisher(Odometry, f"{ns}/odom"))
             for msg_class, topic, callback in (
                 (WheelCommand, f"{ns}/wheels", self._on_wheels),
                 (TreeStatus, f"{ns}/tree_status", self._on_status),
@@ -257,6 +316,14 @@ class SimulatorNode(ManagedNode):
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
         self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
+        self._tf_static.publish(
+            TFMessage(
+                transforms=[
+                    visualisation.transform(self._stamp(), visualisation.FRAME, odom, 0.0, 0.0, 0.0)
+                    for odom, _ in self.frames
+                ]
+            )
+        )
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
@@ -290,7 +357,10 @@ class SimulatorNode(ManagedNode):
                 "trial": self.trial_under_way or "none",
                 "trials run": str(self.trials),
                 "goals waiting": str(self.goals_waiting),
+                "timing": self.timing if self.timing == "lockstep" else f"free at {self.rate} x real time",
             }
+            if self.timing == "free":
+                values["late steps"] = str(self.late_steps)
         rate = (steps - before) / (now - then) if now > then else 0.0
         return {**values, "steps per second": f"{rate:.1f}"}
 
@@ -314,6 +384,10 @@ class SimulatorNode(ManagedNode):
             return
         with self._lock:
             inbox = self._inbox
+            if self.timing == "free":
+                if inbox.answers is not None and self._of_this_chain(msg.header):  # a chain is under way
+                    self.free.answer(robot, robot_answer(msg))
+                return
             if inbox.answers is not None and msg.step == inbox.step:
                 inbox.answers[robot] = msg
                 self._lock.notify_all()
@@ -324,9 +398,19 @@ class SimulatorNode(ManagedNode):
             return
         with self._lock:
             inbox = self._inbox
+            if self.timing == "free":
+                if inbox.statuses is not None and self._of_this_chain(msg.header):
+                    self.free.status(robot, msg.condition_ticks, msg.action)
+                return
             if inbox.statuses is not None and msg.step == inbox.step:
                 inbox.statuses[robot] = msg
                 self._lock.notify_all()
+
+    def _of_this_chain(self, header: Header) -> bool:
+        """Free timing: whether an answer was stamped in the chain under way (a free controller stamps with
+        its clock, the graph's simulated time, which the chain's first step sets to its start): an answer of
+        an earlier chain still in flight, its deliveries counted from that chain's start, is dropped."""
+        return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec >= self._chain_start_ns
 
     def _wrong_robot(self, robot: int, claimed: int) -> None:
         self.get_logger().error(
@@ -423,10 +507,15 @@ class SimulatorNode(ManagedNode):
         self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
+            self.free.start_chain()
+            self._chain_start_ns = self.sim_time_ns
         self._trial_start.publish(
             trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
         record: TrialRecord | None = None
+        late = 0
+        started = time.monotonic()
+        published = 0
         while not world.done:
             if goal is not None and goal.is_cancel_requested:
                 with self._lock:
@@ -439,39 +528,67 @@ class SimulatorNode(ManagedNode):
                     f"trial {trial} of seed {seed} abandoned at step {world.step}: the simulator was "
                     "deactivated"
                 )
+            if self.timing == "free" and timeline.step_in_trial(world.line, world.step) == 1:
+                with self._lock:
+                    self.free.begin_trial()
             self._publish_step(world, seed)
+            published += 1
             if goal is not None:
                 goal.publish_feedback(RunTrialAction.Feedback(step=world.step, steps=steps))
-            answers = self._await_answers(world.step)
-            statuses = self._await_statuses(world.step) if world.ticks_now() else None
-            for i, answer in enumerate(answers):
-                if answer.action >= len(ACTIONS):
+            if self.timing == "free":
+                late += not self._sleep_until(started + published * self.config.step_dt / self.rate)
+                with self._lock:
+                    robot_answers = self.free.answers(world.ticks_now())
+            else:
+                robot_answers = self._lockstep_answers(world.step, world.ticks_now())
+            for i, answer in enumerate(robot_answers):
+                if not 0 <= answer.action < len(ACTIONS):
                     raise TrialAbandonedError(
                         f"{self.namespaces[i]} answered step {world.step} with action {answer.action}; "
                         f"expected 0..{len(ACTIONS) - 1}"
                     )
-            self._actions = [ACTIONS[a.action] for a in answers]
-            record = world.advance(
-                [
-                    RobotAnswer(
-                        action=a.action,
-                        broadcast=(a.nest_estimate, a.food_estimate),
-                        smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
-                        condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
-                        started=statuses[i].action if statuses is not None else -1,
-                        carrying=a.carrying,
-                        deliveries=a.deliveries,
-                    )
-                    for i, a in enumerate(answers)
-                ]
-            )
+            self._actions = [ACTIONS[a.action] for a in robot_answers]
+            record = world.advance(robot_answers)
             self.sim_time_ns += self.step_ns
             with self._figures:
                 self.steps += 1
             with self._lock:
                 self._inbox = _Inbox(step=world.step, answers={}, statuses={}) if not world.done else _Inbox()
         assert record is not None and record.trial == trial, "the chain's last record is the trial asked for"
+        if late:
+            with self._figures:
+                self.late_steps += late
+            self.get_logger().warning(
+                f"free timing: {late} of {published} steps of trial {trial} of seed {seed} were published "
+                f"late (this machine did not keep {self.rate} times real time)"
+            )
         return record
+
+    def _lockstep_answers(self, step: int, ticks: bool) -> list[RobotAnswer]:
+        """Lockstep: every robot's answer to ``step`` (and its tree status at a tick step), waited for."""
+        answers = self._await_answers(step)
+        statuses = self._await_statuses(step) if ticks else None
+        return [
+            RobotAnswer(
+                action=a.action,
+                broadcast=(a.nest_estimate, a.food_estimate),
+                smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
+                condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
+                started=statuses[i].action if statuses is not None else -1,
+                carrying=a.carrying,
+                deliveries=a.deliveries,
+            )
+            for i, a in enumerate(answers)
+        ]
+
+    def _sleep_until(self, deadline: float) -> bool:
+        """Free timing: wait until ``deadline`` (``time.monotonic``); whether it was still ahead."""
+        ahead = deadline - time.monotonic()
+        if ahead <= 0:
+            return False
+        with self._lock:  # woken early by nothing: the answers come in under the same lock meanwhile
+            self._lock.wait_for(lambda: time.monotonic() >= deadline, ahead)
+        return True
 
     # --- steps
     def _start_controllers(self, world: LockstepChain, seed: int) -> None:
@@ -529,6 +646,23 @@ class SimulatorNode(ManagedNode):
         self._poses.publish(messages.poses)
         for publisher, pose in zip(self._pose, messages.pose, strict=True):
             publisher.publish(pose)
+        poses: list[tuple[float, float, float]] = [(x, y, t) for x, y, t in world.poses().tolist()]
+        placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
+        for i, publisher in enumerate(self._odom):
+            previous = None if placed or self._previous is None else self._previous[i]
+            odom, base = self.frames[i]
+            publisher.publish(
+                visualisation.odometry(stamp, poses[i], previous, self.config.step_dt, odom, base)
+            )
+        self._previous = poses
+        self._tf.publish(
+            TFMessage(
+                transforms=[
+                    visualisation.transform(stamp, odom, base, *pose)
+                    for (odom, base), pose in zip(self.frames, poses, strict=True)
+                ]
+            )
+        )
         self._robot_markers.publish(messages.robot_markers)
         for i in range(len(self.namespaces)):
             self._ground[i].publish(messages.ground[i])
@@ -565,6 +699,17 @@ class SimulatorNode(ManagedNode):
 
     def _header(self, frame: str) -> Header:
         return Header(stamp=self._stamp(), frame_id=frame)
+
+
+def robot_answer(msg: WheelCommand) -> RobotAnswer:
+    """A controller's ``wheels`` message as the world takes it (without a tick's status)."""
+    return RobotAnswer(
+        action=int(msg.action),
+        broadcast=(msg.nest_estimate, msg.food_estimate),
+        smoothed=(msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density),
+        carrying=bool(msg.carrying),
+        deliveries=int(msg.deliveries),
+    )
 
 
 @dataclass(frozen=True)
@@ -676,6 +821,8 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     declared["conditions"] = ("", None)
     declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
     declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
+    declared["timing"] = ("lockstep", None)
+    declared["rate"] = (1.0, RATE_RANGE)
     given = check_file_values(path, fully_qualified_name, declared, SHARED)
     world: dict[str, Any] = {
         name: tuple(value) if isinstance(value, list) else value

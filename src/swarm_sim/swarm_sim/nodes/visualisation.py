@@ -7,6 +7,10 @@
   ``<i> <namespace>: <action>`` (with its deliveries once it has made one), and the swarm's delivery counter,
   every sensing step on ``robot_markers``.
 - ``pose_stamped``: a robot's pose, every sensing step on ``<robot namespace>/pose``.
+- ``odometry``: a robot's pose and velocity as ``nav_msgs/Odometry`` in its own frames (REP 105), every
+  sensing step on ``<robot namespace>/odom``.
+- ``transform``: one frame's pose in its parent's (``geometry_msgs/TransformStamped``), for ``/tf`` (each
+  robot's ``base_link`` in its ``odom``, every step) and ``/tf_static`` (each robot's ``odom`` in ``arena``).
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ import math
 from collections.abc import Sequence
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point, Pose, PoseStamped
+from geometry_msgs.msg import Point, Pose, PoseStamped, TransformStamped
+from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -55,6 +60,48 @@ def pose_in_metres(x_mm: float, y_mm: float, theta: float, z: float = 0.0) -> Po
 def pose_stamped(stamp: Time, x_mm: float, y_mm: float, theta: float) -> PoseStamped:
     """A robot's pose in frame ``arena``, metres and radians."""
     return PoseStamped(header=Header(stamp=stamp, frame_id=FRAME), pose=pose_in_metres(x_mm, y_mm, theta))
+
+
+def transform(
+    stamp: Time, parent: str, child: str, x_mm: float, y_mm: float, theta: float
+) -> TransformStamped:
+    """Frame ``child``'s pose in frame ``parent``: translation in metres from millimetres, rotation ``theta``
+    radians about z."""
+    message = TransformStamped(header=Header(stamp=stamp, frame_id=parent), child_frame_id=child)
+    pose = pose_in_metres(x_mm, y_mm, theta)
+    translation = message.transform.translation
+    translation.x, translation.y, translation.z = pose.position.x, pose.position.y, pose.position.z
+    message.transform.rotation = pose.orientation
+    return message
+
+
+def odometry(
+    stamp: Time,
+    pose_mm: tuple[float, float, float],
+    previous_mm: tuple[float, float, float] | None,
+    dt: float,
+    odom_frame: str,
+    base_frame: str,
+) -> Odometry:
+    """A robot's odometry (REP 105): its pose ``pose_mm`` (x, y in millimetres, heading in radians) in
+    ``odom_frame`` in metres, and its velocity in ``base_frame`` (``child_frame_id``) over the last step of
+    ``dt`` seconds from ``previous_mm``: forward (``linear.x``) and sideways (``linear.y``, from pushes) in
+    m/s about the step's mean heading, turning (``angular.z``) in rad/s, anticlockwise positive. Without a
+    previous pose (a trial's first step, when the robots are placed) the velocity is zero. The simulator's
+    odometry is exact: its covariances are zero."""
+    message = Odometry(header=Header(stamp=stamp, frame_id=odom_frame), child_frame_id=base_frame)
+    x, y, theta = pose_mm
+    message.pose.pose = pose_in_metres(x, y, theta)
+    if previous_mm is not None:
+        px, py, ptheta = previous_mm
+        turn = math.remainder(theta - ptheta, math.tau)
+        heading = ptheta + turn / 2.0
+        dx, dy = (x - px) * MM, (y - py) * MM
+        velocity = message.twist.twist
+        velocity.linear.x = (dx * math.cos(heading) + dy * math.sin(heading)) / dt
+        velocity.linear.y = (-dx * math.sin(heading) + dy * math.cos(heading)) / dt
+        velocity.angular.z = turn / dt
+    return message
 
 
 def food_outline(config: Config, gap: float) -> list[tuple[float, float, float, float]]:

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import shutil
 import sys
@@ -60,7 +61,7 @@ from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
-from swarm_msgs.msg import TreeStatus, TrialStart
+from swarm_msgs.msg import TreeStatus, TrialStart, WheelCommand
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
@@ -73,6 +74,7 @@ from swarm_sim.errors import ConfigError
 from swarm_sim.evaluation import result_fields, trial_record_of
 from swarm_sim.evaluation.cli import evaluation_json
 from swarm_sim.model import DEFAULT, Config, LayoutError, SwarmLayout, apply_conditions, load_layout
+from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
 
 MAX_DOMAIN = 232
@@ -91,15 +93,24 @@ recorder lost a trial's first step on two robots after a 1 s wait)."""
 
 
 def expected_messages(
-    robots: int, namespace: str = "", trial: int = 0, config: Config = DEFAULT, clock: str = "/clock"
+    robots: int,
+    namespace: str = "",
+    trial: int = 0,
+    config: Config = DEFAULT,
+    clock: str = "/clock",
+    timing: str = "lockstep",
 ) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
-    from, ``swarm_sim.roads.lockstep.run_with_controllers``) under ``config``'s timeline."""
+    from, ``swarm_sim.roads.lockstep.run_with_controllers``) under ``config``'s timeline. Under free
+    ``timing`` the controllers publish on their own clocks: their topics are expected to carry none (whatever
+    came is recorded)."""
     line = config.timeline
     trials = chain_of_trial(line, trial)[1] + 1
     steps = trials * timeline.trial_steps(line)
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
+    if timing == "free":
+        per_trial.update({TreeStatus: 0, WheelCommand: 0})
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
         for topic, msg_class in trial_topics(robots, namespace, clock)
@@ -278,7 +289,9 @@ class TrialGraph:
     ``robots=N`` among them sets the number of controllers; ``profile`` is the model's profile
     (``docs/model.md``); ``clock``: the simulator's clock topic (``/clock``; two graphs in one domain need
     one each); ``library``: a primitive library every controller reads (a file); ``task``: the task whose
-    world the simulator runs (``swarm_sim.tasks``; ``robots`` overrides its robot count)."""
+    world the simulator runs (``swarm_sim.tasks``; ``robots`` overrides its robot count); ``timing``:
+    ``lockstep`` (exact) or ``free`` (the simulator steps at ``rate`` times real time, the controllers tick
+    on their own timers in simulated time: ``startup.trial_graph_nodes``)."""
 
     def __init__(
         self,
@@ -294,8 +307,12 @@ class TrialGraph:
         clock: str = "/clock",
         library: Path | None = None,
         task: TaskSpec | str | None = None,
+        timing: str = "lockstep",
+        rate: float = 1.0,
     ) -> None:
         self.conditions = list(conditions)
+        self.timing = timing
+        self.rate = rate
         self.clock = clock
         self.library = library
         self.task = resolve_task(DEFAULT_TASK if task is None else task)
@@ -339,6 +356,8 @@ class TrialGraph:
                 clock=self.clock,
                 library=str(self.library.absolute()) if self.library is not None else "",
                 world=world_parameters(self.world),
+                timing=self.timing,
+                rate=self.rate,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -401,7 +420,9 @@ class TrialGraph:
                 recorder.arm()
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
-                expected = expected_messages(self.robots, self.namespace, trial, self.config, self.clock)
+                expected = expected_messages(
+                    self.robots, self.namespace, trial, self.config, self.clock, self.timing
+                )
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
                 runner.spin_while_progressing(
@@ -464,6 +485,8 @@ def run_recorded_trial(
     clock: str = "/clock",
     library: Path | None = None,
     task: TaskSpec | str | None = None,
+    timing: str = "lockstep",
+    rate: float = 1.0,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
     node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other
@@ -479,6 +502,8 @@ def run_recorded_trial(
         clock=clock,
         library=library,
         task=task,
+        timing=timing,
+        rate=rate,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
@@ -515,6 +540,18 @@ def domain_id(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {text!r}") from None
     if not 0 <= value <= MAX_DOMAIN:
         raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {value}")
+    return value
+
+
+def rate_argument(text: str) -> float:
+    """``--rate``: simulated seconds per second of wall time, a number in ``RATE_RANGE``."""
+    low, high = RATE_RANGE
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"expected a number in {low:g}..{high:g}, got {text!r}")
     return value
 
 
@@ -589,6 +626,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="a ROS parameter file (YAML) for every node of the graph",
     )
     parser.add_argument(
+        "--timing",
+        choices=TIMINGS,
+        default="lockstep",
+        help="lockstep (default: every step waits for every controller, bit-exact with evaluate) or free: "
+        "the simulator steps at --rate times real time with each robot's latest answer and the controllers "
+        "tick on their own timers in simulated time, as on robots (docs/ros.md)",
+    )
+    parser.add_argument(
+        "--rate",
+        type=rate_argument,
+        default=None,
+        help="with --timing free: simulated seconds per second of wall time (default 1.0, real time)",
+    )
+    parser.add_argument(
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
     )
     try:
@@ -616,6 +667,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             ran = shown
         namespace = graph_namespace(args.namespace)  # a name ROS refuses: before any node starts
         check_topic(args.clock, "--clock")
+        if args.rate is not None and args.timing != "free":
+            raise ValueError("--rate applies to --timing free only")
         check_new_bag(args.bag)
         try:  # an unusable place fails here, at once
             args.bag.absolute().parent.mkdir(parents=True, exist_ok=True)
@@ -647,6 +700,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 clock=args.clock,
                 library=args.library,
                 task=args.task,
+                timing=args.timing,
+                rate=1.0 if args.rate is None else args.rate,
             )
     except (TreeError, LibraryError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
