@@ -62,6 +62,7 @@ from evolution_manager.evolution.libraries import (
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic, write_json
 from evolution_manager.studies import foraging_tables, intervals
+from swarm_sim.tasks import task_named
 
 ABLATION_STAGE = 5
 """The stage index of this study's seeds (the foraging study uses 0 to 3, the replication study 4)."""
@@ -104,6 +105,9 @@ LIBRARIES: dict[str, str] = {
 }
 """Library name -> how it is made."""
 
+DRAWN = ("random8", "unevolved8")
+"""The libraries made by random draws (each from a generator of its own seed, in the plan)."""
+
 METRIC = "held-out best fitness"
 """The metric the tests are made on (``foraging_tables.METRICS``)."""
 
@@ -142,9 +146,9 @@ def plan_study(
     scenario_seed = source["scenario_seed"] if source["design"] == "shared" else None
     qd_runs = [str(entry["dir"]) for entry in source["primitives"] if entry["config"]["algorithm"] == "qd"]
     index = {arm.name: a for a, arm in enumerate(ARMS)}
-    libraries = {
-        name: {"how": how, "seed": library_seed(args.seed, index[name])} for name, how in LIBRARIES.items()
-    }
+    libraries: dict[str, dict[str, object]] = {name: {"how": how} for name, how in LIBRARIES.items()}
+    for name in DRAWN:
+        libraries[name]["seed"] = library_seed(args.seed, index[name])
     libraries["elite8"]["from"] = ["libraries/qd8.json"]
     libraries["padded1"]["from"] = ["libraries/qd1.json"]
     libraries["random8"]["from"] = qd_runs
@@ -218,16 +222,16 @@ def ablation_library(name: str, folder: Path, source: Path, spec: Mapping[str, o
             raise EvolutionError(f"{error}; remove it to make it again") from None
     try:
         elite = load_library(source / "libraries" / "qd8.json")
-        rng = np.random.default_rng(int(str(spec["seed"])))
         if name == "elite8":
             entries = copied(elite, source / "libraries", folder, name)
         elif name == "padded1":
             entries = padded(load_library(source / "libraries" / "qd1.json"), source / "libraries", folder)
         elif name == "unevolved8":
-            entries = unevolved(elite, rng, int(str(spec["seed"])))
+            seed = int(str(spec["seed"]))
+            entries = unevolved(elite, np.random.default_rng(seed), seed)
         elif name == "random8":
             runs = [read_run(source / str(rel)) for rel in spec["from"]]  # type: ignore[attr-defined]
-            entries = drawn(runs, BLOCKS_PER_GRID, rng, folder)
+            entries = drawn(runs, BLOCKS_PER_GRID, np.random.default_rng(int(str(spec["seed"]))), folder)
         else:
             raise EvolutionError(f"no library {name!r} in the ablation study")
     except LibraryError as error:
@@ -282,15 +286,17 @@ def padded(library: Library, old: Path, new: Path) -> list[dict[str, object]]:
 
 def unevolved(library: Library, rng: np.random.Generator, seed: int) -> list[dict[str, object]]:
     """For each primitive of ``library``, in order, a random tree (``random_tree``) of its node count under
-    its name, drawn from ``rng`` (made from ``seed``, which the sources record)."""
+    its name, drawn from ``rng`` (made from ``seed``, which the sources record), its leaves of the node set
+    the primitives were evolved with (the ``primitives`` task's: no ``got_food``)."""
+    nodes = task_named("primitives").nodes
     entries: list[dict[str, object]] = []
     for p in library.primitives:
         size = parse(p.text).size
-        tree = random_tree(rng, size)
+        tree = random_tree(rng, size, conditions=nodes.conditions, actions=nodes.actions)
         source = {
             "ablation": {
                 "arm": "unevolved8",
-                "generator": "bt_controller.random_trees.random_tree",
+                "generator": "bt_controller.random_trees.random_tree, the primitives task's nodes",
                 "rng": f"numpy.random.default_rng({seed}), drawn in the library's order",
                 "nodes": size,
                 "size_of": {"name": p.name, "tree": p.text},
@@ -455,8 +461,8 @@ def build_report(root: Path) -> Path:
     write_runs_csv(root, table)
     per_arm, compared = tables_from_rows(table)
     libraries = "\n".join(
-        f"- `{name}` ([libraries/{name}.json](libraries/{name}.json)): {entry['how']}; draws from "
-        f"`numpy.random.default_rng({entry['seed']})` where it draws"
+        f"- `{name}` ([libraries/{name}.json](libraries/{name}.json)): {entry['how']}"
+        + (f"; drawn from `numpy.random.default_rng({entry['seed']})`" if "seed" in entry else "")
         for name, entry in document["libraries"].items()
     )
     text = (
@@ -472,6 +478,9 @@ def build_report(root: Path) -> Path:
         f"{document['primitives_from']} --runs {document['runs']} --evaluations {document['evaluations']} "
         f"--seed {document['seed']} --out {root.name}`\n\n"
         f"## Libraries\n\n{libraries}\n\n"
+        "Each primitive's `source` in its library file says where it came from. elite8 over GP is the "
+        "configuration of the foraging study's hier-qd8 arm, and me8 that of its foragers-qd arm, with seeds "
+        "of their own.\n\n"
         "## Arms\n\n"
         "Per arm, the median over its runs with its 95 % percentile bootstrap interval (the runs resampled, "
         f"{intervals.RESAMPLES:,} times, `numpy.random.default_rng({foraging_tables.BOOTSTRAP_SEED})` for "
