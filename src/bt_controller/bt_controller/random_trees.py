@@ -24,8 +24,8 @@ def random_leaf(
     """A uniformly chosen condition (with probability ``p_condition``) or action, of ``conditions`` and
     ``actions`` (the whole vocabulary by default; a task's node set, e.g. without ``got_food``)."""
     if rng.random() < p_condition:
-        return Condition(conditions[rng.integers(len(conditions))])
-    return Action(actions[rng.integers(len(actions))])
+        return Condition(conditions[int(rng.integers(len(conditions)))])
+    return Action(actions[int(rng.integers(len(actions)))])
 
 
 def random_tree(
