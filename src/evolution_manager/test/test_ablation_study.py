@@ -13,6 +13,7 @@ import pytest
 
 from bt_controller.library import load_library
 from bt_controller.tree import parse
+from evolution_manager.errors import EvolutionError
 from evolution_manager.studies import ablation_study, planning
 from evolution_manager.studies.experiment import build_parser, experiment
 
@@ -191,3 +192,18 @@ def test_the_report_command_reads_a_study_folder_of_finished_runs(planned, tmp_p
     assert "8 of 10 runs finished" in text and "padded1" not in text.split("## Arms")[1].split("## Each")[0]
     with (root / "runs.csv").open(newline="") as handle:
         assert ablation_study.tables_from_rows(list(csv.DictReader(handle)))[1] in text
+
+
+def test_a_library_file_there_is_kept_and_a_damaged_one_refused_in_one_line(planned, tmp_path):
+    out, document, _, _ = planned
+    folder = tmp_path / "libraries"
+    folder.mkdir()
+    kept = (out / "libraries" / "random8.json").read_text()
+    (folder / "random8.json").write_text(kept)
+    library = ablation_study.ablation_library("random8", folder, FORAGING, document["libraries"]["random8"])
+    assert library.digest == load_library(out / "libraries" / "random8.json").digest
+    assert (folder / "random8.json").read_text() == kept and not (folder / "elite8.json").exists()
+    (folder / "random8.json").write_text('{"format": 1, "primitives": [{"name": "stop", "tree": "stop"}]}')
+    with pytest.raises(EvolutionError, match="remove it to make it again") as caught:
+        ablation_study.ablation_library("random8", folder, FORAGING, document["libraries"]["random8"])
+    assert "\n" not in str(caught.value)
