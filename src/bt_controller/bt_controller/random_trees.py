@@ -7,31 +7,46 @@ seed.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from bt_controller.tree import Action, Composite, Condition, Node
 from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
 
 
-def random_leaf(rng: np.random.Generator, p_condition: float = 0.5) -> Node:
-    """A uniformly chosen condition (with probability ``p_condition``) or action."""
+def random_leaf(
+    rng: np.random.Generator,
+    p_condition: float = 0.5,
+    conditions: Sequence[str] = CONDITIONS,
+    actions: Sequence[str] = ACTIONS,
+) -> Node:
+    """A uniformly chosen condition (with probability ``p_condition``) or action, of ``conditions`` and
+    ``actions`` (the whole vocabulary by default; a task's node set, e.g. without ``got_food``)."""
     if rng.random() < p_condition:
-        return Condition(CONDITIONS[rng.integers(len(CONDITIONS))])
-    return Action(ACTIONS[rng.integers(len(ACTIONS))])
+        return Condition(conditions[int(rng.integers(len(conditions)))])
+    return Action(actions[int(rng.integers(len(actions)))])
 
 
 def random_tree(
-    rng: np.random.Generator, size: int, p_condition: float = 0.5, p_success: float = 0.0
+    rng: np.random.Generator,
+    size: int,
+    p_condition: float = 0.5,
+    p_success: float = 0.0,
+    conditions: Sequence[str] = CONDITIONS,
+    actions: Sequence[str] = ACTIONS,
 ) -> Node:
     """A random tree of exactly ``size`` nodes (``size`` is 1 or at least 3: 2 nodes make no tree without
     decorators); with ``p_success`` > 0 an inner node is a success decorator with that probability (any
-    ``size`` >= 1 then works)."""
+    ``size`` >= 1 then works). Its leaves are of ``conditions`` and ``actions`` (``random_leaf``)."""
     if size < 1 or (size == 2 and p_success <= 0.0):
         raise ValueError(f"no tree has {size} nodes; size must be 1 or at least 3")
     if size == 1:
-        return random_leaf(rng, p_condition)
+        return random_leaf(rng, p_condition, conditions, actions)
     if p_success > 0.0 and (size == 2 or rng.random() < p_success):
-        return Composite("success", (random_tree(rng, size - 1, p_condition, p_success),))
+        return Composite(
+            "success", (random_tree(rng, size - 1, p_condition, p_success, conditions, actions),)
+        )
     rest = size - 1
     while True:
         n = int(rng.integers(MIN_CHILDREN, min(MAX_CHILDREN, rest) + 1))
@@ -43,7 +58,9 @@ def random_tree(
         if p_success > 0.0 or np.all(parts != 2):
             break
     kind = COMPOSITES[rng.integers(len(COMPOSITES))]
-    return Composite(kind, tuple(random_tree(rng, int(p), p_condition, p_success) for p in parts))
+    return Composite(
+        kind, tuple(random_tree(rng, int(p), p_condition, p_success, conditions, actions) for p in parts)
+    )
 
 
 def random_tree_grow(

@@ -315,12 +315,14 @@ def build_parser() -> argparse.ArgumentParser:
         default="paper",
         help="paper: the 2023 paper's three algorithms on its three objectives (default); foraging: the 2024 "
         "study, primitives, libraries and foragers; replication: the 2024 comparison with a library per "
-        "primitive seed, from --primitives-from (docs/algorithms.md)",
+        "primitive seed, from --primitives-from; ablation: the 8-block QD library's ablations, from "
+        "--primitives-from (docs/algorithms.md)",
     )
     parser.add_argument(
         "--primitives-from",
         metavar="FOLDER",
-        help="with --study replication: the foraging study whose primitive runs give the libraries",
+        help="with --study replication or ablation: the foraging study whose primitive runs and libraries "
+        "give the libraries",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
@@ -409,8 +411,8 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         exclusive_lock(lock_path_for(args.out, "experiment"), f"the experiment folder {args.out}")
         scenarios = args.scenarios or "fixed"
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
-        if args.primitives_from is not None and args.study != "replication":
-            raise UsageError("--primitives-from applies to --study replication only")
+        if args.primitives_from is not None and args.study not in ("replication", "ablation"):
+            raise UsageError("--primitives-from applies to --study replication and ablation only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study  # (late: only this study needs it)
 
@@ -421,6 +423,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
             document, stages, budgets = replication_study.plan_study(args, scenarios, design)
             report = replication_study.build_report
+        elif args.study == "ablation":
+            from evolution_manager.studies import ablation_study  # (late: only this study needs it)
+
+            document, stages, budgets = ablation_study.plan_study(args, scenarios, design)
+            report = ablation_study.build_report
         else:
             from evolution_manager.studies import (
                 report as paper_report,  # (late: its figures load matplotlib)

@@ -1,9 +1,10 @@
 """Planning a study: which runs an experiment makes, in which stages, and whether a saved plan may grow.
 
 ``plan`` lists the 2023 paper's runs (every algorithm x objective x run, each with its seed and folder) and
-``paper_study`` makes its plan document; the foraging and replication studies plan theirs in their own
-modules with ``shared_scenario_seed`` and ``Stage``. ``more_runs`` says whether a new plan only adds runs to
-a saved one (``experiment --runs N`` grows an experiment), ``differences`` what else differs, for a message.
+``paper_study`` makes its plan document; the foraging, replication and ablation studies plan theirs in their
+own modules with ``shared_scenario_seed`` and ``Stage``. ``more_runs`` says whether a new plan only adds
+runs to a saved one (``experiment --runs N`` grows an experiment), ``differences`` what else differs, for a
+message.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from swarm_sim.model import PAPER_OBJECTIVES
 
 PLAN_FILE = "experiment.json"
-STUDIES = ("paper", "foraging", "replication")
+STUDIES = ("paper", "foraging", "replication", "ablation")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
 

@@ -23,7 +23,13 @@ from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run import Run, refuse_planted_links
 from evolution_manager.files import read_json
-from evolution_manager.studies import argos_transfer, foraging_study, replication_study, scenarios
+from evolution_manager.studies import (
+    ablation_study,
+    argos_transfer,
+    foraging_study,
+    replication_study,
+    scenarios,
+)
 from evolution_manager.studies.report import build_report
 from evolution_manager.viewing.results import write_results
 
@@ -80,10 +86,11 @@ def report(argv: Sequence[str] | None = None) -> int:
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
             print(scenarios.build_scenarios_report(args.dir))
-        elif _study(args.dir) == "replication":
+        elif _study(args.dir) in ("replication", "ablation"):
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to the paper's and the foraging study")
-            print(replication_study.build_report(args.dir))
+            study = replication_study if _study(args.dir) == "replication" else ablation_study
+            print(study.build_report(args.dir))
         elif _study(args.dir) == "foraging":
             if args.beside is not None:
                 raise UsageError("--beside applies to the paper's experiment, not to a foraging study")
