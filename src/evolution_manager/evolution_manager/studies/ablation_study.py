@@ -62,6 +62,7 @@ from evolution_manager.evolution.libraries import (
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic, write_json
 from evolution_manager.studies import foraging_tables, intervals
+from evolution_manager.studies.planning import primitives_study_document
 from swarm_sim.tasks import task_named
 
 ABLATION_STAGE = 5
@@ -166,17 +167,9 @@ def plan_study(
         for r in range(args.runs)
     ]
     document = {
-        "study": "ablation",
-        "primitives_from": str(source_folder),
-        "profile": source["profile"],
-        "runs": args.runs,
-        "evaluations": args.evaluations,
-        "seed": args.seed,
-        "trials": source["trials"],
-        "scenarios": scenarios,
-        "design": source["design"],
-        "scenario_seed": scenario_seed,
-        "libraries": libraries,
+        **primitives_study_document(
+            "ablation", source_folder, source, args, scenarios, scenario_seed, libraries
+        ),
         "plan": plan,
     }
     out = Path(args.out).absolute()

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Protocol
 
 from bt_controller.draws import RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
@@ -158,3 +159,30 @@ def paper_study(
         "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
     }
     return document, [lambda: planned], {path: config.evaluations for config, path in planned}
+
+
+def primitives_study_document(
+    study: str,
+    source_folder: Path,
+    source: dict,
+    args: argparse.Namespace,
+    scenarios: str,
+    scenario_seed: int | None,
+    libraries: dict,
+) -> dict:
+    """The head of the plan document of a study over a foraging study's primitives (``--primitives-from``):
+    the study, its source, the source's profile, trials and design, the options and the libraries; the
+    study appends its runs."""
+    return {
+        "study": study,
+        "primitives_from": str(source_folder),
+        "profile": source["profile"],
+        "runs": args.runs,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": source["trials"],
+        "scenarios": scenarios,
+        "design": source["design"],
+        "scenario_seed": scenario_seed,
+        "libraries": libraries,
+    }

@@ -33,6 +33,7 @@ from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
+from evolution_manager.studies.planning import primitives_study_document
 
 REPLICATION_STAGE = 4
 """The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
@@ -99,17 +100,9 @@ def plan_study(
         for r in range(args.runs)
     ]
     document = {
-        "study": "replication",
-        "primitives_from": str(source_folder),
-        "profile": source["profile"],
-        "runs": args.runs,
-        "evaluations": args.evaluations,
-        "seed": args.seed,
-        "trials": source["trials"],
-        "scenarios": scenarios,
-        "design": source["design"],
-        "scenario_seed": scenario_seed,
-        "libraries": libraries,
+        **primitives_study_document(
+            "replication", source_folder, source, args, scenarios, scenario_seed, libraries
+        ),
         "arms": arms,
     }
     out = Path(args.out).absolute()
