@@ -62,7 +62,7 @@ from evolution_manager.evolution.libraries import (
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic, write_json
 from evolution_manager.studies import foraging_tables, intervals
-from evolution_manager.studies.planning import primitives_study_document
+from evolution_manager.studies.planning import finished_foraging_runs, primitives_study_document
 from swarm_sim.tasks import task_named
 
 ABLATION_STAGE = 5
@@ -344,27 +344,16 @@ def drawn(
 
 def rows(root: Path) -> list[dict[str, str]]:
     """One ``runs.csv`` row per finished run of the study in ``root``, in the plan's order."""
-    document = read_json(Path(root) / "experiment.json")
-    if not isinstance(document, dict) or document.get("study") != "ablation":
-        raise EvolutionError(f"{root} is not an ablation study (experiment.json)")
-    found = []
-    for entry in document["plan"]:
-        summary_path = Path(root) / entry["dir"] / "summary.json"
-        summary = read_json(summary_path) if summary_path.exists() else None
-        if not isinstance(summary, dict) or not summary.get("finished"):
-            continue
-        scores = summary["objectives"]["foraging"]
-        held = scores.get("heldout_best_fitness")
-        found.append(
-            {
-                "arm": entry["arm"],
-                "run": str(int(Path(entry["dir"]).name.removeprefix("run"))),
-                "seed": str(entry["seed"]),
-                "best_fitness": repr(float(scores["best_fitness"])),
-                "heldout_best_fitness": "" if held is None else repr(float(held)),
-            }
-        )
-    return found
+    return [
+        {
+            "arm": entry["arm"],
+            "run": str(int(Path(entry["dir"]).name.removeprefix("run"))),
+            "seed": str(entry["seed"]),
+            "best_fitness": repr(best),
+            "heldout_best_fitness": "" if held is None else repr(held),
+        }
+        for entry, best, held in finished_foraging_runs(root, "ablation", "plan")
+    ]
 
 
 def _quartiles(values: Sequence[float]) -> tuple[float, float]:

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Protocol
 
 from bt_controller.draws import RUN_EXPERIMENT, RUN_SCENARIO, derive_seed
-from evolution_manager.errors import UsageError
+from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from evolution_manager.files import read_json
 from swarm_sim.model import PAPER_OBJECTIVES
 
 PLAN_FILE = "experiment.json"
@@ -186,3 +187,23 @@ def primitives_study_document(
         "scenario_seed": scenario_seed,
         "libraries": libraries,
     }
+
+
+def finished_foraging_runs(
+    root: Path, study: str, runs_key: str
+) -> Iterator[tuple[dict, float, float | None]]:
+    """The finished runs of the ``study`` planned in ``root``'s ``experiment.json`` under ``runs_key``, in
+    the plan's order: each plan entry with its best and held-out best foraging fitness (None when not
+    measured). ``EvolutionError`` when ``root`` holds another study."""
+    document = read_json(Path(root) / "experiment.json")
+    if not isinstance(document, dict) or document.get("study") != study:
+        article = "an" if study[0] in "aeiou" else "a"
+        raise EvolutionError(f"{root} is not {article} {study} study (experiment.json)")
+    for entry in document[runs_key]:
+        summary_path = Path(root) / entry["dir"] / "summary.json"
+        summary = read_json(summary_path) if summary_path.exists() else None
+        if not isinstance(summary, dict) or not summary.get("finished"):
+            continue
+        scores = summary["objectives"]["foraging"]
+        held = scores.get("heldout_best_fitness")
+        yield entry, float(scores["best_fitness"]), None if held is None else float(held)

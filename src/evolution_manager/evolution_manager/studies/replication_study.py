@@ -33,7 +33,7 @@ from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
-from evolution_manager.studies.planning import primitives_study_document
+from evolution_manager.studies.planning import finished_foraging_runs, primitives_study_document
 
 REPLICATION_STAGE = 4
 """The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
@@ -136,27 +136,16 @@ def plan_study(
 
 def rows(root: Path) -> list[dict[str, str]]:
     """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order."""
-    document = read_json(Path(root) / "experiment.json")
-    if not isinstance(document, dict) or document.get("study") != "replication":
-        raise EvolutionError(f"{root} is not a replication study (experiment.json)")
-    found = []
-    for entry in document["arms"]:
-        summary_path = Path(root) / entry["dir"] / "summary.json"
-        summary = read_json(summary_path) if summary_path.exists() else None
-        if not isinstance(summary, dict) or not summary.get("finished"):
-            continue
-        scores = summary["objectives"]["foraging"]
-        held = scores.get("heldout_best_fitness")
-        found.append(
-            {
-                "arm": entry["arm"],
-                "library": entry["library"],
-                "seed": str(entry["seed"]),
-                "best_fitness": repr(float(scores["best_fitness"])),
-                "heldout_best_fitness": "" if held is None else repr(float(held)),
-            }
-        )
-    return found
+    return [
+        {
+            "arm": entry["arm"],
+            "library": entry["library"],
+            "seed": str(entry["seed"]),
+            "best_fitness": repr(best),
+            "heldout_best_fitness": "" if held is None else repr(held),
+        }
+        for entry, best, held in finished_foraging_runs(root, "replication", "arms")
+    ]
 
 
 def mixed_comparison(
