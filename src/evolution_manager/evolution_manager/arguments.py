@@ -11,6 +11,7 @@ from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
 from evolution_manager.errors import UsageError
+from swarm_sim.nodes.settings import RATE_RANGE
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -135,3 +136,15 @@ def without_ros_args(argv: Sequence[str]) -> list[str]:
             kept[f"swarm-bt-qd-argument-{k}"] = argument
             argv[k] = f"swarm-bt-qd-argument-{k}"
     return [kept.get(argument, argument) for argument in remove_ros_args(argv)]
+
+
+def rate_argument(text: str) -> float:
+    """``--rate``: simulated seconds per second of wall time, a number in ``RATE_RANGE``."""
+    low, high = RATE_RANGE
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"expected a number in {low:g}..{high:g}, got {text!r}")
+    return value

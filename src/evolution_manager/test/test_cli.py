@@ -28,8 +28,13 @@ COMPARED = [
 ]
 
 
+MODULES = {"report": "report_command"}
+"""The studies module of a command, where its name differs."""
+
+
 def command(tool: str, *args: str) -> list[str]:
-    return [sys.executable, "-c", f"from evolution_manager.studies.{tool} import main; main()", *args]
+    module = MODULES.get(tool, tool)
+    return [sys.executable, "-c", f"from evolution_manager.studies.{module} import main; main()", *args]
 
 
 def run(workspace: Workspace, tool: str, *args: str, **env: str) -> subprocess.CompletedProcess:

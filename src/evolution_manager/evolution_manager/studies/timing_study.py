@@ -37,9 +37,15 @@ from pathlib import Path
 
 import numpy as np
 
-from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, non_negative_int, positive_int
+from evolution_manager.arguments import (
+    EXIT_IO,
+    EXIT_USAGE,
+    Parser,
+    non_negative_int,
+    positive_int,
+    rate_argument,
+)
 from evolution_manager.errors import GraphError, TrialFailedError, UsageError
-from evolution_manager.graph.nodes.trial import rate_argument
 from evolution_manager.studies.intervals import RESAMPLES, interval
 from swarm_ros.safe_paths import UnsafePathError, check_folder, check_output, make_folder, replace_file
 

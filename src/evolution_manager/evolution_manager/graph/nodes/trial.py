@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import shutil
 import sys
@@ -53,7 +52,7 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.model_settings import PROFILES, chain_of_trial
 from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
-from evolution_manager.arguments import Parser, finite, non_negative_int, seed_in_range
+from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
 from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
@@ -74,7 +73,7 @@ from swarm_sim.errors import ConfigError
 from swarm_sim.evaluation import result_fields, trial_record_of
 from swarm_sim.evaluation.cli import evaluation_json
 from swarm_sim.model import DEFAULT, Config, LayoutError, SwarmLayout, apply_conditions, load_layout
-from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS
+from swarm_sim.nodes.settings import TIMINGS
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
 
 MAX_DOMAIN = 232
@@ -540,18 +539,6 @@ def domain_id(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {text!r}") from None
     if not 0 <= value <= MAX_DOMAIN:
         raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {value}")
-    return value
-
-
-def rate_argument(text: str) -> float:
-    """``--rate``: simulated seconds per second of wall time, a number in ``RATE_RANGE``."""
-    low, high = RATE_RANGE
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not low <= value <= high:
-        raise argparse.ArgumentTypeError(f"expected a number in {low:g}..{high:g}, got {text!r}")
     return value
 
 
