@@ -41,6 +41,7 @@ import statistics as stats
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -223,7 +224,9 @@ def ablation_library(name: str, folder: Path, source: Path, spec: Mapping[str, o
             seed = int(str(spec["seed"]))
             entries = unevolved(elite, np.random.default_rng(seed), seed)
         elif name == "random8":
-            runs = [read_run(source / str(rel)) for rel in spec["from"]]  # type: ignore[attr-defined]
+            runs = [
+                read_run(source / str(rel)) for rel in cast("list[str]", spec["from"])
+            ]  # the plan entry's runs
             entries = drawn(runs, BLOCKS_PER_GRID, np.random.default_rng(int(str(spec["seed"]))), folder)
         else:
             raise EvolutionError(f"no library {name!r} in the ablation study")
