@@ -112,13 +112,18 @@ def test_sense_step_matches_a_plain_per_pair_computation():
             assert (nv[i, got] == bn[expected]).all() and (fv[i, got] == bf[expected]).all()
 
 
+def _entry(gap: float) -> np.ndarray:
+    """The 2023 arena's regions for ``gap`` as compiled code reads them."""
+    return Config(gaps=(gap,)).arena_arrays(0)[0]
+
+
 def test_ground_sensor():
-    assert world.ground(0.0, 499.999, 500.0, P) == (True, False)
-    assert world.ground(0.0, 500.0, 500.0, P) == (False, False)  # strictly inside (footbot_bt.cpp:247)
-    assert world.ground(999.999, 0.0, 500.0, P) == (False, False)
-    assert world.ground(600.0, 800.0, 500.0, P) == (False, True)
-    assert world.ground(600.0, 800.0, 700.0, P) == (False, False)
-    assert world.ground(0.0, -1200.0, 700.0, P) == (False, True)
+    assert world.ground(0.0, 499.999, _entry(500.0)) == (True, False)
+    assert world.ground(0.0, 500.0, _entry(500.0)) == (False, False)  # strictly inside (footbot_bt.cpp:247)
+    assert world.ground(999.999, 0.0, _entry(500.0)) == (False, False)
+    assert world.ground(600.0, 800.0, _entry(500.0)) == (False, True)
+    assert world.ground(600.0, 800.0, _entry(700.0)) == (False, False)
+    assert world.ground(0.0, -1200.0, _entry(700.0)) == (False, True)
 
 
 def test_estimate_matches_brute_force_on_hand_built_readings():
@@ -166,14 +171,14 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
     x, y = rng.uniform(-2000, 2000, n), rng.uniform(-2000, 2000, n)
     x[0], y[0] = 100.0, 0.0  # one robot in the nest
     h = rng.uniform(-np.pi, np.pi, n)
-    gap = 500.0
+    entry = _entry(500.0)
     views = [RobotView(p) for _ in range(n)]
-    ground = [world.ground(x[i], y[i], gap, p) for i in range(n)]
+    ground = [world.ground(x[i], y[i], entry) for i in range(n)]
     bn = np.array([world.region_value(g[0], p) for g in ground])
     bf = np.array([world.region_value(g[1], p) for g in ground])
     keys = np.array([stream_key(seed, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
     for step in range(n + 1):
-        for i, reading in enumerate(sense_swarm(x, y, h, bn, bf, keys, step, gap, p)):
+        for i, reading in enumerate(sense_swarm(x, y, h, bn, bf, keys, step, entry, p)):
             views[i].sense(reading)
         bn = np.array([v.nest for v in views])
         bf = np.array([v.food for v in views])
@@ -236,7 +241,7 @@ def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
     x, y, h = np.zeros(9), np.zeros(9), np.zeros(9)
     world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p)
     z = np.full(9, 5000.0)
-    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 2, s.gap, p):
+    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 2, DEFAULT.arena_arrays(0)[0], p):
         assert (np.diff(reading.senders) > 0).all()
         assert len(reading.senders) == len(reading.ranges) == len(reading.bearings)
     assert (world.region_value(True, p), world.region_value(False, p)) == (0.0, 5000.0)

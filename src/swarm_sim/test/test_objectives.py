@@ -58,11 +58,14 @@ def test_objective_formulas():
     assert objectives([1, 1, 1.2], [1, 1, 0.0])[0] == 0.0 and objectives([1, 1, 1.2], [1, 1, 0.0])[3] == 1.0
 
 
+def _food_distance(x: float, y: float, gap: float) -> float:
+    return world.region_distance(x, y, Config(gaps=(gap,)).arena_arrays(0)[0], 1)
+
+
 def test_food_distance_is_the_true_distance_from_the_food_region():
-    p = DEFAULT.params()
-    assert world.food_distance(600.0, 800.0, 500.0, p) == 0.0  # r = 1000 = 500 + 500: on food
-    assert world.food_distance(300.0, 400.0, 700.0, p) == pytest.approx(1200.0 - 500.0)
-    assert world.food_distance(0.0, 0.0, 500.0, p) == 1000.0
+    assert _food_distance(600.0, 800.0, 500.0) == 0.0  # r = 1000 = 500 + 500: on food
+    assert _food_distance(300.0, 400.0, 700.0) == pytest.approx(1200.0 - 500.0)
+    assert _food_distance(0.0, 0.0, 500.0) == 1000.0
 
 
 def test_neighbour_distance_is_the_mean_true_distance_from_the_others():
@@ -73,13 +76,12 @@ def test_neighbour_distance_is_the_mean_true_distance_from_the_others():
 
 
 def test_take_probes_writes_every_probe_of_a_robot_at_the_step_asked():
-    p = DEFAULT.params()
     x, y = np.array([300.0, 0.0]), np.array([400.0, 0.0])
     probes = np.zeros((2, 2, len(PROBES)))
-    world.take_all_probes(x, y, 700.0, p, probes, 1)
+    world.take_all_probes(x, y, Config(gaps=(700.0,)).arena_arrays(0)[0], probes, 1)
     assert probes[:, 0].tolist() == [[0.0, 0.0], [0.0, 0.0]]  # the first step's row untouched
-    assert probes[0, 1].tolist() == [world.food_distance(300.0, 400.0, 700.0, p), 500.0]
-    assert probes[1, 1].tolist() == [world.food_distance(0.0, 0.0, 700.0, p), 500.0]
+    assert probes[0, 1].tolist() == [_food_distance(300.0, 400.0, 700.0), 500.0]
+    assert probes[1, 1].tolist() == [_food_distance(0.0, 0.0, 700.0), 500.0]
 
 
 def test_descriptor_formulas():

@@ -52,6 +52,19 @@ EDITED = replace(
 )
 """The foraging task with its trial length, arena size, robot count and regions edited."""
 
+DISCS = replace(
+    EDITED,
+    name="two-discs",
+    arena=Arena(half_size=1800.0, trial_entries=2),
+    regions=(
+        Region("nest", "disc", (400.0,), ((0.0, 600.0),)),
+        Region("food", "disc", (450.0, 350.0, 450.0, 350.0), ((0.0, -700.0), (700.0, -300.0)) * 2),
+        Region("food", "below", (1500.0,)),
+    ),
+)
+"""Regions unlike the papers': a nest disc off the centre, food as a disc that moves from trial to trial of
+a block (two entries per configuration, two configurations of radii) and a strip along a wall."""
+
 
 def test_the_registered_tasks_are_the_two_papers_worlds_unchanged():
     assert task_names()[:2] == ("primitives", "foraging")
@@ -64,14 +77,14 @@ def test_the_registered_tasks_are_the_two_papers_worlds_unchanged():
     assert world_parameters(EDITED.config())["n_robots"] == 5
 
 
-@pytest.mark.parametrize("task", [PRIMITIVES, FORAGING, EDITED], ids=lambda t: t.name)
+@pytest.mark.parametrize("task", [PRIMITIVES, FORAGING, EDITED, DISCS], ids=lambda t: t.name)
 def test_a_task_file_reproduces_its_task(task, tmp_path):
     text = task_to_yaml(task)
     assert task_from_yaml(text) == task
     (tmp_path / "t.yaml").write_text(text)
     assert resolve_task(str(tmp_path / "t.yaml")) == task
     assert task_from_record(json.loads(json.dumps(task_to_record(task)))) == task
-    assert task_to_record(task) == (task.name if task is not EDITED else task_to_mapping(task))
+    assert task_to_record(task) == (task.name if task in (PRIMITIVES, FORAGING) else task_to_mapping(task))
 
 
 def test_a_file_may_leave_out_every_key_but_the_name():
@@ -90,13 +103,33 @@ BAD_FILES = [
     ("trials: {ticks: 0}", "trials.ticks must be a positive integer, got 0"),
     (
         "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: food, shape: beyond, radius: [3000]}]",
-        "regions[1].radius 3000.0 puts the region's circle outside the arena",
+        "regions[1].radius 3000.0 puts the region's edge outside the arena",
+    ),
+    (
+        "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: food, shape: disc, radius: [300], "
+        "centre: [0, 2600]}]",
+        "regions[1].centre [0, 2600] lies outside the arena",
+    ),
+    (
+        "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: food, shape: below, radius: [300], "
+        "centre: [5, 0]}]",
+        "regions[1].centre must be [0, 0] for a half-plane (below)",
+    ),
+    (
+        "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: food, shape: disc, radius: [300], "
+        "centre: [100, 0]}]",
+        "arena entry 0: the nest's reference point (0, 0) lies on food",
+    ),
+    (
+        "arena: {trial_entries: 2}\nregions: [{kind: nest, shape: disc, radius: [500]}, "
+        "{kind: food, shape: beyond, radius: [900, 1000, 1100]}]",
+        "3 arena entries do not make whole configurations of arena.trial_entries = 2",
     ),
     (
         "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: lava, shape: beyond, radius: [900]}]",
         "regions[1].kind must be one of nest, food, got 'lava'",
     ),
-    ("regions: [{kind: nest, shape: disc, radius: [500]}]", "needs one food region"),
+    ("regions: [{kind: nest, shape: disc, radius: [500]}]", "the task has no food region"),
     ("robots: {count: 90}", "robots.count = 90 robots of radius 85.036758 do not fit"),
     ("robots: {start_half_size: 2400}", "robots.start_half_size 2400.0 lets robots of radius"),
     ("objectives: [fooding]", "objectives: unknown objective 'fooding' (did you mean food?)"),
@@ -169,6 +202,25 @@ def test_an_edited_task_changes_the_world_and_both_roads_agree():
         assert result.fitness + result.descriptors == values, request.tree
         assert all((a.end_poses == b.end_poses).all() for a, b in zip(records, reference, strict=True))
         assert records[0].start_poses.shape[0] == 5
+        assert result != other
+
+
+def test_regions_of_a_task_s_own_travel_as_a_layout_and_both_roads_agree_on_them():
+    config = DISCS.config("paper")
+    assert config.layout and config.gaps == DEFAULT.gaps and np.isnan(config.gap(0))
+    entries = [config.arena_entry(k) for k in range(4)]  # trial k of a block takes entry k % 2
+    assert [e[1].x for e in entries] == [0.0, 700.0, 0.0, 700.0]
+    assert [config.arena_entry(k)[1].radius for k in (0, 1, 2, 3)] == [450.0, 350.0, 450.0, 350.0]
+    assert [config.arena_entry(k)[1].radius for k in (2, 3)] == [450.0, 350.0]
+    texts = ["sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"]
+    texts += random_trees(4, 4)
+    requests = [EvaluationRequest(t, 60 + k, 4) for k, t in enumerate(texts)]
+    batch = BatchEvaluator(config).evaluate_trials(requests)
+    edited = BatchEvaluator(EDITED.config("paper")).evaluate(requests)
+    for request, (result, records), other in zip(requests, batch, edited, strict=True):
+        values, reference = reference_road.evaluate(parse(request.tree), request.seed, request.trials, config)
+        assert result.fitness + result.descriptors == values, request.tree
+        assert all((a.end_poses == b.end_poses).all() for a, b in zip(records, reference, strict=True))
         assert result != other
 
 

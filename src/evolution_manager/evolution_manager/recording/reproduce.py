@@ -256,7 +256,7 @@ class _Published:
         p = self.prefix
         if self.index == 0:  # the trial's start: its markers and its latched announcement
             self.wheel_speed = world.p.wheel_speed * visualisation.MM
-            self._add(f"{p}/markers", visualisation.arena_markers(self.config, world.setup.gap, stamp))
+            self._add(f"{p}/markers", visualisation.arena_markers(self.config, world.trial, stamp))
             start = trial_start_message(
                 world, stamp, self.seed, self.trial, len(self.namespaces), self.config
             )

@@ -31,7 +31,7 @@ from evolution_manager.arguments import Parser, int_in, non_negative_int, positi
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from swarm_ros.safe_paths import check_output, describe, replace_file
-from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, load_layout
+from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, Piece, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
 if TYPE_CHECKING:
@@ -86,6 +86,45 @@ def to_pixels(frames: TrialFrames, x: float, y: float) -> tuple[float, float]:
     return (x + frames.arena_half) * scale, (frames.arena_half - y) * scale
 
 
+def _draw_regions(draw: ImageDraw.ImageDraw, frames: TrialFrames, font: ImageFont.ImageFont) -> None:
+    """A layout's regions (``TrialFrames.regions``): food pieces, then nest pieces over them, each
+    labelled."""
+    scale = ARENA_PX / (2 * frames.arena_half)
+    draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=GAP_COLOUR, outline=(60, 60, 60), width=3)
+    for kind, colour, ink in (("food", FOOD_COLOUR, (40, 100, 40)), ("nest", NEST_COLOUR, (120, 80, 20))):
+        for piece in frames.regions:
+            if piece.kind != kind:
+                continue
+            px, py = to_pixels(frames, piece.x, piece.y)
+            r = piece.radius * scale
+            if piece.shape == "disc":
+                draw.ellipse((px - r, py - r, px + r, py + r), fill=colour)
+            elif piece.shape == "beyond":  # everything but the circle, drawn as a ring out to the corners
+                reach = 2 * ARENA_PX
+                draw.ellipse(
+                    (px - reach, py - reach, px + reach, py + reach), outline=colour, width=int(reach - r)
+                )
+            else:
+                _, edge = to_pixels(frames, 0.0, piece.radius if piece.shape == "above" else -piece.radius)
+                box = (
+                    (3, 3, ARENA_PX - 4, edge)
+                    if piece.shape == "above"
+                    else (3, edge, ARENA_PX - 4, ARENA_PX - 4)
+                )
+                draw.rectangle(box, fill=colour)
+            lx, ly = to_pixels(frames, *_label_at(piece))
+            draw.text((lx - 12, ly - 5), kind, font=font, fill=ink)
+
+
+def _label_at(piece: Piece) -> tuple[float, float]:
+    """Where a piece's label goes (mm): a disc's centre, below a circle's rim, inside a half-plane."""
+    if piece.shape == "disc":
+        return piece.x, piece.y
+    if piece.shape == "beyond":
+        return piece.x, piece.y - piece.radius - 150.0
+    return 0.0, piece.radius + 150.0 if piece.shape == "above" else -piece.radius - 150.0
+
+
 def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     """Frame ``k`` as a Pillow RGB image (arena on the left, values on the right)."""
     image = Image.new("RGB", (ARENA_PX + PANEL_PX, ARENA_PX), (255, 255, 255))
@@ -93,13 +132,16 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     font = text_font()
     scale = ARENA_PX / (2 * frames.arena_half)
     cx, cy = to_pixels(frames, 0.0, 0.0)
-    draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=FOOD_COLOUR, outline=(60, 60, 60), width=3)
-    r_gap = (frames.nest_radius + frames.gap) * scale
-    draw.ellipse((cx - r_gap, cy - r_gap, cx + r_gap, cy + r_gap), fill=GAP_COLOUR)
-    r_nest = frames.nest_radius * scale
-    draw.ellipse((cx - r_nest, cy - r_nest, cx + r_nest, cy + r_nest), fill=NEST_COLOUR)
-    draw.text((cx - 12, cy - 5), "nest", font=font, fill=(120, 80, 20))
-    draw.text((8, 8), f"food (gap {frames.gap:.0f} mm)", font=font, fill=(40, 100, 40))
+    if frames.regions:
+        _draw_regions(draw, frames, font)
+    else:
+        draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=FOOD_COLOUR, outline=(60, 60, 60), width=3)
+        r_gap = (frames.nest_radius + frames.gap) * scale
+        draw.ellipse((cx - r_gap, cy - r_gap, cx + r_gap, cy + r_gap), fill=GAP_COLOUR)
+        r_nest = frames.nest_radius * scale
+        draw.ellipse((cx - r_nest, cy - r_nest, cx + r_nest, cy + r_nest), fill=NEST_COLOUR)
+        draw.text((cx - 12, cy - 5), "nest", font=font, fill=(120, 80, 20))
+        draw.text((8, 8), f"food (gap {frames.gap:.0f} mm)", font=font, fill=(40, 100, 40))
     poses = frames.poses
     for i in range(frames.n_robots):
         trail = [to_pixels(frames, px, py) for px, py in poses[max(0, k - TRAIL) : k + 1, i, :2]]

@@ -22,7 +22,7 @@ import numpy as np
 
 from bt_controller import timeline
 from evolution_manager.errors import AnimationError
-from swarm_sim.model import DEFAULT, N_PROBES
+from swarm_sim.model import DEFAULT, N_PROBES, Piece
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
@@ -59,6 +59,9 @@ class TrialFrames:
     """(T, n) int: each robot's deliveries in the trial after this step."""
     trees: tuple[str, ...] = ()
     """Each robot's tree text, robot 0 first (a heterogeneous swarm's differ; empty: not known)."""
+    regions: tuple[Piece, ...] = ()
+    """The trial's regions (``Config.arena_entry``) when they are not the papers' arena (``gap`` is then
+    NaN); empty for the papers' arena, drawn from ``gap`` and ``nest_radius``."""
 
     @property
     def n_robots(self) -> int:
@@ -75,7 +78,7 @@ class TrialFrames:
             "tree": self.tree,
             "seed": self.seed,
             "trial": self.trial,
-            "gap": self.gap,
+            "gap": None if math.isnan(self.gap) else self.gap,
             "arena_half": self.arena_half,
             "nest_radius": self.nest_radius,
             "robot_radius": self.robot_radius,
@@ -90,17 +93,20 @@ class TrialFrames:
             "carrying": self.carrying.astype(int).tolist(),
             "deliveries": self.deliveries.astype(int).tolist(),
             **({"trees": list(self.trees)} if self.heterogeneous else {}),
+            **({"regions": [piece._asdict() for piece in self.regions]} if self.regions else {}),
         }
 
 
-def arena_fields(config: Config, trial: int) -> dict[str, float]:
+def arena_fields(config: Config, trial: int) -> dict[str, object]:
     """The arena of ``trial`` as ``TrialFrames`` draws it: the gap between nest and food, the arena's and the
-    nest's size and the robots' radius (mm)."""
+    nest's size and the robots' radius (mm), and the trial's regions when they are a layout of the task's
+    own."""
     return {
         "gap": config.gap(trial),
         "arena_half": config.arena_half,
         "nest_radius": config.nest_radius,
         "robot_radius": config.robot_radius,
+        "regions": config.arena_entry(trial) if config.layout else (),
     }
 
 
@@ -109,7 +115,7 @@ def _fitness_so_far(
     current: np.ndarray,
     probes: np.ndarray,
     deliveries: np.ndarray,
-    gap: float,
+    food_scale: float,
     p: Params,
 ) -> np.ndarray:
     """Every objective as if the trial ended now: from the smoothed values, the probes at the trial's first
@@ -119,7 +125,7 @@ def _fitness_so_far(
 
     n = initial.shape[0]
     counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
-    values = world.trial_values(initial, current, counts, motion, probes, deliveries, gap, p)
+    values = world.trial_values(initial, current, counts, motion, probes, deliveries, food_scale, p)
     return values[: world.N_OBJECTIVES]
 
 
@@ -225,9 +231,9 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     from swarm_sim.core import world
 
     p = config.params()
-    gap = config.gap(trial)
+    entry, food_scale = config.arena_arrays(trial)
     probes = np.zeros((n, 2, N_PROBES))
-    world.take_all_probes(poses[0][:, 0], poses[0][:, 1], gap, p, probes, 0)  # at the trial's first step
+    world.take_all_probes(poses[0][:, 0], poses[0][:, 1], entry, probes, 0)  # at the trial's first step
     ticks, actions = [], np.full((len(steps), n), -1, np.int64)
     fitness = np.full((len(steps), world.N_OBJECTIVES), np.nan)
     # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
@@ -241,8 +247,8 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
-            world.take_all_probes(poses[k][:, 0], poses[k][:, 1], gap, p, probes, 1)
-            fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], gap, p)
+            world.take_all_probes(poses[k][:, 0], poses[k][:, 1], entry, probes, 1)
+            fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], food_scale, p)
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
     trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()

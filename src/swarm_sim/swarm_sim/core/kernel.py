@@ -51,6 +51,7 @@ drop_stale_cache(
         "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.model.config",
+        "swarm_sim.model.regions",
         "swarm_sim.core.fast_world",
         "swarm_sim.core.world",
     ),
@@ -86,15 +87,18 @@ def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
 
 class Jobs(NamedTuple):
     """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]``, robot ``i`` running
-    tree ``robot_tree[j, i]`` of a pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) and
-    nest-food gap ``gap[j]``, into output rows ``row[j] .. row[j] + trials[j] - 1``."""
+    tree ``robot_tree[j, i]`` of a pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) in arena
+    configuration ``arena[j]`` of the layout (``regions.layout_table``: ``layout`` and ``food_scale``, shared
+    by the jobs), into output rows ``row[j] .. row[j] + trials[j] - 1``."""
 
     robot_tree: np.ndarray  # int64 (jobs, n_robots)
     seed_key: np.ndarray  # uint64
     chain: np.ndarray  # int64
     trials: np.ndarray  # int64
-    gap: np.ndarray  # float64
+    arena: np.ndarray  # int64
     row: np.ndarray  # int64
+    layout: np.ndarray  # float64 (configurations, entries, pieces, PIECE_FIELDS)
+    food_scale: np.ndarray  # float64 (configurations, entries)
 
     @property
     def n_jobs(self) -> int:
@@ -120,7 +124,8 @@ def make_jobs(
     n_robots = config.n_robots
     if robot_trees is None:
         robot_trees = [[t] * n_robots for t in range(len(seed_keys))]
-    robot_tree, seed_key, chain, length, gap, row = [], [], [], [], [], []
+    robot_tree, seed_key, chain, length, arena, row = [], [], [], [], [], []
+    layout, food_scale = config.arena_table
     next_row = 0
     for key, n, robots in zip(seed_keys, trials, robot_trees, strict=True):
         if len(robots) != n_robots:
@@ -130,7 +135,7 @@ def make_jobs(
             seed_key.append(key)
             chain.append(c)
             length.append(count)
-            gap.append(config.gap(c * config.chain_length))
+            arena.append(config.arena_of_trial(c * config.chain_length))
             row.append(next_row)
             next_row += count
     return Jobs(
@@ -138,8 +143,10 @@ def make_jobs(
         np.array(seed_key, dtype=np.uint64),
         np.array(chain, dtype=np.int64),
         np.array(length, dtype=np.int64),
-        np.array(gap, dtype=np.float64),
+        np.array(arena, dtype=np.int64),
         np.array(row, dtype=np.int64),
+        layout,
+        food_scale,
     )
 
 
@@ -290,7 +297,8 @@ def _last_tick(p: Params, k: int) -> int:
 def _record_step(
     rec: Recording,
     k: int,
-    gap: float,
+    entry: np.ndarray,
+    food_scale: float,
     p: Params,
     x: np.ndarray,
     y: np.ndarray,
@@ -315,7 +323,7 @@ def _record_step(
         rec.poses[row, i, 1] = y[i]
         rec.poses[row, i, 2] = heading[i]
         rec.actions[row, i] = actions[i] if last >= 0 else -1
-        rec.ground[row, i, 0], rec.ground[row, i, 1] = world.ground(x[i], y[i], gap, p)
+        rec.ground[row, i, 0], rec.ground[row, i, 1] = world.ground(x[i], y[i], entry)
         rec.heard[row, i] = heard[i]
         for c in range(heard[i]):
             rec.senders[row, i, c] = senders[i, c]
@@ -329,7 +337,7 @@ def _record_step(
         # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
         # robots' probes now and their deliveries so far.
         now = probes.copy()
-        world.take_all_probes(x, y, gap, p, now, 1)
+        world.take_all_probes(x, y, entry, now, 1)
         values = world.trial_values(
             initial,
             smooth,
@@ -337,7 +345,7 @@ def _record_step(
             np.zeros((n, 2), dtype=np.int64),
             now,
             deliveries,
-            gap,
+            food_scale,
             p,
         )
         for c in range(world.N_OBJECTIVES):
@@ -404,7 +412,8 @@ def simulate_chain(
     seed_key: np.uint64,
     chain: int,
     trials: int,
-    gap: float,
+    layout: np.ndarray,
+    food_scale: np.ndarray,
     p: Params,
     values_out: np.ndarray,
     poses_out: np.ndarray,
@@ -412,9 +421,11 @@ def simulate_chain(
     rec: Recording,
 ) -> None:
     """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
-    ``trees``; write the chain's trial ``t``'s ``world.N_VALUES`` values into ``values_out[t]`` and its start
-    and end poses into ``poses_out[t]`` (2 x n_robots x 3), and the chain's trial ``recorded`` step by step
-    into ``rec`` (-1: none). Makes the chain's state, then runs its steps (``_steps``)."""
+    ``trees``, the chain's trial ``t`` on the regions of entry ``t`` of ``layout`` (its arena configuration's
+    row of ``regions.layout_table``, cycling; ``food_scale`` that row's); write the chain's trial ``t``'s
+    ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]`` (2 x
+    n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none). Makes the chain's
+    state, then runs its steps (``_steps``)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
     swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
@@ -433,7 +444,8 @@ def simulate_chain(
         world.drive(swarm.gains, p),
         np.zeros(N_CONDITIONS, dtype=np.bool_),
         trials,
-        gap,
+        layout,
+        food_scale,
         p,
         values_out,
         poses_out,
@@ -445,12 +457,12 @@ def simulate_chain(
 # Makes an array: compiled with reference counting, which it would otherwise inherit from ``_steps``.
 @numba.njit(cache=True, error_model="numpy", _nrt=True)  # type: ignore[call-overload]  # _nrt: numba's option, not in its type stubs
 def _score_trial(
-    swarm: Swarm, cargo: Cargo, gap: float, p: Params, values_out: np.ndarray, position: int
+    swarm: Swarm, cargo: Cargo, food_scale: float, p: Params, values_out: np.ndarray, position: int
 ) -> None:
     """Write a finished trial's values into ``values_out[position]`` (``world.trial_values``, which makes an
     array: called from ``_steps``, which cannot own one, as a function of its own)."""
     values = world.trial_values(
-        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.probes, cargo.deliveries, gap, p
+        swarm.initial, swarm.smooth, swarm.counts, swarm.motion, cargo.probes, cargo.deliveries, food_scale, p
     )
     for c in range(values.shape[0]):
         values_out[position, c] = values[c]
@@ -473,7 +485,8 @@ def _steps(
     robot_drive: np.ndarray,
     board: np.ndarray,
     trials: int,
-    gap: float,
+    layout: np.ndarray,
+    food_scale: np.ndarray,
     p: Params,
     values_out: np.ndarray,
     poses_out: np.ndarray,
@@ -500,6 +513,7 @@ def _steps(
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
         position = timeline.trial_in_chain(p, k)
+        entry = layout[position % layout.shape[0]]
         if timeline.step_in_trial(p, k) == 1:
             world.place_robots(x, y, heading, position_keys, heading_keys, position, p)
             for i in range(n):
@@ -530,12 +544,12 @@ def _steps(
             # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
             # a73e4af).
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                in_nest, on_food = world.ground(x[i], y[i], entry)
                 carrying[i] = world.start_carrying(carrying[i], on_food)
-                world.take_probes(x, y, i, gap, p, probes, 0)
+                world.take_probes(x, y, i, entry, probes, 0)
         if sensing:
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                in_nest, on_food = world.ground(x[i], y[i], entry)
                 carrying[i], delivered = world.carry(carrying[i], in_nest, on_food)
                 deliveries[i] += 1 if delivered else 0
                 nest_raw, food_raw, density, nest_source, food_source, nearest = world.estimate(
@@ -578,7 +592,7 @@ def _steps(
                 motion[i, 1] += rotation_of(motors)
         if timeline.region_broadcast(k):
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], gap, p)
+                in_nest, on_food = world.ground(x[i], y[i], entry)
                 broadcast_nest[i] = world.region_value(in_nest, p)
                 broadcast_food[i] = world.region_value(on_food, p)
         else:
@@ -593,7 +607,8 @@ def _steps(
             _record_step(
                 rec,
                 k,
-                gap,
+                entry,
+                food_scale[position % layout.shape[0]],
                 p,
                 x,
                 y,
@@ -608,8 +623,8 @@ def _steps(
                 probes,
             )
         if timeline.is_final(p, k):
-            world.take_all_probes(x, y, gap, p, probes, 1)
-            _score_trial(swarm, cargo, gap, p, values_out, position)
+            world.take_all_probes(x, y, entry, probes, 1)
+            _score_trial(swarm, cargo, food_scale[position % layout.shape[0]], p, values_out, position)
             for i in range(n):
                 poses_out[position, 1, i, 0] = x[i]
                 poses_out[position, 1, i, 1] = y[i]
@@ -634,7 +649,8 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
         jobs.seed_key[j],
         jobs.chain[j],
         jobs.trials[j],
-        jobs.gap[j],
+        jobs.layout[jobs.arena[j]],
+        jobs.food_scale[jobs.arena[j]],
         params,
         out.values[a:b],
         out.poses[a:b],
@@ -645,8 +661,8 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
 
 @numba.njit(cache=True, error_model="numpy")
 def run_jobs(trees: PackedTrees, params: Params, jobs: Jobs, out: Outputs) -> None:
-    """Run every job ``j`` of ``jobs`` (the robots' trees of ``trees``, seed key, chain, trials, gap) in world
-    ``params`` into its rows of ``out``."""
+    """Run every job ``j`` of ``jobs`` (the robots' trees of ``trees``, seed key, chain, trials, arena) in
+    world ``params`` into its rows of ``out``."""
     for j in range(jobs.robot_tree.shape[0]):
         _run_job(j, trees, params, jobs, out)
 
@@ -665,7 +681,8 @@ def record_chain(
     seed_key: np.uint64,
     chain: int,
     recorded: int,
-    gap: float,
+    layout: np.ndarray,
+    food_scale: np.ndarray,
     p: Params,
     rec: Recording,
 ) -> np.ndarray:
@@ -674,5 +691,7 @@ def record_chain(
     n_robots)``); its ``world.N_VALUES`` values."""
     values = np.zeros((recorded + 1, world.N_VALUES))
     poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
-    simulate_chain(trees, robot_tree, seed_key, chain, recorded + 1, gap, p, values, poses, recorded, rec)
+    simulate_chain(
+        trees, robot_tree, seed_key, chain, recorded + 1, layout, food_scale, p, values, poses, recorded, rec
+    )
     return values[recorded]

@@ -25,10 +25,11 @@ def sense_swarm(
     broadcast_food: np.ndarray,
     drop_keys: np.ndarray,
     step: int,
-    gap: float,
+    entry: np.ndarray,
     p: Params,
 ) -> list[Readings]:
-    """Every robot's readings at sensing step ``step`` (the simulator's side, robot by robot)."""
+    """Every robot's readings at sensing step ``step`` on the regions of ``entry`` (the simulator's side,
+    robot by robot)."""
     n = x.shape[0]
     counts = np.zeros(n, dtype=np.int64)
     senders = np.zeros((n, n), dtype=np.int64)
@@ -42,7 +43,7 @@ def sense_swarm(
         bearings = np.array(
             [world.bearing(x[i], y[i], heading[i], x[j], y[j]) for j in senders[i, :count]], dtype=np.float64
         )
-        in_nest, on_food = world.ground(x[i], y[i], gap, p)
+        in_nest, on_food = world.ground(x[i], y[i], entry)
         out.append(
             Readings(
                 bool(in_nest),

@@ -6,7 +6,7 @@
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
-(d) objectives and descriptors: ``food_distance``, ``neighbour_distance``, ``take_probes``,
+(d) objectives and descriptors: ``region_distance``, ``neighbour_distance``, ``take_probes``,
 ``take_all_probes``, ``robot_objectives``, ``robot_descriptors``, ``trial_values``, ``mean_values``.
 
 Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
@@ -46,6 +46,7 @@ drop_stale_cache(
         "bt_controller.vocabulary",
         "swarm_sim.model.config",
         "swarm_sim.model.objectives",
+        "swarm_sim.model.regions",
     ),
 )
 
@@ -557,12 +558,43 @@ def physics_step(
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def ground(x: float, y: float, gap: float, p: Params) -> tuple:
-    """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) in an arena with ``gap``
-    (``footbot_bt.cpp:240-247``: r < 0.5 m, r >= 0.5 m + gap)."""
-    d2 = x * x + y * y
-    food_radius = p.nest_radius + gap
-    return d2 < p.nest_radius * p.nest_radius, d2 >= food_radius * food_radius
+def _piece_inside(shape: float, cx: float, cy: float, r: float, x: float, y: float) -> bool:
+    """Whether (x, y) lies in a piece (``regions.PIECE_SHAPES`` order: disc, beyond, above, below). A disc
+    holds the points strictly closer than its radius (``footbot_bt.cpp:240-247`` at 6c65001: r < 0.5 m),
+    beyond its circle those at least its radius away (r >= 0.5 m + gap)."""
+    if shape < 2.0:
+        dx = x - cx
+        dy = y - cy
+        d2 = dx * dx + dy * dy
+        return d2 < r * r if shape == 0.0 else d2 >= r * r
+    return y >= r if shape == 2.0 else y <= -r
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _piece_distance(shape: float, cx: float, cy: float, r: float, x: float, y: float) -> float:
+    """The distance of (x, y) from a piece, 0 inside (``regions.Piece.distance``)."""
+    if shape < 2.0:
+        d = math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy))
+        if shape == 0.0:
+            return 0.0 if d <= r else d - r
+        return 0.0 if d >= r else r - d
+    return max(0.0, r - y) if shape == 2.0 else max(0.0, y + r)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def ground(x: float, y: float, entry: np.ndarray) -> tuple:
+    """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) on the regions of ``entry``
+    (pieces x ``regions.PIECE_FIELDS``, ``regions.layout_table``): in a region when in any of its pieces."""
+    in_nest = False
+    on_food = False
+    for m in range(entry.shape[0]):
+        kind = entry[m, 0]
+        if kind >= 0.0 and _piece_inside(entry[m, 1], entry[m, 2], entry[m, 3], entry[m, 4], x, y):
+            if kind == 0.0:
+                in_nest = True
+            else:
+                on_food = True
+    return in_nest, on_food
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -672,12 +704,15 @@ start_carrying = numba.njit(error_model="numpy", inline="always")(perception.sta
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def food_distance(x: float, y: float, gap: float, p: Params) -> float:
-    """A robot's true distance from the food region: max(0, R - r) with R = nest_radius + gap, 0 on food
+def region_distance(x: float, y: float, entry: np.ndarray, kind: int) -> float:
+    """A robot's true distance from region ``kind`` (``regions.REGION_KINDS`` order) of ``entry``: from its
+    nearest piece, 0 inside. In the 2023 arena, the food distance is max(0, R - r) with R = nest_radius + gap
     (``CBlackBoard.cpp:185-201, 276-292`` at a73e4af; the inverse food objective's positions)."""
-    radius = p.nest_radius + gap
-    r = math.sqrt(x * x + y * y)
-    return 0.0 if r >= radius else radius - r
+    nearest = math.inf
+    for m in range(entry.shape[0]):
+        if entry[m, 0] == kind:
+            nearest = min(nearest, _piece_distance(entry[m, 1], entry[m, 2], entry[m, 3], entry[m, 4], x, y))
+    return nearest
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -695,22 +730,20 @@ def neighbour_distance(x: np.ndarray, y: np.ndarray, i: int) -> float:
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def take_probes(
-    x: np.ndarray, y: np.ndarray, i: int, gap: float, p: Params, probes: np.ndarray, when: int
+    x: np.ndarray, y: np.ndarray, i: int, entry: np.ndarray, probes: np.ndarray, when: int
 ) -> None:
     """Write robot ``i``'s probes (``objectives.PROBES``, true quantities of the world) into
     ``probes[i, when]``, ``when`` 0 at a trial's first step and 1 at its last (or the step being scored).
     Every road calls this at those steps, so a probe added here reaches every road's objectives."""
-    probes[i, when, 0] = food_distance(x[i], y[i], gap, p)
+    probes[i, when, 0] = region_distance(x[i], y[i], entry, 1)
     probes[i, when, 1] = neighbour_distance(x, y, i)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def take_all_probes(
-    x: np.ndarray, y: np.ndarray, gap: float, p: Params, probes: np.ndarray, when: int
-) -> None:
+def take_all_probes(x: np.ndarray, y: np.ndarray, entry: np.ndarray, probes: np.ndarray, when: int) -> None:
     """``take_probes`` for every robot."""
     for i in range(x.shape[0]):
-        take_probes(x, y, i, gap, p, probes, when)
+        take_probes(x, y, i, entry, probes, when)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -733,7 +766,8 @@ def robot_objectives(
     ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0. Inverse density: (initial -
     final + 1) / 2, clipped; inverse nest: ((final - initial) / cap + 1) / 2, with no rule for the nest;
     inverse food: from the true distances from the food region at the trial's first and last steps
-    (``food_distance``), (final - initial + R) / (2 R) with R = ``food_radius``. Foraging: the deliveries.
+    (``region_distance``), (final - initial + R) / (2 R) with R = ``food_radius`` (the nest's food distance,
+    ``regions.food_scale``: nest_radius + gap in the 2023 arena). Foraging: the deliveries.
     Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
     ((first - last) / first + 1) / 2, clipped to [0, 1]; 0.5 for a robot alone.
     """
@@ -775,15 +809,16 @@ def trial_values(
     motion: np.ndarray,
     probes: np.ndarray,
     deliveries: np.ndarray,
-    gap: float,
+    food_scale: float,
     p: Params,
 ) -> np.ndarray:
     """A trial's values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in id
     order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x ``N_COUNTS`` tick counts; ``motion``:
     n x 2 (movement, rotation) sums; ``probes``: n x 2 x ``objectives.N_PROBES``, each robot's probes at the
-    trial's first and last steps (``take_probes``); ``deliveries``: n; ``gap``: the trial's nest-food gap."""
+    trial's first and last steps (``take_probes``); ``deliveries``: n; ``food_scale``: the unit of the inverse
+    food objective (``regions.food_scale`` of the trial's entry)."""
     n = initial.shape[0]
-    radius = p.nest_radius + gap
+    radius = food_scale
     out = np.zeros(N_VALUES)
     for i in range(n):
         o = robot_objectives(initial[i], final[i], probes[i, 0], probes[i, 1], deliveries[i], radius, p)

@@ -2,7 +2,8 @@
 
 ``Config`` (``config``) holds every parameter of the model, validated once; the objectives and descriptors
 are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``); a swarm layout
-gives each robot its tree (``swarm_layout``). Other packages import these names from here.
+gives each robot its tree (``swarm_layout``); the nest and food are pieces of ground (``regions``). Other
+packages import these names from here.
 """
 
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
@@ -21,6 +22,7 @@ from swarm_sim.model.objectives import (
     Objective,
     fitness_ceiling,
 )
+from swarm_sim.model.regions import PIECE_SHAPES, REGION_KINDS, Piece, concentric
 from swarm_sim.model.swarm_layout import (
     LayoutError,
     SwarmLayout,
@@ -41,14 +43,18 @@ __all__ = [
     "OBJECTIVES",
     "OBJECTIVE_TABLE",
     "PAPER_OBJECTIVES",
+    "PIECE_SHAPES",
     "PROBES",
+    "REGION_KINDS",
     "VALUE_NAMES",
     "Config",
     "LayoutError",
     "Objective",
     "Params",
+    "Piece",
     "SwarmLayout",
     "apply_conditions",
+    "concentric",
     "condition_texts",
     "config_from_dict",
     "default_config",

@@ -8,16 +8,31 @@ Units: millimetres, seconds, radians.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields, replace
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from bt_controller.model_settings import PROFILES, PerceptionParams, Timeline, arena_of_trial, profile_number
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
+from swarm_sim.model.regions import (
+    ArenaEntry,
+    Layout,
+    check_layout,
+    concentric,
+    entry_of_trial,
+    layout_as_json,
+    layout_from_json,
+    layout_table,
+)
 
 _PERCEPTION = PerceptionParams()
 _TIMELINE = Timeline()
+DEFAULT_NEST_RADIUS = 500.0
+DEFAULT_GAPS = (500.0, 700.0)
 
 
 class Params(NamedTuple):
@@ -25,7 +40,6 @@ class Params(NamedTuple):
 
     profile: int
     arena_half: float
-    nest_radius: float
     n_robots: int
     robot_radius: float
     start_half: float
@@ -86,10 +100,14 @@ class Config:
     """``paper`` (the authors' experiment, artefacts A1-A4 included) or ``clean`` (A1-A4 removed)."""
     arena_half: float = 2450.0
     """Half the side of the free square inside the walls (walls 100 mm thick centred at +-2500 mm) (mm)."""
-    nest_radius: float = 500.0
-    """A robot is in the nest when its centre is closer than this to the arena centre (mm)."""
-    gaps: tuple[float, ...] = (500.0, 700.0)
-    """Gap between nest and food per arena configuration (mm); see ``gap``."""
+    nest_radius: float = DEFAULT_NEST_RADIUS
+    """The 2023 arena: a robot is in the nest when its centre is closer than this to the arena centre (mm)."""
+    gaps: tuple[float, ...] = DEFAULT_GAPS
+    """The 2023 arena: the gap between nest and food per arena configuration (mm); see ``gap``."""
+    layout: Layout = ()
+    """The regions of every trial (``swarm_sim.model.regions``); empty: the 2023 arena of ``nest_radius`` and
+    ``gaps`` (``regions.concentric``). A task with regions of its own sets it, and then ``nest_radius`` and
+    ``gaps`` must keep their defaults (they describe only the 2023 arena)."""
     n_robots: int = 9
     """Footbots in the swarm: the one place the robot count is defined."""
     robot_radius: float = 85.036758
@@ -187,9 +205,38 @@ class Config:
         return self.chain_trials if self.profile == "paper" else 1
 
     def gap(self, trial: int) -> float:
-        """The nest-food gap of trial ``trial``: trials come in blocks of ``chain_trials`` (one chain under
-        ``paper``), and the blocks alternate the gaps."""
+        """The nest-food gap of trial ``trial`` in the 2023 arena: trials come in blocks of ``chain_trials``
+        (one chain under ``paper``), and the blocks alternate the gaps. NaN under a layout of the task's own,
+        which has no one gap."""
+        if self.layout:
+            return math.nan
         return self.gaps[arena_of_trial(self.timeline, trial, len(self.gaps))]
+
+    @property
+    def arena_layout(self) -> Layout:
+        """The layout in force: ``layout``, or the 2023 arena of ``nest_radius`` and ``gaps``."""
+        return self.layout or concentric(self.nest_radius, self.gaps)
+
+    def arena_of_trial(self, trial: int) -> int:
+        """The arena configuration (a row of ``arena_layout``) of trial ``trial``."""
+        return arena_of_trial(self.timeline, trial, len(self.arena_layout))
+
+    @functools.cached_property
+    def arena_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """``arena_layout`` as compiled code reads it (``regions.layout_table``: pieces and food scales)."""
+        return layout_table(self.arena_layout)
+
+    def arena_arrays(self, trial: int) -> tuple[np.ndarray, float]:
+        """The regions of trial ``trial`` as compiled code reads them: its entry's row of ``arena_table``
+        (pieces x ``regions.PIECE_FIELDS``) and its food scale."""
+        table, scale = self.arena_table
+        c = self.arena_of_trial(trial)
+        k = (trial % self.chain_trials) % table.shape[1]
+        return table[c, k], float(scale[c, k])
+
+    def arena_entry(self, trial: int) -> ArenaEntry:
+        """The regions of trial ``trial`` of an evaluation (``regions.entry_of_trial``)."""
+        return entry_of_trial(self.arena_layout, trial, self.chain_trials)
 
     def params(self) -> Params:
         """The configuration as a ``Params`` named tuple for compiled kernels."""
@@ -204,10 +251,15 @@ class Config:
         return Params._make(field(f) for f in Params._fields)
 
     def as_dict(self) -> dict[str, object]:
-        """Every parameter by name (gaps as a list), for writing next to results."""
+        """Every parameter by name (gaps as a list, a layout as ``regions.layout_as_json``; no ``layout`` key
+        for the papers' arena), for writing next to results."""
         out: dict[str, object] = {}
         for f in fields(self):
             value = getattr(self, f.name)
+            if f.name == "layout":
+                if not value:
+                    continue  # the papers' arena: nest_radius and gaps say it, as before layouts
+                value = layout_as_json(value)
             out[f.name] = list(value) if isinstance(value, tuple) else value
         return out
 
@@ -269,6 +321,16 @@ def _validate(c: Config) -> None:
         raise ConfigError(f"gaps must be a non-empty tuple of positive numbers, got {c.gaps!r}")
     for k, gap in enumerate(c.gaps):
         number(gap, f"gaps[{k}]", positive=True, error=ConfigError)
+    if not isinstance(c.layout, tuple):
+        raise ConfigError(f"layout must be a tuple of arena configurations, got {c.layout!r}")
+    if c.layout:
+        if (c.nest_radius, c.gaps) != (DEFAULT_NEST_RADIUS, DEFAULT_GAPS):
+            raise ConfigError(
+                "nest_radius and gaps describe the 2023 arena only: with a layout, leave them at their "
+                f"defaults ({DEFAULT_NEST_RADIUS:g}, {list(DEFAULT_GAPS)}), "
+                f"got {c.nest_radius:g}, {list(c.gaps)}"
+            )
+        check_layout(c.layout, c.arena_half)
     if c.robot_radius >= c.arena_half:
         raise ConfigError(f"robot_radius must be below arena_half, got {c.robot_radius} >= {c.arena_half}")
     if c.start_half + c.robot_radius > c.arena_half:
@@ -314,4 +376,6 @@ def config_from_dict(data: object) -> Config:
     values: dict[str, Any] = dict(data)
     if isinstance(values.get("gaps"), list):
         values["gaps"] = tuple(values["gaps"])
+    if "layout" in values:
+        values["layout"] = layout_from_json(values["layout"])
     return Config(**values)

@@ -315,7 +315,7 @@ class SimulatorNode(ManagedNode):
             goal_callback=self._on_goal,
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
-        self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
+        self._markers.publish(visualisation.arena_markers(self.config, 0, self._stamp()))
         self._tf_static.publish(
             TFMessage(
                 transforms=[
@@ -504,7 +504,7 @@ class SimulatorNode(ManagedNode):
         self._start_controllers(world, seed)
         self._actions = ["stop"] * self.robots
         self._wait_for_subscribers()
-        self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
+        self._markers.publish(visualisation.arena_markers(self.config, world.trial, self._stamp()))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
             self.free.start_chain()
@@ -528,7 +528,14 @@ class SimulatorNode(ManagedNode):
                     f"trial {trial} of seed {seed} abandoned at step {world.step}: the simulator was "
                     "deactivated"
                 )
-            if self.timing == "free" and timeline.step_in_trial(world.line, world.step) == 1:
+            first_step = timeline.step_in_trial(world.line, world.step) == 1
+            if (
+                first_step
+                and world.step > 1
+                and (self.config.arena_entry(world.trial) != self.config.arena_entry(world.trial - 1))
+            ):  # a later trial of the chain on other regions
+                self._markers.publish(visualisation.arena_markers(self.config, world.trial, self._stamp()))
+            if self.timing == "free" and first_step:
                 with self._lock:
                     self.free.begin_trial()
             self._publish_step(world, seed)

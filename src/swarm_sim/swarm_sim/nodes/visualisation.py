@@ -1,7 +1,7 @@
 """What the simulator shows to RViz2 and Foxglove, in standard messages, SI units and frame ``arena``
 (REP 103: metres, radians, z up; the arena centre at the origin).
 
-- ``arena_markers``: the arena's walls, the nest and the food region of the trial's gap, published latched on
+- ``arena_markers``: the arena's walls and the trial's regions (``Config.arena_entry``), published latched on
   ``markers`` at each trial's start (``visualization_msgs/MarkerArray``).
 - ``robot_markers``: per robot a body (green while it carries food), a heading arrow and a text label
   ``<i> <namespace>: <action>`` (with its deliveries once it has made one), and the swarm's delivery counter,
@@ -24,7 +24,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swarm_sim.model import Config
+from swarm_sim.model import Config, Piece
 
 FRAME = "arena"
 """The fixed frame of every pose and marker: the arena, centre at the origin, metres."""
@@ -104,20 +104,6 @@ def odometry(
     return message
 
 
-def food_outline(config: Config, gap: float) -> list[tuple[float, float, float, float]]:
-    """Per ray, (inner x, inner y, outer x, outer y) in mm: where the ray from the centre enters the food
-    region (the circle of radius nest_radius + gap) and where it meets the walls."""
-    inner = config.nest_radius + gap
-    half = config.arena_half
-    out = []
-    for k in range(RAYS):
-        angle = 2.0 * math.pi * k / RAYS
-        c, s = math.cos(angle), math.sin(angle)
-        reach = half / max(abs(c), abs(s))
-        out.append((inner * c, inner * s, reach * c, reach * s))
-    return out
-
-
 def _marker(stamp: Time, ns: str, marker_id: int, kind: int, colour: ColorRGBA) -> Marker:
     marker = Marker(header=Header(stamp=stamp, frame_id=FRAME), ns=ns, id=marker_id, type=kind)
     marker.action = Marker.ADD
@@ -126,40 +112,93 @@ def _marker(stamp: Time, ns: str, marker_id: int, kind: int, colour: ColorRGBA) 
     return marker
 
 
-def arena_markers(config: Config, gap: float, stamp: Time) -> MarkerArray:
-    """The walls, the nest and the food region of an arena with nest-food gap ``gap`` (mm)."""
+def _wall_reach(x: float, y: float, c: float, s: float, half: float) -> float:
+    """How far a ray from (x, y) inside the walls, along the unit vector (c, s), travels to the walls."""
+    reach = math.inf
+    for along, at in ((c, x), (s, y)):
+        if along > 0.0:
+            reach = min(reach, (half - at) / along)
+        elif along < 0.0:
+            reach = min(reach, (-half - at) / along)
+    return reach
+
+
+def beyond_outline(piece: Piece, half: float) -> list[tuple[float, float, float, float]]:
+    """Per ray from a ``beyond`` piece's centre, (inner x, inner y, outer x, outer y) in mm: where the ray
+    enters the region (the piece's circle) and where it meets the walls (``half`` from the centre)."""
+    out = []
+    for k in range(RAYS):
+        angle = 2.0 * math.pi * k / RAYS
+        c, s = math.cos(angle), math.sin(angle)
+        reach = max(_wall_reach(piece.x, piece.y, c, s, half), piece.radius)
+        out.append(
+            (
+                piece.x + piece.radius * c,
+                piece.y + piece.radius * s,
+                piece.x + reach * c,
+                piece.y + reach * s,
+            )
+        )
+    return out
+
+
+def _piece_marker(stamp: Time, piece: Piece, marker_id: int, half: float) -> Marker:
+    """One piece of a region: a flat cylinder for a disc, triangles for the rest (ns: the region's kind)."""
+    colour = NEST if piece.kind == "nest" else FOOD
+    if piece.shape == "disc":
+        marker = _marker(stamp, piece.kind, marker_id, Marker.CYLINDER, colour)
+        marker.pose.position.x, marker.pose.position.y = piece.x * MM, piece.y * MM
+        marker.scale.x = marker.scale.y = 2.0 * piece.radius * MM
+        marker.scale.z = 0.005
+        return marker
+    marker = _marker(stamp, piece.kind, marker_id, Marker.TRIANGLE_LIST, colour)
+    marker.scale.x = marker.scale.y = marker.scale.z = 1.0
+    if piece.shape == "beyond":
+        rays = beyond_outline(piece, half)
+        for (ix, iy, ox, oy), (jx, jy, px, py) in zip(rays, rays[1:] + rays[:1], strict=True):
+            a, b, c, d = (Point(x=u * MM, y=v * MM) for u, v in ((ix, iy), (ox, oy), (jx, jy), (px, py)))
+            marker.points += [a, b, d, a, d, c]
+        return marker
+    near, far = (piece.radius, half) if piece.shape == "above" else (-piece.radius, -half)
+    a, b, c, d = (
+        Point(x=u * MM, y=v * MM) for u, v in ((-half, near), (half, near), (half, far), (-half, far))
+    )
+    marker.points += [a, b, c, a, c, d]
+    return marker
+
+
+def _label_point(piece: Piece) -> tuple[float, float]:
+    """Where a piece's label goes (mm): a disc's centre, below a circle's rim, or inside a half-plane."""
+    if piece.shape == "disc":
+        return piece.x, piece.y
+    if piece.shape == "beyond":
+        return piece.x, piece.y - piece.radius - 150.0
+    return 0.0, piece.radius + 150.0 if piece.shape == "above" else -piece.radius - 150.0
+
+
+def arena_markers(config: Config, trial: int, stamp: Time) -> MarkerArray:
+    """The walls and the regions of trial ``trial`` (``Config.arena_entry``): each piece of a region kind
+    under that kind's namespace (``nest``, ``food``), labelled (food with its gap in the papers' arena)."""
     clear = Marker(header=Header(stamp=stamp, frame_id=FRAME))
     clear.action = Marker.DELETEALL
-    half = config.arena_half * MM
+    half_mm = config.arena_half
+    half = half_mm * MM
     walls = _marker(stamp, "walls", 0, Marker.LINE_STRIP, WALL)
     walls.scale.x = 0.03
     walls.points = [Point(x=x, y=y) for x, y in ((-half, -half), (half, -half), (half, half), (-half, half))]
     walls.points.append(walls.points[0])
-    nest = _marker(stamp, "nest", 0, Marker.CYLINDER, NEST)
-    nest.scale.x = nest.scale.y = 2.0 * config.nest_radius * MM
-    nest.scale.z = 0.005
-    food = _marker(stamp, "food", 0, Marker.TRIANGLE_LIST, FOOD)
-    food.scale.x = food.scale.y = food.scale.z = 1.0
-    rays = food_outline(config, gap)
-    for (ix, iy, ox, oy), (jx, jy, px, py) in zip(rays, rays[1:] + rays[:1], strict=True):
-        a, b, c, d = (
-            Point(x=ix * MM, y=iy * MM),
-            Point(x=ox * MM, y=oy * MM),
-            Point(x=jx * MM, y=jy * MM),
-            Point(x=px * MM, y=py * MM),
-        )
-        food.points += [a, b, d, a, d, c]
+    markers = [clear, walls]
     labels = []
-    for ns, text, x, y in (
-        ("nest_label", "nest", 0.0, 0.0),
-        ("food_label", f"food (gap {gap:.0f} mm)", 0.0, -(config.nest_radius + gap) * MM - 0.15),
-    ):
-        label = _marker(stamp, ns, 0, Marker.TEXT_VIEW_FACING, LABEL)
-        label.pose.position.x, label.pose.position.y, label.pose.position.z = x, y, 0.05
+    gap = config.gap(trial)
+    for m, piece in enumerate(config.arena_entry(trial)):
+        markers.append(_piece_marker(stamp, piece, m, half_mm))
+        label = _marker(stamp, f"{piece.kind}_label", m, Marker.TEXT_VIEW_FACING, LABEL)
+        x, y = _label_point(piece)
+        label.pose.position.x, label.pose.position.y, label.pose.position.z = x * MM, y * MM, 0.05
         label.scale.z = 0.15
-        label.text = text
+        label.text = piece.kind if math.isnan(gap) or piece.kind == "nest" else f"food (gap {gap:.0f} mm)"
         labels.append(label)
-    return MarkerArray(markers=[clear, walls, nest, food, *labels])
+    return MarkerArray(markers=[*markers, *labels])
 
 
 def robot_markers(

@@ -138,7 +138,8 @@ class LockstepChain:
             self.initial = smoothed
         record = None
         if timeline.is_final(self.line, k):
-            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 1)
+            entry, food_scale = self.config.arena_arrays(self.trial)
+            world.take_all_probes(self.x, self.y, entry, self.probes, 1)
             values = world.trial_values(
                 self.initial,
                 smoothed,
@@ -146,7 +147,7 @@ class LockstepChain:
                 self.motion,
                 self.probes,
                 self.deliveries,
-                self.setup.gap,
+                food_scale,
                 self.p,
             )
             record = TrialRecord(
@@ -166,6 +167,7 @@ class LockstepChain:
 
     def _begin_step(self) -> list[Readings]:
         k = self.step
+        entry, _ = self.config.arena_arrays(self.trial)
         if timeline.step_in_trial(self.line, k) == 1:
             world.place_robots(
                 self.x,
@@ -189,7 +191,7 @@ class LockstepChain:
             self._pairs,
         )
         if timeline.step_in_trial(self.line, k) == 1:
-            world.take_all_probes(self.x, self.y, self.setup.gap, self.p, self.probes, 0)
+            world.take_all_probes(self.x, self.y, entry, self.probes, 0)
         return sense_swarm(
             self.x,
             self.y,
@@ -198,7 +200,7 @@ class LockstepChain:
             self.broadcast_food,
             self.setup.drop_keys,
             k,
-            self.setup.gap,
+            entry,
             self.p,
         )
 
@@ -296,4 +298,4 @@ def warm_up(config: Config = DEFAULT) -> None:
         np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64),
         np.zeros((n, 2, N_PROBES)), np.zeros(n, np.int64), 500.0, sim.p,
     )  # fmt: skip
-    world.take_all_probes(sim.x, sim.y, 500.0, sim.p, np.zeros((n, 2, N_PROBES)), 0)
+    world.take_all_probes(sim.x, sim.y, config.arena_arrays(0)[0], np.zeros((n, 2, N_PROBES)), 0)

@@ -115,9 +115,13 @@ def record_trial(
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots)
     gap = config.gap(trial)  # the gap of its chain (a chain's trials share one)
+    pieces, food_scale = config.arena_table
+    arena = config.arena_of_trial(trial)
     key = np.uint64(root_key(int(seed)))  # (a Python int from numba: keep the kernel's uint64)
     robot_tree = np.array(layout.robot_tree, dtype=np.int64)
-    values = kernel.record_chain(trees, robot_tree, key, chain, position, gap, p, rec)
+    values = kernel.record_chain(
+        trees, robot_tree, key, chain, position, pieces[arena], food_scale[arena], p, rec
+    )
     return RecordedTrial(
         tree=layout.label,
         seed=int(seed),
@@ -199,9 +203,11 @@ def record_trial_reference(
             fitness.append(np.full(world.N_OBJECTIVES, np.nan))
         else:
             probes = sim.probes.copy()
-            world.take_all_probes(sim.x, sim.y, sim.setup.gap, p, probes, 1)
-            gap = sim.setup.gap
-            values = world.trial_values(initial, smoothed, no_counts, no_motion, probes, delivered, gap, p)
+            entry, food_scale = config.arena_arrays(trial)
+            world.take_all_probes(sim.x, sim.y, entry, probes, 1)
+            values = world.trial_values(
+                initial, smoothed, no_counts, no_motion, probes, delivered, food_scale, p
+            )
             fitness.append(values[: world.N_OBJECTIVES])
 
     record = run_with_controllers(parsed, seed, trial, config, on_answers=on_answers)

@@ -16,14 +16,13 @@ from dataclasses import dataclass, field, replace
 
 from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import DEFAULT, OBJECTIVES, Config
+from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece
+from swarm_sim.model.regions import Layout, check_layout
 
-REGION_KINDS: tuple[str, ...] = ("nest", "food")
-"""The kinds of region a task can have."""
-
-REGION_SHAPES: tuple[str, ...] = ("disc", "beyond")
+REGION_SHAPES: tuple[str, ...] = PIECE_SHAPES
 """``disc``: the points closer than ``radius`` to ``centre``; ``beyond``: the points at least ``radius`` from
-``centre`` (the 2023 food region: everything past a circle around the nest)."""
+``centre`` (the 2023 food region: everything past a circle around the nest); ``above``: the points with
+y >= ``radius``; ``below``: the points with y <= -``radius`` (half-planes: their centre is unused, [0, 0])."""
 
 
 class TaskError(ConfigError):
@@ -36,16 +35,20 @@ class Arena:
 
     half_size: float = DEFAULT.arena_half
     """Half the side of the free square inside the walls (mm)."""
+    trial_entries: int = 1
+    """How many arena entries the trials of a block take in turn (1: every trial of a block has the same
+    regions, as in the papers; 5: trial k of a block has entry k, as the authors' 2026 arenas 5-9 have)."""
 
 
 @dataclass(frozen=True)
 class Region:
-    """A region of the arena that the ground sensor reads.
+    """A region of the arena that the ground sensor reads: one piece of ground of one kind; a kind with
+    several regions is their union (``swarm_sim.model.regions``).
 
-    ``radius`` holds one value per arena configuration (a single value: the same in all). A task's arena
-    configurations vary its regions by block of trials: trials come in blocks of ``Trials.chain_trials`` and
-    the blocks cycle through the configurations, as the 2023 gaps do (food 1000 mm then 1200 mm from the
-    centre).
+    ``radius`` and ``centre`` hold one value per arena entry (a single value: the same in all). Entries come
+    ``Arena.trial_entries`` to a configuration; trials come in blocks of ``Trials.chain_trials``, the blocks
+    cycle through the configurations (as the 2023 gaps do: food 1000 mm, then 1200 mm from the centre), and
+    trial k of a block takes its configuration's entry k.
     """
 
     kind: str
@@ -53,9 +56,10 @@ class Region:
     shape: str
     """A shape of ``REGION_SHAPES``."""
     radius: tuple[float, ...]
-    """The circle's radius in each arena configuration (mm)."""
-    centre: tuple[float, float] = (0.0, 0.0)
-    """The circle's centre (mm; the arena's centre is the origin)."""
+    """The circle's radius (a half-plane's distance from the x axis) in each arena entry (mm)."""
+    centre: tuple[tuple[float, float], ...] = ((0.0, 0.0),)
+    """The circle's centre in each arena entry (mm; the arena's centre is the origin). A task file may give
+    one pair, ``[x, y]``, for the same centre in every entry."""
 
 
 @dataclass(frozen=True)
@@ -156,9 +160,49 @@ class TaskSpec:
         return next((r for r in self.regions if r.kind == kind), None)
 
     @property
+    def arena_entries(self) -> int:
+        """How many arena entries the task's regions go through."""
+        return max(max(len(r.radius), len(r.centre)) for r in self.regions)
+
+    @property
     def arena_configurations(self) -> int:
         """How many arena configurations the task's regions go through."""
-        return max(len(r.radius) for r in self.regions)
+        return self.arena_entries // self.arena.trial_entries
+
+    @property
+    def layout(self) -> Layout:
+        """The regions of every arena entry as the world model's layout (``swarm_sim.model.regions``)."""
+        per = self.arena.trial_entries
+        return tuple(
+            tuple(
+                tuple(
+                    Piece(
+                        r.kind,
+                        r.shape,
+                        *_cycle(r.centre, self.arena_entries)[c * per + k],
+                        _cycle(r.radius, self.arena_entries)[c * per + k],
+                    )
+                    for r in self.regions
+                )
+                for k in range(per)
+            )
+            for c in range(self.arena_configurations)
+        )
+
+    @property
+    def concentric(self) -> bool:
+        """Whether the regions are the papers' arena: one nest disc of one radius at the centre and one food
+        region beyond a circle at the centre, by block of trials (``Config.nest_radius`` and ``gaps``)."""
+        nest, food = self.region("nest"), self.region("food")
+        return (
+            len(self.regions) == 2
+            and self.arena.trial_entries == 1
+            and nest is not None
+            and food is not None
+            and (nest.shape, food.shape) == ("disc", "beyond")
+            and len(nest.radius) == 1
+            and set(nest.centre) | set(food.centre) == {(0.0, 0.0)}
+        )
 
     @property
     def trial_seconds(self) -> float:
@@ -167,17 +211,24 @@ class TaskSpec:
         return world.ticks * world.steps_per_tick * world.step_dt
 
     def config(self, profile: str | None = None) -> Config:
-        """The world model's configuration for this task under ``profile`` (None: the model's default)."""
+        """The world model's configuration for this task under ``profile`` (None: the model's default). The
+        papers' arena is given as ``nest_radius`` and ``gaps`` (as the model's own default), any other as a
+        ``layout``."""
         nest, food = self.region("nest"), self.region("food")
         assert nest is not None and food is not None  # check() requires both
-        nest_radius = nest.radius[0]
-        gaps = tuple(radius - nest_radius for radius in _cycle(food.radius, self.arena_configurations))
+        if self.concentric:
+            nest_radius = nest.radius[0]
+            gaps = tuple(radius - nest_radius for radius in _cycle(food.radius, self.arena_configurations))
+            layout: Layout = ()
+        else:
+            nest_radius, gaps, layout = DEFAULT.nest_radius, DEFAULT.gaps, self.layout
         return replace(
             DEFAULT,
             profile=DEFAULT.profile if profile is None else profile,
             arena_half=self.arena.half_size,
             nest_radius=nest_radius,
             gaps=gaps,
+            layout=layout,
             n_robots=self.robots.count,
             robot_radius=self.robots.radius,
             start_half=self.robots.start_half_size,
@@ -201,7 +252,7 @@ def _unknown(key: str, what: str, name: object, choices: tuple[str, ...]) -> str
     return f"{key}: unknown {what} {name!r}{hint}; expected among {', '.join(choices)}"
 
 
-def _cycle(values: tuple[float, ...], n: int) -> tuple[float, ...]:
+def _cycle(values: tuple, n: int) -> tuple:
     return values if len(values) == n else values * n
 
 
@@ -210,45 +261,54 @@ def check(task: TaskSpec) -> None:
     are the file loader's concern; this checks what they mean together)."""
     half = task.arena.half_size
     kinds = [r.kind for r in task.regions]
+    if isinstance(task.arena.trial_entries, bool) or task.arena.trial_entries < 1:
+        raise TaskError(f"arena.trial_entries must be a positive integer, got {task.arena.trial_entries!r}")
     for k, region in enumerate(task.regions):
         key = f"regions[{k}]"
         if region.kind not in REGION_KINDS:
             raise TaskError(f"{key}.kind must be one of {', '.join(REGION_KINDS)}, got {region.kind!r}")
-        if kinds.count(region.kind) > 1:
-            raise TaskError(f"{key}.kind: the task has more than one {region.kind} region; expected one")
         if region.shape not in REGION_SHAPES:
             raise TaskError(f"{key}.shape must be one of {', '.join(REGION_SHAPES)}, got {region.shape!r}")
-        if tuple(region.centre) != (0.0, 0.0):
-            raise TaskError(
-                f"{key}.centre must be [0, 0] (this model version places regions at the arena's centre), "
-                f"got {list(region.centre)}"
-            )
         if not region.radius:
-            raise TaskError(f"{key}.radius must be one positive number per arena configuration, got none")
+            raise TaskError(f"{key}.radius must be one positive number per arena entry, got none")
+        if not region.centre:
+            raise TaskError(f"{key}.centre must be one [x, y] per arena entry, got none")
         for radius in region.radius:
             if not (math.isfinite(radius) and radius > 0):
                 raise TaskError(f"{key}.radius must be positive numbers, got {radius!r}")
             if radius >= half:
                 raise TaskError(
-                    f"{key}.radius {radius} puts the region's circle outside the arena "
+                    f"{key}.radius {radius} puts the region's edge outside the arena "
                     f"(arena.half_size {half}): expected below {half}"
                 )
-    configurations = {len(r.radius) for r in task.regions} - {1}
-    if len(configurations) > 1:
+        for x, y in region.centre:
+            if max(abs(x), abs(y)) >= half:
+                raise TaskError(
+                    f"{key}.centre [{x:g}, {y:g}] lies outside the arena (arena.half_size {half}): "
+                    f"expected both within +-{half:g}"
+                )
+            if region.shape in ("above", "below") and (x, y) != (0.0, 0.0):
+                raise TaskError(
+                    f"{key}.centre must be [0, 0] for a half-plane ({region.shape}), got [{x:g}, {y:g}]"
+                )
+    for kind in REGION_KINDS:
+        if kind not in kinds:
+            raise TaskError(f"regions: the task has no {kind} region; expected at least one")
+    counts = {n for r in task.regions for n in (len(r.radius), len(r.centre))} - {1}
+    if len(counts) > 1:
         raise TaskError(
-            "regions: every region with more than one radius must have one per arena configuration, the same "
-            f"number for all; got {', '.join(str(len(r.radius)) for r in task.regions)}"
+            "regions: every region with more than one radius or centre must have one per arena entry, the "
+            f"same number for all; got {', '.join(str(n) for n in sorted(counts))}"
         )
-    nest, food = task.region("nest"), task.region("food")
-    if nest is None or nest.shape != "disc" or len(nest.radius) != 1:
-        raise TaskError("regions: this model version needs one nest region, a disc of one radius")
-    if food is None or food.shape != "beyond":
-        raise TaskError("regions: this model version needs one food region of shape beyond")
-    if min(food.radius) <= nest.radius[0]:
+    if task.arena_entries % task.arena.trial_entries:
         raise TaskError(
-            f"regions: the food circle's radius ({min(food.radius)}) must exceed the nest's "
-            f"({nest.radius[0]}): nest and food must not overlap"
+            f"regions: {task.arena_entries} arena entries do not make whole configurations of "
+            f"arena.trial_entries = {task.arena.trial_entries}: expected a multiple of it"
         )
+    try:
+        check_layout(task.layout, half, "regions")
+    except ConfigError as error:
+        raise TaskError(str(error)) from None
     for name in task.objectives:
         if name not in OBJECTIVES:
             raise TaskError(_unknown("objectives", "objective", name, OBJECTIVES))
