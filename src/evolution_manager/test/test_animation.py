@@ -197,3 +197,26 @@ def test_a_foraging_trial_of_named_primitives_is_animated_at_its_length_with_the
         load_layout(swarm, 9, load_library(library)), 3, 0, replace(DEFAULT, ticks=200), load_library(library)
     )
     assert frames.trees[0] == "sel(got_food, wander1)" and len(frames.steps) == 800
+
+
+def test_a_trial_on_regions_of_a_task_s_own_is_drawn_with_its_pieces():
+    from evolution_manager.viewing.animate import FOOD_COLOUR, GAP_COLOUR, NEST_COLOUR
+    from swarm_sim.model import Config, Piece
+
+    nest = Piece("nest", "disc", 0.0, 900.0, 400.0)
+    layout = (
+        ((nest, Piece("food", "disc", -1200.0, -1000.0, 500.0), Piece("food", "below", 0.0, 0.0, 2000.0)),),
+    )
+    config = Config(layout=layout)
+    drawn = frames_from_tree(TREE, SEED, 0, config)
+    assert drawn.regions == layout[0][0] and math.isnan(drawn.gap)
+    assert "regions" in drawn.to_json() and drawn.to_json()["gap"] is None  # valid JSON for the explorer
+    image = render_frame(drawn, 0).convert("RGB")
+
+    def colour_at(x: float, y: float) -> tuple[int, int, int]:
+        return image.getpixel(tuple(round(v) for v in to_pixels(drawn, x, y)))
+
+    assert colour_at(250.0, 900.0) == NEST_COLOUR  # inside the nest disc, beside its label
+    assert colour_at(-1200.0, -1250.0) == FOOD_COLOUR  # inside the food disc
+    assert colour_at(1500.0, -2300.0) == FOOD_COLOUR  # the strip along the lower wall
+    assert colour_at(1800.0, 1800.0) == GAP_COLOUR
