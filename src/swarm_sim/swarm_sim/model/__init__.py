@@ -1,10 +1,20 @@
-"""The world model as plain data, free of compiled code: settings, objectives, conditions and swarm layouts.
+"""The world model as plain data, free of compiled code: settings, objectives, conditions, swarm layouts and
+arenas.
 
 ``Config`` (``config``) holds every parameter of the model, validated once; the objectives and descriptors
 are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``); a swarm layout
-gives each robot its tree (``swarm_layout``). Other packages import these names from here.
+gives each robot its tree (``swarm_layout``); the authors' 2026 arena layouts 1-9 are regions made of pieces
+(``arenas``). Other packages import these names from here.
 """
 
+from swarm_sim.model.arenas import (
+    KINDS,
+    Piece,
+    arena_entries,
+    pieces_from_points,
+    region_distance,
+    scatter_points,
+)
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
 from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
 from swarm_sim.model.objectives import (
@@ -35,6 +45,7 @@ __all__ = [
     "DEFAULT",
     "DESCRIPTORS",
     "FAMILIES",
+    "KINDS",
     "N_OBJECTIVES",
     "N_PROBES",
     "N_VALUES",
@@ -47,8 +58,10 @@ __all__ = [
     "LayoutError",
     "Objective",
     "Params",
+    "Piece",
     "SwarmLayout",
     "apply_conditions",
+    "arena_entries",
     "condition_texts",
     "config_from_dict",
     "default_config",
@@ -57,4 +70,7 @@ __all__ = [
     "layout_of_label",
     "load_layout",
     "of_trees",
+    "pieces_from_points",
+    "region_distance",
+    "scatter_points",
 ]
