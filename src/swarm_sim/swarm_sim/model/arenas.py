@@ -81,7 +81,8 @@ def region_distance(entry: ArenaEntry, kind: str, x: float, y: float) -> float:
     As their ``calculateDistancesExpN`` (FB:150-370), here in float64 throughout. Theirs is float64 except
     that layouts 5-9 square the centre offsets in float32 (``hypotenuseSquared``, FB:372-377), and layout 9
     also rounds each food distance to float32 (FB:360-361). Layouts 8 and 9 start their nearest-piece search
-    at 5 m (FB:281, 291, 357), so their distance saturates at 5000 mm; this one does not.
+    at 5 m (FB:281, 291, 357), so their distance saturates at 5000 mm; this one does not. Their gap and radii
+    settings are float32 too (``std::stof``, BLF:308-313, 393: a gap of 0.7 m is 0.699999988 m there).
     """
     pieces = [p for p in entry if p.kind == kind]
     if not pieces:
