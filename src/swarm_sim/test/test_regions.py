@@ -54,8 +54,12 @@ def test_compiled_distances_are_the_pieces_distances(entry):
     rng = np.random.default_rng(entry)
     pieces = LAYOUT[1][entry]
     for x, y in rng.uniform(-2400.0, 2400.0, (50, 2)):
-        assert world.region_distance(x, y, table[1, entry], 1) == pytest.approx(distance(pieces, "food", x, y))
-        assert world.region_distance(x, y, table[1, entry], 0) == pytest.approx(distance(pieces, "nest", x, y))
+        assert world.region_distance(x, y, table[1, entry], 1) == pytest.approx(
+            distance(pieces, "food", x, y)
+        )
+        assert world.region_distance(x, y, table[1, entry], 0) == pytest.approx(
+            distance(pieces, "nest", x, y)
+        )
     assert scale[1, entry] == distance(pieces, "food", 0.0, 600.0)  # from the nest's centre
 
 

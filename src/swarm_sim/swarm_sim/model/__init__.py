@@ -1,11 +1,13 @@
-"""The world model as plain data, free of compiled code: settings, objectives, conditions and swarm layouts.
+"""The world model as plain data, free of compiled code: settings, objectives, conditions, swarm layouts and
+arenas.
 
 ``Config`` (``config``) holds every parameter of the model, validated once; the objectives and descriptors
 are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``); a swarm layout
-gives each robot its tree (``swarm_layout``); the nest and food are pieces of ground (``regions``). Other
-packages import these names from here.
+gives each robot its tree (``swarm_layout``); the nest and food are pieces of ground (``regions``), and the
+authors' 2026 arena layouts 1-9 are made of them (``arenas``). Other packages import these names from here.
 """
 
+from swarm_sim.model.arenas import FOOD_KINDS, arena_entries, pieces_from_points, scatter_points
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
 from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
 from swarm_sim.model.objectives import (
@@ -37,6 +39,7 @@ __all__ = [
     "DEFAULT",
     "DESCRIPTORS",
     "FAMILIES",
+    "FOOD_KINDS",
     "N_OBJECTIVES",
     "N_PROBES",
     "N_VALUES",
@@ -54,6 +57,7 @@ __all__ = [
     "Piece",
     "SwarmLayout",
     "apply_conditions",
+    "arena_entries",
     "concentric",
     "condition_texts",
     "config_from_dict",
@@ -63,4 +67,6 @@ __all__ = [
     "layout_of_label",
     "load_layout",
     "of_trees",
+    "pieces_from_points",
+    "scatter_points",
 ]
