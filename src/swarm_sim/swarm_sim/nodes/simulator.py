@@ -40,14 +40,16 @@ Publishers:
     robot_markers (visualization_msgs/MarkerArray): every step, each robot's body, heading and label (index,
         namespace, current action).
     <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
-        (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
+        (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step, in the robot's frame
+        ``<robot>/base_link``.
     <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
     <robot>/odom (nav_msgs/Odometry): each robot's pose in its frame ``<robot>/odom`` (which coincides with
         ``arena``: the simulator's odometry is exact) and its velocity over the last step in
         ``<robot>/base_link`` (REP 105; ``<robot>``: the robot's full namespace without the leading slash).
     /tf (tf2_msgs/TFMessage): every step, each robot's ``<robot>/base_link`` in its ``<robot>/odom``; at the
         root, as tf2 expects, the frames being namespaced.
-    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity).
+    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity),
+        when the node is configured and again at each trial's start (as ``markers``), stamped then.
     swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step, with whether each robot
         carries food and its deliveries in the trial, as it answered the step before.
     poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
@@ -121,7 +123,7 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
-from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frame, robot_namespaces
+from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frames, robot_namespaces
 from swarm_ros.parameters import (
     ParameterError,
     check_file_values,
@@ -238,11 +240,7 @@ class SimulatorNode(ManagedNode):
             ),
         )
         self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
-        graph = self.get_namespace().rstrip("/")
-        self.frames = [
-            (robot_frame(f"{graph}/{ns}", "odom"), robot_frame(f"{graph}/{ns}", "base_link"))
-            for ns in self.namespaces
-        ]
+        self.frames = robot_frames(self.get_namespace(), self.namespaces)
         """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
         self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
         self.late_steps = 0
@@ -316,14 +314,7 @@ class SimulatorNode(ManagedNode):
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
         self._markers.publish(visualisation.arena_markers(self.config, self.config.gap(0), self._stamp()))
-        self._tf_static.publish(
-            TFMessage(
-                transforms=[
-                    visualisation.transform(self._stamp(), visualisation.FRAME, odom, 0.0, 0.0, 0.0)
-                    for odom, _ in self.frames
-                ]
-            )
-        )
+        self._tf_static.publish(static_frames(self._stamp(), self.frames))
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
@@ -505,6 +496,7 @@ class SimulatorNode(ManagedNode):
         self._actions = ["stop"] * self.robots
         self._wait_for_subscribers()
         self._markers.publish(visualisation.arena_markers(self.config, world.setup.gap, self._stamp()))
+        self._tf_static.publish(static_frames(self._stamp(), self.frames))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
             self.free.start_chain()
@@ -641,28 +633,19 @@ class SimulatorNode(ManagedNode):
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
-        messages = step_messages(world, stamp, seed, self.namespaces, self._actions, self.config)
+        messages = step_messages(
+            world, stamp, seed, self.namespaces, self._actions, self.config, [b for _, b in self.frames]
+        )
         self._state.publish(messages.state)
         self._poses.publish(messages.poses)
         for publisher, pose in zip(self._pose, messages.pose, strict=True):
             publisher.publish(pose)
-        poses: list[tuple[float, float, float]] = [(x, y, t) for x, y, t in world.poses().tolist()]
-        placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
-        for i, publisher in enumerate(self._odom):
-            previous = None if placed or self._previous is None else self._previous[i]
-            odom, base = self.frames[i]
-            publisher.publish(
-                visualisation.odometry(stamp, poses[i], previous, self.config.step_dt, odom, base)
-            )
-        self._previous = poses
-        self._tf.publish(
-            TFMessage(
-                transforms=[
-                    visualisation.transform(stamp, odom, base, *pose)
-                    for (odom, base), pose in zip(self.frames, poses, strict=True)
-                ]
-            )
+        odometry, transforms, self._previous = frame_messages(
+            world, stamp, self._previous, self.frames, self.config.step_dt
         )
+        for publisher, odom in zip(self._odom, odometry, strict=True):
+            publisher.publish(odom)
+        self._tf.publish(transforms)
         self._robot_markers.publish(messages.robot_markers)
         for i in range(len(self.namespaces)):
             self._ground[i].publish(messages.ground[i])
@@ -732,10 +715,13 @@ def step_messages(
     namespaces: Sequence[str],
     actions: Sequence[str],
     config: Config,
+    frames: Sequence[str],
 ) -> StepMessages:
     """The messages of the step ``world`` is at, stamped ``stamp``; ``actions``: each robot's action of the
-    step before (its marker's label). The node publishes these; ``replay --verify`` compares a recording
-    with those of a re-run."""
+    step before (its marker's label); ``frames``: each robot's ``base_link`` frame id
+    (``swarm_ros.names.robot_frames``),
+    the frame of its readings. The node publishes these; ``replay --verify`` compares a recording with those
+    of a re-run."""
     poses = world.poses()
     listed = poses.tolist()
     state = SwarmState(
@@ -763,7 +749,7 @@ def step_messages(
     ground: list[GroundSensor] = []
     readings_of: list[RangeAndBearingReadings] = []
     for i, readings in enumerate(world.readings()):
-        header = Header(stamp=stamp, frame_id=namespaces[i])
+        header = Header(stamp=stamp, frame_id=frames[i])
         ground.append(
             GroundSensor(header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food)
         )
@@ -787,6 +773,44 @@ def step_messages(
         ground,
         readings_of,
     )
+
+
+def static_frames(stamp: Time, frames: Sequence[tuple[str, str]]) -> TFMessage:
+    """The ``/tf_static`` message: each robot's ``odom`` frame in ``arena``, the identity (the simulator's
+    odometry does not drift)."""
+    return TFMessage(
+        transforms=[
+            visualisation.transform(stamp, visualisation.FRAME, odom, 0.0, 0.0, 0.0) for odom, _ in frames
+        ]
+    )
+
+
+Poses = list[tuple[float, float, float]]
+"""Each robot's (x mm, y mm, heading rad)."""
+
+
+def frame_messages(
+    world: LockstepChain, stamp: Time, previous: Poses | None, frames: Sequence[tuple[str, str]], dt: float
+) -> tuple[list[Odometry], TFMessage, Poses]:
+    """Each robot's odometry and the ``/tf`` message of the step ``world`` is at, stamped ``stamp``, and the
+    poses to pass as ``previous`` at the next step. A robot's velocity is over the step from ``previous``
+    (``dt`` seconds), zero at a trial's first step (the robots are placed) or without ``previous``. The node
+    publishes these; ``replay --verify`` compares a recording with those of a re-run."""
+    poses: Poses = [(x, y, t) for x, y, t in world.poses().tolist()]
+    placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
+    odometry = [
+        visualisation.odometry(
+            stamp, pose, None if placed or previous is None else previous[i], dt, odom, base
+        )
+        for i, (pose, (odom, base)) in enumerate(zip(poses, frames, strict=True))
+    ]
+    transforms = TFMessage(
+        transforms=[
+            visualisation.transform(stamp, odom, base, *pose)
+            for (odom, base), pose in zip(frames, poses, strict=True)
+        ]
+    )
+    return odometry, transforms, poses
 
 
 def trial_start_message(
