@@ -641,7 +641,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         action=argparse.BooleanOptionalAction,
         default=True,
         help="record each robot's odom, /tf and /tf_static in the bag (default); --no-frames leaves them out "
-        "(a bag about a third smaller, docs/ros.md)",
+        "(a bag about a third smaller, docs/performance.md)",
     )
     parser.add_argument(
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
