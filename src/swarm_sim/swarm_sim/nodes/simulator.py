@@ -109,6 +109,7 @@ from visualization_msgs.msg import MarkerArray
 from bt_controller import timeline
 from bt_controller.model_settings import arena_of_trial, chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
+from bt_controller.perception import Readings
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
@@ -684,6 +685,32 @@ class SimulatorNode(ManagedNode):
         return Header(stamp=self._stamp(), frame_id=frame)
 
 
+def reading_messages(
+    readings: Sequence[Readings], stamp: Time, step: int, frames: Sequence[str]
+) -> tuple[list[GroundSensor], list[RangeAndBearingReadings]]:
+    """Each robot's ``ground`` and ``range_and_bearing`` messages of sensing step ``step`` from its
+    ``readings``, stamped ``stamp`` in its frame (``frames``: each robot's ``base_link``). The simulator and
+    the virtual-sensor bridge publish these."""
+    ground: list[GroundSensor] = []
+    readings_of: list[RangeAndBearingReadings] = []
+    for i, sensed in enumerate(readings):
+        header = Header(stamp=stamp, frame_id=frames[i])
+        ground.append(GroundSensor(header=header, step=step, in_nest=sensed.in_nest, on_food=sensed.on_food))
+        messages = [
+            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
+            for s, r, b, n, f in zip(
+                sensed.senders.tolist(),
+                sensed.ranges.tolist(),
+                sensed.bearings.tolist(),
+                sensed.nest.tolist(),
+                sensed.food.tolist(),
+                strict=True,
+            )
+        ]
+        readings_of.append(RangeAndBearingReadings(header=header, step=step, readings=messages))
+    return ground, readings_of
+
+
 def robot_answer(msg: WheelCommand) -> RobotAnswer:
     """A controller's ``wheels`` message as the world takes it (without a tick's status)."""
     return RobotAnswer(
@@ -746,25 +773,7 @@ def step_messages(
         [bool(c) for c in world.carrying],
         [int(d) for d in world.deliveries],
     )
-    ground: list[GroundSensor] = []
-    readings_of: list[RangeAndBearingReadings] = []
-    for i, readings in enumerate(world.readings()):
-        header = Header(stamp=stamp, frame_id=frames[i])
-        ground.append(
-            GroundSensor(header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food)
-        )
-        messages = [
-            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
-            for s, r, b, n, f in zip(
-                readings.senders.tolist(),
-                readings.ranges.tolist(),
-                readings.bearings.tolist(),
-                readings.nest.tolist(),
-                readings.food.tolist(),
-                strict=True,
-            )
-        ]
-        readings_of.append(RangeAndBearingReadings(header=header, step=world.step, readings=messages))
+    ground, readings_of = reading_messages(world.readings(), stamp, world.step, frames)
     return StepMessages(
         state,
         arena_poses,
