@@ -1,18 +1,22 @@
 """The virtual-sensor bridge (issue 40) as a robot owner runs it, with real node processes: a fleet tracked in
 poses (``geometry_msgs/PoseStamped`` per robot) gets each robot's readings, in its ``base_link``, as the model
 senses them; a free-running footbot controller fed by the bridge drives its robot on ``cmd_vel``; nothing is
-sensed before every robot has a pose; a bad task is one line."""
+sensed before every robot has a pose; a bad task is one line. A free-running trial graph whose readings come
+from the bridge over a lossy, late link completes, its robots driven."""
 
 import subprocess
 import time
 
+import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from evolution_manager.graph.startup import Graph, executable
+from evolution_manager.graph.nodes.trial import TrialGraph
+from evolution_manager.graph.startup import Bridge, Graph, executable
+from evolution_manager.recording.bags import read_bag
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import RELIABLE
@@ -112,3 +116,26 @@ def test_a_bad_task_stops_the_bridge_with_one_line():
         )
     assert done.returncode == 2, done.stderr
     assert done.stderr.startswith("sensor_bridge: task must be one of") and done.stderr.count("\n") == 1
+
+
+def test_a_free_trial_sensed_by_the_bridge_over_a_lossy_late_link_completes_and_its_robots_drive(tmp_path):
+    bag = tmp_path / "bridged"
+    with TrialGraph(
+        robots=3,
+        timing="free",
+        rate=2.0,
+        timeout=300.0,
+        namespace="/swarm_a",
+        bridge=Bridge(loss=0.2, delay=2, seed=3),
+    ) as graph:
+        record = graph.run("forward", 5, 0, bag)
+    assert record.trial == 0
+    moved = np.hypot(*(record.end_poses[:, :2] - record.start_poses[:, :2]).T)  # mm
+    assert (moved > 50.0).any(), moved  # the controllers drove on the bridge's readings
+    messages = list(read_bag(bag))
+    for robot in range(3):
+        ground = [m.message for m in messages if m.topic == f"/swarm_a/footbot_{robot}/ground"]
+        steps = [g.step for g in ground]
+        assert 60 < len(steps) < 160, len(steps)  # about a fifth lost (the trial has 160 periods)
+        assert len(set(steps)) == len(steps)  # each period's pair once (a bag orders them by their stamps)
+        assert {g.header.frame_id for g in ground} == {f"swarm_a/footbot_{robot}/base_link"}

@@ -10,7 +10,7 @@ from bt_controller.controller import FootbotController
 from bt_controller.tree import parse
 from swarm_sim.model import DEFAULT
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.virtual_sensors import VirtualSensors, heading_of
+from swarm_sim.nodes.virtual_sensors import Delivery, VirtualSensors, heading_of
 from swarm_sim.roads import run_with_controllers
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right), seq(in_nest, stop))"
@@ -96,3 +96,30 @@ def test_replayed_poses_give_the_simulators_readings_and_the_controllers_command
     run_with_controllers(tree, SEED, TRIAL, on_step=on_step, on_answers=on_answers, on_outcomes=on_outcomes)
     assert steps == list(range(1, (TRIAL + 1) * 160 + 1))
     assert worst["range"] < 1e-9 and worst["bearing"] < 1e-12, worst  # mm; radians
+
+
+def test_a_perfect_link_delivers_everything_at_once_in_order():
+    link = Delivery()
+    for item in "abc":
+        link.send(5, item)
+    assert link.due(4) == [] and link.due(5) == ["a", "b", "c"] and link.due(6) == []
+
+
+def test_a_lossy_late_link_loses_about_its_share_and_holds_the_rest_back_within_its_delay():
+    link = Delivery(loss=0.25, delay=3, seed=1)
+    arrived = {}
+    for period in range(1, 2001):
+        link.send(period, period)
+        for item in link.due(period):
+            arrived[item] = period
+    assert 0.22 < link.lost / 2000 < 0.28
+    assert link.lost + len(arrived) + len(link.pending) == 2000
+    held = [arrived[item] - item for item in arrived]
+    assert set(held) == {0, 1, 2, 3}  # on time, or up to three periods late
+    assert any(a > b for a, b in zip(list(arrived), list(arrived)[1:], strict=False))  # some overtaken
+
+
+@pytest.mark.parametrize(("loss", "delay"), [(-0.1, 0), (1.5, 0), (0.0, -1)])
+def test_a_link_refuses_a_loss_that_is_no_probability_or_a_negative_delay(loss, delay):
+    with pytest.raises(ValueError, match=r"loss must be|delay must be"):
+        Delivery(loss, delay)

@@ -26,6 +26,8 @@ stops the node with one line, exit status 2):
         trial is bit-exact with the batch evaluator; ``free``: the world steps on its own, ``rate`` times real
         time, and each step takes every robot's latest answer, whatever step it answered (below).
     rate (float, read-only, free only): simulated seconds per second of wall time (default 1.0: real time).
+    sensing (string, read-only): ``model`` (default): publish each robot's readings; ``external`` (free
+        only): publish none; another node senses from the poses (``sensor_bridge``).
 
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
@@ -142,7 +144,7 @@ from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
 from swarm_sim.model import DEFAULT, Config, apply_conditions
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
+from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
 from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
 from tf2_msgs.msg import TFMessage
 
@@ -230,6 +232,22 @@ class SimulatorNode(ManagedNode):
         )
         if self.timing not in TIMINGS:
             raise ParameterError(f"parameter timing := {self.timing!r}: expected one of {', '.join(TIMINGS)}")
+        self.sensing: str = declare(
+            self,
+            "sensing",
+            "model",
+            descriptor(
+                "model: publish each robot's readings; external: leave them to another node (the "
+                "virtual-sensor bridge; free timing only)",
+                read_only=True,
+            ),
+        )
+        if self.sensing not in SENSINGS:
+            raise ParameterError(
+                f"parameter sensing := {self.sensing!r}: expected one of {', '.join(SENSINGS)}"
+            )
+        if self.sensing == "external" and self.timing != "free":
+            raise ParameterError("parameter sensing := 'external' needs timing := 'free'")
         self.rate: float = declare(
             self,
             "rate",
@@ -648,6 +666,8 @@ class SimulatorNode(ManagedNode):
             publisher.publish(odom)
         self._tf.publish(transforms)
         self._robot_markers.publish(messages.robot_markers)
+        if self.sensing == "external":  # another node senses (the virtual-sensor bridge)
+            return
         for i in range(len(self.namespaces)):
             self._ground[i].publish(messages.ground[i])
             self._readings[i].publish(messages.readings[i])

@@ -11,6 +11,7 @@ replayed from a recorded trial give the readings the simulator gave. ``sensor_br
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -71,3 +72,36 @@ class VirtualSensors:
             raise ValueError(f"no pose yet of robot {', '.join(map(str, missing))}")
         x, y, heading = (np.ascontiguousarray(self.poses[:, k]) for k in range(3))
         return sense_swarm(x, y, heading, self.nest, self.food, self.drop_keys, step, self.gap, self.p)
+
+
+class Delivery:
+    """How each robot's readings reach its controller when the link is worse than the model's radio: a pair
+    of readings (ground and range-and-bearing of one sensing period) is lost with probability ``loss``, or
+    held back a whole number of sensing periods drawn uniformly from 0 to ``delay`` (so it may arrive after a
+    newer one: late). The draws come from ``seed``."""
+
+    def __init__(self, loss: float = 0.0, delay: int = 0, seed: int = 0) -> None:
+        if not 0.0 <= loss <= 1.0:
+            raise ValueError(f"loss must be a probability in [0, 1], got {loss}")
+        if delay < 0:
+            raise ValueError(f"delay must be a number of sensing periods >= 0, got {delay}")
+        self.loss, self.delay = loss, delay
+        self.rng = np.random.default_rng(seed)
+        self.pending: list[tuple[int, int, Any]] = []  # (due period, order sent, item)
+        self.sent = 0
+        self.lost = 0
+
+    def send(self, period: int, item: Any) -> None:
+        """Send ``item`` at sensing period ``period``: lost, or due at a period from ``period`` on."""
+        if self.loss and self.rng.random() < self.loss:
+            self.lost += 1
+            return
+        due = period + (int(self.rng.integers(0, self.delay + 1)) if self.delay else 0)
+        self.pending.append((due, self.sent, item))
+        self.sent += 1
+
+    def due(self, period: int) -> list[Any]:
+        """The items due at or before ``period``, in the order they were sent; they leave the link."""
+        ready = [entry for entry in self.pending if entry[0] <= period]
+        self.pending = [entry for entry in self.pending if entry[0] > period]
+        return [item for _, _, item in sorted(ready, key=lambda entry: entry[1])]

@@ -55,12 +55,12 @@ from bt_controller.tree import parse, to_text
 from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics
-from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
+from evolution_manager.graph.startup import Bridge, Graph, GraphError, start_trial_graph
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
-from swarm_msgs.msg import TreeStatus, TrialStart, WheelCommand
+from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, TrialStart, WheelCommand
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
@@ -99,19 +99,23 @@ def expected_messages(
     clock: str = "/clock",
     timing: str = "lockstep",
     frames: bool = True,
+    bridge: bool = False,
 ) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
     from, ``swarm_sim.roads.lockstep.run_with_controllers``) under ``config``'s timeline. Under free
     ``timing`` the controllers publish on their own clocks: their topics are expected to carry none (whatever
     came is recorded). ``frames``: whether the bag records odom, ``/tf`` and ``/tf_static``
-    (``trial_topics``)."""
+    (``trial_topics``); ``bridge``: the readings come from the virtual-sensor bridge, on its own clock
+    (expected: none)."""
     line = config.timeline
     trials = chain_of_trial(line, trial)[1] + 1
     steps = trials * timeline.trial_steps(line)
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     if timing == "free":
         per_trial.update({TreeStatus: 0, WheelCommand: 0})
+    if bridge:
+        per_trial.update({GroundSensor: 0, RangeAndBearingReadings: 0})
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
         for topic, msg_class in trial_topics(robots, namespace, clock, frames)
@@ -293,7 +297,8 @@ class TrialGraph:
     world the simulator runs (``swarm_sim.tasks``; ``robots`` overrides its robot count); ``timing``:
     ``lockstep`` (exact) or ``free`` (the simulator steps at ``rate`` times real time, the controllers tick
     on their own timers in simulated time: ``startup.trial_graph_nodes``); ``frames``: whether a bag records
-    odom, ``/tf`` and ``/tf_static`` too (``recorder.trial_topics``)."""
+    odom, ``/tf`` and ``/tf_static`` too (``recorder.trial_topics``); ``bridge`` (free timing only): the
+    readings come from the virtual-sensor bridge over its link (``startup.Bridge``), not the simulator."""
 
     def __init__(
         self,
@@ -312,9 +317,11 @@ class TrialGraph:
         timing: str = "lockstep",
         rate: float = 1.0,
         frames: bool = True,
+        bridge: Bridge | None = None,
     ) -> None:
         self.conditions = list(conditions)
         self.frames = frames
+        self.bridge = bridge
         self.timing = timing
         self.rate = rate
         self.clock = clock
@@ -362,6 +369,7 @@ class TrialGraph:
                 world=world_parameters(self.world),
                 timing=self.timing,
                 rate=self.rate,
+                bridge=self.bridge,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -428,7 +436,14 @@ class TrialGraph:
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
                 expected = expected_messages(
-                    self.robots, self.namespace, trial, self.config, self.clock, self.timing, self.frames
+                    self.robots,
+                    self.namespace,
+                    trial,
+                    self.config,
+                    self.clock,
+                    self.timing,
+                    self.frames,
+                    self.bridge is not None,
                 )
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
