@@ -17,10 +17,11 @@ Parameters (read-only):
         readings of a period is lost with probability ``loss`` (default 0), or held back up to ``delay``
         sensing periods (default 0), drawn from ``seed``.
 
-Subscriptions (best effort, so a driver's ``qos_profile_sensor_data`` and reliable publishers both match):
-    trial_start (swarm_msgs/TrialStart, transient-local): in a trial graph whose simulator leaves the sensing
-        to the bridge (``sensing:=external``), each trial's world, seed and trial replace the parameters',
-        and the sensing steps count from 1 again.
+Subscriptions (``pose`` and ``wheels`` best effort, so a driver's ``qos_profile_sensor_data`` and reliable
+publishers both match):
+    trial_start (swarm_msgs/TrialStart, reliable and transient-local): in a trial graph whose simulator leaves
+        the sensing to the bridge (``sensing:=external``), each trial's world, seed and trial replace the
+        parameters', the broadcasts start again from the estimate cap and the steps from 1.
     <robot>/pose (geometry_msgs/PoseStamped): the robot's pose in the arena's frame (its centre, metres).
     <robot>/wheels (swarm_msgs/WheelCommand): its controller's answers, whose ``nest_estimate`` and
         ``food_estimate`` the robot broadcasts to the others (the estimate cap until the first).
