@@ -202,8 +202,8 @@ def verify_trial_bag(path: Path | str) -> Verification:
             continue
         compared.append(topic)
         found = by_topic[topic]
-        if topic in (prefix + "/markers", "/tf_static"):  # latched: the last one is the trial's (an earlier,
-            # the start's)
+        # latched: the last one is the trial's (an earlier one, the simulator's start)
+        if topic in (prefix + "/markers", "/tf_static"):
             found = found[-1:]
         if divergences:
             continue
