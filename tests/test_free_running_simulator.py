@@ -68,6 +68,16 @@ def test_a_free_running_trial_completes_recorded_and_its_robots_drive(tmp_path):
         assert "forward" in {w.action_name for w in wheels}
         # a free controller answers the newest sensing step it used, never a step still to come
         assert all(0 <= w.step <= 160 for w in wheels)
+        # every message names the robot by its frame on /tf: readings, answers and statuses alike
+        frame = f"swarm_a/footbot_{robot}/base_link"
+        for name in ("ground", "range_and_bearing", "wheels", "tree_status"):
+            named = {
+                m.message.header.frame_id for m in messages if m.topic == f"/swarm_a/footbot_{robot}/{name}"
+            }
+            assert named == {frame}, (name, named)
+    # the bag holds what a ROS user replays: each robot's odometry, /tf every step, /tf_static once
+    recorded = {m.topic: sum(1 for n in messages if n.topic == m.topic) for m in messages}
+    assert recorded["/tf"] == recorded["/swarm_a/footbot_2/odom"] == 160 and recorded["/tf_static"] == 1
 
     # odometry (REP 105): the robot's own frames, under its namespace; metres per second forward
     assert odometry, "no odometry on /swarm_a/footbot_1/odom"

@@ -18,6 +18,7 @@ NODES = {
     "simulator": ("swarm_sim", "simulator"),
     "evaluator": ("swarm_sim", "evaluator"),
     "footbot_controller": ("bt_controller", "footbot_controller"),
+    "sensor_bridge": ("swarm_sim", "sensor_bridge"),
 }
 
 
@@ -164,3 +165,14 @@ def test_the_timing_and_cmd_vel_type_parameters_name_what_they_take():
     line = refused("footbot_controller", "-p", "cmd_vel_type:=Twist3")
     expected = "parameter cmd_vel_type := 'Twist3': expected one of TwistStamped, Twist"
     assert line == f"footbot_controller: {expected}"
+
+
+def test_the_simulator_leaves_sensing_to_the_bridge_only_when_free_and_the_bridge_checks_its_link():
+    assert refused("simulator", "-p", "sensing:=radio", namespace="/") == (
+        "simulator: parameter sensing := 'radio': expected one of model, external"
+    )
+    assert refused("simulator", "-p", "sensing:=external", namespace="/") == (
+        "simulator: parameter sensing := 'external' needs timing := 'free'"
+    )
+    line = refused("sensor_bridge", "-p", "loss:=1.5", namespace="/")
+    assert line == "sensor_bridge: parameters loss and delay: loss must be a probability in [0, 1], got 1.5"

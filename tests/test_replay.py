@@ -26,17 +26,19 @@ SEED, TRIAL = 21, 2
 STEP_NS = 125_000_000
 
 
-def write_trial_bag(path, tamper_step=None, tamper_carrying=None):
+def write_trial_bag(path, tamper_step=None, tamper_carrying=None, reading_frames=None):
     """The /trial_start, /swarm_state and /trial_result messages `trial --bag` would record for (TREE, SEED,
     TRIAL), built by the simulator's own code from the in-process twin of the graph; optionally with one
-    pose moved by 1 mm, or one robot's carrying flag flipped."""
+    pose moved by 1 mm, or one robot's carrying flag flipped; with ``reading_frames`` (each robot's), its
+    ground readings too, in those frames."""
     from builtin_interfaces.msg import Time
     from rclpy.serialization import serialize_message
 
-    from swarm_ros.names import robot_namespaces
+    from swarm_ros.names import robot_frames, robot_namespaces
     from swarm_sim.nodes.simulator import step_messages, trial_start_message
 
     names = robot_namespaces(DEFAULT.n_robots)
+    frames = [base for _, base in robot_frames("", names)]
     written = []
 
     def keep(world):
@@ -45,19 +47,25 @@ def write_trial_bag(path, tamper_step=None, tamper_carrying=None):
         if not written:
             start = trial_start_message(world, stamp, SEED, TRIAL, DEFAULT.n_robots, DEFAULT)
             written.append(("/trial_start", "swarm_msgs/msg/TrialStart", 0, serialize_message(start)))
-        state = step_messages(world, stamp, SEED, names, ["stop"] * DEFAULT.n_robots, DEFAULT).state
+        state = step_messages(world, stamp, SEED, names, ["stop"] * DEFAULT.n_robots, DEFAULT, frames).state
         if world.step == tamper_step:
             state.poses[4].x += 1.0
         if world.step == tamper_carrying:
             state.carrying[4] = not state.carrying[4]
         written.append(("/swarm_state", "swarm_msgs/msg/SwarmState", at, serialize_message(state)))
+        if reading_frames is not None:
+            grounds = step_messages(world, stamp, SEED, names, ["stop"] * 9, DEFAULT, reading_frames).ground
+            for name, ground in zip(names, grounds, strict=True):
+                written.append(
+                    (f"/{name}/ground", "swarm_msgs/msg/GroundSensor", at, serialize_message(ground))
+                )
 
     record = run_with_controllers(parse(TREE), SEED, TRIAL, on_step=keep)
     with BagRecorder(path) as bag:
         for topic, msgtype, at, data in written:
             bag.write_cdr(topic, msgtype, at, data)
-        write_result(bag, TREE, SEED, record, (len(written) - 1) * STEP_NS)
-    return len(written) - 1
+        write_result(bag, TREE, SEED, record, written[-1][2] + 1)
+    return sum(1 for w in written if w[0] == "/swarm_state")
 
 
 def test_verify_accepts_a_faithful_recording(tmp_path):
@@ -81,6 +89,24 @@ def test_verify_names_the_first_step_that_differs(tmp_path):
     write_trial_bag(tmp_path / "carrying", tamper_carrying=200)
     verification = verify_trial_bag(tmp_path / "carrying")
     assert verification.first_divergence == "the carrying flags or deliveries differ at step 200"
+
+
+def test_verify_takes_readings_in_each_robots_base_link_or_bare_as_older_bags_name_them(tmp_path):
+    """Issue 40: the readings name a robot by its frame (``footbot_3/base_link``, as on /tf); bags recorded
+    before named it ``footbot_3``, and still reproduce. Any other frame is a divergence."""
+    from swarm_ros.names import robot_frames, robot_namespaces
+
+    names = robot_namespaces(DEFAULT.n_robots)
+    for label, frames in (("namespaced", [base for _, base in robot_frames("", names)]), ("bare", names)):
+        write_trial_bag(tmp_path / label, reading_frames=frames)
+        verification = verify_trial_bag(tmp_path / label)
+        assert verification.reproduced, verification.summary()
+        assert "/footbot_8/ground" in verification.topics_compared
+    write_trial_bag(tmp_path / "odom", reading_frames=[odom for odom, _ in robot_frames("", names)])
+    verification = verify_trial_bag(tmp_path / "odom")
+    assert (
+        verification.first_divergence == "/footbot_0/ground differs from the re-run at its message 1 of 480"
+    )
 
 
 def test_replay_republishes_the_bag_in_order(tmp_path):
@@ -208,7 +234,7 @@ def test_verify_compares_every_topic_of_a_real_recording_checks_its_crcs_and_rec
     assert faithful.returncode == 0, faithful.stdout + faithful.stderr
     assert (
         faithful.stdout.startswith("reproduced: ")
-        and "52 topics compared (/clock, /footbot_0/ground" in faithful.stdout
+        and "63 topics compared (/clock, /footbot_0/ground" in faithful.stdout
     )
     for topic in ("/footbot_8/wheels", "/footbot_8/tree_status", "/poses", "/robot_markers", "/markers"):
         assert topic in faithful.stdout

@@ -85,7 +85,7 @@ def test_a_trial_bag_records_the_qos_each_publisher_offers(graph, tmp_path):
     with Reader(bag) as reader:
         recorded = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     latched = {topic for topic, (qos,) in recorded.items() if qos.durability == QosDurability.TRANSIENT_LOCAL}
-    assert latched == {"/markers", "/trial_start"}
+    assert latched == {"/markers", "/trial_start", "/tf_static"}
     node = graph.runner.node
     for topic, (qos,) in recorded.items():
         if topic == RESULT_TOPIC:

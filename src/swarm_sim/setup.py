@@ -35,6 +35,7 @@ setup(
             "task = swarm_sim.tasks.cli:main",
             "simulator = swarm_sim.nodes.simulator:main",
             "evaluator = swarm_sim.nodes.evaluator:main",
+            "sensor_bridge = swarm_sim.nodes.sensor_bridge:main",
         ],
     },
 )

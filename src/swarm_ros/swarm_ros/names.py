@@ -9,6 +9,7 @@ robot ``i`` is the i-th entry.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 
 ROBOT_PREFIX = "footbot_"
 _ROBOT_NAME = re.compile(rf"{ROBOT_PREFIX}(0|[1-9][0-9]*)")
@@ -83,6 +84,17 @@ def robot_frame(namespace: str, frame: str) -> str:
     swarm has frames of its own; ``frame`` alone at the root namespace."""
     prefix = namespace.strip("/")
     return f"{prefix}/{frame}" if prefix else frame
+
+
+def robot_frames(graph: str, namespaces: Sequence[str]) -> list[tuple[str, str]]:
+    """Each robot's ``(odom, base_link)`` frame ids (REP 105) in the graph of namespace ``graph`` (``/`` or
+    ``""`` for the root, ``/swarm_a``), robot namespaces ``namespaces`` (relative: ``footbot_3``): under the
+    robot's full namespace (``robot_frame``: ``swarm_a/footbot_3/base_link``), so no two swarms share one."""
+    prefix = graph.rstrip("/")
+    return [
+        (robot_frame(f"{prefix}/{ns}", "odom"), robot_frame(f"{prefix}/{ns}", "base_link"))
+        for ns in namespaces
+    ]
 
 
 def robot_index(namespace: str, declared: int) -> int:

@@ -41,7 +41,8 @@ Subscriptions (relative names, in the robot's namespace):
 Publishers:
     wheels (swarm_msgs/WheelCommand): the answer to every sensing step: the action under way (index and
         name), its wheel speeds in m/s, the broadcast and smoothed estimates, whether it carries food and its
-        deliveries in the trial so far.
+        deliveries in the trial so far. Its header (and ``tree_status``'s) is the answered ground reading's
+        in lockstep, the tick's time in the robot's ``<namespace>/base_link`` when free: the same frame.
     cmd_vel (geometry_msgs/TwistStamped, or Twist with ``cmd_vel_type:=Twist``; with ``commands`` cmd_vel or
         both): the same step's wheel speeds as a velocity of the robot's base (REP 103): ``linear.x = (left +
         right) / 2`` in m/s and ``angular.z = (right - left) / wheel_separation`` in rad/s, anticlockwise
@@ -333,7 +334,7 @@ class FootbotControllerNode(RosNode):
             self._timed_out = False
             self.get_logger().info(f"sensing back at step {outcome.step}: ticking again")
             self._publish_diagnostics()
-        header = Header(stamp=now.to_msg(), frame_id=self.get_namespace().rsplit("/", 1)[-1])
+        header = Header(stamp=now.to_msg(), frame_id=self.base_frame)
         status, wheels = free_messages(outcome, self.free, header, self.robot, self.wheel_speed)
         if status is not None:
             self._status.publish(status)

@@ -206,6 +206,17 @@ def parameter_text(value: object) -> str:
     return str(value)
 
 
+@dataclass(frozen=True)
+class Bridge:
+    """A trial graph's readings from the virtual-sensor bridge, over a link that loses a robot's pair of
+    readings with probability ``loss`` or holds it back up to ``delay`` sensing periods, drawn from
+    ``seed`` (``swarm_sim.nodes.virtual_sensors.Delivery``)."""
+
+    loss: float = 0.0
+    delay: int = 0
+    seed: int = 0
+
+
 def trial_graph_nodes(
     robots: int = DEFAULT.n_robots,
     namespace: str = "",
@@ -217,6 +228,7 @@ def trial_graph_nodes(
     world: Mapping[str, object] | None = None,
     timing: str = "lockstep",
     rate: float = 1.0,
+    bridge: Bridge | None = None,
 ) -> list[NodeSpec]:
     """The nodes of a trial graph under ``namespace`` (e.g. ``/swarm_a``; the root by default): the simulator
     in ``<namespace>``, robot ``i``'s controller in ``<namespace>/footbot_<i>`` (its index taken from that
@@ -229,13 +241,18 @@ def trial_graph_nodes(
     world parameters a task sets (``swarm_sim.tasks.world_parameters``; ``n_robots`` is ``robots``'s);
     ``timing``: ``lockstep`` (the default: the nodes' own defaults, bit-exact) or ``free`` (the simulator
     steps at ``rate`` times real time with each robot's latest answer; the controllers tick on their own
-    timers in the graph's simulated time, ``timing:=free`` and ``use_sim_time:=true``)."""
+    timers in the graph's simulated time, ``timing:=free`` and ``use_sim_time:=true``); ``bridge`` (free
+    timing only): the robots' readings come from the virtual-sensor bridge (``swarm_sim sensor_bridge``, in
+    the graph's namespace, following its clock and each trial's ``trial_start``) over a link of the bridge's
+    loss and delay, not from the simulator (``sensing:=external``)."""
     if robots < 1:
         raise GraphError(f"a trial graph needs at least one robot, got {robots}")
     if timing not in TIMINGS:
         raise GraphError(f"timing {timing!r}: expected one of {', '.join(TIMINGS)}")
     if not RATE_RANGE[0] <= rate <= RATE_RANGE[1]:
         raise GraphError(f"rate {rate}: expected a number in {RATE_RANGE[0]}..{RATE_RANGE[1]}")
+    if bridge is not None and timing != "free":
+        raise GraphError("the virtual-sensor bridge senses on its own clock: it needs timing free")
     prefix = namespace.rstrip("/")
     simulator: dict[str, object] = {**(world or {}), "n_robots": robots}
     if profile:
@@ -251,7 +268,21 @@ def trial_graph_nodes(
         raise GraphError(f"{len(trees)} trees for {robots} robots: give one tree, or one per robot")
     # every node's /clock is the graph's: the simulator publishes it, a node with use_sim_time follows it
     remaps = {"/clock": clock} if clock != "/clock" else {}
+    if bridge is not None:
+        simulator["sensing"] = "external"
     nodes = [NodeSpec(f"{prefix}/simulator".lstrip("/"), "swarm_sim", "simulator", prefix, simulator, remaps)]
+    if bridge is not None:
+        link = {"loss": float(bridge.loss), "delay": bridge.delay, "seed": bridge.seed}
+        nodes.append(
+            NodeSpec(
+                f"{prefix}/sensor_bridge".lstrip("/"),
+                "swarm_sim",
+                "sensor_bridge",
+                prefix,
+                {"robots": robots, "use_sim_time": True, **link},
+                dict(remaps),
+            )
+        )
     for robot, own in zip(robot_namespaces(robots), trees, strict=True):
         nodes.append(
             NodeSpec(
@@ -348,6 +379,7 @@ def start_trial_graph(
     world: Mapping[str, object] | None = None,
     timing: str = "lockstep",
     rate: float = 1.0,
+    bridge: Bridge | None = None,
 ) -> None:
     """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
     clock=clock, library=library, world=world, timing=timing, rate=rate)``, each in its own process, with its
@@ -365,6 +397,7 @@ def start_trial_graph(
         world=world,
         timing=timing,
         rate=rate,
+        bridge=bridge,
     )
     for spec in nodes:
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]

@@ -16,9 +16,13 @@ Then every other topic the re-run produces is compared byte for byte with the re
 simulator and the controllers publish are built by their own code (``swarm_sim.nodes.simulator.step_messages``
 and ``trial_start_message``, ``bt_controller.nodes.footbot_controller.answer_messages``, the arena's markers)
 from the re-run, and compared field by field with the recorded ones (CDR padding bytes are not part of a
-message); the clock's stamps start at the recording's first
-and advance one step at a time. The MCAP files' CRCs are checked first (``recording.bags.check_crcs``). The
-verdict names the topics compared, and those of the bag the re-run does not produce.
+message); the clock's stamps start at the recording's first and advance one step at a time. Each robot's
+``odom``, ``/tf`` and ``/tf_static`` are compared too where the bag has them (``simulator.frame_messages``
+and ``static_frames``). The readings, ``wheels`` and ``tree_status`` name a robot by its frame
+``<graph namespace>/footbot_<i>/base_link``; a bag whose readings name it ``footbot_<i>`` (recorded before
+robot frames were namespaced) is re-run with those names. The MCAP files' CRCs are checked first
+(``recording.bags.check_crcs``). The verdict names the topics compared, and those of the bag the re-run
+does not produce.
 """
 
 from __future__ import annotations
@@ -114,9 +118,12 @@ def verify_trial_bag(path: Path | str) -> Verification:
     starts, results, states = [], [], []
     by_topic: dict[str, list[bytes]] = {}
     prefix = ""
+    reading_frames: dict[str, str] = {}  # the first ground reading's frame, by topic
     for message in read_bag(path):
         by_topic.setdefault(message.topic, []).append(message.data)
         name = "/" + message.topic.rsplit("/", 1)[-1]  # the topic's name below the graph's namespace
+        if name == "/ground":
+            reading_frames.setdefault(message.topic, message.message.header.frame_id)
         if name == "/trial_start":
             starts.append(message.message)
             prefix = message.topic[: -len(name)]
@@ -162,7 +169,10 @@ def verify_trial_bag(path: Path | str) -> Verification:
 
     config = recorded_world(start, profile)
     first = states[0].header.stamp if states else None
-    published = _Published(prefix, int(start.robots) or config.n_robots, config, seed, trial, first)
+    robots = int(start.robots) or config.n_robots
+    published = _Published(
+        prefix, robots, config, seed, trial, first, bare_frames(reading_frames, prefix, robots)
+    )
 
     def on_step(world: LockstepChain) -> None:
         compare(world)
@@ -192,7 +202,8 @@ def verify_trial_bag(path: Path | str) -> Verification:
             continue
         compared.append(topic)
         found = by_topic[topic]
-        if topic == prefix + "/markers":  # latched: the last one is the trial's (an earlier, the start's)
+        # latched: the last one is the trial's (an earlier one, the simulator's start)
+        if topic in (prefix + "/markers", "/tf_static"):
             found = found[-1:]
         if divergences:
             continue
@@ -215,17 +226,36 @@ def verify_trial_bag(path: Path | str) -> Verification:
     )
 
 
+def bare_frames(reading_frames: dict[str, str], prefix: str, robots: int) -> bool:
+    """Whether a bag's readings (``reading_frames``: the first ground reading's frame id by topic) name each
+    robot by its bare namespace ``footbot_<i>``, as bags recorded before robot frames were namespaced do."""
+    from swarm_ros.names import robot_namespaces
+
+    return any(reading_frames.get(f"{prefix}/{ns}/ground") == ns for ns in robot_namespaces(robots))
+
+
 class _Published:
     """What the trial graph publishes, built from a re-run by the nodes' own code (rclpy messages, compared
-    field by field with the recording's, deserialised), by absolute topic."""
+    field by field with the recording's, deserialised), by absolute topic. ``bare``: the readings name each
+    robot by its bare namespace (``bare_frames``)."""
 
     def __init__(
-        self, prefix: str, robots: int, config: Config, seed: int, trial: int, first_stamp: Any
+        self,
+        prefix: str,
+        robots: int,
+        config: Config,
+        seed: int,
+        trial: int,
+        first_stamp: Any,
+        bare: bool = False,
     ) -> None:
-        from swarm_ros.names import robot_namespaces
+        from swarm_ros.names import robot_frames, robot_namespaces
 
         self.prefix = prefix
         self.namespaces = robot_namespaces(robots)
+        self.frames = robot_frames(prefix, self.namespaces)
+        self.reading_frames = list(self.namespaces) if bare else [base for _, base in self.frames]
+        self.previous: Any = None  # the step before's poses, for odometry
         self.config = config
         self.seed = seed
         self.trial = trial
@@ -249,7 +279,12 @@ class _Published:
         from rosgraph_msgs.msg import Clock
 
         from swarm_sim.nodes import visualisation
-        from swarm_sim.nodes.simulator import step_messages, trial_start_message
+        from swarm_sim.nodes.simulator import (
+            frame_messages,
+            static_frames,
+            step_messages,
+            trial_start_message,
+        )
 
         at = self.base_ns + self.index * self.step_ns
         stamp = Time(sec=at // 1_000_000_000, nanosec=at % 1_000_000_000)
@@ -261,9 +296,18 @@ class _Published:
                 world, stamp, self.seed, self.trial, len(self.namespaces), self.config
             )
             self._add(f"{p}/trial_start", start)
+            self._add("/tf_static", static_frames(stamp, self.frames))
         self.index += 1
         self._add("/clock", Clock(clock=stamp))
-        messages = step_messages(world, stamp, self.seed, self.namespaces, self.actions, self.config)
+        messages = step_messages(
+            world, stamp, self.seed, self.namespaces, self.actions, self.config, self.reading_frames
+        )
+        odometry, transforms, self.previous = frame_messages(
+            world, stamp, self.previous, self.frames, self.config.step_dt
+        )
+        self._add("/tf", transforms)
+        for ns, odom in zip(self.namespaces, odometry, strict=True):
+            self._add(f"{p}/{ns}/odom", odom)
         self._add(f"{p}/swarm_state", messages.state)
         self._add(f"{p}/poses", messages.poses)
         self._add(f"{p}/robot_markers", messages.robot_markers)

@@ -26,6 +26,8 @@ stops the node with one line, exit status 2):
         trial is bit-exact with the batch evaluator; ``free``: the world steps on its own, ``rate`` times real
         time, and each step takes every robot's latest answer, whatever step it answered (below).
     rate (float, read-only, free only): simulated seconds per second of wall time (default 1.0: real time).
+    sensing (string, read-only): ``model`` (default): publish each robot's readings; ``external`` (free
+        only): publish none; another node senses from the poses (``sensor_bridge``).
 
 Publishers:
     /clock (rosgraph_msgs/Clock): simulated time, one step of 1/8 s per sensing step; at the root, where
@@ -40,14 +42,16 @@ Publishers:
     robot_markers (visualization_msgs/MarkerArray): every step, each robot's body, heading and label (index,
         namespace, current action).
     <robot>/ground (swarm_msgs/GroundSensor) and <robot>/range_and_bearing
-        (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step.
+        (swarm_msgs/RangeAndBearingReadings): each robot's readings, every sensing step, in the robot's frame
+        ``<robot>/base_link``.
     <robot>/pose (geometry_msgs/PoseStamped): each robot's pose in frame ``arena`` (metres, radians).
     <robot>/odom (nav_msgs/Odometry): each robot's pose in its frame ``<robot>/odom`` (which coincides with
         ``arena``: the simulator's odometry is exact) and its velocity over the last step in
         ``<robot>/base_link`` (REP 105; ``<robot>``: the robot's full namespace without the leading slash).
     /tf (tf2_msgs/TFMessage): every step, each robot's ``<robot>/base_link`` in its ``<robot>/odom``; at the
         root, as tf2 expects, the frames being namespaced.
-    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity).
+    /tf_static (tf2_msgs/TFMessage, transient-local): each robot's ``<robot>/odom`` in ``arena`` (identity),
+        when the node is configured and again at each trial's start (as ``markers``), stamped then.
     swarm_state (swarm_msgs/SwarmState): the exact poses (mm), every sensing step, with whether each robot
         carries food and its deliveries in the trial, as it answered the step before.
     poses (geometry_msgs/PoseArray): the same poses in metres, frame ``arena``.
@@ -107,6 +111,7 @@ from visualization_msgs.msg import MarkerArray
 from bt_controller import timeline
 from bt_controller.model_settings import arena_of_trial, chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
+from bt_controller.perception import Readings
 from bt_controller.vocabulary import ACTIONS
 from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
@@ -121,7 +126,7 @@ from swarm_msgs.msg import (
 )
 from swarm_msgs.srv import RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
-from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frame, robot_namespaces
+from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frames, robot_namespaces
 from swarm_ros.parameters import (
     ParameterError,
     check_file_values,
@@ -139,7 +144,7 @@ from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
 from swarm_sim.model import DEFAULT, Config, apply_conditions
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.settings import RATE_RANGE, TIMINGS, EvaluatorSettings
+from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
 from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
 from tf2_msgs.msg import TFMessage
 
@@ -227,6 +232,22 @@ class SimulatorNode(ManagedNode):
         )
         if self.timing not in TIMINGS:
             raise ParameterError(f"parameter timing := {self.timing!r}: expected one of {', '.join(TIMINGS)}")
+        self.sensing: str = declare(
+            self,
+            "sensing",
+            "model",
+            descriptor(
+                "model: publish each robot's readings; external: leave them to another node (the "
+                "virtual-sensor bridge; free timing only)",
+                read_only=True,
+            ),
+        )
+        if self.sensing not in SENSINGS:
+            raise ParameterError(
+                f"parameter sensing := {self.sensing!r}: expected one of {', '.join(SENSINGS)}"
+            )
+        if self.sensing == "external" and self.timing != "free":
+            raise ParameterError("parameter sensing := 'external' needs timing := 'free'")
         self.rate: float = declare(
             self,
             "rate",
@@ -238,11 +259,7 @@ class SimulatorNode(ManagedNode):
             ),
         )
         self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
-        graph = self.get_namespace().rstrip("/")
-        self.frames = [
-            (robot_frame(f"{graph}/{ns}", "odom"), robot_frame(f"{graph}/{ns}", "base_link"))
-            for ns in self.namespaces
-        ]
+        self.frames = robot_frames(self.get_namespace(), self.namespaces)
         """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
         self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
         self.late_steps = 0
@@ -316,14 +333,7 @@ class SimulatorNode(ManagedNode):
             cancel_callback=lambda _request: CancelResponse.ACCEPT,
         )
         self._markers.publish(visualisation.arena_markers(self.config, 0, self._stamp()))
-        self._tf_static.publish(
-            TFMessage(
-                transforms=[
-                    visualisation.transform(self._stamp(), visualisation.FRAME, odom, 0.0, 0.0, 0.0)
-                    for odom, _ in self.frames
-                ]
-            )
-        )
+        self._tf_static.publish(static_frames(self._stamp(), self.frames))
         self.get_logger().info(
             f"ready: {self.robots} robots in {', '.join(self.namespaces)}; run_trial action and service"
         )
@@ -505,6 +515,7 @@ class SimulatorNode(ManagedNode):
         self._actions = ["stop"] * self.robots
         self._wait_for_subscribers()
         self._markers.publish(visualisation.arena_markers(self.config, world.trial, self._stamp()))
+        self._tf_static.publish(static_frames(self._stamp(), self.frames))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
             self.free.start_chain()
@@ -648,29 +659,22 @@ class SimulatorNode(ManagedNode):
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
-        messages = step_messages(world, stamp, seed, self.namespaces, self._actions, self.config)
+        messages = step_messages(
+            world, stamp, seed, self.namespaces, self._actions, self.config, [b for _, b in self.frames]
+        )
         self._state.publish(messages.state)
         self._poses.publish(messages.poses)
         for publisher, pose in zip(self._pose, messages.pose, strict=True):
             publisher.publish(pose)
-        poses: list[tuple[float, float, float]] = [(x, y, t) for x, y, t in world.poses().tolist()]
-        placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
-        for i, publisher in enumerate(self._odom):
-            previous = None if placed or self._previous is None else self._previous[i]
-            odom, base = self.frames[i]
-            publisher.publish(
-                visualisation.odometry(stamp, poses[i], previous, self.config.step_dt, odom, base)
-            )
-        self._previous = poses
-        self._tf.publish(
-            TFMessage(
-                transforms=[
-                    visualisation.transform(stamp, odom, base, *pose)
-                    for (odom, base), pose in zip(self.frames, poses, strict=True)
-                ]
-            )
+        odometry, transforms, self._previous = frame_messages(
+            world, stamp, self._previous, self.frames, self.config.step_dt
         )
+        for publisher, odom in zip(self._odom, odometry, strict=True):
+            publisher.publish(odom)
+        self._tf.publish(transforms)
         self._robot_markers.publish(messages.robot_markers)
+        if self.sensing == "external":  # another node senses (the virtual-sensor bridge)
+            return
         for i in range(len(self.namespaces)):
             self._ground[i].publish(messages.ground[i])
             self._readings[i].publish(messages.readings[i])
@@ -708,6 +712,32 @@ class SimulatorNode(ManagedNode):
         return Header(stamp=self._stamp(), frame_id=frame)
 
 
+def reading_messages(
+    readings: Sequence[Readings], stamp: Time, step: int, frames: Sequence[str]
+) -> tuple[list[GroundSensor], list[RangeAndBearingReadings]]:
+    """Each robot's ``ground`` and ``range_and_bearing`` messages of sensing step ``step`` from its
+    ``readings``, stamped ``stamp`` in its frame (``frames``: each robot's ``base_link``). The simulator and
+    the virtual-sensor bridge publish these."""
+    ground: list[GroundSensor] = []
+    readings_of: list[RangeAndBearingReadings] = []
+    for i, sensed in enumerate(readings):
+        header = Header(stamp=stamp, frame_id=frames[i])
+        ground.append(GroundSensor(header=header, step=step, in_nest=sensed.in_nest, on_food=sensed.on_food))
+        messages = [
+            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
+            for s, r, b, n, f in zip(
+                sensed.senders.tolist(),
+                sensed.ranges.tolist(),
+                sensed.bearings.tolist(),
+                sensed.nest.tolist(),
+                sensed.food.tolist(),
+                strict=True,
+            )
+        ]
+        readings_of.append(RangeAndBearingReadings(header=header, step=step, readings=messages))
+    return ground, readings_of
+
+
 def robot_answer(msg: WheelCommand) -> RobotAnswer:
     """A controller's ``wheels`` message as the world takes it (without a tick's status)."""
     return RobotAnswer(
@@ -739,10 +769,13 @@ def step_messages(
     namespaces: Sequence[str],
     actions: Sequence[str],
     config: Config,
+    frames: Sequence[str],
 ) -> StepMessages:
     """The messages of the step ``world`` is at, stamped ``stamp``; ``actions``: each robot's action of the
-    step before (its marker's label). The node publishes these; ``replay --verify`` compares a recording
-    with those of a re-run."""
+    step before (its marker's label); ``frames``: each robot's ``base_link`` frame id
+    (``swarm_ros.names.robot_frames``),
+    the frame of its readings. The node publishes these; ``replay --verify`` compares a recording with those
+    of a re-run."""
     poses = world.poses()
     listed = poses.tolist()
     state = SwarmState(
@@ -767,25 +800,7 @@ def step_messages(
         [bool(c) for c in world.carrying],
         [int(d) for d in world.deliveries],
     )
-    ground: list[GroundSensor] = []
-    readings_of: list[RangeAndBearingReadings] = []
-    for i, readings in enumerate(world.readings()):
-        header = Header(stamp=stamp, frame_id=namespaces[i])
-        ground.append(
-            GroundSensor(header=header, step=world.step, in_nest=readings.in_nest, on_food=readings.on_food)
-        )
-        messages = [
-            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
-            for s, r, b, n, f in zip(
-                readings.senders.tolist(),
-                readings.ranges.tolist(),
-                readings.bearings.tolist(),
-                readings.nest.tolist(),
-                readings.food.tolist(),
-                strict=True,
-            )
-        ]
-        readings_of.append(RangeAndBearingReadings(header=header, step=world.step, readings=messages))
+    ground, readings_of = reading_messages(world.readings(), stamp, world.step, frames)
     return StepMessages(
         state,
         arena_poses,
@@ -794,6 +809,44 @@ def step_messages(
         ground,
         readings_of,
     )
+
+
+def static_frames(stamp: Time, frames: Sequence[tuple[str, str]]) -> TFMessage:
+    """The ``/tf_static`` message: each robot's ``odom`` frame in ``arena``, the identity (the simulator's
+    odometry does not drift)."""
+    return TFMessage(
+        transforms=[
+            visualisation.transform(stamp, visualisation.FRAME, odom, 0.0, 0.0, 0.0) for odom, _ in frames
+        ]
+    )
+
+
+Poses = list[tuple[float, float, float]]
+"""Each robot's (x mm, y mm, heading rad)."""
+
+
+def frame_messages(
+    world: LockstepChain, stamp: Time, previous: Poses | None, frames: Sequence[tuple[str, str]], dt: float
+) -> tuple[list[Odometry], TFMessage, Poses]:
+    """Each robot's odometry and the ``/tf`` message of the step ``world`` is at, stamped ``stamp``, and the
+    poses to pass as ``previous`` at the next step. A robot's velocity is over the step from ``previous``
+    (``dt`` seconds), zero at a trial's first step (the robots are placed) or without ``previous``. The node
+    publishes these; ``replay --verify`` compares a recording with those of a re-run."""
+    poses: Poses = [(x, y, t) for x, y, t in world.poses().tolist()]
+    placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
+    odometry = [
+        visualisation.odometry(
+            stamp, pose, None if placed or previous is None else previous[i], dt, odom, base
+        )
+        for i, (pose, (odom, base)) in enumerate(zip(poses, frames, strict=True))
+    ]
+    transforms = TFMessage(
+        transforms=[
+            visualisation.transform(stamp, odom, base, *pose)
+            for (odom, base), pose in zip(frames, poses, strict=True)
+        ]
+    )
+    return odometry, transforms, poses
 
 
 def trial_start_message(

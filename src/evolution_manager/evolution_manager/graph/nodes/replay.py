@@ -47,6 +47,8 @@ MESSAGE_PACKAGES = (
     "swarm_msgs",
     "std_msgs",
     "geometry_msgs",
+    "nav_msgs",
+    "tf2_msgs",
     "visualization_msgs",
     "rosgraph_msgs",
     "builtin_interfaces",

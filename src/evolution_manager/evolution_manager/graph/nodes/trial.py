@@ -54,13 +54,13 @@ from bt_controller.tree import Node as TreeNode
 from bt_controller.tree import parse, to_text
 from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
-from evolution_manager.graph.nodes.recorder import GraphRecorder, trial_topics
-from evolution_manager.graph.startup import Graph, GraphError, start_trial_graph
+from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics
+from evolution_manager.graph.startup import Bridge, Graph, GraphError, start_trial_graph
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import RunTrial
-from swarm_msgs.msg import TreeStatus, TrialStart, WheelCommand
+from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, TrialStart, WheelCommand
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient, LifecycleError
@@ -98,21 +98,27 @@ def expected_messages(
     config: Config = DEFAULT,
     clock: str = "/clock",
     timing: str = "lockstep",
+    frames: bool = True,
+    bridge: bool = False,
 ) -> dict[str, int]:
     """How many messages each topic of a trial graph (``trial_topics``) carries when it runs trial ``trial``:
     every step of the trial's chain up to ``trial`` is published (the earlier trials set the state it starts
     from, ``swarm_sim.roads.lockstep.run_with_controllers``) under ``config``'s timeline. Under free
     ``timing`` the controllers publish on their own clocks: their topics are expected to carry none (whatever
-    came is recorded)."""
+    came is recorded). ``frames``: whether the bag records odom, ``/tf`` and ``/tf_static``
+    (``trial_topics``); ``bridge``: the readings come from the virtual-sensor bridge, on its own clock
+    (expected: none)."""
     line = config.timeline
     trials = chain_of_trial(line, trial)[1] + 1
     steps = trials * timeline.trial_steps(line)
     per_trial = {TrialStart: 1, TreeStatus: trials * line.ticks}
     if timing == "free":
         per_trial.update({TreeStatus: 0, WheelCommand: 0})
+    if bridge:
+        per_trial.update({GroundSensor: 0, RangeAndBearingReadings: 0})
     return {
         topic: 1 if is_latched(topic) else per_trial.get(msg_class, steps)
-        for topic, msg_class in trial_topics(robots, namespace, clock)
+        for topic, msg_class in trial_topics(robots, namespace, clock, frames)
     }
 
 
@@ -290,7 +296,9 @@ class TrialGraph:
     one each); ``library``: a primitive library every controller reads (a file); ``task``: the task whose
     world the simulator runs (``swarm_sim.tasks``; ``robots`` overrides its robot count); ``timing``:
     ``lockstep`` (exact) or ``free`` (the simulator steps at ``rate`` times real time, the controllers tick
-    on their own timers in simulated time: ``startup.trial_graph_nodes``)."""
+    on their own timers in simulated time: ``startup.trial_graph_nodes``); ``frames``: whether a bag records
+    odom, ``/tf`` and ``/tf_static`` too (``recorder.trial_topics``); ``bridge`` (free timing only): the
+    readings come from the virtual-sensor bridge over its link (``startup.Bridge``), not the simulator."""
 
     def __init__(
         self,
@@ -308,8 +316,12 @@ class TrialGraph:
         task: TaskSpec | str | None = None,
         timing: str = "lockstep",
         rate: float = 1.0,
+        frames: bool = True,
+        bridge: Bridge | None = None,
     ) -> None:
         self.conditions = list(conditions)
+        self.frames = frames
+        self.bridge = bridge
         self.timing = timing
         self.rate = rate
         self.clock = clock
@@ -357,6 +369,7 @@ class TrialGraph:
                 world=world_parameters(self.world),
                 timing=self.timing,
                 rate=self.rate,
+                bridge=self.bridge,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -399,8 +412,10 @@ class TrialGraph:
         runner.executor.add_node(node)
         try:
             with BagRecorder(bag_path) as bag:
-                topics = trial_topics(self.robots, self.namespace, self.clock)
-                recorder = GraphRecorder(node, bag, topics, armed=False)
+                topics = trial_topics(self.robots, self.namespace, self.clock, self.frames)
+                recorder = GraphRecorder(
+                    node, bag, topics, armed=False, frames=graph_frames(self.robots, self.namespace)
+                )
                 joining = time.monotonic()
                 runner.spin_until(recorder.all_publishers_matched, "the graph's publishers")
                 # Matching is seen from this side first: the publishers learn of the new subscriptions a
@@ -412,6 +427,7 @@ class TrialGraph:
                 stale = {
                     f"{self.namespace}/markers": 1,
                     f"{self.namespace}/trial_start": min(self.trials_run, 1),
+                    **({"/tf_static": 1} if self.frames else {}),
                 }
                 runner.spin_until(
                     lambda: all(recorder.received[t] >= n for t, n in stale.items()), "the latched topics"
@@ -420,7 +436,14 @@ class TrialGraph:
                 record = runner.run_trial(seed, trial)
                 self.trials_run += 1
                 expected = expected_messages(
-                    self.robots, self.namespace, trial, self.config, self.clock, self.timing
+                    self.robots,
+                    self.namespace,
+                    trial,
+                    self.config,
+                    self.clock,
+                    self.timing,
+                    self.frames,
+                    self.bridge is not None,
                 )
                 # the recorder may trail the trial by many steps on a loaded machine (a chain's earlier
                 # trials are recorded too): wait as long as for any step of the graph
@@ -486,6 +509,7 @@ def run_recorded_trial(
     task: TaskSpec | str | None = None,
     timing: str = "lockstep",
     rate: float = 1.0,
+    frames: bool = True,
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
     node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other
@@ -503,6 +527,7 @@ def run_recorded_trial(
         task=task,
         timing=timing,
         rate=rate,
+        frames=frames,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
@@ -627,6 +652,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="with --timing free: simulated seconds per second of wall time (default 1.0, real time)",
     )
     parser.add_argument(
+        "--frames",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="record each robot's odom, /tf and /tf_static in the bag (default); --no-frames leaves them out "
+        "(a bag about a third smaller, docs/performance.md)",
+    )
+    parser.add_argument(
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
     )
     try:
@@ -689,6 +721,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 task=args.task,
                 timing=args.timing,
                 rate=1.0 if args.rate is None else args.rate,
+                frames=args.frames,
             )
     except (TreeError, LibraryError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
