@@ -5,6 +5,7 @@ animation rebuild it from the bag alone."""
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from evolution_manager.graph.nodes.trial import TrialGraph
 from evolution_manager.recording.reproduce import verify_trial_bag
@@ -21,14 +22,26 @@ SMALL = replace(
     trials=Trials(ticks=14, chain_trials=2),
     robots=Robots(count=5, start_half_size=800.0),
 )
+DISCS = replace(
+    SMALL,
+    name="two-discs",
+    arena=Arena(half_size=1800.0, trial_entries=2),
+    regions=(
+        Region("nest", "disc", (400.0,), ((0.0, 600.0),)),
+        Region("food", "disc", (450.0, 350.0, 450.0, 350.0), ((0.0, -700.0), (700.0, -300.0)) * 2),
+        Region("food", "below", (1500.0,)),
+    ),
+)
+"""Regions of the task's own (a layout): the food disc moves between the two trials of a chain."""
 TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
 
 
-def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(tmp_path):
-    config = SMALL.config("paper")
+@pytest.mark.parametrize("task", [SMALL, DISCS], ids=lambda task: task.name)
+def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(task, tmp_path):
+    config = task.config("paper")
     evaluator = BatchEvaluator(config)
-    seed, trial, bag = 11, 3, tmp_path / "bag"  # trial 3: the second chain's second, the food at 900 mm
-    with TrialGraph(timeout=120.0, task=SMALL) as graph:
+    seed, trial, bag = 11, 3, tmp_path / "bag"  # trial 3: the second chain's second (food at 900 mm; disc 2)
+    with TrialGraph(timeout=120.0, task=task) as graph:
         assert graph.robots == 5
         record = graph.run(TREE, seed, trial, bag)
     _, records = evaluator.evaluate_trials([EvaluationRequest(TREE, seed, trial + 1)])[0]
@@ -37,7 +50,8 @@ def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_
     replay = verify_trial_bag(bag)
     assert replay.reproduced, replay
     frames = frames_from_bag(bag)
-    assert len(frames.steps) == SMALL.trials.ticks * 4 and frames.poses.shape[1] == 5
+    assert len(frames.steps) == task.trials.ticks * 4 and frames.poses.shape[1] == 5
+    assert frames.regions == (config.arena_entry(trial) if config.layout else ())
     # Every objective, the newest (aggregation) included, as the animation scores the bag's last step.
     assert frames.fitness[-1].tolist() == list(record.values[:N_OBJECTIVES])
 

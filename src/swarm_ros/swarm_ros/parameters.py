@@ -164,13 +164,17 @@ def declare_dataclass(
     read_only: bool = True,
     ranges: Mapping[str, tuple[float, float]] | None = None,
     prefix: str = "",
+    skip: Collection[str] = (),
 ) -> T:
-    """Declare one parameter per field of the dataclass instance ``defaults`` (named ``prefix + field``)
-    and return a new instance built from the parameters' values (which validates them)."""
+    """Declare one parameter per field of the dataclass instance ``defaults`` (named ``prefix + field``),
+    but those in ``skip`` (the caller declares them its own way), and return a new instance built from the
+    parameters' values (which validates them)."""
     docs = attribute_docs(type(defaults))
     ranges = ranges or {}
     values: dict[str, Any] = {}
     for field in dataclasses.fields(defaults):
+        if field.name in skip:
+            continue
         default = getattr(defaults, field.name)
         is_tuple = isinstance(default, tuple)
         integer = isinstance(default, int) and not isinstance(default, bool)

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+import yaml
 from ament_index_python.packages import (
     PackageNotFoundError,
     get_package_prefix,
@@ -200,10 +201,21 @@ class NodeSpec:
 
 def parameter_text(value: object) -> str:
     """A parameter's value as ``-p NAME:=VALUE`` takes it (YAML): lists and tuples as ``[a, b]``, booleans as
-    ``true``/``false``, anything else as its text."""
+    ``true``/``false``, text that YAML would read as a list or a mapping (a layout's JSON) quoted, anything
+    else as its text."""
     if isinstance(value, (bool, list, tuple)):
         return json.dumps(list(value) if isinstance(value, tuple) else value)
+    if isinstance(value, str) and _reads_as_collection(value):
+        return json.dumps(value)  # a JSON string is a YAML double-quoted scalar
     return str(value)
+
+
+def _reads_as_collection(text: str) -> bool:
+    """Whether YAML would read ``text`` as a list or a mapping (or not at all) rather than a scalar."""
+    try:
+        return isinstance(yaml.safe_load(text), (list, dict))
+    except yaml.YAMLError:
+        return True
 
 
 @dataclass(frozen=True)

@@ -202,9 +202,10 @@ def verify_trial_bag(path: Path | str) -> Verification:
             continue
         compared.append(topic)
         found = by_topic[topic]
-        # latched: the last one is the trial's (an earlier one, the simulator's start)
+        # latched: the last one is the trial's (an earlier one, the simulator's start, or the regions of an
+        # earlier trial of the chain)
         if topic in (prefix + "/markers", "/tf_static"):
-            found = found[-1:]
+            found, expected = found[-1:], expected[-1:]
         if divergences:
             continue
         if len(found) != len(expected):
@@ -281,6 +282,7 @@ class _Published:
         from swarm_sim.nodes import visualisation
         from swarm_sim.nodes.simulator import (
             frame_messages,
+            regions_change,
             static_frames,
             step_messages,
             trial_start_message,
@@ -297,6 +299,8 @@ class _Published:
             )
             self._add(f"{p}/trial_start", start)
             self._add("/tf_static", static_frames(stamp, self.frames))
+        elif regions_change(world):  # a later trial of the chain on other regions: their markers
+            self._add(f"{p}/markers", visualisation.arena_markers(self.config, world.trial, stamp))
         self.index += 1
         self._add("/clock", Clock(clock=stamp))
         messages = step_messages(

@@ -24,7 +24,14 @@ from swarm_sim.model.objectives import (
     Objective,
     fitness_ceiling,
 )
-from swarm_sim.model.regions import PIECE_SHAPES, REGION_KINDS, Piece, concentric
+from swarm_sim.model.regions import (
+    PIECE_SHAPES,
+    REGION_KINDS,
+    Piece,
+    concentric,
+    layout_from_text,
+    layout_to_text,
+)
 from swarm_sim.model.swarm_layout import (
     LayoutError,
     SwarmLayout,
@@ -64,7 +71,9 @@ __all__ = [
     "default_config",
     "fitness_ceiling",
     "layout_from_json",
+    "layout_from_text",
     "layout_of_label",
+    "layout_to_text",
     "load_layout",
     "of_trees",
     "pieces_from_points",

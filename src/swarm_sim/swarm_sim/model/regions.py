@@ -15,6 +15,7 @@ configuration, food beyond the circle of radius nest_radius + gap. Compiled code
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -180,6 +181,24 @@ def layout_as_json(layout: Layout) -> list[list[list[dict[str, object]]]]:
     return [[[piece._asdict() for piece in entry] for entry in row] for row in layout]
 
 
+def layout_to_text(layout: Layout) -> str:
+    """``layout`` as one line of JSON (a ROS parameter's text); "" for the papers' arena (no layout)."""
+    return json.dumps(layout_as_json(layout), separators=(",", ":")) if layout else ""
+
+
+def layout_from_text(text: str, key: str = "layout") -> Layout:
+    """The layout ``layout_to_text`` wrote ("" gives none); ``ConfigError`` naming what is malformed."""
+    if not text.strip():
+        return ()
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ConfigError(
+            f"{key} must be JSON (regions.layout_as_json), got {text[:60]!r}: {error.msg}"
+        ) from None
+    return layout_from_json(data, key)
+
+
 def layout_from_json(data: object, key: str = "layout") -> Layout:
     """The layout ``layout_as_json`` wrote; ``ConfigError`` naming the first malformed part."""
     if not isinstance(data, list):
@@ -199,7 +218,14 @@ def layout_from_json(data: object, key: str = "layout") -> Layout:
                         f"{key}[{c}][{k}][{m}] must be an object with keys {', '.join(Piece._fields)}, "
                         f"got {piece!r}"
                     )
-                pieces.append(Piece(**piece))
+                pieces.append(
+                    Piece(
+                        **{
+                            n: float(v) if isinstance(v, int) and not isinstance(v, bool) else v
+                            for n, v in piece.items()
+                        }
+                    )
+                )
             entries.append(tuple(pieces))
         rows.append(tuple(entries))
     return tuple(rows)

@@ -56,6 +56,7 @@ from swarm_sim.errors import ConfigError
 from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, evaluation_fields
 from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.nodes.settings import EVALUATOR_RANGES, SIMULATOR_PARAMETERS, EvaluatorSettings
+from swarm_sim.nodes.world_parameters import declare_world
 
 
 def check_batch(request: Any) -> str:  # the action's goal or the service's request (generated, untyped)
@@ -75,7 +76,7 @@ class EvaluatorNode(ManagedNode):
 
     def __init__(self) -> None:
         super().__init__("evaluator", "swarm_sim evaluator")
-        self.config = declare_dataclass(self, DEFAULT, read_only=True)
+        self.config = declare_world(self, DEFAULT)
         self.settings = declare_dataclass(self, EvaluatorSettings(), read_only=True, ranges=EVALUATOR_RANGES)
         self.slice = self.settings.slice
         self.library = load_library(self.settings.library) if self.settings.library else None

@@ -109,7 +109,7 @@ from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 from bt_controller import timeline
-from bt_controller.model_settings import arena_of_trial, chain_of_trial
+from bt_controller.model_settings import chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
 from bt_controller.perception import Readings
 from bt_controller.vocabulary import ACTIONS
@@ -131,7 +131,6 @@ from swarm_ros.parameters import (
     ParameterError,
     check_file_values,
     declare,
-    declare_dataclass,
     descriptor,
     field_names,
     start_node,
@@ -142,9 +141,10 @@ from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
-from swarm_sim.model import DEFAULT, Config, apply_conditions
+from swarm_sim.model import DEFAULT, Config, apply_conditions, layout_from_text, layout_to_text
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
+from swarm_sim.nodes.world_parameters import declare_world
 from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
 from tf2_msgs.msg import TFMessage
 
@@ -182,7 +182,7 @@ class SimulatorNode(ManagedNode):
 
     def __init__(self, config: Config = DEFAULT) -> None:
         super().__init__("simulator", "swarm_sim simulator")
-        declared = declare_dataclass(self, config, read_only=True, ranges=WORLD_RANGES)
+        declared = declare_world(self, config, ranges=WORLD_RANGES)
         conditions: str = declare(
             self,
             "conditions",
@@ -433,15 +433,16 @@ class SimulatorNode(ManagedNode):
     # --- the action and the service
     def arena_of(self, trial: int) -> int:
         """The arena configuration of trial ``trial`` (``docs/model.md``: blocks of ``chain_trials``)."""
-        return arena_of_trial(self.config.timeline, trial, len(self.config.gaps))
+        return self.config.arena_of_trial(trial)
 
     def goal_problem(self, request: Any) -> str:  # a RunTrial goal or request (generated, untyped)
         """Why the trial ``request`` asks for cannot be run, or ""."""
         if not self.active:
             return f"{self.get_name()} is not active ({self.state})"
         arena, trial = int(request.arena_configuration), int(request.trial)
-        if arena not in (-1, *range(len(self.config.gaps))):
-            return f"arena_configuration must be -1 or 0..{len(self.config.gaps) - 1}, got {arena}"
+        configurations = len(self.config.arena_layout)
+        if arena not in (-1, *range(configurations)):
+            return f"arena_configuration must be -1 or 0..{configurations - 1}, got {arena}"
         if arena >= 0 and arena != self.arena_of(trial):
             own = self.arena_of(trial)
             return f"trial {trial} uses arena configuration {own}, not {arena} (-1 means its own)"
@@ -539,14 +540,9 @@ class SimulatorNode(ManagedNode):
                     f"trial {trial} of seed {seed} abandoned at step {world.step}: the simulator was "
                     "deactivated"
                 )
-            first_step = timeline.step_in_trial(world.line, world.step) == 1
-            if (
-                first_step
-                and world.step > 1
-                and (self.config.arena_entry(world.trial) != self.config.arena_entry(world.trial - 1))
-            ):  # a later trial of the chain on other regions
+            if regions_change(world):  # a later trial of the chain on other regions
                 self._markers.publish(visualisation.arena_markers(self.config, world.trial, self._stamp()))
-            if self.timing == "free" and first_step:
+            if self.timing == "free" and timeline.step_in_trial(world.line, world.step) == 1:
                 with self._lock:
                     self.free.begin_trial()
             self._publish_step(world, seed)
@@ -849,6 +845,18 @@ def frame_messages(
     return odometry, transforms, poses
 
 
+def regions_change(world: LockstepChain) -> bool:
+    """Whether the current step starts a later trial of the chain on other regions than the trial before
+    (``Config.arena_entry``): the simulator then publishes the new regions' markers (a chain's first ones go
+    out at its start)."""
+    config = world.config
+    return (
+        world.step > 1
+        and timeline.step_in_trial(world.line, world.step) == 1
+        and config.arena_entry(world.trial) != config.arena_entry(world.trial - 1)
+    )
+
+
 def trial_start_message(
     world: LockstepChain, stamp: Time, seed: int, trial: int, robots: int, config: Config
 ) -> TrialStart:
@@ -857,7 +865,7 @@ def trial_start_message(
         header=Header(stamp=stamp, frame_id="arena"),
         seed=seed,
         trial=trial,
-        arena_configuration=arena_of_trial(config.timeline, trial, len(config.gaps)),
+        arena_configuration=config.arena_of_trial(trial),
         robots=robots,
         tree_keys=[int(k) for k in world.setup.tree_keys],
         ticks=world.p.ticks,
@@ -878,6 +886,7 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     declared: dict[str, tuple[Any, tuple[float, float] | None]] = {
         f.name: (getattr(config, f.name), WORLD_RANGES.get(f.name)) for f in fields(config)
     }
+    declared["layout"] = (layout_to_text(config.layout), None)
     declared["conditions"] = ("", None)
     declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
     declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
@@ -890,6 +899,8 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
         if name in {f.name for f in fields(config)}
     }
     try:
+        if "layout" in world:
+            world["layout"] = layout_from_text(world["layout"])
         return replace(config, **world)
     except ConfigError as error:
         raise ConfigError(f"{path}: {error}") from None

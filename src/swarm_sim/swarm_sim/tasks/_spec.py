@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece
+from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
 from swarm_sim.model.regions import Layout, check_layout
 
 REGION_SHAPES: tuple[str, ...] = PIECE_SHAPES
@@ -367,15 +367,16 @@ _TASK_KEY: dict[str, str] = {
 }
 """The task key of each ``Config`` field a task sets, for the messages of ``Config``'s own checks."""
 
-TASK_CONFIG_FIELDS: tuple[str, ...] = (*_TASK_KEY, "gaps")
+TASK_CONFIG_FIELDS: tuple[str, ...] = (*_TASK_KEY, "gaps", "layout")
 """The ``Config`` fields a task sets (the rest are the model's constants, its profile and damage)."""
 
 
 def world_parameters(config: Config) -> dict[str, object]:
     """The simulator node's parameters that give it the world of ``config`` as far as a task sets it: those
-    that differ from the model's default world (so a parameter file can still set the others)."""
+    that differ from the model's default world (so a parameter file can still set the others); a layout as
+    its JSON text (the node's ``layout`` parameter)."""
     return {
-        name: getattr(config, name)
+        name: layout_to_text(config.layout) if name == "layout" else getattr(config, name)
         for name in TASK_CONFIG_FIELDS
         if getattr(config, name) != getattr(DEFAULT, name)
     }

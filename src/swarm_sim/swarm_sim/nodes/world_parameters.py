@@ -1,0 +1,31 @@
+"""The world's parameters as a node declares them: one per field of ``swarm_sim.model.config.Config``
+(``swarm_ros.parameters.declare_dataclass``), but a layout of regions, which ROS parameters cannot hold as
+nested lists, is one JSON text (``layout``; empty: the papers' arena of ``nest_radius`` and ``gaps``).
+The simulator and the evaluator declare the world the same way."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import replace
+
+from rclpy.node import Node
+
+from swarm_ros.parameters import declare, declare_dataclass, descriptor
+from swarm_sim.model import Config, layout_from_text, layout_to_text
+
+LAYOUT_DESCRIPTION = (
+    "the regions of every trial as JSON (swarm_sim.model.regions, docs/tasks.md); empty: the papers' arena "
+    "of nest_radius and gaps"
+)
+
+
+def declare_world(
+    node: Node, config: Config, *, ranges: Mapping[str, tuple[float, float]] | None = None
+) -> Config:
+    """Declare the world's parameters on ``node`` (read-only, defaults from ``config``) and return the world
+    they give; ``ConfigError`` or ``ParameterError`` in one line for a bad one."""
+    declared = declare_dataclass(node, config, read_only=True, ranges=ranges, skip=("layout",))
+    text: str = declare(
+        node, "layout", layout_to_text(config.layout), descriptor(LAYOUT_DESCRIPTION, read_only=True)
+    )
+    return replace(declared, layout=layout_from_text(text))
