@@ -38,6 +38,15 @@ def heldout_path(run: Run) -> Path:
     return run.directory.heldout
 
 
+def saved_heldout(run: Run) -> dict | None:
+    """The run's ``heldout.json`` when there is one and it belongs to this run's configuration, else None."""
+    path = heldout_path(run)
+    if not path.exists():
+        return None
+    saved = read_json(path)
+    return saved if isinstance(saved, dict) and saved.get("config") == run.config.to_json() else None
+
+
 def _trees(run: Run) -> list[str]:
     """The trees to re-score, in a fixed order: every bin's best, then the best trees, without repeats."""
     texts: dict[str, None] = {}
@@ -53,11 +62,9 @@ def _trees(run: Run) -> list[str]:
 def score_heldout(run: Run, evaluator: Evaluator) -> dict:
     """Re-score the run's repertoires on the held-out seeds, write ``heldout.json`` and return it (or return
     the file already there, when it belongs to this run)."""
-    path = heldout_path(run)
-    if path.exists():
-        saved = read_json(path)
-        if isinstance(saved, dict) and saved.get("config") == run.config.to_json():
-            return saved
+    saved = saved_heldout(run)
+    if saved is not None:
+        return saved
     from swarm_sim.evaluation import EvaluationRequest
 
     seeds = [run.config.heldout_seed(repeat) for repeat in range(HELDOUT_EVALUATIONS)]
@@ -83,7 +90,7 @@ def score_heldout(run: Run, evaluator: Evaluator) -> dict:
         "trees": len(trees),
         "objectives": {o: _objective(run, o, means) for o in run.config.objectives},
     }
-    write_json(path, document)
+    write_json(heldout_path(run), document)
     return document
 
 

@@ -160,6 +160,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             )
         config = None if args.resume else config_from_args(args)
         from evolution_manager.evolution.run import Run, RunDirectory
+        from evolution_manager.evolution.run_results import run_results
         from evolution_manager.viewing.results import write_results
 
         directory = RunDirectory(args.out)
@@ -203,7 +204,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
 
     failed = _execute(
         run,
-        lambda: write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator),
+        lambda: write_results(run, run_results(run, run.evaluator), with_figures=not args.no_figures),
         args,
         argv,
         started,

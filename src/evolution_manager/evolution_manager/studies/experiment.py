@@ -126,6 +126,7 @@ def run_one(
     """
 
     from evolution_manager.evolution.run import Run, RunDirectory
+    from evolution_manager.evolution.run_results import run_results
     from evolution_manager.viewing.results import write_results
     from swarm_sim.evaluation import BatchEvaluator
 
@@ -154,7 +155,7 @@ def run_one(
             progress.put((root, produced))
 
     run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
-    write_results(run, with_figures=False, evaluator=evaluator)
+    write_results(run, run_results(run, evaluator), with_figures=False)
     return root
 
 

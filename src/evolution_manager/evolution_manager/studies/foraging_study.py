@@ -617,7 +617,7 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
 def _draw(run: ArmRun, stem: Path) -> Path:
     """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
     from bt_controller.render import render
-    from evolution_manager.viewing.shown_trees import simplified_tree
+    from evolution_manager.evolution.shown_trees import simplified_tree
 
     library = (
         load_library(run.directory / "library.json") if (run.directory / "library.json").exists() else None

@@ -42,10 +42,10 @@ from bt_controller.validate import strict_json
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
+from evolution_manager.evolution.shown_trees import simplified as simplified_text
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames
-from evolution_manager.viewing.shown_trees import simplified as simplified_text
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.tasks import task_from_record
