@@ -19,16 +19,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from evolution_manager.errors import RunDirectoryError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import HELDOUT_EVALUATIONS
 from evolution_manager.files import read_json, write_json
-
-if TYPE_CHECKING:  # the simulator (numba) is imported when held-out scores are computed
-    from swarm_sim.evaluation import Evaluator
+from swarm_sim.evaluation import EvaluationRequest, Evaluator
 
 HELDOUT_FORMAT = 1
 
@@ -65,7 +62,6 @@ def score_heldout(run: Run, evaluator: Evaluator) -> dict:
     saved = saved_heldout(run)
     if saved is not None:
         return saved
-    from swarm_sim.evaluation import EvaluationRequest
 
     seeds = [run.config.heldout_seed(repeat) for repeat in range(HELDOUT_EVALUATIONS)]
     trees = _trees(run)

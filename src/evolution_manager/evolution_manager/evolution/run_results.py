@@ -14,15 +14,12 @@ here, in one place, and handed to it as :class:`RunResults`:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from bt_controller.tree import Node, parse, to_text
 from evolution_manager.evolution.heldout import saved_heldout, score_heldout
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.shown_trees import simplified, simplified_tree
-
-if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are computed
-    from swarm_sim.evaluation import Evaluator
+from swarm_sim.evaluation import Evaluator
 
 
 @dataclass(frozen=True)

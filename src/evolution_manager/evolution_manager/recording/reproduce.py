@@ -34,6 +34,7 @@ from bt_controller.model_settings import PROFILES
 from bt_controller.tree import Node, parse
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.recording.bags import BagError, check_crcs, read_bag
+from swarm_ros.names import robot_namespaces
 from swarm_sim.evaluation import named_values
 from swarm_sim.model import (
     DEFAULT,
@@ -179,6 +180,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         kept = recorded_values.get(name)
         if not divergences and kept is not None and kept != value:
             divergences.append(f"{name} was {kept!r}, the re-run gives {value!r}")
+    # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
     from rclpy.serialization import deserialize_message
 
     compared, other = [], []
@@ -222,7 +224,6 @@ class _Published:
     def __init__(
         self, prefix: str, robots: int, config: Config, seed: int, trial: int, first_stamp: Any
     ) -> None:
-        from swarm_ros.names import robot_namespaces
 
         self.prefix = prefix
         self.namespaces = robot_namespaces(robots)
@@ -237,6 +238,7 @@ class _Published:
         self.messages: dict[str, list[Any]] = {}
 
     def _add(self, topic: str, message: Any) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from rclpy.serialization import deserialize_message, serialize_message
 
         # through CDR and back, as a subscriber sees it: float32 fields rounded as on the wire
@@ -245,9 +247,11 @@ class _Published:
         )
 
     def step(self, world: LockstepChain) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from builtin_interfaces.msg import Time
         from rosgraph_msgs.msg import Clock
 
+        # the nodes' modules load rclpy too
         from swarm_sim.nodes import visualisation
         from swarm_sim.nodes.simulator import step_messages, trial_start_message
 
@@ -276,6 +280,7 @@ class _Published:
         self.headers = [ground.header for ground in messages.ground]
 
     def answers(self, world: LockstepChain, outcomes: Sequence[Any]) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from bt_controller.nodes.footbot_controller import answer_messages
 
         for i, (ns, outcome) in enumerate(zip(self.namespaces, outcomes, strict=True)):

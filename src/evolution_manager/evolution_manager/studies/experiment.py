@@ -44,7 +44,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import get_context, managers
 from pathlib import Path
-from typing import TYPE_CHECKING
+
+from tqdm import tqdm
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, LibraryError, load_library
@@ -59,8 +60,12 @@ from evolution_manager.arguments import (
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
+from evolution_manager.evolution import compositions as comp
+from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 from evolution_manager.evolution.options import add_scenario_options
+from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.evolution.run_results import run_results
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -78,10 +83,9 @@ from evolution_manager.studies.planning import (
     more_runs,
     paper_study,
 )
+from evolution_manager.viewing.results import write_results
 from swarm_ros.safe_paths import refuse_links_within
-
-if TYPE_CHECKING:  # imported where used: the module is read by every command
-    from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
+from swarm_sim.evaluation import BatchEvaluator
 
 SESSIONS_FILE = "sessions.json"
 COMPOSITIONS = "compositions"
@@ -125,11 +129,6 @@ def run_one(
     ``progress`` (a queue) receives ``(root, individuals produced)`` after every batch.
     """
 
-    from evolution_manager.evolution.run import Run, RunDirectory
-    from evolution_manager.evolution.run_results import run_results
-    from evolution_manager.viewing.results import write_results
-    from swarm_sim.evaluation import BatchEvaluator
-
     if config_data.get("kind") == COMPOSITIONS:
         return _run_composition(config_data, root, progress, checkpoint_interval)
     config = RunConfig.from_json(config_data)
@@ -162,7 +161,6 @@ def run_one(
 def _same_cells(directory: CompositionDirectory, config: CompositionConfig) -> bool:
     """Whether the cells the composition run in ``directory`` keeps are those its planned sources give now,
     wherever each source run is."""
-    from evolution_manager.evolution import compositions as comp
 
     planned, _ = comp.read_sources([Path(source) for source in config.sources])
     kept = [comp.Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
@@ -179,8 +177,6 @@ def _run_composition(
 ) -> str:
     """:func:`run_one` of a planned composition run (``evolution.compositions``): its cells are read from
     its source runs when it starts, and must be the cells the plan recorded."""
-    from evolution_manager.evolution import compositions as comp
-    from swarm_sim.evaluation import BatchEvaluator
 
     config = comp.CompositionConfig.from_json(config_data)
     directory = comp.CompositionDirectory(Path(root))
@@ -415,24 +411,26 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if args.primitives_from is not None and args.study not in ("replication", "ablation"):
             raise UsageError("--primitives-from applies to --study replication and ablation only")
         if args.study == "foraging":
-            from evolution_manager.studies import foraging_study  # (late: only this study needs it)
+            # late: loads scipy.stats (about 1 s); only the study asked for
+            from evolution_manager.studies import foraging_study
 
             document, stages, budgets = foraging_study.plan_study(args, scenarios, design)
             report: Callable[[Path], Path] = foraging_study.build_report
         elif args.study == "replication":
-            from evolution_manager.studies import replication_study  # (late: only this study needs it)
+            # late: loads scipy.stats (about 1 s); only the study asked for
+            from evolution_manager.studies import replication_study
 
             document, stages, budgets = replication_study.plan_study(args, scenarios, design)
             report = replication_study.build_report
         elif args.study == "ablation":
-            from evolution_manager.studies import ablation_study  # (late: only this study needs it)
+            # late: loads scipy.stats (about 1 s); only the study asked for
+            from evolution_manager.studies import ablation_study
 
             document, stages, budgets = ablation_study.plan_study(args, scenarios, design)
             report = ablation_study.build_report
         else:
-            from evolution_manager.studies import (
-                report as paper_report,  # (late: its figures load matplotlib)
-            )
+            # late: its figures load matplotlib (about 1.5 s)
+            from evolution_manager.studies import report as paper_report
 
             document, stages, budgets = paper_study(args, scenarios, design)
             report = paper_report.build_report
@@ -525,8 +523,6 @@ def execute(
                 print(f"experiment: error: {error}", file=sys.stderr)
                 return EXIT_USAGE
             if not args.no_progress:
-                from tqdm import tqdm
-
                 bar = stack.enter_context(
                     tqdm(
                         total=sum(total.values()),

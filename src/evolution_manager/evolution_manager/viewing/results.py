@@ -190,9 +190,8 @@ def write_best_trees(run: Run, results: RunResults) -> list[Path]:
 def write_figures(run: Run, heldout: dict | None = None) -> list[Path]:
     """Heatmaps of each evolved objective's grid, the histogram of every grid, the progress curves (with
     the held-out scores as markers at the end, when there are any)."""
-    from evolution_manager.viewing import (
-        figures,  # matplotlib (about 1.5 s to import) only when figures are drawn
-    )
+    # matplotlib (about 1.5 s to import) only when figures are drawn
+    from evolution_manager.viewing import figures
 
     folder = run.directory.figures
     with writing(folder):  # a link planted in the run folder is refused, never followed
