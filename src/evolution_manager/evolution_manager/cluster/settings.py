@@ -246,7 +246,6 @@ def read_slurm_settings(path: Path) -> SlurmSettings:
 def read_settings_file(path: Path) -> dict:
     """The mapping of a ``--cluster-config`` YAML file (UTF-8, each key once), its values not yet checked;
     raise :class:`ClusterError`."""
-
     where = f"--cluster-config {path}"
     try:
         text = Path(path).read_text(encoding="utf-8")

@@ -451,7 +451,6 @@ def evaluate_genomes(
 ) -> list[Member]:
     """Each genome evaluated as a heterogeneous swarm with ``seed`` (or genome ``i`` with ``seeds[i]``) over
     ``trials`` trials; evaluation indices from ``first``."""
-
     if not genomes:
         return []
     chosen = [seed] * len(genomes) if seeds is None else list(seeds)

@@ -5,17 +5,20 @@ against the saved run, and the progress bar."""
 from __future__ import annotations
 
 import argparse
-
-from tqdm import tqdm
+from typing import TYPE_CHECKING
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
-from evolution_manager.evolution.compositions import CompositionConfig
 from evolution_manager.evolution.parameters import NODE_SETS
 from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
 from swarm_sim.tasks import add_task_option, task_label
+
+if TYPE_CHECKING:  # every command's parser reads this module: tqdm and a run's modules load where used
+    from tqdm import tqdm
+
+    from evolution_manager.evolution.compositions import CompositionConfig
 
 
 def add_scenario_options(parser: argparse.ArgumentParser) -> None:
@@ -149,6 +152,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
 def progress_bar(config: RunConfig | CompositionConfig, initial: int, enabled: bool) -> tqdm | None:
     if not enabled:
         return None
+    from tqdm import tqdm  # late: about 70 ms, only when a bar is shown
 
     return tqdm(
         total=config.evaluations,

@@ -27,6 +27,7 @@ digest here.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 from bt_controller.draws import (
     MAX_SEED,
@@ -41,8 +42,6 @@ from bt_controller.model_settings import PROFILES, Timeline
 from bt_controller.validate import integer
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
-from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites
-from evolution_manager.evolution.archive import SimplifiedForms
 from evolution_manager.evolution.parameters import (
     HIERARCHICAL_CONDITIONS,
     NODE_SETS,
@@ -51,6 +50,10 @@ from evolution_manager.evolution.parameters import (
 )
 from swarm_sim.model import OBJECTIVES, Config
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, resolve_task, task_from_record, task_named, task_to_record
+
+if TYPE_CHECKING:  # see make_algorithm
+    from evolution_manager.evolution.algorithms import AskTell
+    from evolution_manager.evolution.archive import SimplifiedForms
 
 DEFAULT_PROFILE: str = PROFILES[Timeline().profile]
 """The model's default profile (``bt_controller.timeline``): runs that name none use it."""
@@ -311,6 +314,9 @@ class RunConfig:
         ``library``: the run's primitive library (its names become terminals; the run's copy of
         ``self.library``); ``forms``: the run's simplified forms, shared with MAP-Elites' archive when it
         refuses clones."""
+        # late: DEAP and qdpy (about 0.1 s) load when a run starts, not when a command's options are read
+        from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites
+        from evolution_manager.evolution.archive import SimplifiedForms
 
         if (library.digest if library is not None else "") != self.library_digest:
             raise ConfigError(

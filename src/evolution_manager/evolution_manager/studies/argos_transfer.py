@@ -160,7 +160,6 @@ def transferred(
     """The trees whose every seed is in ``root/argos_raw.tsv``, each scored here on as many fresh scenarios
     (our seeds ``1..len(seeds)``, ``trials`` trials each in ``world``'s model) and compared with ARGoS on
     its objective; and how many trees lack rows."""
-
     try:
         raw = transfer.read_argos_raw(Path(root) / RAW_FILE)
         argos, _ = transfer.argos_estimates(raw, [t.tree for t in trees], seeds)

@@ -27,15 +27,10 @@ from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from tqdm import tqdm
-
-from bt_controller.library import Library
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
 from evolution_manager.cluster.client import open_client
-from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
+from evolution_manager.cluster.settings import add_cluster_options, settings_from_args
 from evolution_manager.errors import DispatchError, EvolutionError, UsageError, WriteError
-from evolution_manager.evolution import compositions as comp
-from evolution_manager.evolution.compositions import CompositionParameters, is_composition_run
 from evolution_manager.evolution.options import (
     add_scenario_options,
     add_task_options,
@@ -45,19 +40,21 @@ from evolution_manager.evolution.options import (
     library_from_args,
     progress_bar,
 )
-from evolution_manager.evolution.run import Run, RunDirectory
-from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES, RunConfig
-from evolution_manager.evolution.run_results import run_results
+from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
-from evolution_manager.studies.experiment import record_session
-from evolution_manager.viewing.results import write_results
 from swarm_ros.safe_paths import UnsafePathError, describe
-from swarm_sim.evaluation import BatchEvaluator, Evaluator
 from swarm_sim.tasks import TaskSpec, registered_name
 
-if TYPE_CHECKING:  # Dask loads only for a cluster (evolution_manager.cluster.client)
+if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load late (see _evolve)
     from distributed import Client
+    from tqdm import tqdm
+
+    from bt_controller.library import Library
+    from evolution_manager.cluster.settings import ClusterSettings
+    from evolution_manager.evolution.compositions import CompositionParameters
+    from evolution_manager.evolution.run_config import RunConfig
+    from swarm_sim.evaluation import Evaluator
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -128,6 +125,7 @@ def _evaluator(
         from evolution_manager.cluster.evaluator import DaskEvaluator
 
         return DaskEvaluator(client, config.world(), library=library)
+    from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules (see _evolve)
 
     try:
         return BatchEvaluator(config.world(), threads=workers or 1, library=library)
@@ -162,6 +160,11 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 "every worker thread"
             )
         config = None if args.resume else config_from_args(args)
+        # late: a run's modules (qdpy, DEAP, the simulator, the result writers: about 0.3 s) load once the
+        # options are accepted, so that --help and a refused option answer at once
+        from evolution_manager.evolution.run import Run, RunDirectory
+        from evolution_manager.evolution.run_results import run_results
+        from evolution_manager.viewing.results import write_results
 
         directory = RunDirectory(args.out)
         if args.resume:
@@ -248,6 +251,8 @@ def _execute(
     """Execute a started run with its progress bar, then ``write`` its results, the session recorded in
     the run directory before and after; None when it finished, else the exit status, its reason said in
     one line with how to continue."""
+    # late, as the run's modules (see _evolve)
+    from evolution_manager.studies.experiment import record_session
 
     command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
     resume = f"continue with: evolve --out {args.out} --resume"
@@ -286,6 +291,8 @@ def _compositions_asked(args: argparse.Namespace) -> bool:
     if args.swarm_from is not None or args.algorithm == "ga":
         return True
     if args.resume:
+        from evolution_manager.evolution.compositions import is_composition_run  # late, as in _evolve
+
         return is_composition_run(args.out)
     return False
 
@@ -363,6 +370,7 @@ def _evolve_compositions(
     args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
 ) -> int:
     """``evolve`` of compositions (``evolution.compositions``): start or continue a run, write its results."""
+    from evolution_manager.evolution import compositions as comp  # late, as the run's modules in _evolve
 
     try:
         _check_composition_options(args, cluster)
@@ -404,6 +412,7 @@ def _evolve_compositions(
                 parameters,
                 library_digest="" if library is None else library.digest,
             )
+        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
 
         try:
             evaluator = BatchEvaluator(config.world(), threads=args.workers or 1, library=library)
@@ -437,7 +446,6 @@ def _evolve_compositions(
 def result_lines(run: object, out: Path) -> str:
     """What a finished run prints: evaluations, simulations saved, and per objective the in-run and
     held-out scores (from its summary.json)."""
-
     summary = read_json(Path(out) / "summary.json")
     assert isinstance(summary, dict)
     lines = [

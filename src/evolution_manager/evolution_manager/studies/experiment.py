@@ -44,8 +44,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import get_context, managers
 from pathlib import Path
-
-from tqdm import tqdm
+from typing import TYPE_CHECKING
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, LibraryError, load_library
@@ -60,12 +59,8 @@ from evolution_manager.arguments import (
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
-from evolution_manager.evolution import compositions as comp
-from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 from evolution_manager.evolution.options import add_scenario_options
-from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.evolution.run_results import run_results
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -83,9 +78,10 @@ from evolution_manager.studies.planning import (
     more_runs,
     paper_study,
 )
-from evolution_manager.viewing.results import write_results
 from swarm_ros.safe_paths import refuse_links_within
-from swarm_sim.evaluation import BatchEvaluator
+
+if TYPE_CHECKING:  # imported where used (run_one): the module is read by every command
+    from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 
 SESSIONS_FILE = "sessions.json"
 COMPOSITIONS = "compositions"
@@ -129,6 +125,13 @@ def run_one(
     ``progress`` (a queue) receives ``(root, individuals produced)`` after every batch.
     """
 
+    # late: a run's modules (qdpy, DEAP, the simulator, the result writers: about 0.3 s) load in the process
+    # that runs it, not in every command that reads this module (evolve, report, the studies)
+    from evolution_manager.evolution.run import Run, RunDirectory
+    from evolution_manager.evolution.run_results import run_results
+    from evolution_manager.viewing.results import write_results
+    from swarm_sim.evaluation import BatchEvaluator
+
     if config_data.get("kind") == COMPOSITIONS:
         return _run_composition(config_data, root, progress, checkpoint_interval)
     config = RunConfig.from_json(config_data)
@@ -161,6 +164,7 @@ def run_one(
 def _same_cells(directory: CompositionDirectory, config: CompositionConfig) -> bool:
     """Whether the cells the composition run in ``directory`` keeps are those its planned sources give now,
     wherever each source run is."""
+    from evolution_manager.evolution import compositions as comp  # late, as the run's modules in run_one
 
     planned, _ = comp.read_sources([Path(source) for source in config.sources])
     kept = [comp.Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
@@ -177,6 +181,8 @@ def _run_composition(
 ) -> str:
     """:func:`run_one` of a planned composition run (``evolution.compositions``): its cells are read from
     its source runs when it starts, and must be the cells the plan recorded."""
+    from evolution_manager.evolution import compositions as comp  # late, as the run's modules in run_one
+    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
 
     config = comp.CompositionConfig.from_json(config_data)
     directory = comp.CompositionDirectory(Path(root))
@@ -411,26 +417,24 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         if args.primitives_from is not None and args.study not in ("replication", "ablation"):
             raise UsageError("--primitives-from applies to --study replication and ablation only")
         if args.study == "foraging":
-            # late: loads scipy.stats (about 1 s); only the study asked for
-            from evolution_manager.studies import foraging_study
+            from evolution_manager.studies import foraging_study  # late: loads scipy.stats (about 1 s)
 
             document, stages, budgets = foraging_study.plan_study(args, scenarios, design)
             report: Callable[[Path], Path] = foraging_study.build_report
         elif args.study == "replication":
-            # late: loads scipy.stats (about 1 s); only the study asked for
-            from evolution_manager.studies import replication_study
+            from evolution_manager.studies import replication_study  # late: loads scipy.stats (about 1 s)
 
             document, stages, budgets = replication_study.plan_study(args, scenarios, design)
             report = replication_study.build_report
         elif args.study == "ablation":
-            # late: loads scipy.stats (about 1 s); only the study asked for
-            from evolution_manager.studies import ablation_study
+            from evolution_manager.studies import ablation_study  # late: loads scipy.stats (about 1 s)
 
             document, stages, budgets = ablation_study.plan_study(args, scenarios, design)
             report = ablation_study.build_report
         else:
-            # late: its figures load matplotlib (about 1.5 s)
-            from evolution_manager.studies import report as paper_report
+            from evolution_manager.studies import (
+                report as paper_report,  # late: its figures load matplotlib (about 1.5 s)
+            )
 
             document, stages, budgets = paper_study(args, scenarios, design)
             report = paper_report.build_report
@@ -523,6 +527,8 @@ def execute(
                 print(f"experiment: error: {error}", file=sys.stderr)
                 return EXIT_USAGE
             if not args.no_progress:
+                from tqdm import tqdm  # late: about 70 ms, only when a bar is shown
+
                 bar = stack.enter_context(
                     tqdm(
                         total=sum(total.values()),

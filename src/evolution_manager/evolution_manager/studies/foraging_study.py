@@ -615,7 +615,6 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
 
 def _draw(run: ArmRun, stem: Path) -> Path:
     """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
-
     library = (
         load_library(run.directory / "library.json") if (run.directory / "library.json").exists() else None
     )

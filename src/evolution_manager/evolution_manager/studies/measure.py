@@ -30,7 +30,6 @@ def measure_one(
     algorithm: str, objective: str | None, evaluations: int, seed: int, root: Path, workers: int
 ) -> dict:
     """Run one configuration and return its timings."""
-
     run = Run.start(
         RunConfig.make(algorithm, objective, evaluations, seed), root, BatchEvaluator(threads=workers)
     )

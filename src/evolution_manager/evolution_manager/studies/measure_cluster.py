@@ -96,7 +96,6 @@ def task_overhead(client: Client, tasks: int, chunk: int) -> dict[str, float]:
 
 def one_run(evaluator: Evaluator, root: Path, evaluations: int) -> float:
     """Wall seconds of a MAP-Elites run on food stopped after ``evaluations`` evaluations."""
-
     config = RunConfig.make("qd", "food", 25_000, seed=1, profile=PROFILE)
     run = Run.start(config, root, evaluator)
     started = time.perf_counter()

@@ -95,7 +95,6 @@ def best_forager_swarm(root: Path) -> StudyTree:
 
 def study_trials(task: str, count: int) -> list[int]:
     """``count`` trials, each the first of its chain, under the task's paper timeline."""
-
     chain = resolve_task(task).config("paper").chain_length
     return [k * chain for k in range(count)]
 

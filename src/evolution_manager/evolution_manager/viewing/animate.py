@@ -271,7 +271,6 @@ def _config_for(profile: str | None, task: TaskSpec | None = None) -> Config:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``animate``: one trial to an animated GIF (or MP4), from a tree and a seed or from a trial bag."""
-
     parser = Parser(
         prog="animate",
         description="Render one trial to an animated GIF (.mp4 with ffmpeg): one frame per sensing step.",

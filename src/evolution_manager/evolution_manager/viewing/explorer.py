@@ -42,15 +42,6 @@ from bt_controller.validate import strict_json
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
-from evolution_manager.evolution.libraries import (
-    BLOCKS,
-    FAMILIES,
-    LibraryBuildError,
-    best_in_run,
-    block_of,
-    read_run,
-    variant,
-)
 from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.evolution.shown_trees import simplified as simplified_text
 from evolution_manager.files import printable, write_atomic
@@ -336,6 +327,8 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
     it resolved it, or against the library file's folder, where such commands are often run).
     ExplorerError when a primitive lacks that, when the primitives disagree on the block
     count, or when none is of an objective this run shows."""
+    # late: the library module loads DEAP and qdpy (about 0.1 s), only for a page with --library
+    from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, block_of, variant
 
     here_path = Path(root).resolve()
     label = library.label
@@ -484,6 +477,14 @@ def _block_winners(root: Path, bins: int) -> dict[str, dict[int, dict]]:
     """Per primitive objective and block variant, the tree the ``library`` command would take from the run
     in ``root`` (``libraries.best_in_run``: its bin, fitness and derated fitness): what lost to another
     run's; empty for a run the command cannot read (one evolved with a library, say)."""
+    # late, as in library_view
+    from evolution_manager.evolution.libraries import (
+        LibraryBuildError,
+        best_in_run,
+        block_of,
+        read_run,
+        variant,
+    )
 
     try:
         run = read_run(root)
