@@ -72,6 +72,7 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
     from evolution_manager.cluster.settings import ClusterSettings, SlurmSettings
     from evolution_manager.evolution.run import Run
     from evolution_manager.evolution.run_config import RunConfig
+    from evolution_manager.evolution.run_results import run_results
     from evolution_manager.studies.experiment import run_one
     from evolution_manager.viewing.results import write_results
     from swarm_sim.evaluation import BatchEvaluator
@@ -89,7 +90,7 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
     in_process = BatchEvaluator(default_config(single.profile))
     local_run = Run.start(single, tmp_path / "local" / "single", in_process)
     local_run.execute(checkpoint_interval=0)
-    write_results(local_run, with_figures=False, evaluator=local_run.evaluator)
+    write_results(local_run, run_results(local_run, local_run.evaluator), with_figures=False)
     local_run.lock.release()
 
     settings = ClusterSettings(
@@ -122,7 +123,7 @@ def test_runs_on_slurm_jobs_equal_local_runs_and_a_cancelled_job_loses_nothing(s
         evaluator = DaskEvaluator(client, single.profile, chunk=10)
         run = Run.start(single, tmp_path / "slurm" / "single", evaluator)
         run.execute(checkpoint_interval=0)
-        write_results(run, with_figures=False, evaluator=evaluator)
+        write_results(run, run_results(run, evaluator), with_figures=False)
         run.lock.release()
     for k in range(len(configs)):
         local = run_files(tmp_path / "local" / f"run{k}")

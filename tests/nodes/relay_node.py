@@ -1,5 +1,5 @@
 """A small real node for the workspace's own tests: it answers range-and-bearing readings with wheel commands
-and serves load_tree, over swarm_msgs and Fast DDS. Started as a separate process by test_ros_foundation.py.
+and serves load_tree, over swarm_msgs and Fast DDS. Started as a separate process by test_ros_messaging.py.
 
 It computes the robot's raw nest estimate the way a footbot does (minimum of sender estimate plus range), so
 the test can check that the message content crossed the process boundary intact.

@@ -123,6 +123,7 @@ def without_ros_args(argv: Sequence[str]) -> list[str]:
     """``argv`` without the ROS arguments (``--ros-args ... [--]``), as ``rclpy.utilities.remove_ros_args``
     gives it, which raises ``UnicodeEncodeError`` on an argument that is not UTF-8 (a file name's bytes,
     which Python keeps as surrogates): such an argument is kept as it is, for the parser to refuse or use."""
+    # rclpy: a base module, which the ROS-free wings import
     from rclpy.utilities import remove_ros_args
 
     argv = list(argv)

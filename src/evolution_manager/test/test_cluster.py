@@ -30,6 +30,7 @@ from evolution_manager.cluster.settings import (
 )
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.evolution.run_results import run_results
 from evolution_manager.studies.experiment import run_one
 from evolution_manager.viewing.results import write_results
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
@@ -345,7 +346,7 @@ def test_a_run_through_dask_writes_the_bytes_of_a_local_run(client, tmp_path):
     for name, root in roots.items():
         run = Run.start(config, root, evaluators[name])
         run.execute(checkpoint_interval=0)
-        write_results(run, with_figures=False, evaluator=evaluators[name])
+        write_results(run, run_results(run, evaluators[name]), with_figures=False)
         run.lock.release()
     local, dask = run_files(roots["local"]), run_files(roots["dask"])
     assert "evaluations.csv" in local and "heldout.json" in local and "best/food.png" in local

@@ -14,6 +14,7 @@ from evolution_manager.errors import RunDirectoryError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig, evaluation_seed
+from evolution_manager.evolution.run_results import run_results
 from evolution_manager.viewing.results import write_results
 from swarm_sim.model import PAPER_OBJECTIVES  # a primitives run's grids (RunConfig.grids)
 
@@ -32,7 +33,7 @@ def _files(root, names=RESULT_FILES):
 
 def _finish(run):
     run.execute(checkpoint_interval=0)
-    write_results(run, with_figures=False, evaluator=run.evaluator)
+    write_results(run, run_results(run, run.evaluator), with_figures=False)
     return run
 
 

@@ -41,6 +41,7 @@ from evolution_manager.evolution.run_config import OBJECTIVES
 from evolution_manager.files import write_json
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.errors import ConditionError
+from swarm_sim.evaluation import BatchEvaluator
 from swarm_sim.model import apply_conditions, default_config
 
 RESULT = "adaptation.json"
@@ -139,6 +140,7 @@ def adaptation_document(
 def adaptation_figure(document: dict, path: Path) -> Path:
     """Fitness of every trial and the best so far, against trials used; the tried trees' priors for
     comparison."""
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
     from evolution_manager.viewing import figures
 
     tried = document["tried"]
@@ -203,13 +205,12 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         )
 
     if args.graph:
+        # rclpy: adaptation is ROS-free but --graph
         from evolution_manager.graph.graph_evaluator import graph_evaluator
 
         with graph_evaluator(args.condition, args.out / "bags", profile=profile) as graph:
             run_picker(search, ConditionEvaluation(graph, args.seed, args.trials), args.objective, show)
     else:
-        from swarm_sim.evaluation import BatchEvaluator
-
         evaluate = ConditionEvaluation(BatchEvaluator(config), args.seed, args.trials)
         run_picker(search, evaluate, args.objective, show)
     document = adaptation_document(

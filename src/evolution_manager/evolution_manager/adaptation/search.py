@@ -27,7 +27,6 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -42,9 +41,7 @@ from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
 from evolution_manager.files import read_json_object
-
-if TYPE_CHECKING:  # the simulator (numba) is imported when a trial is evaluated
-    from swarm_sim.evaluation import Evaluator
+from swarm_sim.evaluation import EvaluationRequest, Evaluator
 
 
 class AdaptationError(EvolutionError, ValueError):
@@ -289,7 +286,6 @@ class ConditionEvaluation:
         self._cache: dict[str, Outcome] = {}
 
     def __call__(self, trees: Sequence[str]) -> list[Outcome]:
-        from swarm_sim.evaluation import EvaluationRequest
 
         new = [t for t in dict.fromkeys(trees) if t not in self._cache]
         if new:

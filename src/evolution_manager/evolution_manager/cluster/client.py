@@ -12,6 +12,7 @@ several worker processes, and a long experiment outlives any walltime.
 from __future__ import annotations
 
 import asyncio
+import getpass
 import importlib.util
 import logging
 import shutil
@@ -134,6 +135,7 @@ def dask_security(settings: ClusterSettings) -> Security | None:
     certificate presented, the scheduler's checked against their CA, every connection encrypted."""
     if settings.tls is None:
         return None
+    # Dask (about 0.3 s to import) loads only for a cluster
     from distributed.security import Security
 
     return Security(
@@ -147,6 +149,7 @@ def dask_security(settings: ClusterSettings) -> Security | None:
 def cluster_security(settings: SlurmSettings) -> Security:
     """TLS for the client, the scheduler and the workers, each presenting the settings' certificate, every
     connection encrypted and checked against their CA."""
+    # Dask (about 0.3 s to import) loads only for a cluster
     from distributed.security import Security
 
     return Security(
@@ -218,6 +221,7 @@ def _quiet(loop: Any, context: dict[str, Any]) -> None:
     """The exception handler of the client's event loop: Dask's own tasks that end with the client (its
     gathers, its reconnection) when a command is interrupted or loses its scheduler are dropped; the command
     has said why in one line. Anything else goes to asyncio's default handler."""
+    # Dask (about 0.3 s to import) loads only for a cluster
     from distributed.client import AllExit
     from distributed.comm import CommClosedError
 
@@ -277,7 +281,6 @@ def queued_jobs() -> set[str] | None:
 
 
 def _user() -> str:
-    import getpass
 
     return getpass.getuser()
 
@@ -333,6 +336,7 @@ def open_client(
         check_scheduler(settings.address, timeout, dask_security(settings))
     else:
         check_slurm()
+    # Dask (about 0.3 s to import) loads only for a cluster
     import dask
     from distributed import Client
 
@@ -346,6 +350,7 @@ def open_client(
                 client = Client(settings.address, timeout=timeout, security=dask_security(settings))
                 address = str(settings.address)
             else:
+                # dask-jobqueue only for --cluster slurm
                 from dask_jobqueue import SLURMCluster
 
                 assert settings.slurm is not None  # set by parse_cluster

@@ -39,6 +39,8 @@ from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from urllib.parse import urlsplit
 
+import yaml
+
 from evolution_manager.errors import EvolutionError
 
 KINDS = ("local", "dask", "slurm")
@@ -244,8 +246,6 @@ def read_slurm_settings(path: Path) -> SlurmSettings:
 def read_settings_file(path: Path) -> dict:
     """The mapping of a ``--cluster-config`` YAML file (UTF-8, each key once), its values not yet checked;
     raise :class:`ClusterError`."""
-    import yaml
-
     where = f"--cluster-config {path}"
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -278,7 +278,6 @@ class _DuplicateKeyError(ValueError):
 def _safe_load_unique(text: str) -> object:
     """``yaml.safe_load`` that refuses a key given twice in one mapping (:class:`_DuplicateKeyError`, naming
     the key and its line)."""
-    import yaml
 
     class UniqueKeyLoader(yaml.SafeLoader):
         def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:

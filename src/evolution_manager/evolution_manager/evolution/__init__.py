@@ -4,7 +4,8 @@ The paper's parameters (``parameters``), DEAP's primitive set and the conversion
 text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and MAP-Elites as ask/tell
 algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
 configuration and command-line options (``run_config``, ``options``), the run loop with its checkpoints
-(``run``), the held-out scores (``heldout``) and primitive libraries made from runs' repertoires
+(``run``), the held-out scores (``heldout``), trees as people are shown them (``shown_trees``), what a
+run's result files show, computed (``run_results``), and primitive libraries made from runs' repertoires
 (``libraries``, the ``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA
 or MAP-Elites (``compositions``). Imports: the base modules, bt_controller, swarm_sim, DEAP
 and qdpy; no other wing.
@@ -21,4 +22,6 @@ __all__ = [
     "options",
     "run",
     "run_config",
+    "run_results",
+    "shown_trees",
 ]

@@ -35,7 +35,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_HELDOUT, derive_seed
 from bt_controller.errors import TreeError
@@ -44,6 +43,7 @@ from bt_controller.model_settings import PROFILES
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
+from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
 from evolution_manager.evolution.run import LOCK_NAME, create_whole, refuse_planted_links
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
@@ -58,13 +58,9 @@ from evolution_manager.files import (
 )
 from evolution_manager.processes import Lock, exclusive_lock
 from swarm_ros.safe_paths import make_folder
-from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.evaluation import Evaluator, SwarmRequest
+from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import task_named
-
-if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates
-    from evolution_manager.evolution.archive import Repertoire
-    from swarm_sim.evaluation import Evaluator
-    from swarm_sim.model import Config, SwarmLayout
 
 KIND = "compositions"
 """``config.json``'s ``kind``: what tells a composition run from a tree run."""
@@ -344,7 +340,6 @@ def tournament(members: Sequence[Member], count: int, size: int, rng: random.Ran
 
 @functools.cache
 def _binner() -> Repertoire:
-    from evolution_manager.evolution.archive import Repertoire
 
     return Repertoire()
 
@@ -456,8 +451,6 @@ def evaluate_genomes(
 ) -> list[Member]:
     """Each genome evaluated as a heterogeneous swarm with ``seed`` (or genome ``i`` with ``seeds[i]``) over
     ``trials`` trials; evaluation indices from ``first``."""
-    from swarm_sim.evaluation import SwarmRequest
-
     if not genomes:
         return []
     chosen = [seed] * len(genomes) if seeds is None else list(seeds)

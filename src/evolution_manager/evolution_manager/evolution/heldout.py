@@ -19,16 +19,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from evolution_manager.errors import RunDirectoryError
 from evolution_manager.evolution.deap_trees import OBJECTIVES
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import HELDOUT_EVALUATIONS
 from evolution_manager.files import read_json, write_json
-
-if TYPE_CHECKING:  # the simulator (numba) is imported when held-out scores are computed
-    from swarm_sim.evaluation import Evaluator
+from swarm_sim.evaluation import EvaluationRequest, Evaluator
 
 HELDOUT_FORMAT = 1
 
@@ -36,6 +33,15 @@ HELDOUT_FORMAT = 1
 def heldout_path(run: Run) -> Path:
     """Where a run's held-out scores are written."""
     return run.directory.heldout
+
+
+def saved_heldout(run: Run) -> dict | None:
+    """The run's ``heldout.json`` when there is one and it belongs to this run's configuration, else None."""
+    path = heldout_path(run)
+    if not path.exists():
+        return None
+    saved = read_json(path)
+    return saved if isinstance(saved, dict) and saved.get("config") == run.config.to_json() else None
 
 
 def _trees(run: Run) -> list[str]:
@@ -53,12 +59,9 @@ def _trees(run: Run) -> list[str]:
 def score_heldout(run: Run, evaluator: Evaluator) -> dict:
     """Re-score the run's repertoires on the held-out seeds, write ``heldout.json`` and return it (or return
     the file already there, when it belongs to this run)."""
-    path = heldout_path(run)
-    if path.exists():
-        saved = read_json(path)
-        if isinstance(saved, dict) and saved.get("config") == run.config.to_json():
-            return saved
-    from swarm_sim.evaluation import EvaluationRequest
+    saved = saved_heldout(run)
+    if saved is not None:
+        return saved
 
     seeds = [run.config.heldout_seed(repeat) for repeat in range(HELDOUT_EVALUATIONS)]
     trees = _trees(run)
@@ -83,7 +86,7 @@ def score_heldout(run: Run, evaluator: Evaluator) -> dict:
         "trees": len(trees),
         "objectives": {o: _objective(run, o, means) for o in run.config.objectives},
     }
-    write_json(path, document)
+    write_json(heldout_path(run), document)
     return document
 
 

@@ -50,7 +50,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TypeVar
 
 from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
@@ -63,10 +63,8 @@ from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
 from evolution_manager.processes import Lock, exclusive_lock, is_locked
 from swarm_ros.safe_paths import refuse_links
+from swarm_sim.evaluation import EvaluationRequest, Evaluator
 from swarm_sim.model import fitness_ceiling
-
-if TYPE_CHECKING:  # the simulator (numba) is imported when a run first evaluates, not to read a run
-    from swarm_sim.evaluation import EvaluationRequest, Evaluator
 
 LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
 _Filled = TypeVar("_Filled")
@@ -116,12 +114,6 @@ def create_whole(root: Path, fill: Callable[[Path], _Filled]) -> tuple[_Filled, 
         raise
     lock.moved(root / LOCK_NAME)
     return filled, lock
-
-
-def _request_type() -> type[EvaluationRequest]:
-    from swarm_sim.evaluation import EvaluationRequest
-
-    return EvaluationRequest
 
 
 @dataclass(frozen=True)
@@ -537,13 +529,14 @@ class Run:
         ``before_checkpoint()`` before every checkpoint (to put what else records the run on disk first).
         """
         last_checkpoint = time.monotonic()
-        make_request = _request_type()
         while not self.algorithm.done and (stop_after is None or self.evaluations < stop_after):
             started = time.perf_counter()
             trees = self.algorithm.ask()
             first = self.evaluations
             requests = [
-                make_request(tree=tree, seed=self.config.request_seed(first + i), trials=self.config.trials)
+                EvaluationRequest(
+                    tree=tree, seed=self.config.request_seed(first + i), trials=self.config.trials
+                )
                 for i, tree in enumerate(trees)
             ]
             asked = time.perf_counter()
@@ -600,7 +593,6 @@ class Run:
         """GP: every individual of each generation completed, to the one-per-bin grids."""
         if not isinstance(self.algorithm, GeneticProgramming):
             return
-        from evolution_manager.evolution.deap_trees import tree_to_text
 
         for population in self.algorithm.take_generations():
             for tree in population:
@@ -626,8 +618,6 @@ class Run:
         """The best tree on ``objective`` as the authors report it: GP's elite (chosen with the derated
         selection rule, reported with its stored fitness), else the repertoire's fittest item."""
         if isinstance(self.algorithm, GeneticProgramming) and objective in self.config.objectives:
-            from evolution_manager.evolution.deap_trees import tree_to_text
-
             tree = self.algorithm.best(OBJECTIVES.index(objective))
             if tree is not None and tree.descriptors is not None:
                 return tree_to_text(tree), tree.fitness.values[OBJECTIVES.index(objective)], tree.descriptors

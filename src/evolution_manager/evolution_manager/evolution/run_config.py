@@ -51,7 +51,7 @@ from evolution_manager.evolution.parameters import (
 from swarm_sim.model import OBJECTIVES, Config
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, resolve_task, task_from_record, task_named, task_to_record
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # see make_algorithm
     from evolution_manager.evolution.algorithms import AskTell
     from evolution_manager.evolution.archive import SimplifiedForms
 
@@ -314,6 +314,7 @@ class RunConfig:
         ``library``: the run's primitive library (its names become terminals; the run's copy of
         ``self.library``); ``forms``: the run's simplified forms, shared with MAP-Elites' archive when it
         refuses clones."""
+        # late: DEAP and qdpy (about 0.1 s) load when a run starts, not when a command's options are read
         from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites
         from evolution_manager.evolution.archive import SimplifiedForms
 

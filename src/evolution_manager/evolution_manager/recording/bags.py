@@ -28,7 +28,10 @@ from typing import Any
 
 import numpy as np
 import yaml
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
+from mcap.records import Channel, Chunk, DataEnd, Message, Schema
+from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
 from rosbags.interfaces import (
@@ -340,10 +343,6 @@ def check_crcs(path: Path | str) -> int:
     """Validate the CRCs of every MCAP file of the bag at ``path`` (each chunk's and the data section's, where
     the file has them); return how many CRCs were checked; ``BagError`` naming the file for one that does not
     match (a changed byte) or a file that cannot be read whole."""
-    from mcap.exceptions import McapError
-    from mcap.records import Chunk, DataEnd
-    from mcap.stream_reader import StreamReader
-
     checked = 0
     for file in sorted(Path(path).glob("*.mcap")):
         try:
@@ -361,8 +360,6 @@ def check_crcs(path: Path | str) -> int:
 
 def _chunk_records(chunk: Any) -> None:
     """Raise McapError unless ``chunk``'s records match its CRC."""
-    from mcap.exceptions import McapError
-
     if chunk.compression == "" and binascii.crc32(chunk.data) != chunk.uncompressed_crc:
         found = binascii.crc32(chunk.data)
         raise McapError(f"a chunk's CRC is {chunk.uncompressed_crc:#010x}, its records' {found:#010x}")
@@ -449,10 +446,6 @@ def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:
 def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
     """(topic, type, timestamp, CDR bytes) of every message that reached the disk in the MCAP file(s) of a bag
     whose writer may have been killed, in file order; a truncated tail is skipped."""
-    from mcap.exceptions import McapError
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-
     damaged = Path(damaged)
     files = sorted(damaged.glob("*.mcap")) if damaged.is_dir() else [damaged]
     for file in files:
@@ -475,8 +468,6 @@ def stream_messages(damaged: Path) -> Iterator[tuple[str, str, int, bytes]]:
 
 def promised_messages(path: Path | str) -> int | None:
     """How many messages the ``metadata.yaml`` of the bag at ``path`` counts, or None (no readable count)."""
-    import yaml
-
     try:
         document = yaml.safe_load((Path(path) / "metadata.yaml").read_text())
         count = document["rosbag2_bagfile_information"]["message_count"]

@@ -38,6 +38,7 @@ from bt_controller.model_settings import PROFILES
 from bt_controller.tree import Node, parse
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.recording.bags import BagError, check_crcs, read_bag
+from swarm_ros.names import robot_frames, robot_namespaces
 from swarm_sim.evaluation import named_values
 from swarm_sim.model import (
     DEFAULT,
@@ -189,6 +190,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         kept = recorded_values.get(name)
         if not divergences and kept is not None and kept != value:
             divergences.append(f"{name} was {kept!r}, the re-run gives {value!r}")
+    # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
     from rclpy.serialization import deserialize_message
 
     compared, other = [], []
@@ -230,8 +232,6 @@ def verify_trial_bag(path: Path | str) -> Verification:
 def bare_frames(reading_frames: dict[str, str], prefix: str, robots: int) -> bool:
     """Whether a bag's readings (``reading_frames``: the first ground reading's frame id by topic) name each
     robot by its bare namespace ``footbot_<i>``, as bags recorded before robot frames were namespaced do."""
-    from swarm_ros.names import robot_namespaces
-
     return any(reading_frames.get(f"{prefix}/{ns}/ground") == ns for ns in robot_namespaces(robots))
 
 
@@ -250,7 +250,6 @@ class _Published:
         first_stamp: Any,
         bare: bool = False,
     ) -> None:
-        from swarm_ros.names import robot_frames, robot_namespaces
 
         self.prefix = prefix
         self.namespaces = robot_namespaces(robots)
@@ -268,6 +267,7 @@ class _Published:
         self.messages: dict[str, list[Any]] = {}
 
     def _add(self, topic: str, message: Any) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from rclpy.serialization import deserialize_message, serialize_message
 
         # through CDR and back, as a subscriber sees it: float32 fields rounded as on the wire
@@ -276,9 +276,11 @@ class _Published:
         )
 
     def step(self, world: LockstepChain) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from builtin_interfaces.msg import Time
         from rosgraph_msgs.msg import Clock
 
+        # the nodes' modules load rclpy too
         from swarm_sim.nodes import visualisation
         from swarm_sim.nodes.simulator import (
             frame_messages,
@@ -324,6 +326,7 @@ class _Published:
         self.headers = [ground.header for ground in messages.ground]
 
     def answers(self, world: LockstepChain, outcomes: Sequence[Any]) -> None:
+        # rclpy: the recording wing is ROS-free; only replaying through the nodes loads ROS
         from bt_controller.nodes.footbot_controller import answer_messages
 
         for i, (ns, outcome) in enumerate(zip(self.namespaces, outcomes, strict=True)):

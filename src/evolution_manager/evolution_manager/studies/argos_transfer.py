@@ -39,6 +39,7 @@ from swarm_sim.errors import UsageError as SimUsageError
 from swarm_sim.model import PAPER_OBJECTIVES, Config
 from swarm_sim.validation import reference as validation
 from swarm_sim.validation import transfer
+from swarm_sim.validation.cli import our_estimates
 
 RAW_FILE = "argos_raw.tsv"
 CSV_FILE = "transfer.csv"
@@ -159,8 +160,6 @@ def transferred(
     """The trees whose every seed is in ``root/argos_raw.tsv``, each scored here on as many fresh scenarios
     (our seeds ``1..len(seeds)``, ``trials`` trials each in ``world``'s model) and compared with ARGoS on
     its objective; and how many trees lack rows."""
-    from swarm_sim.validation.cli import our_estimates  # the simulator, loaded only when there is work
-
     try:
         raw = transfer.read_argos_raw(Path(root) / RAW_FILE)
         argos, _ = transfer.argos_estimates(raw, [t.tree for t in trees], seeds)

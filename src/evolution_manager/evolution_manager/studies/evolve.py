@@ -41,12 +41,12 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
-from evolution_manager.files import read_json_object
+from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
 from swarm_sim.tasks import TaskSpec, registered_name
 
-if TYPE_CHECKING:  # imported where used: the simulator loads slowly, and not every command needs it
+if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load late (see _evolve)
     from distributed import Client
     from tqdm import tqdm
 
@@ -121,10 +121,11 @@ def _evaluator(
     """The run's evaluator of the run's world (profile and trial length) and library: the cluster's workers
     through ``client``, else ``workers`` threads here."""
     if client is not None:
+        # Dask (about 0.3 s to import) loads only for a cluster
         from evolution_manager.cluster.evaluator import DaskEvaluator
 
         return DaskEvaluator(client, config.world(), library=library)
-    from swarm_sim.evaluation import BatchEvaluator
+    from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules (see _evolve)
 
     try:
         return BatchEvaluator(config.world(), threads=workers or 1, library=library)
@@ -159,7 +160,10 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
                 "every worker thread"
             )
         config = None if args.resume else config_from_args(args)
+        # late: a run's modules (qdpy, DEAP, the simulator, the result writers: about 0.3 s) load once the
+        # options are accepted, so that --help and a refused option answer at once
         from evolution_manager.evolution.run import Run, RunDirectory
+        from evolution_manager.evolution.run_results import run_results
         from evolution_manager.viewing.results import write_results
 
         directory = RunDirectory(args.out)
@@ -203,7 +207,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
 
     failed = _execute(
         run,
-        lambda: write_results(run, with_figures=not args.no_figures, evaluator=run.evaluator),
+        lambda: write_results(run, run_results(run, run.evaluator), with_figures=not args.no_figures),
         args,
         argv,
         started,
@@ -247,6 +251,7 @@ def _execute(
     """Execute a started run with its progress bar, then ``write`` its results, the session recorded in
     the run directory before and after; None when it finished, else the exit status, its reason said in
     one line with how to continue."""
+    # late, as the run's modules (see _evolve)
     from evolution_manager.studies.experiment import record_session
 
     command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
@@ -286,7 +291,7 @@ def _compositions_asked(args: argparse.Namespace) -> bool:
     if args.swarm_from is not None or args.algorithm == "ga":
         return True
     if args.resume:
-        from evolution_manager.evolution.compositions import is_composition_run
+        from evolution_manager.evolution.compositions import is_composition_run  # late, as in _evolve
 
         return is_composition_run(args.out)
     return False
@@ -365,7 +370,7 @@ def _evolve_compositions(
     args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
 ) -> int:
     """``evolve`` of compositions (``evolution.compositions``): start or continue a run, write its results."""
-    from evolution_manager.evolution import compositions as comp
+    from evolution_manager.evolution import compositions as comp  # late, as the run's modules in _evolve
 
     try:
         _check_composition_options(args, cluster)
@@ -407,7 +412,7 @@ def _evolve_compositions(
                 parameters,
                 library_digest="" if library is None else library.digest,
             )
-        from swarm_sim.evaluation import BatchEvaluator
+        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
 
         try:
             evaluator = BatchEvaluator(config.world(), threads=args.workers or 1, library=library)
@@ -441,8 +446,6 @@ def _evolve_compositions(
 def result_lines(run: object, out: Path) -> str:
     """What a finished run prints: evaluations, simulations saved, and per objective the in-run and
     held-out scores (from its summary.json)."""
-    from evolution_manager.files import read_json
-
     summary = read_json(Path(out) / "summary.json")
     assert isinstance(summary, dict)
     lines = [

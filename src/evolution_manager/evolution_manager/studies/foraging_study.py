@@ -46,20 +46,20 @@ import statistics as stats
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from bt_controller.draws import RUN_STUDY, derive_seed
+from bt_controller.errors import TreeLimitError
 from bt_controller.library import LIBRARY_FORMAT, Library, LibraryError, library_from_json, load_library
+from bt_controller.render import render
+from bt_controller.tree import parse
 from evolution_manager.errors import EvolutionError
+from evolution_manager.evolution import compositions as comp
+from evolution_manager.evolution.compositions import CompositionConfig
 from evolution_manager.evolution.libraries import FAMILIES, build_library, read_run
 from evolution_manager.evolution.run_config import RunConfig
-
-if TYPE_CHECKING:
-    from evolution_manager.evolution.compositions import CompositionConfig
-from bt_controller.errors import TreeLimitError
-from bt_controller.tree import parse
+from evolution_manager.evolution.shown_trees import simplified_tree
 from evolution_manager.files import read_json, write_atomic, write_json, writing
-from evolution_manager.studies import foraging_tables
+from evolution_manager.studies import foraging_tables, foraging_transfer
 from evolution_manager.studies.foraging_tables import Claim, Test
 from evolution_manager.studies.planning import shared_scenario_seed
 from swarm_ros.safe_paths import make_folder
@@ -287,7 +287,6 @@ def plan_study(
         return planned
 
     def compositions() -> list[tuple[CompositionConfig, str]]:
-        from evolution_manager.evolution import compositions as comp
 
         planned = []
         for entry in swarms:
@@ -616,9 +615,6 @@ def _best_trees(runs: Sequence[ArmRun], figure_dir: Path) -> str:
 
 def _draw(run: ArmRun, stem: Path) -> Path:
     """A tree run's best tree, simplified, drawn as an outline into ``stem``.png (.svg if too tall)."""
-    from bt_controller.render import render
-    from evolution_manager.viewing.shown_trees import simplified_tree
-
     library = (
         load_library(run.directory / "library.json") if (run.directory / "library.json").exists() else None
     )
@@ -647,6 +643,7 @@ def _progress_curve(directory: Path) -> tuple[list[float], list[float]]:
 
 def _progress_figure(runs: Sequence[ArmRun], document: dict, path: Path) -> Path:
     """Every arm's best fitness so far, the median and interquartile range over its finished runs."""
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
     from evolution_manager.viewing import figures
 
     curves: dict[str, list[tuple[list[float], list[float]]]] = {}
@@ -687,7 +684,7 @@ def build_report(
     report's path. Works on a study under way: it reports the runs finished so far. ``argos_eval``: the
     ARGoS harness's driver, to score each arm's best forager in the authors' foraging build where its rows
     are missing; with rows there the report has a transfer section (``studies.foraging_transfer``)."""
-    from evolution_manager.studies import foraging_transfer
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
     from evolution_manager.viewing import figures
 
     root = Path(root)

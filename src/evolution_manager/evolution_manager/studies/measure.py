@@ -23,14 +23,13 @@ from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
 from swarm_ros.safe_paths import check_output, describe, replace_file
+from swarm_sim.evaluation import BatchEvaluator
 
 
 def measure_one(
     algorithm: str, objective: str | None, evaluations: int, seed: int, root: Path, workers: int
 ) -> dict:
     """Run one configuration and return its timings."""
-    from swarm_sim.evaluation import BatchEvaluator
-
     run = Run.start(
         RunConfig.make(algorithm, objective, evaluations, seed), root, BatchEvaluator(threads=workers)
     )

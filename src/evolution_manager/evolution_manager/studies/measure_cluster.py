@@ -20,6 +20,7 @@ Timings depend on the load of the machine (printed): compare figures of one invo
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import statistics
 import sys
@@ -31,17 +32,21 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bt_controller.random_trees import random_trees
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
+from evolution_manager.cluster.client import open_client
+from evolution_manager.cluster.settings import ClusterSettings, SlurmSettings
 from evolution_manager.errors import UsageError
+from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.studies.experiment import run_one
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, Evaluator
 from swarm_sim.model import default_config
 
 PROFILE = "paper"
 
-if TYPE_CHECKING:  # Dask and the simulator are imported where the benchmark uses them
+if TYPE_CHECKING:  # Dask loads where the benchmark uses it
     from distributed import Client
-
-    from swarm_sim.evaluation import Evaluator
 
 
 def _noop(x: int) -> int:
@@ -55,9 +60,11 @@ def _load() -> str:
 
 def task_overhead(client: Client, tasks: int, chunk: int) -> dict[str, float]:
     """Milliseconds per empty task (round trip, and pipelined) and per chunk of ``chunk`` evaluations."""
-    from bt_controller.random_trees import random_trees
-    from evolution_manager.cluster.evaluator import evaluate_chunk, worker_evaluator
-    from swarm_sim.evaluation import EvaluationRequest
+    # Dask (about 0.3 s to import) loads only for a cluster
+    from evolution_manager.cluster.evaluator import (
+        evaluate_chunk,
+        worker_evaluator,
+    )
 
     c = client
     for k in range(20):  # warm the connection
@@ -89,8 +96,6 @@ def task_overhead(client: Client, tasks: int, chunk: int) -> dict[str, float]:
 
 def one_run(evaluator: Evaluator, root: Path, evaluations: int) -> float:
     """Wall seconds of a MAP-Elites run on food stopped after ``evaluations`` evaluations."""
-    from evolution_manager.evolution.run import Run
-
     config = RunConfig.make("qd", "food", 25_000, seed=1, profile=PROFILE)
     run = Run.start(config, root, evaluator)
     started = time.perf_counter()
@@ -104,8 +109,11 @@ def one_run(evaluator: Evaluator, root: Path, evaluations: int) -> float:
 def run_comparison(client: Client, evaluations: int, chunk: int, work: Path, pairs: int) -> dict[str, float]:
     """In-process against one-worker Dask for the same run, ``pairs`` times in the order ABBA... (so that a
     load that drifts weighs on both alike); raise if any two runs' evaluation logs differ."""
-    from evolution_manager.cluster.evaluator import WARM_UP_TREE, DaskEvaluator
-    from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+    # Dask (about 0.3 s to import) loads only for a cluster
+    from evolution_manager.cluster.evaluator import (
+        WARM_UP_TREE,
+        DaskEvaluator,
+    )
 
     local = BatchEvaluator(default_config(PROFILE))
     local.evaluate([EvaluationRequest(WARM_UP_TREE, 0, 1)])  # kernels loaded before the clock, as ...
@@ -125,10 +133,8 @@ def run_comparison(client: Client, evaluations: int, chunk: int, work: Path, pai
 
 def slurm_comparison(runs: int, evaluations: int, work: Path) -> dict[str, float]:
     """``runs`` small runs in local processes against SLURM jobs (one core each, as many as cores)."""
-    from evolution_manager.cluster.client import open_client
+    # Dask (about 0.3 s to import) loads only for a cluster
     from evolution_manager.cluster.runs import map_runs
-    from evolution_manager.cluster.settings import ClusterSettings, SlurmSettings
-    from evolution_manager.studies.experiment import run_one
 
     cores = os.cpu_count() or 1
     configs = [
@@ -173,8 +179,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         print(f"measure-cluster: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    import logging
 
+    # Dask (about 0.3 s to import) loads only for a cluster
     from distributed import Client, LocalCluster
 
     logging.getLogger("distributed").setLevel(logging.WARNING)

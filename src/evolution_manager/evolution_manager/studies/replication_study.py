@@ -154,6 +154,7 @@ def mixed_comparison(
     """GP_fnd libraries against QD libraries on ``key``: the mixed model's estimate (gpfnd8 minus qd8),
     its 95 % CI, the p-value, and the TOST p-value of equivalence within ``EQUIVALENCE_MARGIN``; None with
     fewer than two libraries of a kind."""
+    # statsmodels, pandas, scipy.stats: seconds to import, only when the model is fitted
     import statsmodels.formula.api as smf
     from pandas import DataFrame
     from scipy import stats

@@ -22,6 +22,7 @@ from pathlib import Path
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run import Run, refuse_planted_links
+from evolution_manager.evolution.run_results import run_results
 from evolution_manager.files import read_json
 from evolution_manager.studies import (
     ablation_study,
@@ -37,7 +38,8 @@ from evolution_manager.viewing.results import write_results
 def rebuild_run(root: Path) -> list[Path]:
     """Rewrite a run directory's results from its last checkpoint (its logs are left as they are)."""
     refuse_planted_links(root)  # before the first result is rewritten
-    return write_results(Run.resume(root, None, cut=False))
+    run = Run.resume(root, None, cut=False)
+    return write_results(run, run_results(run))
 
 
 def _study(root: Path) -> str | None:

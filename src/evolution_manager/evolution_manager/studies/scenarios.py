@@ -26,6 +26,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
+
 from evolution_manager.errors import EvolutionError
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.report import (
@@ -123,7 +125,7 @@ def _mixed(
     first: dict[str, list[float]], second: dict[str, list[float]]
 ) -> tuple[float, float, float, float]:
     """The mixed model's (estimate, CI low, CI high, p) of second minus first (scenario: random intercept)."""
-    import numpy as np
+    # statsmodels, pandas, scipy.stats: seconds to import, only when the model is fitted
     import statsmodels.formula.api as smf
     from pandas import DataFrame
 

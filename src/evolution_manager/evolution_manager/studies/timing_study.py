@@ -48,6 +48,8 @@ from evolution_manager.arguments import (
 from evolution_manager.errors import GraphError, TrialFailedError, UsageError
 from evolution_manager.studies.intervals import RESAMPLES, interval
 from swarm_ros.safe_paths import UnsafePathError, check_folder, check_output, make_folder, replace_file
+from swarm_sim.model import VALUE_NAMES, SwarmLayout
+from swarm_sim.tasks import resolve_task
 
 FIELDS = ("task", "objective", "seed", "trial", "timing", "rate", "fitness", "wall_s", "nominal_s")
 """The columns of ``trials.csv``."""
@@ -93,8 +95,6 @@ def best_forager_swarm(root: Path) -> StudyTree:
 
 def study_trials(task: str, count: int) -> list[int]:
     """``count`` trials, each the first of its chain, under the task's paper timeline."""
-    from swarm_sim.tasks import resolve_task
-
     chain = resolve_task(task).config("paper").chain_length
     return [k * chain for k in range(count)]
 
@@ -102,8 +102,6 @@ def study_trials(task: str, count: int) -> list[int]:
 def run_timing(tree: StudyTree, timing: str, rate: float, seed: int, trials: Sequence[int]) -> list[dict]:
     """Every trial of ``trials`` of ``seed`` through one graph of ``timing``; one row per trial."""
     from evolution_manager.graph.nodes.trial import TrialGraph  # rclpy: only when trials run
-    from swarm_sim.model import VALUE_NAMES, SwarmLayout
-    from swarm_sim.tasks import resolve_task
 
     task = resolve_task(tree.task)
     config = task.config("paper")

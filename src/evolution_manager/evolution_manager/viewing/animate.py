@@ -12,11 +12,14 @@ each robot's tree is named by a letter beside its action, and the letters' trees
 from __future__ import annotations
 
 import functools
+import importlib.util
 import math
 import shutil
 import subprocess
+import sys
 import tempfile
 import textwrap
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -66,8 +69,6 @@ def text_font(size: int = 12) -> ImageFont.FreeTypeFont:
     small sizes): Debian's file, else the copy inside matplotlib."""
     path = DEJAVU
     if not path.is_file():
-        import importlib.util
-
         spec = importlib.util.find_spec("matplotlib")
         locations = spec.submodule_search_locations if spec else None
         path = Path(next(iter(locations or []), "")) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"
@@ -312,9 +313,6 @@ def _config_for(profile: str | None, task: TaskSpec | None = None) -> Config:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``animate``: one trial to an animated GIF (or MP4), from a tree and a seed or from a trial bag."""
-    import sys
-    import time
-
     parser = Parser(
         prog="animate",
         description="Render one trial to an animated GIF (.mp4 with ffmpeg): one frame per sensing step.",

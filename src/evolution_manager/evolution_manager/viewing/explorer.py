@@ -42,10 +42,11 @@ from bt_controller.validate import strict_json
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
+from evolution_manager.evolution.run_config import evaluation_seed
+from evolution_manager.evolution.shown_trees import simplified as simplified_text
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
-from evolution_manager.viewing.frames import TrialFrames
-from evolution_manager.viewing.shown_trees import simplified as simplified_text
+from evolution_manager.viewing.frames import TrialFrames, frames_from_tree
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.tasks import task_from_record
@@ -104,7 +105,6 @@ def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
         return int(item["seed"])
     if isinstance(evaluation, int) and evaluation in seeds:
         return seeds[evaluation]
-    from evolution_manager.evolution.run_config import evaluation_seed
 
     return evaluation_seed(run_seed, int(evaluation or 0))
 
@@ -216,8 +216,6 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         raise ExplorerError(f"{root} holds no repertoire_<objective>.json: not a run directory")
     animations: dict[str, dict] = {}
     if animate:
-        from evolution_manager.viewing.frames import frames_from_tree
-
         # the run's model: its task's world under its profile
         try:
             task = task_from_record(config.get("task"), f"{root / 'config.json'}: task")
@@ -329,6 +327,7 @@ def library_view(library: Library, root: Path, objectives: Sequence[str]) -> dic
     it resolved it, or against the library file's folder, where such commands are often run).
     ExplorerError when a primitive lacks that, when the primitives disagree on the block
     count, or when none is of an objective this run shows."""
+    # late: the library module loads DEAP and qdpy (about 0.1 s), only for a page with --library
     from evolution_manager.evolution.libraries import BLOCKS, FAMILIES, block_of, variant
 
     here_path = Path(root).resolve()
@@ -478,6 +477,7 @@ def _block_winners(root: Path, bins: int) -> dict[str, dict[int, dict]]:
     """Per primitive objective and block variant, the tree the ``library`` command would take from the run
     in ``root`` (``libraries.best_in_run``: its bin, fitness and derated fitness): what lost to another
     run's; empty for a run the command cannot read (one evolved with a library, say)."""
+    # late, as in library_view
     from evolution_manager.evolution.libraries import (
         LibraryBuildError,
         best_in_run,

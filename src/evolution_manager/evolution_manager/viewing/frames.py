@@ -21,8 +21,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_controller import timeline
+from bt_controller.compiled import N_COUNTS
 from evolution_manager.errors import AnimationError
+from swarm_sim.core import world
 from swarm_sim.model import DEFAULT, N_PROBES, Piece
+from swarm_sim.roads import record_trial
 
 if TYPE_CHECKING:
     from bt_controller.library import Library
@@ -120,9 +123,6 @@ def _fitness_so_far(
 ) -> np.ndarray:
     """Every objective as if the trial ended now: from the smoothed values, the probes at the trial's first
     step and now (``probes``, n x 2 x ``N_PROBES``: ``world.take_probes``) and the deliveries so far."""
-    from bt_controller.compiled import N_COUNTS
-    from swarm_sim.core import world
-
     n = initial.shape[0]
     counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
     values = world.trial_values(initial, current, counts, motion, probes, deliveries, food_scale, p)
@@ -141,8 +141,6 @@ def frames_from_tree(
     step by step (``swarm_sim.roads.recording``: the same frames as the node graph and the reference road
     give, tested frame for frame); its chain's earlier trials run first, the frames are trial ``trial``'s
     steps. ``library``: the primitive library the tree's names come from."""
-    from swarm_sim.roads import record_trial
-
     config = config or DEFAULT
     recorded = record_trial(tree, seed, trial, config, library)
     return TrialFrames(
@@ -173,6 +171,7 @@ def _links_shape(links: np.ndarray) -> np.ndarray:
 def frames_from_bag(path: Path | str) -> TrialFrames:
     """The frames of the trial recorded in the bag at ``path`` (``trial --bag``): trial K's steps only (the
     bag also holds the earlier trials of K's chain, run first), as ``frames_from_tree`` draws them."""
+    # late: reading bags loads rosbags and mcap (about 0.1 s), only for a bag's frames
     from evolution_manager.recording.bags import BagError, check_crcs, read_bag
     from evolution_manager.recording.reproduce import RESULT_TOPIC, recorded_world
 
@@ -228,7 +227,6 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             deliveries[k, robot] = int(getattr(msg, "deliveries", 0))
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
-    from swarm_sim.core import world
 
     p = config.params()
     entry, food_scale = config.arena_arrays(trial)

@@ -25,36 +25,30 @@ Trees are shown to people simplified, with the original kept: every item of a re
 library, a simplified tree names each primitive left whole (``Library.fold``); the drawings show them
 expanded. The repertoires and the summary cover the run's ``grids`` (its task's objectives and the evolved
 ones).
+
+This module only writes: the held-out scores and the simplified trees it shows are computed by the evolution
+wing (``evolution.run_results``) and handed to it; it evaluates and simplifies nothing.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from bt_controller.formats import to_dot, to_xml
 from bt_controller.render import render
-from bt_controller.tree import parse, to_indented, to_text
+from bt_controller.tree import to_indented
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS
 from evolution_manager.evolution.run import Run, RunDirectory
+from evolution_manager.evolution.run_results import RunResults
 from evolution_manager.files import write_atomic, write_json, writing
 from evolution_manager.viewing.explorer import write_explorer
-from evolution_manager.viewing.shown_trees import simplified, simplified_tree
 from swarm_ros.safe_paths import make_folder
 
-if TYPE_CHECKING:  # the simulator (numba) loads only when held-out scores are computed
-    from swarm_sim.evaluation import Evaluator
 
-
-def shown_form(run: Run, tree: str) -> str:
-    """``simplified(tree, run.library)``; without a library that is the run's clone key, which the run
-    has mostly computed already (``run.forms``)."""
-    return run.forms(tree) if run.library is None else simplified(tree, run.library)
-
-
-def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dict:
-    """A repertoire as the JSON document of ``repertoire_<objective>.json``."""
+def repertoire_document(repertoire: Repertoire, objective: str, run: Run, shown: dict[str, str]) -> dict:
+    """A repertoire as the JSON document of ``repertoire_<objective>.json``; ``shown``: each tree's shown
+    form (``RunResults.shown``)."""
     best = repertoire.best()
     return {
         "objective": objective,
@@ -74,7 +68,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
             {
                 "bin": list(item.bin),
                 "tree": item.tree,
-                "simplified": shown_form(run, item.tree),
+                "simplified": shown[item.tree],
                 "fitness": item.fitness,
                 "descriptors": list(item.descriptors),
                 "evaluation": item.evaluation,
@@ -84,8 +78,9 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run) -> dic
     }
 
 
-def summary_document(run: Run, heldout: dict | None = None) -> dict:
-    """The deterministic summary of a run (no timings); ``heldout`` is the document of ``heldout.json``."""
+def summary_document(run: Run, results: RunResults) -> dict:
+    """The deterministic summary of a run (no timings)."""
+    heldout = results.heldout
     metrics = {}
     for objective in run.config.grids:
         grid = run.repertoire(objective)
@@ -96,7 +91,7 @@ def summary_document(run: Run, heldout: dict | None = None) -> dict:
             "best_fitness": best[1] if best else None,
             "heldout_best_fitness": held.get("heldout_best_fitness"),
             "best_tree": best[0] if best else None,
-            "best_tree_simplified": shown_form(run, best[0]) if best else None,
+            "best_tree_simplified": results.shown[best[0]] if best else None,
             "best_descriptors": list(best[2]) if best else None,
             "best_evaluation": run.first_evaluation(best[0]) if best else None,
             "coverage": grid.coverage,
@@ -137,65 +132,46 @@ def timing_document(run: Run) -> dict:
     }
 
 
-def write_results(run: Run, with_figures: bool = True, evaluator: Evaluator | None = None) -> list[Path]:
-    """Write every result file of ``run`` (atomically, file by file); return their paths.
-
-    With an ``evaluator``, a finished run's repertoires are first re-scored on held-out scenarios
-    (``evolution_manager.evolution.heldout``, ``heldout.json``); without one, an existing ``heldout.json``
-    of the run is used."""
-    from evolution_manager.evolution.heldout import heldout_path, score_heldout
-
+def write_results(run: Run, results: RunResults, with_figures: bool = True) -> list[Path]:
+    """Write every result file of ``run`` (atomically, file by file) from what ``results`` computed
+    (``evolution.run_results``); return their paths (``heldout.json`` first when it was scored for them)."""
     directory: RunDirectory = run.directory
-    written: list[Path] = []
-    heldout = None
-    if evaluator is not None and run.done:
-        heldout = score_heldout(run, evaluator)
-        written.append(heldout_path(run))
-    elif heldout_path(run).exists():
-        from evolution_manager.files import read_json
-
-        document = read_json(heldout_path(run))
-        if isinstance(document, dict) and document.get("config") == run.config.to_json():
-            heldout = document
+    written: list[Path] = [directory.heldout] if results.heldout_scored else []
     for objective in run.config.grids:
         path = directory.repertoire(objective)
-        write_json(path, repertoire_document(run.repertoire(objective), objective, run))
+        write_json(path, repertoire_document(run.repertoire(objective), objective, run, results.shown))
         written.append(path)
     archive = run.archive()
     if archive is not None:
-        write_json(directory.archive, repertoire_document(archive, run.config.objectives[0], run))
+        document = repertoire_document(archive, run.config.objectives[0], run, results.shown)
+        write_json(directory.archive, document)
         written.append(directory.archive)
-    write_json(directory.summary, summary_document(run, heldout))
+    write_json(directory.summary, summary_document(run, results))
     write_json(directory.root / "timing.json", timing_document(run))
     written += [directory.summary, directory.root / "timing.json"]
-    written += write_best_trees(run)
+    written += write_best_trees(run, results)
     if with_figures:
-        written += write_figures(run, heldout)
+        written += write_figures(run, results.heldout)
         written.append(write_explorer(directory.root))
     return written
 
 
-def write_best_trees(run: Run) -> list[Path]:
+def write_best_trees(run: Run, results: RunResults) -> list[Path]:
     """The best tree of each evolved objective, simplified, in every format the behaviour-tree engine
     offers (text, indented, XML, DOT, SVG, PNG), and the original text. Any failure raises."""
     written = []
     directory = run.directory.best
     with writing(directory):  # a link planted in the run folder is refused, never followed
         make_folder(directory, run.directory.root)
-    for objective in run.config.objectives:
-        best = run.best(objective)
-        if best is None:
-            continue
-        text, value, _ = best
-        original = parse(text, library=run.library)
-        tree = simplified_tree(original, run.library)
-        header = f"# best {objective} tree of {run.config.label}: fitness {value!r}, "
-        header += f"evaluation {run.first_evaluation(text)}; simplified from {original.size} to {tree.size} "
+    for best in results.best_trees:
+        objective, tree = best.objective, best.shown
+        header = f"# best {objective} tree of {run.config.label}: fitness {best.fitness!r}, "
+        header += f"evaluation {best.evaluation}; simplified from {best.original.size} to {tree.size} "
         header += "nodes "
         header += f"(the same motors on every tick; the tree as evolved is in {objective}.original.txt)\n"
         files = {
-            "txt": (to_text(tree) if run.library is None else run.library.fold(tree)) + "\n",
-            "original.txt": text + "\n",
+            "txt": best.shown_text + "\n",
+            "original.txt": best.text + "\n",
             "indented.txt": header + to_indented(tree),
             "xml": to_xml(tree),
             "dot": to_dot(tree),
@@ -214,9 +190,8 @@ def write_best_trees(run: Run) -> list[Path]:
 def write_figures(run: Run, heldout: dict | None = None) -> list[Path]:
     """Heatmaps of each evolved objective's grid, the histogram of every grid, the progress curves (with
     the held-out scores as markers at the end, when there are any)."""
-    from evolution_manager.viewing import (
-        figures,  # matplotlib (about 1.5 s to import) only when figures are drawn
-    )
+    # matplotlib (about 1.5 s to import) only when figures are drawn
+    from evolution_manager.viewing import figures
 
     folder = run.directory.figures
     with writing(folder):  # a link planted in the run folder is refused, never followed

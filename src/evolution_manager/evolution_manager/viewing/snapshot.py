@@ -40,8 +40,10 @@ def scene(bag: Path, step: int) -> tuple[list, list, int]:
 
 def draw(arena: list, robots: list, title: str, out: Path) -> None:
     """Draw the markers top-down (x right, y up, metres) to ``out``."""
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
     from matplotlib.patches import Circle, FancyArrow, Polygon
 
+    # (figures loads matplotlib too)
     from evolution_manager.viewing.figures import subplots
 
     def colour(m: Any) -> tuple[float, float, float, float]:  # a Marker as rosbags reads it (untyped)
@@ -82,6 +84,7 @@ def draw(arena: list, robots: list, title: str, out: Path) -> None:
 def check_format(out: Path) -> str:
     """The picture format of ``out`` (its suffix; PNG without one); ``ValueError`` naming the formats
     matplotlib writes for another, before the bag is read."""
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
     from matplotlib.backend_bases import FigureCanvasBase
 
     fmt = out.suffix.lstrip(".").lower() or "png"

@@ -37,12 +37,14 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from evolution_manager.arguments import Parser, positive_int, seed_in_range
-from evolution_manager.errors import UsageError
+from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, PROFILES, SCENARIOS
 from evolution_manager.graph.nodes.trial import TrialFailedError, run_recorded_trial
 from evolution_manager.graph.startup import GraphError, executable
 from evolution_manager.processes import die_with_parent, exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError
+from evolution_manager.viewing.animate import write_animation
+from evolution_manager.viewing.frames import frames_from_bag
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.safe_paths import check_folder
 from swarm_sim.model import OBJECTIVES
@@ -255,10 +257,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exit_status(error)
     animation = out / "best" / "food_trial.gif"
     try:
-        from evolution_manager.errors import AnimationError
-        from evolution_manager.viewing.animate import write_animation
-        from evolution_manager.viewing.frames import frames_from_bag
-
         write_animation(frames_from_bag(bag), animation)
     except AnimationError as error:
         print(f"main: the best tree's trial animation failed: {error}", file=sys.stderr)

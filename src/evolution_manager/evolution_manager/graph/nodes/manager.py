@@ -75,6 +75,7 @@ from evolution_manager.evolution.options import (
 )
 from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from evolution_manager.evolution.run_results import run_results
 from evolution_manager.graph.dispatch import DispatchError, Timeouts
 from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.graph.startup import Graph, GraphError
@@ -426,7 +427,7 @@ def _execute(args: argparse.Namespace, node: ManagerNode, run: Run, services: Se
         finally:
             if bar is not None:
                 bar.close()
-    write_results(run, with_figures=not args.no_figures, evaluator=services)
+    write_results(run, run_results(run, services), with_figures=not args.no_figures)
     dispatcher = services.dispatcher
     node.get_logger().info(
         f"{run.config.label}: {run.evaluations} evaluations in {args.out} "

@@ -74,6 +74,7 @@ from swarm_sim.evaluation import result_fields, trial_record_of
 from swarm_sim.evaluation.cli import evaluation_json
 from swarm_sim.model import DEFAULT, Config, LayoutError, SwarmLayout, apply_conditions, load_layout
 from swarm_sim.nodes.settings import TIMINGS
+from swarm_sim.nodes.simulator import check_parameter_file
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_task, world_parameters
 
 MAX_DOMAIN = 232
@@ -475,8 +476,6 @@ def check_params_file(path: Path, namespace: str, config: Config) -> None:
     simulator a value it would refuse at start-up (a mistyped value, one out of range, a world its checks
     refuse, an unknown name): one line, rather than a graph started to fail. The controllers check their
     own values as they start."""
-    from swarm_sim.nodes.simulator import check_parameter_file
-
     simulator = f"{graph_namespace(namespace)}/simulator"
     for section in read_parameter_file(path):
         count = section.parameters.get("n_robots")

@@ -1,8 +1,8 @@
-"""ROS 2 habits of the graph's nodes, each shown with real node processes and real clients: the simulator and
-the evaluator are managed (lifecycle) nodes driven through ``change_state``, report on ``/diagnostics``, and
-reject a goal they cannot run in the goal callback; the simulator's clock is ``/clock`` whatever its
-namespace; the footbot controller can publish ``geometry_msgs/TwistStamped`` (or ``Twist``) on ``cmd_vel``
-(REP 103 units)."""
+"""The graph's managed nodes and their ROS 2 interfaces, each shown with real node processes and real clients:
+the simulator and the evaluator are managed (lifecycle) nodes driven through ``change_state``, report on
+``/diagnostics``, and reject a goal they cannot run in the goal callback; the simulator's clock is ``/clock``
+whatever its namespace; the footbot controller can publish ``geometry_msgs/TwistStamped`` (or ``Twist``) on
+``cmd_vel`` (REP 103 units)."""
 
 import time
 

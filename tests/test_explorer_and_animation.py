@@ -1,6 +1,6 @@
-"""Seeing a repertoire: the trial animation reads the poses the node graph recorded, and the explorer page of
-a small run, loaded in headless Chromium from file:// with a fragment, shows the chosen bin's trees, values
-and animation, and exactly the filled bins of the run's repertoire files."""
+"""The explorer page and the trial animation: the animation reads the poses the node graph recorded, and the
+explorer page of a small run, loaded in headless Chromium from file:// with a fragment, shows the chosen bin's
+trees, values and animation, and exactly the filled bins of the run's repertoire files."""
 
 from __future__ import annotations
 

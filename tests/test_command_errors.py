@@ -1,6 +1,6 @@
-"""Nothing silently wrong: the defects of issue 25 that live in the commands, each probed as a user meets it
-(real processes, a real full disk, real signals, real bags). Every refusal is one line and exit status 2
-(74 for a failed write), and nothing already saved changes."""
+"""Command errors as a user meets them (issue 25's defects that live in the commands), each probed (real
+processes, a real full disk, real signals, real bags). Every refusal is one line and exit status 2 (74 for a
+failed write), and nothing already saved changes."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
-"""Nothing lost, nothing left behind: the ten defects of issue 11, each probed with real processes and real
-kills. Locks per run directory and per bag; children that die with their parent; ``trial --tree`` text; an
-atomic run directory; run bags that survive a manager kill; one-line errors; temporary files cleaned on
-resume; ``ws/setup`` that does not delete a repairable environment; signals that end the main job with
-130 / 143 and a job that can be continued; a killed evaluator noticed at once."""
+"""Crash safety: what a kill, a lock or a half-written file leaves behind (issue 11's defects), each probed
+with real processes and real kills. Locks per run directory and per bag; children that die with their parent;
+``trial --tree`` text; an atomic run directory; run bags that survive a manager kill; one-line errors;
+temporary files cleaned on resume; ``ws/setup`` that does not delete a repairable environment; signals that
+end the main job with 130 / 143 and a job that can be continued; a killed evaluator noticed at once."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The workspace's ROS 2 foundation: two real nodes in separate processes exchange swarm_msgs messages and a
+"""ROS 2 messaging between processes: two real nodes in separate processes exchange swarm_msgs messages and a
 service call over Fast DDS, in a domain of their own."""
 
 import subprocess
