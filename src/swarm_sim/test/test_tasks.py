@@ -20,7 +20,7 @@ from bt_controller.vocabulary import CONDITION_TABLE, CONDITIONS, CONDITIONS_202
 from swarm_sim.core import kernel
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.evaluation.cli import run as evaluate_run
-from swarm_sim.model import DEFAULT, Config
+from swarm_sim.model import DEFAULT, Config, arena_entries
 from swarm_sim.roads import reference_road
 from swarm_sim.tasks import (
     FORAGING,
@@ -31,6 +31,7 @@ from swarm_sim.tasks import (
     TaskError,
     TaskSpec,
     Trials,
+    arena_task,
     resolve_task,
     task_from_record,
     task_from_yaml,
@@ -264,3 +265,32 @@ def test_a_config_built_by_hand_is_no_task_but_a_task_with_the_same_world_gives_
     assert replace(PRIMITIVES, name="copy").config() == Config()
     assert TaskSpec("copy").config("clean") == Config(profile="clean")
     assert np.isclose(EDITED.config().gap(0), 500.0)
+
+
+@pytest.mark.parametrize("layout", [1, 2, 3, 4, 7, 8])
+def test_the_authors_single_food_arenas_are_tasks_whose_files_reproduce_them(layout, tmp_path):
+    task = arena_task(FORAGING, layout)
+    assert task.name == f"foraging-arena{layout}" and task.robots.start_half_size == 1500.0
+    assert task_from_yaml(task_to_yaml(task)) == task
+    config = task.config("paper")
+    for trial in range(10):  # every trial's regions are the layout's entry for its gap and place in the block
+        gap = (500.0, 700.0)[trial // 5]
+        row = arena_entries(layout, gap=gap)
+        assert config.arena_entry(trial) == row[(trial % 5) % len(row)]
+    assert config.layout == () if layout == 1 else config.layout  # arena 1 is the papers' arena
+
+
+def test_an_arena_task_runs_alike_on_both_roads_and_the_command_shows_it(tmp_path):
+    task = replace(arena_task(FORAGING, 8), trials=Trials(ticks=12, chain_trials=5))
+    config = task.config("paper")
+    tree = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(tree, 5, 3)])
+    values, reference = reference_road.evaluate(parse(tree), 5, 3, config)
+    assert result.fitness + result.descriptors == values
+    assert all((a.end_poses == b.end_poses).all() for a, b in zip(records, reference, strict=True))
+    command = [sys.executable, "-m", "swarm_sim.tasks.cli", "arena"]
+    shown = subprocess.run([*command, "3"], capture_output=True, text=True, check=True)
+    assert task_from_yaml(shown.stdout) == arena_task(FORAGING, 3)
+    refused = subprocess.run([*command, "6"], capture_output=True, text=True)
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1
+    assert "arena 6 has the food kinds food, food2, food3" in refused.stderr

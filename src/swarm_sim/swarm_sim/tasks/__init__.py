@@ -9,6 +9,7 @@ The named tasks live in one registry (``register``, ``task_named``, ``task_names
 and default, and how to add a task, a condition and an objective.
 """
 
+from swarm_sim.tasks._arenas import arena_task
 from swarm_sim.tasks._files import (
     read_task_file,
     task_from_mapping,
@@ -31,8 +32,6 @@ from swarm_sim.tasks._registry import (
     task_to_record,
 )
 from swarm_sim.tasks._spec import (
-    REGION_KINDS,
-    REGION_SHAPES,
     TASK_CONFIG_FIELDS,
     Arena,
     Communication,
@@ -51,8 +50,6 @@ __all__ = [
     "DEFAULT_TASK",
     "FORAGING",
     "PRIMITIVES",
-    "REGION_KINDS",
-    "REGION_SHAPES",
     "TASK_CONFIG_FIELDS",
     "Arena",
     "Communication",
@@ -64,6 +61,7 @@ __all__ = [
     "TaskSpec",
     "Trials",
     "add_task_option",
+    "arena_task",
     "read_task_file",
     "register",
     "registered_name",

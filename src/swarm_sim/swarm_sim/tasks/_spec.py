@@ -19,11 +19,6 @@ from swarm_sim.errors import ConfigError
 from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
 from swarm_sim.model.regions import Layout, check_layout
 
-REGION_SHAPES: tuple[str, ...] = PIECE_SHAPES
-"""``disc``: the points closer than ``radius`` to ``centre``; ``beyond``: the points at least ``radius`` from
-``centre`` (the 2023 food region: everything past a circle around the nest); ``above``: the points with
-y >= ``radius``; ``below``: the points with y <= -``radius`` (half-planes: their centre is unused, [0, 0])."""
-
 
 class TaskError(ConfigError):
     """A task that cannot be run; the message is one line naming the key, the value and what was expected."""
@@ -52,9 +47,11 @@ class Region:
     """
 
     kind: str
-    """A kind of ``REGION_KINDS``."""
+    """A kind of ``swarm_sim.model.REGION_KINDS``."""
     shape: str
-    """A shape of ``REGION_SHAPES``."""
+    """A shape of ``swarm_sim.model.PIECE_SHAPES``: ``disc``, the points closer than ``radius`` to ``centre``;
+    ``beyond``, the points at least ``radius`` from ``centre`` (the 2023 food region); ``above``, the points
+    with y >= ``radius``; ``below``, the points with y <= -``radius`` (half-planes: centre [0, 0])."""
     radius: tuple[float, ...]
     """The circle's radius (a half-plane's distance from the x axis) in each arena entry (mm)."""
     centre: tuple[tuple[float, float], ...] = ((0.0, 0.0),)
@@ -267,8 +264,8 @@ def check(task: TaskSpec) -> None:
         key = f"regions[{k}]"
         if region.kind not in REGION_KINDS:
             raise TaskError(f"{key}.kind must be one of {', '.join(REGION_KINDS)}, got {region.kind!r}")
-        if region.shape not in REGION_SHAPES:
-            raise TaskError(f"{key}.shape must be one of {', '.join(REGION_SHAPES)}, got {region.shape!r}")
+        if region.shape not in PIECE_SHAPES:
+            raise TaskError(f"{key}.shape must be one of {', '.join(PIECE_SHAPES)}, got {region.shape!r}")
         if not region.radius:
             raise TaskError(f"{key}.radius must be one positive number per arena entry, got none")
         if not region.centre:

@@ -1,5 +1,6 @@
-"""``ws/run swarm_sim task list | show NAME|FILE | check FILE...``: the registered tasks, a task as the YAML
-file that reproduces it, and a check of task files (one line per file; exit status 2 for a bad one)."""
+"""``ws/run swarm_sim task list | show NAME|FILE | check FILE... | arena LAYOUT``: the registered tasks, a
+task as the YAML file that reproduces it, a check of task files (one line per file; exit status 2 for a bad
+one), and a task on the regions of one of the authors' 2026 arena layouts (``arena_task``)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from swarm_sim.tasks._arenas import arena_task
 from swarm_sim.tasks._files import read_task_file, task_to_yaml
 from swarm_sim.tasks._registry import resolve_task, task_named, task_names
 from swarm_sim.tasks._spec import TaskError
@@ -19,12 +21,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="task", description="Tasks as data (docs/tasks.md): list, show and check them."
     )
-    verbs = parser.add_subparsers(dest="verb", required=True, metavar="list|show|check")
+    verbs = parser.add_subparsers(dest="verb", required=True, metavar="list|show|check|arena")
     verbs.add_parser("list", help="the registered tasks, one line each")
     show = verbs.add_parser("show", help="a task as YAML that reproduces it (save it and edit it)")
     show.add_argument("task", metavar="NAME|FILE")
     check = verbs.add_parser("check", help="check task files: one line each, exit status 2 for a bad one")
     check.add_argument("files", nargs="+", metavar="FILE")
+    arena = verbs.add_parser(
+        "arena", help="a task on the regions of the authors' 2026 arena LAYOUT (1-4, 7, 8), as YAML"
+    )
+    arena.add_argument("layout", type=int, metavar="LAYOUT")
+    arena.add_argument("--task", default="foraging", metavar="NAME|FILE", help="the task (default: foraging)")
+    arena.add_argument("--points", type=int, help="points per generated arena (layouts 7, 8)")
+    arena.add_argument("--nest-radius", type=float, default=500.0, help="mm (default 500)")
+    arena.add_argument("--food-radius", type=float, default=500.0, help="mm (default 500)")
     args = parser.parse_args(argv)
     try:
         if args.verb == "list":
@@ -37,6 +47,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
         if args.verb == "show":
             sys.stdout.write(task_to_yaml(resolve_task(args.task)))
+            return 0
+        if args.verb == "arena":
+            task = arena_task(
+                resolve_task(args.task),
+                args.layout,
+                nest_radius=args.nest_radius,
+                food_radius=args.food_radius,
+                points=args.points,
+            )
+            sys.stdout.write(task_to_yaml(task))
             return 0
         bad = 0
         for path in args.files:
