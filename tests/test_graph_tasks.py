@@ -31,8 +31,10 @@ DISCS = replace(
         Region("food", "disc", (450.0, 350.0, 450.0, 350.0), ((0.0, -700.0), (700.0, -300.0)) * 2),
         Region("food", "below", (1500.0,)),
     ),
+    robots=Robots(count=5, start_half_size=800.0, formation="localised"),
 )
-"""Regions of the task's own (a layout): the food disc moves between the two trials of a chain."""
+"""Regions of the task's own (a layout): the food disc moves between the two trials of a chain, and the
+robots start around it (even ones) and around the nest (odd ones)."""
 TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
 
 

@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import DEFAULT, Config
+from swarm_sim.model import DEFAULT, Config, Piece, config_from_dict
 
 
 def test_defaults_follow_the_model():
@@ -34,9 +34,10 @@ def test_defaults_follow_the_model():
 def test_params_carry_every_value_with_its_type():
     p = DEFAULT.params()
     for name in p._fields:
-        if name != "profile":
+        if name not in ("profile", "formation"):
             assert getattr(p, name) == getattr(DEFAULT, name)
     assert p.profile == 0 and Config(profile="clean").params().profile == 1
+    assert p.formation == 0 and Config(formation="lattice", n_robots=4).params().formation == 1
     assert isinstance(p.n_robots, int) and isinstance(p.arena_half, float)
     assert isinstance(Config(arena_half=3000).params().arena_half, float)
 
@@ -75,4 +76,9 @@ def test_bad_values_are_refused_by_name(change, name):
 def test_as_dict_names_every_field():
     d = DEFAULT.as_dict()
     assert d["gaps"] == [500.0, 700.0]
-    assert set(d) == {f.name for f in dataclasses.fields(Config)}
+    # every field; a layout only when there is one (the papers' arena is nest_radius and gaps)
+    assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout"}
+    nest = Piece("nest", "disc", 0.0, 0.0, 400.0)
+    laid_out = Config(layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),))
+    assert set(laid_out.as_dict()) == {f.name for f in dataclasses.fields(Config)}
+    assert config_from_dict(laid_out.as_dict()) == laid_out

@@ -68,7 +68,7 @@ def test_the_model_swarm_under_random_actions(trial):
     # The nine robots as a trial places them, random actions changed every tick, for a whole trial and more.
     chain = setup_chain(trial, trial % 2, DEFAULT)
     x, y, h = np.zeros(P.n_robots), np.zeros(P.n_robots), np.zeros(P.n_robots)
-    world.place_robots(x, y, h, chain.position_keys, chain.heading_keys, 0, P)
+    world.place_robots(x, y, h, chain.position_keys, chain.heading_keys, 0, P, DEFAULT.arena_arrays(0)[0])
     rng = np.random.default_rng(100 + trial)
     plan = rng.integers(0, 7, size=(300, P.n_robots)).astype(np.int64)
     _run_both(x, y, h, chain.gains, lambda s: plan[s // 4], 1200)

@@ -239,7 +239,7 @@ def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
     s = setup_chain(2, 0)
     p = DEFAULT.params()
     x, y, h = np.zeros(9), np.zeros(9), np.zeros(9)
-    world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p)
+    world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p, DEFAULT.arena_arrays(0)[0])
     z = np.full(9, 5000.0)
     for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 2, DEFAULT.arena_arrays(0)[0], p):
         assert (np.diff(reading.senders) > 0).all()

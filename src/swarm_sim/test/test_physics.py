@@ -149,7 +149,7 @@ def test_overlaps_stay_within_two_millimetres_over_thousands_of_random_steps(for
     for trial in range(4):
         chain = setup_chain(trial, trial % 2, DEFAULT)
         x, y, h = np.zeros(P.n_robots), np.zeros(P.n_robots), np.zeros(P.n_robots)
-        world.place_robots(x, y, h, chain.position_keys, chain.heading_keys, 0, P)
+        world.place_robots(x, y, h, chain.position_keys, chain.heading_keys, 0, P, DEFAULT.arena_arrays(0)[0])
         drive = world.drive(chain.gains, P)
         state = world.new_dynamics(P.n_robots)
         # Mostly forward: robots pile into walls and each other.

@@ -107,3 +107,80 @@ def test_the_markers_draw_every_piece_of_the_trial_and_follow_its_entry():
     assert inner == pytest.approx(1.8)
     above = next(m for m in arena_markers(config, 6, stamp).markers if m.ns == "food")
     assert min(p.y for p in above.points) == pytest.approx(1.2)
+
+
+# -- start formations (world.place_robots, Config.formation) ---------------------------------------------
+
+
+def _placed(config: Config, trial: int = 0, seed: int = 4) -> np.ndarray:
+    from swarm_sim.core import setup_chain
+
+    chain = setup_chain(seed, 0, config)
+    n = config.n_robots
+    x, y, h = np.zeros(n), np.zeros(n), np.zeros(n)
+    entry, _ = config.arena_arrays(trial)
+    world.place_robots(x, y, h, chain.position_keys, chain.heading_keys, trial, config.params(), entry)
+    return np.stack([x, y, h], axis=1)
+
+
+HALF_PLANES = (((Piece("nest", "above", 0.0, 0.0, 300.0), Piece("food", "below", 0.0, 0.0, 300.0)),),)
+"""The authors' arena 4: nest and food are half-planes, with no disc to start around."""
+
+
+def test_the_random_formation_is_the_papers_start_square():
+    poses = _placed(DEFAULT)
+    assert (np.abs(poses[:, :2]) <= DEFAULT.start_half).all() and len(set(poses[:, 0])) == 9
+
+
+def test_a_lattice_puts_robots_1_m_apart_with_drawn_headings():
+    poses = _placed(Config(formation="lattice"))
+    assert sorted(set(poses[:, 0])) == sorted(set(poses[:, 1])) == [-1000.0, 0.0, 1000.0]
+    assert (poses[1, :2] == (-1000.0, 0.0)).all()  # robot i * 3 + j at (i - 1, j - 1) m
+    assert len(set(poses[:, 2])) == 9
+    four = _placed(Config(formation="lattice", n_robots=4))
+    assert sorted(set(four[:, 0])) == [-500.0, 500.0]  # half a metre off for an even side
+
+
+def test_nest_and_localised_starts_gather_around_their_discs():
+    nest = _placed(Config(layout=LAYOUT, formation="nest"))
+    assert (np.abs(nest[:, 0]) <= 500.0).all() and (np.abs(nest[:, 1] - 600.0) <= 500.0).all()
+    localised = _placed(Config(layout=LAYOUT[:1], formation="localised"))
+    even, odd = localised[0::2], localised[1::2]
+    assert (np.abs(even[:, 1] + 700.0) <= 500.0).all()  # around the food disc at (0, -700)
+    assert (np.abs(odd[:, 1] - 600.0) <= 500.0).all()  # around the nest at (0, 600)
+
+
+def test_two_robots_face_each_other():
+    poses = _placed(Config(formation="two_robots", n_robots=2, chain_trials=1))
+    assert poses.tolist() == [[300.0, 250.0, -math.pi / 2], [-300.0, -250.0, math.pi / 2]]
+
+
+@pytest.mark.parametrize(
+    ("settings", "expected"),
+    [
+        ({"formation": "circle"}, "formation must be one of random, lattice"),
+        ({"formation": "lattice", "n_robots": 8}, "a square number of robots, got n_robots = 8"),
+        ({"formation": "lattice", "n_robots": 36}, "beyond arena_half"),
+        ({"formation": "two_robots"}, "needs n_robots = 2 and chain_trials = 1"),
+        ({"formation": "localised"}, "arena entry 0 has no food disc"),  # the papers' arena (their arena 1)
+        ({"formation": "nest", "layout": HALF_PLANES}, "arena entry 0 has no nest disc"),  # their arena 4
+    ],
+)
+def test_a_formation_the_arena_cannot_hold_is_refused_in_one_line(settings, expected):
+    with pytest.raises(ConfigError, match=expected) as caught:
+        Config(**settings)
+    assert "\n" not in str(caught.value)
+
+
+def test_a_formation_runs_alike_on_both_roads():
+    from bt_controller.tree import parse
+    from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
+    from swarm_sim.roads import reference_road
+
+    config = Config(layout=LAYOUT[:1], formation="localised", ticks=10)
+    tree = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(tree, 2, 2)])
+    values, reference = reference_road.evaluate(parse(tree), 2, 2, config)
+    assert result.fitness + result.descriptors == values
+    assert all((a.start_poses == b.start_poses).all() for a, b in zip(records, reference, strict=True))
+    assert (np.abs(records[0].start_poses[0::2, 1] + 700.0) <= 500.0).all()

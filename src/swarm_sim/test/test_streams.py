@@ -44,7 +44,9 @@ def _placed(seed: int, chain: int, position: int, x=None, y=None, heading=None):
     x = np.zeros(n) if x is None else x
     y = np.zeros(n) if y is None else y
     heading = np.zeros(n) if heading is None else heading
-    world.place_robots(x, y, heading, s.position_keys, s.heading_keys, position, DEFAULT.params())
+    world.place_robots(
+        x, y, heading, s.position_keys, s.heading_keys, position, DEFAULT.params(), DEFAULT.arena_arrays(0)[0]
+    )
     return x, y, heading, s
 
 
@@ -76,10 +78,14 @@ def test_a_robot_with_no_room_keeps_its_pose_or_stays_where_it_was_created():
     x, y, h = np.arange(9.0) * 200.0 + 100.0, np.zeros(9), np.full(9, 0.5)
     x[0] = 0.0
     before_x, before_h = x.copy(), h.copy()
-    world.place_robots(x, y, h, s.position_keys, s.heading_keys, 1, tight)  # a teleport
+    world.place_robots(
+        x, y, h, s.position_keys, s.heading_keys, 1, tight, DEFAULT.arena_arrays(0)[0]
+    )  # a teleport
     assert abs(x[0]) <= 1.0 and h[0] != 0.5
     assert x[1:].tolist() == before_x[1:].tolist() and h[1:].tolist() == before_h[1:].tolist()
-    world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, tight)  # a chain's start
+    world.place_robots(
+        x, y, h, s.position_keys, s.heading_keys, 0, tight, DEFAULT.arena_arrays(0)[0]
+    )  # a chain's start
     assert x[1:].tolist() == [0.0] * 8 and h[1:].tolist() == [0.0] * 8
 
 

@@ -515,7 +515,7 @@ def _steps(
         position = timeline.trial_in_chain(p, k)
         entry = layout[position % layout.shape[0]]
         if timeline.step_in_trial(p, k) == 1:
-            world.place_robots(x, y, heading, position_keys, heading_keys, position, p)
+            world.place_robots(x, y, heading, position_keys, heading_keys, position, p, entry)
             for i in range(n):
                 poses_out[position, 0, i, 0] = x[i]
                 poses_out[position, 0, i, 1] = y[i]

@@ -36,6 +36,13 @@ from swarm_sim.model import (
     OBJECTIVES as OBJECTIVES,
 )  # re-exported: the values' order, for world.X readers
 from swarm_sim.model import VALUE_NAMES as VALUE_NAMES
+from swarm_sim.model.config import (
+    FORMATION_LATTICE,
+    FORMATION_LOCALISED,
+    FORMATION_MARGIN,
+    FORMATION_RANDOM,
+    FORMATION_TWO_ROBOTS,
+)
 
 drop_stale_cache(
     __file__,
@@ -83,6 +90,32 @@ def _free(x: np.ndarray, y: np.ndarray, i: int, cx: float, cy: float, everyone: 
     return True
 
 
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _first_disc(entry: np.ndarray, kind: float) -> tuple:
+    """(x, y, radius) of the first disc of region ``kind`` in ``entry`` (the formations' target points: the
+    authors' nest point and food point 1); the arena's centre and 500 mm when there is none (their default
+    target, ``bt_loop_functions.cpp:1247-1250``; ``Config`` refuses a formation whose target is missing)."""
+    for m in range(entry.shape[0]):
+        if entry[m, 0] == kind and entry[m, 1] == 0.0:
+            return entry[m, 2], entry[m, 3], entry[m, 4]
+    return 0.0, 0.0, 500.0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def start_area(i: int, entry: np.ndarray, p: Params) -> tuple:
+    """(x low, x high, y low, y high) of robot ``i``'s start positions (mm): the start square under the
+    ``random`` formation; under ``nest`` a square around the nest's point, and under ``localised`` around
+    food point 1 for even robots and the nest's point for odd ones, of half side max(r / sqrt 2, 500 mm),
+    clipped to ``FORMATION_MARGIN`` inside the walls (``bt_loop_functions.cpp:1202-1292``)."""
+    if p.formation == FORMATION_RANDOM:
+        return -p.start_half, p.start_half, -p.start_half, p.start_half
+    kind = 1.0 if p.formation == FORMATION_LOCALISED and i % 2 == 0 else 0.0
+    cx, cy, r = _first_disc(entry, kind)
+    half = max(math.sqrt(r * r / 2.0), 500.0)
+    limit = p.arena_half - FORMATION_MARGIN
+    return max(cx - half, -limit), min(cx + half, limit), max(cy - half, -limit), min(cy + half, limit)
+
+
 @numba.njit(cache=True, error_model="numpy")
 def place_robots(
     x: np.ndarray,
@@ -92,17 +125,22 @@ def place_robots(
     heading_keys: np.ndarray,
     position: int,
     p: Params,
+    entry: np.ndarray,
 ) -> None:
-    """Place every robot for the ``position``-th trial of a chain, in place (``bt_loop_functions.cpp:176-213``
-    at a chain's start, ``:254-287`` at a teleport).
+    """Place every robot for the ``position``-th trial of a chain, in place, in the start formation
+    ``p.formation`` on the regions of ``entry`` (``bt_loop_functions.cpp:176-213`` at a chain's start,
+    ``:254-287`` at a teleport, at 6c65001; the formations ``:1093-1314`` at 1cd2358).
 
-    Robots are placed one after another in id order: a heading uniform in [-pi, pi) (draw ``position`` of
-    the robot's heading stream), then up to ``max_start_attempts`` positions uniform in the start square
-    (attempt ``a``: draws ``2 (position * max_start_attempts + a)`` and the next of its position stream),
-    the first that overlaps no robot where it stands now being taken. At a chain's start (``position`` 0)
-    only robots already placed stand in the arena, and a robot that finds no place stays where it was
-    created: the origin, heading 0. At a teleport every robot stands somewhere, and one that finds no place
-    keeps its pose.
+    ``random``, ``nest`` and ``localised``: robots are placed one after another in id order: a heading
+    uniform in [-pi, pi) (draw ``position`` of the robot's heading stream), then up to ``max_start_attempts``
+    positions uniform in its start area (``start_area``; attempt ``a``: draws ``2 (position *
+    max_start_attempts + a)`` and the next of its position stream), the first that overlaps no robot where it
+    stands now being taken. At a chain's start (``position`` 0) only robots already placed stand in the
+    arena, and a robot that finds no place stays where it was created: the origin, heading 0. At a teleport
+    every robot stands somewhere, and one that finds no place keeps its pose. ``lattice``: robot ``k`` at
+    (k div s - floor(s / 2), k mod s - floor(s / 2)) m for s x s robots (plus 0.5 m each for an even s) with
+    a drawn heading; ``two_robots``: robot 0 at (300, 250) mm heading -pi/2, robot 1 at (-300, -250) mm
+    heading pi/2.
     """
     n = x.shape[0]
     if position == 0:
@@ -110,13 +148,26 @@ def place_robots(
             x[i] = 0.0
             y[i] = 0.0
             heading[i] = 0.0
-    side = 2.0 * p.start_half
+    if p.formation == FORMATION_TWO_ROBOTS:
+        for i in range(n):
+            x[i] = 300.0 if i == 0 else -300.0
+            y[i] = 250.0 if i == 0 else -250.0
+            heading[i] = -0.5 * math.pi if i == 0 else 0.5 * math.pi
+        return
+    side = int(math.sqrt(n) + 0.5)  # the lattice's side (Config checks n is a square)
     for i in range(n):
         h = TWO_PI * uniform(heading_keys[i], position) - math.pi
+        if p.formation == FORMATION_LATTICE:
+            offset = (side // 2) - (0.5 if side % 2 == 0 else 0.0)
+            x[i] = 1000.0 * ((i // side) - offset)
+            y[i] = 1000.0 * ((i % side) - offset)
+            heading[i] = h
+            continue
+        x_low, x_high, y_low, y_high = start_area(i, entry, p)
         base = 2 * position * p.max_start_attempts
         for attempt in range(p.max_start_attempts):
-            cx = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt)
-            cy = -p.start_half + side * uniform(position_keys[i], base + 2 * attempt + 1)
+            cx = x_low + (x_high - x_low) * uniform(position_keys[i], base + 2 * attempt)
+            cy = y_low + (y_high - y_low) * uniform(position_keys[i], base + 2 * attempt + 1)
             if _free(x, y, i, cx, cy, position > 0, p):
                 x[i] = cx
                 y[i] = cy

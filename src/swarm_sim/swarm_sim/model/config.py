@@ -31,6 +31,14 @@ from swarm_sim.model.regions import (
 
 _PERCEPTION = PerceptionParams()
 _TIMELINE = Timeline()
+
+FORMATIONS: tuple[str, ...] = ("random", "lattice", "nest", "localised", "two_robots")
+"""The start formations (the authors' 2026 ``formation`` setting), in the order compiled code numbers them
+(``Params.formation``): see ``world.place_robots``."""
+FORMATION_RANDOM, FORMATION_LATTICE, FORMATION_NEST, FORMATION_LOCALISED, FORMATION_TWO_ROBOTS = range(5)
+FORMATION_MARGIN = 150.0
+"""The ``nest`` and ``localised`` start areas stay this far inside the walls (mm): their +-2.3 m in a
+2.45 m arena."""
 DEFAULT_NEST_RADIUS = 500.0
 DEFAULT_GAPS = (500.0, 700.0)
 
@@ -70,6 +78,7 @@ class Params(NamedTuple):
     dead_robots: int
     weak_robots: int
     weak_gain: float
+    formation: int
 
 
 _INT_MINIMUM = {
@@ -171,6 +180,11 @@ class Config:
     """Damage: the left wheel of the last weak_robots robots runs at weak_gain times its drawn gain."""
     weak_gain: float = 1.0
     """Factor on the weak robots' left wheel gain, in [0, 1]."""
+    formation: str = "random"
+    """Where robots start each trial (``world.place_robots``): ``random`` (uniform in the start square, the
+    papers'), ``lattice`` (a grid 1 m apart; a square number of robots), ``nest`` (around the nest's disc),
+    ``localised`` (even robots around the first food disc, odd ones around the nest's) or ``two_robots``
+    (two robots facing each other; chains of one trial)."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -244,6 +258,8 @@ class Config:
         def field(name: str) -> int | float | bool:
             if name == "profile":
                 return self.profile_number
+            if name == "formation":
+                return FORMATIONS.index(self.formation)
             if name == "occlusion":
                 return bool(self.occlusion)
             return (int if name in _INT_MINIMUM else float)(getattr(self, name))
@@ -344,6 +360,7 @@ def _validate(c: Config) -> None:
             f"{c.ticks * c.steps_per_tick} steps (the smoothed values are refreshed then), "
             f"got {c.initial_step}"
         )
+    _validate_formation(c)
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:
@@ -352,6 +369,36 @@ def _validate(c: Config) -> None:
             f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; "
             "at most 50%)"
         )
+
+
+def _validate_formation(c: Config) -> None:
+    if c.formation not in FORMATIONS:
+        raise ConfigError(f"formation must be one of {', '.join(FORMATIONS)}, got {c.formation!r}")
+    if c.formation == "lattice":
+        side = math.isqrt(c.n_robots)
+        if side * side != c.n_robots:
+            raise ConfigError(
+                f"formation lattice needs a square number of robots, got n_robots = {c.n_robots}"
+            )
+        reach = 1000.0 * (side - 1 - (side // 2 - (0.5 if side % 2 == 0 else 0.0))) + c.robot_radius
+        if reach > c.arena_half:
+            raise ConfigError(
+                f"formation lattice puts {c.n_robots} robots 1 m apart out to {reach:g} mm from the centre, "
+                f"beyond arena_half = {c.arena_half:g}"
+            )
+    if c.formation == "two_robots" and (c.n_robots != 2 or c.chain_trials != 1):
+        raise ConfigError(
+            "formation two_robots needs n_robots = 2 and chain_trials = 1 (the authors' code is undefined "
+            f"beyond a chain's first trial), got n_robots = {c.n_robots}, chain_trials = {c.chain_trials}"
+        )
+    needs = {"nest": ("nest",), "localised": ("nest", "food")}.get(c.formation, ())
+    for k, entry in enumerate(entry for row in c.arena_layout for entry in row):
+        for kind in needs:
+            if not any(piece.kind == kind and piece.shape == "disc" for piece in entry):
+                raise ConfigError(
+                    f"formation {c.formation} starts robots around a {kind} disc, but arena entry {k} has "
+                    f"no {kind} disc (the authors refuse it too: localised in arenas 1 and 4, nest in 4)"
+                )
 
 
 DEFAULT = Config()

@@ -31,7 +31,7 @@ def heading_of(qz: float, qw: float) -> float:
 
 class VirtualSensors:
     """The readings of a swarm of ``config.n_robots`` robots in the arena of trial ``trial`` of ``seed`` (its
-    food region's gap, and the chain whose message losses are drawn). Give each robot's pose
+    regions, ``Config.arena_entry``, and the chain whose message losses are drawn). Give each robot's pose
     (``set_pose``) and what it broadcasts (``set_broadcast``; the estimate cap until it says otherwise, as
     the world starts), then ``sense`` a step."""
 
@@ -40,7 +40,7 @@ class VirtualSensors:
         self.p = config.params()
         chain, _ = chain_of_trial(config.timeline, trial)
         setup = setup_chain(seed, chain, config)
-        self.gap = setup.gap
+        self.entry, _ = config.arena_arrays(trial)
         self.drop_keys = setup.drop_keys
         n = self.p.n_robots
         self.poses = np.full((n, 3), np.nan)
@@ -71,7 +71,7 @@ class VirtualSensors:
         if missing:
             raise ValueError(f"no pose yet of robot {', '.join(map(str, missing))}")
         x, y, heading = (np.ascontiguousarray(self.poses[:, k]) for k in range(3))
-        return sense_swarm(x, y, heading, self.nest, self.food, self.drop_keys, step, self.gap, self.p)
+        return sense_swarm(x, y, heading, self.nest, self.food, self.drop_keys, step, self.entry, self.p)
 
 
 class Delivery:

@@ -24,8 +24,9 @@ def declare_world(
 ) -> Config:
     """Declare the world's parameters on ``node`` (read-only, defaults from ``config``) and return the world
     they give; ``ConfigError`` or ``ParameterError`` in one line for a bad one."""
-    declared = declare_dataclass(node, config, read_only=True, ranges=ranges, skip=("layout",))
     text: str = declare(
         node, "layout", layout_to_text(config.layout), descriptor(LAYOUT_DESCRIPTION, read_only=True)
     )
-    return replace(declared, layout=layout_from_text(text))
+    # The layout first: the other parameters are checked against it (a formation needs its discs).
+    laid_out = replace(config, layout=layout_from_text(text))
+    return declare_dataclass(node, laid_out, read_only=True, ranges=ranges, skip=("layout",))

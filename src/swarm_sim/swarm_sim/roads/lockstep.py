@@ -177,6 +177,7 @@ class LockstepChain:
                 self.setup.heading_keys,
                 timeline.trial_in_chain(self.line, k),
                 self.p,
+                entry,
             )
             self.start_poses = self.poses()
         world.physics_step(

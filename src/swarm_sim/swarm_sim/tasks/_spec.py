@@ -82,6 +82,9 @@ class Robots:
     """Start positions are uniform in the square [-start_half_size, start_half_size]^2 (mm)."""
     start_attempts: int = DEFAULT.max_start_attempts
     """Tries per robot to find a free start position."""
+    formation: str = DEFAULT.formation
+    """Where robots start each trial: ``random`` (uniform in the start square), ``lattice``, ``nest``,
+    ``localised`` or ``two_robots`` (``swarm_sim.model.config.FORMATIONS``; ``docs/tasks.md``)."""
 
 
 @dataclass(frozen=True)
@@ -230,6 +233,7 @@ class TaskSpec:
             robot_radius=self.robots.radius,
             start_half=self.robots.start_half_size,
             max_start_attempts=self.robots.start_attempts,
+            formation=self.robots.formation,
             ticks=self.trials.ticks,
             chain_trials=self.trials.chain_trials,
             message_range=self.communication.range,
@@ -351,6 +355,7 @@ _TASK_KEY: dict[str, str] = {
     "robot_radius": "robots.radius",
     "start_half": "robots.start_half_size",
     "max_start_attempts": "robots.start_attempts",
+    "formation": "robots.formation",
     "ticks": "trials.ticks",
     "chain_trials": "trials.chain_trials",
     "message_range": "communication.range",
