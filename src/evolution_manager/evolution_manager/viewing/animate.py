@@ -87,7 +87,7 @@ def to_pixels(frames: TrialFrames, x: float, y: float) -> tuple[float, float]:
     return (x + frames.arena_half) * scale, (frames.arena_half - y) * scale
 
 
-def _draw_regions(draw: ImageDraw.ImageDraw, frames: TrialFrames, font: ImageFont.ImageFont) -> None:
+def _draw_regions(draw: ImageDraw.ImageDraw, frames: TrialFrames, font: ImageFont.FreeTypeFont) -> None:
     """A layout's regions (``TrialFrames.regions``): food pieces, then nest pieces over them, each
     labelled."""
     scale = ARENA_PX / (2 * frames.arena_half)

@@ -16,7 +16,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -100,7 +100,7 @@ class TrialFrames:
         }
 
 
-def arena_fields(config: Config, trial: int) -> dict[str, object]:
+def arena_fields(config: Config, trial: int) -> dict[str, Any]:
     """The arena of ``trial`` as ``TrialFrames`` draws it: the gap between nest and food, the arena's and the
     nest's size and the robots' radius (mm), and the trial's regions when they are a layout of the task's
     own."""

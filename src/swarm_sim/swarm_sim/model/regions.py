@@ -181,6 +181,10 @@ def layout_as_json(layout: Layout) -> list[list[list[dict[str, object]]]]:
     return [[[piece._asdict() for piece in entry] for entry in row] for row in layout]
 
 
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def layout_to_text(layout: Layout) -> str:
     """``layout`` as one line of JSON (a ROS parameter's text); "" for the papers' arena (no layout)."""
     return json.dumps(layout_as_json(layout), separators=(",", ":")) if layout else ""
@@ -218,14 +222,13 @@ def layout_from_json(data: object, key: str = "layout") -> Layout:
                         f"{key}[{c}][{k}][{m}] must be an object with keys {', '.join(Piece._fields)}, "
                         f"got {piece!r}"
                     )
-                pieces.append(
-                    Piece(
-                        **{
-                            n: float(v) if isinstance(v, int) and not isinstance(v, bool) else v
-                            for n, v in piece.items()
-                        }
+                kind, shape, x, y, radius = (piece[name] for name in Piece._fields)
+                numbers = [float(v) for v in (x, y, radius) if _is_number(v)]
+                if not (isinstance(kind, str) and isinstance(shape, str) and len(numbers) == 3):
+                    raise ConfigError(
+                        f"{key}[{c}][{k}][{m}] must have a text kind and shape and numbers, got {piece!r}"
                     )
-                )
+                pieces.append(Piece(kind, shape, *numbers))
             entries.append(tuple(pieces))
         rows.append(tuple(entries))
     return tuple(rows)

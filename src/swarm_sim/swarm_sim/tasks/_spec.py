@@ -172,20 +172,14 @@ class TaskSpec:
     @property
     def layout(self) -> Layout:
         """The regions of every arena entry as the world model's layout (``swarm_sim.model.regions``)."""
-        per = self.arena.trial_entries
+        per, count = self.arena.trial_entries, self.arena_entries
+
+        def piece(region: Region, entry: int) -> Piece:
+            x, y = _cycle(region.centre, count)[entry]
+            return Piece(region.kind, region.shape, x, y, _cycle(region.radius, count)[entry])
+
         return tuple(
-            tuple(
-                tuple(
-                    Piece(
-                        r.kind,
-                        r.shape,
-                        *_cycle(r.centre, self.arena_entries)[c * per + k],
-                        _cycle(r.radius, self.arena_entries)[c * per + k],
-                    )
-                    for r in self.regions
-                )
-                for k in range(per)
-            )
+            tuple(tuple(piece(r, c * per + k) for r in self.regions) for k in range(per))
             for c in range(self.arena_configurations)
         )
 
