@@ -34,7 +34,7 @@ from evolution_manager.arguments import Parser, int_in, non_negative_int, positi
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from swarm_ros.safe_paths import check_output, describe, replace_file
-from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, Piece, load_layout
+from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, label_point, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
 if TYPE_CHECKING:
@@ -113,17 +113,8 @@ def _draw_regions(draw: ImageDraw.ImageDraw, frames: TrialFrames, font: ImageFon
                     else (3, edge, ARENA_PX - 4, ARENA_PX - 4)
                 )
                 draw.rectangle(box, fill=colour)
-            lx, ly = to_pixels(frames, *_label_at(piece))
+            lx, ly = to_pixels(frames, *label_point(piece))
             draw.text((lx - 12, ly - 5), kind, font=font, fill=ink)
-
-
-def _label_at(piece: Piece) -> tuple[float, float]:
-    """Where a piece's label goes (mm): a disc's centre, below a circle's rim, inside a half-plane."""
-    if piece.shape == "disc":
-        return piece.x, piece.y
-    if piece.shape == "beyond":
-        return piece.x, piece.y - piece.radius - 150.0
-    return 0.0, piece.radius + 150.0 if piece.shape == "above" else -piece.radius - 150.0
 
 
 def render_frame(frames: TrialFrames, k: int) -> Image.Image:

@@ -29,6 +29,7 @@ from swarm_sim.model.regions import (
     REGION_KINDS,
     Piece,
     concentric,
+    label_point,
     layout_from_text,
     layout_to_text,
 )
@@ -70,6 +71,7 @@ __all__ = [
     "config_from_dict",
     "default_config",
     "fitness_ceiling",
+    "label_point",
     "layout_from_json",
     "layout_from_text",
     "layout_of_label",

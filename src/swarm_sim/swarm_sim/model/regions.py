@@ -58,6 +58,16 @@ class Piece(NamedTuple):
         return max(0.0, self.radius - py) if self.shape == "above" else max(0.0, py + self.radius)
 
 
+def label_point(piece: Piece) -> tuple[float, float]:
+    """Where a drawing labels ``piece`` (mm): a disc's centre, below a circle's rim, or inside a half-plane
+    near its edge."""
+    if piece.shape == "disc":
+        return piece.x, piece.y
+    if piece.shape == "beyond":
+        return piece.x, piece.y - piece.radius - 150.0
+    return 0.0, piece.radius + 150.0 if piece.shape == "above" else -piece.radius - 150.0
+
+
 ArenaEntry = tuple[Piece, ...]
 """The regions of one trial."""
 

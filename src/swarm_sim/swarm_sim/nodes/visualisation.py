@@ -24,7 +24,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from swarm_sim.model import Config, Piece
+from swarm_sim.model import Config, Piece, label_point
 
 FRAME = "arena"
 """The fixed frame of every pose and marker: the arena, centre at the origin, metres."""
@@ -167,15 +167,6 @@ def _piece_marker(stamp: Time, piece: Piece, marker_id: int, half: float) -> Mar
     return marker
 
 
-def _label_point(piece: Piece) -> tuple[float, float]:
-    """Where a piece's label goes (mm): a disc's centre, below a circle's rim, or inside a half-plane."""
-    if piece.shape == "disc":
-        return piece.x, piece.y
-    if piece.shape == "beyond":
-        return piece.x, piece.y - piece.radius - 150.0
-    return 0.0, piece.radius + 150.0 if piece.shape == "above" else -piece.radius - 150.0
-
-
 def arena_markers(config: Config, trial: int, stamp: Time) -> MarkerArray:
     """The walls and the regions of trial ``trial`` (``Config.arena_entry``): each piece of a region kind
     under that kind's namespace (``nest``, ``food``), labelled (food with its gap in the papers' arena)."""
@@ -193,7 +184,7 @@ def arena_markers(config: Config, trial: int, stamp: Time) -> MarkerArray:
     for m, piece in enumerate(config.arena_entry(trial)):
         markers.append(_piece_marker(stamp, piece, m, half_mm))
         label = _marker(stamp, f"{piece.kind}_label", m, Marker.TEXT_VIEW_FACING, LABEL)
-        x, y = _label_point(piece)
+        x, y = label_point(piece)
         label.pose.position.x, label.pose.position.y, label.pose.position.z = x * MM, y * MM, 0.05
         label.scale.z = 0.15
         label.text = piece.kind if math.isnan(gap) or piece.kind == "nest" else f"food (gap {gap:.0f} mm)"
