@@ -207,3 +207,28 @@ def test_explorer_shows_trees_that_simplify_alike_once_with_their_count(small_ru
         key = next(iter(clones))
         dom = rendered(small_run / "explorer.html", f"objective=food&bin={key}")
         assert dom.find("div", class_="tree copies")
+
+
+def test_a_run_on_a_task_s_own_regions_shows_them_in_its_explorer(tmp_path):
+    """A run of a task whose regions are not the papers' arena (the authors' arena 8, shortened): its
+    explorer is written (valid JSON: no NaN gap), decodes the poses in the task's arena and draws every piece
+    of the trial's regions."""
+    shown = subprocess.run(
+        [str(executable("swarm_sim", "task")), "arena", "8"], capture_output=True, text=True, check=True
+    )
+    task_file = tmp_path / "arena8.yaml"
+    task_file.write_text(shown.stdout.replace("ticks: 200", "ticks: 20"))
+    out = tmp_path / "run"
+    done = subprocess.run(
+        [str(executable("evolution_manager", "evolve")), "--algorithm", "qd", "--objective", "foraging",
+         "--task", str(task_file), "--evaluations", "20", "--trials", "2", "--seed", "2", "--out", str(out),
+         "--no-progress"],
+        capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    best = max(
+        json.loads((out / "repertoire_foraging.json").read_text())["items"], key=lambda i: i["fitness"]
+    )
+    dom = rendered(out / "explorer.html", f"objective=foraging&bin={','.join(map(str, best['bin']))}")
+    (canvas,) = dom.find("canvas", id="animation")
+    assert canvas["data-regions"] == "; ".join(["nest disc", "food disc"] * 3)

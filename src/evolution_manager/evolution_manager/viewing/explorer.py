@@ -48,7 +48,7 @@ from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames, frames_from_tree
 from swarm_ros.safe_paths import refuse_links
-from swarm_sim.model import DEFAULT, OBJECTIVES
+from swarm_sim.model import DEFAULT, OBJECTIVES, Config
 from swarm_sim.tasks import task_from_record
 
 STRIDE = 2
@@ -151,7 +151,8 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     return {
         "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
         "trial": frames.trial,
-        "gap": frames.gap,
+        "gap": None if math.isnan(frames.gap) else frames.gap,
+        **({"regions": [piece._asdict() for piece in frames.regions]} if frames.regions else {}),
         "steps": [int(frames.steps[k]) for k in keep],
         "data": base64.b64encode(out).decode("ascii"),
     }
@@ -215,13 +216,15 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
     if not objectives:
         raise ExplorerError(f"{root} holds no repertoire_<objective>.json: not a run directory")
     animations: dict[str, dict] = {}
-    if animate:
-        # the run's model: its task's world under its profile
-        try:
-            task = task_from_record(config.get("task"), f"{root / 'config.json'}: task")
-            model = task.config(config.get("profile") or DEFAULT.profile)
-        except ValueError as error:  # a task or profile the model cannot run
+    # the run's model: its task's world under its profile (the arena the page draws)
+    try:
+        task = task_from_record(config.get("task"), f"{root / 'config.json'}: task")
+        model = task.config(config.get("profile") or DEFAULT.profile)
+    except ValueError as error:  # a task or profile the model cannot run: no trial to show
+        if animate:
             raise ExplorerError(str(error)) from None
+        model = DEFAULT
+    if animate:
         seeds = _evaluation_seeds(root)
         wanted = []
         for grid in objectives.values():
@@ -252,7 +255,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         "evolved": evolved,
         "objectives": objectives,
         "animations": animations,
-        "arena": _arena(),
+        "arena": _arena(model),
         "actions": _actions(),
     }
 
@@ -514,14 +517,14 @@ def _is_index(value: object) -> bool:
     )
 
 
-def _arena() -> dict:
-
+def _arena(model: Config) -> dict:
+    """The run's arena as the page draws it (mm); a trial's own regions travel with its animation."""
     return {
-        "half": DEFAULT.arena_half,
-        "nest_radius": DEFAULT.nest_radius,
-        "robot_radius": DEFAULT.robot_radius,
-        "range": 1000.0,
-        "robots": DEFAULT.n_robots,
+        "half": model.arena_half,
+        "nest_radius": model.nest_radius,
+        "robot_radius": model.robot_radius,
+        "range": model.message_range,
+        "robots": model.n_robots,
     }
 
 

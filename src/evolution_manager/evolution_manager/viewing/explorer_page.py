@@ -249,15 +249,36 @@ function unpack(anim) {
   return frames;
 }
 const COLOURS = ["#1f77b4","#d62728","#2ca02c","#9467bd","#8c564b","#e377c2","#7f7f7f","#bcbd22","#17becf"];
+// A task's own regions (swarm_sim.model.regions): food pieces, then nest pieces over them; the canvas says
+// what it drew in data-regions.
+function drawRegions(ctx, regions, S, scale, px) {
+  ctx.fillStyle = "#fafafa"; ctx.fillRect(0, 0, S, S);
+  for (const kind of ["food", "nest"]) for (const p of regions) {
+    if (p.kind !== kind) continue;
+    ctx.fillStyle = kind === "nest" ? "#f6d6a0" : "#c4e6b4";
+    const [cx, cy] = px(p.x, p.y);
+    if (p.shape === "disc") { ctx.beginPath(); ctx.arc(cx, cy, p.radius * scale, 0, 2 * Math.PI); ctx.fill(); }
+    else if (p.shape === "beyond") {
+      ctx.beginPath(); ctx.rect(0, 0, S, S); ctx.arc(cx, cy, p.radius * scale, 0, 2 * Math.PI); ctx.fill("evenodd");
+    } else {
+      const edge = px(0, p.shape === "above" ? p.radius : -p.radius)[1];
+      if (p.shape === "above") ctx.fillRect(0, 0, S, edge); else ctx.fillRect(0, edge, S, S - edge);
+    }
+  }
+  ctx.canvas.dataset.regions = regions.map(p => `${p.kind} ${p.shape}`).join("; ");
+}
 function drawFrame(canvas, anim, frames, k) {
   const ctx = canvas.getContext("2d"), S = canvas.width, A = DATA.arena, scale = S / (2 * A.half);
   const px = (x, y) => [(x + A.half) * scale, (A.half - y) * scale];
-  ctx.fillStyle = "#c4e6b4"; ctx.fillRect(0, 0, S, S);
-  ctx.beginPath(); ctx.arc(S / 2, S / 2, (A.nest_radius + anim.gap) * scale, 0, 2 * Math.PI);
-  ctx.fillStyle = "#fafafa"; ctx.fill();
-  ctx.beginPath(); ctx.arc(S / 2, S / 2, A.nest_radius * scale, 0, 2 * Math.PI);
-  ctx.fillStyle = "#f6d6a0"; ctx.fill();
-  ctx.fillStyle = "#785014"; ctx.font = "11px sans-serif"; ctx.fillText("nest", S / 2 - 11, S / 2 + 4);
+  if (anim.regions) drawRegions(ctx, anim.regions, S, scale, px);
+  else {
+    ctx.fillStyle = "#c4e6b4"; ctx.fillRect(0, 0, S, S);
+    ctx.beginPath(); ctx.arc(S / 2, S / 2, (A.nest_radius + anim.gap) * scale, 0, 2 * Math.PI);
+    ctx.fillStyle = "#fafafa"; ctx.fill();
+    ctx.beginPath(); ctx.arc(S / 2, S / 2, A.nest_radius * scale, 0, 2 * Math.PI);
+    ctx.fillStyle = "#f6d6a0"; ctx.fill();
+    ctx.fillStyle = "#785014"; ctx.font = "11px sans-serif"; ctx.fillText("nest", S / 2 - 11, S / 2 + 4);
+  }
   const f = frames[k];
   ctx.lineWidth = 2;
   f.robots.forEach((r, i) => {
@@ -323,7 +344,7 @@ function drawDetail() {
     return;
   }
   const frames = unpack(anim);
-  player.appendChild(el("h3", {}, `trial ${anim.trial} of seed ${anim.seed} (gap ${anim.gap} mm), best tree of the bin`));
+  player.appendChild(el("h3", {}, `trial ${anim.trial} of seed ${anim.seed} (${anim.gap === null ? "the task's regions" : `gap ${anim.gap} mm`}), best tree of the bin`));
   const canvas = el("canvas", { id: "animation", width: 460, height: 460, "data-frames": frames.length,
     "data-tree": best.simplified });
   player.appendChild(canvas);
