@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -294,3 +295,17 @@ def test_an_arena_task_runs_alike_on_both_roads_and_the_command_shows_it(tmp_pat
     refused = subprocess.run([*command, "6"], capture_output=True, text=True)
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1
     assert "arena 6 has the food kinds food, food2, food3" in refused.stderr
+
+
+def test_docs_tasks_md_gives_every_key_of_a_task():
+    """The schema table of ``docs/tasks.md`` names every key a task file holds."""
+    docs = (Path(__file__).resolve().parents[3] / "docs" / "tasks.md").read_text()
+    mapping = task_to_mapping(FORAGING)
+    keys = [
+        f"{section}.{key}" for section, value in mapping.items() if isinstance(value, dict) for key in value
+    ]
+    keys += [f"regions[k].{key}" for key in mapping["regions"][0]]
+    keys += [key for key, value in mapping.items() if not isinstance(value, dict) and key != "regions"]
+    # a key in backticks, or (in a row that gives several of a section) its last part
+    missing = [key for key in keys if f"`{key}`" not in docs and f"`{key.rsplit('.', 1)[-1]}`" not in docs]
+    assert not missing, f"docs/tasks.md does not give {', '.join(missing)}"
