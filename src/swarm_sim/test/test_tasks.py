@@ -207,8 +207,9 @@ def test_an_edited_task_changes_the_world_and_both_roads_agree():
         assert result != other
 
 
-def test_regions_of_a_task_s_own_travel_as_a_layout_and_both_roads_agree_on_them():
-    config = DISCS.config("paper")
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_regions_of_a_task_s_own_travel_as_a_layout_and_both_roads_agree_on_them(profile):
+    config = DISCS.config(profile)
     assert config.layout and config.gaps == DEFAULT.gaps and np.isnan(config.gap(0))
     entries = [config.arena_entry(k) for k in range(4)]  # trial k of a block takes entry k % 2
     assert [e[1].x for e in entries] == [0.0, 700.0, 0.0, 700.0]

@@ -444,6 +444,7 @@ def simulate_chain(
         world.drive(swarm.gains, p),
         np.zeros(N_CONDITIONS, dtype=np.bool_),
         trials,
+        (chain * timeline.chain_length(p)) % p.chain_trials,
         layout,
         food_scale,
         p,
@@ -485,6 +486,7 @@ def _steps(
     robot_drive: np.ndarray,
     board: np.ndarray,
     trials: int,
+    block_start: int,
     layout: np.ndarray,
     food_scale: np.ndarray,
     p: Params,
@@ -493,7 +495,9 @@ def _steps(
     recorded: int,
     rec: Recording,
 ) -> None:
-    """The control steps of ``simulate_chain``'s chain, from the state it made."""
+    """The control steps of ``simulate_chain``'s chain, from the state it made. ``block_start``: the place of
+    the chain's first trial in its block of ``chain_trials``, so that trial k of a block takes entry k of
+    ``layout`` (``Config.arena_arrays``) under either profile."""
     n = p.n_robots
     position_keys = keys[POSITION]
     heading_keys = keys[HEADING]
@@ -513,7 +517,8 @@ def _steps(
 
     for k in range(1, trials * timeline.trial_steps(p) + 1):
         position = timeline.trial_in_chain(p, k)
-        entry = layout[position % layout.shape[0]]
+        row = ((block_start + position) % p.chain_trials) % layout.shape[0]
+        entry = layout[row]
         if timeline.step_in_trial(p, k) == 1:
             world.place_robots(x, y, heading, position_keys, heading_keys, position, p, entry)
             for i in range(n):
@@ -608,7 +613,7 @@ def _steps(
                 rec,
                 k,
                 entry,
-                food_scale[position % layout.shape[0]],
+                food_scale[row],
                 p,
                 x,
                 y,
@@ -624,7 +629,7 @@ def _steps(
             )
         if timeline.is_final(p, k):
             world.take_all_probes(x, y, entry, probes, 1)
-            _score_trial(swarm, cargo, food_scale[position % layout.shape[0]], p, values_out, position)
+            _score_trial(swarm, cargo, food_scale[row], p, values_out, position)
             for i in range(n):
                 poses_out[position, 1, i, 0] = x[i]
                 poses_out[position, 1, i, 1] = y[i]
