@@ -5,12 +5,21 @@ import signal
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import yaml
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from evolution_manager.recording.bags import BagError, BagRecorder, read_bag, recover_bag, swarm_typestore
+from evolution_manager.recording.bags import (
+    BagError,
+    BagRecorder,
+    read_bag,
+    recover_bag,
+    swarm_msgs_definitions,
+    swarm_typestore,
+)
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +46,10 @@ def wheel_command(typestore, step):
         smoothed_density=0.5,
         carrying=step % 2 == 1,
         deliveries=step // 100,
+        other_food_estimates=np.array([250.0 * (step % 3)]),  # a world of two food kinds
+        smoothed_other_food=np.array([125.0]),
+        carrying_other_food=np.array([step % 3 == 0]),
+        other_food_deliveries=np.array([step // 200], dtype=np.uint32),
     )
 
 
@@ -51,6 +64,7 @@ def test_recorded_messages_read_back_in_order_with_rosbags_and_mcap(tmp_path, ty
     assert [m.message.step for m in messages] == list(range(2000))
     assert all(m.topic == f"/footbot_{m.message.step % 9}/wheels" for m in messages)
     assert messages[1234].message.nest_estimate == 617.0
+    assert messages[1234].message.other_food_estimates.tolist() == [250.0 * (1234 % 3)]
 
     (mcap_file,) = bag.glob("*.mcap")
     with mcap_file.open("rb") as stream:
@@ -132,3 +146,26 @@ with BagRecorder(sys.argv[1]) as recorder:
     assert count > 10_000  # every chunk flushed before the kill (the writer buffers about 1 MiB)
     xs = [m.message.x for m in read_bag(tmp_path / "recovered")]
     assert xs == [float(i) for i in range(count)]
+
+
+def test_a_bag_written_before_the_food_kinds_reads_back_as_it_was_written(tmp_path):
+    """A message type that has since gained fields is read with the bag's own definition of it."""
+    older = get_typestore(Stores.ROS2_KILTED)
+    types = {}
+    for name, text in swarm_msgs_definitions().items():
+        if name.endswith("/WheelCommand"):
+            text = text[: text.index("# In a world of several food kinds")]  # the fields of before
+        types.update(get_types_from_msg(text, name))
+    older.register(types)
+    stamp = older.types["builtin_interfaces/msg/Time"](sec=1, nanosec=0)
+    header = older.types["std_msgs/msg/Header"](stamp=stamp, frame_id="arena")
+    old = older.types["swarm_msgs/msg/WheelCommand"](
+        header=header, robot=2, step=8, action=1, action_name="forward", left=0.05, right=0.05,
+        nest_estimate=1200.0, food_estimate=300.0, smoothed_nest=1250.0, smoothed_food=310.0,
+        smoothed_density=0.2, carrying=True, deliveries=3,
+    )  # fmt: skip
+    with BagRecorder(tmp_path / "bag", older) as recorder:
+        recorder.write("/footbot_2/wheels", old, 1_000_000_000)
+    (read,) = read_bag(tmp_path / "bag")  # with today's definitions as the default
+    assert (read.message.food_estimate, read.message.carrying, read.message.deliveries) == (300.0, True, 3)
+    assert not hasattr(read.message, "other_food_estimates")

@@ -50,8 +50,8 @@ def test_poses_replayed_from_a_trial_bag_give_its_readings_and_its_commands(tmp_
             assert ground.step == k + 1
             assert (got.in_nest, got.on_food) == (ground.in_nest, ground.on_food), (i, k + 1)
             assert got.senders.tolist() == [r.sender for r in recorded], (i, k + 1)  # the same losses
-            assert got.nest.tolist() == [r.nest_estimate for r in recorded]
-            assert got.food.tolist() == [r.food_estimate for r in recorded]
+            assert got.values[:, 0].tolist() == [r.nest_estimate for r in recorded]
+            assert got.values[:, 1].tolist() == [r.food_estimate for r in recorded]
             if len(recorded):
                 worst_range = max(
                     worst_range, float(np.max(np.abs(got.ranges - [r.range for r in recorded])))

@@ -207,6 +207,7 @@ def start_lockstep(bench):
             estimate_cap=5000.0,
             density_range=10000.0,
             density_divisor=6642.0,
+            food_kinds=1,
             wheel_speed=SPEED,
             wheel_separation=0.14,
         )

@@ -12,7 +12,7 @@ from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import N_OBJECTIVES, OBJECTIVES
-from swarm_sim.tasks import AGGREGATION, FORAGING, Arena, Region, Robots, Trials
+from swarm_sim.tasks import AGGREGATION, FORAGING, Arena, Region, Robots, Trials, task_named
 
 SMALL = replace(
     FORAGING,
@@ -35,18 +35,33 @@ DISCS = replace(
 )
 """Regions of the task's own (a layout): the food disc moves between the two trials of a chain, and the
 robots start around it (even ones) and around the nest (odd ones)."""
+KINDS = replace(
+    task_named("multifood-arena9-kind2"),
+    trials=Trials(ticks=14, chain_trials=2),
+    robots=Robots(count=5, start_half_size=800.0),
+)
+"""Three kinds of food (the authors' arena 9, kind 2 preferred): the numbered conditions, carrying and
+deliveries per kind and the biased objective travel through the graph's messages and its bag."""
 TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
+KINDS_TREE = (
+    "sel(seq(sel(got_food1, got_food2, got_food3), sel(seq(nest_left, forward_left), seq(nest_right, "
+    "forward_right), forward)), sel(seq(food_left2, forward_left), seq(food_right3, forward_right), forward))"
+)
 
 
-@pytest.mark.parametrize("task", [SMALL, DISCS], ids=lambda task: task.name)
-def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(task, tmp_path):
+@pytest.mark.parametrize(
+    ("task", "tree"), [(SMALL, TREE), (DISCS, TREE), (KINDS, KINDS_TREE)], ids=["small", "discs", "kinds"]
+)
+def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(
+    task, tree, tmp_path
+):
     config = task.config("paper")
     evaluator = BatchEvaluator(config)
     seed, trial, bag = 11, 3, tmp_path / "bag"  # trial 3: the second chain's second (food at 900 mm; disc 2)
     with TrialGraph(timeout=120.0, task=task) as graph:
         assert graph.robots == 5
-        record = graph.run(TREE, seed, trial, bag)
-    _, records = evaluator.evaluate_trials([EvaluationRequest(TREE, seed, trial + 1)])[0]
+        record = graph.run(tree, seed, trial, bag)
+    _, records = evaluator.evaluate_trials([EvaluationRequest(tree, seed, trial + 1)])[0]
     assert record.values == records[trial].values
     assert np.array_equal(record.end_poses, records[trial].end_poses)
     replay = verify_trial_bag(bag)

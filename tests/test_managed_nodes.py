@@ -253,6 +253,7 @@ def test_the_controller_publishes_each_step_on_cmd_vel_as_twist_stamped_or_twist
         estimate_cap=c.estimate_cap,
         density_range=c.density_range,
         density_divisor=c.density_divisor,
+        food_kinds=c.food_kinds,
         wheel_speed=c.wheel_speed / 1000,
         wheel_separation=c.wheel_separation / 1000,
     )

@@ -98,7 +98,7 @@ def test_a_fleet_tracked_in_poses_is_sensed_as_the_model_senses_it_and_driven(tm
         assert [r.sender for r in message.readings] == want.senders.tolist()
         assert [r.range for r in message.readings] == want.ranges.tolist()
         assert [r.bearing for r in message.readings] == want.bearings.tolist()
-        assert [r.nest_estimate for r in message.readings] == want.nest.tolist()
+        assert [r.nest_estimate for r in message.readings] == want.values[:, 0].tolist()
     assert {m.header.frame_id for m in ground + readings} == {"fleet/footbot_3/base_link"}
     driving = next(c for c in commands if c.twist.linear.x > 0)
     assert driving.header.frame_id == "fleet/footbot_3/base_link"

@@ -44,16 +44,18 @@ class StepOutcome:
     action: int
     """The motors driving the wheels from the next step on (``STOP`` before the first tick)."""
     wheels: tuple[int, int]
-    broadcast: tuple[float, float]
-    """The (nest, food) values broadcast at this step, heard by the others at the next (mm)."""
-    smoothed: tuple[float, float, float]
-    """The smoothed (nest, food, density) as last refreshed."""
+    broadcast: tuple[float, ...]
+    """The values broadcast at this step per region (nest, food, food2, food3), heard by the others at the
+    next (mm)."""
+    smoothed: tuple[float, ...]
+    """The smoothed values as last refreshed (nest, food, density, food2, food3)."""
     tick: TickOutcome | None
     """The tick run at this step, if any."""
-    carrying: bool = False
-    """Whether the robot carries food after this step (its got_food)."""
-    deliveries: int = 0
-    """Its deliveries in the trial so far (at a trial's last step: the trial's, before they are cleared)."""
+    carrying: tuple[bool, ...] = (False,)
+    """Whether the robot carries food of each kind after this step (got_food1-3)."""
+    deliveries: tuple[int, ...] = (0,)
+    """Its deliveries of each kind in the trial so far (at a trial's last step: the trial's, before they are
+    cleared)."""
 
 
 class FootbotController:
@@ -111,7 +113,7 @@ class FootbotController:
             if timeline.refreshes(line, step):
                 self.view.refresh()
         else:
-            self.view.first_step(readings.on_food)
+            self.view.first_step(readings.ground)
         tick = None
         if timeline.ticks_at(line, step):
             conditions_before = self.robot.counts[0]
@@ -121,7 +123,7 @@ class FootbotController:
             self.resumed = running_action(status, started)
             tick = TickOutcome(number, status, started, self.robot.counts[0] - conditions_before, self.action)
         if timeline.region_broadcast(step):
-            broadcast = self.view.region_broadcast(readings.in_nest, readings.on_food)
+            broadcast = self.view.region_broadcast(readings.ground)
         else:
             broadcast = self.view.broadcast()
         self.next_step = step + 1
@@ -129,11 +131,11 @@ class FootbotController:
             step=step,
             action=self.action,
             wheels=ACTION_WHEELS[self.action],
-            broadcast=broadcast,
-            smoothed=self.view.smoothed(),
+            broadcast=tuple(float(v) for v in broadcast),
+            smoothed=tuple(float(v) for v in self.view.smoothed()),
             tick=tick,
-            carrying=self.view.carrying,
-            deliveries=self.view.deliveries,
+            carrying=tuple(bool(c) for c in self.view.carrying),
+            deliveries=tuple(int(d) for d in self.view.deliveries),
         )
         if timeline.is_final(line, step):
             self.view.end_trial()

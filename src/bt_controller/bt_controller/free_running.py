@@ -31,6 +31,7 @@ its timer.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -71,9 +72,9 @@ class FreeTick:
     action: int
     """The motors from now on (``STOP`` after a timeout)."""
     wheels: tuple[int, int]
-    broadcast: tuple[float, float]
-    """The (nest, food) values the robot broadcasts (mm)."""
-    smoothed: tuple[float, float, float]
+    broadcast: tuple[float, ...]
+    """The values the robot broadcasts per region (nest, food, food2, food3) (mm)."""
+    smoothed: tuple[float, ...]
     step: int
     """The newest sensing step used (0: none yet)."""
     timed_out: bool
@@ -83,7 +84,7 @@ class FreeTick:
     """Seconds since the newest step was used (since the start when none was)."""
 
 
-_Ground = tuple[bool, bool]
+_Ground = tuple[bool, ...]
 
 
 class FreeRunningController:
@@ -111,11 +112,14 @@ class FreeRunningController:
         self._ground: dict[int, _Ground] = {}
         self._rab: dict[int, Readings] = {}
 
-    def offer_ground(self, step: int, in_nest: bool, on_food: bool, now: float) -> None:
-        """The ground reading of sensing step ``step``, received at ``now``."""
+    def offer_ground(self, step: int, ground: Sequence[bool], now: float) -> None:
+        """The ground reading of sensing step ``step`` (per region: nest, food, food2, food3), received at
+        ``now``."""
         if self._stale(step) or self._duplicate(step, self._ground):
             return
-        self._ground[step] = (bool(in_nest), bool(on_food))
+        if len(ground) != self.view.regions:
+            raise ValueError(f"a ground reading of {len(ground)} regions, expected {self.view.regions}")
+        self._ground[step] = tuple(bool(g) for g in ground)
         self._use_complete(now)
 
     def offer_range_and_bearing(self, step: int, readings: Readings, now: float) -> None:
@@ -145,9 +149,8 @@ class FreeRunningController:
         if not complete:
             return
         step = complete[-1]
-        in_nest, on_food = self._ground[step]
         rab = self._rab[step]
-        self.view.sense(replace(rab, in_nest=in_nest, on_food=on_food))
+        self.view.sense(replace(rab, ground=np.array(self._ground[step], dtype=np.bool_)))
         self.counts.lost += step - self.newest - 1
         self.counts.used += 1
         self.newest = step
@@ -179,8 +182,8 @@ class FreeRunningController:
                 0,
                 STOP,
                 ACTION_WHEELS[STOP],
-                self.view.broadcast(),
-                self.view.smoothed(),
+                tuple(float(v) for v in self.view.broadcast()),
+                tuple(float(v) for v in self.view.smoothed()),
                 self.newest,
                 timed_out,
                 silence,
@@ -198,22 +201,21 @@ class FreeRunningController:
             int(self.robot.counts[0] - before),
             self.action,
             ACTION_WHEELS[self.action],
-            self.view.broadcast(),
-            self.view.smoothed(),
+            tuple(float(v) for v in self.view.broadcast()),
+            tuple(float(v) for v in self.view.smoothed()),
             self.newest,
             False,
             silence,
         )
 
 
-def empty_readings() -> Readings:
-    """Readings with nobody heard (the range-and-bearing arrays empty)."""
+def empty_readings(regions: int = 2) -> Readings:
+    """Readings with nobody heard (the range-and-bearing arrays empty) and no region under the robot, in a
+    world of ``regions`` regions."""
     return Readings(
-        in_nest=False,
-        on_food=False,
+        ground=np.zeros(regions, dtype=np.bool_),
         senders=np.zeros(0, dtype=np.int64),
         ranges=np.zeros(0, dtype=np.float64),
         bearings=np.zeros(0, dtype=np.float64),
-        nest=np.zeros(0, dtype=np.float64),
-        food=np.zeros(0, dtype=np.float64),
+        values=np.zeros((0, regions), dtype=np.float64),
     )

@@ -83,6 +83,8 @@ class PerceptionParams(NamedTuple):
     profile: int = PAPER
     """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard
     (A2)."""
+    regions: int = 2
+    """The regions a robot perceives: the nest and the world's food kinds (2-4, ``vocabulary.REGIONS``)."""
 
 
 class PerceptionSettings(Protocol):
@@ -98,3 +100,5 @@ class PerceptionSettings(Protocol):
     def density_divisor(self) -> float: ...
     @property
     def profile(self) -> int: ...
+    @property
+    def regions(self) -> int: ...

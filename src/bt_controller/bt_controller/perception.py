@@ -1,10 +1,10 @@
 """A footbot's perception: what its onboard software makes of its own readings, step by step.
 
 From one sensing step's readings (the ground sensor and the range-and-bearing messages it received) a robot
-computes its raw nest and food distance estimates (hop gradients through its neighbours' broadcasts) and its
-neighbourhood density, keeps the last ``window`` samples for the smoothed values, keeps its carrying flag and
-counts its deliveries (``carry``: foraging), and fills the blackboard its behaviour tree reads
-(``docs/model.md``, "One step of a robot", "Foraging" and "Blackboard").
+computes its raw distance estimates of the nest and of each food kind (hop gradients through its neighbours'
+broadcasts) and its neighbourhood density, keeps the last ``window`` samples for the smoothed values, keeps a
+carrying flag per food kind and counts its deliveries (``carry``: foraging), and fills the blackboard its
+behaviour tree reads (``docs/model.md``, "One step of a robot", "Foraging" and "Blackboard").
 
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
 ``njit`` functions inline, and the controller node and the reference road call them from Python, so both roads
@@ -22,45 +22,55 @@ import numpy as np
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.model_settings import PAPER, PerceptionParams, PerceptionSettings
-from bt_controller.vocabulary import N_CONDITIONS
+from bt_controller.vocabulary import (
+    MAX_FOOD_KINDS,
+    N_CONDITIONS,
+    NUMBERED_FOOD,
+    REGIONS,
+    SIDES,
+)
+from bt_controller.vocabulary import (
+    region_column as _region_column,
+)
+
+region_column = numba.njit(inline="always")(_region_column)  # no disk cache: its source is vocabulary's
+DENSITY = SIDES.index("robot")
+"""The column of the density in a robot's samples and smoothed values (``vocabulary.region_column``)."""
+ROBOT_SIDE = SIDES.index("robot")
 
 
 @numba.njit(cache=True, error_model="numpy")
 def estimate(
-    in_nest: bool,
-    on_food: bool,
+    inside: np.ndarray,
     count: int,
     ranges: np.ndarray,
-    nest_values: np.ndarray,
-    food_values: np.ndarray,
+    values: np.ndarray,
     p: PerceptionSettings,
+    raw: np.ndarray,
+    sources: np.ndarray,
 ) -> tuple:
-    """A robot's raw estimates from one step's messages (one per sender, in sender order).
+    """A robot's raw estimates from one step's messages (one per sender, in sender order), per region.
 
-    Returns ``(nest, food, density, nest_source, food_source, nearest)``: the nest estimate is 0 in the nest,
-    else the least of the cap and every sender's broadcast value plus its range (``footbot_bt.cpp:281-331``);
-    food likewise. The sources are positions in the messages (-1 for none) of the message that gave the
-    minimum (first on ties; none inside the region or when nothing beat the cap) and of the nearest sender
-    (first on ties).
+    ``inside`` (regions, ``vocabulary.REGIONS`` order: nest, food, food2, food3) says where the ground sensor
+    reads the robot is; ``values`` (at least count x regions) holds what each sender broadcast per region.
+    Region r's estimate, written to ``raw[r]``, is 0 inside it, else the least of the cap and every sender's
+    broadcast value plus its range (``footbot_bt.cpp:281-331``); ``sources[r]`` is the position in the
+    messages of the one that gave the minimum (first on ties; -1 inside the region or when nothing beat the
+    cap). Returns ``(density, nearest)``: the neighbourhood density and the position of the nearest sender
+    (first on ties, -1 for none).
     """
-    nest = 0.0
-    nest_source = -1
-    if not in_nest:
-        nest = p.estimate_cap
-        for k in range(count):
-            candidate = nest_values[k] + ranges[k]
-            if candidate < nest:
-                nest = candidate
-                nest_source = k
-    food = 0.0
-    food_source = -1
-    if not on_food:
-        food = p.estimate_cap
-        for k in range(count):
-            candidate = food_values[k] + ranges[k]
-            if candidate < food:
-                food = candidate
-                food_source = k
+    for r in range(inside.shape[0]):
+        best = 0.0
+        source = -1
+        if not inside[r]:
+            best = p.estimate_cap
+            for k in range(count):
+                candidate = values[k, r] + ranges[k]
+                if candidate < best:
+                    best = candidate
+                    source = k
+        raw[r] = best
+        sources[r] = source
     total = 0.0
     nearest = -1
     for k in range(count):
@@ -68,37 +78,31 @@ def estimate(
         total += 1.0 / (math.pi * (q * q))
         if nearest < 0 or ranges[k] < ranges[nearest]:
             nearest = k
-    return nest, food, total / p.density_divisor, nest_source, food_source, nearest
+    return total / p.density_divisor, nearest
 
 
 @numba.njit(cache=True, error_model="numpy")
-def push_sample(window: np.ndarray, count: int, nest: float, food: float, density: float) -> int:
-    """Store one raw sample (nest, food, density) in a ring ``window`` (w x 3) holding ``count`` samples so
-    far; returns the new count."""
+def push_sample(window: np.ndarray, count: int, raw: np.ndarray, density: float) -> int:
+    """Store one raw sample in a ring ``window`` (w x columns: the regions' estimates and the density, in
+    ``vocabulary.region_column`` order) holding ``count`` samples so far; returns the new count."""
     slot = count % window.shape[0]
-    window[slot, 0] = nest
-    window[slot, 1] = food
-    window[slot, 2] = density
+    for r in range(raw.shape[0]):
+        window[slot, region_column(r)] = raw[r]
+    window[slot, DENSITY] = density
     return count + 1
 
 
 @numba.njit(cache=True, error_model="numpy")
-def smoothed(window: np.ndarray, count: int) -> tuple:
-    """The mean (nest, food, density) of the last ``min(count, w)`` samples, summed oldest first (the mean
-    over the samples held, ``CBlackBoard.cpp:64-83``)."""
+def smoothed(window: np.ndarray, count: int, out: np.ndarray) -> None:
+    """Write into ``out`` the mean of each column of the last ``min(count, w)`` samples of ``window``, summed
+    oldest first (the mean over the samples held, ``CBlackBoard.cpp:64-83``); zeros before any sample."""
     w = window.shape[0]
     m = min(count, w)
-    nest = 0.0
-    food = 0.0
-    density = 0.0
-    for k in range(count - m, count):
-        slot = k % w
-        nest += window[slot, 0]
-        food += window[slot, 1]
-        density += window[slot, 2]
-    if m == 0:
-        return 0.0, 0.0, 0.0
-    return nest / m, food / m, density / m
+    for c in range(window.shape[1]):
+        total = 0.0
+        for k in range(count - m, count):
+            total += window[k % w, c]
+        out[c] = 0.0 if m == 0 else total / m
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -117,9 +121,10 @@ def region_value(inside: bool, p: PerceptionSettings) -> float:
 
 @numba.njit(cache=True, error_model="numpy")
 def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
-    """``(carrying, delivered)`` after a sensing step's ground reading (``footbot_bt.cpp:243-254`` at
-    a73e4af): a robot on food carries food (it is unlimited: no item, no pick-up time); a robot in the nest
-    that carries delivers it and carries nothing more."""
+    """``(carrying, delivered)`` of one food kind after a sensing step's ground reading
+    (``footbot_bt.cpp:243-254`` at a73e4af; per kind, ``footbot_bt.cpp:634-661`` at 1cd2358): a robot on
+    food carries food (it is unlimited: no item, no pick-up time); a robot in the nest that carries delivers
+    it and carries nothing more. A robot can carry every kind at once."""
     carrying = carrying or on_food
     if in_nest and carrying:
         return False, True
@@ -128,154 +133,180 @@ def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
 
 @numba.njit(cache=True, error_model="numpy")
 def start_carrying(carrying: bool, on_food: bool) -> bool:
-    """The carrying flag after a trial's first step, which senses nothing but the start pose's ground
-    (``footbot_bt.cpp:134-137``, ``CBlackBoard.cpp:124-145`` at a73e4af): set on food; no delivery."""
+    """The carrying flag of a food kind after a trial's first step, which senses nothing but the start pose's
+    ground (``footbot_bt.cpp:134-137``, ``CBlackBoard.cpp:124-145`` at a73e4af): set on food; no delivery."""
     return carrying or on_food
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _sides(known: bool, bearing: float) -> tuple:
+    return known and bearing > 0.0, known and bearing < 0.0
 
 
 @numba.njit(cache=True, error_model="numpy")
 def blackboard(
-    in_nest: bool,
-    on_food: bool,
-    nest: float,
-    food: float,
-    nest_bearing: float,
-    food_bearing: float,
+    inside: np.ndarray,
+    raw: np.ndarray,
+    bearings: np.ndarray,
     heard: bool,
-    nearest_bearing: float,
-    got_food: bool,
+    carrying: np.ndarray,
     p: PerceptionSettings,
     out: np.ndarray,
 ) -> None:
     """Fill ``out`` (``vocabulary.N_CONDITIONS`` entries, ``vocabulary.CONDITIONS`` order) from the latest
-    sensing step; ``got_food`` is the carrying flag after its delivery check (``carry``).
+    sensing step: ``inside`` and ``raw`` per region (``estimate``), ``bearings`` per side pair
+    (``vocabulary.SIDES``: each region's estimate source and the nearest robot heard, NaN for none or not
+    needed), ``carrying`` per food kind (after its delivery check, ``carry``).
 
-    ``nest``/``food`` are the raw estimates and the bearings those of their sources
-    (``footbot_bt.cpp:389-392``: a side holds when 0 < estimate < cap and the bearing is strictly on it). The
-    nearest robot heard is left at a bearing >= 0, right below 0 (``footbot_bt.cpp:358-369``); with nobody
-    ``heard`` robot_left holds under ``paper`` (the code reads a bearing of 0, A2) and neither under
-    ``clean``.
+    A region's side holds when 0 < estimate < cap and its source's bearing is strictly on it
+    (``footbot_bt.cpp:389-392``). The nearest robot heard is left at a bearing >= 0, right below 0
+    (``footbot_bt.cpp:358-369``); with nobody ``heard`` robot_left holds under ``paper`` (the code reads a
+    bearing of 0, A2) and neither under ``clean``. The unnumbered food conditions read kind 1; a kind the
+    world lacks is never on, carried or on a side.
     """
-    out[0] = on_food
-    out[1] = in_nest
-    food_known = 0.0 < food < p.estimate_cap
-    nest_known = 0.0 < nest < p.estimate_cap
-    out[2] = food_known and food_bearing > 0.0
-    out[3] = food_known and food_bearing < 0.0
-    out[4] = nest_known and nest_bearing > 0.0
-    out[5] = nest_known and nest_bearing < 0.0
+    cap = p.estimate_cap
+    out[0] = inside[1]
+    out[1] = inside[0]
+    out[2], out[3] = _sides(0.0 < raw[1] < cap, bearings[1])
+    out[4], out[5] = _sides(0.0 < raw[0] < cap, bearings[0])
     if heard:
-        out[6] = nearest_bearing >= 0.0
-        out[7] = nearest_bearing < 0.0
+        out[6] = bearings[ROBOT_SIDE] >= 0.0
+        out[7] = bearings[ROBOT_SIDE] < 0.0
     else:
         out[6] = p.profile == PAPER
         out[7] = False
-    out[8] = got_food
+    out[8] = carrying[0]
+    for kind in range(1, MAX_FOOD_KINDS + 1):
+        at = NUMBERED_FOOD + 4 * (kind - 1)
+        if kind < inside.shape[0]:
+            out[at] = inside[kind]
+            out[at + 1] = carrying[kind - 1]
+            out[at + 2], out[at + 3] = _sides(0.0 < raw[kind] < cap, bearings[region_column(kind)])
+        else:
+            out[at] = out[at + 1] = out[at + 2] = out[at + 3] = False
 
 
 @dataclass(frozen=True)
 class Readings:
     """One robot's readings of one sensing step: the ground sensor and the messages it received.
 
-    The message arrays are ordered by sender id: ``senders`` (int), ``ranges`` (mm), ``bearings`` (rad, from
-    the receiver's heading), and the senders' broadcast ``nest`` and ``food`` estimates (mm).
+    ``ground`` (bool, one per region of the world: ``vocabulary.REGIONS`` order, nest first) says which
+    regions the robot stands in. The message arrays are ordered by sender id: ``senders`` (int), ``ranges``
+    (mm), ``bearings`` (rad, from the receiver's heading), and ``values`` (messages x regions): the senders'
+    broadcast estimates (mm) per region.
     """
 
-    in_nest: bool
-    on_food: bool
+    ground: np.ndarray
     senders: np.ndarray
     ranges: np.ndarray
     bearings: np.ndarray
-    nest: np.ndarray
-    food: np.ndarray
+    values: np.ndarray
+
+    @property
+    def in_nest(self) -> bool:
+        """Whether the ground sensor reads the nest."""
+        return bool(self.ground[0])
+
+    @property
+    def on_food(self) -> bool:
+        """Whether the ground sensor reads food of kind 1."""
+        return bool(self.ground[1])
+
+    @property
+    def regions(self) -> int:
+        """How many regions the world has (the nest and its food kinds)."""
+        return len(self.ground)
 
 
 class RobotView:
-    """One robot's perception across a chain: raw estimates, smoothing window, smoothed values, carrying flag
-    and deliveries, blackboard.
+    """One robot's perception across a chain: raw estimates, smoothing window, smoothed values, carrying flags
+    and deliveries per food kind, blackboard.
 
     ``sense`` takes a sensing step's readings; ``first_step`` a trial's first step's ground (no sensing);
     ``refresh`` recomputes the smoothed values (the timeline says when); ``broadcast`` is what the robot
-    sends; ``end_trial`` clears the carrying flag and the deliveries at a trial's last step
+    sends; ``end_trial`` clears the carrying flags and the deliveries at a trial's last step
     (``footbot_bt.cpp:579-580`` at a73e4af). Nothing else is reset between the trials of a chain (A1).
+    ``p.regions``: the nest and the world's food kinds (2 to ``len(REGIONS)``).
     """
 
     def __init__(self, p: PerceptionSettings) -> None:
+        regions = p.regions
+        if not 2 <= regions <= len(REGIONS):
+            raise ValueError(
+                f"regions must be 2 to {len(REGIONS)} (the nest and 1-3 food kinds), got {regions}"
+            )
         self.p = p
-        self.window = np.zeros((p.window, 3))
+        self.regions = regions
+        self.window = np.zeros((p.window, regions + 1))
         self.samples = 0
-        self.nest = p.estimate_cap
-        self.food = p.estimate_cap
+        self.raw = np.full(regions, p.estimate_cap)
         self.density = 0.0
-        self.smooth = (0.0, 0.0, 0.0)
+        self.smooth = np.zeros(regions + 1)
         self.latest: Readings | None = None
-        self.sources = (-1, -1, -1)
-        self.carrying = False
-        self.deliveries = 0
+        self.sources = np.full(regions, -1, dtype=np.int64)
+        self.nearest = -1
+        self.carrying = np.zeros(regions - 1, dtype=np.bool_)
+        self.deliveries = np.zeros(regions - 1, dtype=np.int64)
+
+    def _check(self, ground: np.ndarray) -> None:
+        if len(ground) != self.regions:
+            raise ValueError(f"readings for {len(ground)} regions, expected {self.regions}")
 
     def sense(self, readings: Readings) -> None:
-        """Take one sensing step's readings: raw estimates, the window and the sources of the blackboard."""
-        nest, food, density, nest_source, food_source, nearest = estimate(
-            readings.in_nest,
-            readings.on_food,
-            len(readings.senders),
-            readings.ranges,
-            readings.nest,
-            readings.food,
-            self.p,
-        )
-        self.nest, self.food, self.density = nest, food, density
-        self.carrying, delivered = carry(self.carrying, readings.in_nest, readings.on_food)
-        self.deliveries += int(delivered)
-        self.samples = push_sample(self.window, self.samples, nest, food, density)
+        """Take one sensing step's readings: raw estimates, carrying and deliveries, the window and the
+        sources of the blackboard."""
+        self._check(readings.ground)
+        self.density, self.nearest = estimate(
+            readings.ground, len(readings.senders), readings.ranges, readings.values, self.p, self.raw,
+            self.sources,
+        )  # fmt: skip
+        in_nest = bool(readings.ground[0])
+        for k in range(self.regions - 1):
+            self.carrying[k], delivered = carry(self.carrying[k], in_nest, readings.ground[k + 1])
+            self.deliveries[k] += int(delivered)
+        self.samples = push_sample(self.window, self.samples, self.raw, self.density)
         self.latest = readings
-        self.sources = (nest_source, food_source, nearest)
 
-    def first_step(self, on_food: bool) -> None:
-        """A trial's first step: the start pose's ground sets the carrying flag (``start_carrying``)."""
-        self.carrying = bool(start_carrying(self.carrying, on_food))
+    def first_step(self, ground: np.ndarray) -> None:
+        """A trial's first step: the start pose's ground sets the carrying flags (``start_carrying``)."""
+        self._check(ground)
+        for k in range(self.regions - 1):
+            self.carrying[k] = start_carrying(self.carrying[k], ground[k + 1])
 
     def end_trial(self) -> None:
         """A trial's last step, after its tick and its scores: no carrying, no deliveries."""
-        self.carrying = False
-        self.deliveries = 0
+        self.carrying[:] = False
+        self.deliveries[:] = 0
 
     def refresh(self) -> None:
-        """Recompute the smoothed (nest, food, density) from the window."""
-        self.smooth = smoothed(self.window, self.samples)
+        """Recompute the smoothed values (``region_column`` order: nest, food, density, food2, food3)."""
+        smoothed(self.window, self.samples, self.smooth)
 
-    def smoothed(self) -> tuple[float, float, float]:
-        """The smoothed (nest, food, density) as last refreshed."""
+    def smoothed(self) -> np.ndarray:
+        """The smoothed values as last refreshed (nest, food, density, then food2 and food3 if any)."""
         return self.smooth
 
-    def broadcast(self) -> tuple[float, float]:
-        """The (nest, food) values this robot broadcasts: its smoothed estimates in whole centimetres (mm)."""
-        return broadcast_value(self.smooth[0]), broadcast_value(self.smooth[1])
+    def broadcast(self) -> np.ndarray:
+        """The values this robot broadcasts, per region: its smoothed estimates in whole centimetres (mm)."""
+        return np.array([broadcast_value(self.smooth[region_column(r)]) for r in range(self.regions)])
 
-    def region_broadcast(self, in_nest: bool, on_food: bool) -> tuple[float, float]:
-        """The (nest, food) values broadcast at a chain's first step."""
-        return region_value(in_nest, self.p), region_value(on_food, self.p)
+    def region_broadcast(self, ground: np.ndarray) -> np.ndarray:
+        """The values broadcast at a chain's first step, per region."""
+        return np.array([region_value(bool(inside), self.p) for inside in ground])
 
     def blackboard(self) -> np.ndarray:
-        """The 8 conditions (``vocabulary.CONDITIONS`` order) from the latest readings."""
+        """The conditions (``vocabulary.CONDITIONS`` order) from the latest readings."""
         if self.latest is None:
             raise RuntimeError("blackboard before any readings")
         r = self.latest
-        nest_b, food_b, near_b = (r.bearings[k] if k >= 0 else math.nan for k in self.sources)
+        bearings = np.full(len(SIDES), math.nan)
+        for region in range(self.regions):
+            if self.sources[region] >= 0:
+                bearings[region_column(region)] = r.bearings[self.sources[region]]
+        if self.nearest >= 0:
+            bearings[ROBOT_SIDE] = r.bearings[self.nearest]
         out = np.zeros(N_CONDITIONS, dtype=np.bool_)
-        blackboard(
-            r.in_nest,
-            r.on_food,
-            self.nest,
-            self.food,
-            nest_b,
-            food_b,
-            self.sources[2] >= 0,
-            near_b,
-            self.carrying,
-            self.p,
-            out,
-        )
+        blackboard(r.ground, self.raw, bearings, self.nearest >= 0, self.carrying, self.p, out)
         return out
 
 
@@ -284,9 +315,10 @@ def warm_up() -> None:
     of a trial is not slowed down by compilation."""
     view = RobotView(PerceptionParams())
     one = np.ones(1)
-    view.first_step(True)
-    view.sense(Readings(False, False, np.zeros(1, dtype=np.int64), one * 300.0, one * 0.5, one, one))
+    ground = np.array([False, True])
+    view.first_step(ground)
+    view.sense(Readings(ground, np.zeros(1, dtype=np.int64), one * 300.0, one * 0.5, np.ones((1, 2))))
     view.refresh()
     view.broadcast()
-    view.region_broadcast(False, True)
+    view.region_broadcast(ground)
     view.blackboard()

@@ -12,17 +12,26 @@ from collections.abc import Sequence
 import numpy as np
 
 from bt_controller.tree import Action, Composite, Condition, Node
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS, MAX_CHILDREN, MIN_CHILDREN
+from bt_controller.vocabulary import (
+    ACTIONS,
+    COMPOSITES,
+    CONDITIONS_2024,
+    MAX_CHILDREN,
+    MIN_CHILDREN,
+    N_CONDITIONS,
+)
 
 
 def random_leaf(
     rng: np.random.Generator,
     p_condition: float = 0.5,
-    conditions: Sequence[str] = CONDITIONS,
+    conditions: Sequence[str] = CONDITIONS_2024,
     actions: Sequence[str] = ACTIONS,
 ) -> Node:
     """A uniformly chosen condition (with probability ``p_condition``) or action, of ``conditions`` and
-    ``actions`` (the whole vocabulary by default; a task's node set, e.g. without ``got_food``)."""
+    ``actions`` (by default the 2024 node set, which every task's world can read, and with which every
+    seed gives the trees it gave before the food kinds' conditions came; a task's node set, or
+    ``vocabulary.CONDITIONS`` for all of them)."""
     if rng.random() < p_condition:
         return Condition(conditions[int(rng.integers(len(conditions)))])
     return Action(actions[int(rng.integers(len(actions)))])
@@ -33,7 +42,7 @@ def random_tree(
     size: int,
     p_condition: float = 0.5,
     p_success: float = 0.0,
-    conditions: Sequence[str] = CONDITIONS,
+    conditions: Sequence[str] = CONDITIONS_2024,
     actions: Sequence[str] = ACTIONS,
 ) -> Node:
     """A random tree of exactly ``size`` nodes (``size`` is 1 or at least 3: 2 nodes make no tree without
@@ -86,18 +95,22 @@ def _grow(rng: np.random.Generator, max_depth: int, p_here: float, p_leaf: float
 def random_blackboards(rng: np.random.Generator, n_robots: int, n_ticks: int) -> np.ndarray:
     """Blackboards (robots, ticks, ``N_CONDITIONS``) bool; each robot has its own probability of true per
     condition (no world facts: any combination)."""
-    p_true = rng.random((n_robots, 1, len(CONDITIONS)))
-    return rng.random((n_robots, n_ticks, len(CONDITIONS))) < p_true
+    p_true = rng.random((n_robots, 1, N_CONDITIONS))
+    return rng.random((n_robots, n_ticks, N_CONDITIONS)) < p_true
 
 
 def random_trees(
-    seed: int, count: int, min_size: int = 10, max_size: int = 60, p_success: float = 0.0
+    seed: int,
+    count: int,
+    min_size: int = 10,
+    max_size: int = 60,
+    p_success: float = 0.0,
+    conditions: Sequence[str] = CONDITIONS_2024,
 ) -> list[str]:
-    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``; with
-    ``p_success`` > 0 some inner nodes are success decorators), reproducible from ``seed``."""
+    """``count`` random tree texts of ``min_size + 1`` to ``max_size`` nodes (``random_tree``, over
+    ``conditions``; with ``p_success`` > 0 some inner nodes are success decorators), reproducible from
+    ``seed``."""
     rng = np.random.default_rng(seed)
     sizes = [int(rng.integers(min_size + 1, max_size + 1)) for _ in range(count)]
-    return [
-        str(random_tree(rng, 3 if size == 2 and p_success <= 0 else size, p_success=p_success))
-        for size in sizes
-    ]
+    size_of = [3 if size == 2 and p_success <= 0 else size for size in sizes]
+    return [str(random_tree(rng, size, p_success=p_success, conditions=conditions)) for size in size_of]

@@ -22,6 +22,7 @@ from bt_controller.compiled import (
 from bt_controller.model_settings import CLEAN, PAPER
 from bt_controller.random_trees import random_blackboards, random_tree
 from bt_controller.tree import parse
+from bt_controller.vocabulary import N_CONDITIONS
 
 
 @settings(max_examples=600, derandomize=True, deadline=None)
@@ -95,10 +96,10 @@ def _simulator_like_kernel(tree, key, n_ticks):
     memory = np.empty(len(tree.op), np.int8)
     start_memory(tree.op, memory, PAPER)
     counts = np.zeros(N_COUNTS, np.int64)
-    blackboard = np.zeros(8, np.bool_)
+    blackboard = np.zeros(N_CONDITIONS, np.bool_)
     actions = np.empty(n_ticks, np.int64)
     for k in range(n_ticks):
-        blackboard[k % 8] = not blackboard[k % 8]
+        blackboard[k % N_CONDITIONS] = not blackboard[k % N_CONDITIONS]
         _, actions[k] = tick(tree, memory, blackboard, key, k, counts)
     return actions, counts
 
@@ -108,8 +109,8 @@ def test_tick_is_callable_from_another_kernel():
     flat = flatten(tree)
     actions, counts = _simulator_like_kernel(flat, np.uint64(99), 40)
     ref = semantics.ReferenceRobot(tree, 99)
-    board = [False] * 8
+    board = [False] * N_CONDITIONS
     for k in range(40):
-        board[k % 8] = not board[k % 8]
+        board[k % N_CONDITIONS] = not board[k % N_CONDITIONS]
         assert ref.step(board)[1] == actions[k]
     assert ref.counts == counts.tolist()

@@ -19,7 +19,7 @@ def controller(tree="forward", timeout=1.0):
 
 def offer(c, step, now, ground=True, rab=True, in_nest=False):
     if ground:
-        c.offer_ground(step, in_nest, False, now)
+        c.offer_ground(step, (in_nest, False), now)
     if rab:
         c.offer_range_and_bearing(step, empty_readings(), now)
 

@@ -21,7 +21,7 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[2]
 CONDITION_ROW = '    Condition("nest_ahead", ("nest",), "nest", "the nest estimate\'s source is ahead"),\n'
-CONDITION_LINE = "    out[9] = 0.0 < nest < p.estimate_cap and abs(nest_bearing) < 0.5\n"
+CONDITION_LINE = "    out[N_CONDITIONS - 1] = 0.0 < raw[0] < cap and abs(bearings[0]) < 0.5\n"
 OBJECTIVE_ROW = (
     '    Objective("near_nest", "smoothed nest estimate, last step", "1 - final / cap", 1.0, ""),\n'
 )
@@ -42,21 +42,24 @@ def extended(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
         shutil.copytree(
             SRC / package / package, root / package, ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]")
         )
+    vocabulary = root / "bt_controller" / "vocabulary.py"
+    text = vocabulary.read_text()
+    end = text.index(')\n"""Every condition')  # the table's end
+    vocabulary.write_text(text[:end] + CONDITION_ROW + text[end:])
     _edit(
-        root / "bt_controller" / "vocabulary.py",
-        '    Condition("got_food", ("food", "nest"), None, "the robot carries food"),\n',
-        CONDITION_ROW,
+        root / "bt_controller" / "perception.py",
+        "            out[at] = out[at + 1] = out[at + 2] = out[at + 3] = False\n",  # blackboard's last line
+        CONDITION_LINE,
     )
-    _edit(root / "bt_controller" / "perception.py", "    out[8] = got_food\n", CONDITION_LINE)
     objectives = root / "swarm_sim" / "model" / "objectives.py"
     text = objectives.read_text()
     end = text.index(')\n"""Every objective')
     objectives.write_text(text[:end] + OBJECTIVE_ROW + text[end:])
     world = root / "swarm_sim" / "core" / "world.py"
-    old = "    return density, nest, food, idensity, inest, ifood, float(deliveries), aggregation\n"
+    returned = "density, nest, food, idensity, inest, ifood, total, aggregation, kind1, kind2, kind3, biased"
+    old = f"    return {returned}\n"
     new = (
-        "    near_nest = 1.0 - final[0] / p.estimate_cap\n"
-        "    return density, nest, food, idensity, inest, ifood, float(deliveries), aggregation, near_nest\n"
+        f"    near_nest = 1.0 - final[0] / p.estimate_cap\n    return ({returned},\n            near_nest)\n"
     )
     assert world.read_text().count(old) == 1
     world.write_text(world.read_text().replace(old, new))

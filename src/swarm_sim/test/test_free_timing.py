@@ -16,7 +16,7 @@ CAP = DEFAULT.params().estimate_cap
 def answer(action: int = 1, deliveries: int = 0, nest: float = 10.0) -> RobotAnswer:
     return RobotAnswer(
         action=action, broadcast=(nest, 20.0), smoothed=(1.0, 2.0, 0.5), condition_ticks=7, started=3,
-        deliveries=deliveries,
+        deliveries=(deliveries,),
     )  # fmt: skip
 
 
@@ -55,11 +55,11 @@ def test_statuses_count_at_the_next_tick_step_only_once() -> None:
 def test_deliveries_count_from_each_trials_first_step() -> None:
     free = FreeAnswers(1, CAP)
     free.answer(0, answer(deliveries=2))
-    assert free.answers(ticks=False)[0].deliveries == 2
+    assert free.answers(ticks=False)[0].deliveries == (2,)
     free.begin_trial()
-    assert free.answers(ticks=False)[0].deliveries == 0
+    assert free.answers(ticks=False)[0].deliveries == (0,)
     free.answer(0, answer(deliveries=5))
-    assert free.answers(ticks=False)[0].deliveries == 3
+    assert free.answers(ticks=False)[0].deliveries == (3,)
     free.start_chain()  # a new chain forgets everything
     assert free.answers(ticks=False)[0] == RobotAnswer(action=STOP, broadcast=(CAP, CAP), smoothed=(0.0,) * 3)
 

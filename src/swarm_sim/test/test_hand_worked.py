@@ -75,20 +75,26 @@ def _line_world(occlusion: bool):
     n = 3
     x = np.array([0.0, 300.0, 600.0])
     y = np.zeros(n)
-    nest = np.array([0.0, 1000.0, 2000.0])
-    food = np.array([4000.0, 3000.0, 2000.0])
+    broadcast = np.array([[0.0, 4000.0], [1000.0, 3000.0], [2000.0, 2000.0]])  # (nest, food) per robot
     keys = np.array([stream_key(1, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
     counts = np.zeros(n, np.int64)
     senders = np.zeros((n, n), np.int64)
-    ranges, nest_in, food_in = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
-    world.sense_step(x, y, nest, food, keys, 5, p, counts, senders, ranges, nest_in, food_in)
-    return p, counts, senders, ranges, nest_in, food_in
+    ranges, values = np.zeros((n, n)), np.zeros((n, n, 2))
+    world.sense_step(x, y, broadcast, keys, 5, p, counts, senders, ranges, values)
+    return p, counts, senders, ranges, values
+
+
+def _estimate(p, count, ranges, values):
+    """(nest, food, density) of a robot in neither region."""
+    raw, sources = np.zeros(2), np.zeros(2, np.int64)
+    density, _ = world.estimate(np.zeros(2, np.bool_), count, ranges, values, p, raw, sources)
+    return raw[0], raw[1], density
 
 
 def test_occlusion_three_robots_in_a_line():
     # Robots at x = 0, 300, 600 mm: the middle one's body (radius 85) cuts the segment between the outer
     # ones, which are 600 mm apart (in range) yet do not hear each other; both hear the middle one.
-    p, counts, senders, ranges, nest_in, food_in = _line_world(occlusion=True)
+    p, counts, senders, ranges, values = _line_world(occlusion=True)
     assert counts.tolist() == [1, 2, 1]
     assert (
         senders[0, :1].tolist() == [1]
@@ -97,15 +103,15 @@ def test_occlusion_three_robots_in_a_line():
     )
     assert ranges[0, 0] == 300.0 and ranges[2, 0] == 300.0
     # Robot 0 (not in the nest) hears only robot 1: nest 1000 + 300 = 1300, food 3000 + 300 = 3300.
-    nest, food, density, *_ = world.estimate(False, False, counts[0], ranges[0], nest_in[0], food_in[0], p)
+    nest, food, density = _estimate(p, counts[0], ranges[0], values[0])
     assert (nest, food) == (1300.0, 3300.0)
     # Density: 1 / (pi (300 / 10000)^2) / (1107 x 6).
     assert density == pytest.approx(1.0 / (np.pi * 0.03**2) / 6642.0, rel=1e-12)
     # Without occlusion the outer robots hear each other too; robot 0's food estimate then comes from
     # robot 2: 2000 + 600 = 2600.
-    p, counts, senders, ranges, nest_in, food_in = _line_world(occlusion=False)
+    p, counts, senders, ranges, values = _line_world(occlusion=False)
     assert counts.tolist() == [2, 2, 2]
-    _, food, *_ = world.estimate(False, False, counts[0], ranges[0], nest_in[0], food_in[0], p)
+    _, food, _ = _estimate(p, counts[0], ranges[0], values[0])
     assert food == 2600.0
 
 
@@ -121,9 +127,8 @@ def test_a_robot_beside_the_line_does_not_occlude():
 def _readings(in_nest: bool, messages: list[tuple[float, float, float, float]]) -> Readings:
     """Readings with messages (range, bearing, nest value, food value) from senders 1, 2, ..."""
     m = np.array(messages, dtype=np.float64).reshape(len(messages), 4)
-    return Readings(
-        in_nest, False, np.arange(1, len(messages) + 1, dtype=np.int64), m[:, 0], m[:, 1], m[:, 2], m[:, 3]
-    )
+    senders = np.arange(1, len(messages) + 1, dtype=np.int64)
+    return Readings(np.array([in_nest, False]), senders, m[:, 0], m[:, 1], m[:, 2:4])
 
 
 def _controller(profile: int = PAPER) -> FootbotController:
@@ -170,19 +175,26 @@ def test_an_estimate_carried_over_a_teleport():
     assert outcome.tick is not None and outcome.tick.tick == 40  # the chain's 41st tick
 
 
+_NOWHERE = np.zeros(2, np.bool_)
+"""In neither the nest nor food."""
+_EMPTY = np.zeros(1, np.bool_)
+"""Carrying nothing."""
+
+
+def _bearings(nest: float, food: float, robot: float) -> np.ndarray:
+    """The side pairs' bearings (``vocabulary.SIDES``: nest, food, robot, food2, food3)."""
+    return np.array([nest, food, robot, np.nan, np.nan])
+
+
 def test_robot_left_with_nobody_heard_depends_on_the_profile():
     out = np.zeros(N_CONDITIONS, np.bool_)
     for profile, expected in ((PAPER, True), (CLEAN, False)):
         blackboard(
+            _NOWHERE,
+            np.full(2, 5000.0),
+            np.full(5, np.nan),
             False,
-            False,
-            5000.0,
-            5000.0,
-            np.nan,
-            np.nan,
-            False,
-            np.nan,
-            False,
+            _EMPTY,
             PerceptionParams(profile=profile),
             out,
         )
@@ -193,10 +205,12 @@ def test_robot_left_with_nobody_heard_depends_on_the_profile():
 def test_nest_side_needs_an_estimate_strictly_inside_the_cap():
     out = np.zeros(N_CONDITIONS, np.bool_)
     p = PerceptionParams()
-    blackboard(False, False, 4999.0, 5000.0, 0.3, 0.3, True, -0.1, False, p, out)
+    blackboard(_NOWHERE, np.array([4999.0, 5000.0]), _bearings(0.3, 0.3, -0.1), True, _EMPTY, p, out)
     assert out[CONDITION_INDEX["nest_left"]] and not out[CONDITION_INDEX["food_left"]]
     assert out[CONDITION_INDEX["robot_right"]]
-    blackboard(False, False, 2000.0, 2000.0, 0.0, -0.2, True, 0.0, True, p, out)
+    blackboard(
+        _NOWHERE, np.array([2000.0, 2000.0]), _bearings(0.0, -0.2, 0.0), True, np.array([True]), p, out
+    )
     assert not out[CONDITION_INDEX["nest_left"]] and not out[CONDITION_INDEX["nest_right"]]  # bearing 0
     assert out[CONDITION_INDEX["food_right"]] and out[CONDITION_INDEX["robot_left"]]
     assert out[CONDITION_INDEX["got_food"]]  # the carrying flag, as given
@@ -205,7 +219,13 @@ def test_nest_side_needs_an_estimate_strictly_inside_the_cap():
 def test_nest_objective_is_one_when_the_final_smoothed_nest_value_is_zero():
     p = PAPER_CONFIG.params()
     density, nest, food, *_ = world.robot_objectives(
-        np.array([3000.0, 2000.0, 0.1]), np.array([0.0, 4000.0, 0.3]), np.zeros(2), np.zeros(2), 0, 1000.0, p
+        np.array([3000.0, 2000.0, 0.1]),
+        np.array([0.0, 4000.0, 0.3]),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(1, np.int64),
+        1000.0,
+        p,
     )
     assert nest == 1.0
     assert food == pytest.approx(0.5 * ((2000.0 - 4000.0) / 5000.0 + 1.0))
@@ -224,7 +244,7 @@ FORWARD, REVERSE, STOP_ACTION = ACTION_INDEX["forward"], ACTION_INDEX["reverse"]
 def _ground(in_nest: bool, on_food: bool) -> Readings:
     """Readings of the ground sensor only (nobody heard)."""
     none = np.zeros(0)
-    return Readings(in_nest, on_food, np.zeros(0, dtype=np.int64), none, none, none, none)
+    return Readings(np.array([in_nest, on_food]), np.zeros(0, dtype=np.int64), none, none, np.zeros((0, 2)))
 
 
 def _forager(profile: int = PAPER) -> FootbotController:
@@ -239,18 +259,18 @@ def test_a_robot_started_on_food_delivers_on_its_first_sensed_step_in_the_nest()
     # Step 1, the trial's first: no sensing, but the start pose on food sets the carrying flag (a73e4af:
     # footbot_bt.cpp:134-137 -> CBlackBoard.cpp:140-143).
     first = c.on_step(1, _ground(False, True))
-    assert first.carrying and first.deliveries == 0
+    assert first.carrying == (True,) and first.deliveries == (0,)
     # Steps 2-3 away from both regions: still carrying; step 4 ticks: got_food holds, reverse starts.
     c.on_step(2, _ground(False, False))
     c.on_step(3, _ground(False, False))
     tick = c.on_step(4, _ground(False, False))
-    assert tick.carrying and tick.tick is not None and tick.action == tick.tick.started == REVERSE
+    assert tick.carrying == (True,) and tick.tick is not None and tick.action == tick.tick.started == REVERSE
     # Step 5: the first sensed step in the nest delivers and clears the flag (footbot_bt.cpp:249-254).
     delivered = c.on_step(5, _ground(True, False))
-    assert (delivered.carrying, delivered.deliveries) == (False, 1)
+    assert (delivered.carrying, delivered.deliveries) == ((False,), (1,))
     # In the nest there is nothing to deliver any more.
-    assert c.on_step(6, _ground(True, False)).deliveries == 1
-    assert not c.on_step(7, _ground(True, False)).carrying
+    assert c.on_step(6, _ground(True, False)).deliveries == (1,)
+    assert c.on_step(7, _ground(True, False)).carrying == (False,)
     # Step 8 ticks: reverse, resumed, succeeds (the motors stay reverse); step 12's fresh tick finds got_food
     # false in the nest and goes forward.
     assert c.on_step(8, _ground(True, False)).action == REVERSE
@@ -263,7 +283,7 @@ def test_a_robot_started_on_food_delivers_on_its_first_sensed_step_in_the_nest()
 def test_a_robot_started_in_the_nest_delivers_nothing_at_the_trial_start():
     c = _forager()
     assert (c.on_step(1, _ground(True, False)).carrying, c.on_step(2, _ground(True, False)).deliveries) == (
-        False, 0
+        (False,), (0,)
     )  # fmt: skip
 
 
@@ -278,10 +298,10 @@ def test_a_food_crossing_between_two_ticks_still_shows_as_got_food_at_the_next_t
     # Steps 5-7: the robot crosses the food region's edge at step 6 only (sensing at 8 Hz, ticks at 2 Hz).
     c.on_step(5, _ground(False, False))
     crossing = c.on_step(6, _ground(False, True))
-    assert crossing.carrying and crossing.tick is None
+    assert crossing.carrying == (True,) and crossing.tick is None
     c.on_step(7, _ground(False, False))
     tick = c.on_step(8, _ground(False, False))  # on_food is false at the tick, got_food true
-    assert tick.tick is not None and tick.action == REVERSE and tick.carrying
+    assert tick.tick is not None and tick.action == REVERSE and tick.carrying == (True,)
 
 
 def test_the_carrying_flag_and_deliveries_are_cleared_at_a_trials_last_step():
@@ -291,7 +311,7 @@ def test_the_carrying_flag_and_deliveries_are_cleared_at_a_trials_last_step():
     for k in range(1, 161):
         on_food, in_nest = k % 20 == 10, k % 20 == 15  # a delivery every 20 steps from step 15
         outcome = c.on_step(k, _ground(in_nest, on_food))
-    assert (outcome.carrying, outcome.deliveries) == (False, 8)  # the trial's count, at its last step
+    assert (outcome.carrying, outcome.deliveries) == ((False,), (8,))  # the trial's count, at its last step
     # Step 161, the second trial's first: counted from 0 again, carrying only if it starts on food.
     outcome = c.on_step(161, _ground(False, False))
-    assert (outcome.carrying, outcome.deliveries) == (False, 0)
+    assert (outcome.carrying, outcome.deliveries) == ((False,), (0,))

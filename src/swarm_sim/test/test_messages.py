@@ -7,22 +7,17 @@ import pytest
 
 from bt_controller.draws import DROPS, stream_key, uniform
 from bt_controller.perception import Readings, RobotView
+from bt_controller.vocabulary import CONDITIONS, N_CONDITIONS
 from swarm_sim.core import sense_swarm, setup_chain, world
-from swarm_sim.model import DEFAULT, Config
+from swarm_sim.model import DEFAULT, Config, Piece
 
 P = DEFAULT.params()
 OPEN = Config(occlusion=False).params()
 """No occlusion: for tests of delivery and drops alone."""
 
 
-def _buffers(n):
-    return (
-        np.zeros(n, np.int64),
-        np.zeros((n, n), np.int64),
-        np.zeros((n, n)),
-        np.zeros((n, n)),
-        np.zeros((n, n)),
-    )
+def _buffers(n, regions=2):
+    return np.zeros(n, np.int64), np.zeros((n, n), np.int64), np.zeros((n, n)), np.zeros((n, n, regions))
 
 
 def _range(x, y, i, j):
@@ -41,13 +36,13 @@ def test_delivery_rate_within_range_is_095_and_nothing_comes_from_beyond():
     angles = np.linspace(0.0, 2 * np.pi, 9, endpoint=False)
     x, y = ranges * np.cos(angles), ranges * np.sin(angles)
     heard = np.zeros((9, 9), np.int64)
-    nest, food = np.zeros(9), np.zeros(9)
-    counts, senders, r, nv, fv = _buffers(9)
+    broadcast = np.zeros((9, 2))
+    counts, senders, r, values = _buffers(9)
     keys = _keys(3, 9)
     distance = np.array([[_range(x, y, i, j) for j in range(9)] for i in range(9)])
     steps = 4000
     for step in range(steps):
-        world.sense_step(x, y, nest, food, keys, step, OPEN, counts, senders, r, nv, fv)
+        world.sense_step(x, y, broadcast, keys, step, OPEN, counts, senders, r, values)
         for i in range(9):
             heard[i, senders[i, : counts[i]]] += 1
             np.testing.assert_array_equal(r[i, : counts[i]], distance[i, senders[i, : counts[i]]])
@@ -64,12 +59,12 @@ def test_delivery_rate_within_range_is_095_and_nothing_comes_from_beyond():
 
 def test_drops_are_independent_per_ordered_pair():
     x, y = np.array([0.0, 500.0]), np.array([0.0, 0.0])
-    z = np.zeros(2)
-    counts, senders, r, nv, fv = _buffers(2)
+    z = np.zeros((2, 2))
+    counts, senders, r, values = _buffers(2)
     keys = _keys(9, 2)
     both_dropped = 0
     for step in range(2000):
-        world.sense_step(x, y, z, z, keys, step, OPEN, counts, senders, r, nv, fv)
+        world.sense_step(x, y, z, keys, step, OPEN, counts, senders, r, values)
         both_dropped += counts[0] == 0 and counts[1] == 0
     assert both_dropped / 2000 < 0.01  # independent: 0.0025 expected; one shared draw would give 0.05
 
@@ -88,15 +83,16 @@ def _blocked(x, y, i, j) -> bool:
     return False
 
 
-def test_sense_step_matches_a_plain_per_pair_computation():
+@pytest.mark.parametrize("regions", [2, 4])
+def test_sense_step_matches_a_plain_per_pair_computation(regions):
     rng = np.random.default_rng(4)
     n = 9
-    counts, senders, r, nv, fv = _buffers(n)
+    counts, senders, r, values = _buffers(n, regions)
     keys = _keys(17, n)
     for step in range(200):
         x, y = rng.uniform(-900, 900, n), rng.uniform(-900, 900, n)
-        bn, bf = rng.uniform(0, 5000, n), rng.uniform(0, 5000, n)
-        world.sense_step(x, y, bn, bf, keys, step, P, counts, senders, r, nv, fv)
+        broadcast = rng.uniform(0, 5000, (n, regions))
+        world.sense_step(x, y, broadcast, keys, step, P, counts, senders, r, values)
         for i in range(n):
             expected = [
                 j
@@ -109,7 +105,7 @@ def test_sense_step_matches_a_plain_per_pair_computation():
             assert senders[i, : counts[i]].tolist() == expected
             got = slice(0, counts[i])
             assert (r[i, got] == [_range(x, y, i, j) for j in expected]).all()
-            assert (nv[i, got] == bn[expected]).all() and (fv[i, got] == bf[expected]).all()
+            assert (values[i, got] == broadcast[expected]).all()
 
 
 def _entry(gap: float) -> np.ndarray:
@@ -117,34 +113,67 @@ def _entry(gap: float) -> np.ndarray:
     return Config(gaps=(gap,)).arena_arrays(0)[0]
 
 
+def _ground(x, y, entry, regions=2):
+    inside = np.zeros(regions, np.bool_)
+    world.ground(x, y, entry, inside)
+    return tuple(bool(g) for g in inside)
+
+
 def test_ground_sensor():
-    assert world.ground(0.0, 499.999, _entry(500.0)) == (True, False)
-    assert world.ground(0.0, 500.0, _entry(500.0)) == (False, False)  # strictly inside (footbot_bt.cpp:247)
-    assert world.ground(999.999, 0.0, _entry(500.0)) == (False, False)
-    assert world.ground(600.0, 800.0, _entry(500.0)) == (False, True)
-    assert world.ground(600.0, 800.0, _entry(700.0)) == (False, False)
-    assert world.ground(0.0, -1200.0, _entry(700.0)) == (False, True)
+    assert _ground(0.0, 499.999, _entry(500.0)) == (True, False)
+    assert _ground(0.0, 500.0, _entry(500.0)) == (False, False)  # strictly inside (footbot_bt.cpp:247)
+    assert _ground(999.999, 0.0, _entry(500.0)) == (False, False)
+    assert _ground(600.0, 800.0, _entry(500.0)) == (False, True)
+    assert _ground(600.0, 800.0, _entry(700.0)) == (False, False)
+    assert _ground(0.0, -1200.0, _entry(700.0)) == (False, True)
+
+
+def test_ground_sensor_reads_each_food_kind():
+    layout = ((
+        (Piece("nest", "disc", 0.0, 0.0, 400.0), Piece("food", "disc", 1000.0, 0.0, 300.0),
+         Piece("food2", "disc", -1000.0, 0.0, 300.0), Piece("food3", "disc", 0.0, 1000.0, 300.0),
+         Piece("food3", "disc", 0.0, -1000.0, 300.0)),
+    ),)  # fmt: skip
+    entry = Config(layout=layout).arena_arrays(0)[0]
+    assert _ground(0.0, 0.0, entry, 4) == (True, False, False, False)
+    assert _ground(1100.0, 0.0, entry, 4) == (False, True, False, False)
+    assert _ground(-1100.0, 0.0, entry, 4) == (False, False, True, False)
+    assert _ground(0.0, -1100.0, entry, 4) == (False, False, False, True)  # either piece of kind 3
+    assert _ground(0.0, 1100.0, entry, 4) == (False, False, False, True)
+    assert _ground(700.0, 700.0, entry, 4) == (False, False, False, False)
+
+
+def _estimate(inside, count, ranges, values):
+    raw, sources = np.zeros(len(inside)), np.zeros(len(inside), np.int64)
+    density, nearest = world.estimate(np.array(inside), count, ranges, values, P, raw, sources)
+    return raw.tolist(), sources.tolist(), density, nearest
 
 
 def test_estimate_matches_brute_force_on_hand_built_readings():
     ranges = np.array([400.0, 250.0, 900.0, 170.0])
-    nest = np.array([300.0, 700.0, 0.0, 5000.0])
-    food = np.array([5000.0, 5000.0, 4500.0, 4900.0])
-    got = world.estimate(False, False, 4, ranges, nest, food, P)
+    values = np.array([[300.0, 5000.0], [700.0, 5000.0], [0.0, 4500.0], [5000.0, 4900.0]])
+    raw, sources, density, nearest = _estimate([False, False], 4, ranges, values)
     # nest: 700, 950, 900, 5170 -> 700 from message 0; food: 5400, 5250, 5400, 5070 -> all capped.
-    assert got[0] == 700.0 and got[3] == 0
-    assert got[1] == 5000.0 and got[4] == -1
-    assert got[2] == pytest.approx(
+    assert raw == [700.0, 5000.0] and sources == [0, -1]
+    assert density == pytest.approx(
         sum(1.0 / (math.pi * (r / 10000.0) ** 2) for r in ranges) / 6642.0, rel=1e-14
     )
-    assert got[5] == 3
-    inside = world.estimate(True, True, 4, ranges, nest, food, P)
-    assert inside[:2] == (0.0, 0.0) and inside[3:5] == (-1, -1)
-    nothing = world.estimate(False, False, 0, ranges, nest, food, P)
-    assert nothing == (5000.0, 5000.0, 0.0, -1, -1, -1)
+    assert nearest == 3
+    raw, sources, _, _ = _estimate([True, True], 4, ranges, values)
+    assert raw == [0.0, 0.0] and sources == [-1, -1]
+    assert _estimate([False, False], 0, ranges, values) == ([5000.0, 5000.0], [-1, -1], 0.0, -1)
     # ties go to the first message
-    tie = world.estimate(False, False, 2, np.array([300.0, 300.0]), np.array([100.0, 100.0]), food, P)
-    assert tie[3] == 0 and tie[5] == 0
+    raw, sources, _, nearest = _estimate(
+        [False, False], 2, np.array([300.0, 300.0]), np.array([[100.0, 0], [100.0, 0]])
+    )
+    assert sources[0] == 0 and nearest == 0
+
+
+def test_estimate_keeps_each_food_kind_apart():
+    ranges = np.array([400.0, 250.0])
+    values = np.array([[300.0, 5000.0, 100.0, 5000.0], [700.0, 5000.0, 4000.0, 200.0]])
+    raw, sources, _, _ = _estimate([False, False, False, True], 2, ranges, values)
+    assert raw == [700.0, 5000.0, 500.0, 0.0] and sources == [0, -1, 0, -1]
 
 
 def _shortest(x, y, sources, cap, max_range):
@@ -173,19 +202,17 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
     h = rng.uniform(-np.pi, np.pi, n)
     entry = _entry(500.0)
     views = [RobotView(p) for _ in range(n)]
-    ground = [world.ground(x[i], y[i], entry) for i in range(n)]
-    bn = np.array([world.region_value(g[0], p) for g in ground])
-    bf = np.array([world.region_value(g[1], p) for g in ground])
+    ground = [_ground(x[i], y[i], entry) for i in range(n)]
+    broadcast = np.array([[world.region_value(g, p) for g in inside] for inside in ground])
     keys = np.array([stream_key(seed, 0, i, DROPS) for i in range(n)], dtype=np.uint64)
     for step in range(n + 1):
-        for i, reading in enumerate(sense_swarm(x, y, h, bn, bf, keys, step, entry, p)):
+        for i, reading in enumerate(sense_swarm(x, y, h, broadcast, keys, step, entry, p)):
             views[i].sense(reading)
-        bn = np.array([v.nest for v in views])
-        bf = np.array([v.food for v in views])
+        broadcast = np.array([v.raw for v in views])
     in_nest = np.array([g[0] for g in ground])
     on_food = np.array([g[1] for g in ground])
-    np.testing.assert_allclose(bn, _shortest(x, y, in_nest, 5000.0, 1000.0), rtol=1e-12)
-    np.testing.assert_allclose(bf, _shortest(x, y, on_food, 5000.0, 1000.0), rtol=1e-12)
+    np.testing.assert_allclose(broadcast[:, 0], _shortest(x, y, in_nest, 5000.0, 1000.0), rtol=1e-12)
+    np.testing.assert_allclose(broadcast[:, 1], _shortest(x, y, on_food, 5000.0, 1000.0), rtol=1e-12)
     for i, v in enumerate(views):
         d = np.hypot(x - x[i], y - y[i])
         near = (d <= 1000.0) & (np.arange(n) != i)
@@ -194,14 +221,19 @@ def test_converged_estimates_equal_shortest_hop_paths(seed):
         )
 
 
-def test_smoothing_is_the_mean_of_the_last_seven_samples():
-    window = np.zeros((7, 3))
+@pytest.mark.parametrize("regions", [2, 3, 4])
+def test_smoothing_is_the_mean_of_the_last_seven_samples(regions):
+    window = np.zeros((7, regions + 1))
     count = 0
-    samples = [(float(k), 2.0 * k, 0.5 * k) for k in range(12)]
+    # columns: nest, food, density, food2, food3 (the density keeps its 2023 column)
+    samples = [[float(k), 2.0 * k, 0.5 * k, 3.0 * k, 4.0 * k][: regions + 1] for k in range(12)]
+    out = np.zeros(regions + 1)
     for k, s in enumerate(samples):
-        count = world.push_sample(window, count, *s)
+        raw = np.array([s[c] for c in (0, 1, 3, 4)[:regions]])
+        count = world.push_sample(window, count, raw, s[2])
         last = np.array(samples[max(0, k - 6) : k + 1])
-        np.testing.assert_allclose(world.smoothed(window, count), last.mean(axis=0), rtol=1e-15)
+        world.smoothed(window, count, out)
+        np.testing.assert_allclose(out, last.mean(axis=0), rtol=1e-15)
 
 
 def test_blackboard_sides_from_bearings():
@@ -211,10 +243,32 @@ def test_blackboard_sides_from_bearings():
     right = world.bearing(0.0, 0.0, heading, 300.0, 10.0)
     assert 0 < left < math.pi and -math.pi < right < 0
     assert world.bearing(0.0, 0.0, 0.0, 100.0, 0.0) == 0.0  # dead ahead: a robot there counts as left
-    out = np.zeros(9, np.bool_)
-    world.blackboard(False, True, 3000.0, 3000.0, left, right, True, math.nan, True, P, out)
+    out = np.zeros(N_CONDITIONS, np.bool_)
+    bearings = np.array([left, right, math.nan, math.nan, math.nan])  # nest, food, robot, food2, food3
+    world.blackboard(
+        np.array([False, True]), np.array([3000.0, 3000.0]), bearings, True, np.array([True]), P, out
+    )
     # on_food, in_nest, food_left, food_right, nest_left, nest_right, robot_left, robot_right, got_food
-    assert out.tolist() == [True, False, False, True, True, False, False, False, True]
+    assert out[:9].tolist() == [True, False, False, True, True, False, False, False, True]
+    # kind 1's numbered conditions repeat the unnumbered ones; the kinds the world lacks are false
+    assert out[9:13].tolist() == [True, True, False, True] and not out[13:].any()
+
+
+def test_blackboard_reads_each_food_kind():
+    # kind 2 under the robot and carried, kind 3's source on the left, kind 1 known nowhere
+    out = np.zeros(N_CONDITIONS, np.bool_)
+    bearings = np.array([math.nan, math.nan, -1.0, math.nan, 0.5])
+    raw = np.array([5000.0, 5000.0, 0.0, 800.0])
+    world.blackboard(
+        np.array([False, False, True, False]), raw, bearings, True, np.array([False, True, False]), P, out
+    )
+    named = dict(zip(CONDITIONS, out.tolist(), strict=True))
+    assert named["robot_right"] and not named["robot_left"]
+    assert [named[f"on_food{k}"] for k in (1, 2, 3)] == [False, True, False]
+    assert [named[f"got_food{k}"] for k in (1, 2, 3)] == [False, True, False]
+    assert [named[f"food_left{k}"] for k in (1, 2, 3)] == [False, False, True]
+    assert not any(named[f"food_right{k}"] for k in (1, 2, 3))
+    assert (named["on_food"], named["got_food"]) == (False, False)
 
 
 def test_robot_view_blackboard_uses_the_estimate_sources():
@@ -222,17 +276,15 @@ def test_robot_view_blackboard_uses_the_estimate_sources():
     view = RobotView(p)
     # Sender 4 gives the best nest estimate and lies left; sender 7 is nearest and lies right; food capped.
     readings = Readings(
-        in_nest=False,
-        on_food=False,
+        ground=np.array([False, False]),
         senders=np.array([4, 7]),
         ranges=np.array([600.0, 200.0]),
         bearings=np.array([1.0, -2.0]),
-        nest=np.array([100.0, 900.0]),
-        food=np.array([5000.0, 4900.0]),
+        values=np.array([[100.0, 5000.0], [900.0, 4900.0]]),
     )
     view.sense(readings)
-    assert (view.nest, view.food) == (700.0, 5000.0)
-    assert view.blackboard().tolist() == [False, False, False, False, True, False, False, True, False]
+    assert view.raw.tolist() == [700.0, 5000.0]
+    assert view.blackboard()[:9].tolist() == [False, False, False, False, True, False, False, True, False]
 
 
 def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
@@ -240,8 +292,8 @@ def test_start_of_trial_broadcasts_and_readings_are_in_sender_order():
     p = DEFAULT.params()
     x, y, h = np.zeros(9), np.zeros(9), np.zeros(9)
     world.place_robots(x, y, h, s.position_keys, s.heading_keys, 0, p, DEFAULT.arena_arrays(0)[0])
-    z = np.full(9, 5000.0)
-    for reading in sense_swarm(x, y, h, z, z, s.drop_keys, 2, DEFAULT.arena_arrays(0)[0], p):
+    z = np.full((9, 2), 5000.0)
+    for reading in sense_swarm(x, y, h, z, s.drop_keys, 2, DEFAULT.arena_arrays(0)[0], p):
         assert (np.diff(reading.senders) > 0).all()
         assert len(reading.senders) == len(reading.ranges) == len(reading.bearings)
     assert (world.region_value(True, p), world.region_value(False, p)) == (0.0, 5000.0)

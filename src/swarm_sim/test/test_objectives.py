@@ -8,7 +8,7 @@ import pytest
 from bt_controller.tree import parse
 from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
-from swarm_sim.model import DEFAULT, PROBES, Config
+from swarm_sim.model import DEFAULT, PROBES, Config, Piece
 from swarm_sim.roads import reference_road
 
 TRIALS = 4
@@ -24,20 +24,21 @@ def both_roads(tree, seed, config, trials=TRIALS):
     return values, records
 
 
-def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0, spread=(0.0, 0.0)):
+def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0, spread=(0.0, 0.0), p=None):
     """One robot's objectives; ``food`` and ``spread``: its food and neighbour distances (``PROBES``) at the
-    trial's first and last steps."""
-    p = DEFAULT.params()
+    trial's first and last steps; ``deliveries``: a count of kind 1, or one per food kind."""
+    p = p or DEFAULT.params()
     initial, final = np.array(initial, float), np.array(final, float)
     first, last = np.array([food[0], spread[0]]), np.array([food[1], spread[1]])
-    return world.robot_objectives(initial, final, first, last, deliveries, radius, p)
+    kinds = np.array(deliveries if isinstance(deliveries, tuple) else (deliveries,), np.int64)
+    return world.robot_objectives(initial, final, first, last, kinds, radius, p)
 
 
 def test_objective_formulas():
     initial, final = [4000.0, 1000.0, 0.2], [1500.0, 3000.0, 0.5]
     # 300 mm from food at the start, on food at the end; food radius 1200 mm (gap 700); 3 deliveries.
     values = objectives(initial, final, (300.0, 0.0), 3, 1200.0, (1600.0, 400.0))
-    density, nest, food, idensity, inest, ifood, foraging, aggregation = values
+    density, nest, food, idensity, inest, ifood, foraging, aggregation, *kinds, biased = values
     assert density == pytest.approx((0.5 - 0.2 + 1) / 2)
     assert nest == pytest.approx(((4000 - 1500) / 5000 + 1) / 2)
     assert food == pytest.approx(((1000 - 3000) / 5000 + 1) / 2)
@@ -45,7 +46,7 @@ def test_objective_formulas():
     assert idensity == pytest.approx((0.2 - 0.5 + 1) / 2)
     assert inest == pytest.approx(((1500 - 4000) / 5000 + 1) / 2)
     assert ifood == pytest.approx((0.0 - 300.0 + 1200.0) / 2400.0)
-    assert foraging == 3.0
+    assert foraging == 3.0 and kinds == [3.0, 0.0, 0.0] and biased == 3.0
     # Aggregation: the mean distance from the others fell from 1600 to 400 mm.
     assert aggregation == pytest.approx(((1600 - 400) / 1600 + 1) / 2)
     assert objectives(initial, final, spread=(500.0, 1500.0))[7] == 0.0  # spread out threefold: clipped
@@ -56,6 +57,27 @@ def test_objective_formulas():
     assert objectives(initial, [0.0, 0.0, 0.5])[4] == pytest.approx(((0 - 4000) / 5000 + 1) / 2)
     assert objectives([0, 0, 0.0], [1, 1, 1.2])[0] == 1.0 and objectives([0, 0, 0.0], [1, 1, 1.2])[3] == 0.0
     assert objectives([1, 1, 1.2], [1, 1, 0.0])[0] == 0.0 and objectives([1, 1, 1.2], [1, 1, 0.0])[3] == 1.0
+
+
+def test_the_food_kinds_objectives_and_the_bias():
+    initial, final = [4000.0, 1000.0, 0.2], [1500.0, 3000.0, 0.5]
+    named = dict(zip(world.OBJECTIVES, objectives(initial, final, deliveries=(2, 5, 1)), strict=True))
+    assert (named["foraging"], named["foraging1"], named["foraging2"], named["foraging3"]) == (
+        8.0,
+        2.0,
+        5.0,
+        1.0,
+    )
+    assert named["foraging_biased"] == 8.0  # no kind preferred: every delivery counts
+    layout = ((
+        (Piece("nest", "disc", 0.0, 0.0, 400.0), Piece("food", "disc", 1000.0, 0.0, 300.0),
+         Piece("food2", "disc", -1000.0, 0.0, 300.0)),
+    ),)  # fmt: skip
+    biased = Config(layout=layout, preferred_food=2, other_food_weight=0.5).params()
+    named = dict(zip(world.OBJECTIVES, objectives(initial, final, deliveries=(2, 5), p=biased), strict=True))
+    assert named["foraging_biased"] == 5.0 + 0.5 * 2.0 and named["foraging3"] == 0.0
+    penalised = Config(layout=layout, preferred_food=1, other_food_weight=-1.0).params()
+    assert objectives(initial, final, deliveries=(2, 5), p=penalised)[-1] == 2.0 - 5.0
 
 
 def _food_distance(x: float, y: float, gap: float) -> float:

@@ -27,8 +27,10 @@ readings = st.integers(0, 8).flatmap(
 def test_estimate_equals_brute_force(case):
     in_nest, on_food, ranges, nest, food = case
     n = len(ranges)
-    r, nv, fv = np.array([*ranges, 0.0]), np.array([*nest, 0.0]), np.array([*food, 0.0])
-    got = world.estimate(in_nest, on_food, n, r, nv, fv, P)
+    r, values = np.array([*ranges, 0.0]), np.array([*zip(nest, food, strict=True), (0.0, 0.0)])
+    raw, sources = np.zeros(2), np.zeros(2, np.int64)
+    density, nearest = world.estimate(np.array([in_nest, on_food]), n, r, values, P, raw, sources)
+    got = (raw[0], raw[1], density, sources[0], sources[1], nearest)
 
     def best(values, inside):
         if inside:

@@ -45,7 +45,9 @@ def test_the_papers_arena_is_the_default_layout_and_the_same_bits_as_its_radii()
 )
 def test_the_ground_sensor_reads_every_piece_of_a_kind(x, y, expected):
     table, _ = layout_table(LAYOUT)
-    assert world.ground(x, y, table[0, 0]) == expected
+    inside = np.zeros(2, np.bool_)
+    world.ground(x, y, table[0, 0], inside)
+    assert tuple(inside) == expected
 
 
 @pytest.mark.parametrize("entry", [0, 1])

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from bt_controller.compiled import pack
 from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
-from bt_controller.vocabulary import CONDITION_TABLE, CONDITIONS, CONDITIONS_2023, SIDES
+from bt_controller.vocabulary import CONDITION_TABLE, CONDITIONS_2023, CONDITIONS_2024, SIDES
 from swarm_sim.core import kernel
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.evaluation.cli import run as evaluate_run
@@ -73,7 +73,7 @@ def test_the_registered_tasks_are_the_two_papers_worlds_unchanged():
     for profile in ("paper", "clean"):
         assert PRIMITIVES.config(profile) == replace(DEFAULT, profile=profile)
         assert FORAGING.config(profile) == replace(DEFAULT, profile=profile, ticks=200)
-    assert PRIMITIVES.nodes.conditions == CONDITIONS_2023 and FORAGING.nodes.conditions == CONDITIONS
+    assert PRIMITIVES.nodes.conditions == CONDITIONS_2023 and FORAGING.nodes.conditions == CONDITIONS_2024
     assert PRIMITIVES.objectives == ("density", "nest", "food") and FORAGING.objectives == ("foraging",)
     assert world_parameters(PRIMITIVES.config()) == {}
     assert world_parameters(EDITED.config())["n_robots"] == 5
@@ -129,9 +129,23 @@ BAD_FILES = [
     ),
     (
         "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: lava, shape: beyond, radius: [900]}]",
-        "regions[1].kind must be one of nest, food, got 'lava'",
+        "regions[1].kind must be one of nest, food, food2, food3, got 'lava'",
     ),
     ("regions: [{kind: nest, shape: disc, radius: [500]}]", "the task has no food region"),
+    (
+        "regions: [{kind: nest, shape: disc, radius: [500]}, {kind: food3, shape: disc, radius: [300], "
+        "centre: [1000, 0]}]",
+        "the task has no food region; expected at least one (a nest, and food of every kind up to its "
+        "highest, food3)",
+    ),
+    (
+        "nodes: {conditions: [on_food2]}",
+        "nodes.conditions: on_food2 reads the food2 region, which the task does not",
+    ),
+    (
+        "scoring: {preferred_food: 2}",
+        "scoring.preferred_food must be 0 (none) or a food kind of the task, 1 to 1",
+    ),
     ("robots: {count: 90}", "robots.count = 90 robots of radius 85.036758 do not fit"),
     ("robots: {start_half_size: 2400}", "robots.start_half_size 2400.0 lets robots of radius"),
     ("objectives: [fooding]", "objectives: unknown objective 'fooding' (did you mean food?)"),
@@ -293,9 +307,9 @@ def test_an_arena_task_runs_alike_on_both_roads_and_the_command_shows_it(tmp_pat
     command = [sys.executable, "-m", "swarm_sim.tasks.cli", "arena"]
     shown = subprocess.run([*command, "3"], capture_output=True, text=True, check=True)
     assert task_from_yaml(shown.stdout) == arena_task(FORAGING, 3)
-    refused = subprocess.run([*command, "6"], capture_output=True, text=True)
+    refused = subprocess.run([*command, "9"], capture_output=True, text=True)
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1
-    assert "arena 6 has the food kinds food, food2, food3" in refused.stderr
+    assert "arena layout 9 needs a bias" in refused.stderr
 
 
 def test_docs_tasks_md_gives_every_key_of_a_task():

@@ -64,6 +64,7 @@ interpreter; the logic is ``bt_controller.controller``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -82,7 +83,7 @@ from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.model_settings import PerceptionParams, Timeline, profile_number
 from bt_controller.perception import Readings, warm_up
 from bt_controller.tree import Node, parse, to_text
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
 from swarm_ros.names import NamespaceError, robot_frame, robot_index
@@ -284,7 +285,11 @@ class FootbotControllerNode(RosNode):
                 request.density_range,
                 request.density_divisor,
                 line.profile,  # robot_left with nobody heard differs between the profiles
+                1 + request.food_kinds,
             )
+            if not 1 <= request.food_kinds <= MAX_FOOD_KINDS:
+                kinds = f"food_kinds must be 1 to {MAX_FOOD_KINDS} (the world's food kinds)"
+                raise ValueError(f"{kinds}, got {request.food_kinds}")
             self.controller.start_chain(request.tree_key, line, perception, request.trials)
         except (ValueError, RuntimeError) as error:
             response.success = False
@@ -304,7 +309,7 @@ class FootbotControllerNode(RosNode):
     def _on_ground(self, msg: GroundSensor) -> None:
         if self.settings.free:
             if self.free is not None:
-                self.free.offer_ground(msg.step, msg.in_nest, msg.on_food, self._now())
+                self.free.offer_ground(msg.step, ground_of(msg), self._now())
             return
         self._ground[msg.step] = msg
         self._answer_ready_steps()
@@ -312,7 +317,8 @@ class FootbotControllerNode(RosNode):
     def _on_readings(self, msg: RangeAndBearingReadings) -> None:
         if self.settings.free:
             if self.free is not None:
-                self.free.offer_range_and_bearing(msg.step, readings_of(False, False, msg), self._now())
+                unknown = [False] * self.free.view.regions  # (the ground message brings them)
+                self.free.offer_range_and_bearing(msg.step, readings_of(unknown, msg), self._now())
             return
         self._readings[msg.step] = msg
         self._answer_ready_steps()
@@ -396,7 +402,7 @@ class FootbotControllerNode(RosNode):
             and controller.next_step in self._readings
         ):
             ground = self._ground.pop(controller.next_step)
-            readings = readings_of(ground.in_nest, ground.on_food, self._readings.pop(controller.next_step))
+            readings = readings_of(ground_of(ground), self._readings.pop(controller.next_step))
             outcome = controller.on_step(ground.step, readings)
             status, wheels = answer_messages(outcome, ground.header, self.robot, self.wheel_speed)
             if status is not None:
@@ -430,18 +436,43 @@ class FootbotControllerNode(RosNode):
             )
 
 
-def readings_of(in_nest: bool, on_food: bool, msg: RangeAndBearingReadings) -> Readings:
-    """The perception's readings of one step: its ground values and its range-and-bearing message."""
+def ground_of(msg: GroundSensor) -> list[bool]:
+    """A ground message's regions in perception's order: the nest, food kind 1, the other food kinds."""
+    return [bool(msg.in_nest), bool(msg.on_food), *(bool(f) for f in msg.on_other_food)]
+
+
+def readings_of(inside: Sequence[bool], msg: RangeAndBearingReadings) -> Readings:
+    """The perception's readings of one step: its ground values (``ground_of``) and its range-and-bearing
+    message (the nest, food kind 1, then the other food kinds the world has)."""
     rab = msg.readings
     return Readings(
-        in_nest=in_nest,
-        on_food=on_food,
+        ground=np.array(inside, dtype=np.bool_),
         senders=np.array([m.sender for m in rab], dtype=np.int64),
         ranges=np.array([m.range for m in rab], dtype=np.float64),
         bearings=np.array([m.bearing for m in rab], dtype=np.float64),
-        nest=np.array([m.nest_estimate for m in rab], dtype=np.float64),
-        food=np.array([m.food_estimate for m in rab], dtype=np.float64),
+        values=np.array(
+            [[m.nest_estimate, m.food_estimate, *m.other_food_estimates] for m in rab], dtype=np.float64
+        ).reshape(len(rab), len(inside)),
     )
+
+
+def _kind_fields(
+    broadcast: Sequence[float], smoothed: Sequence[float], carrying: Sequence[bool], deliveries: Sequence[int]
+) -> dict[str, object]:
+    """A wheel command's estimate, smoothed, carrying and delivery fields: kind 1's, then the other kinds'."""
+    return {
+        "nest_estimate": float(broadcast[0]),
+        "food_estimate": float(broadcast[1]),
+        "other_food_estimates": [float(v) for v in broadcast[2:]],
+        "smoothed_nest": float(smoothed[0]),
+        "smoothed_food": float(smoothed[1]),
+        "smoothed_density": float(smoothed[2]),
+        "smoothed_other_food": [float(v) for v in smoothed[3:]],
+        "carrying": bool(carrying[0]),
+        "carrying_other_food": [bool(c) for c in carrying[1:]],
+        "deliveries": int(deliveries[0]),
+        "other_food_deliveries": [int(d) for d in deliveries[1:]],
+    }
 
 
 def free_messages(
@@ -460,7 +491,6 @@ def free_messages(
             action=outcome.started,
             condition_ticks=outcome.condition_ticks,
         )
-    nest, food, density = outcome.smoothed
     wheels = WheelCommand(
         header=header,
         robot=robot,
@@ -469,13 +499,9 @@ def free_messages(
         action_name=ACTIONS[outcome.action],
         left=float(outcome.wheels[0]) * wheel_speed,
         right=float(outcome.wheels[1]) * wheel_speed,
-        nest_estimate=outcome.broadcast[0],
-        food_estimate=outcome.broadcast[1],
-        smoothed_nest=nest,
-        smoothed_food=food,
-        smoothed_density=density,
-        carrying=free.view.carrying,
-        deliveries=free.view.deliveries,
+        **_kind_fields(
+            outcome.broadcast, outcome.smoothed, free.view.carrying.tolist(), free.view.deliveries.tolist()
+        ),
     )
     return status, wheels
 
@@ -497,7 +523,6 @@ def answer_messages(
             action=outcome.tick.started,
             condition_ticks=outcome.tick.condition_ticks,
         )
-    nest, food, density = outcome.smoothed
     left, right = float(outcome.wheels[0]), float(outcome.wheels[1])
     action = int(outcome.action)
     left, right = left * wheel_speed, right * wheel_speed
@@ -509,13 +534,7 @@ def answer_messages(
         action_name=ACTIONS[action],
         left=left,
         right=right,
-        nest_estimate=outcome.broadcast[0],
-        food_estimate=outcome.broadcast[1],
-        smoothed_nest=nest,
-        smoothed_food=food,
-        smoothed_density=density,
-        carrying=outcome.carrying,
-        deliveries=outcome.deliveries,
+        **_kind_fields(outcome.broadcast, outcome.smoothed, outcome.carrying, outcome.deliveries),
     )
     return status, wheels
 

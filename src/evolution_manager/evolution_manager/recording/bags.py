@@ -35,6 +35,8 @@ from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
 from rosbags.interfaces import (
+    Connection,
+    MessageDefinitionFormat,
     Nodetype,
     Qos,
     QosDurability,
@@ -431,9 +433,26 @@ def topic_counts(path: Path) -> dict[str, int]:
         raise BagError(f"{path} is not a readable bag ({type(error).__name__}: {error})") from None
 
 
+def _as_written(connections: list[Connection], store: Typestore) -> Typestore:
+    """``store``, but with the bag's own definitions of its message types where it holds them: a bag written
+    before a message gained fields (the food kinds' arrays, say) reads back as it was written, and a reader
+    asks ``getattr`` for what such a message lacks."""
+    written: dict[str, Any] = {}
+    for connection in connections:
+        if connection.msgdef.format == MessageDefinitionFormat.MSG and connection.msgdef.data:
+            written.update(get_types_from_msg(connection.msgdef.data, connection.msgtype))
+    if all(store.fielddefs.get(name) == fields for name, fields in written.items()):
+        return store
+    own = get_typestore(Stores.EMPTY)
+    own.register(written)
+    own.register({name: fields for name, fields in store.fielddefs.items() if name not in written})
+    return own
+
+
 def _messages(path: Path, store: Typestore) -> Iterator[BagMessage]:
     try:
         with Reader(path) as reader:
+            store = _as_written(list(reader.connections), store)
             for connection, timestamp, data in reader.messages():
                 message = store.deserialize_cdr(data, connection.msgtype)
                 yield BagMessage(connection.topic, connection.msgtype, timestamp, bytes(data), message)

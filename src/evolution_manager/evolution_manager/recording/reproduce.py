@@ -164,7 +164,7 @@ def verify_trial_bag(path: Path | str) -> Verification:
         poses = [tuple(p) for p in world.poses().tolist()]
         if not divergences and recorded.get(world.step) != poses:
             divergences.append(f"the poses differ at step {world.step}")
-        carried = ([bool(c) for c in world.carrying], [int(d) for d in world.deliveries])
+        carried = ([bool(row.any()) for row in world.carrying], [int(row.sum()) for row in world.deliveries])
         if not divergences and world.step in cargo and cargo[world.step] != carried:
             divergences.append(f"the carrying flags or deliveries differ at step {world.step}")
 

@@ -24,12 +24,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.errors import TreeError
 from bt_controller.library import library_option
 from bt_controller.tree import parse, to_text
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.vocabulary import ACTIONS, food_kind_name
 from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
@@ -55,6 +56,13 @@ NEST_COLOUR = (246, 214, 160)
 FOOD_COLOUR = (196, 230, 180)
 GAP_COLOUR = (250, 250, 250)
 CARRY_COLOUR = (30, 130, 30)
+REGION_COLOURS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
+    "food": (FOOD_COLOUR, (40, 100, 40)),
+    "food2": ((184, 208, 240), (40, 70, 150)),
+    "food3": ((240, 196, 214), (150, 40, 90)),
+    "nest": (NEST_COLOUR, (120, 80, 20)),
+}
+"""Each region kind's fill and ink (its label; the ring of a robot carrying it), drawn in this order."""
 
 
 DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
@@ -92,7 +100,7 @@ def _draw_regions(draw: ImageDraw.ImageDraw, frames: TrialFrames, font: ImageFon
     labelled."""
     scale = ARENA_PX / (2 * frames.arena_half)
     draw.rectangle((0, 0, ARENA_PX - 1, ARENA_PX - 1), fill=GAP_COLOUR, outline=(60, 60, 60), width=3)
-    for kind, colour, ink in (("food", FOOD_COLOUR, (40, 100, 40)), ("nest", NEST_COLOUR, (120, 80, 20))):
+    for kind, (colour, ink) in REGION_COLOURS.items():
         for piece in frames.regions:
             if piece.kind != kind:
                 continue
@@ -147,9 +155,10 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
     for i in range(frames.n_robots):
         x, y = to_pixels(frames, *poses[k, i, :2])
         heading = poses[k, i, 2]
-        if frames.carrying[k, i]:  # carrying food: a ring in the food region's darker green
-            ring = radius + 3
-            draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=CARRY_COLOUR, width=3)
+        for f in np.flatnonzero(frames.carrying[k, i]):  # carrying food: a ring per kind, in its ink
+            ring = radius + 3 + 3 * int(f)
+            ink = CARRY_COLOUR if f == 0 else REGION_COLOURS[food_kind_name(int(f) + 1)][1]
+            draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=ink, width=3)
         draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
         tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))
         draw.line(((x, y), tip), fill=(0, 0, 0), width=2)
@@ -163,7 +172,7 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         f"tick {tick if tick >= 0 else '-'}",
     ]
     if "foraging" in shown:  # a foraging trial: the swarm's deliveries so far and how many robots carry food
-        delivered, carrying = int(frames.deliveries[k].sum()), int(frames.carrying[k].sum())
+        delivered, carrying = int(frames.deliveries[k].sum()), int(frames.carrying[k].any(axis=1).sum())
         lines.append(f"deliveries {delivered}, carrying {carrying}")
     lines.append("fitness so far:")
 

@@ -124,7 +124,7 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     fitness = np.asarray(frames.fitness, dtype=np.float64)[rows][:, columns]
     ticks = np.asarray(frames.ticks)[rows]
     actions = np.asarray(frames.actions)[rows]
-    carrying = np.asarray(frames.carrying)[rows]
+    carrying = np.asarray(np.asarray(frames.carrying).any(axis=2))[rows]
     robots = poses.shape[1]
     # One record per kept frame; a dtype given as a list of fields is packed, as struct's "<" formats.
     record = np.dtype(

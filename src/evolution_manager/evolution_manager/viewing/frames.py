@@ -57,9 +57,9 @@ class TrialFrames:
     fitness: np.ndarray
     """(T, ``world.N_OBJECTIVES``): every objective so far (NaN before the initial values)."""
     carrying: np.ndarray
-    """(T, n) bool: whether each robot carries food after this step (its answer)."""
+    """(T, n, kinds) bool: whether each robot carries food of each kind after this step (its answer)."""
     deliveries: np.ndarray
-    """(T, n) int: each robot's deliveries in the trial after this step."""
+    """(T, n, kinds) int: each robot's deliveries of each kind in the trial after this step."""
     trees: tuple[str, ...] = ()
     """Each robot's tree text, robot 0 first (a heterogeneous swarm's differ; empty: not known)."""
     regions: tuple[Piece, ...] = ()
@@ -93,8 +93,8 @@ class TrialFrames:
             "ticks": [int(t) for t in self.ticks],
             "links": [[int(v) for v in pair] for frame in self.links for pair in [frame.ravel()]],
             "fitness": [[None if math.isnan(v) else round(float(v), 4) for v in row] for row in self.fitness],
-            "carrying": self.carrying.astype(int).tolist(),
-            "deliveries": self.deliveries.astype(int).tolist(),
+            "carrying": self.carrying.any(axis=2).astype(int).tolist(),
+            "deliveries": self.deliveries.sum(axis=2).astype(int).tolist(),
             **({"trees": list(self.trees)} if self.heterogeneous else {}),
             **({"regions": [piece._asdict() for piece in self.regions]} if self.regions else {}),
         }
@@ -198,13 +198,14 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     if not states:
         raise AnimationError(f"{path} holds no /swarm_state messages: nothing to animate")
     n = int(start.robots)
+    kinds = config.food_kinds
     steps = sorted(states)
     index = {s: k for k, s in enumerate(steps)}
     poses = np.array([[[q.x, q.y, q.theta] for q in states[s].poses] for s in steps], dtype=np.float64)
     wheels = np.full((len(steps), n), -1, dtype=np.int64)
-    smoothed = np.full((len(steps), n, 3), np.nan)
-    carrying = np.zeros((len(steps), n), dtype=np.bool_)
-    deliveries = np.zeros((len(steps), n), dtype=np.int64)
+    smoothed = np.full((len(steps), n, kinds + 2), np.nan)
+    carrying = np.zeros((len(steps), n, kinds), dtype=np.bool_)
+    deliveries = np.zeros((len(steps), n, kinds), dtype=np.int64)
     heard: list[list[tuple[int, int]]] = [[] for _ in steps]
     tick_at: dict[int, int] = {}
     for m in messages:
@@ -222,9 +223,17 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             continue
         if kind == "wheels":
             wheels[k, robot] = int(msg.action)  # the action's index (wheel speeds are in m/s since issue 13)
-            smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density)
-            carrying[k, robot] = bool(getattr(msg, "carrying", False))  # (bags before foraging: none)
-            deliveries[k, robot] = int(getattr(msg, "deliveries", 0))
+            # (bags before foraging have no carrying and deliveries, before food kinds no other kinds)
+            others = list(getattr(msg, "smoothed_other_food", []))
+            smoothed[k, robot] = (msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density, *others)
+            carrying[k, robot] = (
+                bool(getattr(msg, "carrying", False)),
+                *getattr(msg, "carrying_other_food", []),
+            )
+            deliveries[k, robot] = (
+                int(getattr(msg, "deliveries", 0)),
+                *getattr(msg, "other_food_deliveries", []),
+            )
         elif kind == "range_and_bearing":
             heard[k].extend((robot, int(r.sender)) for r in msg.readings)
 

@@ -35,6 +35,7 @@ from bt_controller import timeline
 from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_memory, tick, tree_at
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
+from bt_controller.perception import ROBOT_SIDE, region_column
 from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
 from swarm_sim.core import fast_world, world
 from swarm_sim.core._numba_cache import drop_stale_cache
@@ -74,8 +75,8 @@ _CONDITION_SIDE = np.array(CONDITION_SIDE, dtype=np.int64)
 
 @numba.njit(cache=True, error_model="numpy")
 def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
-    """Which of the blackboard's side pairs (``vocabulary.SIDES``: nest, food, robot) the tree reads, from
-    its condition nodes and the conditions table."""
+    """Which of the blackboard's side pairs (``vocabulary.SIDES``: nest, food, robot, food2, food3) the tree
+    reads, from its condition nodes and the conditions table."""
     read = np.zeros(len(SIDES), dtype=np.bool_)
     for k in range(op.shape[0]):
         if op[k] == OP_CONDITION:
@@ -180,20 +181,27 @@ class Swarm(NamedTuple):
     """(n, 10) workspace of ``fast_world.physics_step``'s solver."""
     gains: np.ndarray
     """(left, right) wheel gains."""
-    broadcast_nest: np.ndarray
-    """Values each robot broadcast at the last step (heard by the others at this one)."""
-    broadcast_food: np.ndarray
-    raw_nest: np.ndarray
-    """Raw estimates of the latest sensing step."""
-    raw_food: np.ndarray
+    broadcast: np.ndarray
+    """(n, regions) values each robot broadcast at the last step (heard by the others at this one), per
+    region (``vocabulary.REGIONS`` order: nest, food, food2, food3)."""
+    raw: np.ndarray
+    """(n, regions) raw estimates of the latest sensing step."""
     window: np.ndarray
-    """(n, window, 3) raw samples (nest, food, density) for smoothing."""
+    """(n, window, regions + 1) raw samples for smoothing (``vocabulary.region_column`` order: nest, food,
+    density, food2, food3)."""
     smooth: np.ndarray
-    """(n, 3) smoothed (nest, food, density), as last refreshed."""
+    """(n, regions + 1) smoothed values, as last refreshed (columns as ``window``'s)."""
     ground: np.ndarray
-    """(n, 2) bool: in the nest, on food, at the latest sensing step."""
+    """(n, regions) bool: in each region, at the latest sensing step."""
+    here: np.ndarray
+    """(n, regions) bool: the ground at a step that senses nothing (a trial's first)."""
     sources: np.ndarray
-    """(n, 3) sender ids of the nest source, food source and nearest robot (-1: none)."""
+    """(n, ``len(SIDES)``) sender ids of each region's estimate source (at its ``region_column``) and of the
+    nearest robot (at ``ROBOT_SIDE``); -1: none."""
+    positions: np.ndarray
+    """(regions,) workspace: the positions in the messages of a robot's estimate sources."""
+    bearings: np.ndarray
+    """(``len(SIDES)``,) workspace: a robot's bearings of its side pairs at a tick."""
     actions: np.ndarray
     """The motors of each robot: the last action its last tick ticked."""
     resumed: np.ndarray
@@ -205,7 +213,7 @@ class Swarm(NamedTuple):
     motion: np.ndarray
     """(n, 2) movement and rotation sums of the current trial."""
     initial: np.ndarray
-    """(n, 3) the current trial's initial smoothed values."""
+    """(n, regions + 1) the current trial's initial smoothed values."""
 
 
 class Cargo(NamedTuple):
@@ -213,9 +221,9 @@ class Cargo(NamedTuple):
     where the trial found it (``docs/model.md``, "Foraging")."""
 
     carrying: np.ndarray
-    """(n,) bool: whether each robot carries food (``perception.carry``)."""
+    """(n, food kinds) bool: whether each robot carries food of each kind (``perception.carry``)."""
     deliveries: np.ndarray
-    """(n,) int64: each robot's deliveries in the current trial."""
+    """(n, food kinds) int64: each robot's deliveries of each kind in the current trial."""
     probes: np.ndarray
     """(n, 2, ``N_PROBES``) each robot's probes (``world.take_probes``) at the current trial's first step and,
     once taken, its last."""
@@ -227,10 +235,9 @@ class Inbox(NamedTuple):
     n_heard: np.ndarray
     """(n,) messages received."""
     sender: np.ndarray
-    """(n, n) their senders, in sender order; then their ranges, nest and food estimates."""
+    """(n, n) their senders, in sender order; then their ranges (n, n) and estimates (n, n, regions)."""
     range: np.ndarray
-    nest: np.ndarray
-    food: np.ndarray
+    values: np.ndarray
 
 
 class Recording(NamedTuple):
@@ -250,36 +257,38 @@ class Recording(NamedTuple):
     senders: np.ndarray
     """(steps, n, n) int64: their senders, in sender order."""
     smoothed: np.ndarray
-    """(steps, n, 3): each robot's smoothed (nest, food, density) as last refreshed."""
+    """(steps, n, regions + 1): each robot's smoothed values as last refreshed (nest, food, density, food2,
+    food3)."""
     ground: np.ndarray
-    """(steps, n, 2) bool: in the nest, on food (the ground sensor at the step)."""
+    """(steps, n, regions) bool: in each region (the ground sensor at the step)."""
     fitness: np.ndarray
     """(steps, ``world.N_OBJECTIVES``): every objective scored as if the trial ended at the step (foraging:
     the deliveries so far); NaN before the initial step."""
     initial: np.ndarray
-    """(n, 3): the trial's initial smoothed values (taken at its initial step)."""
+    """(n, regions + 1): the trial's initial smoothed values (taken at its initial step)."""
     carrying: np.ndarray
-    """(steps, n) bool: whether each robot carries food after the step (what it answered)."""
+    """(steps, n, food kinds) bool: whether each robot carries food of each kind after the step (what it
+    answered)."""
     deliveries: np.ndarray
-    """(steps, n) int64: each robot's deliveries in the trial after the step."""
+    """(steps, n, food kinds) int64: each robot's deliveries of each kind in the trial after the step."""
 
 
 @numba.njit(cache=True, error_model="numpy")
-def new_recording(steps: int, n: int) -> Recording:
-    """A zeroed recording of ``steps`` steps of ``n`` robots (0 steps: the batch road's, which records
-    nothing)."""
+def new_recording(steps: int, n: int, regions: int) -> Recording:
+    """A zeroed recording of ``steps`` steps of ``n`` robots in a world of ``regions`` regions (0 steps: the
+    batch road's, which records nothing)."""
     return Recording(
         np.zeros((steps, n, 3)),
         np.zeros((steps, n), dtype=np.int64),
         np.zeros(steps, dtype=np.int64),
         np.zeros((steps, n), dtype=np.int64),
         np.zeros((steps, n, n), dtype=np.int64),
-        np.zeros((steps, n, 3)),
-        np.zeros((steps, n, 2), dtype=np.bool_),
+        np.zeros((steps, n, regions + 1)),
+        np.zeros((steps, n, regions), dtype=np.bool_),
         np.zeros((steps, world.N_OBJECTIVES)),
-        np.zeros((n, 3)),
-        np.zeros((steps, n), dtype=np.bool_),
-        np.zeros((steps, n), dtype=np.int64),
+        np.zeros((n, regions + 1)),
+        np.zeros((steps, n, regions - 1), dtype=np.bool_),
+        np.zeros((steps, n, regions - 1), dtype=np.int64),
     )
 
 
@@ -323,14 +332,15 @@ def _record_step(
         rec.poses[row, i, 1] = y[i]
         rec.poses[row, i, 2] = heading[i]
         rec.actions[row, i] = actions[i] if last >= 0 else -1
-        rec.ground[row, i, 0], rec.ground[row, i, 1] = world.ground(x[i], y[i], entry)
+        world.ground(x[i], y[i], entry, rec.ground[row, i])
         rec.heard[row, i] = heard[i]
         for c in range(heard[i]):
             rec.senders[row, i, c] = senders[i, c]
-        for c in range(3):
+        for c in range(smooth.shape[1]):
             rec.smoothed[row, i, c] = smooth[i, c]
-        rec.carrying[row, i] = carrying[i]
-        rec.deliveries[row, i] = deliveries[i]
+        for f in range(carrying.shape[1]):
+            rec.carrying[row, i, f] = carrying[i, f]
+            rec.deliveries[row, i, f] = deliveries[i, f]
     if timeline.is_initial(p, k):
         rec.initial[:, :] = initial
     if row + 1 >= p.initial_step:
@@ -357,6 +367,7 @@ def _record_step(
 @numba.njit(cache=True, error_model="numpy")
 def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p: Params) -> Swarm:
     n = p.n_robots
+    regions = p.regions
     width = 1
     for i in range(n):
         width = max(width, tree_at(trees, robot_tree[i]).op.shape[0])
@@ -372,36 +383,38 @@ def _new_swarm(gains: np.ndarray, trees: PackedTrees, robot_tree: np.ndarray, p:
         np.zeros((n * (n - 1) // 2, 2), dtype=np.int64),
         np.zeros((n, 10)),
         gains,
-        np.full(n, p.estimate_cap),
-        np.full(n, p.estimate_cap),
-        np.full(n, p.estimate_cap),
-        np.full(n, p.estimate_cap),
-        np.zeros((n, p.window, 3)),
-        np.zeros((n, 3)),
-        np.zeros((n, 2), dtype=np.bool_),
-        np.full((n, 3), -1, dtype=np.int64),
+        np.full((n, regions), p.estimate_cap),
+        np.full((n, regions), p.estimate_cap),
+        np.zeros((n, p.window, regions + 1)),
+        np.zeros((n, regions + 1)),
+        np.zeros((n, regions), dtype=np.bool_),
+        np.zeros((n, regions), dtype=np.bool_),
+        np.full((n, len(SIDES)), -1, dtype=np.int64),
+        np.full(regions, -1, dtype=np.int64),
+        np.full(len(SIDES), math.nan),
         np.full(n, STOP, dtype=np.int64),
         np.full(n, -1, dtype=np.int64),
         memory,
         np.zeros((n, N_COUNTS), dtype=np.int64),
         np.zeros((n, 2), dtype=np.int64),
-        np.zeros((n, 3)),
+        np.zeros((n, regions + 1)),
     )
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _new_cargo(n: int) -> Cargo:
-    return Cargo(np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64), np.zeros((n, 2, N_PROBES)))
+def _new_cargo(n: int, kinds: int) -> Cargo:
+    return Cargo(
+        np.zeros((n, kinds), dtype=np.bool_), np.zeros((n, kinds), dtype=np.int64), np.zeros((n, 2, N_PROBES))
+    )
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _new_inbox(n: int) -> Inbox:
+def _new_inbox(n: int, regions: int) -> Inbox:
     return Inbox(
         np.zeros(n, dtype=np.int64),
         np.zeros((n, n), dtype=np.int64),
         np.zeros((n, n)),
-        np.zeros((n, n)),
-        np.zeros((n, n)),
+        np.zeros((n, n, regions)),
     )
 
 
@@ -429,7 +442,7 @@ def simulate_chain(
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
     swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
-    sides = np.zeros((n, 3), dtype=np.bool_)
+    sides = np.zeros((n, len(SIDES)), dtype=np.bool_)
     for i in range(n):
         own = tree_at(trees, robot_tree[i])
         sides[i] = _sides_read(own.op, own.arg)
@@ -439,8 +452,8 @@ def simulate_chain(
         keys,
         sides,
         swarm,
-        _new_cargo(n),
-        _new_inbox(n),
+        _new_cargo(n, p.regions - 1),
+        _new_inbox(n, p.regions),
         world.drive(swarm.gains, p),
         np.zeros(N_CONDITIONS, dtype=np.bool_),
         trials,
@@ -503,11 +516,12 @@ def _steps(
     heading_keys = keys[HEADING]
     drop_keys = keys[DROPS]
     tree_keys = keys[TREE]
-    (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast_nest, broadcast_food, raw_nest, raw_food,
-     window, smooth, ground_now, sources, actions, resumed, memory, counts, motion,
-     initial) = swarm  # fmt: skip
-    counts_in, senders, ranges, nest_values, food_values = inbox
+    (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast, raw, window, smooth, ground_now, here,
+     sources, positions, bearings, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
+    counts_in, senders, ranges, values = inbox
     carrying, deliveries, probes = cargo
+    regions = p.regions
+    kinds = regions - 1
     samples = 0
     # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
     shared = tree_at(trees, robot_tree[0])
@@ -530,64 +544,42 @@ def _steps(
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the
             # robots ignore it, and only a recording looks).
-            world.sense_step(
-                x,
-                y,
-                broadcast_nest,
-                broadcast_food,
-                drop_keys,
-                k,
-                p,
-                counts_in,
-                senders,
-                ranges,
-                nest_values,
-                food_values,
-            )
+            world.sense_step(x, y, broadcast, drop_keys, k, p, counts_in, senders, ranges, values)
         if not sensing:
             # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
             # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
             # a73e4af).
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], entry)
-                carrying[i] = world.start_carrying(carrying[i], on_food)
+                world.ground(x[i], y[i], entry, here[i])
+                for f in range(kinds):
+                    carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
                 world.take_probes(x, y, i, entry, probes, 0)
         if sensing:
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], entry)
-                carrying[i], delivered = world.carry(carrying[i], in_nest, on_food)
-                deliveries[i] += 1 if delivered else 0
-                nest_raw, food_raw, density, nest_source, food_source, nearest = world.estimate(
-                    in_nest, on_food, counts_in[i], ranges[i], nest_values[i], food_values[i], p
+                inside = ground_now[i]
+                world.ground(x[i], y[i], entry, inside)
+                for f in range(kinds):
+                    carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], inside[f + 1])
+                    deliveries[i, f] += 1 if delivered else 0
+                density, nearest = world.estimate(
+                    inside, counts_in[i], ranges[i], values[i], p, raw[i], positions
                 )
-                world.push_sample(window[i], samples, nest_raw, food_raw, density)
-                raw_nest[i] = nest_raw
-                raw_food[i] = food_raw
-                ground_now[i, 0] = in_nest
-                ground_now[i, 1] = on_food
-                sources[i, 0] = senders[i, nest_source] if nest_source >= 0 else -1
-                sources[i, 1] = senders[i, food_source] if food_source >= 0 else -1
-                sources[i, 2] = senders[i, nearest] if nearest >= 0 else -1
+                world.push_sample(window[i], samples, raw[i], density)
+                for r in range(regions):
+                    sources[i, region_column(r)] = senders[i, positions[r]] if positions[r] >= 0 else -1
+                sources[i, ROBOT_SIDE] = senders[i, nearest] if nearest >= 0 else -1
             samples += 1
             if timeline.refreshes(p, k):
                 for i in range(n):
-                    smooth[i, 0], smooth[i, 1], smooth[i, 2] = world.smoothed(window[i], samples)
+                    world.smoothed(window[i], samples, smooth[i])
         if timeline.ticks_at(p, k):
             number = timeline.tick_number(p, k)
             for i in range(n):
                 tree = shared if uniform else tree_at(trees, robot_tree[i])
+                for side in range(bearings.shape[0]):
+                    bearings[side] = _source_bearing(sides[i, side], i, sources[i, side], x, y, heading)
                 world.blackboard(
-                    ground_now[i, 0],
-                    ground_now[i, 1],
-                    raw_nest[i],
-                    raw_food[i],
-                    _source_bearing(sides[i, 0], i, sources[i, 0], x, y, heading),
-                    _source_bearing(sides[i, 1], i, sources[i, 1], x, y, heading),
-                    sources[i, 2] >= 0,
-                    _source_bearing(sides[i, 2], i, sources[i, 2], x, y, heading),
-                    carrying[i],
-                    p,
-                    board,
+                    ground_now[i], raw[i], bearings, sources[i, ROBOT_SIDE] >= 0, carrying[i], p, board
                 )
                 status, started = tick(tree, memory[i], board, tree_keys[i], number, counts[i])
                 motors = motors_after_tick(status, started, resumed[i])
@@ -597,16 +589,16 @@ def _steps(
                 motion[i, 1] += rotation_of(motors)
         if timeline.region_broadcast(k):
             for i in range(n):
-                in_nest, on_food = world.ground(x[i], y[i], entry)
-                broadcast_nest[i] = world.region_value(in_nest, p)
-                broadcast_food[i] = world.region_value(on_food, p)
+                world.ground(x[i], y[i], entry, here[i])
+                for r in range(regions):
+                    broadcast[i, r] = world.region_value(here[i, r], p)
         else:
             for i in range(n):
-                broadcast_nest[i] = world.broadcast_value(smooth[i, 0])
-                broadcast_food[i] = world.broadcast_value(smooth[i, 1])
+                for r in range(regions):
+                    broadcast[i, r] = world.broadcast_value(smooth[i, region_column(r)])
         if timeline.is_initial(p, k):
             for i in range(n):
-                for c in range(3):
+                for c in range(regions + 1):
                     initial[i, c] = smooth[i, c]
         if position == recorded:
             _record_step(
@@ -639,8 +631,9 @@ def _steps(
                 motion[i, 0] = 0
                 motion[i, 1] = 0
                 # after the scores: no carrying, no deliveries (footbot_bt.cpp:579-580 at a73e4af)
-                carrying[i] = False
-                deliveries[i] = 0
+                for f in range(kinds):
+                    carrying[i, f] = False
+                    deliveries[i, f] = 0
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -660,7 +653,7 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
         out.values[a:b],
         out.poses[a:b],
         -1,
-        new_recording(0, params.n_robots),
+        new_recording(0, params.n_robots, params.regions),
     )
 
 
@@ -693,7 +686,7 @@ def record_chain(
 ) -> np.ndarray:
     """Run trials 0 .. ``recorded`` of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
     ``trees`` (``simulate_chain``), recording trial ``recorded`` into ``rec`` (``new_recording(trial_steps,
-    n_robots)``); its ``world.N_VALUES`` values."""
+    n_robots, regions)``); its ``world.N_VALUES`` values."""
     values = np.zeros((recorded + 1, world.N_VALUES))
     poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
     simulate_chain(

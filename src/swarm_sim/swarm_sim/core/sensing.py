@@ -21,38 +21,35 @@ def sense_swarm(
     x: np.ndarray,
     y: np.ndarray,
     heading: np.ndarray,
-    broadcast_nest: np.ndarray,
-    broadcast_food: np.ndarray,
+    broadcast: np.ndarray,
     drop_keys: np.ndarray,
     step: int,
     entry: np.ndarray,
     p: Params,
 ) -> list[Readings]:
     """Every robot's readings at sensing step ``step`` on the regions of ``entry`` (the simulator's side,
-    robot by robot)."""
+    robot by robot); ``broadcast`` (n x regions) is what each robot broadcast at the step before."""
     n = x.shape[0]
+    regions = broadcast.shape[1]
     counts = np.zeros(n, dtype=np.int64)
     senders = np.zeros((n, n), dtype=np.int64)
-    ranges, nest, food = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
-    world.sense_step(
-        x, y, broadcast_nest, broadcast_food, drop_keys, step, p, counts, senders, ranges, nest, food
-    )
+    ranges, values = np.zeros((n, n)), np.zeros((n, n, regions))
+    world.sense_step(x, y, broadcast, drop_keys, step, p, counts, senders, ranges, values)
     out = []
     for i in range(n):
         count = counts[i]
         bearings = np.array(
             [world.bearing(x[i], y[i], heading[i], x[j], y[j]) for j in senders[i, :count]], dtype=np.float64
         )
-        in_nest, on_food = world.ground(x[i], y[i], entry)
+        inside = np.zeros(regions, dtype=np.bool_)
+        world.ground(x[i], y[i], entry, inside)
         out.append(
             Readings(
-                bool(in_nest),
-                bool(on_food),
+                inside,
                 senders[i, :count].copy(),
                 ranges[i, :count].copy(),
                 bearings,
-                nest[i, :count].copy(),
-                food[i, :count].copy(),
+                values[i, :count].copy(),
             )
         )
     return out

@@ -633,19 +633,16 @@ def _piece_distance(shape: float, cx: float, cy: float, r: float, x: float, y: f
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def ground(x: float, y: float, entry: np.ndarray) -> tuple:
-    """The ground sensor: (in_nest, on_food) for a robot centred at (x, y) on the regions of ``entry``
+def ground(x: float, y: float, entry: np.ndarray, inside: np.ndarray) -> None:
+    """The ground sensor: write into ``inside`` (one bool per region the robots perceive, ``REGION_KINDS``
+    order: nest, food, food2, food3) whether a robot centred at (x, y) stands in each region of ``entry``
     (pieces x ``regions.PIECE_FIELDS``, ``regions.layout_table``): in a region when in any of its pieces."""
-    in_nest = False
-    on_food = False
+    for r in range(inside.shape[0]):
+        inside[r] = False
     for m in range(entry.shape[0]):
         kind = entry[m, 0]
         if kind >= 0.0 and _piece_inside(entry[m, 1], entry[m, 2], entry[m, 3], entry[m, 4], x, y):
-            if kind == 0.0:
-                in_nest = True
-            else:
-                on_food = True
-    return in_nest, on_food
+            inside[int(kind)] = True
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -677,27 +674,27 @@ def occluded(x: np.ndarray, y: np.ndarray, i: int, j: int, p: Params) -> bool:
 def sense_step(
     x: np.ndarray,
     y: np.ndarray,
-    broadcast_nest: np.ndarray,
-    broadcast_food: np.ndarray,
+    broadcast: np.ndarray,
     drop_keys: np.ndarray,
     step: int,
     p: Params,
     counts: np.ndarray,
     senders: np.ndarray,
     ranges: np.ndarray,
-    nest_values: np.ndarray,
-    food_values: np.ndarray,
+    values: np.ndarray,
 ) -> None:
     """The messages every robot receives at control step ``step`` of a chain.
 
     Robot ``j``'s message reaches robot ``i`` when their centres are within ``message_range``, no third
     robot's body cuts the segment between them (with ``occlusion``), and draw ``step * n + j`` of ``i``'s
     drop stream (``drop_keys[i]``) is below ``delivery_probability``. It carries what ``j`` broadcast at the
-    step before (``broadcast_*``). Robot ``i``'s messages fill the first ``counts[i]`` entries of row ``i`` of
-    ``senders``, ``ranges``, ``nest_values`` and ``food_values`` (n x n), in sender order. Each pair's range
-    is computed once for both directions (the same bits either way: ``(-d) * (-d) == d * d``).
+    step before (``broadcast``: n x regions). Robot ``i``'s messages fill the first ``counts[i]`` entries of
+    row ``i`` of ``senders`` and ``ranges`` (n x n) and of ``values`` (n x n x regions), in sender order.
+    Each pair's range is computed once for both directions (the same bits either way: ``(-d) * (-d) ==
+    d * d``).
     """
     n = x.shape[0]
+    regions = broadcast.shape[1]
     range2 = p.message_range * p.message_range
     for i in range(n):
         counts[i] = 0
@@ -716,15 +713,15 @@ def sense_step(
                 c = counts[i]
                 senders[i, c] = j
                 ranges[i, c] = d
-                nest_values[i, c] = broadcast_nest[j]
-                food_values[i, c] = broadcast_food[j]
+                for r in range(regions):
+                    values[i, c, r] = broadcast[j, r]
                 counts[i] = c + 1
             if uniform(drop_keys[j], step * n + i) < p.delivery_probability:
                 c = counts[j]
                 senders[j, c] = i
                 ranges[j, c] = d
-                nest_values[j, c] = broadcast_nest[i]
-                food_values[j, c] = broadcast_food[i]
+                for r in range(regions):
+                    values[j, c, r] = broadcast[i, r]
                 counts[j] = c + 1
 
 
@@ -803,23 +800,28 @@ def robot_objectives(
     final: np.ndarray,
     first: np.ndarray,
     last: np.ndarray,
-    deliveries: int,
+    deliveries: np.ndarray,
     food_radius: float,
     p: Params,
 ) -> tuple:
     """The objectives of one robot in one trial, ``OBJECTIVES`` order (``CBlackBoard.cpp:85-96, 224-235,
     343-347`` at 6c65001; the inverse ones and foraging ``CBlackBoard.cpp:98-104, 247-261, 355-359`` and
-    ``footbot_bt.cpp:563-566`` at a73e4af). The mapping column of ``objectives.OBJECTIVE_TABLE``, row by row.
+    ``footbot_bt.cpp:563-566`` at a73e4af; per kind and biased ``footbot_bt.cpp:977-986`` and
+    ``utilities.py:307-312, 329-348`` at 1cd2358). The mapping column of ``objectives.OBJECTIVE_TABLE``, row
+    by row.
 
     ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps;
-    ``first`` and ``last`` the robot's probes (``take_probes``) at the trial's first and last steps.
+    ``first`` and ``last`` the robot's probes (``take_probes``) at the trial's first and last steps;
+    ``deliveries`` its deliveries per food kind.
     Density: (final - initial + 1) / 2, clipped to [0, 1]; nest and food: distances normalised by the cap,
     ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0. Inverse density: (initial -
     final + 1) / 2, clipped; inverse nest: ((final - initial) / cap + 1) / 2, with no rule for the nest;
     inverse food: from the true distances from the food region at the trial's first and last steps
     (``region_distance``), (final - initial + R) / (2 R) with R = ``food_radius`` (the nest's food distance,
-    ``regions.food_scale``: nest_radius + gap in the 2023 arena). Foraging: the deliveries.
-    Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
+    ``regions.food_scale``: nest_radius + gap in the 2023 arena). Foraging: the deliveries of every kind;
+    foraging1-3 those of one kind (0 for a kind the world lacks); foraging_biased those of
+    ``p.preferred_food`` plus ``p.other_food_weight`` times the others' (all of them when none is
+    preferred). Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
     ((first - last) / first + 1) / 2, clipped to [0, 1]; 0.5 for a robot alone.
     """
     density = min(max(0.5 * (final[2] - initial[2] + 1.0), 0.0), 1.0)
@@ -830,7 +832,16 @@ def robot_objectives(
     ifood = (last[0] - first[0] + food_radius) / (2.0 * food_radius)
     spread = first[1]
     aggregation = 0.5 if spread == 0.0 else min(max(0.5 * ((spread - last[1]) / spread + 1.0), 0.0), 1.0)
-    return density, nest, food, idensity, inest, ifood, float(deliveries), aggregation
+    kinds = deliveries.shape[0]
+    kind1 = float(deliveries[0])
+    kind2 = float(deliveries[1]) if kinds > 1 else 0.0
+    kind3 = float(deliveries[2]) if kinds > 2 else 0.0
+    total = kind1 + kind2 + kind3
+    biased = total
+    if p.preferred_food > 0:
+        preferred = float(deliveries[p.preferred_food - 1])
+        biased = preferred + p.other_food_weight * (total - preferred)
+    return density, nest, food, idensity, inest, ifood, total, aggregation, kind1, kind2, kind3, biased
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -864,10 +875,10 @@ def trial_values(
     p: Params,
 ) -> np.ndarray:
     """A trial's values (``N_VALUES``): each robot's objectives and descriptors, averaged over robots in id
-    order. ``initial``/``final``: n x 3 smoothed values; ``counts``: n x ``N_COUNTS`` tick counts; ``motion``:
-    n x 2 (movement, rotation) sums; ``probes``: n x 2 x ``objectives.N_PROBES``, each robot's probes at the
-    trial's first and last steps (``take_probes``); ``deliveries``: n; ``food_scale``: the unit of the inverse
-    food objective (``regions.food_scale`` of the trial's entry)."""
+    order. ``initial``/``final``: n x (regions + 1) smoothed values; ``counts``: n x ``N_COUNTS`` tick counts;
+    ``motion``: n x 2 (movement, rotation) sums; ``probes``: n x 2 x ``objectives.N_PROBES``, each robot's
+    probes at the trial's first and last steps (``take_probes``); ``deliveries``: n x food kinds;
+    ``food_scale``: the unit of the inverse food objective (``regions.food_scale`` of the trial's entry)."""
     n = initial.shape[0]
     radius = food_scale
     out = np.zeros(N_VALUES)

@@ -24,6 +24,7 @@ from swarm_sim.model.regions import (
     check_layout,
     concentric,
     entry_of_trial,
+    food_kinds,
     layout_as_json,
     layout_from_json,
     layout_table,
@@ -79,6 +80,9 @@ class Params(NamedTuple):
     weak_robots: int
     weak_gain: float
     formation: int
+    regions: int
+    preferred_food: int
+    other_food_weight: float
 
 
 _INT_MINIMUM = {
@@ -94,6 +98,7 @@ _INT_MINIMUM = {
     "solver_iterations": 1,
     "dead_robots": 0,
     "weak_robots": 0,
+    "preferred_food": 0,
 }
 """The integer parameters and the least value each may take (the one list of them)."""
 
@@ -185,6 +190,12 @@ class Config:
     papers'), ``lattice`` (a grid 1 m apart; a square number of robots), ``nest`` (around the nest's disc),
     ``localised`` (even robots around the first food disc, odd ones around the nest's) or ``two_robots``
     (two robots facing each other; chains of one trial)."""
+    preferred_food: int = 0
+    """The food kind (1-3) the ``foraging_biased`` objective prefers (the authors' 2026 ``arenaBias``, 0-based
+    there); 0: none, and ``foraging_biased`` is ``foraging``."""
+    other_food_weight: float = 1.0
+    """What a delivery of another kind than ``preferred_food`` counts in ``foraging_biased`` (the authors'
+    ``penalty``: 1.0 by default, 0.5 in their arena-9 runs)."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -205,8 +216,23 @@ class Config:
     def perception(self) -> PerceptionParams:
         """The robots' perception parameters."""
         return PerceptionParams(
-            self.window, self.estimate_cap, self.density_range, self.density_divisor, self.profile_number
+            self.window,
+            self.estimate_cap,
+            self.density_range,
+            self.density_divisor,
+            self.profile_number,
+            self.regions,
         )
+
+    @property
+    def food_kinds(self) -> int:
+        """How many kinds of food the arena has (1 for the papers' arena; ``regions.food_kinds``)."""
+        return food_kinds(self.layout)
+
+    @property
+    def regions(self) -> int:
+        """The regions robots perceive: the nest and the food kinds."""
+        return 1 + self.food_kinds
 
     @property
     def trial_steps(self) -> int:
@@ -262,6 +288,8 @@ class Config:
                 return FORMATIONS.index(self.formation)
             if name == "occlusion":
                 return bool(self.occlusion)
+            if name == "regions":
+                return self.regions
             return (int if name in _INT_MINIMUM else float)(getattr(self, name))
 
         return Params._make(field(f) for f in Params._fields)
@@ -361,6 +389,12 @@ def _validate(c: Config) -> None:
             f"got {c.initial_step}"
         )
     _validate_formation(c)
+    if c.preferred_food > food_kinds(c.layout):
+        raise ConfigError(
+            f"preferred_food must be 0 (none) or a food kind of the arena, 1 to {food_kinds(c.layout)}, "
+            f"got {c.preferred_food}"
+        )
+    _number(c, "other_food_weight")
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:

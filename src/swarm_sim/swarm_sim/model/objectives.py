@@ -100,10 +100,30 @@ OBJECTIVE_TABLE: tuple[Objective, ...] = (
         1.0,
         "",
     ),
+    *(
+        Objective(
+            f"foraging{kind}",
+            f"deliveries of food kind {kind} counted over the trial",
+            "deliveries of the kind per robot per trial",
+            math.inf,
+            "",
+        )
+        for kind in (1, 2, 3)
+    ),
+    Objective(
+        "foraging_biased",
+        "deliveries of each food kind counted over the trial",
+        "deliveries of the preferred kind + other_food_weight x those of the other kinds, per robot per "
+        "trial; all deliveries when no kind is preferred",
+        math.inf,
+        "",
+    ),
 )
 """Every objective, in fitness order: the paper's three, the 2024 follow-up's three inverse primitives,
-foraging, and aggregation (the ``aggregation`` task's, which neither paper has). A new objective is a row
-appended here and its mapping appended to ``world.robot_objectives`` (``docs/tasks.md``)."""
+foraging (every kind of food), aggregation (the ``aggregation`` task's, which neither paper has), and the
+authors' 2026 multi-food objectives: foraging of one kind each, and their bias and penalty fitness. A new
+objective is a row appended here and its mapping appended to ``world.robot_objectives``
+(``docs/tasks.md``)."""
 
 PROBES: tuple[str, ...] = ("food_distance", "neighbour_distance")
 """What every road measures of each robot's true state at a trial's first and last steps

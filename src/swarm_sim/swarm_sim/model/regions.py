@@ -22,10 +22,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from bt_controller.vocabulary import REGIONS
 from swarm_sim.errors import ConfigError
 
-REGION_KINDS: tuple[str, ...] = ("nest", "food")
-"""The kinds of region, in the order compiled code numbers them (a piece's kind column)."""
+REGION_KINDS: tuple[str, ...] = REGIONS
+"""The kinds of region, in the order compiled code numbers them (a piece's kind column): the nest and the
+food kinds 1-3 (``food``, ``food2``, ``food3``; ``bt_controller.vocabulary.REGIONS``)."""
 
 PIECE_SHAPES: tuple[str, ...] = ("disc", "beyond", "above", "below")
 """The shapes of a piece, in the order compiled code numbers them (a piece's shape column)."""
@@ -119,12 +121,21 @@ def food_scale(entry: ArenaEntry) -> float:
     return distance(entry, "food", *nest_point(entry))
 
 
+def food_kinds(layout: Layout) -> int:
+    """How many kinds of food ``layout`` has: its highest food kind (1 for the papers' arena, no layout)."""
+    return max([1, *(REGION_KINDS.index(p.kind) for row in layout for e in row for p in e)])
+
+
 def check_layout(layout: Layout, arena_half: float, key: str = "layout") -> None:
     """Raise ``ConfigError`` naming the first piece of ``layout`` that cannot be run: an unknown kind or
     shape, a radius that is not a positive finite number, a centre outside the arena, an entry without a
-    nest or food, or a nest that overlaps food."""
+    nest or without one of the layout's food kinds, or a nest that overlaps food."""
     if not layout or any(not row for row in layout):
         raise ConfigError(f"{key} must hold at least one arena entry per configuration, got {layout!r}")
+    known = [REGION_KINDS.index(p.kind) for row in layout for e in row for p in e if p.kind in REGION_KINDS]
+    kinds = REGION_KINDS[
+        : 1 + max([1, *known])
+    ]  # the nest and every food kind up to the highest (at least 1)
     for c, row in enumerate(layout):
         for k, entry in enumerate(row):
             where = f"{key}: arena entry {c * len(row) + k}"
@@ -153,9 +164,12 @@ def check_layout(layout: Layout, arena_half: float, key: str = "layout") -> None
                         f"{at} the region lies outside the arena (centre ({piece.x:g}, {piece.y:g}), radius "
                         f"{piece.radius:g}, arena half size {arena_half:g}): expected within +-{arena_half:g}"
                     )
-            for kind in REGION_KINDS:
+            for kind in kinds:
                 if not any(piece.kind == kind for piece in entry):
-                    raise ConfigError(f"{where} has no {kind} piece; every arena entry needs one")
+                    raise ConfigError(
+                        f"{where} has no {kind} piece; every arena entry needs the nest and each food kind "
+                        f"of the layout ({', '.join(kinds)})"
+                    )
             nest_x, nest_y = nest_point(entry)
             if distance(entry, "food", nest_x, nest_y) <= 0.0:
                 raise ConfigError(

@@ -132,7 +132,7 @@ class SensorBridgeNode(Node):
         self.get_logger().info(f"trial {msg.trial} of seed {msg.seed}: sensing its world from step 1")
 
     def _on_wheels(self, robot: int, msg: WheelCommand) -> None:
-        self.sensors.set_broadcast(robot, msg.nest_estimate, msg.food_estimate)
+        self.sensors.set_broadcast(robot, msg.nest_estimate, msg.food_estimate, *msg.other_food_estimates)
 
     def _sense(self) -> None:
         missing = self.sensors.missing()

@@ -91,6 +91,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseArray, PoseStamped
 from nav_msgs.msg import Odometry
@@ -258,7 +259,7 @@ class SimulatorNode(ManagedNode):
                 value_range=RATE_RANGE,
             ),
         )
-        self.free = FreeAnswers(self.robots, self.config.params().estimate_cap)
+        self.free = FreeAnswers(self.robots, self.config.params().estimate_cap, self.config.regions)
         self.frames = robot_frames(self.get_namespace(), self.namespaces)
         """Each robot's (odom, base_link) frame ids, under its full namespace (REP 105)."""
         self._previous: list[tuple[float, float, float]] | None = None  # the step before's poses (odometry)
@@ -519,6 +520,7 @@ class SimulatorNode(ManagedNode):
         self._tf_static.publish(static_frames(self._stamp(), self.frames))
         with self._lock:
             self._inbox = _Inbox(step=world.step, answers={}, statuses={})
+            self.free.regions = self.config.regions  # (the world may have changed since the last chain)
             self.free.start_chain()
             self._chain_start_ns = self.sim_time_ns
         self._trial_start.publish(
@@ -582,18 +584,7 @@ class SimulatorNode(ManagedNode):
         """Lockstep: every robot's answer to ``step`` (and its tree status at a tick step), waited for."""
         answers = self._await_answers(step)
         statuses = self._await_statuses(step) if ticks else None
-        return [
-            RobotAnswer(
-                action=a.action,
-                broadcast=(a.nest_estimate, a.food_estimate),
-                smoothed=(a.smoothed_nest, a.smoothed_food, a.smoothed_density),
-                condition_ticks=statuses[i].condition_ticks if statuses is not None else 0,
-                started=statuses[i].action if statuses is not None else -1,
-                carrying=a.carrying,
-                deliveries=a.deliveries,
-            )
-            for i, a in enumerate(answers)
-        ]
+        return [robot_answer(a, statuses[i] if statuses is not None else None) for i, a in enumerate(answers)]
 
     def _sleep_until(self, deadline: float) -> bool:
         """Free timing: wait until ``deadline`` (``time.monotonic``); whether it was still ahead."""
@@ -628,6 +619,7 @@ class SimulatorNode(ManagedNode):
                 estimate_cap=p.estimate_cap,
                 density_range=p.density_range,
                 density_divisor=p.density_divisor,
+                food_kinds=p.regions - 1,
                 wheel_speed=p.wheel_speed * visualisation.MM,
                 wheel_separation=self.config.wheel_separation * visualisation.MM,
             )
@@ -718,15 +710,26 @@ def reading_messages(
     readings_of: list[RangeAndBearingReadings] = []
     for i, sensed in enumerate(readings):
         header = Header(stamp=stamp, frame_id=frames[i])
-        ground.append(GroundSensor(header=header, step=step, in_nest=sensed.in_nest, on_food=sensed.on_food))
+        inside = [bool(g) for g in sensed.ground]
+        ground.append(
+            GroundSensor(
+                header=header, step=step, in_nest=inside[0], on_food=inside[1], on_other_food=inside[2:]
+            )
+        )
         messages = [
-            RangeAndBearing(sender=int(s), range=r, bearing=b, nest_estimate=n, food_estimate=f)
-            for s, r, b, n, f in zip(
+            RangeAndBearing(
+                sender=int(s),
+                range=r,
+                bearing=b,
+                nest_estimate=v[0],
+                food_estimate=v[1],
+                other_food_estimates=v[2:],
+            )
+            for s, r, b, v in zip(
                 sensed.senders.tolist(),
                 sensed.ranges.tolist(),
                 sensed.bearings.tolist(),
-                sensed.nest.tolist(),
-                sensed.food.tolist(),
+                sensed.values.tolist(),
                 strict=True,
             )
         ]
@@ -734,15 +737,23 @@ def reading_messages(
     return ground, readings_of
 
 
-def robot_answer(msg: WheelCommand) -> RobotAnswer:
-    """A controller's ``wheels`` message as the world takes it (without a tick's status)."""
+def robot_answer(msg: WheelCommand, status: TreeStatus | None = None) -> RobotAnswer:
+    """A controller's ``wheels`` message as the world takes it, with its tick's ``status`` if it ticked (the
+    kind-1 fields, then those of the other food kinds)."""
     return RobotAnswer(
         action=int(msg.action),
-        broadcast=(msg.nest_estimate, msg.food_estimate),
-        smoothed=(msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density),
-        carrying=bool(msg.carrying),
-        deliveries=int(msg.deliveries),
+        broadcast=(msg.nest_estimate, msg.food_estimate, *msg.other_food_estimates),
+        smoothed=(msg.smoothed_nest, msg.smoothed_food, msg.smoothed_density, *msg.smoothed_other_food),
+        condition_ticks=status.condition_ticks if status is not None else 0,
+        started=status.action if status is not None else -1,
+        carrying=(bool(msg.carrying), *(bool(c) for c in msg.carrying_other_food)),
+        deliveries=(int(msg.deliveries), *(int(d) for d in msg.other_food_deliveries)),
     )
+
+
+def carrying_any(carrying: np.ndarray) -> list[bool]:
+    """Per robot, whether it carries food of any kind (``carrying``: robots x food kinds)."""
+    return [bool(row.any()) for row in carrying]
 
 
 @dataclass(frozen=True)
@@ -780,8 +791,8 @@ def step_messages(
         trial=world.trial,
         step=world.step,
         poses=[RobotPose(x=x, y=y, theta=t) for x, y, t in listed],
-        carrying=[bool(c) for c in world.carrying],
-        deliveries=[int(d) for d in world.deliveries],
+        carrying=carrying_any(world.carrying),
+        deliveries=[int(d) for d in world.deliveries.sum(axis=1)],
     )
     arena_poses = PoseArray(
         header=Header(stamp=stamp, frame_id=visualisation.FRAME),
@@ -793,8 +804,9 @@ def step_messages(
         listed,
         list(namespaces),
         list(actions),
-        [bool(c) for c in world.carrying],
-        [int(d) for d in world.deliveries],
+        carrying_any(world.carrying),
+        [int(d) for d in world.deliveries.sum(axis=1)],
+        [int(row.argmax()) + 1 if row.any() else 0 for row in world.carrying],
     )
     ground, readings_of = reading_messages(world.readings(), stamp, world.step, frames)
     return StepMessages(

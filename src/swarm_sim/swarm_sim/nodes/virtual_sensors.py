@@ -45,8 +45,8 @@ class VirtualSensors:
         n = self.p.n_robots
         self.poses = np.full((n, 3), np.nan)
         """Each robot's (x mm, y mm, heading rad); NaN until given."""
-        self.nest = np.full(n, self.p.estimate_cap)
-        self.food = np.full(n, self.p.estimate_cap)
+        self.broadcast = np.full((n, self.p.regions), self.p.estimate_cap)
+        """What each robot broadcasts, per region (nest, food, food2, food3) (mm)."""
 
     def set_pose(self, robot: int, x_mm: float, y_mm: float, heading: float) -> None:
         """Robot ``robot``'s pose in the arena's frame, millimetres and radians."""
@@ -56,9 +56,15 @@ class VirtualSensors:
         """Robot ``robot``'s pose as a ROS pose gives it: metres, and a rotation about z as a quaternion."""
         self.set_pose(robot, x * MM, y * MM, heading_of(qz, qw))
 
-    def set_broadcast(self, robot: int, nest: float, food: float) -> None:
-        """What robot ``robot`` broadcasts to the others from now on: its nest and food estimates (mm)."""
-        self.nest[robot], self.food[robot] = nest, food
+    def set_broadcast(self, robot: int, nest: float, food: float, *other_food: float) -> None:
+        """What robot ``robot`` broadcasts to the others from now on: its nest and food estimates, and those
+        of the other food kinds the world has (mm)."""
+        values = (nest, food, *other_food)
+        if len(values) != self.p.regions:
+            raise ValueError(
+                f"expected {self.p.regions} broadcast values (nest and each food kind), got {len(values)}"
+            )
+        self.broadcast[robot] = values
 
     def missing(self) -> list[int]:
         """The robots whose pose was never given."""
@@ -71,7 +77,7 @@ class VirtualSensors:
         if missing:
             raise ValueError(f"no pose yet of robot {', '.join(map(str, missing))}")
         x, y, heading = (np.ascontiguousarray(self.poses[:, k]) for k in range(3))
-        return sense_swarm(x, y, heading, self.nest, self.food, self.drop_keys, step, self.entry, self.p)
+        return sense_swarm(x, y, heading, self.broadcast, self.drop_keys, step, self.entry, self.p)
 
 
 class Delivery:

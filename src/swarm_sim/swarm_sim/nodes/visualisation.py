@@ -46,6 +46,15 @@ WALL, NEST, FOOD, ROBOT, LABEL, CARRYING = (
     _colour(1.0, 1.0, 1.0),
     _colour(0.1, 0.6, 0.1),
 )
+REGION_COLOURS: dict[str, ColorRGBA] = {
+    "nest": NEST,
+    "food": FOOD,
+    "food2": _colour(0.6, 0.3, 0.8, 0.35),
+    "food3": _colour(0.9, 0.7, 0.1, 0.35),
+}
+"""Each region kind's colour on the ground."""
+CARRYING_COLOURS: tuple[ColorRGBA, ...] = (CARRYING, _colour(0.45, 0.15, 0.6), _colour(0.7, 0.5, 0.0))
+"""A robot's body while it carries food of kind 1, 2 or 3 (the lowest kind it carries)."""
 
 
 def pose_in_metres(x_mm: float, y_mm: float, theta: float, z: float = 0.0) -> Pose:
@@ -144,7 +153,7 @@ def beyond_outline(piece: Piece, half: float) -> list[tuple[float, float, float,
 
 def _piece_marker(stamp: Time, piece: Piece, marker_id: int, half: float) -> Marker:
     """One piece of a region: a flat cylinder for a disc, triangles for the rest (ns: the region's kind)."""
-    colour = NEST if piece.kind == "nest" else FOOD
+    colour = REGION_COLOURS[piece.kind]
     if piece.shape == "disc":
         marker = _marker(stamp, piece.kind, marker_id, Marker.CYLINDER, colour)
         marker.pose.position.x, marker.pose.position.y = piece.x * MM, piece.y * MM
@@ -200,17 +209,22 @@ def robot_markers(
     actions: Sequence[str],
     carrying: Sequence[bool] = (),
     deliveries: Sequence[int] = (),
+    carried: Sequence[int] = (),
 ) -> MarkerArray:
-    """Per robot ``i``: a body (ns ``robots``, id i; green while it carries food), a heading arrow
+    """Per robot ``i``: a body (ns ``robots``, id i; coloured while it carries food), a heading arrow
     (``headings``) and a text label (``labels``: ``<i> <namespace>: <action>``, then ``, <d> delivered`` once
     it has delivered); and a text marker (ns ``deliveries``) counting the swarm's deliveries in the trial.
-    ``carrying`` and ``deliveries`` are per robot (empty: none yet)."""
+    ``carrying`` and ``deliveries`` are per robot (empty: none yet); ``carried``, per robot, the lowest food
+    kind it carries (0: none) picks its body's colour in ``CARRYING_COLOURS`` (empty: kind 1 if carrying)."""
     markers = []
     radius = config.robot_radius * MM
     carrying = list(carrying) or [False] * len(poses)
     deliveries = list(deliveries) or [0] * len(poses)
+    kinds = list(carried) or [1 if c else 0 for c in carrying]
     for i, ((x, y, theta), namespace, action) in enumerate(zip(poses, namespaces, actions, strict=True)):
-        body = _marker(stamp, "robots", i, Marker.CYLINDER, CARRYING if carrying[i] else ROBOT)
+        body = _marker(
+            stamp, "robots", i, Marker.CYLINDER, CARRYING_COLOURS[kinds[i] - 1] if kinds[i] else ROBOT
+        )
         body.pose = pose_in_metres(x, y, theta, 0.05)
         body.scale.x = body.scale.y = 2.0 * radius
         body.scale.z = 0.1

@@ -37,9 +37,11 @@ class FreeAnswers:
 
     robots: int
     estimate_cap: float
+    regions: int = 2
+    """The nest and the world's food kinds."""
     latest: list[RobotAnswer | None] = field(default_factory=list)
     pending: list[_Pending] = field(default_factory=list)
-    baseline: list[int] = field(default_factory=list)
+    baseline: list[tuple[int, ...]] = field(default_factory=list)
     answers_taken: int = 0
     """Answers received since the chain started (for diagnostics)."""
 
@@ -52,7 +54,7 @@ class FreeAnswers:
         """Forget every answer: a new chain starts (its controllers were just reset)."""
         self.latest = [None] * self.robots
         self.pending = [_Pending() for _ in range(self.robots)]
-        self.baseline = [0] * self.robots
+        self.baseline = [(0,) * (self.regions - 1)] * self.robots
         self.answers_taken = 0
 
     def answer(self, robot: int, answer: RobotAnswer) -> None:
@@ -72,17 +74,27 @@ class FreeAnswers:
 
     def begin_trial(self) -> None:
         """A trial starts: its deliveries count from each robot's deliveries now."""
-        self.baseline = [a.deliveries if a is not None else 0 for a in self.latest]
+        self.baseline = [
+            tuple(a.deliveries) if a is not None else (0,) * (self.regions - 1) for a in self.latest
+        ]
 
     def answers(self, ticks: bool) -> list[RobotAnswer]:
         """Every robot's answer for the step under way; ``ticks``: whether it is a tick step (the statuses
         received since the last one are then credited and cleared)."""
         out = []
         for robot, latest in enumerate(self.latest):
+            kinds = self.regions - 1
             answer = latest or RobotAnswer(
-                action=STOP, broadcast=(self.estimate_cap, self.estimate_cap), smoothed=(0.0, 0.0, 0.0)
+                action=STOP,
+                broadcast=(self.estimate_cap,) * self.regions,
+                smoothed=(0.0,) * (self.regions + 1),
+                carrying=(False,) * kinds,
+                deliveries=(0,) * kinds,
             )
-            deliveries = max(0, answer.deliveries - self.baseline[robot])
+            deliveries = tuple(
+                max(0, now - before)
+                for now, before in zip(answer.deliveries, self.baseline[robot], strict=True)
+            )
             pending = self.pending[robot]
             if ticks:
                 answer = replace(

@@ -33,18 +33,19 @@ class RobotAnswer:
 
     action: int
     """The motors driving the wheels from the next step on."""
-    broadcast: tuple[float, float]
-    """The (nest, food) values the robot broadcasts at this step (mm)."""
-    smoothed: tuple[float, float, float]
-    """The robot's smoothed (nest, food, density) as last refreshed."""
+    broadcast: Sequence[float]
+    """The values the robot broadcasts at this step, per region (nest, food, food2, food3) (mm)."""
+    smoothed: Sequence[float]
+    """The robot's smoothed values as last refreshed (nest, food, density, food2, food3)."""
     condition_ticks: int = 0
     """Condition nodes ticked by this step's tick (0 without a tick)."""
     started: int = -1
     """The action this step's tick started, or -1."""
-    carrying: bool = False
-    """Whether the robot carries food after this step (foraging)."""
-    deliveries: int = 0
-    """The robot's deliveries in the trial so far; the foraging objective is scored from them."""
+    carrying: Sequence[bool] = (False,)
+    """Whether the robot carries food of each kind after this step (foraging)."""
+    deliveries: Sequence[int] = (0,)
+    """The robot's deliveries of each kind in the trial so far; the foraging objectives are scored from
+    them."""
 
 
 def action_of_wheels(left: float, right: float) -> int:
@@ -74,17 +75,19 @@ class LockstepChain:
         self.x, self.y, self.heading = np.zeros(n), np.zeros(n), np.zeros(n)
         self._motion, self._contacts, self._pairs = world.new_dynamics(n)
         self.actions = np.full(n, STOP, dtype=np.int64)
-        self.broadcast_nest = np.full(n, self.p.estimate_cap)
-        self.broadcast_food = np.full(n, self.p.estimate_cap)
+        regions = self.p.regions
+        self.broadcast = np.full((n, regions), self.p.estimate_cap)
+        """What each robot broadcast at the last step, per region."""
         self.counts = np.zeros((n, 1 + len(ACTIONS)), dtype=np.int64)
         self.motion = np.zeros((n, 2), dtype=np.int64)
-        self.initial = np.zeros((n, 3))
+        self.initial = np.zeros((n, regions + 1))
         self.probes = np.zeros((n, 2, N_PROBES))
         """Each robot's probes (``world.take_probes``) at the trial's first step, and at its last."""
-        self.carrying = np.zeros(n, dtype=np.bool_)
-        """Each robot's carrying flag, as it answered the last step (for viewers: swarm_state)."""
-        self.deliveries = np.zeros(n, dtype=np.int64)
-        """Each robot's deliveries in the trial, as it answered the last step."""
+        self.carrying = np.zeros((n, regions - 1), dtype=np.bool_)
+        """Each robot's carrying flag per food kind, as it answered the last step (for viewers:
+        swarm_state)."""
+        self.deliveries = np.zeros((n, regions - 1), dtype=np.int64)
+        """Each robot's deliveries per food kind in the trial, as it answered the last step."""
         self.start_poses = np.zeros((n, 3))
         self.records: list[TrialRecord] = []
         self.last_step = trials * timeline.trial_steps(self.line)
@@ -122,7 +125,7 @@ class LockstepChain:
             raise ValueError(f"expected {self.p.n_robots} answers, got {len(answers)}")
         k = self.step
         for i, answer in enumerate(answers):
-            self.broadcast_nest[i], self.broadcast_food[i] = answer.broadcast
+            self.broadcast[i] = answer.broadcast
             self.actions[i] = answer.action
             self.carrying[i] = answer.carrying
             self.deliveries[i] = answer.deliveries
@@ -197,8 +200,7 @@ class LockstepChain:
             self.x,
             self.y,
             self.heading,
-            self.broadcast_nest,
-            self.broadcast_food,
+            self.broadcast,
             self.setup.drop_keys,
             k,
             entry,
@@ -290,13 +292,17 @@ def warm_up(config: Config = DEFAULT) -> None:
     """Compile (or load from numba's cache) every world function a lockstep chain uses, by running the first
     steps of a chain with every robot stopped, and scoring a trial."""
     sim = LockstepChain(0, 0, 1, config)
-    still = RobotAnswer(STOP, (config.estimate_cap, config.estimate_cap), (0.0, 0.0, 0.0))
+    regions = config.regions
+    still = RobotAnswer(
+        STOP, (config.estimate_cap,) * regions, (0.0,) * (regions + 1), 0, -1, (False,) * (regions - 1),
+        (0,) * (regions - 1),
+    )  # fmt: skip
     for _ in range(config.steps_per_tick + 1):
         sim.advance([still] * config.n_robots)
     n = config.n_robots
     counts = np.zeros((n, 1 + len(ACTIONS)), np.int64)
     world.trial_values(
-        np.zeros((n, 3)), np.zeros((n, 3)), counts, np.zeros((n, 2), np.int64),
-        np.zeros((n, 2, N_PROBES)), np.zeros(n, np.int64), 500.0, sim.p,
+        np.zeros((n, regions + 1)), np.zeros((n, regions + 1)), counts, np.zeros((n, 2), np.int64),
+        np.zeros((n, 2, N_PROBES)), np.zeros((n, regions - 1), np.int64), 500.0, sim.p,
     )  # fmt: skip
     world.take_all_probes(sim.x, sim.y, config.arena_arrays(0)[0], np.zeros((n, 2, N_PROBES)), 0)

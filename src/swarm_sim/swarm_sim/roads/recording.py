@@ -54,19 +54,20 @@ class RecordedTrial:
     """Per row, (k, 2) int64: (receiver, sender) of every message received at the step, by receiver, then
     sender (at a trial's first step the robots ignore them)."""
     smoothed: np.ndarray
-    """(T, n, 3): each robot's smoothed (nest, food, density) as last refreshed."""
+    """(T, n, R + 1): each robot's smoothed values as last refreshed (nest, food, density, then food2 and
+    food3 in a world of R = 3 or 4 regions)."""
     ground: np.ndarray
-    """(T, n, 2) bool: in the nest, on food."""
+    """(T, n, R) bool: in each region (nest, food, food2, food3)."""
     initial: np.ndarray
-    """(n, 3): the trial's initial smoothed values (taken at step ``initial_step`` of the trial)."""
+    """(n, R + 1): the trial's initial smoothed values (taken at step ``initial_step`` of the trial)."""
     fitness: np.ndarray
     """(T, ``world.N_OBJECTIVES``): every objective so far (NaN before the initial step)."""
     values: tuple[float, ...]
     """The trial's values (``world.VALUE_NAMES``), as an evaluation scores it."""
     carrying: np.ndarray
-    """(T, n) bool: whether each robot carries food after the step."""
+    """(T, n, kinds) bool: whether each robot carries food of each kind after the step."""
     deliveries: np.ndarray
-    """(T, n) int64: each robot's deliveries in the trial after the step."""
+    """(T, n, kinds) int64: each robot's deliveries of each kind in the trial after the step."""
     trees: tuple[str, ...]
     """Each robot's tree text, robot 0 first."""
 
@@ -113,7 +114,7 @@ def record_trial(
     trees = pack([parse(text, library=library) for text in layout.distinct])
     chain, position = chain_of_trial(config.timeline, trial)
     p = config.params()
-    rec = kernel.new_recording(config.trial_steps, p.n_robots)
+    rec = kernel.new_recording(config.trial_steps, p.n_robots, p.regions)
     gap = config.gap(trial)  # the gap of its chain (a chain's trials share one)
     pieces, food_scale = config.arena_table
     arena = config.arena_of_trial(trial)
@@ -175,7 +176,7 @@ def record_trial_reference(
     deliveries: list[np.ndarray] = []
     current = np.full(n, -1, dtype=np.int64)
     last_tick = -1
-    initial = np.zeros((n, 3))
+    initial = np.zeros((n, p.regions + 1))
     no_counts, no_motion = np.zeros((n, N_COUNTS), dtype=np.int64), np.zeros((n, 2), dtype=np.int64)
 
     def on_answers(sim: LockstepChain, answers: Sequence[RobotAnswer]) -> None:
@@ -195,7 +196,7 @@ def record_trial_reference(
         pairs = [(i, int(s)) for i, r in enumerate(readings) for s in r.senders]
         links.append(np.array(pairs, dtype=np.int64).reshape(-1, 2))
         smoothed_rows.append(smoothed)
-        ground.append(np.array([[r.in_nest, r.on_food] for r in readings], dtype=np.bool_))
+        ground.append(np.array([r.ground for r in readings], dtype=np.bool_))
         carrying.append(np.array([a.carrying for a in answers], dtype=np.bool_))
         delivered = np.array([a.deliveries for a in answers], dtype=np.int64)
         deliveries.append(delivered)

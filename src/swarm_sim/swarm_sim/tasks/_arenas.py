@@ -2,21 +2,22 @@
 (``swarm_sim.model.arenas``) into the regions of a task, so that a layout can be shown as a task file, edited
 and run.
 
-Only the regions come from the 2026 code, with its random start area ([-1500, 1500] mm). The rest is this
-project's model of the 2024 code (its perception, messages and trials; ``docs/model.md``), and only layouts
-with one food kind (1-4, 7 and 8) run: the three food kinds of layouts 5, 6 and 9 come with issue 35's next
-step. Their two runs per evaluation (gaps 500 and 700 mm) are this model's two blocks of trials, and trial k
-of a block takes the layout's entry k, as theirs does.
+The regions (with the three food kinds of layouts 5, 6 and 9), the random start area ([-1500, 1500] mm), the
+numbered food conditions and the bias and penalty of layout 9 come from the 2026 code. The rest is this
+project's model of the 2024 code (its perception, messages and trials; ``docs/model.md``, which lists what
+the 2026 code changed beside them). Their two runs per evaluation (gaps 500 and 700 mm) are this model's two
+blocks of trials, and trial k of a block takes the layout's entry k, as theirs does.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
+from bt_controller.vocabulary import MULTIFOOD_CONDITIONS
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import FOOD_KINDS, REGION_KINDS, arena_entries
+from swarm_sim.model import FOOD_KINDS, arena_entries
 from swarm_sim.model.regions import ArenaEntry
-from swarm_sim.tasks._spec import Arena, Region, TaskError, TaskSpec
+from swarm_sim.tasks._spec import Arena, Nodes, Region, Scoring, TaskError, TaskSpec
 
 START_HALF_2026 = 1500.0
 """The 2026 code's random start area: uniform in [-1.5, 1.5]^2 m (``bt_loop_functions.cpp:1156``)."""
@@ -32,23 +33,25 @@ def arena_task(
     nest_radius: float = 500.0,
     food_radius: float = 500.0,
     points: int | None = None,
+    bias: int | None = None,
+    other_food_weight: float = 1.0,
+    name: str | None = None,
 ) -> TaskSpec:
-    """``base`` (a foraging task, say) on the regions of the authors' arena ``layout``, named
-    ``<base>-arena<layout>``, with the 2026 random start area; ``TaskError`` in one line for a layout this
-    model version cannot run or a bad setting."""
+    """``base`` (a foraging task, say) on the regions of the authors' arena ``layout``, named ``name`` (by
+    default ``<base>-arena<layout>``), with the 2026 random start area. Layout 9 needs ``bias``, the preferred
+    food kind 0-based as theirs (``arenaBias``), which the task's ``foraging_biased`` objective prefers with
+    ``other_food_weight`` for the others (their ``penalty``). A layout with several food kinds gets their
+    node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``TaskError`` in one line for
+    a bad setting."""
     try:
-        rows = [arena_entries(layout, nest_radius=nest_radius, food_radius=food_radius, gap=g, points=points)
+        rows = [arena_entries(layout, nest_radius=nest_radius, food_radius=food_radius, gap=g, points=points,
+                              bias=bias)
                 for g in GAPS]  # fmt: skip
     except ConfigError as error:
         raise TaskError(f"arena {layout}: {error}") from None
     kinds = sorted(
         {piece.kind for row in rows for entry in row for piece in entry} - {"nest"}, key=FOOD_KINDS.index
     )
-    if set(kinds) - set(REGION_KINDS):
-        raise TaskError(
-            f"arena {layout} has the food kinds {', '.join(kinds)}; this model version runs one food kind "
-            "(food): arenas 1-4, 7 and 8"
-        )
     per_block = base.trials.chain_trials
     entries: list[ArenaEntry] = []
     for row in rows if rows[0] != rows[1] else rows[:1]:  # generated layouts do not change with the gap
@@ -63,14 +66,29 @@ def arena_task(
         )
         for m in range(len(entries[0]))
     )
+    several = len(kinds) > 1
+    preferred = 0 if bias is None else bias + 1
+    objectives = base.objectives
+    if several:
+        objectives = (
+            *objectives,
+            *(f"foraging{k}" for k in range(1, len(kinds) + 1) if f"foraging{k}" not in objectives),
+        )
+    if preferred and "foraging_biased" not in objectives:
+        objectives = (*objectives, "foraging_biased")
+    what = f"{len(kinds)} food kinds" if several else "one food kind"
+    told = f", food kind {preferred} preferred (other kinds count {other_food_weight:g})" if preferred else ""
     return replace(
         base,
-        name=f"{base.name}-arena{layout}",
-        description=f"{base.name} on the regions of the authors' 2026 arena {layout} (their random start "
-        "area; the rest of the model is the 2024 code's).",
+        name=name or f"{base.name}-arena{layout}",
+        description=f"{base.name} on the regions of the authors' 2026 arena {layout}, {what}{told} (their "
+        "random start area; the rest of the model is the 2024 code's).",
         arena=Arena(half_size=base.arena.half_size, trial_entries=trial_entries),
         regions=regions,
         robots=replace(base.robots, start_half_size=START_HALF_2026),
+        objectives=objectives,
+        scoring=Scoring(preferred_food=preferred, other_food_weight=other_food_weight),
+        nodes=Nodes(MULTIFOOD_CONDITIONS, base.nodes.actions) if several else base.nodes,
     )
 
 

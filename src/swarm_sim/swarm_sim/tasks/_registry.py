@@ -11,8 +11,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from bt_controller.vocabulary import CONDITIONS, CONDITIONS_2023
+from bt_controller.vocabulary import CONDITIONS_2023, CONDITIONS_2024
 from swarm_sim.model import PAPER_OBJECTIVES
+from swarm_sim.tasks._arenas import arena_task
 from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping
 from swarm_sim.tasks._spec import Nodes, TaskError, TaskSpec, Trials
 
@@ -32,7 +33,7 @@ FORAGING = replace(
     "food region to the nest; got_food joins the conditions.",
     trials=Trials(ticks=200),
     objectives=("foraging",),
-    nodes=Nodes(conditions=CONDITIONS),
+    nodes=Nodes(conditions=CONDITIONS_2024),
 )
 """The 2024 foraging task (``footbot_bt.cpp:493,538,546,551`` at a73e4af: 200 ticks, 800 steps)."""
 
@@ -67,6 +68,25 @@ def register(task: TaskSpec) -> TaskSpec:
 register(PRIMITIVES)
 register(FORAGING)
 register(AGGREGATION)
+
+ARENA9_OTHER_FOOD_WEIGHT = 0.5
+"""The penalty of the authors' arena-9 runs and of their public reference data (``argos_stats_multifood``)."""
+
+# The authors' 2026 arenas as tasks (``arena_task``): ``multifood-arena1`` to ``-arena8``, and arena 9 with
+# each food kind preferred (``multifood-arena9-kind2``: their 0-based ``arenaBias`` 1, the setting of their
+# public reference data beside ``multifood-arena6``).
+for _layout in range(1, 9):
+    register(arena_task(FORAGING, _layout, name=f"multifood-arena{_layout}"))
+for _kind in (1, 2, 3):
+    register(
+        arena_task(
+            FORAGING,
+            9,
+            bias=_kind - 1,
+            other_food_weight=ARENA9_OTHER_FOOD_WEIGHT,
+            name=f"multifood-arena9-kind{_kind}",
+        )
+    )
 
 
 def task_names() -> tuple[str, ...]:

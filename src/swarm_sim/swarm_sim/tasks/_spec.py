@@ -14,7 +14,7 @@ import math
 import re
 from dataclasses import dataclass, field, replace
 
-from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS
+from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS_2024
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
 from swarm_sim.model.regions import Layout, check_layout
@@ -116,11 +116,21 @@ class Motors:
 
 
 @dataclass(frozen=True)
+class Scoring:
+    """How the ``foraging_biased`` objective weighs the food kinds (the authors' 2026 bias and penalty)."""
+
+    preferred_food: int = DEFAULT.preferred_food
+    """The preferred food kind, 1-3 (0: none, and ``foraging_biased`` is ``foraging``)."""
+    other_food_weight: float = DEFAULT.other_food_weight
+    """What a delivery of another kind counts (the authors' penalty: 0.5 in their arena-9 runs)."""
+
+
+@dataclass(frozen=True)
 class Nodes:
     """The node set trees of the task are made of (composites are always available)."""
 
-    conditions: tuple[str, ...] = CONDITIONS
-    """Condition nodes, by name (``bt_controller.vocabulary.CONDITION_TABLE``)."""
+    conditions: tuple[str, ...] = CONDITIONS_2024
+    """Condition nodes, by name (``bt_controller.vocabulary.CONDITION_TABLE``); by default the 2024 nine."""
     actions: tuple[str, ...] = ACTIONS
     """Action nodes, by name (``bt_controller.vocabulary.ACTIONS``)."""
 
@@ -150,6 +160,7 @@ class TaskSpec:
     objectives: tuple[str, ...] = ()
     """The objectives the task is about: every run of it shows them (grids, summary, figures) and GP_fnd
     evolves them by default. Every trial scores every objective of the table all the same."""
+    scoring: Scoring = field(default_factory=Scoring)
     nodes: Nodes = field(default_factory=Nodes)
 
     def __post_init__(self) -> None:
@@ -238,6 +249,8 @@ class TaskSpec:
             gain_low=self.motors.gain_low,
             gain_step=self.motors.gain_step,
             gain_levels=self.motors.gain_levels,
+            preferred_food=self.scoring.preferred_food,
+            other_food_weight=self.scoring.other_food_weight,
         )
 
 
@@ -286,9 +299,24 @@ def check(task: TaskSpec) -> None:
                 raise TaskError(
                     f"{key}.centre must be [0, 0] for a half-plane ({region.shape}), got [{x:g}, {y:g}]"
                 )
-    for kind in REGION_KINDS:
+    known = [REGION_KINDS.index(k) for k in kinds if k in REGION_KINDS]
+    needed = REGION_KINDS[: 1 + max([1, *known])]  # the nest and every food kind up to the highest
+    for kind in needed:
         if kind not in kinds:
-            raise TaskError(f"regions: the task has no {kind} region; expected at least one")
+            raise TaskError(
+                f"regions: the task has no {kind} region; expected at least one (a nest, and food of every "
+                f"kind up to its highest, {needed[-1]})"
+            )
+    scoring = task.scoring
+    if isinstance(scoring.preferred_food, bool) or scoring.preferred_food not in range(len(needed)):
+        raise TaskError(
+            "scoring.preferred_food must be 0 (none) or a food kind of the task, 1 to "
+            f"{len(needed) - 1}, got {scoring.preferred_food!r}"
+        )
+    if not math.isfinite(scoring.other_food_weight):
+        raise TaskError(
+            f"scoring.other_food_weight must be a finite number, got {scoring.other_food_weight!r}"
+        )
     counts = {n for r in task.regions for n in (len(r.radius), len(r.centre))} - {1}
     if len(counts) > 1:
         raise TaskError(
@@ -360,6 +388,8 @@ _TASK_KEY: dict[str, str] = {
     "gain_low": "motors.gain_low",
     "gain_step": "motors.gain_step",
     "gain_levels": "motors.gain_levels",
+    "preferred_food": "scoring.preferred_food",
+    "other_food_weight": "scoring.other_food_weight",
 }
 """The task key of each ``Config`` field a task sets, for the messages of ``Config``'s own checks."""
 

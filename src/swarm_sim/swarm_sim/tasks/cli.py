@@ -28,13 +28,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     check = verbs.add_parser("check", help="check task files: one line each, exit status 2 for a bad one")
     check.add_argument("files", nargs="+", metavar="FILE")
     arena = verbs.add_parser(
-        "arena", help="a task on the regions of the authors' 2026 arena LAYOUT (1-4, 7, 8), as YAML"
+        "arena", help="a task on the regions of the authors' 2026 arena LAYOUT (1-9), as YAML"
     )
     arena.add_argument("layout", type=int, metavar="LAYOUT")
     arena.add_argument("--task", default="foraging", metavar="NAME|FILE", help="the task (default: foraging)")
     arena.add_argument("--points", type=int, help="points per generated arena (layouts 7, 8)")
     arena.add_argument("--nest-radius", type=float, default=500.0, help="mm (default 500)")
     arena.add_argument("--food-radius", type=float, default=500.0, help="mm (default 500)")
+    arena.add_argument(
+        "--bias", type=int, help="layout 9: the preferred food kind, 0-based as theirs (their arenaBias: 0-2)"
+    )
+    arena.add_argument(
+        "--other-food-weight",
+        type=float,
+        default=1.0,
+        help="what another kind than the preferred one counts in foraging_biased (their penalty; default 1)",
+    )
     args = parser.parse_args(argv)
     try:
         if args.verb == "list":
@@ -55,6 +64,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 nest_radius=args.nest_radius,
                 food_radius=args.food_radius,
                 points=args.points,
+                bias=args.bias,
+                other_food_weight=args.other_food_weight,
             )
             sys.stdout.write(task_to_yaml(task))
             return 0

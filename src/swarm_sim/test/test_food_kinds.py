@@ -1,0 +1,107 @@
+"""Several kinds of food (the authors' 2026 arenas 5, 6 and 9): the numbered conditions, carrying and
+deliveries per kind, the per-kind and biased objectives, alike on the batch road, the reference road and both
+recordings; the registered arena tasks; and the bad settings of these arenas, refused in one line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from bt_controller.random_trees import random_trees
+from bt_controller.tree import parse
+from bt_controller.vocabulary import CONDITIONS, MULTIFOOD_CONDITIONS
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
+from swarm_sim.model import OBJECTIVES, of_trees
+from swarm_sim.roads import record_trial, record_trial_reference, reference_road
+from swarm_sim.tasks import FORAGING, TaskError, Trials, arena_task, task_from_yaml, task_named, task_to_yaml
+
+GATHERER = (
+    "sel(seq(sel(got_food1, got_food2, got_food3), sel(seq(nest_left, forward_left), seq(nest_right, "
+    "forward_right), forward)), sel(seq(food_left2, forward_left), seq(food_right2, forward_right), "
+    "seq(food_left3, forward_left), prob(forward, forward_left, forward_right)))"
+)
+"""A tree that reads every numbered kind: back to the nest with anything, else towards kind 2 or 3."""
+
+
+def _short(name: str, ticks: int = 60) -> object:
+    return replace(task_named(name), trials=Trials(ticks=ticks, chain_trials=5))
+
+
+def _named(values: tuple[float, ...]) -> dict[str, float]:
+    return dict(zip(OBJECTIVES, values, strict=False))
+
+
+@pytest.mark.parametrize("profile", ["paper", "clean"])
+def test_a_multifood_task_scores_alike_on_both_roads_and_each_kind_adds_up(profile):
+    config = _short("multifood-arena6").config(profile)
+    assert config.food_kinds == 3 and config.regions == 4
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(GATHERER, 2, 5)])
+    values, reference = reference_road.evaluate(parse(GATHERER), 2, 5, config)
+    assert result.fitness + result.descriptors == values
+    assert all((a.end_poses == b.end_poses).all() for a, b in zip(records, reference, strict=True))
+    named = _named(values)
+    assert named["foraging"] == named["foraging1"] + named["foraging2"] + named["foraging3"]
+    assert named["foraging_biased"] == named["foraging"]  # no kind preferred in arena 6
+
+
+def test_random_trees_over_every_condition_agree_on_both_roads_in_a_heterogeneous_swarm():
+    config = _short("multifood-arena9-kind2", ticks=16).config("paper")
+    trees = random_trees(11, 3, 25, conditions=CONDITIONS)  # every condition, the numbered ones included
+    swarm = of_trees([trees[k % 3] for k in range(config.n_robots)], config.n_robots)
+    ((result, _),) = BatchEvaluator(config).evaluate_trials([SwarmRequest(swarm, 4, 5)])
+    assert result.ok, result.error
+    values, _ = reference_road.evaluate(swarm.parsed(), 4, 5, config)
+    assert result.fitness + result.descriptors == values
+
+
+def test_the_biased_fitness_prefers_its_kind():
+    task = _short("multifood-arena9-kind2")
+    assert task.scoring.preferred_food == 2 and task.scoring.other_food_weight == 0.5
+    ((result, _),) = BatchEvaluator(task.config()).evaluate_trials([EvaluationRequest(GATHERER, 7, 5)])
+    named = _named(result.fitness)
+    expected = named["foraging2"] + 0.5 * (named["foraging1"] + named["foraging3"])
+    assert named["foraging_biased"] == pytest.approx(expected, rel=1e-12)
+
+
+def test_both_recordings_of_a_multifood_trial_are_the_same():
+    config = _short("multifood-arena5", ticks=40).config("paper")
+    batch, reference = record_trial(GATHERER, 3, 2, config), record_trial_reference(GATHERER, 3, 2, config)
+    for name in ("poses", "actions", "smoothed", "ground", "initial", "carrying", "deliveries"):
+        assert (getattr(batch, name) == getattr(reference, name)).all(), name
+    assert batch.ground.shape[2] == 4 and batch.carrying.shape[2] == batch.deliveries.shape[2] == 3
+    assert batch.smoothed.shape[2] == 5  # nest, food, density, food2, food3
+    assert (
+        np.array_equal(batch.fitness, reference.fitness, equal_nan=True) and batch.values == reference.values
+    )
+
+
+def test_the_registered_arena_tasks():
+    for layout in range(1, 9):
+        task = task_named(f"multifood-arena{layout}")
+        kinds = 3 if layout in (5, 6) else 1
+        assert task.config().food_kinds == kinds
+        assert task.nodes.conditions == (MULTIFOOD_CONDITIONS if kinds == 3 else FORAGING.nodes.conditions)
+    for kind in (1, 2, 3):
+        task = task_named(f"multifood-arena9-kind{kind}")
+        assert task.scoring.preferred_food == kind and "foraging_biased" in task.objectives
+        assert task_from_yaml(task_to_yaml(task)) == task
+
+
+def test_bad_settings_of_the_2026_arenas_are_refused_in_one_line():
+    command = [sys.executable, "-m", "swarm_sim.tasks.cli", "arena"]
+    for args, expected in (
+        (["9"], "arena layout 9 needs a bias"),
+        (["5", "--nest-radius", "400"], "arena 5"),
+    ):
+        refused = subprocess.run([*command, *args], capture_output=True, text=True)
+        assert refused.returncode == 2 and refused.stderr.count("\n") == 1, args
+        assert expected in refused.stderr, refused.stderr
+    for layout in (1, 4):  # localised starts need a food disc (the authors refuse them too)
+        with pytest.raises(TaskError, match="formation localised"):
+            replace(arena_task(FORAGING, layout), robots=replace(FORAGING.robots, formation="localised"))
+    with pytest.raises(TaskError, match="on_food2 reads the food2 region"):
+        replace(FORAGING, nodes=replace(FORAGING.nodes, conditions=("on_food2",)))
