@@ -20,6 +20,7 @@ ROSDEP_KEYS = {
     "scipy": "python3-scipy",
     "matplotlib": "python3-matplotlib",
     "defusedxml": "python3-defusedxml",
+    "cma": "python3-cma",
     "deap": "python3-deap",
     "qdpy": "python3-qdpy",
     "tqdm": "python3-tqdm",
