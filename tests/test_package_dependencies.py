@@ -23,6 +23,7 @@ ROSDEP_KEYS = {
     "cma": "python3-cma",
     "deap": "python3-deap",
     "qdpy": "python3-qdpy",
+    "ribs": "python3-ribs",
     "tqdm": "python3-tqdm",
     "rosbags": "python3-rosbags",
     "mcap": "python3-mcap",

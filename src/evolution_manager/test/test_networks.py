@@ -18,6 +18,7 @@ from evolution_manager.evolution.networks import (
     NetworkRun,
     WeightCmaEs,
     WeightGA,
+    WeightMapElites,
     cx_two_point,
     mut_gaussian,
     sel_best,
@@ -59,20 +60,26 @@ def test_operators_draw_as_deaps_own_from_the_same_generator_state():
         assert sel_best(fitness, 3) == [ind[0] for ind in tools.selBest(population, 3)]
 
 
+def _descriptors(w):  # type: ignore[no-untyped-def]
+    return [1.0 / (1.0 + np.exp(-w[k])) for k in range(2)] + [0.0]
+
+
 def _drive(optimiser, generations: int) -> list[list[float]]:
     asked = []
     for _ in range(generations):
         batch = optimiser.ask()
         asked.extend(batch)
-        optimiser.tell([-float(np.sum(np.square(w))) + w[0] for w in batch])
+        optimiser.tell([-float(np.sum(np.square(w))) + w[0] for w in batch], [_descriptors(w) for w in batch])
     return asked
 
 
-@pytest.mark.parametrize("kind", ["ga", "cmaes"])
+@pytest.mark.parametrize("kind", ["ga", "cmaes", "qd"])
 def test_an_optimiser_continues_exactly_from_its_state(kind):
     def make():  # type: ignore[no-untyped-def]
         p = NetworkParameters()
-        return WeightGA(p, random.Random(4)) if kind == "ga" else WeightCmaEs(p, np.random.default_rng(4))
+        if kind == "ga":
+            return WeightGA(p, random.Random(4))
+        return (WeightCmaEs if kind == "cmaes" else WeightMapElites)(p, np.random.default_rng(4))
 
     straight = make()
     _drive(straight, 8)
@@ -107,12 +114,21 @@ def test_cmaes_samples_from_the_passed_generator_only():
     assert len(one.ask()) == 25 and len(one.ask()[0]) == N_WEIGHTS
 
 
+def test_map_elites_fills_bins_and_draws_from_the_passed_generator():
+    one = WeightMapElites(NetworkParameters(), np.random.default_rng(5))
+    asked = _drive(one, 6)
+    assert len(asked) == 6 * 50 and one.scheduler.archive.stats.num_elites > 4
+    two = WeightMapElites(NetworkParameters(), np.random.default_rng(5))
+    assert _drive(two, 6) == asked
+
+
 def _files(root):  # type: ignore[no-untyped-def]
-    names = ("evaluations.csv", "progress.csv", "summary.json", "checkpoint.json", "best/food.json")
+    names = ("evaluations.csv", "progress.csv", "summary.json", "checkpoint.json", "best/food.json",
+             "repertoire_food.json")  # fmt: skip
     return {name: (root / name).read_bytes() for name in names}
 
 
-@pytest.mark.parametrize("algorithm", ["nn-ga", "nn-cmaes"])
+@pytest.mark.parametrize("algorithm", ["nn-ga", "nn-cmaes", "nn-qd"])
 def test_a_run_stopped_and_resumed_ends_identical(tmp_path, algorithm):
     args = ["--algorithm", algorithm, "--objective", "food", "--evaluations", "100", "--trials", "1"]
     assert evolve([*args, "--seed", "3", "--out", str(tmp_path / "straight"), "--no-progress"]) == 0
@@ -131,6 +147,10 @@ def test_a_run_stopped_and_resumed_ends_identical(tmp_path, algorithm):
     summary = json.loads((tmp_path / "straight" / "summary.json").read_text())
     best = load_network(tmp_path / "straight" / "best" / "food.json")
     assert list(best.weights) == summary["best"]["weights"] and summary["produced"] >= 100
+    repertoire = json.loads((tmp_path / "straight" / "repertoire_food.json").read_text())["items"]
+    assert len(repertoire) == summary["repertoire_size"] == round(summary["coverage"] * 512) > 0
+    assert all(item["bin"][2] == 0 for item in repertoire)  # a network's conditionality is 0
+    assert max(item["fitness"] for item in repertoire) == summary["best"]["fitness"]
     # the same options again: refused, the run is there; --resume of a finished run changes nothing
     assert evolve([*args, "--seed", "3", "--out", str(tmp_path / "straight"), "--no-progress"]) == 2
     assert evolve(["--out", str(tmp_path / "straight"), "--resume", "--no-progress"]) == 0

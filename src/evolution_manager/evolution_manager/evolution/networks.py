@@ -1,10 +1,11 @@
-"""Optimisers over a neural controller's 56 weights (``bt_controller.network``, issue 37): CMA-ES with pycma
-and the authors' GA with DEAP's operators, as ask/tell objects, and a run of either with its run directory.
+"""Optimisers over a neural controller's 56 weights (``bt_controller.network``, issue 37): CMA-ES with
+pycma, the authors' GA with DEAP's operators and MAP-Elites with pyribs, as ask/tell objects, and a run of any
+of them with its run directory.
 
-``evolve --algorithm nn-cmaes|nn-ga --objective O [--task T] --evaluations N --seed S --out DIR [--resume]``
-(``docs/algorithms.md``, "Networks"). Every network of a run is evaluated on the run's scenario seed, as a
-tree run under ``--scenarios fixed``, and the run keeps the fittest network evaluated (the authors keep the
-best individual so far rather than an elite, 6709a35).
+``evolve --algorithm nn-cmaes|nn-ga|nn-qd --objective O [--task T] --evaluations N --seed S --out DIR``
+(``--resume``; ``docs/algorithms.md``, "Networks"). Every network of a run is evaluated on the run's scenario
+seed, as a tree run under ``--scenarios fixed``, and the run keeps the fittest network evaluated (the authors
+keep the best individual so far rather than an elite, 6709a35).
 
 ``nn-cmaes`` (``WeightCmaEs``): pycma's ``CMAEvolutionStrategy`` at the authors' settings, centroid 0 on all
 56 weights, step size 1, 25 samples per generation, no bounds, no rounding; it minimises, so it is told the
@@ -12,7 +13,18 @@ negated fitness. The authors use DEAP's ``cma.Strategy``; pycma, Hansen's refere
 ways that matter (see the class). ``nn-ga`` (``WeightGA``): the authors' GA: 25 weight vectors drawn uniformly
 in [-5, 5], each generation the 3 best kept and 22 tournament winners (size 3) varied as DEAP's ``varAnd``:
 pairwise two-point crossover with probability 0.5, then each child with probability 0.5 a Gaussian mutation
-(mean 0, sigma 5, each weight with probability 0.05); weights rounded to 2 decimals.
+(mean 0, sigma 5, each weight with probability 0.05); weights rounded to 2 decimals. ``nn-qd``
+(``WeightMapElites``): MAP-Elites over the weights with pyribs's CMA-ME (5 CMA-ES emitters of 10 samples,
+each ranked by improvement of the archive, from centroid 0 and step size 1) on the paper's descriptors, an
+8 x 8 x 8 grid over [0, 1]^3. Why pyribs rather than qdpy (the trees' MAP-Elites): its emitters are built for
+continuous genomes (CMA-ME, CMA-MAE), it is maintained and typed, and its archive and emitters take explicit
+seeds; qdpy's continuous operators are the plain Gaussian and polynomial mutations of 2019-era MAP-Elites.
+
+Every run also keeps its networks on a grid of its own, binned as every repertoire of the project
+(``archive.Repertoire``: movement, rotation, conditionality, 8 bins each), the fittest per bin: its coverage
+(filled bins / 512) and QD score (the sum of each bin's best / 512) are what a tree run reports. A network
+ticks no condition node, so its conditionality is 0 and only the 64 bins of the first conditionality slice
+can be filled: coverage is at most 0.125 (issue 37's comparison of repertoires must say so).
 
 Each optimiser takes its generator from the caller (a ``numpy.random.Generator`` for CMA-ES, whose sampling
 it replaces pycma's ``np.random.randn`` with; a ``random.Random`` for the GA, drawn from exactly as DEAP's
@@ -44,6 +56,7 @@ from bt_controller.model_settings import PROFILES
 from bt_controller.network import N_WEIGHTS, Network, network_document, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
+from evolution_manager.evolution.compositions import bin_of
 from evolution_manager.evolution.run import LOCK_NAME, create_whole
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, default_scenario_seed
 from evolution_manager.files import CsvLog, number, read_json_object, write_json
@@ -56,7 +69,9 @@ from swarm_sim.tasks import task_named
 
 KIND = "networks"
 """``config.json``'s ``kind``: what tells a network run from a tree or composition run."""
-ALGORITHMS: tuple[str, ...] = ("nn-cmaes", "nn-ga")
+ALGORITHMS: tuple[str, ...] = ("nn-cmaes", "nn-ga", "nn-qd")
+GRID_BINS = 8 * 8 * 8
+"""Bins of a repertoire grid (``archive.GRID_SHAPE``)."""
 CHECKPOINT_FORMAT = 1
 DESCRIPTORS = ("movement", "rotation", "conditionality")
 FAILED = -1.0
@@ -82,12 +97,18 @@ class NetworkParameters:
     init_high: float = 5.0
     decimals: int = 2
     """GA: weights rounded to this many decimals after initialisation and variation."""
+    emitters: int = 5
+    """MAP-Elites: CMA-ME emitters."""
+    emitter_batch: int = 10
+    """MAP-Elites: samples per emitter and batch (5 x 10: the trees' MAP-Elites batch of 50)."""
 
     def __post_init__(self) -> None:
         integer(self.population, "population", 2, error=ConfigError)
         integer(self.tournament, "tournament", 1, error=ConfigError)
         integer(self.elites, "elites", 0, self.population - 1, error=ConfigError)
         integer(self.decimals, "decimals", 0, 15, error=ConfigError)
+        integer(self.emitters, "emitters", 1, error=ConfigError)
+        integer(self.emitter_batch, "emitter_batch", 2, error=ConfigError)
         for name in ("crossover", "mutation", "gene_probability"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ConfigError(f"{name} must be a probability in [0, 1], got {getattr(self, name)}")
@@ -171,8 +192,11 @@ class WeightGA:
         self._asked = batch
         return [list(w) for w in batch]
 
-    def tell(self, fitness: Sequence[float]) -> None:
-        """The fitness of the asked batch, in order (``FAILED`` for a failed evaluation)."""
+    def tell(
+        self, fitness: Sequence[float], descriptors: Sequence[Sequence[float] | None] | None = None
+    ) -> None:
+        """The fitness of the asked batch, in order (``FAILED`` for a failed evaluation); the descriptors are
+        not used."""
         if self._asked is None or len(fitness) != len(self._asked):
             raise ValueError("tell() needs one fitness per network of the last ask()")
         if self.population:
@@ -257,8 +281,11 @@ class WeightCmaEs:
         self._asked = np.array(self.es.ask())  # type: ignore[attr-defined]
         return [[float(w) for w in row] for row in self._asked]
 
-    def tell(self, fitness: Sequence[float]) -> None:
-        """The fitness of the asked samples, in order (pycma is told their negation: it minimises)."""
+    def tell(
+        self, fitness: Sequence[float], descriptors: Sequence[Sequence[float] | None] | None = None
+    ) -> None:
+        """The fitness of the asked samples, in order (pycma is told their negation: it minimises); the
+        descriptors are not used."""
         if self._asked is None or len(fitness) != len(self._asked):
             raise ValueError("tell() needs one fitness per network of the last ask()")
         told = [float(f) for f in fitness]
@@ -287,9 +314,91 @@ class WeightCmaEs:
             self.tell([float(f) for f in fitness])
 
 
-def make_optimiser(algorithm: str, parameters: NetworkParameters, seed: int) -> WeightGA | WeightCmaEs:
+class WeightMapElites:
+    """MAP-Elites over the weights with pyribs (``ribs``): CMA-ME, ``emitters`` CMA-ES emitters ranked by
+    improvement ("2imp"), restarting when they stop improving, on an 8 x 8 x 8 ``GridArchive`` of the
+    descriptors over [0, 1]^3 (module docstring). The archive's and emitters' seeds are drawn from the
+    passed-in generator. A checkpoint keeps the generator's starting state and every batch's fitness and
+    descriptors; a resume replays them, as ``WeightCmaEs``. A failed evaluation (never expected of a network)
+    is told as the worst fitness at descriptors (0, 0, 0).
+    """
+
+    name = "nn-qd"
+
+    def __init__(self, parameters: NetworkParameters, rng: np.random.Generator) -> None:
+        self.p = parameters
+        self.rng = rng
+        self.start = rng.bit_generator.state
+        self.told: list[list[list[float]]] = []
+        """Per batch: the fitness, then the descriptors of each network."""
+        self._asked: np.ndarray | None = None
+        self.scheduler = self._scheduler()
+
+    def _scheduler(self) -> object:
+        from ribs.archives import GridArchive  # (pyribs: imported only by network runs)
+        from ribs.emitters import EvolutionStrategyEmitter
+        from ribs.schedulers import Scheduler
+
+        seeds = [int(s) for s in self.rng.integers(0, 2**62, size=1 + self.p.emitters)]
+        archive = GridArchive(solution_dim=N_WEIGHTS, dims=(8, 8, 8), ranges=[(0.0, 1.0)] * 3, seed=seeds[0])
+        emitters = [
+            EvolutionStrategyEmitter(
+                archive,
+                x0=np.zeros(N_WEIGHTS),
+                sigma0=self.p.sigma,
+                ranker="2imp",
+                batch_size=self.p.emitter_batch,
+                seed=seed,
+            )
+            for seed in seeds[1:]
+        ]
+        return Scheduler(archive, emitters)
+
+    def ask(self) -> list[list[float]]:
+        self._asked = np.asarray(self.scheduler.ask())  # type: ignore[attr-defined]
+        return [[float(w) for w in row] for row in self._asked]
+
+    def tell(
+        self, fitness: Sequence[float], descriptors: Sequence[Sequence[float] | None] | None = None
+    ) -> None:
+        """The fitness and descriptors of the asked batch, in order (None descriptors: a failed one)."""
+        if self._asked is None or len(fitness) != len(self._asked):
+            raise ValueError("tell() needs one fitness per network of the last ask()")
+        if descriptors is None or len(descriptors) != len(fitness):
+            raise ValueError("MAP-Elites needs the descriptors of every network")
+        told = [float(f) for f in fitness]
+        measures = [[float(d) for d in (m if m is not None else (0.0, 0.0, 0.0))] for m in descriptors]
+        self.scheduler.tell(np.array(told), np.array(measures))  # type: ignore[attr-defined]
+        self.told.append([told, *measures])
+        self._asked = None
+
+    def initial(self) -> bool:
+        return False
+
+    def to_state(self) -> dict:
+        return {"start": self.start, "told": self.told}
+
+    def restore(self, state: dict) -> None:
+        start = state["start"]
+        if start.get("bit_generator") != self.rng.bit_generator.state["bit_generator"]:
+            raise ValueError("the checkpoint's generator is not this run's")
+        self.rng.bit_generator.state = start
+        self.start = start
+        self.told = []
+        self.scheduler = self._scheduler()
+        for batch in state["told"]:
+            self.ask()
+            self.tell(batch[0], batch[1:])
+
+
+Optimiser = WeightGA | WeightCmaEs | WeightMapElites
+
+
+def make_optimiser(algorithm: str, parameters: NetworkParameters, seed: int) -> Optimiser:
     """The optimiser of ``algorithm`` with its generator seeded from the run's ``seed``."""
     algorithm_seed = derive_seed(seed, RUN_ALGORITHM)
+    if algorithm == "nn-qd":
+        return WeightMapElites(parameters, np.random.default_rng(algorithm_seed))
     if algorithm == "nn-ga":
         return WeightGA(parameters, random.Random(algorithm_seed))
     if algorithm == "nn-cmaes":
@@ -380,7 +489,7 @@ class Evaluated:
 
 
 EVALUATION_HEADER = ["evaluation", "seed", "weights", "fitness", *DESCRIPTORS, "error"]
-PROGRESS_HEADER = ["evaluations", "best_fitness"]
+PROGRESS_HEADER = ["evaluations", "best_fitness", "coverage", "qd_score"]
 
 
 class NetworkRun:
@@ -395,6 +504,8 @@ class NetworkRun:
         self.evaluations = 0
         self.produced = 0
         self.best: Evaluated | None = None
+        self.grid: dict[tuple[int, ...], Evaluated] = {}
+        """The fittest network evaluated per bin (the first among equals), as a tree run's repertoire."""
         self.evaluations_log = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
         self.progress_log = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
         self.offsets = {"evaluations": 0, "progress": 0}
@@ -450,6 +561,7 @@ class NetworkRun:
                 "produced": self.produced,
                 "optimiser": self.optimiser.to_state(),
                 "best": None if self.best is None else self.best.as_json(),
+                "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
                 "offsets": self.offsets,
             },
             indent=None,
@@ -464,6 +576,8 @@ class NetworkRun:
         self.produced = integer(state["produced"], "produced", 0)
         self.optimiser.restore(state["optimiser"])
         self.best = None if state["best"] is None else Evaluated.from_json(state["best"])
+        members = [Evaluated.from_json(e) for e in state["grid"]]
+        self.grid = {bin_of(e.descriptors): e for e in members if e.descriptors is not None}
         self.offsets = {
             name: integer(state["offsets"][name], name, 0) for name in ("evaluations", "progress")
         }
@@ -494,13 +608,18 @@ class NetworkRun:
         initial = self.optimiser.initial()
         batch = self.optimiser.ask()
         evaluated = self.evaluate(batch)
-        self.optimiser.tell([e.rank for e in evaluated])
+        self.optimiser.tell([e.rank for e in evaluated], [e.descriptors for e in evaluated])
         self.evaluations += len(evaluated)
         if not initial:
             self.produced += len(evaluated)
         for e in evaluated:
             if e.fitness is not None and (self.best is None or e.fitness > self.best.rank):
                 self.best = e
+            if e.fitness is not None and e.descriptors is not None:
+                index = bin_of(e.descriptors)
+                held = self.grid.get(index)
+                if held is None or e.fitness > held.rank:
+                    self.grid[index] = e
         self._record(evaluated)
         return evaluated
 
@@ -534,7 +653,18 @@ class NetworkRun:
             rows.append([str(e.evaluation), str(self.config.scenario_seed), weights, *values, e.error or ""])
         self.offsets["evaluations"] = self.evaluations_log.append(rows)
         best = "" if self.best is None else number(self.best.fitness)
-        self.offsets["progress"] = self.progress_log.append([[str(self.evaluations), best]])
+        row = [str(self.evaluations), best, number(self.coverage), number(self.qd_score)]
+        self.offsets["progress"] = self.progress_log.append([row])
+
+    @property
+    def coverage(self) -> float:
+        """Filled bins / 512."""
+        return len(self.grid) / GRID_BINS
+
+    @property
+    def qd_score(self) -> float:
+        """The sum of each bin's best fitness / 512 (the authors' analysis), summed in bin order."""
+        return sum(self.grid[b].rank for b in sorted(self.grid)) / GRID_BINS
 
     def finish(self) -> dict:
         """Write ``summary.json`` and ``best/<objective>.json``; return the summary."""
@@ -544,8 +674,13 @@ class NetworkRun:
             "evaluations": self.evaluations,
             "produced": self.produced,
             "best": None if self.best is None else self.best.as_json(),
+            "coverage": self.coverage,
+            "qd_score": self.qd_score,
+            "repertoire_size": len(self.grid),
         }
         write_json(self.root / "summary.json", summary)
+        items = [{"bin": list(b), **self.grid[b].as_json()} for b in sorted(self.grid)]
+        write_json(self.root / f"repertoire_{self.config.objective}.json", {"kind": KIND, "items": items})
         if self.best is not None:
             make_folder(self.root / "best")
             network = Network(self.best.weights)

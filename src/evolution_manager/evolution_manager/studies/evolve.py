@@ -5,7 +5,7 @@
     ws/run evolution_manager evolve --task foraging --swarm-from runs/qd runs/qd-nest --algorithm ga \
         --evaluations 1000 --out runs/compositions     # a repertoire cell per robot (evolution.compositions)
     ws/run evolution_manager evolve --algorithm nn-cmaes --objective food --evaluations 25000 --seed 1 \
-        --out runs/nn    # the 9-5-1 network's weights, CMA-ES or the GA (nn-ga; evolution.networks)
+        --out runs/nn    # the 9-5-1 network's weights: CMA-ES, the GA (nn-ga) or MAP-Elites (nn-qd)
 
 Bad options print one line saying what was expected and exit with status 2; nothing already saved is
 touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
@@ -59,7 +59,7 @@ if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load la
     from swarm_sim.evaluation import Evaluator
 
 
-NETWORK_ALGORITHMS = ("nn-cmaes", "nn-ga")
+NETWORK_ALGORITHMS = ("nn-cmaes", "nn-ga", "nn-qd")
 """The optimisers over a network's weights (``evolution.networks.ALGORITHMS``: that module loads late)."""
 
 
@@ -70,7 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--algorithm",
         choices=(*ALGORITHMS, "ga", *NETWORK_ALGORITHMS),
         help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga or qd over compositions; "
-        "nn-cmaes or nn-ga: the weights of the 9-5-1 network controller",
+        "nn-cmaes, nn-ga or nn-qd (MAP-Elites): the weights of the 9-5-1 network controller",
     )
     parser.add_argument(
         "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd: --objectives)"
@@ -473,7 +473,7 @@ def _evolve_networks(
 
     try:
         if not cluster.is_local:
-            raise UsageError("--algorithm nn-cmaes and nn-ga run here only (--cluster local)")
+            raise UsageError("--algorithm nn-cmaes, nn-ga and nn-qd run here only (--cluster local)")
         if args.library is not None or args.objectives is not None or args.scenarios not in (None, "fixed"):
             raise UsageError("network runs take no --library or --objectives, and fixed scenarios only")
         if args.resume:
