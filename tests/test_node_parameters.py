@@ -176,3 +176,16 @@ def test_the_simulator_leaves_sensing_to_the_bridge_only_when_free_and_the_bridg
     )
     line = refused("sensor_bridge", "-p", "loss:=1.5", namespace="/")
     assert line == "sensor_bridge: parameters loss and delay: loss must be a probability in [0, 1], got 1.5"
+
+
+def test_a_controller_network_parameter_that_is_no_network_file(tmp_path):
+    line = refused("footbot_controller", "-p", f"network:={tmp_path / 'missing.json'}")
+    assert line.startswith("footbot_controller: the network parameter: ") and "cannot read" in line
+    short = tmp_path / "short.json"
+    short.write_text('{"weights": [1, 2]}')
+    line = refused("footbot_controller", "-p", f"network:={short}")
+    assert line.endswith(f"{short}: a network has 56 weights, got 2")
+    line = refused("footbot_controller", "-p", f"network:={short}", "-p", "tree:=stop")
+    assert "give one controller, not both" in line
+    line = refused("footbot_controller", "-p", "tree:=nn(1, 2)")
+    assert "a network has 56 weights, got 2" in line

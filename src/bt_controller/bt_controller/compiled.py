@@ -14,6 +14,11 @@ pre-order (root 0, indices local to the tree) to
 The six arrays travel together as a ``FlatTree`` and many trees as one ``PackedTrees`` (named tuples of
 arrays, which numba passes to kernels whole); ``tree_at`` is the one place a pack is cut into trees.
 
+A pack may also hold neural controllers (``bt_controller.network``): a network is packed as a single node of
+op 6 (``OP_NETWORK``) and its weights are row ``t`` of the pack's ``weights`` (every row but a network's is
+unused; the array has no columns when the pack holds no network). The batch kernels run a network in place
+of a tree (``network.act``); the tick functions of this module take trees only.
+
 Per robot, ``memory`` is int8 with one entry per node (see ``semantics``). ``tick`` is an ``njit`` function
 that other compiled kernels call with a ``FlatTree``; ``tick_batch`` and ``run_ticks`` tick many robots of
 many packed trees. ``tick`` walks the tree with an explicit stack of ancestors that lives on the machine stack
@@ -35,6 +40,7 @@ from numba.extending import intrinsic
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
 from bt_controller.draws import choose, derive
 from bt_controller.model_settings import PAPER
+from bt_controller.network import N_WEIGHTS, Network
 from bt_controller.tree import (
     MAX_TICK_DEPTH,
     Action,
@@ -47,6 +53,8 @@ from bt_controller.tree import (
 from bt_controller.vocabulary import ACTIONS, FAILURE, N_CONDITIONS, RUNNING, SUCCESS
 
 OP_SEQ, OP_SEL, OP_PROB, OP_CONDITION, OP_ACTION, OP_SUCCESS = 0, 1, 2, 3, 4, 5
+OP_NETWORK = 6
+"""The one node of a packed network (see the module docstring)."""
 _OP_OF_KIND = {"seq": OP_SEQ, "sel": OP_SEL, "prob": OP_PROB, "success": OP_SUCCESS}
 N_COUNTS = 1 + len(ACTIONS)
 MAX_COMPILED_DEPTH = MAX_TICK_DEPTH
@@ -113,6 +121,9 @@ class PackedTrees(NamedTuple):
     draw: np.ndarray
     node_offset: np.ndarray
     child_offset: np.ndarray
+    weights: np.ndarray
+    """float64 (trees, ``network.N_WEIGHTS``): row ``t`` holds network ``t``'s weights (no columns when the
+    pack holds no network)."""
 
     @property
     def n_trees(self) -> int:
@@ -129,9 +140,29 @@ class PackedTrees(NamedTuple):
         return tree_at(self, t)
 
 
-def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
-    """Flatten (if needed) and concatenate ``trees``."""
-    flats = [t if isinstance(t, FlatTree) else flatten(t) for t in trees]
+def _network_node() -> FlatTree:
+    """The flat form of a network: one node of op ``OP_NETWORK`` (its weights go in the pack)."""
+    return FlatTree(
+        np.array([OP_NETWORK], np.int8),
+        np.full(1, -1, np.int8),
+        np.full(1, -1, np.int32),
+        np.zeros(1, np.int8),
+        np.zeros(0, np.int32),
+        np.full(1, -1, np.int32),
+    )
+
+
+def pack(trees: Sequence[Node | FlatTree | Network]) -> PackedTrees:
+    """Flatten (if needed) and concatenate ``trees``; a network is packed as ``OP_NETWORK`` with its
+    weights."""
+    flats = [
+        t if isinstance(t, FlatTree) else _network_node() if isinstance(t, Network) else flatten(t)
+        for t in trees
+    ]
+    networks = [(k, t) for k, t in enumerate(trees) if isinstance(t, Network)]
+    weights = np.zeros((len(flats), N_WEIGHTS if networks else 0))
+    for k, network in networks:
+        weights[k] = network.weights
     node_offset = np.zeros(len(flats) + 1, np.int64)
     child_offset = np.zeros(len(flats) + 1, np.int64)
     node_offset[1:] = np.cumsum([f.n_nodes for f in flats])
@@ -150,6 +181,7 @@ def pack(trees: Sequence[Node | FlatTree]) -> PackedTrees:
         cat("draw", np.int32),
         node_offset,
         child_offset,
+        weights,
     )
 
 

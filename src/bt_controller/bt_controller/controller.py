@@ -3,7 +3,8 @@
 This is the core of the footbot controller node (``bt_controller.nodes.footbot_controller``), kept free of ROS
 so that it can be tested, and checked against the batch evaluator, without a graph; the reference road and the
 in-process lockstep run it too. It follows ``bt_controller.timeline`` step by step: sense, refresh the
-smoothed values, tick the tree with the reference interpreter, broadcast and drive. A chain's trials follow
+smoothed values, tick the tree with the reference interpreter (or a network, ``bt_controller.network``, at
+the same ticks on the same blackboard), broadcast and drive. A chain's trials follow
 each other without a reset: the tree's memory, the smoothing window and the estimates carry over (A1 under
 ``paper``; under ``clean`` a chain is one trial).
 """
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 from bt_controller import timeline
 from bt_controller.model_settings import PerceptionParams, Timeline
 from bt_controller.motors import motors_after_tick, running_action
+from bt_controller.network import Network, NetworkRobot
 from bt_controller.perception import Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
@@ -59,20 +61,20 @@ class StepOutcome:
 
 
 class FootbotController:
-    """One footbot's perception and behaviour tree across the steps of a chain."""
+    """One footbot's perception and behaviour tree (or network) across the steps of a chain."""
 
     def __init__(self) -> None:
-        self.tree: Node | None = None
+        self.tree: Node | Network | None = None
         self.timeline = Timeline()
         self.view: RobotView | None = None
-        self.robot: ReferenceRobot | None = None
+        self.robot: ReferenceRobot | NetworkRobot | None = None
         self.action = STOP
         self.resumed = -1
         self.next_step = 1
         self.last_step = 0
 
-    def load(self, tree: Node) -> None:
-        """Run ``tree`` from the next chain on."""
+    def load(self, tree: Node | Network) -> None:
+        """Run ``tree`` (a tree or a network) from the next chain on."""
         self.tree = tree
         self.view = None
         self.robot = None
@@ -89,7 +91,10 @@ class FootbotController:
             raise ValueError(f"a chain has 1 to {timeline.chain_length(line)} trials, got {trials!r}")
         self.timeline = line
         self.view = RobotView(perception)
-        self.robot = ReferenceRobot(self.tree, tree_key, line.profile)
+        if isinstance(self.tree, Network):
+            self.robot = NetworkRobot(self.tree)
+        else:
+            self.robot = ReferenceRobot(self.tree, tree_key, line.profile)
         self.action = STOP
         self.resumed = -1
         self.next_step = 1

@@ -38,6 +38,7 @@ import numpy as np
 
 from bt_controller.model_settings import PerceptionParams
 from bt_controller.motors import motors_after_tick, running_action
+from bt_controller.network import Network, NetworkRobot
 from bt_controller.perception import Readings, RobotView
 from bt_controller.semantics import ReferenceRobot
 from bt_controller.tree import Node
@@ -92,7 +93,7 @@ class FreeRunningController:
 
     def __init__(
         self,
-        tree: Node,
+        tree: Node | Network,
         tree_key: int,
         perception: PerceptionParams,
         sensing_timeout: float,
@@ -101,7 +102,11 @@ class FreeRunningController:
         if not sensing_timeout > 0:
             raise ValueError(f"sensing_timeout must be positive, got {sensing_timeout!r}")
         self.view = RobotView(perception)
-        self.robot = ReferenceRobot(tree, tree_key, perception.profile)
+        self.robot: ReferenceRobot | NetworkRobot
+        if isinstance(tree, Network):
+            self.robot = NetworkRobot(tree)
+        else:
+            self.robot = ReferenceRobot(tree, tree_key, perception.profile)
         self.sensing_timeout = float(sensing_timeout)
         self.counts = SensingCounts()
         self.action = STOP

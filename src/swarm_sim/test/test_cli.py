@@ -176,4 +176,50 @@ def test_bad_swarm_input_exits_2_with_one_line(tmp_path, capsys, content, extra,
 
 def test_tree_or_swarm_is_required(capsys):
     assert evaluate_main(["--seed", "1"]) == 2
-    assert "one of the arguments --tree --swarm is required" in capsys.readouterr().err
+    assert "one of the arguments --tree --network --swarm is required" in capsys.readouterr().err
+
+
+NETWORK = [round(0.37 * ((k * 7) % 11) - 1.8, 2) for k in range(56)]
+
+
+def test_a_network_file_evaluates_on_both_engines_and_prints_its_weights(tmp_path, capsys):
+    path = tmp_path / "net.json"
+    path.write_text(json.dumps({"weights": NETWORK}))
+    documents = []
+    for engine in ("compiled", "reference"):
+        args = [
+            "--network",
+            str(path),
+            "--seed",
+            "3",
+            "--trials",
+            "2",
+            "--task",
+            "foraging",
+            "--engine",
+            engine,
+        ]
+        assert evaluate_main(args) == 0
+        documents.append(capsys.readouterr().out)
+    assert documents[0] == documents[1]
+    document = json.loads(documents[0])
+    assert document["network"] == NETWORK and "tree" not in document and document["task"] == "foraging"
+    assert document["descriptors"]["conditionality"] == 0.0  # a network ticks no condition node
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        ({"weights": NETWORK[:55]}, "a network has 56 weights, got 55"),
+        ({"weights": [*NETWORK[:55], "x"]}, "weight 56 must be a number, got 'x'"),
+        ({"weights": NETWORK, "bias": 1}, 'expected an object with one key, {"weights"'),
+        ("[1,", "not JSON"),
+    ],
+)
+def test_bad_network_files_exit_2_with_one_line(tmp_path, capsys, content, words):
+    path = tmp_path / "net.json"
+    path.write_text(content if isinstance(content, str) else json.dumps(content))
+    assert evaluate_main(["--network", str(path), "--trials", "1"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    assert f"--network: {path}: " in captured.err and words in captured.err

@@ -8,7 +8,12 @@ with one line, exit status 2):
     robot (int, read-only): the robot's index i, its position in the simulator's ``robot_namespaces``.
         Default -1: taken from the namespace, whose last part must then be ``footbot_<i>``. When both are
         given they must agree: ``__ns:=/footbot_4 -p robot:=0`` stops the node with an error saying so.
-    tree (string, read-only): a tree to load at start (default: none; use the load_tree service).
+    tree (string, read-only): a tree to load at start (default: none; use the load_tree service); a network's
+        text, ``nn(w1, ..., w56)`` (``bt_controller.network``), loads that network instead (so does the
+        load_tree service's).
+    network (string, read-only): a network file (JSON ``{"weights": [56 numbers]}``) to load at start
+        (default: none); not with ``tree``. A file that cannot be used stops the node with one line, exit
+        status 2.
     library (string, read-only): a primitive library file (``bt_controller.library``) whose primitives'
         names the trees may use (default: none). A path: the library is fixed for the node's life, as its
         other parameters; a library that cannot be read stops the node with one line, exit status 2.
@@ -81,8 +86,9 @@ from bt_controller.errors import TreeError
 from bt_controller.free_running import FreeRunningController, FreeTick
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.model_settings import PerceptionParams, Timeline, profile_number
+from bt_controller.network import Network, NetworkError, controller_text, load_network, parse_controller
 from bt_controller.perception import Readings, warm_up
-from bt_controller.tree import Node, parse, to_text
+from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
@@ -111,7 +117,9 @@ class ControllerSettings:
     robot: int = -1
     """Index of this footbot in the simulator's robot_namespaces; -1: from the namespace (footbot_<i>)."""
     tree: str = ""
-    """Tree to load at start (tree text); empty: wait for the load_tree service."""
+    """Tree to load at start (tree text, or a network's ``nn(...)``); empty: wait for load_tree."""
+    network: str = ""
+    """A network file (``{"weights": [...]}``) to load at start; empty: none (not with ``tree``)."""
     library: str = ""
     """A primitive library file whose names the trees may use (each use its own success copy); empty:
     none."""
@@ -188,11 +196,15 @@ class FootbotControllerNode(RosNode):
         self.robot = robot_index(self.get_namespace(), self.settings.robot)
         self.library: Library | None = load_library(self.settings.library) if self.settings.library else None
         initial_tree = self.settings.tree
+        if self.settings.network:
+            if initial_tree:
+                raise ParameterError("parameters tree and network: give one controller, not both")
+            initial_tree = controller_text(load_network(self.settings.network))
         self.controller = FootbotController()
         self.wheel_speed = self.settings.default_wheel_speed  # m/s, from each trial's StartTrial
         self.wheel_separation = self.settings.default_wheel_separation  # m, from each trial's StartTrial
         self.free: FreeRunningController | None = None  # free timing: made when a tree is loaded
-        self._tree: Node | None = None
+        self._tree: Node | Network | None = None
         self._timed_out = False
         self._stall_warned = 0  # lockstep: the step a stall was last reported at
         warm_up()  # compile before offering services, so no step waits for numba
@@ -221,11 +233,11 @@ class FootbotControllerNode(RosNode):
         self.create_service(StartTrial, "start_trial", self._on_start_trial)
         self.loaded = ""
         if initial_tree:
-            tree = parse(initial_tree, library=self.library)
+            tree = parse_controller(initial_tree, library=self.library)
             self._load(tree)
             self.loaded = self._text(tree)
 
-    def _load(self, tree: Node) -> None:
+    def _load(self, tree: Node | Network) -> None:
         self.controller.load(tree)
         self._tree = tree
         if self.settings.free:
@@ -244,9 +256,12 @@ class FootbotControllerNode(RosNode):
         """The node's clock in seconds (simulated under use_sim_time)."""
         return self.get_clock().now().nanoseconds / 1e9
 
-    def _text(self, tree: Node) -> str:
-        """The canonical text of ``tree``, with the library's names where it has one."""
-        return to_text(tree) if self.library is None else self.library.fold(tree)
+    def _text(self, tree: Node | Network) -> str:
+        """The canonical text of ``tree`` (a network's ``nn(...)``), with the library's names where it has
+        one."""
+        if self.library is None or isinstance(tree, Network):
+            return controller_text(tree)
+        return self.library.fold(tree)
 
     def announce(self) -> None:
         """Log that the node is ready (once its parameters are checked)."""
@@ -257,7 +272,7 @@ class FootbotControllerNode(RosNode):
 
     def _on_load_tree(self, request: LoadTree.Request, response: LoadTree.Response) -> LoadTree.Response:
         try:
-            tree = parse(request.tree, library=self.library)
+            tree = parse_controller(request.tree, library=self.library)
         except TreeError as error:
             response.success = False
             response.message = str(error)
@@ -540,7 +555,8 @@ def answer_messages(
 
 
 class InitialTreeError(ValueError):
-    """The ``tree`` parameter is not a valid tree, or the ``library`` parameter not a library."""
+    """The ``tree`` parameter is not a valid tree, the ``network`` parameter not a network file, or the
+    ``library`` parameter not a library."""
 
 
 def make_node() -> FootbotControllerNode:
@@ -552,6 +568,8 @@ def make_node() -> FootbotControllerNode:
         raise InitialTreeError(f"the tree parameter is not a valid tree: {error}") from None
     except LibraryError as error:
         raise InitialTreeError(f"the library parameter: {error}") from None
+    except NetworkError as error:
+        raise InitialTreeError(f"the network parameter: {error}") from None
 
 
 def main(args: list[str] | None = None) -> None:

@@ -7,8 +7,9 @@ configuration and command-line options (``run_config``, ``options``), the run lo
 (``run``), the held-out scores (``heldout``), trees as people are shown them (``shown_trees``), what a
 run's result files show, computed (``run_results``), and primitive libraries made from runs' repertoires
 (``libraries``, the ``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA
-or MAP-Elites (``compositions``). Imports: the base modules, bt_controller, swarm_sim, DEAP
-and qdpy; no other wing.
+or MAP-Elites (``compositions``), and the optimisers over a neural controller's weights, CMA-ES and the
+authors' GA (``networks``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy and pycma; no
+other wing.
 """
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "deap_trees",
     "heldout",
     "libraries",
+    "networks",
     "operators",
     "options",
     "run",

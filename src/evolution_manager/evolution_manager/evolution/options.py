@@ -19,6 +19,7 @@ if TYPE_CHECKING:  # every command's parser reads this module: tqdm and a run's 
     from tqdm import tqdm
 
     from evolution_manager.evolution.compositions import CompositionConfig
+    from evolution_manager.evolution.networks import NetworkConfig
 
 
 def add_scenario_options(parser: argparse.ArgumentParser) -> None:
@@ -149,7 +150,9 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
             )
 
 
-def progress_bar(config: RunConfig | CompositionConfig, initial: int, enabled: bool) -> tqdm | None:
+def progress_bar(
+    config: RunConfig | CompositionConfig | NetworkConfig, initial: int, enabled: bool
+) -> tqdm | None:
     if not enabled:
         return None
     from tqdm import tqdm  # late: about 70 ms, only when a bar is shown

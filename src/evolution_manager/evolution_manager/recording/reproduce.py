@@ -35,7 +35,8 @@ from typing import Any
 
 from bt_controller.errors import TreeError
 from bt_controller.model_settings import PROFILES
-from bt_controller.tree import Node, parse
+from bt_controller.network import Network, parse_controller
+from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTIONS
 from evolution_manager.recording.bags import BagError, check_crcs, read_bag
 from swarm_ros.names import robot_frames, robot_namespaces
@@ -140,9 +141,11 @@ def verify_trial_bag(path: Path | str) -> Verification:
     start, result = starts[0], results[0]
     try:
         if result.tree.lstrip().startswith("["):  # a heterogeneous swarm: each robot re-runs its own tree
-            tree: Node | list[Node] = layout_of_label(result.tree, DEFAULT.n_robots).parsed()
+            tree: Node | Network | list[Node | Network] = layout_of_label(
+                result.tree, DEFAULT.n_robots
+            ).parsed()
         else:
-            tree = parse(result.tree)
+            tree = parse_controller(result.tree)
     except (TreeError, LayoutError) as error:
         raise BagError(f"the recorded tree does not parse: {error}") from None
     seed, trial = int(start.seed), int(start.trial)

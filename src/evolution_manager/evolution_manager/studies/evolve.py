@@ -4,6 +4,8 @@
     ws/run evolution_manager evolve --out runs/qd --resume        # continue a killed or interrupted run
     ws/run evolution_manager evolve --task foraging --swarm-from runs/qd runs/qd-nest --algorithm ga \
         --evaluations 1000 --out runs/compositions     # a repertoire cell per robot (evolution.compositions)
+    ws/run evolution_manager evolve --algorithm nn-cmaes --objective food --evaluations 25000 --seed 1 \
+        --out runs/nn    # the 9-5-1 network's weights: CMA-ES, the GA (nn-ga) or MAP-Elites (nn-qd)
 
 Bad options print one line saying what was expected and exit with status 2; nothing already saved is
 touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
@@ -57,13 +59,18 @@ if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load la
     from swarm_sim.evaluation import Evaluator
 
 
+NETWORK_ALGORITHMS = ("nn-cmaes", "nn-ga", "nn-qd")
+"""The optimisers over a network's weights (``evolution.networks.ALGORITHMS``: that module loads late)."""
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``evolve`` command line."""
     parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
     parser.add_argument(
         "--algorithm",
-        choices=(*ALGORITHMS, "ga"),
-        help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga or qd over compositions",
+        choices=(*ALGORITHMS, "ga", *NETWORK_ALGORITHMS),
+        help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga or qd over compositions; "
+        "nn-cmaes, nn-ga or nn-qd (MAP-Elites): the weights of the 9-5-1 network controller",
     )
     parser.add_argument(
         "--objective", choices=OBJECTIVES, help="the objective of gp and qd (gp-fnd: --objectives)"
@@ -150,6 +157,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
+        if _networks_asked(args):
+            return _evolve_networks(args, argv, started, cluster)
         if args.homogeneous is not None:
             raise UsageError(
                 "--homogeneous seeds compositions of repertoire cells: it goes with --swarm-from RUN_DIR"
@@ -440,6 +449,97 @@ def _evolve_compositions(
         f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
         f"foraging {best}; the best swarm is {Path(args.out) / 'best' / 'foraging_swarm.json'}"
     )
+    return 0
+
+
+def _networks_asked(args: argparse.Namespace) -> bool:
+    """Whether the command evolves a network's weights: ``--algorithm nn-*``, or ``--resume`` of such a
+    run."""
+    if args.algorithm in NETWORK_ALGORITHMS:
+        return True
+    if args.resume and (Path(args.out) / "config.json").is_file():
+        with contextlib.suppress(EvolutionError):
+            saved = read_json(Path(args.out) / "config.json")
+            return isinstance(saved, dict) and saved.get("kind") == "networks"
+    return False
+
+
+def _evolve_networks(
+    args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
+) -> int:
+    """``evolve`` of a network's weights (``evolution.networks``): start or continue a run, write its
+    summary and best network."""
+    from evolution_manager.evolution import networks as nets  # late, as the run's modules in _evolve
+
+    try:
+        if not cluster.is_local:
+            raise UsageError("--algorithm nn-cmaes, nn-ga and nn-qd run here only (--cluster local)")
+        if args.library is not None or args.objectives is not None or args.scenarios not in (None, "fixed"):
+            raise UsageError("network runs take no --library or --objectives, and fixed scenarios only")
+        if args.resume:
+            saved = nets.NetworkConfig.from_json(read_json_object(Path(args.out) / "config.json"))
+            for name in (
+                "algorithm",
+                "objective",
+                "evaluations",
+                "seed",
+                "trials",
+                "profile",
+                "scenario_seed",
+            ):
+                value = getattr(args, name)
+                if value is not None and value != getattr(saved, name):
+                    raise UsageError(
+                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
+                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
+                    )
+            config = saved
+        else:
+            if (Path(args.out) / "config.json").exists():
+                raise UsageError(
+                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
+                )
+            if args.objective is None:
+                raise UsageError(f"--algorithm {args.algorithm} needs --objective")
+            task = "primitives" if args.task is None else registered_name(args.task)
+            if task is None:
+                raise UsageError("network runs take a registered --task (primitives or foraging)")
+            config = nets.NetworkConfig(
+                args.algorithm,
+                args.objective,
+                args.evaluations or 25_000,
+                0 if args.seed is None else args.seed,
+                args.trials or 10,
+                args.profile or nets.DEFAULT_PROFILE,
+                task,
+                -1 if args.scenario_seed is None else args.scenario_seed,
+            )
+        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
+
+        try:
+            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
+        except ValueError as error:
+            raise UsageError(f"--workers: {error}") from None
+        if args.resume:
+            run = nets.NetworkRun.resume(args.out, evaluator)
+        else:
+            run = nets.NetworkRun.start(config, args.out, evaluator)
+    except (WriteError, UsageError, EvolutionError, OSError) as error:
+        return _could_not_start(error, args.out)
+    bar = progress_bar(run.config, run.produced, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            if run.best is not None and run.best.fitness is not None:
+                bar.set_postfix_str(f"{run.config.objective}={run.best.fitness:.3f}")
+
+    failed = _execute(run, run.finish, args, argv, started, cluster, bar, on_batch)
+    if failed is not None:
+        return failed
+    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    where = Path(args.out) / "best" / f"{run.config.objective}.json"
+    print(f"{run.config.label}: {run.evaluations} evaluations, best {run.config.objective} {best}; {where}")
     return 0
 
 

@@ -29,6 +29,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.errors import TreeError
 from bt_controller.library import library_option
+from bt_controller.network import NetworkError, controller_text, load_network
 from bt_controller.tree import parse, to_text
 from bt_controller.vocabulary import ACTIONS, food_kind_name
 from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
@@ -319,6 +320,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--tree", help="tree text, or a file holding it (the trial runs in-process)")
+    source.add_argument(
+        "--network",
+        type=Path,
+        metavar="FILE",
+        help='every robot\'s network: {"weights": [56 numbers]} (the trial runs in-process)',
+    )
     source.add_argument("--bag", type=Path, help="a trial bag written by `trial --bag`")
     source.add_argument(
         "--swarm",
@@ -373,12 +380,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             frames = frames_from_bag(args.bag)
         else:
             if args.seed is None:
-                raise AnimationError(f"{'--tree' if args.tree is not None else '--swarm'} needs --seed S")
+                given = "--tree" if args.tree is not None else "--network" if args.network else "--swarm"
+                raise AnimationError(f"{given} needs --seed S")
             config = _config_for(args.profile, args.task)
             library = _library(args.library)
             tree = (
                 _tree_text(args.tree, library)
                 if args.tree is not None
+                else _network_text(args.network)
+                if args.network is not None
                 else _swarm(args.swarm, config, library)
             )
             frames = frames_from_tree(tree, args.seed, args.trial, config, library)
@@ -407,6 +417,13 @@ def _swarm(path: Path, config: Config, library: Library | None = None) -> SwarmL
         return load_layout(path, config.n_robots, library)
     except LayoutError as error:
         raise AnimationError(f"--swarm: {error}") from None
+
+
+def _network_text(path: Path) -> str:
+    try:
+        return controller_text(load_network(path))
+    except NetworkError as error:
+        raise AnimationError(f"--network: {error}") from None
 
 
 def _tree_text(source: str, library: Library | None = None) -> str:

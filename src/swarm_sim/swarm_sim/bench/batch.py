@@ -23,6 +23,7 @@ import numba
 
 from bt_controller.model_settings import PROFILES
 from bt_controller.random_trees import random_trees
+from bt_controller.tree import parse
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.model import DEFAULT, Config
 from swarm_sim.roads import reference_road
@@ -96,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.seed, args.trees, p_success=0.1 if "got_food" in args.task.nodes.conditions else 0.0
     )
     requests = [EvaluationRequest(t, args.seed + k, args.trials) for k, t in enumerate(texts)]
-    sizes = [check_request(r).size for r in requests]
+    sizes = [parse(t).size for t in texts]
     print(
         f"trees: {len(texts)} random, {min(sizes)}-{max(sizes)} nodes (mean {sum(sizes) / len(sizes):.1f}); "
         f"{args.trials} trials of {config.trial_steps} steps per evaluation; profile {config.profile}, "

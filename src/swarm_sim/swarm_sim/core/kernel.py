@@ -32,11 +32,20 @@ import numba
 import numpy as np
 
 from bt_controller import timeline
-from bt_controller.compiled import N_COUNTS, OP_CONDITION, PackedTrees, start_memory, tick, tree_at
+from bt_controller.compiled import (
+    N_COUNTS,
+    OP_CONDITION,
+    OP_NETWORK,
+    PackedTrees,
+    start_memory,
+    tick,
+    tree_at,
+)
 from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
+from bt_controller.network import act
 from bt_controller.perception import ROBOT_SIDE, region_column
-from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, SIDES, STOP
+from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, RUNNING, SIDES, STOP
 from swarm_sim.core import fast_world, world
 from swarm_sim.core._numba_cache import drop_stale_cache
 from swarm_sim.core.trial_data import chain_plan
@@ -48,6 +57,7 @@ drop_stale_cache(
         "bt_controller.compiled",
         "bt_controller.draws",
         "bt_controller.motors",
+        "bt_controller.network",
         "bt_controller.perception",
         "bt_controller.timeline",
         "bt_controller.vocabulary",
@@ -76,9 +86,11 @@ _CONDITION_SIDE = np.array(CONDITION_SIDE, dtype=np.int64)
 @numba.njit(cache=True, error_model="numpy")
 def _sides_read(op: np.ndarray, arg: np.ndarray) -> np.ndarray:
     """Which of the blackboard's side pairs (``vocabulary.SIDES``: nest, food, robot, food2, food3) the tree
-    reads, from its condition nodes and the conditions table."""
+    reads, from its condition nodes and the conditions table; a network reads them all."""
     read = np.zeros(len(SIDES), dtype=np.bool_)
     for k in range(op.shape[0]):
+        if op[k] == OP_NETWORK:
+            read[:] = True
         if op[k] == OP_CONDITION:
             side = _CONDITION_SIDE[arg[k]]
             if side >= 0:
@@ -443,12 +455,16 @@ def simulate_chain(
     keys = chain_keys(seed_key, chain, n)
     swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
     sides = np.zeros((n, len(SIDES)), dtype=np.bool_)
+    network = np.full(n, -1, dtype=np.int64)
     for i in range(n):
         own = tree_at(trees, robot_tree[i])
         sides[i] = _sides_read(own.op, own.arg)
+        if own.op[0] == OP_NETWORK:
+            network[i] = robot_tree[i]
     _steps(
         trees,
         robot_tree,
+        network,
         keys,
         sides,
         swarm,
@@ -491,6 +507,7 @@ def _score_trial(
 def _steps(
     trees: PackedTrees,
     robot_tree: np.ndarray,
+    network: np.ndarray,
     keys: np.ndarray,
     sides: np.ndarray,
     swarm: Swarm,
@@ -510,7 +527,9 @@ def _steps(
 ) -> None:
     """The control steps of ``simulate_chain``'s chain, from the state it made. ``block_start``: the place of
     the chain's first trial in its block of ``chain_trials``, so that trial k of a block takes entry k of
-    ``layout`` (``Config.arena_arrays``) under either profile."""
+    ``layout`` (``Config.arena_arrays``) under either profile. ``network[i]``: the pack's index of robot
+    ``i``'s network, or -1 when it runs a tree; a network ticks where a tree would (``network.act`` on the
+    same blackboard), returning running with its action started (``network.NetworkRobot``)."""
     n = p.n_robots
     position_keys = keys[POSITION]
     heading_keys = keys[HEADING]
@@ -581,7 +600,11 @@ def _steps(
                 world.blackboard(
                     ground_now[i], raw[i], bearings, sources[i, ROBOT_SIDE] >= 0, carrying[i], p, board
                 )
-                status, started = tick(tree, memory[i], board, tree_keys[i], number, counts[i])
+                if network[i] >= 0:
+                    status, started = RUNNING, act(trees.weights[network[i]], board)
+                    counts[i, 1 + started] += 1
+                else:
+                    status, started = tick(tree, memory[i], board, tree_keys[i], number, counts[i])
                 motors = motors_after_tick(status, started, resumed[i])
                 resumed[i] = running_action(status, started)
                 actions[i] = motors

@@ -8,6 +8,8 @@ depends only on its request.
 
 A ``SwarmRequest`` evaluates a heterogeneous swarm (``swarm_sim.model.swarm_layout``: a tree per robot) the
 same way; a layout of one tree on every robot gives the very bits of the ``EvaluationRequest`` of that tree.
+A request's tree text may be a network's (``nn(...)``, ``bt_controller.network``): it runs in a tree's
+place.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ from bt_controller.compiled import FlatTree, flatten, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.errors import TreeError
 from bt_controller.library import Library
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
+from bt_controller.network import Network, parse_controller
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node
 from bt_controller.validate import integer
 from swarm_sim.core import TrialRecord, combine, kernel, world
 from swarm_sim.model import DEFAULT, Config, SwarmLayout
@@ -92,9 +95,9 @@ def check_request(
     max_nodes: int = MAX_NODES,
     max_depth: int = MAX_DEPTH,
     library: Library | None = None,
-) -> Node:
-    """The parsed tree of a valid request (its primitives' names expanded with ``library``); raise
-    ValueError saying what is wrong otherwise."""
+) -> Node | Network:
+    """The parsed tree (or network) of a valid request (its primitives' names expanded with ``library``);
+    raise ValueError saying what is wrong otherwise."""
     return _parse(_check_fields(request).tree, max_nodes, max_depth, library)
 
 
@@ -108,19 +111,20 @@ def _check_fields(request: object) -> EvaluationRequest:
     return request
 
 
-def _parse(text: str, max_nodes: int, max_depth: int, library: Library | None) -> Node:
+def _parse(text: str, max_nodes: int, max_depth: int, library: Library | None) -> Node | Network:
     try:
-        return parse(text, max_nodes=max_nodes, max_depth=max_depth, library=library)
+        return parse_controller(text, max_nodes=max_nodes, max_depth=max_depth, library=library)
     except TreeError as error:
         raise ValueError(f"bad tree: {error}") from None
 
 
 @functools.lru_cache(maxsize=4096)
-def _flat_tree(text: str, max_nodes: int, max_depth: int, library: Library | None) -> FlatTree:
-    """The flat tree of a tree text, remembered: evolution offers the same tree again and again. (Errors are
-    not cached; a FlatTree's arrays are only read; a library is one object per evaluator, compared by
-    identity.)"""
-    return flatten(_parse(text, max_nodes, max_depth, library))
+def _flat_tree(text: str, max_nodes: int, max_depth: int, library: Library | None) -> FlatTree | Network:
+    """The flat tree of a tree text (a network as it is: ``compiled.pack`` packs it), remembered: evolution
+    offers the same tree again and again. (Errors are not cached; a FlatTree's arrays are only read; a library
+    is one object per evaluator, compared by identity.)"""
+    parsed = _parse(text, max_nodes, max_depth, library)
+    return parsed if isinstance(parsed, Network) else flatten(parsed)
 
 
 @dataclass(frozen=True)
@@ -129,7 +133,7 @@ class _Request:
     key and trial count."""
 
     index: int
-    flats: tuple[FlatTree, ...]
+    flats: tuple[FlatTree | Network, ...]
     robot_tree: tuple[int, ...]
     seed_key: np.uint64
     trials: int

@@ -1,6 +1,6 @@
 """``ws/run swarm_sim evaluate``: evaluate one tree, or a swarm of a tree per robot; print one JSON object.
 
-    evaluate (--tree TREE | --swarm FILE) [--trials 10] [--seed S] [--profile paper|clean]
+    evaluate (--tree TREE | --network FILE | --swarm FILE) [--trials 10] [--seed S] [--profile paper|clean]
              [--task NAME|FILE] [--engine compiled|reference] [--per-trial]
              [--condition NAME=VALUE ...] [--library FILE]
 
@@ -14,7 +14,9 @@ form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) t
 primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
 "digest"}`` is added. ``--swarm FILE`` (a swarm layout, ``swarm_sim.model.swarm_layout``: ``{"trees": [one
 tree text per robot]}`` or ``{"tree": TREE}``) gives each robot its own tree; ``"trees"`` (each robot's tree,
-robot 0 first, canonical) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status 2.
+robot 0 first, canonical) then stands in place of ``"tree"``. ``--network FILE`` (``{"weights": [56
+numbers]}``, ``bt_controller.network``) runs that network on every robot instead of a tree; ``"network"`` (its
+56 weights) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status 2.
 """
 
 from __future__ import annotations
@@ -28,7 +30,15 @@ from typing import NoReturn
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, library_option
 from bt_controller.model_settings import PROFILES
-from bt_controller.tree import Node, to_text
+from bt_controller.network import (
+    Network,
+    NetworkError,
+    controller_text,
+    is_network_text,
+    load_network,
+    parse_network,
+)
+from bt_controller.tree import Node
 from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, UsageError
 from swarm_sim.evaluation.batch import (
@@ -64,6 +74,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     what = parser.add_mutually_exclusive_group(required=True)
     what.add_argument("--tree", help="tree text for every robot, e.g. 'sel(seq(in_nest, stop), forward)'")
+    what.add_argument(
+        "--network",
+        metavar="FILE",
+        help='a network for every robot: a JSON file {"weights": [56 numbers]} (9-5-1 perceptron)',
+    )
     what.add_argument(
         "--swarm",
         metavar="FILE",
@@ -113,9 +128,15 @@ def evaluation_json(
     task: TaskSpec | None = None,
 ) -> str:
     """The one-line JSON document ``evaluate`` prints (``tree_text`` a sequence: each robot's tree, as
-    ``trees``; ``records`` given: with ``per_trial``; ``library`` given: with ``library``)."""
+    ``trees``; a network's text: its weights, as ``network``; ``records`` given: with ``per_trial``;
+    ``library`` given: with ``library``)."""
     named = dict(zip(VALUE_NAMES, (float(v) for v in values), strict=True))
-    which = {"tree": tree_text} if isinstance(tree_text, str) else {"trees": list(tree_text)}
+    which: dict[str, object]
+    if isinstance(tree_text, str):
+        network = is_network_text(tree_text)
+        which = {"network": list(parse_network(tree_text).weights)} if network else {"tree": tree_text}
+    else:
+        which = {"trees": list(tree_text)}
     document: dict[str, object] = {
         **which,
         "seed": seed,
@@ -146,7 +167,7 @@ def run(argv: Sequence[str] | None = None) -> str:
         raise UsageError(f"--condition: {error}") from None
     library = library_option(args.library, UsageError)
     request: EvaluationRequest | SwarmRequest
-    trees: Node | list[Node]  # every robot's tree, or each robot's own
+    trees: Node | Network | list[Node | Network]  # every robot's tree, or each robot's own
     if args.swarm is not None:
         try:
             layout = load_layout(args.swarm, config.n_robots, library)
@@ -155,7 +176,13 @@ def run(argv: Sequence[str] | None = None) -> str:
         request = SwarmRequest(layout, seed=args.seed, trials=args.trials)
         trees = layout.parsed(library)
     else:
-        request = EvaluationRequest(tree=args.tree, seed=args.seed, trials=args.trials)
+        text = args.tree
+        if args.network is not None:
+            try:
+                text = controller_text(load_network(args.network))
+            except NetworkError as error:
+                raise UsageError(f"--network: {error}") from None
+        request = EvaluationRequest(tree=text, seed=args.seed, trials=args.trials)
         try:
             trees = check_request(request, library=library)
         except ValueError as error:
@@ -171,11 +198,13 @@ def run(argv: Sequence[str] | None = None) -> str:
         assert result.fitness is not None and result.descriptors is not None
         values = result.fitness + result.descriptors
 
-    def canonical(tree: Node) -> str:
-        return to_text(tree) if library is None else library.fold(tree)
+    def canonical(tree: Node | Network) -> str:
+        if library is None or isinstance(tree, Network):
+            return controller_text(tree)
+        return library.fold(tree)
 
     return evaluation_json(
-        canonical(trees) if isinstance(trees, Node) else [canonical(t) for t in trees],
+        canonical(trees) if isinstance(trees, Node | Network) else [canonical(t) for t in trees],
         args.seed,
         args.trials,
         values,

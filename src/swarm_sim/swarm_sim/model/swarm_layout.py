@@ -2,7 +2,9 @@
 
 A homogeneous swarm runs one tree on every robot; a heterogeneous one gives robot ``i`` (in id order) tree
 ``trees[i]``. Both roads (``swarm_sim.roads.reference_road``, ``swarm_sim.evaluation.batch.BatchEvaluator``)
-and the node graph (one controller node per robot, each loading its own tree) take a layout.
+and the node graph (one controller node per robot, each loading its own tree) take a layout. A network's text
+(``nn(...)``, ``bt_controller.network``) may stand wherever a tree's does, so a swarm may mix trees and
+networks.
 
 The file format (JSON) is one object, either
 
@@ -21,7 +23,8 @@ from pathlib import Path
 
 from bt_controller.errors import TreeError
 from bt_controller.library import Library
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node, parse
+from bt_controller.network import Network, parse_controller
+from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node
 from bt_controller.validate import strict_json
 
 EXPECTED_SHAPE = '{"trees": ["tree text", ...] (one per robot)} or {"tree": "tree text"} (every robot)'
@@ -71,14 +74,17 @@ class SwarmLayout:
 
     def parsed(
         self, library: Library | None = None, max_nodes: int = MAX_NODES, max_depth: int = MAX_DEPTH
-    ) -> list[Node]:
-        """Each robot's parsed tree; ``LayoutError`` naming the first robot whose tree does not parse."""
-        cache: dict[str, Node] = {}
+    ) -> list[Node | Network]:
+        """Each robot's parsed tree (or network); ``LayoutError`` naming the first robot whose tree does not
+        parse."""
+        cache: dict[str, Node | Network] = {}
         out = []
         for i, text in enumerate(self.trees):
             if text not in cache:
                 try:
-                    cache[text] = parse(text, max_nodes=max_nodes, max_depth=max_depth, library=library)
+                    cache[text] = parse_controller(
+                        text, max_nodes=max_nodes, max_depth=max_depth, library=library
+                    )
                 except TreeError as error:
                     raise LayoutError(
                         f"swarm layout: the tree of robot {i} does not parse: {error}"

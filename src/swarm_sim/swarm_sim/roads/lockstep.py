@@ -20,6 +20,7 @@ from bt_controller import timeline
 from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.model_settings import chain_of_trial
 from bt_controller.motors import movement_of, rotation_of
+from bt_controller.network import Network
 from bt_controller.perception import Readings
 from bt_controller.tree import Node
 from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
@@ -208,10 +209,11 @@ class LockstepChain:
         )
 
 
-def robot_trees(tree: Node | Sequence[Node], n_robots: int) -> list[Node]:
+def robot_trees(tree: Node | Network | Sequence[Node | Network], n_robots: int) -> list[Node | Network]:
     """Each robot's tree: ``tree`` on every robot (a homogeneous swarm), or one tree per robot in id order
-    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); ValueError for a count that is not ``n_robots``."""
-    if isinstance(tree, Node):
+    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); a network (``bt_controller.network``) in place
+    of any tree. ValueError for a count that is not ``n_robots``."""
+    if isinstance(tree, Node | Network):
         return [tree] * n_robots
     trees = list(tree)
     if len(trees) != n_robots:
@@ -220,7 +222,7 @@ def robot_trees(tree: Node | Sequence[Node], n_robots: int) -> list[Node]:
 
 
 def run_chain_with_controllers(
-    tree: Node | Sequence[Node],
+    tree: Node | Network | Sequence[Node | Network],
     seed: int,
     chain: int,
     trials: int,
@@ -272,7 +274,7 @@ def run_chain_with_controllers(
 
 
 def run_with_controllers(
-    tree: Node | Sequence[Node],
+    tree: Node | Network | Sequence[Node | Network],
     seed: int,
     trial: int,
     config: Config = DEFAULT,

@@ -24,7 +24,7 @@ from bt_controller.compiled import N_COUNTS, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.library import Library
 from bt_controller.model_settings import chain_of_trial
-from bt_controller.tree import parse
+from bt_controller.network import parse_controller
 from bt_controller.validate import integer
 from swarm_sim.core import kernel, world
 from swarm_sim.model import DEFAULT, Config, SwarmLayout
@@ -111,7 +111,7 @@ def record_trial(
     ``TreeError`` for a bad tree and ``ValueError`` for a bad seed, trial or layout."""
     trial = _check(seed, trial)
     layout = _layout(tree, config)
-    trees = pack([parse(text, library=library) for text in layout.distinct])
+    trees = pack([parse_controller(text, library=library) for text in layout.distinct])
     chain, position = chain_of_trial(config.timeline, trial)
     p = config.params()
     rec = kernel.new_recording(config.trial_steps, p.n_robots, p.regions)
@@ -161,7 +161,7 @@ def record_trial_reference(
 
     trial = _check(seed, trial)
     layout = _layout(tree, config)
-    parsed = [parse(text, library=library) for text in layout.trees]
+    parsed = [parse_controller(text, library=library) for text in layout.trees]
     line = config.timeline
     p = config.params()
     n = p.n_robots

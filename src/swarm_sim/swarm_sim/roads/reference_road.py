@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from bt_controller.network import Network
 from bt_controller.tree import Node
 from swarm_sim.core import TrialRecord, chain_plan, combine
 from swarm_sim.model import DEFAULT, Config
@@ -18,7 +19,11 @@ from swarm_sim.roads.lockstep import run_chain_with_controllers
 
 
 def run_chain(
-    tree: Node | Sequence[Node], seed: int, chain: int, trials: int, config: Config = DEFAULT
+    tree: Node | Network | Sequence[Node | Network],
+    seed: int,
+    chain: int,
+    trials: int,
+    config: Config = DEFAULT,
 ) -> list[TrialRecord]:
     """Run the first ``trials`` trials of chain ``chain`` of ``seed`` with every robot running ``tree``, or
     robot ``i`` running ``tree[i]`` (a heterogeneous swarm: ``swarm_layout.SwarmLayout.parsed``)."""
@@ -26,7 +31,7 @@ def run_chain(
 
 
 def evaluate(
-    tree: Node | Sequence[Node], seed: int, trials: int = 10, config: Config = DEFAULT
+    tree: Node | Network | Sequence[Node | Network], seed: int, trials: int = 10, config: Config = DEFAULT
 ) -> tuple[tuple[float, ...], list[TrialRecord]]:
     """Evaluate ``tree`` (every robot's, or one per robot) over trials 0 .. trials - 1 of ``seed``: the mean
     values and each trial's record."""

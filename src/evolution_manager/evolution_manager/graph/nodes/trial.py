@@ -50,8 +50,9 @@ from bt_controller import timeline
 from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.model_settings import PROFILES, chain_of_trial
+from bt_controller.network import Network, controller_text, is_network_text, load_network, parse_controller
 from bt_controller.tree import Node as TreeNode
-from bt_controller.tree import parse, to_text
+from bt_controller.tree import to_text
 from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics
@@ -403,7 +404,11 @@ class TrialGraph:
         # the bag keeps the trees its robots ran, primitives written out: it reproduces without the library
         if self.library:
             library = load_library(self.library)
-            layout = SwarmLayout(tuple(to_text(library.parse(text)) for text in layout.trees))
+            layout = SwarmLayout(
+                tuple(
+                    text if is_network_text(text) else to_text(library.parse(text)) for text in layout.trees
+                )
+            )
         recorded_tree = layout.label
         if bag_path is None:
             record = runner.run_trial(seed, trial)
@@ -586,6 +591,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     what = parser.add_mutually_exclusive_group(required=True)
     what.add_argument("--tree", help="every robot's tree, as text or a file holding it")
     what.add_argument(
+        "--network",
+        type=Path,
+        metavar="FILE",
+        help='every robot\'s network instead of a tree: a JSON file {"weights": [56 numbers]}',
+    )
+    what.add_argument(
         "--swarm",
         type=Path,
         metavar="FILE",
@@ -668,8 +679,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         library: Library | None = load_library(args.library) if args.library is not None else None
 
-        def canonical(tree: TreeNode) -> str:
-            return to_text(tree) if library is None else library.fold(tree)
+        def canonical(tree: TreeNode | Network) -> str:
+            if library is None or isinstance(tree, Network):
+                return controller_text(tree)
+            return library.fold(tree)
 
         shown: str | list[str]
         ran: str | SwarmLayout
@@ -680,8 +693,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise ValueError(f"--swarm: {error}") from None
             shown = [canonical(tree) for tree in layout.parsed(library)]
             ran = SwarmLayout(tuple(shown))
+        elif args.network is not None:
+            shown = controller_text(load_network(args.network))
+            ran = shown
         else:
-            shown = canonical(parse(tree_argument(args.tree), library=library))
+            shown = canonical(parse_controller(tree_argument(args.tree), library=library))
             ran = shown
         namespace = graph_namespace(args.namespace)  # a name ROS refuses: before any node starts
         check_topic(args.clock, "--clock")
