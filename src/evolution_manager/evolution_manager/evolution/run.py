@@ -1,6 +1,7 @@
-"""The run loop: an algorithm, an evaluator, passive grids, a run directory and checkpoints.
+"""A tree run (GP, GP_fnd, MAP-Elites): an algorithm, an evaluator, passive grids, a run directory and
+checkpoints, on the loop and folder every run shares (``run_folder``).
 
-A run directory holds (all written by this module, all plain text):
+A run directory holds (all plain text):
 
 ``config.json``
     the configuration and seed (never changed after the run starts);
