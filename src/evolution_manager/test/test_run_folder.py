@@ -39,8 +39,9 @@ class Squares(RunLoop[int, int]):
 
     @classmethod
     def resume(cls, root: Path) -> Squares:
+        folder = SquaresFolder(root)
+
         def load() -> Squares:
-            folder = SquaresFolder(root)
             run = cls(root, json.loads(folder.config.read_text())["budget"])
             state = folder.read_checkpoint()
             folder.check_logs()
@@ -48,7 +49,7 @@ class Squares(RunLoop[int, int]):
             run.offsets = folder.read_offsets(state["offsets"])
             return run
 
-        return cls._reopen(root, load)
+        return cls._reopen(folder, load)
 
     @property
     def done(self) -> bool:

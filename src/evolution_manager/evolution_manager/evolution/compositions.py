@@ -535,7 +535,7 @@ class CompositionRun(RunLoop[Genome, Member]):
                 ) from error
             return run
 
-        return cls._reopen(root, load)
+        return cls._reopen(directory, load)
 
     # State -------------------------------------------------------------------------------------------------
     def checkpoint(self) -> None:

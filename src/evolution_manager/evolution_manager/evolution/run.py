@@ -210,7 +210,7 @@ class Run(RunLoop[EvaluationRequest, Evaluated]):
             directory.check_heldout()  # read when the run ends: checked before anything is run
             return run
 
-        return cls._reopen(root, load)
+        return cls._reopen(directory, load)
 
     @classmethod
     def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:

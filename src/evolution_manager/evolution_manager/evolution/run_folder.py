@@ -268,14 +268,14 @@ class RunLoop(ABC, Generic[_Asked, _Answer]):
         return run
 
     @staticmethod
-    def _reopen(root: Path, load: Callable[[], _Run]) -> _Run:
-        """The run ``load()`` reads from its checkpoint in ``root``, to be continued: the folder's lock is
+    def _reopen(folder: RunFolder, load: Callable[[], _Run]) -> _Run:
+        """The run ``load()`` reads from its checkpoint in ``folder``, to be continued: the folder's lock is
         taken first, then the run is loaded and checked whole (``load`` changes nothing) and the folder
         checked for planted links; only then are the temporary files of a killed writer removed and the
         logs cut back to the checkpoint."""
-        if not (Path(root) / "config.json").exists():
-            raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
-        lock = exclusive_lock(Path(root) / LOCK_NAME, f"the run directory {root}")
+        if not folder.started():
+            raise RunDirectoryError(f"{folder.root} holds no run to resume (no config.json)")
+        lock = exclusive_lock(folder.root / LOCK_NAME, f"the run directory {folder.root}")
         try:
             run = load()
             refuse_planted_links(run.directory.root)  # before anything is evaluated or written
