@@ -31,38 +31,34 @@ import hashlib
 import json
 import math
 import random
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_HELDOUT, derive_seed
 from bt_controller.errors import TreeError
-from bt_controller.library import Library, LibraryError, library_from_json, load_library
+from bt_controller.library import Library, LibraryError, load_library
 from bt_controller.model_settings import PROFILES
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
-from evolution_manager.evolution.run import LOCK_NAME, create_whole, refuse_planted_links
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
+from evolution_manager.evolution.run_folder import COMPOSITIONS, RunFolder, RunLoop
 from evolution_manager.files import (
-    CsvLog,
     number,
-    read_json,
     read_json_object,
     write_atomic,
     write_json,
     writing,
 )
-from evolution_manager.processes import Lock, exclusive_lock
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.evaluation import Evaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import task_named
 
-KIND = "compositions"
+KIND = COMPOSITIONS
 """``config.json``'s ``kind``: what tells a composition run from a tree run."""
 
 ALGORITHMS: tuple[str, ...] = ("ga", "qd")
@@ -71,7 +67,6 @@ LABELS = {"ga": "GA_compositions", "qd": "QD_compositions"}
 OBJECTIVE = "foraging"
 TASK = "foraging"
 DESCRIPTORS = ("movement", "rotation", "conditionality")
-CHECKPOINT_FORMAT = 1
 
 MUTATION = 0.5
 """Probability that a child is mutated (one robot's cell redrawn): our choice, the probability of the GP's
@@ -422,18 +417,6 @@ class CompositionConfig:
             raise ConfigError(f"not a composition run's configuration: {error}") from error
 
 
-def is_composition_run(root: Path) -> bool:
-    """Whether ``root`` holds a composition run (its ``config.json`` says so)."""
-    path = Path(root) / "config.json"
-    if not path.is_file():
-        return False
-    try:
-        data = read_json(path)
-    except RunDirectoryError:
-        return False
-    return isinstance(data, dict) and data.get("kind") == KIND
-
-
 def layout_of(genome: Genome, cells: Sequence[Cell]) -> SwarmLayout:
     """The swarm a genome stands for: robot ``i`` runs the tree of cell ``genome[i]``."""
 
@@ -467,47 +450,32 @@ def evaluate_genomes(
 
 
 # The run -------------------------------------------------------------------------------------------------
-class CompositionDirectory:
-    """The paths of a composition run directory."""
+class CompositionDirectory(RunFolder):
+    """The paths of a composition run's folder."""
 
     def __init__(self, root: Path) -> None:
-        self.root = Path(root)
-        self.config = self.root / "config.json"
+        super().__init__(root, EVALUATION_HEADER, PROGRESS_HEADER)
         self.cells = self.root / "cells.json"
-        self.checkpoint = self.root / "checkpoint.json"
-        self.summary = self.root / "summary.json"
         self.repertoire = self.root / "repertoire_compositions.json"
-        self.library = self.root / "library.json"
-        self.best = self.root / "best"
-        self.evaluations = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
-        self.progress = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
 
     def read_library(self, config: CompositionConfig) -> Library | None:
         """The run's copy of its primitive library (None without one), checked against the digest."""
-        if not config.library_digest:
-            return None
-        try:
-            library = library_from_json(read_json(self.library), str(self.library))
-        except (LibraryError, RunDirectoryError) as error:
-            raise RunDirectoryError(f"{self.library} is damaged: {error}") from error
-        if library.digest != config.library_digest:
-            raise RunDirectoryError(f"{self.library} is not the library the run started with")
-        return library
+        return self.read_library_copy(config.library_digest, str(self.library))
 
 
-class CompositionRun:
+class CompositionRun(RunLoop[Genome, Member]):
     """One composition run; create with :meth:`start` or :meth:`resume`, then :meth:`execute`."""
 
     def __init__(
         self, config: CompositionConfig, cells: Sequence[Cell], root: Path, evaluator: Evaluator | None
     ) -> None:
+        super().__init__()
         self.config = config
         self.cells = list(cells)
-        self.directory = CompositionDirectory(root)
+        self.directory: CompositionDirectory = CompositionDirectory(root)
         self.evaluator = evaluator
         self.rng = random.Random(derive_seed(config.seed, RUN_ALGORITHM))
         self.n_robots = config.world().n_robots
-        self.evaluations = 0
         self.produced = 0
         """Genomes produced after the initial population (what the budget counts)."""
         self.population: list[Member] = []
@@ -516,10 +484,8 @@ class CompositionRun:
         """qd: the archive, one genome per bin."""
         self.best: Member | None = None
         """The fittest genome evaluated (the first among equals)."""
-        self.offsets = {"evaluations": 0, "progress": 0}
         self.known: dict[Genome, Member] = {}
         """Genomes evaluated by this process (fixed scenario: a genome's result never changes)."""
-        self.lock: Lock | None = None
 
     # Construction ----------------------------------------------------------------------------------------
     @classmethod
@@ -531,67 +497,52 @@ class CompositionRun:
         evaluator: Evaluator,
         library: Library | None = None,
     ) -> CompositionRun:
-        """A new run in ``root``, which must be missing or empty. The directory appears whole or not at all,
-        as a tree run's (``Run.start``): built as a hidden sibling, then renamed into place."""
-        root = Path(root)
-        if root.exists() and (not root.is_dir() or any(root.iterdir())):
-            raise RunDirectoryError(f"{root} is not an empty directory: choose an empty or new --out")
+        """A new run in ``root``, which must not hold a run already (``RunLoop._begin``): its configuration,
+        its cells, its copy of the library, empty logs and first checkpoint."""
         if config.cells != len(cells) or config.cells_digest != cells_digest(cells):
             raise ConfigError("the configuration does not describe these cells")
         if config.library_digest != ("" if library is None else library.digest):
             raise ConfigError("the configuration does not describe this primitive library")
-
-        def fill(building: Path) -> CompositionRun:
-            run = cls(config, cells, building, evaluator)
-            write_json(run.directory.config, config.to_json())
-            write_json(run.directory.cells, {"cells": [c.as_json() for c in cells]})
-            if library is not None:
-                write_json(run.directory.library, library.as_json())
-            run.offsets = {
-                "evaluations": run.directory.evaluations.create(),
-                "progress": run.directory.progress.create(),
-            }
-            run.checkpoint()
-            return run
-
-        run, lock = create_whole(root, fill)
-        run.lock = lock
-        run.directory = CompositionDirectory(root)
-        return run
+        files: dict[str, object] = {
+            "config.json": config.to_json(),
+            "cells.json": {"cells": [c.as_json() for c in cells]},
+        }
+        if library is not None:
+            files["library.json"] = library.as_json()
+        return cls._begin(
+            CompositionDirectory(root), lambda building: cls(config, cells, building, evaluator), files
+        )
 
     @classmethod
     def resume(cls, root: Path, evaluator: Evaluator | None) -> CompositionRun:
-        """The run in ``root`` at its last checkpoint, its CSV files cut back to it."""
+        """The run in ``root`` at its last checkpoint, its CSV files cut back to it (``RunLoop._reopen``)."""
         directory = CompositionDirectory(root)
-        lock = exclusive_lock(directory.root / LOCK_NAME, f"the run directory {root}")
-        try:
-            config = CompositionConfig.from_json(read_json_object(directory.config))
-            cells = [Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
-            if len(cells) != config.cells or cells_digest(cells) != config.cells_digest:
-                raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
-            directory.read_library(config)  # the evaluator was made with it
-            run = cls(config, cells, root, evaluator)
-            run.restore(read_json_object(directory.checkpoint))
-            refuse_planted_links(directory.root)  # before anything is evaluated
-        except (ConfigError, KeyError, TypeError, ValueError) as error:
-            lock.release()
-            raise RunDirectoryError(f"{root}: the run cannot be continued, it is damaged: {error}") from error
-        except BaseException:
-            lock.release()
-            raise
-        run.lock = lock
-        for name, log in (("evaluations", directory.evaluations), ("progress", directory.progress)):
-            log.cut(run.offsets[name])
-        return run
+
+        def load() -> CompositionRun:
+            try:
+                config = CompositionConfig.from_json(read_json_object(directory.config))
+                cells = [Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
+                if len(cells) != config.cells or cells_digest(cells) != config.cells_digest:
+                    raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
+                directory.read_library(config)  # the evaluator was made with it
+                run = cls(config, cells, root, evaluator)
+                state = directory.read_checkpoint()
+                directory.check_logs()
+                run.restore(state)
+            except (ConfigError, KeyError, TypeError, ValueError) as error:
+                raise RunDirectoryError(
+                    f"{root}: the run cannot be continued, it is damaged: {error}"
+                ) from error
+            return run
+
+        return cls._reopen(directory, load)
 
     # State -------------------------------------------------------------------------------------------------
     def checkpoint(self) -> None:
         """Write the checkpoint atomically (between batches only)."""
         version, internal, gauss = self.rng.getstate()
-        write_json(
-            self.directory.checkpoint,
+        self.directory.write_checkpoint(
             {
-                "format": CHECKPOINT_FORMAT,
                 "config": self.config.to_json(),
                 "evaluations": self.evaluations,
                 "produced": self.produced,
@@ -600,13 +551,12 @@ class CompositionRun:
                 "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
                 "best": None if self.best is None else self.best.as_json(),
                 "offsets": self.offsets,
-            },
-            indent=None,
+            }
         )
 
     def restore(self, state: dict) -> None:
-        if state.get("format") != CHECKPOINT_FORMAT:
-            raise ValueError(f"not a checkpoint of format {CHECKPOINT_FORMAT}")
+        """The run's state from its checkpoint (``checkpoint.json``); a ValueError or KeyError when it is
+        damaged."""
         if CompositionConfig.from_json(state["config"]) != self.config:
             raise ValueError("the checkpoint belongs to another configuration than config.json")
         version, internal, gauss = state["rng"]
@@ -622,16 +572,17 @@ class CompositionRun:
                 0 <= c < len(self.cells) for c in member.genome
             ):
                 raise ValueError(f"genome {list(member.genome)} is not {self.n_robots} cell indices")
-        self.offsets = {
-            name: integer(state["offsets"][name], name, 0) for name in ("evaluations", "progress")
-        }
+        self.offsets = self.directory.read_offsets(state["offsets"])
 
     # Execution ---------------------------------------------------------------------------------------------
     @property
     def done(self) -> bool:
         return self.produced >= self.config.evaluations
 
-    def ask(self) -> list[Genome]:
+    def progress(self) -> tuple[int, int]:
+        return self.produced, self.config.evaluations
+
+    def _ask(self) -> list[Genome]:
         """The next batch of genomes: the initial population, or offspring cut to the budget left."""
         p = self.config.parameters
         n = len(self.cells)
@@ -653,7 +604,12 @@ class CompositionRun:
         drawn = [random_genome(self.rng, len(self.cells), self.n_robots) for _ in range(size - len(seeded))]
         return seeded + drawn
 
-    def tell(self, members: list[Member]) -> None:
+    def _tell(self, batch: list[Genome], answers: list[Member]) -> None:
+        self._select(answers)
+        self._record(answers)
+
+    def _select(self, members: list[Member]) -> None:
+        """The GA's next population, or the members kept in MAP-Elites' grid; the best so far."""
         initial = not self.population if self.config.algorithm == "ga" else not self.grid
         if not initial:
             self.produced += len(members)
@@ -675,7 +631,7 @@ class CompositionRun:
                 if held is None or member.fitness > held.rank:
                     self.grid[index] = member
 
-    def evaluate(self, genomes: Sequence[Genome]) -> list[Member]:
+    def _evaluate(self, genomes: list[Genome]) -> list[Member]:
         """The genomes evaluated on the run's scenario; a genome this process evaluated before is answered
         from memory (the same request, the same result)."""
         if self.evaluator is None:
@@ -691,26 +647,6 @@ class CompositionRun:
             )
             for i, g in enumerate(genomes)
         ]
-
-    def execute(
-        self,
-        on_batch: Callable[[int, int], None] | None = None,
-        checkpoint_interval: float = 30.0,
-        stop_after: int | None = None,
-    ) -> None:
-        """Run batches until the budget is spent (or ``stop_after`` evaluations); checkpoint every
-        ``checkpoint_interval`` seconds and at the end."""
-        last = time.monotonic()
-        while not self.done and (stop_after is None or self.evaluations < stop_after):
-            members = self.evaluate(self.ask())
-            self.tell(members)
-            self._record(members)
-            if on_batch is not None:
-                on_batch(self.produced, self.config.evaluations)
-            if time.monotonic() - last >= checkpoint_interval:
-                self.checkpoint()
-                last = time.monotonic()
-        self.checkpoint()
 
     def _record(self, members: Sequence[Member]) -> None:
         rows = []

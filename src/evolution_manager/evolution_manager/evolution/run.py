@@ -1,6 +1,7 @@
-"""The run loop: an algorithm, an evaluator, passive grids, a run directory and checkpoints.
+"""A tree run (GP, GP_fnd, MAP-Elites): an algorithm, an evaluator, passive grids, a run directory and
+checkpoints, on the loop and folder every run shares (``run_folder``).
 
-A run directory holds (all written by this module, all plain text):
+A run directory holds (all plain text):
 
 ``config.json``
     the configuration and seed (never changed after the run starts);
@@ -43,36 +44,22 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import shutil
-import tempfile
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
 
-from bt_controller.library import Library, LibraryError, library_from_json
+from bt_controller.library import Library
 from bt_controller.validate import integer
-from bt_controller.validate import number as finite_number
 from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.files import CsvLog, _umask, number, read_json, read_json_object, write_json
-from evolution_manager.processes import Lock, exclusive_lock, is_locked
+from evolution_manager.evolution.run_folder import DAMAGE, RunFolder, RunLoop, Timing
+from evolution_manager.files import number, read_json_object
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.evaluation import EvaluationRequest, Evaluator
 from swarm_sim.model import fitness_ceiling
-
-LOCK_NAME = ".lock"  # in the run directory: held by the process writing the run
-_Filled = TypeVar("_Filled")
-
-CHECKPOINT_FORMAT = 1
-
-_DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
-"""What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
 
 SIMULATED, CACHED, INHERITED = "simulated", "cached", "inherited"
 """How an evaluation was answered: simulated; from the cache (fixed scenarios: the same tree text evaluated
@@ -80,40 +67,6 @@ before); from the simplified form's earlier evaluation (``paper`` with fixed sce
 
 EVALUATION_HEADER = ["evaluation", "seed", "tree", *OBJECTIVES, *DESCRIPTORS, "error"]
 PROGRESS_HEADER = ["evaluations"] + [f"{m}_{o}" for o in OBJECTIVES for m in ("best", "coverage", "qd_score")]
-
-
-def _remove_abandoned_starts(parent: Path, name: str) -> None:
-    """Remove what starts of a run at ``parent/name`` killed before their first checkpoint left behind."""
-    for leftover in parent.glob(f".{name}.new-*"):
-        if leftover.is_dir() and not is_locked(leftover / LOCK_NAME):
-            shutil.rmtree(leftover, ignore_errors=True)
-
-
-def create_whole(root: Path, fill: Callable[[Path], _Filled]) -> tuple[_Filled, Lock]:
-    """Create the run directory ``root`` whole or not at all: ``fill(folder)`` writes a hidden sibling
-    (``.<name>.new-*``, holding the directory's lock) with the run's first files, which is then renamed into
-    place (replacing an empty directory, never a full one). Returns what ``fill`` returned and the lock, now
-    at ``root``. Leftovers of starts killed before their rename are removed first."""
-    root = Path(root)
-    parent = root.absolute().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    _remove_abandoned_starts(parent, root.name)
-    building = Path(tempfile.mkdtemp(prefix=f".{root.name}.new-", dir=parent))
-    try:
-        os.chmod(building, 0o777 & ~_umask())
-        lock = exclusive_lock(building / LOCK_NAME, f"the run directory {root}")
-        filled = fill(building)
-        try:
-            os.rename(building, root)
-        except OSError as error:
-            raise RunDirectoryError(
-                f"{root} was created by another process meanwhile: choose another --out"
-            ) from error
-    except BaseException:
-        shutil.rmtree(building, ignore_errors=True)
-        raise
-    lock.moved(root / LOCK_NAME)
-    return filled, lock
 
 
 @dataclass(frozen=True)
@@ -127,74 +80,12 @@ class Evaluated:
     """Answered without simulating (``CACHED`` or ``INHERITED``)."""
 
 
-@dataclass
-class Timing:
-    """Wall-clock seconds spent in the evaluator and in everything else (algorithm, grids, files)."""
-
-    evaluator: float = 0.0
-    manager: float = 0.0
-
-    @property
-    def total(self) -> float:
-        return self.evaluator + self.manager
-
-    @classmethod
-    def from_state(cls, state: object) -> Timing:
-        """The timing saved in a checkpoint: two non-negative seconds, or a ValueError naming the bad one."""
-        if not isinstance(state, dict) or set(state) != {"evaluator", "manager"}:
-            raise ValueError(f"timing must be an object of evaluator and manager seconds, got {state!r}")
-        seconds = {name: finite_number(value, f"timing.{name}") for name, value in state.items()}
-        if min(seconds.values()) < 0:
-            raise ValueError(f"timing seconds must not be negative, got {state!r}")
-        return cls(**seconds)
-
-
-WRITTEN = (
-    "checkpoint.json",
-    "summary.json",
-    "evaluations.csv",
-    "progress.csv",
-    "heldout.json",
-    "archive.json",
-    "timing.json",
-    "sessions.json",
-    "explorer.html",
-    "best",
-    "figures",
-)
-"""What a run writes in its folder, besides ``repertoire_<objective>.json`` and the files in ``best/`` and
-``figures/`` (``config.json``, ``cells.json`` and ``library.json`` are only read once a run has started)."""
-
-
-def refuse_planted_links(root: Path) -> None:
-    """Raise ``RunDirectoryError`` (one line) for a symbolic link at a path a run writes in ``root``
-    (``WRITTEN``, the repertoires, what ``best/`` and ``figures/`` hold): a resume or a rebuild refuses it
-    before anything is evaluated or written, rather than when it reaches that file."""
-    root = Path(root)
-    paths = [root / name for name in WRITTEN] + sorted(root.glob("repertoire_*.json"))
-    for folder in (root / "best", root / "figures"):
-        if folder.is_dir() and not folder.is_symlink():
-            paths += sorted(folder.iterdir())
-    for path in paths:
-        try:
-            refuse_links(path)
-        except OSError as error:
-            raise RunDirectoryError(str(error)) from None
-
-
-class RunDirectory:
-    """The paths of a run directory."""
+class RunDirectory(RunFolder):
+    """The paths of a tree run's folder."""
 
     def __init__(self, root: Path) -> None:
-        self.root = Path(root)
-        self.config = self.root / "config.json"
-        self.checkpoint = self.root / "checkpoint.json"
-        self.summary = self.root / "summary.json"
-        self.evaluations = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
-        self.progress = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
+        super().__init__(root, EVALUATION_HEADER, PROGRESS_HEADER)
         self.figures = self.root / "figures"
-        self.best = self.root / "best"
-        self.library = self.root / "library.json"
 
     def repertoire(self, objective: str) -> Path:
         return self.root / f"repertoire_{objective}.json"
@@ -203,31 +94,19 @@ class RunDirectory:
     def archive(self) -> Path:
         return self.root / "archive.json"
 
-    def started(self) -> bool:
-        """Whether a run was ever started here."""
-        return self.config.exists()
-
     def read_config(self) -> RunConfig:
         """The run's configuration from ``config.json``; a damaged file is named in the error."""
         try:
             return RunConfig.from_json(read_json_object(self.config))
         except RunDirectoryError:
             raise
-        except (*_DAMAGE, EvolutionError) as error:
+        except (*DAMAGE, EvolutionError) as error:
             raise RunDirectoryError(f"{self.config} is damaged: {error}") from error
 
     def read_library(self, config: RunConfig) -> Library | None:
         """The run's copy of its primitive library (None for a run without one), checked against the
         configuration's digest."""
-        if not config.library:
-            return None
-        try:
-            library = library_from_json(read_json(self.library), config.library)
-        except (LibraryError, RunDirectoryError, *_DAMAGE) as error:
-            raise RunDirectoryError(f"{self.library} is damaged: {error}") from error
-        if library.digest != config.library_digest:
-            raise RunDirectoryError(f"{self.library} is not the library the run started with")
-        return library
+        return self.read_library_copy(config.library_digest, config.library)
 
     @property
     def heldout(self) -> Path:
@@ -249,15 +128,9 @@ class RunDirectory:
                 f"{error}; remove it (the held-out scores are computed again when the run ends)"
             ) from None
 
-    def temporary_files(self) -> list[Path]:
-        """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
-        if not self.root.is_dir():
-            return []
-        return [p for p in self.root.rglob(".*.tmp") if p.is_file()]
 
-
-class Run:
-    """One run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
+class Run(RunLoop[EvaluationRequest, Evaluated]):
+    """One tree run being executed; create with :meth:`start` or :meth:`resume`, then call :meth:`execute`."""
 
     def __init__(
         self,
@@ -266,8 +139,9 @@ class Run:
         evaluator: Evaluator | None,
         library: Library | None = None,
     ) -> None:
+        super().__init__()
         self.config = config
-        self.directory = directory
+        self.directory: RunDirectory = directory
         self.evaluator = evaluator
         self.library = library
         """The run's primitive library (its copy in the run directory), or None."""
@@ -300,47 +174,22 @@ class Run:
         """The batch evaluated last, every evaluation of it (for whoever records the run, e.g. a bag)."""
         self.simulations_saved = 0
         self._first: dict[str, int] = {}
-        self.evaluations = 0
-        self.timing = Timing()
-        self.offsets = {"evaluations": 0, "progress": 0}
-        self.lock: Lock | None = None  # the run directory's lock, held by a run that writes
 
     # Construction ------------------------------------------------------------------------------------
     @classmethod
     def start(
         cls, config: RunConfig, root: Path, evaluator: Evaluator, library: Library | None = None
     ) -> Run:
-        """A new run in ``root``, which must not hold a run already (nothing saved is ever overwritten).
-
-        The directory appears whole or not at all: it is built as a hidden sibling (``.<name>.new-*``) with
-        its configuration, empty logs and first checkpoint, then renamed into place. The run holds the
-        directory's lock (``.lock``) until the process ends."""
-        directory = RunDirectory(root)
-        if directory.started():
-            raise RunDirectoryError(
-                f"{root} already holds a run: continue it with --resume, or choose another --out"
-            )
-        if directory.root.exists() and not directory.root.is_dir():
-            raise RunDirectoryError(f"{root} is a file, not a directory: choose another --out")
-        if directory.root.exists() and any(directory.root.iterdir()):
-            raise RunDirectoryError(f"{root} is not empty and holds no run: choose an empty or new --out")
-
-        def fill(building: Path) -> Run:
-            run = cls(config, RunDirectory(building), evaluator, library)
-            write_json(run.directory.config, config.to_json())
-            if library is not None:
-                write_json(run.directory.library, library.as_json())
-            run.offsets = {
-                "evaluations": run.directory.evaluations.create(),
-                "progress": run.directory.progress.create(),
-            }
-            run.checkpoint()
-            return run
-
-        run, lock = create_whole(directory.root, fill)
-        run.lock = lock
-        run.directory = directory
-        return run
+        """A new run in ``root``, which must not hold a run already (``RunLoop._begin``): its configuration,
+        its copy of the library, empty logs and first checkpoint."""
+        files: dict[str, object] = {"config.json": config.to_json()}
+        if library is not None:
+            files["library.json"] = library.as_json()
+        return cls._begin(
+            RunDirectory(root),
+            lambda building: cls(config, RunDirectory(building), evaluator, library),
+            files,
+        )
 
     @classmethod
     def resume(cls, root: Path, evaluator: Evaluator | None, cut: bool = True) -> Run:
@@ -351,43 +200,24 @@ class Run:
         anything is changed; a writer's lock is taken first, and the temporary files of a killed writer are
         removed."""
         directory = RunDirectory(root)
-        if not directory.started():
-            raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
-        lock = exclusive_lock(directory.root / LOCK_NAME, f"the run directory {root}") if cut else None
-        try:
+        if not cut:
+            if not directory.started():
+                raise RunDirectoryError(f"{root} holds no run to resume (no config.json)")
+            return cls._load(directory, evaluator)
+
+        def load() -> Run:
             run = cls._load(directory, evaluator)
-            if cut:
-                directory.check_heldout()  # read when the run ends: checked before anything is run
-                refuse_planted_links(directory.root)
-        except BaseException:
-            if lock is not None:
-                lock.release()
-            raise
-        run.lock = lock
-        if cut:
-            for temporary in directory.temporary_files():
-                temporary.unlink(missing_ok=True)
-            directory.evaluations.cut(run.offsets["evaluations"])
-            directory.progress.cut(run.offsets["progress"])
-        return run
+            directory.check_heldout()  # read when the run ends: checked before anything is run
+            return run
+
+        return cls._reopen(directory, load)
 
     @classmethod
     def _load(cls, directory: RunDirectory, evaluator: Evaluator | None) -> Run:
         """The run of ``directory`` at its checkpoint, every part of it checked; changes nothing."""
         config = directory.read_config()
-        state = read_json(directory.checkpoint)
-        if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
-            raise RunDirectoryError(
-                f"{directory.checkpoint} is not a checkpoint of format {CHECKPOINT_FORMAT}"
-            )
-        for log in (directory.evaluations, directory.progress):
-            with open(log.path, newline="") as handle:
-                header = handle.readline().strip()
-            if header != ",".join(log.header):
-                raise RunDirectoryError(
-                    f"{log.path} was written with other columns ({header[:120]}): a run of an earlier "
-                    "version of the model, which this version cannot continue"
-                )
+        state = directory.read_checkpoint()
+        directory.check_logs()
         run = cls(config, directory, evaluator, directory.read_library(config))
         try:
             if RunConfig.from_json(state["config"]) != config:
@@ -400,12 +230,7 @@ class Run:
                 for o in config.grids
             }
             run.evaluations = integer(state["evaluations"], "evaluations", 0)
-            logs = {"evaluations": directory.evaluations, "progress": directory.progress}
-            for name, log in logs.items():
-                offset = integer(state["offsets"][name], f"offsets.{name}", 0)
-                if offset > log.size():
-                    raise ValueError(f"offsets.{name} {offset} is beyond the end of {log.path.name}")
-                run.offsets[name] = offset
+            run.offsets = directory.read_offsets(state["offsets"])
             run.timing = Timing.from_state(state["timing"])
             for objective, grid in state.get("generations", {}).items():
                 run.generations[objective] = Repertoire.from_state(
@@ -420,17 +245,9 @@ class Run:
                 raise ValueError(
                     f"the algorithm counts {run.algorithm.evaluations} evaluations, the run {run.evaluations}"
                 )
-        except (
-            KeyError,
-            TypeError,
-            ValueError,
-            AttributeError,
-            IndexError,
-            OverflowError,
-            EvolutionError,
-        ) as error:
-            if isinstance(error, RunDirectoryError):
-                raise
+        except RunDirectoryError:
+            raise
+        except (*DAMAGE, EvolutionError) as error:
             raise RunDirectoryError(f"{directory.checkpoint} is damaged: {error}") from error
         run._rebuild_cache()
         return run
@@ -515,51 +332,24 @@ class Run:
     def done(self) -> bool:
         return self.algorithm.done
 
-    def execute(
-        self,
-        on_batch: Callable[[int, int], None] | None = None,
-        checkpoint_interval: float = 30.0,
-        stop_after: int | None = None,
-        before_checkpoint: Callable[[], None] | None = None,
-    ) -> None:
-        """Run batches until the budget is spent (or ``stop_after`` evaluations, for tests and benchmarks).
+    def progress(self) -> tuple[int, int]:
+        return self.algorithm.produced, self.config.evaluations
 
-        A checkpoint is written when ``checkpoint_interval`` seconds have passed since the last one, and
-        always at the end. ``on_batch(evaluations, budget)`` is called after every batch, and
-        ``before_checkpoint()`` before every checkpoint (to put what else records the run on disk first).
-        """
-        last_checkpoint = time.monotonic()
-        while not self.algorithm.done and (stop_after is None or self.evaluations < stop_after):
-            started = time.perf_counter()
-            trees = self.algorithm.ask()
-            first = self.evaluations
-            requests = [
-                EvaluationRequest(
-                    tree=tree, seed=self.config.request_seed(first + i), trials=self.config.trials
-                )
-                for i, tree in enumerate(trees)
-            ]
-            asked = time.perf_counter()
-            self.last_batch = self._evaluate(requests)
-            results = [e.outcome for e in self.last_batch]
-            evaluated = time.perf_counter()
-            self.algorithm.tell(results)
-            self._record(requests, results)
-            finished = time.perf_counter()
-            self.timing.evaluator += evaluated - asked
-            self.timing.manager += (asked - started) + (finished - evaluated)
-            if on_batch is not None:
-                on_batch(self.algorithm.produced, self.config.evaluations)
-            if time.monotonic() - last_checkpoint >= checkpoint_interval:
-                if before_checkpoint is not None:
-                    before_checkpoint()
-                self._timed_checkpoint()
-                last_checkpoint = time.monotonic()
-        if before_checkpoint is not None:
-            before_checkpoint()
-        self._timed_checkpoint()
+    def _ask(self) -> list[EvaluationRequest]:
+        """The algorithm's next trees, each with its evaluation's seed."""
+        first = self.evaluations
+        return [
+            EvaluationRequest(tree=tree, seed=self.config.request_seed(first + i), trials=self.config.trials)
+            for i, tree in enumerate(self.algorithm.ask())
+        ]
 
-    def _evaluate(self, requests: Sequence[EvaluationRequest]) -> list[Evaluated]:
+    def _tell(self, batch: list[EvaluationRequest], answers: list[Evaluated]) -> None:
+        self.last_batch = answers
+        results = [e.outcome for e in answers]
+        self.algorithm.tell(results)
+        self._record(batch, results)
+
+    def _evaluate(self, requests: list[EvaluationRequest]) -> list[Evaluated]:
         """Every request evaluated as :meth:`_plan` says: the ``SIMULATED`` ones go to the evaluator in one
         batch, the others are answered from the cache or from their simplified form's evaluation."""
         if self.evaluator is None:
@@ -624,11 +414,6 @@ class Run:
         entry = self.repertoire(objective).best()
         return None if entry is None else (entry.tree, entry.value, entry.descriptors)
 
-    def _timed_checkpoint(self) -> None:
-        started = time.perf_counter()
-        self.checkpoint()
-        self.timing.manager += time.perf_counter() - started
-
     def _record(self, requests: Sequence, results: Sequence) -> None:
         rows = []
         for offset, (request, result) in enumerate(zip(requests, results, strict=True)):
@@ -665,10 +450,8 @@ class Run:
 
     def checkpoint(self) -> None:
         """Write the checkpoint atomically (only between batches)."""
-        write_json(
-            self.directory.checkpoint,
+        self.directory.write_checkpoint(
             {
-                "format": CHECKPOINT_FORMAT,
                 "config": self.config.to_json(),
                 "evaluations": self.evaluations,
                 "done": self.algorithm.done,
@@ -677,8 +460,7 @@ class Run:
                 "algorithm": self.algorithm.to_state(),
                 "passive": {o: grid.to_state() for o, grid in self.passive.items()},
                 "generations": {o: grid.to_state() for o, grid in self.generations.items()},
-            },
-            indent=None,
+            }
         )
 
     # Results -----------------------------------------------------------------------------------------

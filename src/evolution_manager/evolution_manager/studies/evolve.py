@@ -43,6 +43,7 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
+from evolution_manager.evolution.run_folder import COMPOSITIONS, run_kind
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
@@ -299,11 +300,7 @@ def _compositions_asked(args: argparse.Namespace) -> bool:
     of a composition run."""
     if args.swarm_from is not None or args.algorithm == "ga":
         return True
-    if args.resume:
-        from evolution_manager.evolution.compositions import is_composition_run  # late, as in _evolve
-
-        return is_composition_run(args.out)
-    return False
+    return bool(args.resume) and run_kind(args.out) == COMPOSITIONS
 
 
 def _check_composition_options(args: argparse.Namespace, cluster: ClusterSettings) -> None:

@@ -61,6 +61,7 @@ from evolution_manager.cluster.settings import ClusterSettings, add_cluster_opti
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import RunConfig
+from evolution_manager.evolution.run_folder import COMPOSITIONS
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -84,8 +85,6 @@ if TYPE_CHECKING:  # imported where used (run_one): the module is read by every 
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
 
 SESSIONS_FILE = "sessions.json"
-COMPOSITIONS = "compositions"
-"""``config.json``'s ``kind`` of a composition run (``evolution.compositions.KIND``, without importing it)."""
 
 
 def finished(root: Path) -> bool:

@@ -21,7 +21,8 @@ from pathlib import Path
 
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.errors import EvolutionError, UsageError
-from evolution_manager.evolution.run import Run, refuse_planted_links
+from evolution_manager.evolution.run import Run
+from evolution_manager.evolution.run_folder import refuse_planted_links
 from evolution_manager.evolution.run_results import run_results
 from evolution_manager.files import read_json
 from evolution_manager.studies import (
