@@ -3,14 +3,14 @@
 The paper's parameters (``parameters``), DEAP's primitive set and the conversion between DEAP trees and tree
 text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and MAP-Elites as ask/tell
 algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
-configuration and command-line options (``run_config``, ``options``), the run folder and run loop that tree
-runs and composition runs share (``run_folder``), a tree run with its checkpoints (``run``), the held-out scores
-(``heldout``), trees as people are shown them (``shown_trees``), what a run's result files show, computed
-(``run_results``), and primitive libraries made from runs' repertoires (``libraries``, the ``library``
-command), and heterogeneous compositions of repertoire cells evolved by a GA or MAP-Elites
+configuration and command-line options (``run_config``, ``options``), the run folder and run loop that
+tree runs and composition runs share (``run_folder``), a tree run with its checkpoints (``run``), the
+held-out scores (``heldout``), trees as people are shown them (``shown_trees``), what a run's result files
+show, computed (``run_results``), and primitive libraries made from runs' repertoires (``libraries``, the
+``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA or MAP-Elites
 (``compositions``), and the optimisers over a neural controller's weights, CMA-ES, the authors' GA and
-MAP-Elites (``networks``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy, pycma and pyribs;
-no other wing.
+MAP-Elites (``networks``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy, pycma and
+pyribs; no other wing.
 """
 
 __all__ = [
