@@ -57,8 +57,8 @@ from bt_controller.network import N_WEIGHTS, Network, network_document, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.compositions import bin_of
-from evolution_manager.evolution.run import LOCK_NAME, create_whole
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, default_scenario_seed
+from evolution_manager.evolution.run_folder import LOCK_NAME, create_whole
 from evolution_manager.files import CsvLog, number, read_json_object, write_json
 from evolution_manager.processes import Lock, exclusive_lock
 from swarm_ros.safe_paths import make_folder
