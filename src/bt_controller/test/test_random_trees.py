@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from bt_controller.random_trees import random_tree
-from bt_controller.tree import Composite, Node
-from bt_controller.vocabulary import ACTIONS, CONDITIONS
+from bt_controller.random_trees import random_tree, random_trees
+from bt_controller.tree import Composite, Node, parse
+from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2024
 
 
 def _leaves(node: Node) -> list[str]:
@@ -15,11 +15,16 @@ def _leaves(node: Node) -> list[str]:
     return [str(node)]
 
 
-def test_the_whole_vocabulary_is_the_default_and_draws_as_before():
+def test_the_2024_node_set_is_the_default_and_draws_as_before():
+    """The default is the nine conditions every task's world can read (the food kinds' numbered ones are
+    asked for), so a seed gives the trees it gave before they came."""
     for seed in range(20):
         a = random_tree(np.random.default_rng(seed), 25)
-        b = random_tree(np.random.default_rng(seed), 25, 0.5, 0.0, CONDITIONS, ACTIONS)
+        b = random_tree(np.random.default_rng(seed), 25, 0.5, 0.0, CONDITIONS_2024, ACTIONS)
         assert a == b
+        assert set(_leaves(a)) <= set(CONDITIONS_2024) | set(ACTIONS)
+    leaves = {name for text in random_trees(4, 30, conditions=CONDITIONS) for name in _leaves(parse(text))}
+    assert {"on_food2", "got_food3"} <= leaves  # every condition when asked
 
 
 def test_a_node_set_without_got_food_gives_trees_of_the_size_without_it():
