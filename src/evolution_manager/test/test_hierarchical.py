@@ -14,7 +14,7 @@ import pytest
 from toy import ToyEvaluator
 
 from bt_controller.library import library_from_json
-from bt_controller.vocabulary import ACTIONS, CONDITIONS
+from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2024
 from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites, as_outcome
 from evolution_manager.evolution.deap_trees import HIERARCHICAL_CONDITIONS, OBJECTIVES, make_primitive_set
 from evolution_manager.evolution.operators import choose_leaf
@@ -110,7 +110,7 @@ def test_the_flat_foraging_baseline_derates_as_the_authors_and_the_rest_as_in_20
     sizes = (1, 64, 65, 1000, 6994, 6995)
     assert [baseline(n) for n in sizes] == [1.0, 1.0, 1 - 1 / 6930, 1 - 936 / 6930, 0.0, 0.0]
     flat = RunConfig.make("gp", "foraging", 100, 1, task="foraging")
-    assert (flat.nodes, flat.gp.derating, flat.conditions) == ("flat", "baseline", CONDITIONS)
+    assert (flat.nodes, flat.gp.derating, flat.conditions) == ("flat", "baseline", CONDITIONS_2024)
     assert flat.to_json()["gp"]["derating"] == "baseline"
     library = ("primitives.json", LIBRARY.digest)
     hierarchical = RunConfig.make(
@@ -127,7 +127,7 @@ def test_the_flat_foraging_baseline_derates_as_the_authors_and_the_rest_as_in_20
     mixed = RunConfig.make(
         "gp", "foraging", 100, 1, task="foraging", library=library[0], library_digest=library[1], nodes="flat"
     )
-    assert (mixed.nodes, mixed.gp.derating, mixed.conditions) == ("flat", "standard", CONDITIONS)
+    assert (mixed.nodes, mixed.gp.derating, mixed.conditions) == ("flat", "standard", CONDITIONS_2024)
 
 
 def test_a_seeded_hierarchical_run_is_reproducible_and_refuses_what_it_cannot_run(tmp_path, capsys):
