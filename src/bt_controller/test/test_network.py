@@ -112,7 +112,7 @@ def test_bad_network_text_is_refused_in_one_line(text: str, expected: str) -> No
     assert expected in str(caught.value)
 
 
-def test_network_file_and_its_refusals(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_network_file_and_its_refusals(tmp_path) -> None:  # type: ignore[no-untyped-def]  # tmp_path: pytest's
     good = tmp_path / "net.json"
     good.write_text(json.dumps({"weights": [0.5] * N_WEIGHTS}))
     assert load_network(good) == Network((0.5,) * N_WEIGHTS)

@@ -33,7 +33,7 @@ class _Fitness(base.Fitness):
 
 
 class _Individual(list):
-    def __init__(self, values, fitness):  # type: ignore[no-untyped-def]
+    def __init__(self, values, fitness):  # type: ignore[no-untyped-def]  # a test helper, untyped like the other tests
         super().__init__(values)
         self.fitness = _Fitness((fitness,))
 
@@ -60,7 +60,7 @@ def test_operators_draw_as_deaps_own_from_the_same_generator_state():
         assert sel_best(fitness, 3) == [ind[0] for ind in tools.selBest(population, 3)]
 
 
-def _descriptors(w):  # type: ignore[no-untyped-def]
+def _descriptors(w):  # type: ignore[no-untyped-def]  # a test helper, untyped like the other tests
     return [1.0 / (1.0 + np.exp(-w[k])) for k in range(2)] + [0.0]
 
 
@@ -75,7 +75,7 @@ def _drive(optimiser, generations: int) -> list[list[float]]:
 
 @pytest.mark.parametrize("kind", ["ga", "cmaes", "qd"])
 def test_an_optimiser_continues_exactly_from_its_state(kind):
-    def make():  # type: ignore[no-untyped-def]
+    def make():  # type: ignore[no-untyped-def]  # a test helper, untyped like the other tests
         p = NetworkParameters()
         if kind == "ga":
             return WeightGA(p, random.Random(4))
@@ -122,7 +122,7 @@ def test_map_elites_fills_bins_and_draws_from_the_passed_generator():
     assert _drive(two, 6) == asked
 
 
-def _files(root):  # type: ignore[no-untyped-def]
+def _files(root):  # type: ignore[no-untyped-def]  # a test helper, untyped like the other tests
     names = ("evaluations.csv", "progress.csv", "summary.json", "checkpoint.json", "best/food.json",
              "repertoire_food.json")  # fmt: skip
     return {name: (root / name).read_bytes() for name in names}
@@ -139,7 +139,7 @@ def test_a_run_stopped_and_resumed_ends_identical(tmp_path, algorithm):
         stopped.execute(checkpoint_interval=1e9, stop_after=stop)
         with open(tmp_path / "stopped" / "evaluations.csv", "a") as log:  # rows after the last checkpoint
             log.write("999,1,garbage\n")
-        stopped.lock.release()  # type: ignore[union-attr]
+        stopped.lock.release()  # type: ignore[union-attr]  # a started run holds its lock
         stopped = NetworkRun.resume(tmp_path / "stopped", evaluator)
     stopped.execute(checkpoint_interval=0)
     stopped.finish()

@@ -278,7 +278,7 @@ class WeightCmaEs:
 
     def ask(self) -> list[list[float]]:
         """One generation's samples."""
-        self._asked = np.array(self.es.ask())  # type: ignore[attr-defined]
+        self._asked = np.array(self.es.ask())  # type: ignore[attr-defined]  # es is typed object: pycma loads late
         return [[float(w) for w in row] for row in self._asked]
 
     def tell(
@@ -289,7 +289,7 @@ class WeightCmaEs:
         if self._asked is None or len(fitness) != len(self._asked):
             raise ValueError("tell() needs one fitness per network of the last ask()")
         told = [float(f) for f in fitness]
-        self.es.tell(list(self._asked), [-f for f in told])  # type: ignore[attr-defined]
+        self.es.tell(list(self._asked), [-f for f in told])  # type: ignore[attr-defined]  # typed object: pycma loads late
         self.told.append(told)
         self._asked = None
 
@@ -355,7 +355,7 @@ class WeightMapElites:
         return Scheduler(archive, emitters)
 
     def ask(self) -> list[list[float]]:
-        self._asked = np.asarray(self.scheduler.ask())  # type: ignore[attr-defined]
+        self._asked = np.asarray(self.scheduler.ask())  # type: ignore[attr-defined]  # typed object: pyribs loads late
         return [[float(w) for w in row] for row in self._asked]
 
     def tell(
@@ -368,7 +368,7 @@ class WeightMapElites:
             raise ValueError("MAP-Elites needs the descriptors of every network")
         told = [float(f) for f in fitness]
         measures = [[float(d) for d in (m if m is not None else (0.0, 0.0, 0.0))] for m in descriptors]
-        self.scheduler.tell(np.array(told), np.array(measures))  # type: ignore[attr-defined]
+        self.scheduler.tell(np.array(told), np.array(measures))  # type: ignore[attr-defined]  # typed object: pyribs loads late
         self.told.append([told, *measures])
         self._asked = None
 

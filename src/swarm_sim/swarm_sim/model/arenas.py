@@ -1,6 +1,6 @@
 """The arena layouts 1-9 of the authors' 2026 code (commit 1cd2358) as plain data: regions made of pieces.
 
-The multi-food addendum (``shared/design/multifood.md``, sections 2 and 3) describes them; the facts here
+The authors' code at 1cd2358 defines them; the facts here
 were read from their ``arena.py`` (the seeded generator of layouts 6-9), their loop functions (BLF,
 ``bt_loop_functions.cpp``: builds and reorders the arenas) and their controller (FB, ``footbot_bt.cpp``:
 measures a robot's distance to each region). Units are millimetres
