@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -121,9 +121,16 @@ def food_scale(entry: ArenaEntry) -> float:
     return distance(entry, "food", *nest_point(entry))
 
 
+def kinds_needed(kinds: Iterable[str]) -> tuple[str, ...]:
+    """The region kinds a world of regions of ``kinds`` must have: the nest and every food kind up to the
+    highest among them (at least kind 1); unknown kinds are left to the checks that name them."""
+    known = [REGION_KINDS.index(kind) for kind in kinds if kind in REGION_KINDS]
+    return REGION_KINDS[: 1 + max([1, *known])]
+
+
 def food_kinds(layout: Layout) -> int:
     """How many kinds of food ``layout`` has: its highest food kind (1 for the papers' arena, no layout)."""
-    return max([1, *(REGION_KINDS.index(p.kind) for row in layout for e in row for p in e)])
+    return len(kinds_needed(p.kind for row in layout for e in row for p in e)) - 1
 
 
 def check_layout(layout: Layout, arena_half: float, key: str = "layout") -> None:
@@ -132,10 +139,7 @@ def check_layout(layout: Layout, arena_half: float, key: str = "layout") -> None
     nest or without one of the layout's food kinds, or a nest that overlaps food."""
     if not layout or any(not row for row in layout):
         raise ConfigError(f"{key} must hold at least one arena entry per configuration, got {layout!r}")
-    known = [REGION_KINDS.index(p.kind) for row in layout for e in row for p in e if p.kind in REGION_KINDS]
-    kinds = REGION_KINDS[
-        : 1 + max([1, *known])
-    ]  # the nest and every food kind up to the highest (at least 1)
+    kinds = kinds_needed(p.kind for row in layout for e in row for p in e)
     for c, row in enumerate(layout):
         for k, entry in enumerate(row):
             where = f"{key}: arena entry {c * len(row) + k}"

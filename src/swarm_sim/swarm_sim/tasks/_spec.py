@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS_2024
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
-from swarm_sim.model.regions import Layout, check_layout
+from swarm_sim.model.regions import Layout, check_layout, kinds_needed
 
 
 class TaskError(ConfigError):
@@ -299,8 +299,7 @@ def check(task: TaskSpec) -> None:
                 raise TaskError(
                     f"{key}.centre must be [0, 0] for a half-plane ({region.shape}), got [{x:g}, {y:g}]"
                 )
-    known = [REGION_KINDS.index(k) for k in kinds if k in REGION_KINDS]
-    needed = REGION_KINDS[: 1 + max([1, *known])]  # the nest and every food kind up to the highest
+    needed = kinds_needed(kinds)  # the nest and every food kind up to the highest
     for kind in needed:
         if kind not in kinds:
             raise TaskError(
