@@ -542,6 +542,7 @@ def _steps(
     regions = p.regions
     kinds = regions - 1
     samples = 0
+    fresh = 0  # samples since the region windows were last emptied (perception.smoothed)
     # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
     shared = tree_at(trees, robot_tree[0])
     uniform = True
@@ -588,9 +589,10 @@ def _steps(
                     sources[i, region_column(r)] = senders[i, positions[r]] if positions[r] >= 0 else -1
                 sources[i, ROBOT_SIDE] = senders[i, nearest] if nearest >= 0 else -1
             samples += 1
+            fresh += 1
             if timeline.refreshes(p, k):
                 for i in range(n):
-                    world.smoothed(window[i], samples, smooth[i])
+                    world.smoothed(window[i], samples, fresh, smooth[i])
         if timeline.ticks_at(p, k):
             number = timeline.tick_number(p, k)
             for i in range(n):
@@ -610,7 +612,7 @@ def _steps(
                 actions[i] = motors
                 motion[i, 0] += movement_of(motors)
                 motion[i, 1] += rotation_of(motors)
-        if timeline.region_broadcast(k):
+        if timeline.region_broadcast(p, k):
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
                 for r in range(regions):
@@ -657,6 +659,8 @@ def _steps(
                 for f in range(kinds):
                     carrying[i, f] = False
                     deliveries[i, f] = 0
+            if timeline.trials_restart(p):
+                fresh = 0  # the 2026 code empties the region windows (RobotView.end_trial)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")

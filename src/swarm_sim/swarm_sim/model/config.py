@@ -15,7 +15,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from bt_controller.model_settings import PROFILES, PerceptionParams, Timeline, arena_of_trial, profile_number
+from bt_controller.model_settings import (
+    PROFILES,
+    PerceptionParams,
+    Timeline,
+    arena_of_trial,
+    check_authors_code,
+    profile_number,
+)
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
 from swarm_sim.model.regions import (
@@ -83,6 +90,7 @@ class Params(NamedTuple):
     regions: int
     preferred_food: int
     other_food_weight: float
+    authors_code: int
 
 
 _INT_MINIMUM = {
@@ -99,6 +107,7 @@ _INT_MINIMUM = {
     "dead_robots": 0,
     "weak_robots": 0,
     "preferred_food": 0,
+    "authors_code": 0,
 }
 """The integer parameters and the least value each may take (the one list of them)."""
 
@@ -196,6 +205,11 @@ class Config:
     other_food_weight: float = 1.0
     """What a delivery of another kind than ``preferred_food`` counts in ``foraging_biased`` (the authors'
     ``penalty``: 1.0 by default, 0.5 in their arena-9 runs)."""
+    authors_code: int = _TIMELINE.authors_code
+    """Which of the authors' code versions ``paper`` reproduces (``AUTHORS_CODES``): 2024, the papers' code,
+    or 2026, their commit 1cd2358, whose robots start their estimates afresh at every trial of a chain and
+    see no robot on either side when nobody is heard (``docs/model.md``, "Two profiles"). Under ``clean``
+    both give the same model."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -209,7 +223,12 @@ class Config:
     def timeline(self) -> Timeline:
         """The timeline's parameters."""
         return Timeline(
-            self.profile_number, self.steps_per_tick, self.ticks, self.initial_step, self.chain_trials
+            self.profile_number,
+            self.steps_per_tick,
+            self.ticks,
+            self.initial_step,
+            self.chain_trials,
+            self.authors_code,
         )
 
     @property
@@ -222,6 +241,7 @@ class Config:
             self.density_divisor,
             self.profile_number,
             self.regions,
+            self.authors_code,
         )
 
     @property
@@ -323,6 +343,10 @@ def _count(config: Config, name: str, minimum: int = 1) -> int:
 def _validate(c: Config) -> None:
     if c.profile not in PROFILES:
         raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {c.profile!r}")
+    try:
+        check_authors_code(c.authors_code)
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
     for name in (
         "arena_half",
         "nest_radius",

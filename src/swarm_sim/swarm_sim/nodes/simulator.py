@@ -620,6 +620,7 @@ class SimulatorNode(ManagedNode):
                 density_range=p.density_range,
                 density_divisor=p.density_divisor,
                 food_kinds=p.regions - 1,
+                authors_code=p.authors_code,
                 wheel_speed=p.wheel_speed * visualisation.MM,
                 wheel_separation=self.config.wheel_separation * visualisation.MM,
             )
