@@ -325,7 +325,7 @@ function drawDetail() {
   box.appendChild(el("h2", {}, `${state.objective}, bin ${state.bin} (${DATA.objectives[state.objective].descriptors.join(", ")})`));
   const table = el("table", { id: "values" });
   const head = el("tr");
-  ["", "fitness", "held-out", "movement", "rotation", "conditionality", "evaluation", "seed"].forEach(h => head.appendChild(el("th", {}, h)));
+  ["", "fitness", "held-out", ...DATA.objectives[state.objective].descriptors, "evaluation", "seed"].forEach(h => head.appendChild(el("th", {}, h)));
   table.appendChild(head);
   items.forEach((it, n) => {
     const row = el("tr", { class: "item", "data-fitness": it.fitness });
