@@ -351,7 +351,8 @@ def _record_step(
         rec.poses[row, i, 1] = y[i]
         rec.poses[row, i, 2] = heading[i]
         rec.actions[row, i] = actions[i] if last >= 0 else -1
-        world.sensed_ground(x[i], y[i], entry, rec.ground[row, i], faults[i])
+        world.ground(x[i], y[i], entry, rec.ground[row, i])
+        world.faulty_ground(faults[i], rec.ground[row, i])
         rec.heard[row, i] = heard[i]
         for c in range(heard[i]):
             rec.senders[row, i, c] = senders[i, c]
@@ -549,6 +550,9 @@ def _steps(
     drop_keys = keys[DROPS]
     tree_keys = keys[TREE]
     bearing_keys = keys[BEARINGS]
+    faulty = False  # without faults, the steps pay one test of this where a fault would act
+    for i in range(n):
+        faulty = faulty or faults[i] != 0
     (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast, raw, window, smooth, ground_now, here,
      sources, positions, bearings, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
     counts_in, senders, ranges, values = inbox
@@ -578,22 +582,28 @@ def _steps(
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the
             # robots ignore it, and only a recording looks).
-            world.disrupt(faults, broadcast)
+            if faulty:
+                world.disrupt(faults, broadcast)
             world.sense_step(x, y, broadcast, drop_keys, k, p, counts_in, senders, ranges, values)
-            world.deafen(faults, counts_in)
+            if faulty:
+                world.deafen(faults, counts_in)
         if not sensing:
             # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
             # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
             # a73e4af).
             for i in range(n):
-                world.sensed_ground(x[i], y[i], entry, here[i], faults[i])
+                world.ground(x[i], y[i], entry, here[i])
+                if faulty:
+                    world.faulty_ground(faults[i], here[i])
                 for f in range(kinds):
                     carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
                 world.take_probes(x, y, i, entry, probes, 0)
         if sensing:
             for i in range(n):
                 inside = ground_now[i]
-                world.sensed_ground(x[i], y[i], entry, inside, faults[i])
+                world.ground(x[i], y[i], entry, inside)
+                if faulty:
+                    world.faulty_ground(faults[i], inside)
                 for f in range(kinds):
                     carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], inside[f + 1])
                     deliveries[i, f] += 1 if delivered else 0
@@ -614,9 +624,11 @@ def _steps(
             for i in range(n):
                 tree = shared if uniform else tree_at(trees, robot_tree[i])
                 for side in range(bearings.shape[0]):
-                    source = sources[i, side]
-                    seen = _source_bearing(sides[i, side], i, source, x, y, heading)
-                    bearings[side] = world.faulty_bearing(faults[i], seen, bearing_keys[i], k, source, n)
+                    bearings[side] = _source_bearing(sides[i, side], i, sources[i, side], x, y, heading)
+                    if faulty:
+                        source = sources[i, side]
+                        seen = bearings[side]
+                        bearings[side] = world.faulty_bearing(faults[i], seen, bearing_keys[i], k, source, n)
                 world.blackboard(
                     ground_now[i], raw[i], bearings, sources[i, ROBOT_SIDE] >= 0, carrying[i], p, board
                 )
@@ -632,7 +644,9 @@ def _steps(
                 motion[i, 1] += rotation_of(motors)
         if timeline.region_broadcast(p, k):
             for i in range(n):
-                world.sensed_ground(x[i], y[i], entry, here[i], faults[i])
+                world.ground(x[i], y[i], entry, here[i])
+                if faulty:
+                    world.faulty_ground(faults[i], here[i])
                 for r in range(regions):
                     broadcast[i, r] = world.region_value(here[i, r], p)
         else:

@@ -55,7 +55,8 @@ def sense_swarm(
             seen = world.bearing(x[i], y[i], heading[i], x[j], y[j])
             bearings[m] = world.faulty_bearing(fault, seen, key, step, j, n)
         inside = np.zeros(regions, dtype=np.bool_)
-        world.sensed_ground(x[i], y[i], entry, inside, fault)
+        world.ground(x[i], y[i], entry, inside)
+        world.faulty_ground(fault, inside)
         out.append(
             Readings(
                 inside,

@@ -3,7 +3,7 @@
 
 (a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``, and the
-per-robot faults that change them (``swarm_sim.model.faults``): ``faulty_wheels``, ``sensed_ground``,
+per-robot faults that change them (``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``,
 ``deafen``, ``faulty_bearing``, ``disrupt``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
@@ -768,10 +768,10 @@ def faulty_wheels(gains: np.ndarray, faults: np.ndarray) -> None:
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def sensed_ground(x: float, y: float, entry: np.ndarray, inside: np.ndarray, fault: int) -> None:
-    """What a robot with fault ``fault`` reads on its ground sensor at (x, y) (``ground``): in no region
-    when ``ground-stuck``, every region the other way round when ``ground-inverted``."""
-    ground(x, y, entry, inside)
+def faulty_ground(fault: int, inside: np.ndarray) -> None:
+    """What a robot with fault ``fault`` reads on its ground sensor, from where it is (``inside``, written
+    by ``ground``), in place: in no region when ``ground-stuck``, every region the other way round when
+    ``ground-inverted``."""
     if fault == GROUND_STUCK:
         for r in range(inside.shape[0]):
             inside[r] = False

@@ -2,7 +2,7 @@
 
 A fault strikes one robot and changes the world on the simulator's side (what the robot reads, what its
 message carries, how its wheels move), never the robot's own software; ``swarm_sim.core.world`` applies
-them (``faulty_wheels``, ``sensed_ground``, ``deafen``, ``faulty_bearing``, ``disrupt``) in the batch
+them (``faulty_wheels``, ``faulty_ground``, ``deafen``, ``faulty_bearing``, ``disrupt``) in the batch
 kernels, the reference road and the simulator node alike. The kinds:
 
 ``ground-stuck``
