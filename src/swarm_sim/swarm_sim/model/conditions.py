@@ -1,9 +1,12 @@
-"""Conditions: named, validated changes to the world (damage, a harder radio, another swarm or arena).
+"""Conditions: named, validated changes to the world (damage, per-robot faults, a harder radio, another swarm
+or arena).
 
 A condition is written ``NAME=VALUE`` (``evaluate --condition``, ``adapt --condition``, the simulator node's
 ``conditions`` parameter) and is nothing but a setting of ``swarm_sim.model.config.Config``, so it holds in
-the reference road, the batch kernels and the node graph alike; damage acts through the wheel gains a trial
-starts with (``world.wheel_gains``), never inside the kernels' loops.
+the reference road, the batch kernels, recordings and the node graph alike. Swarm-wide damage acts through
+the wheel gains a trial starts with (``world.wheel_gains``); per-robot faults act on the simulator's side of
+the robots' readings, messages and wheels (``world.faulty_wheels`` and its neighbours), never inside the
+robots' own perception.
 
 ``dead-robots=K``
     robots 0 .. K-1 never drive or turn (both wheel gains 0: ``Config.dead_robots``). They **still
