@@ -25,6 +25,8 @@ from bt_controller.model_settings import (
 )
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
+from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
+from swarm_sim.model.faults import check_faults
 from swarm_sim.model.regions import (
     ArenaEntry,
     Layout,
@@ -210,6 +212,15 @@ class Config:
     or 2026, their commit 1cd2358, whose robots start their estimates afresh at every trial of a chain and
     see no robot on either side when nobody is heard (``docs/model.md``, "Two profiles"). Under ``clean``
     both give the same model."""
+    fault_rate: float = 0.0
+    """Per-robot faults (``swarm_sim.model.faults``): each robot is faulty with this probability, drawn per
+    evaluation seed (``trial_data.robot_faults``); 0: none."""
+    fault_kinds: tuple[str, ...] = ()
+    """The kinds a faulty robot's fault is drawn among under ``fault_rate`` (``faults.FAULT_KINDS``); empty:
+    all of them."""
+    fault_robots: tuple[tuple[int, str], ...] = ()
+    """Faults given robot by robot, (robot id, kind) pairs, the same for every seed (not with
+    ``fault_rate``)."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -324,6 +335,10 @@ class Config:
                 if not value:
                     continue  # the papers' arena: nest_radius and gaps say it, as before layouts
                 value = layout_as_json(value)
+            if f.name in FAULT_FIELDS and value == f.default:
+                continue  # no faults: written as before faults
+            if f.name == "fault_robots":
+                value = [list(pair) for pair in value]
             out[f.name] = list(value) if isinstance(value, tuple) else value
         return out
 
@@ -419,6 +434,7 @@ def _validate(c: Config) -> None:
             f"got {c.preferred_food}"
         )
     _number(c, "other_food_weight")
+    check_faults(c.fault_rate, c.fault_kinds, c.fault_robots, c.n_robots)
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:
@@ -481,6 +497,10 @@ def config_from_dict(data: object) -> Config:
     values: dict[str, Any] = dict(data)
     if isinstance(values.get("gaps"), list):
         values["gaps"] = tuple(values["gaps"])
+    if isinstance(values.get("fault_kinds"), list):
+        values["fault_kinds"] = tuple(values["fault_kinds"])
+    if isinstance(values.get("fault_robots"), list):
+        values["fault_robots"] = tuple(tuple(p) if isinstance(p, list) else p for p in values["fault_robots"])
     if "layout" in values:
         values["layout"] = layout_from_json(values["layout"])
     return Config(**values)
