@@ -43,7 +43,7 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
-from evolution_manager.evolution.run_folder import COMPOSITIONS, run_kind
+from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, run_kind
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
@@ -382,13 +382,9 @@ def _evolve_compositions(
         _check_composition_options(args, cluster)
         if args.resume:
             saved = comp.CompositionConfig.from_json(read_json_object(Path(args.out) / "config.json"))
-            for name in ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed"):
-                value = getattr(args, name)
-                if value is not None and value != getattr(saved, name):
-                    raise UsageError(
-                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
-                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
-                    )
+            _check_as_saved(
+                args, saved, ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            )
             if args.homogeneous is not None and args.homogeneous != saved.parameters.homogeneous:
                 raise UsageError(
                     f"--homogeneous {args.homogeneous} differs from the run being resumed "
@@ -449,16 +445,22 @@ def _evolve_compositions(
     return 0
 
 
+def _check_as_saved(args: argparse.Namespace, saved: object, names: Sequence[str]) -> None:
+    """Raise ``UsageError`` for an option of ``names`` given to ``--resume`` that differs from the saved
+    configuration's field of that name."""
+    for name in names:
+        value = getattr(args, name)
+        if value is not None and value != getattr(saved, name):
+            raise UsageError(
+                f"--{name.replace('_', '-')} {value} differs from the run being resumed "
+                f"({getattr(saved, name)}); leave it out or start a new run in another --out"
+            )
+
+
 def _networks_asked(args: argparse.Namespace) -> bool:
     """Whether the command evolves a network's weights: ``--algorithm nn-*``, or ``--resume`` of such a
     run."""
-    if args.algorithm in NETWORK_ALGORITHMS:
-        return True
-    if args.resume and (Path(args.out) / "config.json").is_file():
-        with contextlib.suppress(EvolutionError):
-            saved = read_json(Path(args.out) / "config.json")
-            return isinstance(saved, dict) and saved.get("kind") == "networks"
-    return False
+    return args.algorithm in NETWORK_ALGORITHMS or (bool(args.resume) and run_kind(args.out) == NETWORKS)
 
 
 def _evolve_networks(
@@ -475,21 +477,8 @@ def _evolve_networks(
             raise UsageError("network runs take no --library or --objectives, and fixed scenarios only")
         if args.resume:
             saved = nets.NetworkConfig.from_json(read_json_object(Path(args.out) / "config.json"))
-            for name in (
-                "algorithm",
-                "objective",
-                "evaluations",
-                "seed",
-                "trials",
-                "profile",
-                "scenario_seed",
-            ):
-                value = getattr(args, name)
-                if value is not None and value != getattr(saved, name):
-                    raise UsageError(
-                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
-                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
-                    )
+            names = ("algorithm", "objective", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            _check_as_saved(args, saved, names)
             config = saved
         else:
             if (Path(args.out) / "config.json").exists():
