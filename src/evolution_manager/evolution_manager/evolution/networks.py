@@ -38,9 +38,10 @@ A run directory is a run folder as every run's (``run_folder``; ``NetworkRun`` e
 (atomic, with the lengths of the CSV files), and when the run ends ``summary.json`` (with the best network's
 held-out fitness: its mean over the five held-out scenarios a tree run's best tree is re-scored on),
 ``repertoire_<objective>.json`` and ``best/<objective>.json`` (the best network, ``{"weights": [...]}``, for
-``evaluate --network``, ``trial --network`` and ``animate --network``). The GA's checkpoint holds its population and generator state; CMA-ES's its generator's starting state and
-the fitness told at every generation, from which a resume rebuilds the strategy exactly (no pickle: a
-checkpoint is plain JSON). A resumed run ends with the very bytes of an uninterrupted one.
+``evaluate --network``, ``trial --network`` and ``animate --network``). The GA's checkpoint holds its
+population and generator state; CMA-ES's its generator's starting state and the fitness told at every
+generation, from which a resume rebuilds the strategy exactly (no pickle: a checkpoint is plain JSON). A
+resumed run ends with the very bytes of an uninterrupted one.
 """
 
 from __future__ import annotations
