@@ -243,15 +243,15 @@ def write_action_csv(path: Path, actions: Sequence[int]) -> None:
     write_atomic(path, buffer.getvalue())
 
 
-def _best_network(
-    found: Sequence[tuple[dict, dict[str, str]]], objective: str
+def _best_run(
+    found: Sequence[tuple[dict, dict[str, str]]], objective: str, arms: Sequence[str]
 ) -> tuple[dict[str, str], str] | None:
-    """The network run of ``objective`` with the highest held-out best fitness (in-run best among equals or
-    without one): (its row, its folder)."""
+    """The run of one of ``arms`` on ``objective`` with the highest held-out best fitness (in-run best among
+    equals or without one): (its row, its folder)."""
     mine = [
         (row, entry["dir"])
         for entry, row in found
-        if row["arm"] in NETWORK_ARMS and row["objective"] == objective and row["best_fitness"] != ""
+        if row["arm"] in arms and row["objective"] == objective and row["best_fitness"] != ""
     ]
     if not mine:
         return None
@@ -261,12 +261,31 @@ def _best_network(
     )
 
 
+def _scores(row: dict[str, str]) -> str:
+    held = row["heldout_best_fitness"]
+    return f"best {float(row['best_fitness']):.4g}, held-out " + (f"{float(held):.4g}" if held else "n/a")
+
+
+def _best_tree(root: Path, found: Sequence[tuple[dict, dict[str, str]]], objective: str) -> str:
+    """The best tree of ``objective`` (the tree run with the highest held-out best fitness), simplified, to
+    set beside the network."""
+    best = _best_run(found, objective, TREE_ARMS)
+    if best is None:
+        return ""
+    row, folder = best
+    summary = read_json(Path(root) / folder / "summary.json")
+    assert isinstance(summary, dict)  # a finished tree run's summary
+    tree = summary["objectives"][objective]["best_tree_simplified"]
+    head = f"Beside it the best tree, {row['arm']} seed {row['seed']} ({_scores(row)}), simplified:"
+    return f"{head}\n\n    {tree}\n\n"
+
+
 def _network_section(
     root: Path, found: Sequence[tuple[dict, dict[str, str]]], objectives: Sequence[str]
 ) -> str:
     parts = []
     for objective in objectives:
-        best = _best_network(found, objective)
+        best = _best_run(found, objective, NETWORK_ARMS)
         if best is None:
             continue
         row, folder = best
@@ -274,8 +293,8 @@ def _network_section(
         actions = action_table(network.weights)
         write_action_csv(Path(root) / "networks" / f"{objective}.csv", actions)
         parts.append(
-            f"### {objective}: {row['arm']}, seed {row['seed']} (best {float(row['best_fitness']):.4g}, "
-            f"held-out {row['heldout_best_fitness'] or 'n/a'})\n\n"
+            f"### {objective}: {row['arm']}, seed {row['seed']} ({_scores(row)})\n\n"
+            f"{_best_tree(root, found, objective)}"
             f"Every input pattern's action: [networks/{objective}.csv](networks/{objective}.csv); the "
             f"network: `{folder}/best/{objective}.json`.\n\n| action | patterns | when |\n|---|---|---|"
         )
@@ -403,10 +422,11 @@ def build_report(root: Path) -> Path:
         f"{markdown_table(repertoires) if repertoires else none}\n"
         "## Figures\n\nTree arms (gp, qd) beside network arms (nn-cmaes, nn-ga, nn-qd).\n\n"
         + "\n\n".join(_figures(root, table, objectives))
-        + "\n\n## What the best networks do\n\n"
-        "For each objective the network run with the highest held-out best fitness: its action for each of "
-        "the 2^9 patterns of its inputs (in_nest, on_food, got_food (carrying), nest_left, nest_right, "
-        "food_left, food_right, robot_left, robot_right), the patterns of each action summed up as "
+        + "\n\n## What the best networks and trees do\n\n"
+        "For each objective the network run with the highest held-out best fitness, beside the best tree "
+        "run's tree simplified: the network's action for each of the 2^9 patterns of its inputs (in_nest, "
+        "on_food, got_food (carrying), nest_left, nest_right, food_left, food_right, robot_left, "
+        "robot_right), the patterns of each action summed up as "
         "conditions (a short cover of the patterns: a pattern that meets one condition picks the action)."
         "\n\n"
         f"{_network_section(root, found, objectives)}"
