@@ -48,9 +48,10 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -250,7 +251,7 @@ class _Replayed:
     drawing as it first did (no pickle: a checkpoint is plain JSON)."""
 
     rng: np.random.Generator
-    start: dict
+    start: Mapping[str, Any]
     told: list
 
     def initial(self) -> bool:
