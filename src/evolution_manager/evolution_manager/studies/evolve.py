@@ -27,7 +27,7 @@ import time
 from collections.abc import Callable, Sequence
 from contextlib import ExitStack
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
 from evolution_manager.cluster.client import open_client
@@ -235,6 +235,49 @@ class _Executable(Protocol):
     def execute(self, on_batch: Callable[[int, int], None], checkpoint_interval: float) -> object: ...
 
 
+class _Best(Protocol):
+    @property
+    def fitness(self) -> float | None: ...
+
+
+class _OneObjective(_Executable, Protocol):
+    """A composition or network run: one objective, its best so far, individuals produced."""
+
+    produced: int
+
+    @property
+    def config(self) -> Any: ...
+
+    @property
+    def best(self) -> _Best | None: ...
+
+
+def _execute_one(
+    run: _OneObjective,
+    write: Callable[[], object],
+    objective: str,
+    args: argparse.Namespace,
+    argv: Sequence[str] | None,
+    started: float,
+    cluster: ClusterSettings,
+) -> int | None:
+    """:func:`_execute` of a composition or network run, its bar showing the best ``objective`` so far."""
+    bar = progress_bar(run.config, run.produced, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            if run.best is not None and run.best.fitness is not None:
+                bar.set_postfix_str(f"{objective}={run.best.fitness:.3f}")
+
+    return _execute(run, write, args, argv, started, cluster, bar, on_batch)
+
+
+def _best_shown(run: _OneObjective) -> str:
+    """The best fitness of a composition or network run as its last line shows it."""
+    return "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+
+
 def _could_not_start(error: Exception, out: Path | None) -> int:
     """Say in one line why a run could not be started or continued; return the exit status."""
     if isinstance(error, WriteError):  # the new run directory could not be written
@@ -426,18 +469,10 @@ def _evolve_compositions(
             run = comp.CompositionRun.start(config, cells, args.out, evaluator, library)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, args.out)
-    bar = progress_bar(run.config, run.produced, not args.no_progress)
-
-    def on_batch(done: int, total: int) -> None:
-        if bar is not None:
-            bar.update(done - bar.n)
-            if run.best is not None and run.best.fitness is not None:
-                bar.set_postfix_str(f"foraging={run.best.fitness:.3f}")
-
-    failed = _execute(run, run.write_results, args, argv, started, cluster, bar, on_batch)
+    failed = _execute_one(run, run.write_results, "foraging", args, argv, started, cluster)
     if failed is not None:
         return failed
-    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    best = _best_shown(run)
     print(
         f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
         f"foraging {best}; the best swarm is {Path(args.out) / 'best' / 'foraging_swarm.json'}"
@@ -512,18 +547,10 @@ def _evolve_networks(
             run = nets.NetworkRun.start(config, args.out, evaluator)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, args.out)
-    bar = progress_bar(run.config, run.produced, not args.no_progress)
-
-    def on_batch(done: int, total: int) -> None:
-        if bar is not None:
-            bar.update(done - bar.n)
-            if run.best is not None and run.best.fitness is not None:
-                bar.set_postfix_str(f"{run.config.objective}={run.best.fitness:.3f}")
-
-    failed = _execute(run, run.finish, args, argv, started, cluster, bar, on_batch)
+    failed = _execute_one(run, run.finish, run.config.objective, args, argv, started, cluster)
     if failed is not None:
         return failed
-    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    best = _best_shown(run)
     where = Path(args.out) / "best" / f"{run.config.objective}.json"
     print(f"{run.config.label}: {run.evaluations} evaluations, best {run.config.objective} {best}; {where}")
     return 0
