@@ -45,7 +45,7 @@ from evolution_manager.evolution.networks import NetworkConfig
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.intervals import interval
-from evolution_manager.studies.planning import PLAN_FILE, shared_scenario_seed
+from evolution_manager.studies.planning import PLAN_FILE, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.model import FAMILIES
@@ -118,14 +118,7 @@ def plan_study(
                 entries.append({"arm": arm, "objective": objective, "dir": folder, "config": made.to_json()})
     document = {
         "study": STUDY,
-        "profile": args.profile or DEFAULT_PROFILE,
-        "runs": args.runs,
-        "evaluations": args.evaluations,
-        "seed": args.seed,
-        "trials": args.trials,
-        "scenarios": scenarios,
-        "design": design,
-        "scenario_seed": scenario_seed,
+        **document_head(args, args.profile or DEFAULT_PROFILE, scenarios, design, scenario_seed),
         "objectives": objectives,
         "plan": entries,
     }
