@@ -14,9 +14,12 @@ NETWORKS_STAGE, a, k, r)``. Every run uses fixed scenarios (network runs know no
 shared`` (the default) every run of the study is evaluated on one scenario seed.
 
 Equal budget: every run produces ``--evaluations`` controllers (25,000 by default). How each arm counts them:
-GP and the GA count the offspring after their initial population (the initial 25 or 75 are evaluated on
-top, as the paper's GP); MAP-Elites over trees counts every tree after its initial batch; CMA-ES and CMA-ME
-count every sample. A run also re-scores its best controller on five held-out scenarios at its end.
+GP and the GA count the offspring after their initial population of 25 (evaluated on top, as the paper's
+GP); MAP-Elites over trees counts every tree after its initial batch of 100; CMA-ES and CMA-ME count every
+sample. A tree arm simulates fewer than it counts: an offspring no operator changed keeps its parent's
+fitness, and a tree seen before on the fixed scenario is answered from the run's cache; a network arm
+simulates every network it counts (the GA's three elites are not evaluated again). A run also re-scores its
+best controller on five held-out scenarios at its end.
 
 The report (``report.md``, regenerated from ``runs.csv`` and the run folders, in the plan's order, so a
 continued study writes the same bytes): per objective and arm the mean best and held-out best fitness with
@@ -398,10 +401,14 @@ def build_report(root: Path) -> Path:
         f"evaluation, profile {document['profile']}, design {document['design']}); one row per run in "
         "[runs.csv](runs.csv).\n\n"
         "Equal budget is the same number of controllers produced per run. GP and the GA count their "
-        "offspring after the initial population, MAP-Elites over trees every tree after its initial batch, "
-        "CMA-ES and CMA-ME every sample. Held-out best fitness: the run's best controller re-scored on five "
-        "scenarios it never saw (mean). A network ticks no condition, so its conditionality descriptor is 0: "
-        "an nn-qd repertoire fills at most the 64 bins of one slice of the 512, coverage 0.125 at most.\n\n"
+        "offspring after the initial population of 25, MAP-Elites over trees every tree after its initial"
+        " batch of 100, CMA-ES and CMA-ME every sample. Tree arms simulate fewer than they count (an "
+        "offspring no operator changed keeps its parent's fitness, a tree seen before on the fixed "
+        "scenario is answered from the run's cache); network arms simulate every network they count. "
+        "Held-out best fitness: the run's best controller re-scored on five scenarios it never saw "
+        "(mean). A network ticks no condition, so its conditionality descriptor is 0: an nn-qd repertoire"
+        " fills at most the 64 bins of one slice of the 512, coverage 0.125 at most."
+        "\n\n"
         "## Scores\n\nMeans with 95 % bootstrap intervals of the mean (10,000 resamples).\n\n"
         f"{scores_table(table, objectives)}\n"
         "## Does readability cost performance?\n\n"
