@@ -1,6 +1,7 @@
 """``experiment --study bt-vs-nn``: the plan (arms, objectives, seeds), the whole study end to end on a tiny
 budget (runs.csv, report, figures, each best network's action table), a second start that runs nothing
-again, and the readable form of a network (its action per input pattern, grouped as conditions)."""
+again, the report command rebuilding the same report, and the readable form of a network (its action per
+input pattern, grouped as conditions)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 from bt_controller.network import N_WEIGHTS, Network, load_network
 from evolution_manager.studies import networks_study
 from evolution_manager.studies.experiment import build_parser, experiment
+from evolution_manager.studies.report_command import report as report_command
 
 
 def _members(cube: str) -> set[int]:
@@ -103,5 +105,8 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert experiment(args) == 0  # every run finished: nothing runs again, the report is the same
     assert {p: p.read_bytes() for p in out.glob("runs/*/*/run00/*.csv")} == kept
     assert {name: (out / name).read_bytes() for name in written} == written
+    (out / "report.md").unlink()
+    assert report_command([str(out)]) == 0  # the report command rebuilds the same report from the runs
+    assert (out / "report.md").read_bytes() == written["report.md"]
     assert experiment([*args[:-3], "--runs", "1", "--evaluations", "70", "--out", str(out)]) == 2
     assert "other options" in capsys.readouterr().err
