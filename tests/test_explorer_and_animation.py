@@ -210,13 +210,16 @@ def test_explorer_shows_trees_that_simplify_alike_once_with_their_count(small_ru
 
 
 def test_a_run_on_a_task_s_own_regions_shows_them_in_its_explorer(tmp_path):
-    """A run of a task whose regions are not the papers' arena (the authors' arena 8, shortened): its
-    explorer is written (valid JSON: no NaN gap), decodes the poses in the task's arena and draws every piece
-    of the trial's regions."""
+    """A run of a task whose regions are not the papers' arena (the authors' arena 9 with its three food
+    kinds, shortened): its explorer is written (valid JSON: no NaN gap), decodes the poses in the task's arena
+    and draws every piece of the trial's regions, each kind in its colour (the food kinds, then the nest)."""
     shown = subprocess.run(
-        [str(executable("swarm_sim", "task")), "arena", "8"], capture_output=True, text=True, check=True
+        [str(executable("swarm_sim", "task")), "arena", "9", "--bias", "1"],
+        capture_output=True,
+        text=True,
+        check=True,
     )
-    task_file = tmp_path / "arena8.yaml"
+    task_file = tmp_path / "arena9.yaml"
     task_file.write_text(shown.stdout.replace("ticks: 200", "ticks: 20"))
     out = tmp_path / "run"
     done = subprocess.run(
@@ -231,4 +234,4 @@ def test_a_run_on_a_task_s_own_regions_shows_them_in_its_explorer(tmp_path):
     )
     dom = rendered(out / "explorer.html", f"objective=foraging&bin={','.join(map(str, best['bin']))}")
     (canvas,) = dom.find("canvas", id="animation")
-    assert canvas["data-regions"] == "; ".join(["nest disc", "food disc"] * 3)
+    assert canvas["data-regions"] == "; ".join(["food disc", *["food2 disc"] * 3, "food3 disc", "nest disc"])

@@ -2,7 +2,8 @@
 
 Their trees name composites by arity (``seqm2``, ``selm3``, ``probm4``), the decorator ``successd``,
 conditions ``ifOnFood ifInNest ifGotFood ifFoodToLeft ifFoodToRight ifNestToLeft ifNestToRight ifRobotToLeft
-ifRobotToRight`` and actions ``stop f fl fr r rl rr`` (``params.py`` ``addNodes``; ``CNode.cpp``). Reference
+ifRobotToRight`` (in their 2026 code also ``ifOnFood1``-``3`` and so on, per food kind) and actions ``stop f
+fl fr r rl rr`` (``params.py`` ``addNodes``; ``CNode.cpp``). Reference
 trees of the validation (``docs/validation/``) and their sub-behaviours files come in it. ``from_authors``
 maps each token to ours and leaves anything else (a primitive's name, punctuation) as it is, so that the
 result parses with our parser (``seq2`` names keep their arity check); ``is_authors_syntax`` tells the two
@@ -35,6 +36,18 @@ LEAVES: dict[str, str] = {
     "rl": "reverse_left",
     "rr": "reverse_right",
 }
+LEAVES.update(
+    {
+        f"{theirs}{kind}": f"{ours}{kind}"
+        for theirs, ours in (
+            ("ifOnFood", "on_food"),
+            ("ifGotFood", "got_food"),
+            ("ifFoodToLeft", "food_left"),
+            ("ifFoodToRight", "food_right"),
+        )
+        for kind in (1, 2, 3)
+    }
+)  # their 2026 code's conditions of food kinds 1-3 (CNode.cpp:115-136 at 1cd2358)
 """Their conditions and actions, and ours."""
 
 _TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")

@@ -6,7 +6,8 @@ in-process lockstep run it too. It follows ``bt_controller.timeline`` step by st
 smoothed values, tick the tree with the reference interpreter (or a network, ``bt_controller.network``, at
 the same ticks on the same blackboard), broadcast and drive. A chain's trials follow
 each other without a reset: the tree's memory, the smoothing window and the estimates carry over (A1 under
-``paper``; under ``clean`` a chain is one trial).
+``paper``; under ``clean`` a chain is one trial; the authors' 2026 code empties the region windows,
+``timeline.trials_restart``).
 """
 
 from __future__ import annotations
@@ -127,7 +128,7 @@ class FootbotController:
             self.action = motors_after_tick(status, started, self.resumed)
             self.resumed = running_action(status, started)
             tick = TickOutcome(number, status, started, self.robot.counts[0] - conditions_before, self.action)
-        if timeline.region_broadcast(step):
+        if timeline.region_broadcast(line, step):
             broadcast = self.view.region_broadcast(readings.ground)
         else:
             broadcast = self.view.broadcast()

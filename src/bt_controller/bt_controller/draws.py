@@ -20,6 +20,11 @@ below, so any chain, any robot and any step can be replayed alone, by any road, 
 | ``GAINS`` | ``0`` (right wheel), ``1`` (left wheel) |
 | ``DROPS`` | message from robot ``j`` to this robot at the chain's control step ``k``: ``k * n_robots + j`` |
 | ``TREE`` | the tree's stream key, passed to the tree interpreter with the chain's tick number |
+| ``BEARINGS`` | a ``rab-noisy`` receiver's error on robot ``j``'s bearing at step ``k``: ``k n_robots + j`` |
+
+Per-robot faults of an evaluation (``swarm_sim.model.faults``, ``fault_rate``) are drawn from
+``derive(root_key(seed), FAULT_DRAWS)``, the same for every chain: robot ``i``'s draw ``2 i`` says whether it
+is faulty, draw ``2 i + 1`` which kind.
 
 Seeds of a run (``evolution_manager``), each ``derive_seed(run seed, purpose, ...)``:
 ``RUN_EVALUATION, i`` is the simulator seed of evaluation ``i``; ``RUN_ALGORITHM`` seeds the algorithm's own
@@ -98,8 +103,12 @@ HEADING = 1
 GAINS = 2
 DROPS = 3
 TREE = 4
-PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree")
+BEARINGS = 5
+PURPOSES: tuple[str, ...] = ("position", "heading", "gains", "drops", "tree", "bearings")
 """The purposes of a chain's per-robot streams, in index order."""
+
+FAULT_DRAWS = 2**62
+"""The sub-stream of a seed's root key that per-robot faults are drawn from (beyond any chain number)."""
 
 RUN_EVALUATION = 1
 RUN_ALGORITHM = 2

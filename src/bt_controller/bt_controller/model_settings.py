@@ -14,12 +14,35 @@ PAPER, CLEAN = 0, 1
 PROFILES: tuple[str, ...] = ("paper", "clean")
 """Profile names, indexed by the profile number (``PAPER``, ``CLEAN``)."""
 
+CODE_2024, CODE_2026 = 2024, 2026
+AUTHORS_CODES: tuple[int, ...] = (CODE_2024, CODE_2026)
+"""The versions of the authors' code whose artefacts ``paper`` reproduces (``docs/model.md``, "Two profiles"):
+2024, the code of both papers (6c65001 and a73e4af, which compute the same model), and 2026, their commit
+1cd2358, whose robots start their estimates afresh at every trial and see no robot when nobody is heard."""
+
+
+def check_authors_code(code: object) -> int:
+    """``code`` if it is one of ``AUTHORS_CODES``; ValueError naming the choices otherwise."""
+    for known in AUTHORS_CODES:
+        if code == known and not isinstance(code, bool):
+            return known
+    raise ValueError(f"authors_code must be one of {', '.join(map(str, AUTHORS_CODES))}, got {code!r}")
+
 
 def profile_number(name: str) -> int:
     """The number of profile ``name``; ValueError naming the choices for anything else."""
     if name not in PROFILES:
         raise ValueError(f"profile must be one of {', '.join(PROFILES)}, got {name!r}")
     return PROFILES.index(name)
+
+
+class CodeSettings(Protocol):
+    """The two settings that say which of the authors' artefacts hold: any of the named tuples below."""
+
+    @property
+    def profile(self) -> int: ...
+    @property
+    def authors_code(self) -> int: ...
 
 
 class Timeline(NamedTuple):
@@ -35,6 +58,9 @@ class Timeline(NamedTuple):
     """A trial's step at which the objectives' initial values are taken (``footbot_bt.cpp:539``)."""
     chain_trials: int = 5
     """Trials run as one simulation under ``paper`` (the authors' ``iterations``, ``params.py``)."""
+    authors_code: int = CODE_2024
+    """The authors' code ``paper`` follows (``AUTHORS_CODES``): under 2026 each trial of a chain starts its
+    estimates afresh (``timeline.trials_restart``)."""
 
 
 class TimelineSettings(Protocol):
@@ -51,6 +77,8 @@ class TimelineSettings(Protocol):
     def initial_step(self) -> int: ...
     @property
     def chain_trials(self) -> int: ...
+    @property
+    def authors_code(self) -> int: ...
 
 
 def chain_of_trial(t: TimelineSettings, trial: int) -> tuple[int, int]:
@@ -82,9 +110,12 @@ class PerceptionParams(NamedTuple):
     (``CBlackBoard.cpp:295``)."""
     profile: int = PAPER
     """``timeline.PAPER`` or ``timeline.CLEAN``: under ``paper`` robot_left holds when nobody was heard
-    (A2)."""
+    (A2), unless ``authors_code`` is 2026."""
     regions: int = 2
     """The regions a robot perceives: the nest and the world's food kinds (2-4, ``vocabulary.REGIONS``)."""
+    authors_code: int = CODE_2024
+    """The authors' code ``paper`` follows (``AUTHORS_CODES``): under 2026 a trial's end empties the
+    estimate windows, and nobody heard means no robot on either side."""
 
 
 class PerceptionSettings(Protocol):
@@ -102,3 +133,5 @@ class PerceptionSettings(Protocol):
     def profile(self) -> int: ...
     @property
     def regions(self) -> int: ...
+    @property
+    def authors_code(self) -> int: ...

@@ -21,7 +21,8 @@ import numba
 import numpy as np
 
 import bt_controller.lean_numba  # noqa: F401  (numba without scipy and cffi: see there)
-from bt_controller.model_settings import PAPER, PerceptionParams, PerceptionSettings
+from bt_controller.model_settings import CODE_2026, PAPER, PerceptionParams, PerceptionSettings
+from bt_controller.timeline import trials_restart
 from bt_controller.vocabulary import (
     MAX_FOOD_KINDS,
     N_CONDITIONS,
@@ -93,12 +94,14 @@ def push_sample(window: np.ndarray, count: int, raw: np.ndarray, density: float)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def smoothed(window: np.ndarray, count: int, out: np.ndarray) -> None:
-    """Write into ``out`` the mean of each column of the last ``min(count, w)`` samples of ``window``, summed
-    oldest first (the mean over the samples held, ``CBlackBoard.cpp:64-83``); zeros before any sample."""
+def smoothed(window: np.ndarray, count: int, fresh: int, out: np.ndarray) -> None:
+    """Write into ``out`` the mean of each column of the samples ``window`` holds, summed oldest first (the
+    mean over the samples held, ``CBlackBoard.cpp:64-83``): the density's over the last ``min(count, w)`` of
+    the ``count`` pushed, the regions' over the last ``min(fresh, w)`` (``fresh``: the samples pushed since
+    the region windows were last emptied, at most ``count``). A column with no sample is written 0."""
     w = window.shape[0]
-    m = min(count, w)
     for c in range(window.shape[1]):
+        m = min(count if c == DENSITY else fresh, w)
         total = 0.0
         for k in range(count - m, count):
             total += window[k % w, c]
@@ -161,7 +164,8 @@ def blackboard(
     A region's side holds when 0 < estimate < cap and its source's bearing is strictly on it
     (``footbot_bt.cpp:389-392``). The nearest robot heard is left at a bearing >= 0, right below 0
     (``footbot_bt.cpp:358-369``); with nobody ``heard`` robot_left holds under ``paper`` (the code reads a
-    bearing of 0, A2) and neither under ``clean``. The unnumbered food conditions read kind 1; a kind the
+    bearing of 0, A2) and neither under ``clean`` or the authors' 2026 code (``footbot_bt.cpp:752-763`` at
+    1cd2358). The unnumbered food conditions read kind 1; a kind the
     world lacks is never on, carried or on a side.
     """
     cap = p.estimate_cap
@@ -173,7 +177,7 @@ def blackboard(
         out[6] = bearings[ROBOT_SIDE] >= 0.0
         out[7] = bearings[ROBOT_SIDE] < 0.0
     else:
-        out[6] = p.profile == PAPER
+        out[6] = p.profile == PAPER and p.authors_code != CODE_2026
         out[7] = False
     out[8] = carrying[0]
     for kind in range(1, MAX_FOOD_KINDS + 1):
@@ -225,7 +229,9 @@ class RobotView:
     ``sense`` takes a sensing step's readings; ``first_step`` a trial's first step's ground (no sensing);
     ``refresh`` recomputes the smoothed values (the timeline says when); ``broadcast`` is what the robot
     sends; ``end_trial`` clears the carrying flags and the deliveries at a trial's last step
-    (``footbot_bt.cpp:579-580`` at a73e4af). Nothing else is reset between the trials of a chain (A1).
+    (``footbot_bt.cpp:579-580`` at a73e4af), and where ``timeline.trials_restart`` (the authors' 2026 code)
+    also empties the region windows. Nothing else is reset between the trials of a chain
+    (A1).
     ``p.regions``: the nest and the world's food kinds (2 to ``len(REGIONS)``).
     """
 
@@ -239,6 +245,8 @@ class RobotView:
         self.regions = regions
         self.window = np.zeros((p.window, regions + 1))
         self.samples = 0
+        self.fresh = 0
+        """Samples pushed since the region windows were last emptied (``smoothed``)."""
         self.raw = np.full(regions, p.estimate_cap)
         self.density = 0.0
         self.smooth = np.zeros(regions + 1)
@@ -265,6 +273,7 @@ class RobotView:
             self.carrying[k], delivered = carry(self.carrying[k], in_nest, readings.ground[k + 1])
             self.deliveries[k] += int(delivered)
         self.samples = push_sample(self.window, self.samples, self.raw, self.density)
+        self.fresh += 1
         self.latest = readings
 
     def first_step(self, ground: np.ndarray) -> None:
@@ -274,13 +283,16 @@ class RobotView:
             self.carrying[k] = start_carrying(self.carrying[k], ground[k + 1])
 
     def end_trial(self) -> None:
-        """A trial's last step, after its tick and its scores: no carrying, no deliveries."""
+        """A trial's last step, after its tick and its scores: no carrying, no deliveries; where
+        ``timeline.trials_restart``, the region windows emptied too (the density's is kept)."""
         self.carrying[:] = False
         self.deliveries[:] = 0
+        if trials_restart(self.p):
+            self.fresh = 0
 
     def refresh(self) -> None:
         """Recompute the smoothed values (``region_column`` order: nest, food, density, food2, food3)."""
-        smoothed(self.window, self.samples, self.smooth)
+        smoothed(self.window, self.samples, self.fresh, self.smooth)
 
     def smoothed(self) -> np.ndarray:
         """The smoothed values as last refreshed (nest, food, density, then food2 and food3 if any)."""

@@ -17,7 +17,6 @@ from bt_controller.library import load_library
 from evolution_manager.errors import AnimationError
 from evolution_manager.viewing.animate import (
     ARENA_PX,
-    ROBOT_COLOURS,
     main,
     render_frame,
     text_font,
@@ -25,6 +24,7 @@ from evolution_manager.viewing.animate import (
     write_animation,
 )
 from evolution_manager.viewing.frames import frames_from_tree
+from evolution_manager.viewing.palette import ROBOT_COLOURS
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import DEFAULT, OBJECTIVES, load_layout
 
@@ -200,7 +200,7 @@ def test_a_foraging_trial_of_named_primitives_is_animated_at_its_length_with_the
 
 
 def test_a_trial_on_regions_of_a_task_s_own_is_drawn_with_its_pieces():
-    from evolution_manager.viewing.animate import FOOD_COLOUR, GAP_COLOUR, NEST_COLOUR
+    from evolution_manager.viewing.palette import FOOD_COLOUR, GAP_COLOUR, NEST_COLOUR
     from swarm_sim.model import Config, Piece
 
     nest = Piece("nest", "disc", 0.0, 900.0, 400.0)
@@ -220,3 +220,23 @@ def test_a_trial_on_regions_of_a_task_s_own_is_drawn_with_its_pieces():
     assert colour_at(-1200.0, -1250.0) == FOOD_COLOUR  # inside the food disc
     assert colour_at(1500.0, -2300.0) == FOOD_COLOUR  # the strip along the lower wall
     assert colour_at(1800.0, 1800.0) == GAP_COLOUR
+
+
+def test_the_explorer_packs_each_carried_food_kind_as_a_bit():
+    """A multi-food trial's frames, packed for the explorer page: each robot's byte of carried kinds has bit k
+    set while it carries food of kind k + 1, as the frames say."""
+    import base64
+
+    from evolution_manager.viewing.explorer import _pack
+    from swarm_sim.tasks import Trials, task_named
+
+    task = replace(task_named("multifood-arena6"), trials=Trials(ticks=60, chain_trials=5))
+    tree = "sel(seq(got_food2, forward), seq(got_food3, forward), prob(forward, forward_left, forward_right))"
+    frames = frames_from_tree(tree, 3, 0, task.config("paper"))
+    packed = _pack(frames, 1, ["foraging"])
+    n, record = frames.n_robots, frames.n_robots * 5 + 2 + 2 + 2 * frames.n_robots
+    data = np.frombuffer(base64.b64decode(packed["data"]), dtype=np.uint8).reshape(-1, record)
+    bits = data[:, -n:]
+    expected = (np.asarray(frames.carrying, dtype=np.uint8) << np.arange(3, dtype=np.uint8)).sum(axis=2)
+    np.testing.assert_array_equal(bits, expected)
+    assert (bits & 0b110).any()  # kinds 2 or 3 are carried at some step, not only kind 1

@@ -285,3 +285,45 @@ def test_paper_answers_a_clone_of_an_earlier_batch_with_its_values_unsimulated(t
     assert clone_bins  # paper keeps clones, with identical values
     for items in clone_bins.values():
         assert len({(i["fitness"], tuple(i["descriptors"])) for i in items}) == 1
+
+
+class _KindsToy(ToyEvaluator):
+    """The toy, with deliveries of food kinds 2 and 3 that vary with the tree (the toy's own has none)."""
+
+    def one(self, request):
+        result = super().one(request)
+        if result.fitness is None:
+            return result
+        fitness = list(result.fitness)
+        fitness[OBJECTIVES.index("foraging2")] = 0.4 * fitness[OBJECTIVES.index("food")]
+        fitness[OBJECTIVES.index("foraging3")] = 0.6 * fitness[OBJECTIVES.index("nest")]
+        return type(result)(tuple(fitness), result.descriptors, None)
+
+
+def test_a_run_over_the_deliveries_of_each_food_kind_bins_by_them_and_resumes_alike(tmp_path):
+    from evolution_manager.evolution.descriptor_sets import DELIVERY_DOMAIN
+    from evolution_manager.evolution.run_config import ConfigError
+
+    config = RunConfig.make("qd", "foraging", 300, 5, task="multifood-arena6", descriptors="deliveries")
+    assert config.to_json()["descriptors"] == "deliveries"
+    assert RunConfig.from_json(config.to_json()) == config
+    assert "descriptors" not in RunConfig.make("qd", "foraging", 300, 5).to_json()  # as before: unchanged
+    with pytest.raises(ConfigError, match="one kind of food"):
+        RunConfig.make("qd", "foraging", 300, 5, task="foraging", descriptors="deliveries")
+    _finish(Run.start(config, tmp_path / "straight", _KindsToy()))
+    stopped = Run.start(config, tmp_path / "stopped", _KindsToy())
+    stopped.execute(checkpoint_interval=0, stop_after=120)
+    _finish(Run.resume(tmp_path / "stopped", _KindsToy()))
+    names = ["evaluations.csv", "progress.csv", "repertoire_foraging.json", "archive.json"]
+    assert _files(tmp_path / "stopped", names) == _files(tmp_path / "straight", names)
+    document = json.loads((tmp_path / "straight" / "repertoire_foraging.json").read_text())
+    assert document["descriptors"] == ["foraging1", "foraging2", "foraging3"]
+    with open(tmp_path / "straight" / "evaluations.csv") as handle:
+        rows = {int(r["evaluation"]): r for r in csv.DictReader(handle)}
+    assert {"movement", "rotation", "conditionality"} <= set(next(iter(rows.values())))  # the evaluator's
+    for item in document["items"]:
+        row = rows[item["evaluation"]]
+        kinds = ("foraging1", "foraging2", "foraging3")
+        expected = [min(1.0, float(row[k]) / DELIVERY_DOMAIN) for k in kinds]
+        assert item["descriptors"] == pytest.approx(expected, abs=1e-12)
+    assert len({tuple(i["bin"]) for i in document["items"]}) > 3  # spread over the kinds, not one bin

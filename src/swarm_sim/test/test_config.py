@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import DEFAULT, Config, Piece, config_from_dict
+from swarm_sim.model import DEFAULT, FAULT_FIELDS, Config, Piece, config_from_dict
 
 
 def test_defaults_follow_the_model():
@@ -76,9 +76,15 @@ def test_bad_values_are_refused_by_name(change, name):
 def test_as_dict_names_every_field():
     d = DEFAULT.as_dict()
     assert d["gaps"] == [500.0, 700.0]
-    # every field; a layout only when there is one (the papers' arena is nest_radius and gaps)
-    assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout"}
+    # every field; a layout only when there is one (the papers' arena is nest_radius and gaps), faults only
+    # when some are given
+    assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout", *FAULT_FIELDS}
     nest = Piece("nest", "disc", 0.0, 0.0, 400.0)
     laid_out = Config(layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),))
-    assert set(laid_out.as_dict()) == {f.name for f in dataclasses.fields(Config)}
+    assert set(laid_out.as_dict()) == {f.name for f in dataclasses.fields(Config)} - set(FAULT_FIELDS)
     assert config_from_dict(laid_out.as_dict()) == laid_out
+    faulty = Config(fault_robots=((0, "wheel-dead"), (3, "disruptive")))
+    assert faulty.as_dict()["fault_robots"] == [[0, "wheel-dead"], [3, "disruptive"]]
+    assert config_from_dict(faulty.as_dict()) == faulty
+    drawn = Config(fault_rate=0.25, fault_kinds=("rab-deaf",))
+    assert config_from_dict(drawn.as_dict()) == drawn

@@ -48,6 +48,20 @@ def test_a_multifood_task_scores_alike_on_both_roads_and_each_kind_adds_up(profi
     assert named["foraging_biased"] == named["foraging"]  # no kind preferred in arena 6
 
 
+def test_the_arena_tasks_run_the_2026_code_which_differs_after_a_chains_first_trial():
+    config = _short("multifood-arena6").config("paper")
+    assert config.authors_code == 2026
+    older = replace(config, authors_code=2024)
+    request = [EvaluationRequest(GATHERER, 2, 5)]
+    ((_, new_records),) = BatchEvaluator(config).evaluate_trials(request)
+    ((_, old_records),) = BatchEvaluator(older).evaluate_trials(request)
+    # The first trial is the same (nobody reads robot_left here); the later ones start their estimates afresh.
+    assert (new_records[0].end_poses == old_records[0].end_poses).all()
+    assert any(
+        (a.end_poses != b.end_poses).any() for a, b in zip(new_records[1:], old_records[1:], strict=True)
+    )
+
+
 def test_random_trees_over_every_condition_agree_on_both_roads_in_a_heterogeneous_swarm():
     config = _short("multifood-arena9-kind2", ticks=16).config("paper")
     trees = random_trees(11, 3, 25, conditions=CONDITIONS)  # every condition, the numbered ones included

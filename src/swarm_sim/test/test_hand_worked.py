@@ -11,7 +11,7 @@ import pytest
 
 from bt_controller.controller import FootbotController
 from bt_controller.draws import DROPS, stream_key
-from bt_controller.model_settings import CLEAN, PAPER, PerceptionParams, Timeline
+from bt_controller.model_settings import CLEAN, CODE_2024, CODE_2026, PAPER, PerceptionParams, Timeline
 from bt_controller.perception import Readings, blackboard
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, N_CONDITIONS
@@ -131,11 +131,14 @@ def _readings(in_nest: bool, messages: list[tuple[float, float, float, float]]) 
     return Readings(np.array([in_nest, False]), senders, m[:, 0], m[:, 1], m[:, 2:4])
 
 
-def _controller(profile: int = PAPER) -> FootbotController:
+def _controller(profile: int = PAPER, code: int = CODE_2024) -> FootbotController:
     controller = FootbotController()
     controller.load(parse("stop"))
     controller.start_chain(
-        0, Timeline(profile=profile), PerceptionParams(profile=profile), trials=2 if profile == PAPER else 1
+        0,
+        Timeline(profile=profile, authors_code=code),
+        PerceptionParams(profile=profile, authors_code=code),
+        trials=2 if profile == PAPER else 1,
     )
     return controller
 
@@ -175,6 +178,22 @@ def test_an_estimate_carried_over_a_teleport():
     assert outcome.tick is not None and outcome.tick.tick == 40  # the chain's 41st tick
 
 
+def test_the_2026_code_starts_every_trial_afresh():
+    c = _controller(code=CODE_2026)
+    heard = [(1000.0, 0.5, 2000.0, 5000.0)]  # raw nest 3000 at every sensing step
+    for k in range(1, 161):
+        outcome = c.on_step(k, _readings(False, heard))
+    assert outcome.smoothed[0] == 3000.0
+    # Step 161: teleported into the nest, the robot senses nothing and broadcasts its region values from
+    # where it stands (footbot_bt.cpp:855-859 at 1cd2358), not the stale smoothed ones.
+    assert c.on_step(161, _readings(True, [])).broadcast == (0.0, 5000.0)
+    # Step 162: the trial's end emptied the window, and step 2 of every trial refreshes: one sample, 0.
+    outcome = c.on_step(162, _readings(True, []))
+    assert outcome.smoothed[0] == 0.0 and outcome.broadcast[0] == 0.0
+    # The density's window was kept: its mean still holds the last trial's neighbour (range 1000 mm).
+    assert outcome.smoothed[2] == pytest.approx(6 / 7 * 1.0 / (np.pi * 0.01) / 6642.0)
+
+
 _NOWHERE = np.zeros(2, np.bool_)
 """In neither the nest nor food."""
 _EMPTY = np.zeros(1, np.bool_)
@@ -188,14 +207,15 @@ def _bearings(nest: float, food: float, robot: float) -> np.ndarray:
 
 def test_robot_left_with_nobody_heard_depends_on_the_profile():
     out = np.zeros(N_CONDITIONS, np.bool_)
-    for profile, expected in ((PAPER, True), (CLEAN, False)):
+    cases = ((PAPER, CODE_2024, True), (CLEAN, CODE_2024, False), (PAPER, CODE_2026, False))
+    for profile, code, expected in cases:
         blackboard(
             _NOWHERE,
             np.full(2, 5000.0),
             np.full(5, np.nan),
             False,
             _EMPTY,
-            PerceptionParams(profile=profile),
+            PerceptionParams(profile=profile, authors_code=code),
             out,
         )
         assert out[CONDITION_INDEX["robot_left"]] == expected

@@ -232,8 +232,21 @@ def test_smoothing_is_the_mean_of_the_last_seven_samples(regions):
         raw = np.array([s[c] for c in (0, 1, 3, 4)[:regions]])
         count = world.push_sample(window, count, raw, s[2])
         last = np.array(samples[max(0, k - 6) : k + 1])
-        world.smoothed(window, count, out)
+        world.smoothed(window, count, count, out)
         np.testing.assert_allclose(out, last.mean(axis=0), rtol=1e-15)
+
+
+def test_emptied_region_windows_average_only_what_came_since():
+    # The 2026 code empties the region windows at a trial's end and keeps the density's: after 10 samples
+    # and an emptying, the regions average the 2 new samples, the density the last 7 of all 12.
+    window, out = np.zeros((7, 3)), np.zeros(3)
+    count = 0
+    for k in range(12):
+        count = world.push_sample(window, count, np.array([float(k), 2.0 * k]), 0.5 * k)
+    world.smoothed(window, count, 2, out)
+    np.testing.assert_allclose(out, [10.5, 21.0, 0.5 * np.mean(range(5, 12))], rtol=1e-15)
+    world.smoothed(window, count, 0, out)
+    assert out[0] == out[1] == 0.0 and out[2] == pytest.approx(0.5 * np.mean(range(5, 12)))
 
 
 def test_blackboard_sides_from_bearings():

@@ -236,3 +236,53 @@ def test_a_report_whose_name_is_not_utf8_is_written(tmp_path, monkeypatch):
     out = tmp_path / "v-\udcff\udcfe.md"
     assert validate_main(["--reference", str(_reference(tmp_path)), "--seeds", "2", "--out", str(out)]) == 0
     assert "v-\\xff\\xfe.md" in out.read_text()
+
+
+MULTIFOOD = ("foraging", "food1", "food2", "food3", "fitness")
+"""The quantities of the harness's multi-food statistics (its 2026 build)."""
+
+
+def _multifood_reference(tmp_path, setting):
+    header = "tree\tsetting\t" + "\t".join(f"{q}_mean\t{q}_sem" for q in MULTIFOOD) + "\tn_seeds\n"
+    values = "\t".join("0.1\t0.05" for _ in MULTIFOOD) + "\t20\n"
+    ref = tmp_path / "multifood.tsv"
+    # even robots ahead, odd ones forward only when carrying kind 2, in the authors' syntax
+    swarm = "swarm: " + " ; ".join(("seqm2(ifGotFood2, f)" if k % 2 else "forward") for k in range(9))
+    tree = "sel(seq(got_food2, forward), reverse)"
+    ref.write_text(f"{header}{tree}\t{setting}\t{values}{swarm}\t{setting}\t{values}")
+    return ref
+
+
+def test_multifood_references_run_their_settings_task_trees_and_swarms(tmp_path, capsys):
+    # Arena 9 with kind 2 preferred (their bias 1) and a penalty of 0.5, in 5 s trials to be quick.
+    setting = "project=heterogeneous_genetic_algorithm;arena=9;formation=random;trial_s=5;iterations=5;"
+    ref = _multifood_reference(tmp_path, setting + "robots=9;bias=1;penalty=0.5")
+    out, tsv = tmp_path / "validation.md", tmp_path / "ours.tsv"
+    args = ["--multifood-reference", str(ref), "--seeds", "2", "--trials", "10", "--out", str(out)]
+    assert validate_main(["--reference", str(_reference(tmp_path)), *args, "--tsv", str(tsv)]) == 0
+    report = out.read_text()
+    assert "### 2. [multifood-arena9-kind2] `sel(seq(got_food2, forward), reverse)`" in report
+    assert "[multifood-arena9-kind2] `swarm: forward ; seqm2(ifGotFood2, f) ; forward" in report
+    for ours in ("foraging1", "foraging2", "foraging3", "foraging_biased"):
+        assert f"| {ours} | " in report
+    rows = validation.read_reference(tsv, ticks=10)
+    assert rows["[multifood-arena9-kind2] sel(seq(got_food2, forward), reverse)"]["foraging"].n == 2
+    # A setting this project cannot read is one line naming the file and the item, and nothing is written.
+    out.unlink()
+    capsys.readouterr()
+    _multifood_reference(tmp_path, setting + "robots=9;bias=1;velocity=7")
+    assert validate_main(["--reference", str(_reference(tmp_path)), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "velocity=7" in err and str(ref) in err and "\n" not in err and not out.exists()
+
+
+def test_a_multifood_setting_is_the_registered_task_of_its_arena():
+    from swarm_sim.tasks import task_named
+    from swarm_sim.validation.cli import multifood_task
+
+    base = "project=straight_to_foraging;formation=random;trial_s=100;iterations=5;robots=9"
+    assert multifood_task(base + ";arena=6") == task_named("multifood-arena6")
+    assert multifood_task(base + ";arena=9;bias=1;penalty=0.5") == task_named("multifood-arena9-kind2")
+    assert multifood_task(base + ";arena=1;build=multifood-a73start") == task_named("foraging-2026")
+    with pytest.raises(ValueError, match="project must be one of"):
+        multifood_task("project=objectives_cast_to_grid;arena=6")

@@ -85,7 +85,7 @@ from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.errors import TreeError
 from bt_controller.free_running import FreeRunningController, FreeTick
 from bt_controller.library import Library, LibraryError, load_library
-from bt_controller.model_settings import PerceptionParams, Timeline, profile_number
+from bt_controller.model_settings import PerceptionParams, Timeline, check_authors_code, profile_number
 from bt_controller.network import Network, NetworkError, controller_text, load_network, parse_controller
 from bt_controller.perception import Readings, warm_up
 from bt_controller.tree import Node
@@ -293,6 +293,7 @@ class FootbotControllerNode(RosNode):
                 request.ticks,
                 request.initial_step,
                 request.chain_trials,
+                check_authors_code(request.authors_code),
             )
             perception = PerceptionParams(
                 request.window,
@@ -301,6 +302,7 @@ class FootbotControllerNode(RosNode):
                 request.density_divisor,
                 line.profile,  # robot_left with nobody heard differs between the profiles
                 1 + request.food_kinds,
+                line.authors_code,  # and between the authors' codes, as the trial's end does
             )
             if not 1 <= request.food_kinds <= MAX_FOOD_KINDS:
                 kinds = f"food_kinds must be 1 to {MAX_FOOD_KINDS} (the world's food kinds)"

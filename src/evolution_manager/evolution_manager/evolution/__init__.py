@@ -2,7 +2,8 @@
 
 The paper's parameters (``parameters``), DEAP's primitive set and the conversion between DEAP trees and tree
 text (``deap_trees``), the genetic operators (``operators``), GP_o, GP_fnd and MAP-Elites as ask/tell
-algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``), a run's
+algorithms (``algorithms``), the grids and repertoires (``archive`` over qdpy, ``qdpy_grid``) and the
+behaviour spaces they bin trees by (``descriptor_sets``), a run's
 configuration and command-line options (``run_config``, ``options``), the run folder and run loop that
 tree runs and composition runs share (``run_folder``), a tree run with its checkpoints (``run``), the
 held-out scores (``heldout``), trees as people are shown them (``shown_trees``), what a run's result files
@@ -18,6 +19,7 @@ __all__ = [
     "archive",
     "compositions",
     "deap_trees",
+    "descriptor_sets",
     "heldout",
     "libraries",
     "networks",

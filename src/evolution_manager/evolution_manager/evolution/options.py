@@ -11,6 +11,7 @@ from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.evolution.descriptor_sets import DESCRIPTOR_SETS
 from evolution_manager.evolution.parameters import NODE_SETS
 from evolution_manager.evolution.run_config import OBJECTIVES, PROFILES, SCENARIOS, RunConfig
 from swarm_sim.tasks import add_task_option, task_label
@@ -52,7 +53,8 @@ def check_scenario_seed(args: argparse.Namespace) -> None:
 
 
 def add_task_options(parser: argparse.ArgumentParser) -> None:
-    """``--task``, ``--objectives`` (GP_fnd's set) and ``--library`` (evolve and manager)."""
+    """``--task``, ``--objectives`` (GP_fnd's set), ``--library``, ``--nodes`` and ``--descriptors`` (evolve
+    and manager)."""
     add_task_option(
         parser,
         default=None,
@@ -75,6 +77,13 @@ def add_task_options(parser: argparse.ArgumentParser) -> None:
         help="the node set: hierarchical (the default with --library: composites, got_food, on_food, "
         "in_nest and the library's names, no actions) or flat (the default without: composites, the task's "
         "conditions, the actions, and the library's names if one is given)",
+    )
+    parser.add_argument(
+        "--descriptors",
+        choices=tuple(DESCRIPTOR_SETS),
+        help="the behaviour space the grids bin trees by: "
+        + "; ".join(f"{s.name}, {s.description}" for s in DESCRIPTOR_SETS.values())
+        + " (default behaviour; deliveries needs a task with several kinds of food)",
     )
 
 
@@ -114,6 +123,7 @@ def config_from_args(args: argparse.Namespace) -> RunConfig:
             library=str(library.label) if library is not None else "",
             library_digest=library.digest if library is not None else "",
             nodes=getattr(args, "nodes", None),
+            descriptors=getattr(args, "descriptors", None) or "behaviour",
         )
     except EvolutionError as error:
         message = str(error).replace("the scenario seed", "--scenario-seed")
@@ -132,6 +142,7 @@ def check_resume_options(args: argparse.Namespace, saved: RunConfig) -> None:
         "profile": getattr(args, "profile", None),
         "task": getattr(args, "task", None),
         "nodes": getattr(args, "nodes", None),
+        "descriptors": getattr(args, "descriptors", None),
     }
     if getattr(args, "objectives", None) is not None or getattr(args, "library", None) is not None:
         raise UsageError(

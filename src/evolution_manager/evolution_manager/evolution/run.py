@@ -18,7 +18,9 @@ A run directory holds (all plain text):
 ``repertoire_<objective>.json``, ``archive.json`` (MAP-Elites), ``summary.json``, ``figures/``, ``best/``
     written when the run ends (see ``evolution_manager.viewing.results``).
 
-Every evaluated tree is offered to a passive grid per objective of ``RunConfig.grids`` (3 per bin). The
+Every evaluated tree is offered to a passive grid per objective of ``RunConfig.grids`` (3 per bin), at its
+point of the run's behaviour space (``RunConfig.descriptors``: the paper's descriptors, or the deliveries of
+each food kind; ``descriptor_sets``). The
 repertoire of an objective that the run evolves is what the authors' analysis measures: MAP-Elites' own
 archive; for GP a grid of one tree per bin offered every individual of generations 1 onwards
 (charts/analysis.py:96-121).
@@ -54,6 +56,7 @@ from evolution_manager.errors import EvolutionError, RunDirectoryError
 from evolution_manager.evolution.algorithms import AskTell, GeneticProgramming, MapElites, Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES, tree_from_text, tree_to_text
+from evolution_manager.evolution.descriptor_sets import descriptor_set
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.evolution.run_folder import DAMAGE, RunFolder, RunLoop, Timing
 from evolution_manager.files import number, read_json_object
@@ -149,6 +152,8 @@ class Run(RunLoop[EvaluationRequest, Evaluated]):
         """The simplified form of every tree text that needed one (shared by the grids and the cache)."""
         self.grid_forms = self.forms if config.refuses_clones else None
         """What the grids refuse clones by: the simplified forms under ``clean``, nothing under ``paper``."""
+        self.space = descriptor_set(config.descriptors)
+        """The behaviour space the grids bin trees by (``descriptor_sets``)."""
         self.algorithm: AskTell = config.make_algorithm(library, self.forms)
         self.passive = {
             objective: Repertoire(forms=self.grid_forms, fitness_max=fitness_ceiling(objective))
@@ -346,8 +351,16 @@ class Run(RunLoop[EvaluationRequest, Evaluated]):
     def _tell(self, batch: list[EvaluationRequest], answers: list[Evaluated]) -> None:
         self.last_batch = answers
         results = [e.outcome for e in answers]
-        self.algorithm.tell(results)
+        self.algorithm.tell([self._placed(outcome) for outcome in results])
         self._record(batch, results)
+
+    def _placed(self, outcome: Outcome) -> Outcome:
+        """``outcome`` with its descriptors in the run's behaviour space (the grids'; the evaluator's own
+        stay in ``evaluations.csv``)."""
+        measured = outcome.measured()
+        if measured is None or self.space.names == DESCRIPTORS:
+            return outcome
+        return Outcome(measured[0], self.space.point(*measured), outcome.error)
 
     def _evaluate(self, requests: list[EvaluationRequest]) -> list[Evaluated]:
         """Every request evaluated as :meth:`_plan` says: the ``SIMULATED`` ones go to the evaluator in one
@@ -422,8 +435,9 @@ class Run(RunLoop[EvaluationRequest, Evaluated]):
             measured = outcome.measured()
             if measured is not None:
                 fitness, descriptors = measured
+                point = self.space.point(fitness, descriptors)
                 for objective, grid in self.passive.items():
-                    grid.offer(request.tree, fitness[OBJECTIVES.index(objective)], descriptors, index)
+                    grid.offer(request.tree, fitness[OBJECTIVES.index(objective)], point, index)
                 values = [number(v) for v in fitness + descriptors]
                 error = ""
             else:

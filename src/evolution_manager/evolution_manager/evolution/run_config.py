@@ -42,6 +42,7 @@ from bt_controller.model_settings import PROFILES, Timeline
 from bt_controller.validate import integer
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
+from evolution_manager.evolution.descriptor_sets import descriptor_set
 from evolution_manager.evolution.parameters import (
     HIERARCHICAL_CONDITIONS,
     NODE_SETS,
@@ -109,6 +110,9 @@ class RunConfig:
     """The digest of that library (``bt_controller.library.Library.digest``)."""
     nodes: str = "flat"
     """The node set (``parameters.NODE_SETS``): ``flat`` or ``hierarchical`` (needs a library)."""
+    descriptors: str = "behaviour"
+    """The behaviour space the grids bin trees by (``descriptor_sets.DESCRIPTOR_SETS``): ``behaviour`` (the
+    paper's) or ``deliveries`` (the deliveries of each food kind: a task with several)."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -139,6 +143,15 @@ class RunConfig:
                 )
         if bool(self.library) != bool(self.library_digest):
             raise ConfigError("a library needs its digest (and a digest its library)")
+        try:
+            descriptor_set(self.descriptors)
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
+        if self.descriptors == "deliveries" and self.task.config().food_kinds < 2:
+            raise ConfigError(
+                f"descriptors deliveries bins trees by the deliveries of each food kind: task "
+                f"{self.task.name} has one kind of food; give a task of several (multifood-arena6, ...)"
+            )
         if self.nodes not in NODE_SETS:
             raise ConfigError(f"nodes must be one of {', '.join(NODE_SETS)}, got {self.nodes!r}")
         if self.nodes == "hierarchical" and not self.library:
@@ -172,6 +185,7 @@ class RunConfig:
         library: str = "",
         library_digest: str = "",
         nodes: str | None = None,
+        descriptors: str = "behaviour",
     ) -> RunConfig:
         """A configuration with the paper's parameters for ``algorithm`` (population 75 and tournament 5
         for gp-fnd), its default budget when ``evaluations`` is None and the scenario seed derived from
@@ -207,6 +221,7 @@ class RunConfig:
             library=library,
             library_digest=library_digest,
             nodes=nodes,
+            descriptors=descriptors,
         )
 
     def request_seed(self, index: int) -> int:
@@ -254,6 +269,8 @@ class RunConfig:
             del data["nodes"]
         if self.gp.derating == "standard":
             del data["gp"]["derating"]
+        if self.descriptors == "behaviour":
+            del data["descriptors"]
         return data
 
     @classmethod
@@ -283,6 +300,8 @@ class RunConfig:
                 library_digest=str(data.get("library_digest", "")),
                 # ... and before node sets, the flat one
                 nodes=str(data.get("nodes", "flat")),
+                # ... and before descriptor sets, the paper's
+                descriptors=str(data.get("descriptors", "behaviour")),
             )
         except (KeyError, TypeError, ValueError, OverflowError) as error:
             if isinstance(error, ConfigError):

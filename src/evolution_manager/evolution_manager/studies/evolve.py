@@ -356,7 +356,7 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
         raise UsageError(
             "--library cannot be combined with --swarm-from: a composition's cells are trees without one"
         )
-    for name in ("objectives", "nodes"):
+    for name in ("objectives", "nodes", "descriptors"):
         if getattr(args, name) is not None:
             raise UsageError(
                 f"--{name} applies to tree runs, not to compositions (--swarm-from); leave it out"

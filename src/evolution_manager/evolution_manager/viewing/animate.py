@@ -31,10 +31,18 @@ from bt_controller.errors import TreeError
 from bt_controller.library import library_option
 from bt_controller.network import NetworkError, controller_text, load_network
 from bt_controller.tree import parse, to_text
-from bt_controller.vocabulary import ACTIONS, food_kind_name
+from bt_controller.vocabulary import ACTIONS
 from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
+from evolution_manager.viewing.palette import (
+    FOOD_COLOUR,
+    GAP_COLOUR,
+    NEST_COLOUR,
+    REGION_COLOURS,
+    ROBOT_COLOURS,
+    carry_colour,
+)
 from swarm_ros.safe_paths import check_output, describe, replace_file
 from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, label_point, load_layout
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
@@ -49,21 +57,6 @@ if TYPE_CHECKING:
 ARENA_PX = 520
 PANEL_PX = 250
 TRAIL = 24  # frames of trail behind each robot
-ROBOT_COLOURS = (
-    (31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189), (140, 86, 75),
-    (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
-)  # fmt: skip
-NEST_COLOUR = (246, 214, 160)
-FOOD_COLOUR = (196, 230, 180)
-GAP_COLOUR = (250, 250, 250)
-CARRY_COLOUR = (30, 130, 30)
-REGION_COLOURS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
-    "food": (FOOD_COLOUR, (40, 100, 40)),
-    "food2": ((184, 208, 240), (40, 70, 150)),
-    "food3": ((240, 196, 214), (150, 40, 90)),
-    "nest": (NEST_COLOUR, (120, 80, 20)),
-}
-"""Each region kind's fill and ink (its label; the ring of a robot carrying it), drawn in this order."""
 
 
 DEJAVU = Path("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
@@ -158,7 +151,7 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         heading = poses[k, i, 2]
         for f in np.flatnonzero(frames.carrying[k, i]):  # carrying food: a ring per kind, in its ink
             ring = radius + 3 + 3 * int(f)
-            ink = CARRY_COLOUR if f == 0 else REGION_COLOURS[food_kind_name(int(f) + 1)][1]
+            ink = carry_colour(int(f))
             draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=ink, width=3)
         draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
         tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))

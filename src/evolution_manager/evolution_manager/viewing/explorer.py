@@ -39,7 +39,7 @@ from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
 from bt_controller.tree import parse
 from bt_controller.validate import strict_json
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.evolution.run_config import evaluation_seed
@@ -47,6 +47,13 @@ from evolution_manager.evolution.shown_trees import simplified as simplified_tex
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
 from evolution_manager.viewing.frames import TrialFrames, frames_from_tree
+from evolution_manager.viewing.palette import (
+    GAP_COLOUR,
+    REGION_COLOURS,
+    ROBOT_COLOURS,
+    carry_colour,
+    hex_colour,
+)
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.model import DEFAULT, OBJECTIVES, Config
 from swarm_sim.tasks import task_from_record
@@ -113,7 +120,8 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
     heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
     10000, at most 65534; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255:
-    none); whether each robot carries food (u8). Little-endian, packed (no padding)."""
+    none); the food kinds each robot carries (u8, bit k for kind k + 1). Little-endian, packed (no
+    padding)."""
 
     columns = [OBJECTIVES.index(o) for o in objectives]
     keep = list(range(0, len(frames.steps), stride))
@@ -124,7 +132,8 @@ def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
     fitness = np.asarray(frames.fitness, dtype=np.float64)[rows][:, columns]
     ticks = np.asarray(frames.ticks)[rows]
     actions = np.asarray(frames.actions)[rows]
-    carrying = np.asarray(np.asarray(frames.carrying).any(axis=2))[rows]
+    carried = np.asarray(frames.carrying, dtype=np.uint8)  # steps x robots x food kinds
+    carrying = (carried << np.arange(carried.shape[2], dtype=np.uint8)).sum(axis=2)[rows]
     robots = poses.shape[1]
     # One record per kept frame; a dtype given as a list of fields is packed, as struct's "<" formats.
     record = np.dtype(
@@ -257,6 +266,7 @@ def explorer_data(root: Path, animate: bool = True, progress: Progress = None) -
         "animations": animations,
         "arena": _arena(model),
         "actions": _actions(),
+        "palette": _palette(),
     }
 
 
@@ -525,6 +535,17 @@ def _arena(model: Config) -> dict:
         "robot_radius": model.robot_radius,
         "range": model.message_range,
         "robots": model.n_robots,
+    }
+
+
+def _palette() -> dict:
+    """The colours of ``palette`` as the page draws them: robots, region kinds (fill and ink, in drawing
+    order), the ring of each carried food kind, and the ground outside every region."""
+    return {
+        "robots": [hex_colour(c) for c in ROBOT_COLOURS],
+        "regions": {kind: [hex_colour(c) for c in colours] for kind, colours in REGION_COLOURS.items()},
+        "carry": [hex_colour(carry_colour(k)) for k in range(MAX_FOOD_KINDS)],
+        "gap": hex_colour(GAP_COLOUR),
     }
 
 

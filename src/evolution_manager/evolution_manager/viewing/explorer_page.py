@@ -242,20 +242,20 @@ function unpack(anim) {
     const f = off + n * 5, fit = [...Array(F).keys()].map(k => view.getUint16(f + 2 * k, true));
     const tick = view.getUint16(f + 2 * F, true), actions = [], carrying = [];
     for (let i = 0; i < n; i++) actions.push(view.getUint8(f + 2 * F + 2 + i));
-    for (let i = 0; i < n; i++) carrying.push(view.getUint8(f + 2 * F + 2 + n + i) === 1);
+    for (let i = 0; i < n; i++) carrying.push(view.getUint8(f + 2 * F + 2 + n + i));  // bit k: food kind k + 1
     frames.push({ robots, fitness: fit.map(v => v === 65535 ? null : v / 10000), tick: tick === 65535 ? null : tick,
       actions, carrying });
   }
   return frames;
 }
-const COLOURS = ["#1f77b4","#d62728","#2ca02c","#9467bd","#8c564b","#e377c2","#7f7f7f","#bcbd22","#17becf"];
-// A task's own regions (swarm_sim.model.regions): food pieces, then nest pieces over them; the canvas says
-// what it drew in data-regions.
+const COLOURS = DATA.palette.robots, REGION_COLOURS = DATA.palette.regions;
+// A task's own regions (swarm_sim.model.regions): each kind's pieces in the palette's order (the food kinds,
+// then the nest over them); the canvas says what it drew in data-regions.
 function drawRegions(ctx, regions, S, scale, px) {
-  ctx.fillStyle = "#fafafa"; ctx.fillRect(0, 0, S, S);
-  for (const kind of ["food", "nest"]) for (const p of regions) {
+  ctx.fillStyle = DATA.palette.gap; ctx.fillRect(0, 0, S, S);
+  for (const kind of Object.keys(REGION_COLOURS)) for (const p of regions) {
     if (p.kind !== kind) continue;
-    ctx.fillStyle = kind === "nest" ? "#f6d6a0" : "#c4e6b4";
+    ctx.fillStyle = REGION_COLOURS[kind][0];
     const [cx, cy] = px(p.x, p.y);
     if (p.shape === "disc") { ctx.beginPath(); ctx.arc(cx, cy, p.radius * scale, 0, 2 * Math.PI); ctx.fill(); }
     else if (p.shape === "beyond") {
@@ -265,19 +265,20 @@ function drawRegions(ctx, regions, S, scale, px) {
       if (p.shape === "above") ctx.fillRect(0, 0, S, edge); else ctx.fillRect(0, edge, S, S - edge);
     }
   }
-  ctx.canvas.dataset.regions = regions.map(p => `${p.kind} ${p.shape}`).join("; ");
+  const drawn = Object.keys(REGION_COLOURS).flatMap(kind => regions.filter(p => p.kind === kind));
+  ctx.canvas.dataset.regions = drawn.map(p => `${p.kind} ${p.shape}`).join("; ");
 }
 function drawFrame(canvas, anim, frames, k) {
   const ctx = canvas.getContext("2d"), S = canvas.width, A = DATA.arena, scale = S / (2 * A.half);
   const px = (x, y) => [(x + A.half) * scale, (A.half - y) * scale];
   if (anim.regions) drawRegions(ctx, anim.regions, S, scale, px);
   else {
-    ctx.fillStyle = "#c4e6b4"; ctx.fillRect(0, 0, S, S);
+    ctx.fillStyle = REGION_COLOURS.food[0]; ctx.fillRect(0, 0, S, S);
     ctx.beginPath(); ctx.arc(S / 2, S / 2, (A.nest_radius + anim.gap) * scale, 0, 2 * Math.PI);
-    ctx.fillStyle = "#fafafa"; ctx.fill();
+    ctx.fillStyle = DATA.palette.gap; ctx.fill();
     ctx.beginPath(); ctx.arc(S / 2, S / 2, A.nest_radius * scale, 0, 2 * Math.PI);
-    ctx.fillStyle = "#f6d6a0"; ctx.fill();
-    ctx.fillStyle = "#785014"; ctx.font = "11px sans-serif"; ctx.fillText("nest", S / 2 - 11, S / 2 + 4);
+    ctx.fillStyle = REGION_COLOURS.nest[0]; ctx.fill();
+    ctx.fillStyle = REGION_COLOURS.nest[1]; ctx.font = "11px sans-serif"; ctx.fillText("nest", S / 2 - 11, S / 2 + 4);
   }
   const f = frames[k];
   ctx.lineWidth = 2;
@@ -296,9 +297,10 @@ function drawFrame(canvas, anim, frames, k) {
   const rr = Math.max(3, A.robot_radius * scale);
   f.robots.forEach((r, i) => {
     const [x, y] = px(r.x, r.y);
-    if (f.carrying[i]) {  // carrying food: a green ring
-      ctx.beginPath(); ctx.arc(x, y, rr + 3, 0, 2 * Math.PI); ctx.strokeStyle = "#1e821e"; ctx.lineWidth = 3; ctx.stroke();
-    }
+    DATA.palette.carry.forEach((ink, kind) => {  // carrying food: a ring per kind carried, in its ink
+      if (!(f.carrying[i] >> kind & 1)) return;
+      ctx.beginPath(); ctx.arc(x, y, rr + 3 + 3 * kind, 0, 2 * Math.PI); ctx.strokeStyle = ink; ctx.lineWidth = 3; ctx.stroke();
+    });
     ctx.beginPath(); ctx.arc(x, y, rr, 0, 2 * Math.PI); ctx.fillStyle = COLOURS[i % 9]; ctx.fill();
     ctx.strokeStyle = "#000"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(x, y);
     ctx.lineTo(x + 1.8 * rr * Math.cos(r.h), y - 1.8 * rr * Math.sin(r.h)); ctx.stroke();
@@ -323,7 +325,7 @@ function drawDetail() {
   box.appendChild(el("h2", {}, `${state.objective}, bin ${state.bin} (${DATA.objectives[state.objective].descriptors.join(", ")})`));
   const table = el("table", { id: "values" });
   const head = el("tr");
-  ["", "fitness", "held-out", "movement", "rotation", "conditionality", "evaluation", "seed"].forEach(h => head.appendChild(el("th", {}, h)));
+  ["", "fitness", "held-out", ...DATA.objectives[state.objective].descriptors, "evaluation", "seed"].forEach(h => head.appendChild(el("th", {}, h)));
   table.appendChild(head);
   items.forEach((it, n) => {
     const row = el("tr", { class: "item", "data-fitness": it.fitness });

@@ -52,9 +52,12 @@ def fitness_top(values: Iterable[float]) -> float:
     return 1.0 if largest <= 1.0 else math.ceil(largest * 4.0) / 4.0
 
 
-def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
-    """The 8 x 8 x 8 grid as eight 8 x 8 heatmaps (fig. 7): one panel per conditionality bin, movement
-    across, rotation up, colour the best fitness in the bin (blank when empty) from 0 to ``fitness_top``."""
+def heatmaps(
+    repertoire: Repertoire, title: str, path: Path, descriptors: Sequence[str] = DESCRIPTORS
+) -> Path:
+    """The 8 x 8 x 8 grid as eight 8 x 8 heatmaps (fig. 7): one panel per bin of the third descriptor
+    (conditionality), the first (movement) across, the second (rotation) up, colour the best fitness in the
+    bin (blank when empty) from 0 to ``fitness_top``."""
     best = np.full(repertoire.shape, np.nan)
     for index, value in repertoire.best_per_bin().items():
         best[index] = value
@@ -63,14 +66,14 @@ def heatmaps(repertoire: Repertoire, title: str, path: Path) -> Path:
     image = None
     for k, axis in enumerate(axes.flat):
         image = axis.imshow(best[:, :, k].T, origin="lower", vmin=0.0, vmax=top, cmap="viridis")
-        axis.set_title(f"{DESCRIPTORS[2]} bin {k}", fontsize=9)
+        axis.set_title(f"{descriptors[2]} bin {k}", fontsize=9)
         axis.set_xticks(range(8))
         axis.set_yticks(range(8))
         axis.tick_params(labelsize=7)
         if k >= 4:
-            axis.set_xlabel(DESCRIPTORS[0], fontsize=8)
+            axis.set_xlabel(descriptors[0], fontsize=8)
         if k % 4 == 0:
-            axis.set_ylabel(DESCRIPTORS[1], fontsize=8)
+            axis.set_ylabel(descriptors[1], fontsize=8)
     assert image is not None  # eight panels were drawn
     figure.colorbar(image, ax=axes, shrink=0.8, label="best fitness in bin")
     figure.suptitle(f"{title}: coverage {repertoire.coverage:.3f}, QD score {repertoire.qd_score:.2f}")

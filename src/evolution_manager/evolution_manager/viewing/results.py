@@ -38,7 +38,7 @@ from bt_controller.formats import to_dot, to_xml
 from bt_controller.render import render
 from bt_controller.tree import to_indented
 from evolution_manager.evolution.archive import Repertoire
-from evolution_manager.evolution.deap_trees import DESCRIPTORS
+from evolution_manager.evolution.descriptor_sets import descriptor_set
 from evolution_manager.evolution.run import Run, RunDirectory
 from evolution_manager.evolution.run_results import RunResults
 from evolution_manager.files import write_atomic, write_json, writing
@@ -58,7 +58,7 @@ def repertoire_document(repertoire: Repertoire, objective: str, run: Run, shown:
         "evaluations": run.evaluations,
         "shape": list(repertoire.shape),
         "items_per_bin": repertoire.items_per_bin,
-        "descriptors": list(DESCRIPTORS),
+        "descriptors": list(descriptor_set(run.config.descriptors).names),
         "coverage": repertoire.coverage,
         "qd_score": repertoire.qd_score,
         "best_fitness": best.value if best else None,
@@ -203,6 +203,7 @@ def write_figures(run: Run, heldout: dict | None = None) -> list[Path]:
                 run.repertoire(objective),
                 f"{run.config.label} ({objective})",
                 folder / f"heatmap_{objective}.png",
+                descriptor_set(run.config.descriptors).names,
             )
         )
     rows = {o: {run.config.label: run.repertoire(o)} for o in run.config.objectives}

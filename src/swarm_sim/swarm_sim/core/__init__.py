@@ -7,6 +7,6 @@ planned. Every road (``swarm_sim.roads``, ``swarm_sim.evaluation``) steps the wo
 """
 
 from swarm_sim.core.sensing import sense_swarm
-from swarm_sim.core.trial_data import ChainSetup, TrialRecord, chain_plan, combine, setup_chain
+from swarm_sim.core.trial_data import ChainSetup, TrialRecord, chain_plan, combine, robot_faults, setup_chain
 
-__all__ = ["ChainSetup", "TrialRecord", "chain_plan", "combine", "sense_swarm", "setup_chain"]
+__all__ = ["ChainSetup", "TrialRecord", "chain_plan", "combine", "robot_faults", "sense_swarm", "setup_chain"]

@@ -41,14 +41,14 @@ from bt_controller.compiled import (
     tick,
     tree_at,
 )
-from bt_controller.draws import DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
+from bt_controller.draws import BEARINGS, DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
 from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
 from bt_controller.network import act
 from bt_controller.perception import ROBOT_SIDE, region_column
 from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, RUNNING, SIDES, STOP
 from swarm_sim.core import fast_world, world
 from swarm_sim.core._numba_cache import drop_stale_cache
-from swarm_sim.core.trial_data import chain_plan
+from swarm_sim.core.trial_data import chain_plan, robot_faults
 from swarm_sim.model import N_PROBES, Config, Params
 
 drop_stale_cache(
@@ -62,6 +62,7 @@ drop_stale_cache(
         "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.model.config",
+        "swarm_sim.model.faults",
         "swarm_sim.model.regions",
         "swarm_sim.core.fast_world",
         "swarm_sim.core.world",
@@ -102,7 +103,8 @@ class Jobs(NamedTuple):
     """Many jobs; job ``j`` runs the first ``trials[j]`` trials of chain ``chain[j]``, robot ``i`` running
     tree ``robot_tree[j, i]`` of a pack, with stream key ``seed_key[j]`` (``root_key`` of its seed) in arena
     configuration ``arena[j]`` of the layout (``regions.layout_table``: ``layout`` and ``food_scale``, shared
-    by the jobs), into output rows ``row[j] .. row[j] + trials[j] - 1``."""
+    by the jobs), into output rows ``row[j] .. row[j] + trials[j] - 1``; robot ``i`` has fault
+    ``faults[j, i]`` (``trial_data.robot_faults`` of the job's seed; 0: none)."""
 
     robot_tree: np.ndarray  # int64 (jobs, n_robots)
     seed_key: np.ndarray  # uint64
@@ -112,6 +114,7 @@ class Jobs(NamedTuple):
     row: np.ndarray  # int64
     layout: np.ndarray  # float64 (configurations, entries, pieces, PIECE_FIELDS)
     food_scale: np.ndarray  # float64 (configurations, entries)
+    faults: np.ndarray  # int64 (jobs, n_robots)
 
     @property
     def n_jobs(self) -> int:
@@ -137,13 +140,15 @@ def make_jobs(
     n_robots = config.n_robots
     if robot_trees is None:
         robot_trees = [[t] * n_robots for t in range(len(seed_keys))]
-    robot_tree, seed_key, chain, length, arena, row = [], [], [], [], [], []
+    robot_tree, seed_key, chain, length, arena, row, faults = [], [], [], [], [], [], []
     layout, food_scale = config.arena_table
     next_row = 0
     for key, n, robots in zip(seed_keys, trials, robot_trees, strict=True):
         if len(robots) != n_robots:
             raise ValueError(f"expected a tree index for each of the {n_robots} robots, got {len(robots)}")
+        robots_faults = robot_faults(config, key)
         for c, count in chain_plan(int(n), config):
+            faults.append(robots_faults)
             robot_tree.append(list(robots))
             seed_key.append(key)
             chain.append(c)
@@ -160,6 +165,7 @@ def make_jobs(
         np.array(row, dtype=np.int64),
         layout,
         food_scale,
+        np.array(faults, dtype=np.int64).reshape(len(faults), n_robots),
     )
 
 
@@ -332,6 +338,7 @@ def _record_step(
     carrying: np.ndarray,
     deliveries: np.ndarray,
     probes: np.ndarray,
+    faults: np.ndarray,
 ) -> None:
     """Write chain step ``k`` (of the recorded trial) into its row of ``rec``, from the swarm after the step:
     what the simulator publishes and what the robots answered to it."""
@@ -345,6 +352,7 @@ def _record_step(
         rec.poses[row, i, 2] = heading[i]
         rec.actions[row, i] = actions[i] if last >= 0 else -1
         world.ground(x[i], y[i], entry, rec.ground[row, i])
+        world.faulty_ground(faults[i], rec.ground[row, i])
         rec.heard[row, i] = heard[i]
         for c in range(heard[i]):
             rec.senders[row, i, c] = senders[i, c]
@@ -444,16 +452,20 @@ def simulate_chain(
     poses_out: np.ndarray,
     recorded: int,
     rec: Recording,
+    faults: np.ndarray,
 ) -> None:
     """Run the first ``trials`` trials of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
     ``trees``, the chain's trial ``t`` on the regions of entry ``t`` of ``layout`` (its arena configuration's
     row of ``regions.layout_table``, cycling; ``food_scale`` that row's); write the chain's trial ``t``'s
     ``world.N_VALUES`` values into ``values_out[t]`` and its start and end poses into ``poses_out[t]`` (2 x
-    n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none). Makes the chain's
-    state, then runs its steps (``_steps``)."""
+    n_robots x 3), and the chain's trial ``recorded`` step by step into ``rec`` (-1: none); robot ``i`` has
+    fault ``faults[i]`` (``trial_data.robot_faults``; 0: none). Makes the chain's state, then runs its steps
+    (``_steps``)."""
     n = p.n_robots
     keys = chain_keys(seed_key, chain, n)
-    swarm = _new_swarm(world.wheel_gains(keys[GAINS], p), trees, robot_tree, p)
+    gains = world.wheel_gains(keys[GAINS], p)
+    world.faulty_wheels(gains, faults)
+    swarm = _new_swarm(gains, trees, robot_tree, p)
     sides = np.zeros((n, len(SIDES)), dtype=np.bool_)
     network = np.full(n, -1, dtype=np.int64)
     for i in range(n):
@@ -481,6 +493,7 @@ def simulate_chain(
         poses_out,
         recorded,
         rec,
+        faults,
     )
 
 
@@ -524,6 +537,7 @@ def _steps(
     poses_out: np.ndarray,
     recorded: int,
     rec: Recording,
+    faults: np.ndarray,
 ) -> None:
     """The control steps of ``simulate_chain``'s chain, from the state it made. ``block_start``: the place of
     the chain's first trial in its block of ``chain_trials``, so that trial k of a block takes entry k of
@@ -535,6 +549,10 @@ def _steps(
     heading_keys = keys[HEADING]
     drop_keys = keys[DROPS]
     tree_keys = keys[TREE]
+    bearing_keys = keys[BEARINGS]
+    faulty = False  # without faults, the steps pay one test of this where a fault would act
+    for i in range(n):
+        faulty = faulty or faults[i] != 0
     (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast, raw, window, smooth, ground_now, here,
      sources, positions, bearings, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
     counts_in, senders, ranges, values = inbox
@@ -542,6 +560,7 @@ def _steps(
     regions = p.regions
     kinds = regions - 1
     samples = 0
+    fresh = 0  # samples since the region windows were last emptied (perception.smoothed)
     # Each robot's tree; one tree for all (a homogeneous swarm) is cut from the pack once, not at every tick.
     shared = tree_at(trees, robot_tree[0])
     uniform = True
@@ -563,13 +582,19 @@ def _steps(
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the
             # robots ignore it, and only a recording looks).
+            if faulty:
+                world.disrupt(faults, broadcast)
             world.sense_step(x, y, broadcast, drop_keys, k, p, counts_in, senders, ranges, values)
+            if faulty:
+                world.deafen(faults, counts_in)
         if not sensing:
             # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
             # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
             # a73e4af).
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
+                if faulty:
+                    world.faulty_ground(faults[i], here[i])
                 for f in range(kinds):
                     carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
                 world.take_probes(x, y, i, entry, probes, 0)
@@ -577,6 +602,8 @@ def _steps(
             for i in range(n):
                 inside = ground_now[i]
                 world.ground(x[i], y[i], entry, inside)
+                if faulty:
+                    world.faulty_ground(faults[i], inside)
                 for f in range(kinds):
                     carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], inside[f + 1])
                     deliveries[i, f] += 1 if delivered else 0
@@ -588,15 +615,20 @@ def _steps(
                     sources[i, region_column(r)] = senders[i, positions[r]] if positions[r] >= 0 else -1
                 sources[i, ROBOT_SIDE] = senders[i, nearest] if nearest >= 0 else -1
             samples += 1
+            fresh += 1
             if timeline.refreshes(p, k):
                 for i in range(n):
-                    world.smoothed(window[i], samples, smooth[i])
+                    world.smoothed(window[i], samples, fresh, smooth[i])
         if timeline.ticks_at(p, k):
             number = timeline.tick_number(p, k)
             for i in range(n):
                 tree = shared if uniform else tree_at(trees, robot_tree[i])
                 for side in range(bearings.shape[0]):
                     bearings[side] = _source_bearing(sides[i, side], i, sources[i, side], x, y, heading)
+                    if faulty:
+                        source = sources[i, side]
+                        seen = bearings[side]
+                        bearings[side] = world.faulty_bearing(faults[i], seen, bearing_keys[i], k, source, n)
                 world.blackboard(
                     ground_now[i], raw[i], bearings, sources[i, ROBOT_SIDE] >= 0, carrying[i], p, board
                 )
@@ -610,9 +642,11 @@ def _steps(
                 actions[i] = motors
                 motion[i, 0] += movement_of(motors)
                 motion[i, 1] += rotation_of(motors)
-        if timeline.region_broadcast(k):
+        if timeline.region_broadcast(p, k):
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
+                if faulty:
+                    world.faulty_ground(faults[i], here[i])
                 for r in range(regions):
                     broadcast[i, r] = world.region_value(here[i, r], p)
         else:
@@ -641,6 +675,7 @@ def _steps(
                 carrying,
                 deliveries,
                 probes,
+                faults,
             )
         if timeline.is_final(p, k):
             world.take_all_probes(x, y, entry, probes, 1)
@@ -657,6 +692,8 @@ def _steps(
                 for f in range(kinds):
                     carrying[i, f] = False
                     deliveries[i, f] = 0
+            if timeline.trials_restart(p):
+                fresh = 0  # the 2026 code empties the region windows (RobotView.end_trial)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -677,6 +714,7 @@ def _run_job(j: int, trees: PackedTrees, params: Params, jobs: Jobs, out: Output
         out.poses[a:b],
         -1,
         new_recording(0, params.n_robots, params.regions),
+        jobs.faults[j],
     )
 
 
@@ -706,13 +744,15 @@ def record_chain(
     food_scale: np.ndarray,
     p: Params,
     rec: Recording,
+    faults: np.ndarray,
 ) -> np.ndarray:
     """Run trials 0 .. ``recorded`` of chain ``chain``, robot ``i`` running tree ``robot_tree[i]`` of
-    ``trees`` (``simulate_chain``), recording trial ``recorded`` into ``rec`` (``new_recording(trial_steps,
-    n_robots, regions)``); its ``world.N_VALUES`` values."""
+    ``trees`` (``simulate_chain``) with fault ``faults[i]``, recording trial ``recorded`` into ``rec``
+    (``new_recording(trial_steps, n_robots, regions)``); its ``world.N_VALUES`` values."""
     values = np.zeros((recorded + 1, world.N_VALUES))
     poses = np.zeros((recorded + 1, 2, p.n_robots, 3))
     simulate_chain(
-        trees, robot_tree, seed_key, chain, recorded + 1, layout, food_scale, p, values, poses, recorded, rec
-    )
+        trees, robot_tree, seed_key, chain, recorded + 1, layout, food_scale, p, values, poses, recorded, rec,
+        faults,
+    )  # fmt: skip
     return values[recorded]

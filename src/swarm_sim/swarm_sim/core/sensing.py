@@ -26,23 +26,37 @@ def sense_swarm(
     step: int,
     entry: np.ndarray,
     p: Params,
+    faults: np.ndarray | None = None,
+    bearing_keys: np.ndarray | None = None,
 ) -> list[Readings]:
     """Every robot's readings at sensing step ``step`` on the regions of ``entry`` (the simulator's side,
-    robot by robot); ``broadcast`` (n x regions) is what each robot broadcast at the step before."""
+    robot by robot); ``broadcast`` (n x regions) is what each robot broadcast at the step before.
+    ``faults``: each robot's fault code (``ChainSetup.faults``; None: none), with the robots' ``BEARINGS``
+    stream keys (``ChainSetup.bearing_keys``) for noisy bearings; ``broadcast`` is left as it is."""
     n = x.shape[0]
     regions = broadcast.shape[1]
+    if faults is None:
+        faults = np.zeros(n, dtype=np.int64)
+    if bearing_keys is None:
+        bearing_keys = np.zeros(n, dtype=np.uint64)
+    sent = broadcast.copy()
+    world.disrupt(faults, sent)
     counts = np.zeros(n, dtype=np.int64)
     senders = np.zeros((n, n), dtype=np.int64)
     ranges, values = np.zeros((n, n)), np.zeros((n, n, regions))
-    world.sense_step(x, y, broadcast, drop_keys, step, p, counts, senders, ranges, values)
+    world.sense_step(x, y, sent, drop_keys, step, p, counts, senders, ranges, values)
+    world.deafen(faults, counts)
     out = []
     for i in range(n):
         count = counts[i]
-        bearings = np.array(
-            [world.bearing(x[i], y[i], heading[i], x[j], y[j]) for j in senders[i, :count]], dtype=np.float64
-        )
+        fault, key = int(faults[i]), np.uint64(bearing_keys[i])
+        bearings = np.zeros(count)
+        for m, j in enumerate(senders[i, :count]):
+            seen = world.bearing(x[i], y[i], heading[i], x[j], y[j])
+            bearings[m] = world.faulty_bearing(fault, seen, key, step, j, n)
         inside = np.zeros(regions, dtype=np.bool_)
         world.ground(x[i], y[i], entry, inside)
+        world.faulty_ground(fault, inside)
         out.append(
             Readings(
                 inside,

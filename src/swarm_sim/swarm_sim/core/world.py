@@ -2,7 +2,9 @@
 (``docs/model.md``).
 
 (a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
-(b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``;
+(b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``, and the
+per-robot faults that change them (``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``,
+``deafen``, ``faulty_bearing``, ``disrupt``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
@@ -43,6 +45,20 @@ from swarm_sim.model.config import (
     FORMATION_RANDOM,
     FORMATION_TWO_ROBOTS,
 )
+from swarm_sim.model.faults import (
+    BEARING_NOISE,
+    DISRUPTIVE,
+    DISRUPTIVE_VALUE,
+    GROUND_INVERTED,
+    GROUND_STUCK,
+    RAB_DEAF,
+    RAB_MIRRORED,
+    RAB_NOISY,
+    WEAK_WHEEL_GAIN,
+    WHEEL_DEAD,
+    WHEEL_REVERSED,
+    WHEEL_WEAK,
+)
 
 drop_stale_cache(
     __file__,
@@ -52,6 +68,7 @@ drop_stale_cache(
         "bt_controller.timeline",
         "bt_controller.vocabulary",
         "swarm_sim.model.config",
+        "swarm_sim.model.faults",
         "swarm_sim.model.objectives",
         "swarm_sim.model.regions",
     ),
@@ -729,6 +746,69 @@ def sense_step(
 def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) -> float:
     """Bearing of (x_other, y_other) from a robot at (x, y) facing ``heading``, in [-pi, pi)."""
     return wrap_angle(math.atan2(y_other - y, x_other - x) - heading)
+
+
+# Per-robot faults (``swarm_sim.model.faults``): ``faults`` holds each robot's fault code (0: none). Each
+# function changes only the faulty robots' values, after the fault-free computation, so every other robot's
+# values are those of a world without faults.
+
+
+@numba.njit(cache=True, error_model="numpy")
+def faulty_wheels(gains: np.ndarray, faults: np.ndarray) -> None:
+    """Apply the wheel faults to a chain's wheel gains (``wheel_gains``, n x (left, right)), in place: a
+    ``wheel-dead`` left wheel gets gain 0, a ``wheel-weak`` one ``WEAK_WHEEL_GAIN`` times its own, a
+    ``wheel-reversed`` one its gain negated."""
+    for i in range(gains.shape[0]):
+        if faults[i] == WHEEL_DEAD:
+            gains[i, 0] = 0.0
+        elif faults[i] == WHEEL_WEAK:
+            gains[i, 0] *= WEAK_WHEEL_GAIN
+        elif faults[i] == WHEEL_REVERSED:
+            gains[i, 0] = -gains[i, 0]
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def faulty_ground(fault: int, inside: np.ndarray) -> None:
+    """What a robot with fault ``fault`` reads on its ground sensor, from where it is (``inside``, written
+    by ``ground``), in place: in no region when ``ground-stuck``, every region the other way round when
+    ``ground-inverted``."""
+    if fault == GROUND_STUCK:
+        for r in range(inside.shape[0]):
+            inside[r] = False
+    elif fault == GROUND_INVERTED:
+        for r in range(inside.shape[0]):
+            inside[r] = not inside[r]
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def deafen(faults: np.ndarray, counts: np.ndarray) -> None:
+    """A ``rab-deaf`` robot receives nothing: its count of messages of ``sense_step`` set to 0."""
+    for i in range(counts.shape[0]):
+        if faults[i] == RAB_DEAF:
+            counts[i] = 0
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def faulty_bearing(fault: int, value: float, noise_key: np.uint64, step: int, sender: int, n: int) -> float:
+    """The bearing ``value`` (``bearing``) of robot ``sender``'s message at chain step ``step`` as a robot
+    with fault ``fault`` measures it: its sign flipped when ``rab-mirrored``; when ``rab-noisy``, off by
+    ``BEARING_NOISE`` times a uniform draw in [-1, 1) (draw ``step * n + sender`` of the robot's
+    ``BEARINGS`` stream ``noise_key``), wrapped into [-pi, pi)."""
+    if fault == RAB_MIRRORED:
+        return wrap_angle(-value)
+    if fault == RAB_NOISY:
+        return wrap_angle(value + BEARING_NOISE * (2.0 * uniform(noise_key, step * n + sender) - 1.0))
+    return value
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def disrupt(faults: np.ndarray, broadcast: np.ndarray) -> None:
+    """A ``disruptive`` robot's messages carry ``DISRUPTIVE_VALUE`` for every region: its row of
+    ``broadcast`` (what ``sense_step`` delivers) overwritten."""
+    for i in range(broadcast.shape[0]):
+        if faults[i] == DISRUPTIVE:
+            for r in range(broadcast.shape[1]):
+                broadcast[i, r] = DISRUPTIVE_VALUE
 
 
 # ---------------------------------------------------------------------------------------------------- (c)

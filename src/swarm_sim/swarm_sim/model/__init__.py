@@ -2,14 +2,17 @@
 arenas.
 
 ``Config`` (``config``) holds every parameter of the model, validated once; the objectives and descriptors
-are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``); a swarm layout
-gives each robot its tree (``swarm_layout``); the nest and food are pieces of ground (``regions``), and the
-authors' 2026 arena layouts 1-9 are made of them (``arenas``). Other packages import these names from here.
+are a table (``objectives``); conditions are named changes to a ``Config`` (``conditions``), per-robot
+faults among them (``faults``); a swarm layout gives each robot its tree (``swarm_layout``); the nest and food
+are pieces of ground (``regions``), and the authors' 2026 arena layouts 1-9 are made of them (``arenas``).
+Other packages import these names from here.
 """
 
 from swarm_sim.model.arenas import FOOD_KINDS, arena_entries, pieces_from_points, scatter_points
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
 from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
+from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
+from swarm_sim.model.faults import FAULT_KINDS
 from swarm_sim.model.objectives import (
     DESCRIPTORS,
     FAMILIES,
@@ -47,6 +50,8 @@ __all__ = [
     "DEFAULT",
     "DESCRIPTORS",
     "FAMILIES",
+    "FAULT_FIELDS",
+    "FAULT_KINDS",
     "FOOD_KINDS",
     "N_OBJECTIVES",
     "N_PROBES",

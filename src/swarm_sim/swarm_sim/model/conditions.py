@@ -1,9 +1,12 @@
-"""Conditions: named, validated changes to the world (damage, a harder radio, another swarm or arena).
+"""Conditions: named, validated changes to the world (damage, per-robot faults, a harder radio, another swarm
+or arena).
 
 A condition is written ``NAME=VALUE`` (``evaluate --condition``, ``adapt --condition``, the simulator node's
 ``conditions`` parameter) and is nothing but a setting of ``swarm_sim.model.config.Config``, so it holds in
-the reference road, the batch kernels and the node graph alike; damage acts through the wheel gains a trial
-starts with (``world.wheel_gains``), never inside the kernels' loops.
+the reference road, the batch kernels, recordings and the node graph alike. Swarm-wide damage acts through
+the wheel gains a trial starts with (``world.wheel_gains``); per-robot faults act on the simulator's side of
+the robots' readings, messages and wheels (``world.faulty_wheels`` and its neighbours), never inside the
+robots' own perception.
 
 ``dead-robots=K``
     robots 0 .. K-1 never drive or turn (both wheel gains 0: ``Config.dead_robots``). They **still
@@ -18,6 +21,15 @@ starts with (``world.wheel_gains``), never inside the kernels' loops.
     a swarm of N robots (``n_robots``).
 ``gap=MM``
     every trial's nest-food gap is MM mm, instead of 500 and 700 in turn (``gaps = (MM,)``).
+``faults=RATE``, ``faults=RATE:KIND,KIND``, ``faults=FILE``
+    per-robot faults (``swarm_sim.model.faults``, which says what each kind does; kinds ``ground-stuck``,
+    ``ground-inverted``, ``rab-deaf``, ``rab-noisy``, ``rab-mirrored``, ``wheel-dead``, ``wheel-weak``,
+    ``wheel-reversed``, ``disruptive``). ``RATE``: each robot is faulty with probability RATE, its kind drawn
+    among all kinds, or among the KINDs listed, from a stream keyed by the evaluation's seed (the same seed
+    has the same faulty robots on every road: ``fault_rate``, ``fault_kinds``). ``FILE``: a JSON or YAML
+    file mapping robot ids to kinds, e.g. ``{"0": "wheel-dead", "4": "disruptive"}``, the same for every
+    seed (``fault_robots``). Unlike ``dead-robots`` and ``weak-wheel``, a fault acts robot by robot where the
+    world meets the robot (its readings, its messages, its wheels), not only on the wheel gains.
 """
 
 from __future__ import annotations
@@ -25,15 +37,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from pathlib import Path
 
 from swarm_sim.errors import ConditionError, ConfigError
 from swarm_sim.model.config import DEFAULT, Config
+from swarm_sim.model.faults import FAULT_KINDS, read_fault_file
 
-CONDITION_NAMES: tuple[str, ...] = ("dead-robots", "weak-wheel", "message-loss", "robots", "gap")
+CONDITION_NAMES: tuple[str, ...] = ("dead-robots", "weak-wheel", "message-loss", "robots", "gap", "faults")
 """Every condition name, in the order they are applied (``robots`` is applied first, whatever the order
 given, so that ``dead-robots`` and ``weak-wheel`` are checked against the swarm they damage)."""
 
-_ORDER = ("robots", "gap", "message-loss", "dead-robots", "weak-wheel")
+_ORDER = ("robots", "gap", "message-loss", "dead-robots", "weak-wheel", "faults")
 
 
 def _integer(name: str, text: str, piece: str | None = None, what: str = "") -> int:
@@ -108,12 +122,40 @@ def _weak_wheel(config: Config, text: str) -> tuple[Config, object]:
     return replace(config, weak_robots=k, weak_gain=gain), [k, gain]
 
 
+def _faults(config: Config, text: str) -> tuple[Config, object]:
+    head, _, kinds_text = text.partition(":")
+    try:
+        rate = float(head)
+    except ValueError:
+        rate = None
+    if rate is None:  # not a rate: a file of faults
+        if not Path(text).is_file():
+            raise ConditionError(
+                f"condition faults={text}: expected RATE, RATE:KIND,KIND or a fault file (JSON or YAML), "
+                f"and there is no file {text}"
+            )
+        try:
+            robots = read_fault_file(text)
+        except ConfigError as error:
+            raise ConditionError(f"condition faults={text}: {error}") from None
+        return replace(config, fault_robots=robots), text
+    if not 0.0 <= rate <= 1.0:
+        raise ConditionError(f"condition faults={text}: expected RATE, a probability in [0, 1], got {head!r}")
+    kinds = tuple(kind.strip() for kind in kinds_text.split(",")) if kinds_text else ()
+    for kind in kinds:
+        if kind not in FAULT_KINDS:
+            said = f"condition faults={text}: unknown fault kind {kind!r}"
+            raise ConditionError(f"{said}; expected one of {', '.join(FAULT_KINDS)}")
+    return replace(config, fault_rate=rate, fault_kinds=kinds), [rate, ",".join(kinds)] if kinds else rate
+
+
 _APPLY: dict[str, Callable[[Config, str], tuple[Config, object]]] = {
     "robots": _robots,
     "gap": _gap,
     "message-loss": _message_loss,
     "dead-robots": _dead_robots,
     "weak-wheel": _weak_wheel,
+    "faults": _faults,
 }
 
 

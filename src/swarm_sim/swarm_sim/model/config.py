@@ -15,9 +15,18 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from bt_controller.model_settings import PROFILES, PerceptionParams, Timeline, arena_of_trial, profile_number
+from bt_controller.model_settings import (
+    PROFILES,
+    PerceptionParams,
+    Timeline,
+    arena_of_trial,
+    check_authors_code,
+    profile_number,
+)
 from bt_controller.validate import integer, number
 from swarm_sim.errors import ConfigError
+from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
+from swarm_sim.model.faults import check_faults
 from swarm_sim.model.regions import (
     ArenaEntry,
     Layout,
@@ -83,6 +92,7 @@ class Params(NamedTuple):
     regions: int
     preferred_food: int
     other_food_weight: float
+    authors_code: int
 
 
 _INT_MINIMUM = {
@@ -99,6 +109,7 @@ _INT_MINIMUM = {
     "dead_robots": 0,
     "weak_robots": 0,
     "preferred_food": 0,
+    "authors_code": 0,
 }
 """The integer parameters and the least value each may take (the one list of them)."""
 
@@ -196,6 +207,20 @@ class Config:
     other_food_weight: float = 1.0
     """What a delivery of another kind than ``preferred_food`` counts in ``foraging_biased`` (the authors'
     ``penalty``: 1.0 by default, 0.5 in their arena-9 runs)."""
+    authors_code: int = _TIMELINE.authors_code
+    """Which of the authors' code versions ``paper`` reproduces (``AUTHORS_CODES``): 2024, the papers' code,
+    or 2026, their commit 1cd2358, whose robots start their estimates afresh at every trial of a chain and
+    see no robot on either side when nobody is heard (``docs/model.md``, "Two profiles"). Under ``clean``
+    both give the same model."""
+    fault_rate: float = 0.0
+    """Per-robot faults (``swarm_sim.model.faults``): each robot is faulty with this probability, drawn per
+    evaluation seed (``trial_data.robot_faults``); 0: none."""
+    fault_kinds: tuple[str, ...] = ()
+    """The kinds a faulty robot's fault is drawn among under ``fault_rate`` (``faults.FAULT_KINDS``); empty:
+    all of them."""
+    fault_robots: tuple[tuple[int, str], ...] = ()
+    """Faults given robot by robot, (robot id, kind) pairs, the same for every seed (not with
+    ``fault_rate``)."""
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -209,7 +234,12 @@ class Config:
     def timeline(self) -> Timeline:
         """The timeline's parameters."""
         return Timeline(
-            self.profile_number, self.steps_per_tick, self.ticks, self.initial_step, self.chain_trials
+            self.profile_number,
+            self.steps_per_tick,
+            self.ticks,
+            self.initial_step,
+            self.chain_trials,
+            self.authors_code,
         )
 
     @property
@@ -222,6 +252,7 @@ class Config:
             self.density_divisor,
             self.profile_number,
             self.regions,
+            self.authors_code,
         )
 
     @property
@@ -304,6 +335,10 @@ class Config:
                 if not value:
                     continue  # the papers' arena: nest_radius and gaps say it, as before layouts
                 value = layout_as_json(value)
+            if f.name in FAULT_FIELDS and value == f.default:
+                continue  # no faults: written as before faults
+            if f.name == "fault_robots":
+                value = [list(pair) for pair in value]
             out[f.name] = list(value) if isinstance(value, tuple) else value
         return out
 
@@ -323,6 +358,10 @@ def _count(config: Config, name: str, minimum: int = 1) -> int:
 def _validate(c: Config) -> None:
     if c.profile not in PROFILES:
         raise ConfigError(f"profile must be one of {', '.join(PROFILES)}, got {c.profile!r}")
+    try:
+        check_authors_code(c.authors_code)
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
     for name in (
         "arena_half",
         "nest_radius",
@@ -395,6 +434,7 @@ def _validate(c: Config) -> None:
             f"got {c.preferred_food}"
         )
     _number(c, "other_food_weight")
+    check_faults(c.fault_rate, c.fault_kinds, c.fault_robots, c.n_robots)
     # Placing n discs of radius r in a square of side 2 S by rejection is easy while their area is small.
     area_ratio = c.n_robots * math.pi * c.robot_radius**2 / (2.0 * c.start_half) ** 2
     if area_ratio > 0.5:
@@ -457,6 +497,10 @@ def config_from_dict(data: object) -> Config:
     values: dict[str, Any] = dict(data)
     if isinstance(values.get("gaps"), list):
         values["gaps"] = tuple(values["gaps"])
+    if isinstance(values.get("fault_kinds"), list):
+        values["fault_kinds"] = tuple(values["fault_kinds"])
+    if isinstance(values.get("fault_robots"), list):
+        values["fault_robots"] = tuple(tuple(p) if isinstance(p, list) else p for p in values["fault_robots"])
     if "layout" in values:
         values["layout"] = layout_from_json(values["layout"])
     return Config(**values)

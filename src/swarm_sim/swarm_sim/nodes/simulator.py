@@ -142,7 +142,7 @@ from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
-from swarm_sim.model import DEFAULT, Config, apply_conditions, layout_from_text, layout_to_text
+from swarm_sim.model import DEFAULT, FAULT_FIELDS, Config, apply_conditions, layout_from_text, layout_to_text
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
 from swarm_sim.nodes.world_parameters import declare_world
@@ -620,6 +620,7 @@ class SimulatorNode(ManagedNode):
                 density_range=p.density_range,
                 density_divisor=p.density_divisor,
                 food_kinds=p.regions - 1,
+                authors_code=p.authors_code,
                 wheel_speed=p.wheel_speed * visualisation.MM,
                 wheel_separation=self.config.wheel_separation * visualisation.MM,
             )
@@ -896,7 +897,9 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     as the node checks them when it starts (``ParameterError`` or ``ConfigError`` in one line); return
     that world."""
     declared: dict[str, tuple[Any, tuple[float, float] | None]] = {
-        f.name: (getattr(config, f.name), WORLD_RANGES.get(f.name)) for f in fields(config)
+        f.name: (getattr(config, f.name), WORLD_RANGES.get(f.name))
+        for f in fields(config)
+        if f.name not in FAULT_FIELDS
     }
     declared["layout"] = (layout_to_text(config.layout), None)
     declared["conditions"] = ("", None)
@@ -908,7 +911,7 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     world: dict[str, Any] = {
         name: tuple(value) if isinstance(value, list) else value
         for name, value in given.items()
-        if name in {f.name for f in fields(config)}
+        if name in {f.name for f in fields(config)} - set(FAULT_FIELDS)
     }
     try:
         if "layout" in world:

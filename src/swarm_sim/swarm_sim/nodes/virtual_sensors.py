@@ -42,6 +42,7 @@ class VirtualSensors:
         setup = setup_chain(seed, chain, config)
         self.entry, _ = config.arena_arrays(trial)
         self.drop_keys = setup.drop_keys
+        self.setup = setup
         n = self.p.n_robots
         self.poses = np.full((n, 3), np.nan)
         """Each robot's (x mm, y mm, heading rad); NaN until given."""
@@ -77,7 +78,19 @@ class VirtualSensors:
         if missing:
             raise ValueError(f"no pose yet of robot {', '.join(map(str, missing))}")
         x, y, heading = (np.ascontiguousarray(self.poses[:, k]) for k in range(3))
-        return sense_swarm(x, y, heading, self.broadcast, self.drop_keys, step, self.entry, self.p)
+        s = self.setup
+        return sense_swarm(
+            x,
+            y,
+            heading,
+            self.broadcast,
+            s.drop_keys,
+            step,
+            self.entry,
+            self.p,
+            s.faults,
+            s.bearing_keys,
+        )
 
 
 class Delivery:

@@ -1,6 +1,7 @@
 """The world's parameters as a node declares them: one per field of ``swarm_sim.model.config.Config``
 (``swarm_ros.parameters.declare_dataclass``), but a layout of regions, which ROS parameters cannot hold as
-nested lists, is one JSON text (``layout``; empty: the papers' arena of ``nest_radius`` and ``gaps``).
+nested lists, is one JSON text (``layout``; empty: the papers' arena of ``nest_radius`` and ``gaps``), and
+per-robot faults (``swarm_sim.model.faults``) come only through the simulator's ``conditions`` parameter.
 The simulator and the evaluator declare the world the same way."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from dataclasses import replace
 from rclpy.node import Node
 
 from swarm_ros.parameters import declare, declare_dataclass, descriptor
-from swarm_sim.model import Config, layout_from_text, layout_to_text
+from swarm_sim.model import FAULT_FIELDS, Config, layout_from_text, layout_to_text
 
 LAYOUT_DESCRIPTION = (
     "the regions of every trial as JSON (swarm_sim.model.regions, docs/tasks.md); empty: the papers' arena "
@@ -29,4 +30,5 @@ def declare_world(
     )
     # The layout first: the other parameters are checked against it (a formation needs its discs).
     laid_out = replace(config, layout=layout_from_text(text))
-    return declare_dataclass(node, laid_out, read_only=True, ranges=ranges, skip=("layout",))
+    skip = ("layout", *FAULT_FIELDS)  # faults come through the conditions parameter
+    return declare_dataclass(node, laid_out, read_only=True, ranges=ranges, skip=skip)

@@ -1,7 +1,8 @@
 """The simulator's side of one chain, advanced one control step at a time by the robots' answers.
 
 This is what the simulator node and the reference road run: it owns the world (poses, wheel gains, the radio
-channel, the ground sensor) and nothing of the robots' minds. At each step ``k`` of the chain it first
+channel, the ground sensor, and the robots' faults in them: ``swarm_sim.model.faults``) and nothing of the
+robots' minds. At each step ``k`` of the chain it first
 teleports the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at
 step ``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k -
 1``); then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and,
@@ -206,6 +207,8 @@ class LockstepChain:
             k,
             entry,
             self.p,
+            self.setup.faults,
+            self.setup.bearing_keys,
         )
 
 

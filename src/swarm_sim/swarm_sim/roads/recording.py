@@ -26,7 +26,7 @@ from bt_controller.library import Library
 from bt_controller.model_settings import chain_of_trial
 from bt_controller.network import parse_controller
 from bt_controller.validate import integer
-from swarm_sim.core import kernel, world
+from swarm_sim.core import kernel, robot_faults, world
 from swarm_sim.model import DEFAULT, Config, SwarmLayout
 
 
@@ -120,8 +120,9 @@ def record_trial(
     arena = config.arena_of_trial(trial)
     key = np.uint64(root_key(int(seed)))  # (a Python int from numba: keep the kernel's uint64)
     robot_tree = np.array(layout.robot_tree, dtype=np.int64)
+    faults = robot_faults(config, key)
     values = kernel.record_chain(
-        trees, robot_tree, key, chain, position, pieces[arena], food_scale[arena], p, rec
+        trees, robot_tree, key, chain, position, pieces[arena], food_scale[arena], p, rec, faults
     )
     return RecordedTrial(
         tree=layout.label,

@@ -3,16 +3,17 @@
 and run.
 
 The regions (with the three food kinds of layouts 5, 6 and 9), the random start area ([-1500, 1500] mm), the
-numbered food conditions and the bias and penalty of layout 9 come from the 2026 code. The rest is this
-project's model of the 2024 code (its perception, messages and trials; ``docs/model.md``, which lists what
-the 2026 code changed beside them). Their two runs per evaluation (gaps 500 and 700 mm) are this model's two
-blocks of trials, and trial k of a block takes the layout's entry k, as theirs does.
+numbered food conditions, the bias and penalty of layout 9, and the robots' perception under ``paper``
+(``authors_code`` 2026: estimates afresh at every trial, no robot seen when nobody is heard) come from the
+2026 code. Their two runs per evaluation (gaps 500 and 700 mm) are this model's two blocks of trials, and
+trial k of a block takes the layout's entry k, as theirs does.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
+from bt_controller.model_settings import CODE_2026
 from bt_controller.vocabulary import MULTIFOOD_CONDITIONS
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import FOOD_KINDS, arena_entries
@@ -81,8 +82,9 @@ def arena_task(
     return replace(
         base,
         name=name or f"{base.name}-arena{layout}",
-        description=f"{base.name} on the regions of the authors' 2026 arena {layout}, {what}{told} (their "
-        "random start area; the rest of the model is the 2024 code's).",
+        description=f"{base.name} on the regions of the authors' 2026 arena {layout}, {what}{told}, as "
+        "their 2026 code runs it (its start area and its robots' perception).",
+        authors_code=CODE_2026,
         arena=Arena(half_size=base.arena.half_size, trial_entries=trial_entries),
         regions=regions,
         robots=replace(base.robots, start_half_size=START_HALF_2026),

@@ -11,6 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from bt_controller.model_settings import CODE_2026
 from bt_controller.vocabulary import CONDITIONS_2023, CONDITIONS_2024
 from swarm_sim.model import PAPER_OBJECTIVES
 from swarm_sim.tasks._arenas import arena_task
@@ -68,6 +69,17 @@ def register(task: TaskSpec) -> TaskSpec:
 register(PRIMITIVES)
 register(FORAGING)
 register(AGGREGATION)
+FORAGING_2026 = register(
+    replace(
+        FORAGING,
+        name="foraging-2026",
+        description="foraging as the authors' 2026 code runs it (commit 1cd2358: estimates afresh at every "
+        "trial, no robot seen when nobody is heard), in the 2024 arena with the 2024 start area.",
+        authors_code=CODE_2026,
+    )
+)
+"""The 2024 foraging task in the authors' 2026 code: their single-food setting closest to the 2024 paper's
+(arena 1, the [-1, 1] m start area), which agrees with the 2024 code within noise in their simulator."""
 
 ARENA9_OTHER_FOOD_WEIGHT = 0.5
 """The penalty of the authors' arena-9 runs and of their public reference data (``argos_stats_multifood``)."""

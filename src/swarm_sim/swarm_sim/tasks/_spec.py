@@ -151,6 +151,9 @@ class TaskSpec:
     """The task's name (a registered name, or one of the user's own)."""
     description: str = ""
     """One or two sentences for people."""
+    authors_code: int = DEFAULT.authors_code
+    """Which of the authors' code versions the ``paper`` profile reproduces on this task: 2024 (the papers')
+    or 2026 (their commit 1cd2358: estimates start afresh at every trial; ``docs/model.md``)."""
     arena: Arena = field(default_factory=Arena)
     regions: tuple[Region, ...] = field(default_factory=_default_regions)
     trials: Trials = field(default_factory=Trials)
@@ -251,6 +254,7 @@ class TaskSpec:
             gain_levels=self.motors.gain_levels,
             preferred_food=self.scoring.preferred_food,
             other_food_weight=self.scoring.other_food_weight,
+            authors_code=self.authors_code,
         )
 
 
@@ -389,6 +393,7 @@ _TASK_KEY: dict[str, str] = {
     "gain_levels": "motors.gain_levels",
     "preferred_food": "scoring.preferred_food",
     "other_food_weight": "scoring.other_food_weight",
+    "authors_code": "authors_code",
 }
 """The task key of each ``Config`` field a task sets, for the messages of ``Config``'s own checks."""
 

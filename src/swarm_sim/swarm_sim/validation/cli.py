@@ -3,7 +3,7 @@
     validate --reference docs/validation/argos_stats.tsv [--reference MORE.tsv] [--profile paper]
              [--seeds 20] [--trials 10] [--notes docs/validation/notes.md] [--transfer-table T.tsv]
              [--foraging-reference docs/validation/argos_stats_foraging.tsv] [--library PRIMITIVES.json]
-             --out docs/validation.md
+             [--multifood-reference docs/validation/argos_stats_multifood.tsv] --out docs/validation.md
     validate --transfer RUN_DIR [RUN_DIR ...] [--per-run 4] [--evaluations 20] [--seeds 1-20]
              [--tree TREE ...] [--argos-eval argos_eval.py] [--argos-raw RAW.tsv] --out T.md [--tsv T.tsv]
     (either mode) [--force]: replace a report or table that exists
@@ -12,11 +12,14 @@ Reference mode: each tree of the reference files (ARGoS statistics measured by t
 with seeds 1..N (one evaluation of ``--trials`` trials per seed, all in one batch); our mean and standard
 error of each quantity the reference measured are set beside the reference's with a verdict
 (``swarm_sim.validation.reference``). ``--reference`` files are measured in the primitives' 20 s trials,
-``--foraging-reference`` files in the 2024 foraging trials (100 s; their trees are labelled ``[foraging]``);
-trees in the authors' syntax are read into ours (``bt_controller.authors``), and a tree may name the
-primitives of ``--library``. ``--notes`` is markdown appended as it is (the explanations of what is outside
-tolerance, kept in the repository so that regenerating keeps them); ``--transfer-table`` adds the summary of a
-transfer table. ``--tsv`` also writes our statistics in the reference's format.
+``--foraging-reference`` files in the 2024 foraging trials (100 s; their trees are labelled ``[foraging]``),
+``--multifood-reference`` files in the 2026 code's multi-food settings (a ``setting`` column per row, read
+as the task of that arena, ``multifood_task``; rows labelled with the task's name; a row may be a swarm,
+``swarm: T1 ; T2 ; ...``, one tree per robot); trees in the authors' syntax are read into ours
+(``bt_controller.authors``), and a tree may name the primitives of ``--library``. ``--notes`` is markdown
+appended as it is (the explanations of what is outside tolerance, kept in the repository so that regenerating
+keeps them); ``--transfer-table`` adds the summary of a transfer table. ``--tsv`` also writes our statistics
+in the reference's format.
 
 Transfer mode (``swarm_sim.validation.transfer``): trees picked from evolution run directories of the
 primitives' task without a library (each evolved grid's best and ``--per-run`` more by farthest-point sampling
@@ -48,10 +51,10 @@ from typing import NoReturn
 from bt_controller.authors import from_authors, is_authors_syntax
 from bt_controller.library import Library, library_option
 from swarm_ros.safe_paths import check_output, refuse_links, replace_file
-from swarm_sim.errors import UsageError
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
-from swarm_sim.model import DEFAULT, Config
-from swarm_sim.tasks import FORAGING
+from swarm_sim.errors import ConfigError, UsageError
+from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
+from swarm_sim.model import DEFAULT, Config, of_trees
+from swarm_sim.tasks import FORAGING, FORAGING_2026, TaskSpec, Trials, arena_task
 from swarm_sim.validation import reference as validation
 from swarm_sim.validation import transfer
 
@@ -74,6 +77,13 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         help="reference: statistics TSV of foraging trials (repeatable)",
+    )
+    parser.add_argument(
+        "--multifood-reference",
+        type=Path,
+        action="append",
+        default=[],
+        help="reference: multi-food statistics TSV of the harness's 2026 build (setting per row; repeatable)",
     )
     parser.add_argument("--library", help="reference: a primitive library (JSON) whose names the trees use")
     parser.add_argument("--profile", help="model profile (default: the model's default)")
@@ -123,8 +133,9 @@ def our_estimates(
     config: Config,
     library: Library | None = None,
 ) -> dict[str, dict[str, validation.Estimate]]:
-    """Per tree (a reference's text, or ours), our estimates over ``seeds`` (one batch)."""
-    requests = [EvaluationRequest(ours(tree), seed, trials) for tree in trees for seed in seeds]
+    """Per tree (a reference's text, or ours; or a swarm, ``reference.swarm_trees``), our estimates over
+    ``seeds`` (one batch)."""
+    requests = [_request(tree, seed, trials, config, library) for tree in trees for seed in seeds]
     results = BatchEvaluator(config, library=library).evaluate(requests)
     n = len(seeds)
     out = {}
@@ -137,6 +148,96 @@ def our_estimates(
             rows.append(result.fitness + result.descriptors)
         out[tree] = validation.estimates(rows)
     return out
+
+
+def _request(
+    subject: str, seed: int, trials: int, config: Config, library: Library | None
+) -> EvaluationRequest | SwarmRequest:
+    """The evaluation of a reference's tree or swarm; UsageError naming it when it is not valid."""
+    swarm = validation.swarm_trees(subject)
+    try:
+        if swarm is None:
+            request = EvaluationRequest(ours(subject), seed, trials)
+            check_request(request, library=library)
+            return request
+        return SwarmRequest(of_trees([ours(tree) for tree in swarm], config.n_robots, library), seed, trials)
+    except ValueError as error:
+        raise UsageError(f"tree {subject!r}: {error}") from None
+
+
+MULTIFOOD_SETTING_KEYS = (
+    "project",
+    "arena",
+    "formation",
+    "trial_s",
+    "iterations",
+    "robots",
+    "bias",
+    "penalty",
+    "build",
+)
+"""The keys of a multi-food reference's ``setting`` that ``multifood_task`` reads (the harness writes the
+others only where they differ from the authors' defaults, which this project's arena tasks have)."""
+
+MULTIFOOD_PROJECTS = (
+    "straight_to_foraging",
+    "heterogeneous_genetic_algorithm",
+    "objectives_in_fitness_function",
+)
+"""The authors' projects that score deliveries: per kind, with one tree for all robots or one per robot, and
+the 2024 slots (deliveries of kind 1 and the descriptors)."""
+
+MULTIFOOD_BUILDS = ("multifood", "multifood-a73start")
+"""The harness's builds of the 2026 code: unchanged, and with the 2024 start area ([-1, 1] m)."""
+
+
+def multifood_task(setting: str) -> TaskSpec:
+    """The task of a multi-food reference's ``setting`` (``project=...;arena=6;formation=random;trial_s=100;
+    iterations=5;robots=9[;bias=1;penalty=0.5][;build=multifood-a73start]``): the foraging task on the
+    authors' arena (``arena_task``), named as registered (``multifood-arena6``, ``multifood-arena9-kind2``);
+    arena 1 with the 2024 start area is ``foraging-2026``. ValueError naming the key."""
+    values: dict[str, str] = {}
+    for item in setting.split(";"):
+        key, equals, value = item.partition("=")
+        if not equals or key not in MULTIFOOD_SETTING_KEYS:
+            raise ValueError(
+                f"setting {setting!r}: unknown item {item!r}; expected key=value with a key among "
+                f"{', '.join(MULTIFOOD_SETTING_KEYS)}"
+            )
+        values[key] = value
+    if values.get("project") not in MULTIFOOD_PROJECTS:
+        raise ValueError(f"setting {setting!r}: project must be one of {', '.join(MULTIFOOD_PROJECTS)}")
+    try:
+        layout = int(values["arena"])
+        bias = int(values["bias"]) if "bias" in values else None
+        penalty = float(values.get("penalty", "1.0"))
+        seconds = float(values.get("trial_s", "100"))
+        trials = int(values.get("iterations", "5"))
+        robots = int(values.get("robots", "9"))
+    except (KeyError, ValueError) as error:
+        raise ValueError(
+            f"setting {setting!r}: arena, bias, penalty, trial_s, iterations and robots are "
+            f"numbers, and arena is needed ({error})"
+        ) from None
+    build = values.get("build", "multifood")
+    if build not in MULTIFOOD_BUILDS:
+        raise ValueError(f"setting {setting!r}: build must be one of {', '.join(MULTIFOOD_BUILDS)}")
+    name = f"multifood-arena{layout}" + ("" if bias is None else f"-kind{bias + 1}")
+    base = replace(
+        FORAGING,
+        trials=Trials(ticks=round(seconds * 2), chain_trials=trials),
+        robots=replace(FORAGING.robots, count=robots, formation=values.get("formation", "random")),
+    )
+    if build == "multifood-a73start":  # the 2024 start area: only their concentric arena has a task for it
+        if layout != 1 or bias is not None:
+            raise ValueError(f"setting {setting!r}: build {build} is checked on arena 1 only, without a bias")
+        return replace(
+            base, name=FORAGING_2026.name, description=FORAGING_2026.description, authors_code=2026
+        )
+    try:
+        return arena_task(base, layout, bias=bias, other_food_weight=penalty, name=name)
+    except ConfigError as error:
+        raise ValueError(f"setting {setting!r}: {error}") from None
 
 
 def stats_tsv(estimates: dict[str, dict[str, validation.Estimate]], ticks: int = 40) -> str:
@@ -216,6 +317,7 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     checked = [
         (g, world, _references(paths, args.trials, world.ticks, library)) for g, world, paths in groups
     ]
+    checked += _multifood_references(args.multifood_reference, config.profile, args.trials, library)
     print(
         f"validate: {sum(len(r) for _, _, r in checked)} trees x {len(seeds)} seeds x {args.trials} trials",
         file=sys.stderr,
@@ -232,6 +334,7 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
     command = "ws/run swarm_sim validate " + shlex.join(shown)
     tolerance = f"3 sqrt(2) SE_ARGoS + {validation.TOLERANCE_ABSOLUTE}"
     z_rule = f"|z| <= {validation.MAX_Z:g}, z = diff / sqrt(SE_ours² + SE_ARGoS²)"
+    files = [*args.reference, *args.foraging_reference, *args.multifood_reference]
     header = [
         "# Validation against the authors' ARGoS simulation",
         "",
@@ -239,10 +342,18 @@ def run(argv: Sequence[str]) -> tuple[argparse.Namespace, str, str]:
         "",
         f"- Model: profile `{profile or 'none (this model has no profiles)'}`. Ours: mean ± standard error "
         f"over {len(seeds)} evaluations per tree (seeds {_seeds_text(seeds)}, {args.trials} trials each).",
-        f"- ARGoS: {', '.join(f'`{p}`' for p in [*args.reference, *args.foraging_reference])} (mean ± "
+        f"- ARGoS: {', '.join(f'`{p}`' for p in files)} (mean ± "
         "standard error over its seeds; how they were measured: `docs/validation/README.md`). Movement and "
         "rotation mapped to [0, 1] as (x + T) / 2T for T ticks per trial (40; 200 in the `[foraging]` trees' "
-        "100 s trials)" + (f"; primitives' names from `{args.library}`." if args.library else "."),
+        "100 s trials)"
+        + (f"; primitives' names from `{args.library}`." if args.library else ".")
+        + (
+            " Multi-food rows are labelled with their task (`[multifood-arena6]`): the harness's setting as"
+            " this project's task, under the same profile, deliveries per kind as `foraging1`-`foraging3` and"
+            " their fitness as `foraging_biased`."
+            if args.multifood_reference
+            else ""
+        ),
         f"- Tolerance (`docs/model.md`): agrees when |diff| <= {tolerance}; indistinguishable when it also "
         f"has {z_rule}.",
     ]
@@ -277,6 +388,29 @@ def _references(
                 raise UsageError(f"{path}: tree {tree!r}: {error}") from None
             references.setdefault(tree, stats)
     return references
+
+
+def _multifood_references(
+    paths: Sequence[Path], profile: str, trials: int, library: Library | None
+) -> list[tuple[str, Config, dict[str, dict[str, validation.Estimate]]]]:
+    """Per setting of the multi-food references (file order), its task's name, its world under ``profile`` and
+    its trees' and swarms' statistics, each checked; UsageError naming the file and the problem."""
+    out: list[tuple[str, Config, dict[str, dict[str, validation.Estimate]]]] = []
+    for path in paths:
+        try:
+            settings = validation.read_multifood_reference(path, FORAGING.trials.ticks)
+        except validation.ReferenceFileError as error:
+            raise UsageError(str(error)) from None
+        for setting, references in settings.items():
+            try:
+                task = multifood_task(setting)
+            except ValueError as error:
+                raise UsageError(f"{path}: {error}") from None
+            world = task.config(profile)
+            for subject in references:
+                _request(subject, 1, trials, world, library)  # checked before anything is evaluated
+            out.append((task.name, world, references))
+    return out
 
 
 def _seeds_text(seeds: Sequence[int]) -> str:

@@ -54,8 +54,10 @@ __all__ = [
     "compare",
     "estimate",
     "estimates",
+    "read_multifood_reference",
     "read_reference",
     "render",
+    "swarm_trees",
 ]
 
 
@@ -161,6 +163,82 @@ def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]
             raise ReferenceFileError(f"{path}:{line}: tree {tree!r} given twice")
         n = _number(path, line, row, "n_seeds", default=0.0)
         out[tree] = {q: _reference_estimate(path, line, row, q, int(n), ticks) for q in measured}
+    if not out:
+        raise ReferenceFileError(f"{path}: no trees in the reference")
+    return out
+
+
+MULTIFOOD_QUANTITIES: dict[str, str] = {
+    "foraging": "foraging",
+    "food1": "foraging1",
+    "food2": "foraging2",
+    "food3": "foraging3",
+    "fitness": "foraging_biased",
+}
+"""The harness's multi-food columns (``--build multifood``) and our objective of each: deliveries of every
+kind, of kinds 1-3, and their biased fitness (``foraging`` where no kind is preferred)."""
+
+SWARM_PREFIX = "swarm:"
+"""A reference row whose subject starts so is a heterogeneous swarm: a tree per robot, ``;`` between them."""
+
+
+def swarm_trees(subject: str) -> tuple[str, ...] | None:
+    """The robots' trees of a reference subject that is a swarm (``swarm: T1 ; T2 ; ...``), else None."""
+    if not subject.startswith(SWARM_PREFIX):
+        return None
+    return tuple(tree.strip() for tree in subject[len(SWARM_PREFIX) :].split(";"))
+
+
+def read_multifood_reference(path: Path, ticks: int = 200) -> dict[str, dict[str, dict[str, Estimate]]]:
+    """The statistics of a multi-food reference TSV (the harness's ``argos_stats_multifood.tsv``): per
+    ``setting`` (the harness's configuration, ``key=value;...``, with ``;build=B`` added for a build other
+    than ``multifood``), per tree or swarm (file order), our objective of each column of
+    ``MULTIFOOD_QUANTITIES`` the file has, and the descriptors where the row measured them (their projects
+    of ten slots; ``nan`` elsewhere), movement and rotation mapped from trials of the setting's ``trial_s``
+    (``ticks`` ticks without one)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
+    except UnicodeDecodeError as error:
+        raise ReferenceFileError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
+    reader = csv.DictReader(text.splitlines(), delimiter="\t")
+    columns = set(reader.fieldnames or ())
+    measured = [q for q in MULTIFOOD_QUANTITIES if f"{q}_mean" in columns]
+    missing = sorted({"tree", "setting", "foraging_mean", "foraging_sem"} - columns)
+    if missing:
+        raise ReferenceFileError(
+            f"{path}: not a multi-food reference statistics TSV: missing column(s) {', '.join(missing)}"
+        )
+    out: dict[str, dict[str, dict[str, Estimate]]] = {}
+    for line, row in enumerate(reader, start=2):
+        subject, setting = (row["tree"] or "").strip(), (row["setting"] or "").strip()
+        if not subject or not setting:
+            raise ReferenceFileError(f"{path}:{line}: empty {'tree' if not subject else 'setting'}")
+        build = (row.get("build") or "multifood").strip()
+        if build != "multifood":
+            setting += f";build={build}"
+        by_subject = out.setdefault(setting, {})
+        if subject in by_subject:
+            raise ReferenceFileError(f"{path}:{line}: tree {subject!r} given twice for setting {setting!r}")
+        n = int(_number(path, line, row, "n_seeds", default=0.0))
+        by_subject[subject] = {}
+        for column in measured:
+            mean = _number(path, line, row, f"{column}_mean")
+            sem = _number(path, line, row, f"{column}_sem")
+            if sem < 0:
+                raise ReferenceFileError(f"{path}:{line}: {column} standard error must be >= 0, got {sem}")
+            by_subject[subject][MULTIFOOD_QUANTITIES[column]] = Estimate(mean, sem, n)
+        seconds = dict(item.partition("=")[::2] for item in setting.split(";")).get("trial_s")
+        try:
+            row_ticks = ticks if seconds is None else round(2 * float(seconds))  # 2 ticks a second
+        except ValueError:
+            raise ReferenceFileError(f"{path}:{line}: trial_s must be a number, got {seconds!r}") from None
+        for descriptor in QUANTITIES[-3:]:
+            if row.get(f"{descriptor}_mean", "nan").strip().lower() not in ("nan", ""):
+                by_subject[subject][descriptor] = _reference_estimate(
+                    path, line, row, descriptor, n, row_ticks
+                )
     if not out:
         raise ReferenceFileError(f"{path}: no trees in the reference")
     return out

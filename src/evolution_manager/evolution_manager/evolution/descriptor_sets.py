@@ -1,0 +1,61 @@
+"""The behaviour spaces a tree run's grids bin trees by: a run's ``descriptors`` setting names one.
+
+``behaviour`` is the paper's: movement, rotation and conditionality, as the evaluator gives them (each in
+[0, 1]). ``deliveries`` is the authors' 2026 one for swarms of several food kinds (``ga/qd.py``; their
+descriptors are the deliveries of each kind): a tree's deliveries of kinds 1, 2 and 3 per robot per trial,
+each divided by ``DELIVERY_DOMAIN`` so that the grid spans [0, 1]; more than that is kept in the last bin,
+as their grid keeps a value beyond its domain. ``evaluations.csv`` always records the evaluator's own
+values; the grids, the archive and the repertoire files hold the run's descriptors.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from swarm_sim.model import DESCRIPTORS, OBJECTIVES
+
+DELIVERY_DOMAIN = 0.5
+"""Deliveries of one kind per robot per trial at the top of a ``deliveries`` grid axis (8 bins of 0.0625):
+the reference trees on the authors' arenas 6 and 9 deliver 0.001 to 0.23 of a kind (docs/validation.md)."""
+
+FOOD_KINDS = ("foraging1", "foraging2", "foraging3")
+
+
+@dataclass(frozen=True)
+class DescriptorSet:
+    """A behaviour space: its axes' names and how an evaluation's values give a point of it in [0, 1]^3."""
+
+    name: str
+    names: tuple[str, ...]
+    """The axes, as the grids, figures and repertoire files name them."""
+    description: str
+    point: Callable[[Sequence[float], Sequence[float]], tuple[float, ...]]
+    """(every objective in ``OBJECTIVES`` order, the evaluator's descriptors) -> the point."""
+
+
+def _deliveries(fitness: Sequence[float], _: Sequence[float]) -> tuple[float, ...]:
+    return tuple(min(1.0, max(0.0, fitness[OBJECTIVES.index(k)] / DELIVERY_DOMAIN)) for k in FOOD_KINDS)
+
+
+BEHAVIOUR = DescriptorSet(
+    "behaviour",
+    DESCRIPTORS,
+    "movement, rotation and conditionality (the paper's)",
+    lambda _, descriptors: tuple(float(d) for d in descriptors),
+)
+DELIVERIES = DescriptorSet(
+    "deliveries",
+    FOOD_KINDS,
+    f"deliveries of food kinds 1-3 per robot per trial over [0, {DELIVERY_DOMAIN:g}] (the authors' 2026)",
+    _deliveries,
+)
+DESCRIPTOR_SETS: dict[str, DescriptorSet] = {s.name: s for s in (BEHAVIOUR, DELIVERIES)}
+"""Every behaviour space by name; ``behaviour`` is the default."""
+
+
+def descriptor_set(name: str) -> DescriptorSet:
+    """The set named ``name``; ValueError naming the choices otherwise."""
+    if name not in DESCRIPTOR_SETS:
+        raise ValueError(f"descriptors must be one of {', '.join(DESCRIPTOR_SETS)}, got {name!r}")
+    return DESCRIPTOR_SETS[name]
