@@ -32,22 +32,26 @@ operators draw from the ``random`` module, so ``cx_two_point``, ``mut_gaussian``
 DEAP's results for the same generator state; ``test_networks.py`` checks it). The budget counts the networks
 produced: every sample of CMA-ES, and the GA's offspring after its initial population (as a tree run's).
 
-A run directory holds ``config.json``, ``evaluations.csv`` (evaluation, seed, the network's 56 weights
-space-separated, the objective, the descriptors, error), ``progress.csv``, ``checkpoint.json`` (atomic, with
-the lengths of the CSV files), and when the run ends ``summary.json`` and ``best/<objective>.json`` (the best
-network, ``{"weights": [...]}``, for ``evaluate --network``, ``trial --network`` and ``animate --network``).
-The GA's checkpoint holds its population and generator state; CMA-ES's its generator's starting state and
-the fitness told at every generation, from which a resume rebuilds the strategy exactly (no pickle: a
-checkpoint is plain JSON). A resumed run ends with the very bytes of an uninterrupted one.
+A run directory is a run folder as every run's (``run_folder``; ``NetworkRun`` executes the shared
+``RunLoop``): ``config.json`` (``"kind": "networks"``), ``evaluations.csv`` (evaluation, seed, the network's
+56 weights space-separated, the objective, the descriptors, error), ``progress.csv``, ``checkpoint.json``
+(atomic, with the lengths of the CSV files), and when the run ends ``summary.json`` (with the best network's
+held-out fitness: its mean over the five held-out scenarios a tree run's best tree is re-scored on),
+``repertoire_<objective>.json`` and ``best/<objective>.json`` (the best network, ``{"weights": [...]}``, for
+``evaluate --network``, ``trial --network`` and ``animate --network``). The GA's checkpoint holds its
+population and generator state; CMA-ES's its generator's starting state and the fitness told at every
+generation, from which a resume rebuilds the strategy exactly (no pickle: a checkpoint is plain JSON). A
+resumed run ends with the very bytes of an uninterrupted one.
 """
 
 from __future__ import annotations
 
+import math
 import random
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -57,22 +61,25 @@ from bt_controller.network import N_WEIGHTS, Network, network_document, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.compositions import bin_of
-from evolution_manager.evolution.run_config import DEFAULT_PROFILE, default_scenario_seed
-from evolution_manager.evolution.run_folder import LOCK_NAME, create_whole
-from evolution_manager.files import CsvLog, number, read_json_object, write_json
-from evolution_manager.processes import Lock, exclusive_lock
+from evolution_manager.evolution.run_config import (
+    DEFAULT_PROFILE,
+    HELDOUT_EVALUATIONS,
+    default_scenario_seed,
+    heldout_seed,
+)
+from evolution_manager.evolution.run_folder import DAMAGE, NETWORKS, RunFolder, RunLoop
+from evolution_manager.files import number, read_json_object, write_json
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.core import world
 from swarm_sim.evaluation import EvaluationRequest, Evaluator
 from swarm_sim.model import Config
 from swarm_sim.tasks import task_named
 
-KIND = "networks"
+KIND = NETWORKS
 """``config.json``'s ``kind``: what tells a network run from a tree or composition run."""
 ALGORITHMS: tuple[str, ...] = ("nn-cmaes", "nn-ga", "nn-qd")
 GRID_BINS = 8 * 8 * 8
 """Bins of a repertoire grid (``archive.GRID_SHAPE``)."""
-CHECKPOINT_FORMAT = 1
 DESCRIPTORS = ("movement", "rotation", "conditionality")
 FAILED = -1.0
 """The fitness a network whose evaluation failed is ranked with: below every real fitness."""
@@ -238,7 +245,48 @@ class _Randn:
         return self.rng.standard_normal(shape)
 
 
-class WeightCmaEs:
+class _Replayed:
+    """An optimiser whose state is its generator's starting state and what it was told, batch by batch
+    (``told``): a checkpoint holds both, and a resume rebuilds the optimiser by replaying them, each ask
+    drawing as it first did (no pickle: a checkpoint is plain JSON)."""
+
+    rng: np.random.Generator
+    start: Mapping[str, Any]
+    told: list
+
+    def initial(self) -> bool:
+        """Never an uncounted initial batch: every sample counts."""
+        return False
+
+    def to_state(self) -> dict:
+        return {"start": self.start, "told": self.told}
+
+    def restore(self, state: dict) -> None:
+        """Rebuild the optimiser from the generator's starting state and what it was told."""
+        start = state["start"]
+        if start.get("bit_generator") != self.rng.bit_generator.state["bit_generator"]:
+            raise ValueError("the checkpoint's generator is not this run's")
+        self.rng.bit_generator.state = start
+        self.start = start
+        self.told = []
+        self._fresh()
+        for told in state["told"]:
+            self.ask()
+            self._tell_again(told)
+
+    def ask(self) -> list[list[float]]:
+        raise NotImplementedError
+
+    def _fresh(self) -> None:
+        """The optimiser as new, drawing from the generator as it stands."""
+        raise NotImplementedError
+
+    def _tell_again(self, told: list) -> None:
+        """Tell one batch's entry of ``told`` again."""
+        raise NotImplementedError
+
+
+class WeightCmaEs(_Replayed):
     """CMA-ES over the 56 weights with pycma (``cma``), ask/tell over weight vectors.
 
     Where pycma (4.x, Hansen's reference implementation) differs from DEAP's ``cma.Strategy``, which the
@@ -293,28 +341,14 @@ class WeightCmaEs:
         self.told.append(told)
         self._asked = None
 
-    def initial(self) -> bool:
-        return False
-
-    def to_state(self) -> dict:
-        return {"start": self.start, "told": self.told}
-
-    def restore(self, state: dict) -> None:
-        """Rebuild the strategy from the generator's starting state and the fitness told, generation by
-        generation (each ask draws as it first did)."""
-        start = state["start"]
-        if start.get("bit_generator") != self.rng.bit_generator.state["bit_generator"]:
-            raise ValueError("the checkpoint's generator is not this run's")
-        self.rng.bit_generator.state = start
-        self.start = start
-        self.told = []
+    def _fresh(self) -> None:
         self.es = self._strategy()
-        for fitness in state["told"]:
-            self.ask()
-            self.tell([float(f) for f in fitness])
+
+    def _tell_again(self, told: list) -> None:
+        self.tell([float(f) for f in told])
 
 
-class WeightMapElites:
+class WeightMapElites(_Replayed):
     """MAP-Elites over the weights with pyribs (``ribs``): CMA-ME, ``emitters`` CMA-ES emitters ranked by
     improvement ("2imp"), restarting when they stop improving, on an 8 x 8 x 8 ``GridArchive`` of the
     descriptors over [0, 1]^3 (module docstring). The archive's and emitters' seeds are drawn from the
@@ -372,23 +406,11 @@ class WeightMapElites:
         self.told.append([told, *measures])
         self._asked = None
 
-    def initial(self) -> bool:
-        return False
-
-    def to_state(self) -> dict:
-        return {"start": self.start, "told": self.told}
-
-    def restore(self, state: dict) -> None:
-        start = state["start"]
-        if start.get("bit_generator") != self.rng.bit_generator.state["bit_generator"]:
-            raise ValueError("the checkpoint's generator is not this run's")
-        self.rng.bit_generator.state = start
-        self.start = start
-        self.told = []
+    def _fresh(self) -> None:
         self.scheduler = self._scheduler()
-        for batch in state["told"]:
-            self.ask()
-            self.tell(batch[0], batch[1:])
+
+    def _tell_again(self, told: list) -> None:
+        self.tell(told[0], told[1:])
 
 
 Optimiser = WeightGA | WeightCmaEs | WeightMapElites
@@ -447,6 +469,10 @@ class NetworkConfig:
         """The model of every evaluation: the task's, under the run's profile."""
         return task_named(self.task).config(self.profile)
 
+    def heldout_seeds(self) -> list[int]:
+        """The seeds of the best network's held-out evaluations, as a tree run's (``heldout``)."""
+        return [heldout_seed(self.scenario_seed, repeat) for repeat in range(HELDOUT_EVALUATIONS)]
+
     def to_json(self) -> dict:
         return {"kind": KIND, **asdict(self)}
 
@@ -492,70 +518,70 @@ EVALUATION_HEADER = ["evaluation", "seed", "weights", "fitness", *DESCRIPTORS, "
 PROGRESS_HEADER = ["evaluations", "best_fitness", "coverage", "qd_score"]
 
 
-class NetworkRun:
-    """One network run; create with :meth:`start` or :meth:`resume`, then :meth:`execute` and
-    :meth:`finish`."""
+class NetworkDirectory(RunFolder):
+    """The paths of a network run's folder."""
+
+    def __init__(self, root: Path) -> None:
+        super().__init__(root, EVALUATION_HEADER, PROGRESS_HEADER)
+
+    def repertoire(self, objective: str) -> Path:
+        return self.root / f"repertoire_{objective}.json"
+
+
+class NetworkRun(RunLoop[list[float], Evaluated]):
+    """One network run; create with :meth:`start` or :meth:`resume`, then :meth:`execute` (the loop every
+    run shares, ``run_folder.RunLoop``) and :meth:`finish`."""
 
     def __init__(self, config: NetworkConfig, root: Path, evaluator: Evaluator | None) -> None:
+        super().__init__()
         self.config = config
-        self.root = Path(root)
+        self.directory: NetworkDirectory = NetworkDirectory(root)
         self.evaluator = evaluator
         self.optimiser = make_optimiser(config.algorithm, config.parameters, config.seed)
-        self.evaluations = 0
         self.produced = 0
+        """Networks produced, the optimiser's uncounted initial population aside (what the budget counts)."""
         self.best: Evaluated | None = None
         self.grid: dict[tuple[int, ...], Evaluated] = {}
         """The fittest network evaluated per bin (the first among equals), as a tree run's repertoire."""
-        self.evaluations_log = CsvLog(self.root / "evaluations.csv", EVALUATION_HEADER)
-        self.progress_log = CsvLog(self.root / "progress.csv", PROGRESS_HEADER)
-        self.offsets = {"evaluations": 0, "progress": 0}
-        self.lock: Lock | None = None
+        self._counted = True
+        """Whether the batch being evaluated counts in the budget."""
 
+    # Construction ------------------------------------------------------------------------------------
     @classmethod
     def start(cls, config: NetworkConfig, root: Path, evaluator: Evaluator) -> NetworkRun:
-        """A new run in ``root`` (missing or empty), appearing whole (``run.create_whole``)."""
-        root = Path(root)
-        if root.exists() and (not root.is_dir() or any(root.iterdir())):
-            raise RunDirectoryError(f"{root} is not an empty directory: choose an empty or new --out")
-
-        def fill(building: Path) -> NetworkRun:
-            run = cls(config, building, evaluator)
-            write_json(building / "config.json", config.to_json())
-            run.offsets = {"evaluations": run.evaluations_log.create(), "progress": run.progress_log.create()}
-            run.checkpoint()
-            return run
-
-        run, lock = create_whole(root, fill)
-        resumed = cls(config, root, evaluator)  # the same state, its paths at root
-        resumed.offsets, resumed.lock = run.offsets, lock
-        return resumed
+        """A new run in ``root``, which must not hold a run already (``RunLoop._begin``): its configuration,
+        empty logs and first checkpoint."""
+        return cls._begin(
+            NetworkDirectory(root),
+            lambda building: cls(config, building, evaluator),
+            {"config.json": config.to_json()},
+        )
 
     @classmethod
     def resume(cls, root: Path, evaluator: Evaluator | None) -> NetworkRun:
-        """The run in ``root`` at its last checkpoint, its CSV files cut back to it."""
-        root = Path(root)
-        lock = exclusive_lock(root / LOCK_NAME, f"the run directory {root}")
-        try:
-            config = NetworkConfig.from_json(read_json_object(root / "config.json"))
-            run = cls(config, root, evaluator)
-            run.restore(read_json_object(root / "checkpoint.json"))
-        except (ConfigError, KeyError, TypeError, ValueError) as error:
-            lock.release()
-            raise RunDirectoryError(f"{root}: the run cannot be continued, it is damaged: {error}") from error
-        except BaseException:
-            lock.release()
-            raise
-        run.lock = lock
-        run.evaluations_log.cut(run.offsets["evaluations"])
-        run.progress_log.cut(run.offsets["progress"])
-        return run
+        """The run in ``root`` at its last checkpoint, its CSV files cut back to it (``RunLoop._reopen``)."""
+        directory = NetworkDirectory(root)
 
+        def load() -> NetworkRun:
+            try:
+                config = NetworkConfig.from_json(read_json_object(directory.config))
+                run = cls(config, root, evaluator)
+                state = directory.read_checkpoint()
+                directory.check_logs()
+                run.restore(state)
+            except (ConfigError, *DAMAGE) as error:
+                raise RunDirectoryError(
+                    f"{root}: the run cannot be continued, it is damaged: {error}"
+                ) from error
+            return run
+
+        return cls._reopen(directory, load)
+
+    # State -------------------------------------------------------------------------------------------
     def checkpoint(self) -> None:
         """Write the checkpoint atomically (between batches only)."""
-        write_json(
-            self.root / "checkpoint.json",
+        self.directory.write_checkpoint(
             {
-                "format": CHECKPOINT_FORMAT,
                 "config": self.config.to_json(),
                 "evaluations": self.evaluations,
                 "produced": self.produced,
@@ -563,13 +589,11 @@ class NetworkRun:
                 "best": None if self.best is None else self.best.as_json(),
                 "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
                 "offsets": self.offsets,
-            },
-            indent=None,
+            }
         )
 
     def restore(self, state: dict) -> None:
-        if state.get("format") != CHECKPOINT_FORMAT:
-            raise ValueError(f"not a checkpoint of format {CHECKPOINT_FORMAT}")
+        """The run's state from its checkpoint; a ValueError or KeyError when it is damaged."""
         if NetworkConfig.from_json(state["config"]) != self.config:
             raise ValueError("the checkpoint belongs to another configuration than config.json")
         self.evaluations = integer(state["evaluations"], "evaluations", 0)
@@ -578,15 +602,21 @@ class NetworkRun:
         self.best = None if state["best"] is None else Evaluated.from_json(state["best"])
         members = [Evaluated.from_json(e) for e in state["grid"]]
         self.grid = {bin_of(e.descriptors): e for e in members if e.descriptors is not None}
-        self.offsets = {
-            name: integer(state["offsets"][name], name, 0) for name in ("evaluations", "progress")
-        }
+        self.offsets = self.directory.read_offsets(state["offsets"])
 
+    # Execution ---------------------------------------------------------------------------------------
     @property
     def done(self) -> bool:
         return self.produced >= self.config.evaluations
 
-    def evaluate(self, batch: Sequence[Sequence[float]]) -> list[Evaluated]:
+    def progress(self) -> tuple[int, int]:
+        return self.produced, self.config.evaluations
+
+    def _ask(self) -> list[list[float]]:
+        self._counted = not self.optimiser.initial()
+        return self.optimiser.ask()
+
+    def _evaluate(self, batch: list[list[float]]) -> list[Evaluated]:
         """Each network of ``batch`` on the run's scenario seed."""
         if self.evaluator is None:
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
@@ -603,16 +633,13 @@ class NetworkRun:
                 out.append(Evaluated(tuple(weights), None, None, index, result.error or "no fitness"))
         return out
 
-    def step(self) -> list[Evaluated]:
-        """Ask, evaluate, tell, record: one batch."""
-        initial = self.optimiser.initial()
-        batch = self.optimiser.ask()
-        evaluated = self.evaluate(batch)
-        self.optimiser.tell([e.rank for e in evaluated], [e.descriptors for e in evaluated])
-        self.evaluations += len(evaluated)
-        if not initial:
-            self.produced += len(evaluated)
-        for e in evaluated:
+    def _tell(self, batch: list[list[float]], answers: list[Evaluated]) -> None:
+        """Tell the optimiser, keep the best and the grid, record the batch."""
+        self.optimiser.tell([e.rank for e in answers], [e.descriptors for e in answers])
+        self.evaluations += len(answers)
+        if self._counted:
+            self.produced += len(answers)
+        for e in answers:
             if e.fitness is not None and (self.best is None or e.fitness > self.best.rank):
                 self.best = e
             if e.fitness is not None and e.descriptors is not None:
@@ -620,26 +647,7 @@ class NetworkRun:
                 held = self.grid.get(index)
                 if held is None or e.fitness > held.rank:
                     self.grid[index] = e
-        self._record(evaluated)
-        return evaluated
-
-    def execute(
-        self,
-        on_batch: Callable[[int, int], None] | None = None,
-        checkpoint_interval: float = 30.0,
-        stop_after: int | None = None,
-    ) -> None:
-        """Run batches until the budget is spent (or ``stop_after`` evaluations); checkpoint every
-        ``checkpoint_interval`` seconds and at the end."""
-        last = time.monotonic()
-        while not self.done and (stop_after is None or self.evaluations < stop_after):
-            self.step()
-            if on_batch is not None:
-                on_batch(self.produced, self.config.evaluations)
-            if time.monotonic() - last >= checkpoint_interval:
-                self.checkpoint()
-                last = time.monotonic()
-        self.checkpoint()
+        self._record(answers)
 
     def _record(self, evaluated: Sequence[Evaluated]) -> None:
         rows = []
@@ -651,10 +659,10 @@ class NetworkRun:
             )
             weights = " ".join(number(w) for w in e.weights)
             rows.append([str(e.evaluation), str(self.config.scenario_seed), weights, *values, e.error or ""])
-        self.offsets["evaluations"] = self.evaluations_log.append(rows)
+        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
         best = "" if self.best is None else number(self.best.fitness)
         row = [str(self.evaluations), best, number(self.coverage), number(self.qd_score)]
-        self.offsets["progress"] = self.progress_log.append([row])
+        self.offsets["progress"] = self.directory.progress.append([row])
 
     @property
     def coverage(self) -> float:
@@ -666,23 +674,43 @@ class NetworkRun:
         """The sum of each bin's best fitness / 512 (the authors' analysis), summed in bin order."""
         return sum(self.grid[b].rank for b in sorted(self.grid)) / GRID_BINS
 
+    def heldout(self) -> tuple[dict | None, float | None]:
+        """The best network re-scored on the held-out seeds (``NetworkConfig.heldout_seeds``, scenarios the
+        run never used), as a tree run's best tree: what was done, and the mean of its fitness (None when no
+        network has a fitness or one of its held-out evaluations failed). Nothing without an evaluator or
+        before the budget is spent."""
+        if self.evaluator is None or not self.done or self.best is None:
+            return None, None
+        seeds = self.config.heldout_seeds()
+        text = to_text(Network(self.best.weights))
+        results = self.evaluator.evaluate([EvaluationRequest(text, s, self.config.trials) for s in seeds])
+        k = world.OBJECTIVES.index(self.config.objective)
+        scored = [r.fitness[k] for r in results if r.error is None and r.fitness is not None]
+        done = {"seeds": seeds, "evaluations_per_tree": len(seeds), "trials": self.config.trials, "trees": 1}
+        return done, math.fsum(scored) / len(seeds) if len(scored) == len(seeds) else None
+
     def finish(self) -> dict:
-        """Write ``summary.json`` and ``best/<objective>.json``; return the summary."""
+        """Write ``summary.json`` (with the best network's held-out fitness once the budget is spent),
+        ``repertoire_<objective>.json`` and ``best/<objective>.json``; return the summary."""
+        heldout, heldout_best = self.heldout()
         summary = {
             "kind": KIND,
             "config": self.config.to_json(),
             "evaluations": self.evaluations,
             "produced": self.produced,
+            "finished": self.done,
             "best": None if self.best is None else self.best.as_json(),
+            "heldout": heldout,
+            "heldout_best_fitness": heldout_best,
             "coverage": self.coverage,
             "qd_score": self.qd_score,
             "repertoire_size": len(self.grid),
         }
-        write_json(self.root / "summary.json", summary)
+        write_json(self.directory.summary, summary)
         items = [{"bin": list(b), **self.grid[b].as_json()} for b in sorted(self.grid)]
-        write_json(self.root / f"repertoire_{self.config.objective}.json", {"kind": KIND, "items": items})
+        write_json(self.directory.repertoire(self.config.objective), {"kind": KIND, "items": items})
         if self.best is not None:
-            make_folder(self.root / "best")
+            make_folder(self.directory.best)
             network = Network(self.best.weights)
-            write_json(self.root / "best" / f"{self.config.objective}.json", network_document(network))
+            write_json(self.directory.best / f"{self.config.objective}.json", network_document(network))
         return summary

@@ -73,6 +73,11 @@ HELDOUT_EVALUATIONS = 5
 """Evaluations (of ``trials`` trials each, on fresh scenarios) behind every held-out score."""
 
 
+def heldout_seed(scenario_seed: int, repeat: int) -> int:
+    """The seed of held-out evaluation ``repeat`` of a run on ``scenario_seed``: a scenario it never used."""
+    return derive_seed(scenario_seed, RUN_HELDOUT, repeat)
+
+
 def default_scenario_seed(run_seed: int) -> int:
     """The scenario seed of a run when none is given: derived from the run seed."""
     return derive_seed(run_seed, RUN_SCENARIO)
@@ -227,7 +232,7 @@ class RunConfig:
     def heldout_seed(self, repeat: int) -> int:
         """The seed of held-out evaluation ``repeat`` (0 to ``HELDOUT_EVALUATIONS`` - 1), the same for every
         tree re-scored at the end of the run: scenarios the run never used."""
-        return derive_seed(self.scenario_seed, RUN_HELDOUT, repeat)
+        return heldout_seed(self.scenario_seed, repeat)
 
     @property
     def objectives(self) -> tuple[str, ...]:

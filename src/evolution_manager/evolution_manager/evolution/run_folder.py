@@ -1,15 +1,16 @@
-"""What every run shares, tree runs (``evolution.run``) and composition runs (``evolution.compositions``): its
-folder and its loop.
+"""What every run shares, tree runs (``evolution.run``), composition runs (``evolution.compositions``) and
+network runs (``evolution.networks``): its folder and its loop.
 
-A run folder holds ``config.json`` (never changed once the run starts; a composition run's says
-``"kind": "compositions"``), ``evaluations.csv`` and ``progress.csv`` (append-only logs, one row per
-evaluation and per batch), ``checkpoint.json`` (written atomically between batches, with the lengths of the
-two logs) and, when the run ends, its results. A new folder appears whole or not at all; one process at a
-time writes it, holding ``.lock``; a resume checks the checkpoint whole before changing anything, then cuts
-the logs back to it, so that a resumed run ends with the very files of an uninterrupted one.
+A run folder holds ``config.json`` (never changed once the run starts; a composition run's says ``"kind":
+"compositions"``, a network run's ``"kind": "networks"``), ``evaluations.csv`` and ``progress.csv``
+(append-only logs, one row per evaluation and per batch), ``checkpoint.json`` (written atomically between
+batches, with the lengths of the two logs) and, when the run ends, its results. A new folder appears whole or
+not at all; one process at a time writes it, holding ``.lock``; a resume checks the checkpoint whole before
+changing anything, then cuts the logs back to it, so that a resumed run ends with the very files of an
+uninterrupted one.
 
-:class:`RunLoop` is the loop both kinds execute: ask for a batch, evaluate it, tell the outcome and record it,
-checkpoint now and then and at the end. Each kind keeps its own configuration, log columns and checkpoint
+:class:`RunLoop` is the loop every kind executes: ask for a batch, evaluate it, tell the outcome and record
+it, checkpoint now and then and at the end. Each kind keeps its own configuration, log columns and checkpoint
 contents (format 1 of each, as the runs already made wrote them).
 """
 
@@ -37,6 +38,8 @@ LOCK_NAME = ".lock"  # in the run folder: held by the process writing the run
 CHECKPOINT_FORMAT = 1
 COMPOSITIONS = "compositions"
 """``config.json``'s ``kind`` of a composition run (a tree run's has no ``kind``)."""
+NETWORKS = "networks"
+"""``config.json``'s ``kind`` of a network run (``evolution.networks``)."""
 
 DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
 """What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
@@ -64,8 +67,8 @@ _Answer = TypeVar("_Answer")
 
 
 def run_kind(root: Path) -> str | None:
-    """The kind of the run in ``root`` by its ``config.json``: ``"compositions"``, ``"trees"``, or None when
-    it holds no readable configuration."""
+    """The kind of the run in ``root`` by its ``config.json``: ``"compositions"``, ``"networks"``,
+    ``"trees"``, or None when it holds no readable configuration."""
     path = Path(root) / "config.json"
     if not path.is_file():
         return None
@@ -75,7 +78,8 @@ def run_kind(root: Path) -> str | None:
         return None
     if not isinstance(data, dict):
         return None
-    return COMPOSITIONS if data.get("kind") == COMPOSITIONS else "trees"
+    kind = data.get("kind")
+    return kind if kind in (COMPOSITIONS, NETWORKS) else "trees"
 
 
 def _remove_abandoned_starts(parent: Path, name: str) -> None:
@@ -221,7 +225,7 @@ class RunFolder:
 
 
 class RunLoop(ABC, Generic[_Asked, _Answer]):
-    """A run being executed, of either kind: its folder, its lock, the lengths of its logs at the last
+    """A run being executed, of any kind: its folder, its lock, the lengths of its logs at the last
     checkpoint, where the time went, and the loop of batches (:meth:`execute`). A kind says how a batch is
     asked for, evaluated and told (:meth:`_ask`, :meth:`_evaluate`, :meth:`_tell`) and what its checkpoint
     holds (:meth:`checkpoint`)."""

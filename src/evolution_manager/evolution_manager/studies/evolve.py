@@ -27,7 +27,7 @@ import time
 from collections.abc import Callable, Sequence
 from contextlib import ExitStack
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
 from evolution_manager.cluster.client import open_client
@@ -43,7 +43,7 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
-from evolution_manager.evolution.run_folder import COMPOSITIONS, run_kind
+from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, run_kind
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
@@ -235,6 +235,49 @@ class _Executable(Protocol):
     def execute(self, on_batch: Callable[[int, int], None], checkpoint_interval: float) -> object: ...
 
 
+class _Best(Protocol):
+    @property
+    def fitness(self) -> float | None: ...
+
+
+class _OneObjective(_Executable, Protocol):
+    """A composition or network run: one objective, its best so far, individuals produced."""
+
+    produced: int
+
+    @property
+    def config(self) -> Any: ...
+
+    @property
+    def best(self) -> _Best | None: ...
+
+
+def _execute_one(
+    run: _OneObjective,
+    write: Callable[[], object],
+    objective: str,
+    args: argparse.Namespace,
+    argv: Sequence[str] | None,
+    started: float,
+    cluster: ClusterSettings,
+) -> int | None:
+    """:func:`_execute` of a composition or network run, its bar showing the best ``objective`` so far."""
+    bar = progress_bar(run.config, run.produced, not args.no_progress)
+
+    def on_batch(done: int, total: int) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            if run.best is not None and run.best.fitness is not None:
+                bar.set_postfix_str(f"{objective}={run.best.fitness:.3f}")
+
+    return _execute(run, write, args, argv, started, cluster, bar, on_batch)
+
+
+def _best_shown(run: _OneObjective) -> str:
+    """The best fitness of a composition or network run as its last line shows it."""
+    return "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+
+
 def _could_not_start(error: Exception, out: Path | None) -> int:
     """Say in one line why a run could not be started or continued; return the exit status."""
     if isinstance(error, WriteError):  # the new run directory could not be written
@@ -382,13 +425,9 @@ def _evolve_compositions(
         _check_composition_options(args, cluster)
         if args.resume:
             saved = comp.CompositionConfig.from_json(read_json_object(Path(args.out) / "config.json"))
-            for name in ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed"):
-                value = getattr(args, name)
-                if value is not None and value != getattr(saved, name):
-                    raise UsageError(
-                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
-                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
-                    )
+            _check_as_saved(
+                args, saved, ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            )
             if args.homogeneous is not None and args.homogeneous != saved.parameters.homogeneous:
                 raise UsageError(
                     f"--homogeneous {args.homogeneous} differs from the run being resumed "
@@ -430,18 +469,10 @@ def _evolve_compositions(
             run = comp.CompositionRun.start(config, cells, args.out, evaluator, library)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, args.out)
-    bar = progress_bar(run.config, run.produced, not args.no_progress)
-
-    def on_batch(done: int, total: int) -> None:
-        if bar is not None:
-            bar.update(done - bar.n)
-            if run.best is not None and run.best.fitness is not None:
-                bar.set_postfix_str(f"foraging={run.best.fitness:.3f}")
-
-    failed = _execute(run, run.write_results, args, argv, started, cluster, bar, on_batch)
+    failed = _execute_one(run, run.write_results, "foraging", args, argv, started, cluster)
     if failed is not None:
         return failed
-    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    best = _best_shown(run)
     print(
         f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
         f"foraging {best}; the best swarm is {Path(args.out) / 'best' / 'foraging_swarm.json'}"
@@ -449,16 +480,22 @@ def _evolve_compositions(
     return 0
 
 
+def _check_as_saved(args: argparse.Namespace, saved: object, names: Sequence[str]) -> None:
+    """Raise ``UsageError`` for an option of ``names`` given to ``--resume`` that differs from the saved
+    configuration's field of that name."""
+    for name in names:
+        value = getattr(args, name)
+        if value is not None and value != getattr(saved, name):
+            raise UsageError(
+                f"--{name.replace('_', '-')} {value} differs from the run being resumed "
+                f"({getattr(saved, name)}); leave it out or start a new run in another --out"
+            )
+
+
 def _networks_asked(args: argparse.Namespace) -> bool:
     """Whether the command evolves a network's weights: ``--algorithm nn-*``, or ``--resume`` of such a
     run."""
-    if args.algorithm in NETWORK_ALGORITHMS:
-        return True
-    if args.resume and (Path(args.out) / "config.json").is_file():
-        with contextlib.suppress(EvolutionError):
-            saved = read_json(Path(args.out) / "config.json")
-            return isinstance(saved, dict) and saved.get("kind") == "networks"
-    return False
+    return args.algorithm in NETWORK_ALGORITHMS or (bool(args.resume) and run_kind(args.out) == NETWORKS)
 
 
 def _evolve_networks(
@@ -475,21 +512,8 @@ def _evolve_networks(
             raise UsageError("network runs take no --library or --objectives, and fixed scenarios only")
         if args.resume:
             saved = nets.NetworkConfig.from_json(read_json_object(Path(args.out) / "config.json"))
-            for name in (
-                "algorithm",
-                "objective",
-                "evaluations",
-                "seed",
-                "trials",
-                "profile",
-                "scenario_seed",
-            ):
-                value = getattr(args, name)
-                if value is not None and value != getattr(saved, name):
-                    raise UsageError(
-                        f"--{name.replace('_', '-')} {value} differs from the run being resumed "
-                        f"({getattr(saved, name)}); leave it out or start a new run in another --out"
-                    )
+            names = ("algorithm", "objective", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            _check_as_saved(args, saved, names)
             config = saved
         else:
             if (Path(args.out) / "config.json").exists():
@@ -523,18 +547,10 @@ def _evolve_networks(
             run = nets.NetworkRun.start(config, args.out, evaluator)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, args.out)
-    bar = progress_bar(run.config, run.produced, not args.no_progress)
-
-    def on_batch(done: int, total: int) -> None:
-        if bar is not None:
-            bar.update(done - bar.n)
-            if run.best is not None and run.best.fitness is not None:
-                bar.set_postfix_str(f"{run.config.objective}={run.best.fitness:.3f}")
-
-    failed = _execute(run, run.finish, args, argv, started, cluster, bar, on_batch)
+    failed = _execute_one(run, run.finish, run.config.objective, args, argv, started, cluster)
     if failed is not None:
         return failed
-    best = "none" if run.best is None or run.best.fitness is None else f"{run.best.fitness:.4f}"
+    best = _best_shown(run)
     where = Path(args.out) / "best" / f"{run.config.objective}.json"
     print(f"{run.config.label}: {run.evaluations} evaluations, best {run.config.objective} {best}; {where}")
     return 0

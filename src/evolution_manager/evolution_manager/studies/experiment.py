@@ -61,7 +61,7 @@ from evolution_manager.cluster.settings import ClusterSettings, add_cluster_opti
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.evolution.run_folder import COMPOSITIONS
+from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -133,6 +133,8 @@ def run_one(
 
     if config_data.get("kind") == COMPOSITIONS:
         return _run_composition(config_data, root, progress, checkpoint_interval)
+    if config_data.get("kind") == NETWORKS:
+        return _run_network(config_data, root, progress, checkpoint_interval)
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
     if finished(directory.root):
@@ -151,11 +153,7 @@ def run_one(
     else:
         run = Run.start(config, directory.root, evaluator, library)
 
-    def on_batch(produced: int, _budget: int) -> None:
-        if progress is not None:
-            progress.put((root, produced))
-
-    run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
+    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
     write_results(run, run_results(run, evaluator), with_figures=False)
     return root
 
@@ -201,12 +199,45 @@ def _run_composition(
         evaluator = BatchEvaluator(config.world(), threads=1, library=library)
         run = comp.CompositionRun.start(config, cells, directory.root, evaluator, library)
 
+    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
+    run.write_results()
+    return root
+
+
+def _reporter(root: str, progress: queues.Queue[tuple[str, int]] | None) -> Callable[[int, int], None]:
+    """A run's ``on_batch``: ``(root, individuals produced)`` into ``progress`` after every batch."""
+
     def on_batch(produced: int, _budget: int) -> None:
         if progress is not None:
             progress.put((root, produced))
 
-    run.execute(on_batch=on_batch, checkpoint_interval=checkpoint_interval)
-    run.write_results()
+    return on_batch
+
+
+def _run_network(
+    config_data: dict,
+    root: str,
+    progress: queues.Queue[tuple[str, int]] | None,
+    checkpoint_interval: float,
+) -> str:
+    """:func:`run_one` of a planned network run (``evolution.networks``): started or continued, then its
+    summary (with the best network's held-out fitness) and best network written."""
+    from evolution_manager.evolution import networks as nets  # late, as the run's modules in run_one
+    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
+
+    config = nets.NetworkConfig.from_json(config_data)
+    directory = nets.NetworkDirectory(Path(root))
+    if finished(directory.root):
+        return root
+    evaluator = BatchEvaluator(config.world(), threads=1)
+    if directory.started():
+        if nets.NetworkConfig.from_json(read_json_object(directory.config)) != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+        run = nets.NetworkRun.resume(directory.root, evaluator)
+    else:
+        run = nets.NetworkRun.start(config, directory.root, evaluator)
+    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
+    run.finish()
     return root
 
 
@@ -318,13 +349,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="paper: the 2023 paper's three algorithms on its three objectives (default); foraging: the 2024 "
         "study, primitives, libraries and foragers; replication: the 2024 comparison with a library per "
         "primitive seed, from --primitives-from; ablation: the 8-block QD library's ablations, from "
-        "--primitives-from (docs/algorithms.md)",
+        "--primitives-from; bt-vs-nn: trees against neural networks at equal budget (docs/algorithms.md)",
     )
     parser.add_argument(
         "--primitives-from",
         metavar="FOLDER",
         help="with --study replication or ablation: the foraging study whose primitive runs and libraries "
         "give the libraries",
+    )
+    parser.add_argument(
+        "--objectives",
+        metavar="O1,O2",
+        help="with --study bt-vs-nn: which of its seven objectives (default all: the six primitives and "
+        "foraging)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
@@ -415,6 +452,8 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
         if args.primitives_from is not None and args.study not in ("replication", "ablation"):
             raise UsageError("--primitives-from applies to --study replication and ablation only")
+        if args.objectives is not None and args.study != "bt-vs-nn":
+            raise UsageError("--objectives applies to --study bt-vs-nn only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study  # late: loads scipy.stats (about 1 s)
 
@@ -425,6 +464,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
             document, stages, budgets = replication_study.plan_study(args, scenarios, design)
             report = replication_study.build_report
+        elif args.study == "bt-vs-nn":
+            from evolution_manager.studies import networks_study  # late: loads scipy.stats (about 1 s)
+
+            document, stages, budgets = networks_study.plan_study(args, scenarios, design)
+            report = networks_study.build_report
         elif args.study == "ablation":
             from evolution_manager.studies import ablation_study  # late: loads scipy.stats (about 1 s)
 

@@ -22,7 +22,7 @@ from evolution_manager.files import read_json
 from swarm_sim.model import PAPER_OBJECTIVES
 
 PLAN_FILE = "experiment.json"
-STUDIES = ("paper", "foraging", "replication", "ablation")
+STUDIES = ("paper", "foraging", "replication", "ablation", "bt-vs-nn")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
 
@@ -133,6 +133,23 @@ def _shown(value: object, width: int = 40) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
+def document_head(
+    args: argparse.Namespace, profile: str, scenarios: str, design: str | None, scenario_seed: int | None
+) -> dict:
+    """The options a study's plan document records first, in this order: the profile, ``--runs``,
+    ``--evaluations``, ``--seed``, ``--trials``, the scenarios, the design and the shared scenario seed."""
+    return {
+        "profile": profile,
+        "runs": args.runs,
+        "evaluations": args.evaluations,
+        "seed": args.seed,
+        "trials": args.trials,
+        "scenarios": scenarios,
+        "design": design,
+        "scenario_seed": scenario_seed,
+    }
+
+
 def paper_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list[Stage], dict[str, int]]:
@@ -148,15 +165,9 @@ def paper_study(
         design or "per-run",
     )
     shared = {config.scenario_seed for config, _ in planned}
+    scenario_seed = shared.pop() if design == "shared" else args.scenario_seed
     document = {
-        "profile": planned[0][0].profile,
-        "runs": args.runs,
-        "evaluations": args.evaluations,
-        "seed": args.seed,
-        "trials": args.trials,
-        "scenarios": scenarios,
-        "design": design,
-        "scenario_seed": shared.pop() if design == "shared" else args.scenario_seed,
+        **document_head(args, planned[0][0].profile, scenarios, design, scenario_seed),
         "plan": [{"dir": path, "config": config.to_json()} for config, path in planned],
     }
     return document, [lambda: planned], {path: config.evaluations for config, path in planned}
