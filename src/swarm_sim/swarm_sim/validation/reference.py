@@ -58,6 +58,7 @@ __all__ = [
     "read_reference",
     "render",
     "swarm_trees",
+    "tsv_rows",
 ]
 
 
@@ -136,16 +137,22 @@ def estimates(rows: Sequence[Sequence[float]], quantities: Sequence[str] = QUANT
     return {q: estimate([float(row[i]) for row in rows]) for i, q in enumerate(quantities)}
 
 
+def tsv_rows(path: Path, what: str, error: type[Exception]) -> csv.DictReader:
+    """The rows of the tab-separated file ``path`` (``what`` it should be, for the messages); ``error`` with
+    one line naming the file when it cannot be read or is not UTF-8 text."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as problem:
+        raise error(f"{path}: cannot read {what} ({problem.strerror or problem})") from None
+    except UnicodeDecodeError as problem:
+        raise error(f"{path}: not UTF-8 text (byte {problem.start}: {problem.reason})") from None
+    return csv.DictReader(text.splitlines(), delimiter="\t")
+
+
 def read_reference(path: Path, ticks: int = 40) -> dict[str, dict[str, Estimate]]:
     """The reference statistics of a TSV, per tree (file order) and each quantity it measured, descriptors
     mapped to [0, 1] (raw ones with trials of ``ticks`` ticks)."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
-    except UnicodeDecodeError as error:
-        raise ReferenceFileError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
-    reader = csv.DictReader(text.splitlines(), delimiter="\t")
+    reader = tsv_rows(path, "the reference", ReferenceFileError)
     columns = set(reader.fieldnames or ())
     measured = [q for q in QUANTITIES if f"{q}_mean" in columns or f"{q}_sem" in columns]
     descriptors = QUANTITIES[-3:]
@@ -196,13 +203,7 @@ def read_multifood_reference(path: Path, ticks: int = 200) -> dict[str, dict[str
     ``MULTIFOOD_QUANTITIES`` the file has, and the descriptors where the row measured them (their projects
     of ten slots; ``nan`` elsewhere), movement and rotation mapped from trials of the setting's ``trial_s``
     (``ticks`` ticks without one)."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise ReferenceFileError(f"{path}: cannot read the reference ({error.strerror or error})") from None
-    except UnicodeDecodeError as error:
-        raise ReferenceFileError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
-    reader = csv.DictReader(text.splitlines(), delimiter="\t")
+    reader = tsv_rows(path, "the reference", ReferenceFileError)
     columns = set(reader.fieldnames or ())
     measured = [q for q in MULTIFOOD_QUANTITIES if f"{q}_mean" in columns]
     missing = sorted({"tree", "setting", "foraging_mean", "foraging_sem"} - columns)

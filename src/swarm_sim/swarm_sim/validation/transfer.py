@@ -35,7 +35,7 @@ from bt_controller.validate import strict_json
 from swarm_sim.errors import UsageError
 from swarm_sim.model import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
 from swarm_sim.validation import reference as validation
-from swarm_sim.validation.reference import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate
+from swarm_sim.validation.reference import INDISTINGUISHABLE, MAX_Z, OUTSIDE, Comparison, Estimate, tsv_rows
 
 __all__ = [
     "ArgosHarness",
@@ -477,13 +477,7 @@ def transfer_tsv(rows: Sequence[TransferRow]) -> str:
 
 def read_transfer_tsv(path: Path) -> list[TransferRow]:
     """The rows of a ``transfer_tsv`` file (UsageError naming the file and line when it is not one)."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as error:
-        raise UsageError(f"{path}: cannot read the transfer table ({error.strerror or error})") from None
-    except UnicodeDecodeError as error:
-        raise UsageError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
-    reader = csv.DictReader(text.splitlines(), delimiter="\t")
+    reader = tsv_rows(path, "the transfer table", UsageError)
     if tuple(reader.fieldnames or ()) != TSV_COLUMNS:
         raise UsageError(f"{path}: not a transfer table (expected the columns {', '.join(TSV_COLUMNS)})")
     by_index: dict[int, tuple[Pick, list[Comparison]]] = {}
