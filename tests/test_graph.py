@@ -22,23 +22,29 @@ from evolution_manager.recording.reproduce import verify_trial_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values, values_of
 from swarm_sim.model import DEFAULT
-from swarm_sim.tasks import FORAGING
+from swarm_sim.tasks import FORAGING, PRIMITIVES, Trials
 
 PARITY_TREES = 20
 CLEAN_PARITY_TREES = 20
 
 
-def test_trials_through_the_graph_equal_the_batch_evaluator(graph):
+SHORT_TRIALS = replace(PRIMITIVES, name="primitives-5s", trials=Trials(ticks=10, chain_trials=5))
+"""The primitives' world in 5 s trials (40 steps: the initial values at step 16, then 6 ticks), so that the
+parity of 20 trees over the positions of two chains takes a quarter of the 20 s trials' steps."""
+
+
+def test_trials_through_the_graph_equal_the_batch_evaluator():
     trees = ["forward", "sel(seq(in_nest, stop), forward)", *random_trees(seed=2023, count=PARITY_TREES - 2)]
-    evaluator = BatchEvaluator()
-    for index, text in enumerate(trees):
-        seed, trial = 1000 + index, index % 7  # trials 0-6: all of chain 0, the first two of chain 1
-        record = graph.run(to_text(parse(text)), seed, trial)
-        _, trial_records = evaluator.evaluate_trials([EvaluationRequest(text, seed, trial + 1)])[0]
-        expected = trial_records[trial]
-        assert record.values == expected.values, f"tree {index}: {text}"
-        assert np.array_equal(record.end_poses, expected.end_poses), f"tree {index}: {text}"
-        assert np.array_equal(record.start_poses, expected.start_poses)
+    evaluator = BatchEvaluator(SHORT_TRIALS.config())
+    with TrialGraph(timeout=240.0, task=SHORT_TRIALS) as graph:
+        for index, text in enumerate(trees):
+            seed, trial = 1000 + index, index % 7  # trials 0-6: all of chain 0, the first two of chain 1
+            record = graph.run(to_text(parse(text)), seed, trial)
+            _, trial_records = evaluator.evaluate_trials([EvaluationRequest(text, seed, trial + 1)])[0]
+            expected = trial_records[trial]
+            assert record.values == expected.values, f"tree {index}: {text}"
+            assert np.array_equal(record.end_poses, expected.end_poses), f"tree {index}: {text}"
+            assert np.array_equal(record.start_poses, expected.start_poses)
 
 
 def test_under_the_clean_profile_the_graph_equals_the_batch_evaluator_too(tmp_path):
