@@ -340,3 +340,33 @@ def test_a_dask_scheduler_that_speaks_tls_is_reached_with_the_settings_certifica
             if process.poll() is None:
                 process.kill()
             process.wait()
+
+
+def test_distributeds_own_failure_to_cancel_an_interrupted_call_is_not_shown():
+    """Ctrl-C before distributed's ``sync`` has begun its call makes its cancel callback fail with a
+    ``NameError`` that tornado logs with a traceback, at any moment after the interrupt: that one record is
+    dropped, every other error of the loop is kept."""
+    import functools
+    import logging
+    import sys
+
+    from evolution_manager.cluster.client import _INTERRUPTED_SYNC
+
+    def sync():
+        def cancel():
+            return None
+
+        return cancel
+
+    def record(callback, error):
+        try:
+            raise error
+        except Exception:
+            return logging.LogRecord(
+                "tornado.application", logging.ERROR, __file__, 1, "Exception in callback %r", (callback,),
+                sys.exc_info(),
+            )  # fmt: skip
+
+    assert not _INTERRUPTED_SYNC.filter(record(functools.partial(sync()), NameError("future")))
+    assert _INTERRUPTED_SYNC.filter(record(functools.partial(sync()), ValueError("other")))
+    assert _INTERRUPTED_SYNC.filter(record(print, NameError("elsewhere")))

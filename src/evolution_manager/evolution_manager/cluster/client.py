@@ -242,6 +242,20 @@ class _LostScheduler(logging.Filter):
 _LOST_SCHEDULER = _LostScheduler()
 
 
+class _InterruptedSync(logging.Filter):
+    """Drops tornado's report of distributed's own ``sync`` failing to cancel the call that Ctrl-C
+    interrupted: when the interrupt comes before that call has begun, the cancel callback reads a variable
+    not yet set (a ``NameError`` in ``distributed.utils``, logged on the client's event-loop thread at any
+    moment after the interrupt). The command has said in one line that it was interrupted."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        return not (isinstance(error, NameError) and "sync.<locals>.cancel" in record.getMessage())
+
+
+_INTERRUPTED_SYNC = _InterruptedSync()
+
+
 @contextmanager
 def _silenced() -> Iterator[None]:
     """Log records up to ERROR dropped within the block (distributed's loggers set their own levels, so
@@ -341,6 +355,7 @@ def open_client(
     from distributed import Client
 
     logging.getLogger("distributed").setLevel(logging.WARNING)  # its INFO lines are not for a terminal
+    logging.getLogger("tornado.application").addFilter(_INTERRUPTED_SYNC)  # once: a filter is added once
     cluster = None
     keeper = None
     client = None
