@@ -230,8 +230,7 @@ class RobotView:
     ``refresh`` recomputes the smoothed values (the timeline says when); ``broadcast`` is what the robot
     sends; ``end_trial`` clears the carrying flags and the deliveries at a trial's last step
     (``footbot_bt.cpp:579-580`` at a73e4af), and where ``timeline.trials_restart`` (the authors' 2026 code)
-    also empties the region windows. Nothing else is reset between the trials of a chain
-    (A1).
+    also empties the region windows. Nothing else is reset between the trials of a chain (A1).
     ``p.regions``: the nest and the world's food kinds (2 to ``len(REGIONS)``).
     """
 

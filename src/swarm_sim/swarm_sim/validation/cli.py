@@ -232,7 +232,10 @@ def multifood_task(setting: str) -> TaskSpec:
         if layout != 1 or bias is not None:
             raise ValueError(f"setting {setting!r}: build {build} is checked on arena 1 only, without a bias")
         return replace(
-            base, name=FORAGING_2026.name, description=FORAGING_2026.description, authors_code=2026
+            base,
+            name=FORAGING_2026.name,
+            description=FORAGING_2026.description,
+            authors_code=FORAGING_2026.authors_code,
         )
     try:
         return arena_task(base, layout, bias=bias, other_food_weight=penalty, name=name)
