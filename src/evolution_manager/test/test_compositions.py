@@ -248,7 +248,7 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
 @pytest.mark.parametrize(
     ("extra", "words"),
     [
-        (["--algorithm", "qd", "--swarm-from", "SOURCE"], "add --task foraging"),
+        (["--algorithm", "qd", "--swarm-from", "SOURCE"], "add --task (foraging"),
         (["--algorithm", "ga", "--task", "foraging"], "give --swarm-from RUN_DIR"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "EMPTY"], "holds no repertoire"),
         (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "BARE"], "no cell to compose"),
@@ -256,8 +256,10 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
          "--library cannot be combined with --swarm-from"),
         (["--algorithm", "gp", "--task", "foraging", "--swarm-from", "SOURCE"],
          "--algorithm ga or --algorithm qd"),
-        (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--objective", "food"],
-         "not on --objective food"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-crossover", "mix"],
+         "goes with algorithm qd"),
+        (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--descriptors", "deliveries"],
+         "has one kind of food"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
          "fixed scenarios"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "SOURCE"], "is given twice"),
@@ -318,7 +320,11 @@ def test_resume_of_a_composition_run_refuses_other_options(source, tmp_path, cap
     before = _files(out)
     capsys.readouterr()
     assert evolve(["--out", str(out), "--resume", "--task", "primitives"]) == 2
-    assert "evolves on the foraging task" in capsys.readouterr().err
+    assert "--task primitives differs from the run being resumed (foraging)" in capsys.readouterr().err
+    assert evolve(["--out", str(out), "--resume", "--objective", "food"]) == 2
+    assert "--objective food differs" in capsys.readouterr().err
+    assert evolve(["--out", str(out), "--resume", "--swarm-mutation", "axis"]) == 2
+    assert "--swarm-mutation axis differs from the run being resumed (one)" in capsys.readouterr().err
     assert evolve(["--out", str(out), "--resume", "--seed", "9"]) == 2
     assert "--seed 9 differs" in capsys.readouterr().err
     assert evolve(["--out", str(out), "--resume", "--swarm-from", str(source)]) == 2

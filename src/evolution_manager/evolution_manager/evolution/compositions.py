@@ -1,37 +1,50 @@
-"""Heterogeneous compositions: evolve which repertoire cell each robot of a foraging swarm runs.
+"""Heterogeneous compositions: evolve which repertoire cell each robot of a swarm runs.
 
-``evolve --task foraging --swarm-from RUN_DIR [RUN_DIR ...] --algorithm ga|qd`` (``docs/algorithms.md``,
-"Heterogeneous compositions"). The *cells* are the best tree of every filled bin of every repertoire file
+``evolve --task TASK --swarm-from RUN_DIR [RUN_DIR ...] --algorithm ga|qd`` (``docs/algorithms.md``,
+"Heterogeneous compositions"); any task and objective (by default ``foraging``), binned by the paper's
+behaviour space or by the deliveries of each food kind (``--descriptors``, ``descriptor_sets``).
+
+The *cells* are the best tree of every filled bin of every repertoire file
 found in the given run directories, listed in a fixed order (:func:`read_sources`): directory by directory
 as given, then the objectives in ``OBJECTIVES`` order (``repertoire_<objective>.json``), then the bins
 in index order. A *genome* is one cell index per robot (robot 0 first); it is evaluated as a heterogeneous
-swarm (``swarm_sim.model.swarm_layout``) on the foraging task, every evaluation on the run's scenario seed.
+swarm (``swarm_sim.model.swarm_layout``) on the run's task, every evaluation on the run's scenario seed.
 
 ``ga``: a population of ``population`` genomes; each generation keeps ``elites`` best and fills the rest with
 tournament winners (``tournament``), varied pairwise by two-point crossover (probability ``crossover``) and
-then each by mutation (probability ``mutation``: one robot's cell redrawn uniformly among the other cells).
-``qd``: MAP-Elites over compositions: an 8x8x8 grid (the swarm's movement, rotation, conditionality, binned as
-every repertoire of the project) holding one genome per bin, the fitter kept; ``init_batch`` random genomes,
-then batches of ``batch`` genomes varied as above from tournament winners of the grid. The budget
-(``evaluations``) counts the genomes produced after the initial population, as every run's.
+then each by mutation (probability ``mutation``), one of the authors' three (``ga/qd.py``; ``cell_mutation``):
+``one`` robot's cell redrawn uniformly among the other cells; ``all``: each robot's cell, with probability
+0.5, redrawn among every cell; ``axis``: each robot's cell moved along one descriptor axis of its source
+repertoire, drawn uniformly, to a cell that shares the other two coordinates (kept when there is none).
+``qd``: MAP-Elites over compositions: an 8x8x8 grid over the run's behaviour space (binned as every
+repertoire of the project) holding one genome per bin, the fitter kept (under ``foraging_biased`` binned by
+deliveries, the authors' rule: the one that delivers more of the preferred kind); ``init_batch`` random
+genomes, then batches of ``batch`` genomes varied as above from tournament winners of the grid, or, with
+``crossover_operator`` ``mix`` (after Mix-ME, Ingvarsson et al. 2023), each child with probability
+``crossover`` made of two genomes of different bins drawn uniformly, each robot taking its cell from either,
+then mutated as above. The budget (``evaluations``) counts the genomes produced after the initial population,
+as every run's.
 
 A run directory holds ``config.json``, ``cells.json`` (the run's copy of its cells, checked by digest),
-``evaluations.csv`` (index, seed, genome as space-separated cell indices, foraging, the descriptors, error),
+``evaluations.csv`` (index, seed, genome as space-separated cell indices, the objective, the behaviour
+space's measured values, error),
 ``progress.csv``, ``checkpoint.json`` (written atomically, with the lengths of the two CSV files and the
-random generator's state); when the run ends ``summary.json``, ``best/foraging_swarm.json`` (the best
-composition as a swarm layout file, for ``evaluate --swarm``, ``trial --swarm``, ``animate --swarm``),
-``best/foraging_robot<i>.txt`` (its trees) and for ``qd`` ``repertoire_compositions.json``. A resumed run cuts
-the CSV files back to its checkpoint and ends with the very bytes of an uninterrupted run.
+random generator's state); when the run ends ``summary.json`` (with the authors' QD score at 1, 2, 4 and 8
+bins per axis, :func:`coarse_qd_scores`), ``best/<objective>_swarm.json`` (the best composition as a
+swarm layout file, for ``evaluate --swarm``, ``trial --swarm``, ``animate --swarm``),
+``best/<objective>_robot<i>.txt`` (its trees) and for ``qd`` ``repertoire_compositions.json``. A resumed
+run cuts the CSV files back to its checkpoint and ends with the very bytes of an uninterrupted run.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import json
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -43,6 +56,12 @@ from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.archive import Repertoire
+from evolution_manager.evolution.descriptor_sets import (
+    BEHAVIOUR,
+    DESCRIPTOR_SETS,
+    DescriptorSet,
+    descriptor_set,
+)
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
 from evolution_manager.evolution.run_folder import COMPOSITIONS, RunFolder, RunLoop
@@ -56,7 +75,7 @@ from evolution_manager.files import (
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.evaluation import Evaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
-from swarm_sim.tasks import task_named
+from swarm_sim.tasks import TaskSpec, resolve_task, task_from_record, task_named, task_to_record
 
 KIND = COMPOSITIONS
 """``config.json``'s ``kind``: what tells a composition run from a tree run."""
@@ -65,16 +84,23 @@ ALGORITHMS: tuple[str, ...] = ("ga", "qd")
 DEFAULT_EVALUATIONS = {"ga": 1000, "qd": 1000}
 LABELS = {"ga": "GA_compositions", "qd": "QD_compositions"}
 OBJECTIVE = "foraging"
+"""The objective a run evolves unless it names another (every run before multi-food tasks)."""
 TASK = "foraging"
+"""The task a run's configuration names when it names none (every run before multi-food tasks)."""
 DESCRIPTORS = ("movement", "rotation", "conditionality")
+CELL_MUTATIONS: tuple[str, ...] = ("one", "all", "axis")
+"""The authors' three mutations of a genome (``ga/qd.py``), ``cell_mutation``'s values; ``one`` is theirs in
+use and the default."""
+CROSSOVERS: tuple[str, ...] = ("two-point", "mix")
+"""How two genomes are crossed (``crossover_operator``): the authors' two-point crossover, or Mix-ME's mixing
+of two archive bins' genomes (``qd`` only)."""
+QD_SCORE_BINS: tuple[int, ...] = (1, 2, 4, 8)
+"""The bins per axis at which the authors print a container's QD score (``utilities.py``)."""
 
 MUTATION = 0.5
 """Probability that a child is mutated (one robot's cell redrawn): our choice, the probability of the GP's
 point mutation (``replace`` 0.5 of ``GPParameters.mutations``), the operator that likewise swaps one part of
 a genome for a random one."""
-
-EVALUATION_HEADER = ["evaluation", "seed", "genome", OBJECTIVE, *DESCRIPTORS, "error"]
-PROGRESS_HEADER = ["evaluations", f"best_{OBJECTIVE}", "coverage", "qd_score"]
 
 Genome = tuple[int, ...]
 
@@ -97,8 +123,20 @@ class CompositionParameters:
     homogeneous: int = 0
     """How many genomes of the initial population (ga) or batch (qd) are homogeneous swarms of the fittest
     cells (:func:`homogeneous_genomes`), the rest random; 0, the authors' start: all random."""
+    cell_mutation: str = "one"
+    """Which of :data:`CELL_MUTATIONS` a mutated child undergoes."""
+    crossover_operator: str = "two-point"
+    """Which of :data:`CROSSOVERS` makes children (``mix``: MAP-Elites only)."""
 
     def __post_init__(self) -> None:
+        if self.cell_mutation not in CELL_MUTATIONS:
+            raise ConfigError(
+                f"cell_mutation must be one of {', '.join(CELL_MUTATIONS)}, got {self.cell_mutation!r}"
+            )
+        if self.crossover_operator not in CROSSOVERS:
+            raise ConfigError(
+                f"crossover_operator must be one of {', '.join(CROSSOVERS)}, got {self.crossover_operator!r}"
+            )
         integer(self.population, "population", 2, error=ConfigError)
         integer(self.homogeneous, "homogeneous", 0, error=ConfigError)
         integer(self.tournament, "tournament", 1, error=ConfigError)
@@ -271,16 +309,70 @@ def mutate(genome: Genome, rng: random.Random, n_cells: int) -> Genome:
     return (*genome[:robot], cell, *genome[robot + 1 :])
 
 
+def mutate_all(genome: Genome, rng: random.Random, n_cells: int) -> Genome:
+    """The genome with each robot's cell, with probability 0.5, redrawn uniformly among every cell (it may
+    draw its own): the authors' ``mutateAllAxes``."""
+    return tuple(rng.randrange(n_cells) if rng.random() < 0.5 else c for c in genome)
+
+
+Neighbours = tuple[tuple[tuple[int, ...], ...], ...]
+"""For each cell and descriptor axis, the cells one step along that axis: :func:`axis_neighbours`."""
+
+
+def axis_neighbours(cells: Sequence[Cell]) -> Neighbours:
+    """For each cell and each axis of its source repertoire's bin, the cells whose bins share every other
+    coordinate and differ on that axis (cell order), whichever run or objective they come from."""
+    return tuple(
+        tuple(
+            tuple(
+                k
+                for k, other in enumerate(cells)
+                if len(other.bin) == len(cell.bin)
+                and other.bin[axis] != cell.bin[axis]
+                and all(other.bin[a] == cell.bin[a] for a in range(len(cell.bin)) if a != axis)
+            )
+            for axis in range(len(cell.bin))
+        )
+        for cell in cells
+    )
+
+
+def mutate_axis(genome: Genome, rng: random.Random, neighbours: Neighbours) -> Genome:
+    """The genome with each robot's cell moved along one axis of its source repertoire, drawn uniformly, to a
+    cell drawn uniformly among :func:`axis_neighbours` (kept when that axis has none): the authors'
+    ``mutateOneAxis``."""
+    moved = []
+    for cell in genome:
+        choices = neighbours[cell][rng.randrange(len(neighbours[cell]))] if neighbours[cell] else ()
+        moved.append(choices[rng.randrange(len(choices))] if choices else cell)
+    return tuple(moved)
+
+
+def mix(a: Genome, b: Genome, rng: random.Random) -> Genome:
+    """A child whose robot ``i`` runs the cell of robot ``i`` of ``a`` or of ``b``, each with probability 0.5:
+    Mix-ME's mixing of two teams."""
+    if len(a) != len(b):
+        raise ValueError(f"mixing needs genomes of one length, got {len(a)}, {len(b)}")
+    return tuple(x if rng.random() < 0.5 else y for x, y in zip(a, b, strict=True))
+
+
 def vary(
-    parents: Sequence[Genome], rng: random.Random, crossover: float, mutation: float, n_cells: int
+    parents: Sequence[Genome],
+    rng: random.Random,
+    crossover: float,
+    mutation: float,
+    n_cells: int,
+    mutator: Callable[[Genome, random.Random], Genome] | None = None,
 ) -> list[Genome]:
     """Offspring of ``parents`` (in order): consecutive pairs crossed with probability ``crossover``, then
-    each child mutated with probability ``mutation`` (DEAP's ``varAnd`` order)."""
+    each child mutated with probability ``mutation`` (DEAP's ``varAnd`` order) by ``mutator`` (by default
+    :func:`mutate`)."""
     children = list(parents)
     for k in range(1, len(children), 2):
         if rng.random() < crossover:
             children[k - 1], children[k] = two_point_crossover(children[k - 1], children[k], rng)
-    return [mutate(c, rng, n_cells) if rng.random() < mutation else c for c in children]
+    change = mutator or (lambda genome, r: mutate(genome, r, n_cells))
+    return [change(c, rng) if rng.random() < mutation else c for c in children]
 
 
 @dataclass(frozen=True)
@@ -340,8 +432,27 @@ def _binner() -> Repertoire:
 
 
 def bin_of(descriptors: Sequence[float]) -> tuple[int, ...]:
-    """The 8x8x8 bin of a descriptor vector, as every repertoire of the project bins (``archive``)."""
+    """The 8x8x8 bin of a point in [0, 1]^3, as every repertoire of the project bins (``archive``)."""
     return _binner().bin_of(tuple(descriptors))
+
+
+def coarse_qd_scores(
+    scored: Iterable[tuple[Sequence[float], float]], bins: Sequence[int] = QD_SCORE_BINS
+) -> dict[int, float]:
+    """The authors' QD score of a container at ``k`` bins per axis, for each ``k`` of ``bins``: its points
+    (in [0, 1]^3, each with its fitness) binned ``k`` per axis (the top edge into the last bin), the fittest
+    of each bin kept, their fitnesses summed and divided by ``k`` cubed (``utilities.py``, the foraging
+    description: no offset). A failed evaluation (fitness None) is no entry."""
+    entries = [(tuple(point), fitness) for point, fitness in scored]
+    scores = {}
+    for k in bins:
+        integer(k, "bins per axis", 1)
+        best: dict[tuple[int, ...], float] = {}
+        for point, fitness in entries:
+            index = tuple(min(k - 1, math.floor(x * k)) for x in point)
+            best[index] = max(fitness, best.get(index, -math.inf))
+        scores[k] = math.fsum(best.values()) / k ** len(entries[0][0]) if entries else 0.0
+    return scores
 
 
 # Configuration -------------------------------------------------------------------------------------------
@@ -362,10 +473,34 @@ class CompositionConfig:
     parameters: CompositionParameters = field(default_factory=CompositionParameters)
     library_digest: str = ""
     """The digest of the primitive library the cells' trees name ("" for none); the run keeps a copy."""
+    task: TaskSpec = field(default_factory=lambda: task_named(TASK))
+    """The world every evaluation runs in (a name is taken for the registered task)."""
+    objective: str = OBJECTIVE
+    """What the run maximises: one of ``OBJECTIVES``."""
+    descriptors: str = BEHAVIOUR.name
+    """The behaviour space the grids bin compositions by (``descriptor_sets``)."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
             raise ConfigError(f"compositions evolve with {' or '.join(ALGORITHMS)}, got {self.algorithm!r}")
+        if isinstance(self.task, str):
+            object.__setattr__(self, "task", resolve_task(self.task))
+        if self.objective not in OBJECTIVES:
+            raise ConfigError(f"objective must be one of {', '.join(OBJECTIVES)}, got {self.objective!r}")
+        if self.descriptors not in DESCRIPTOR_SETS:
+            raise ConfigError(
+                f"descriptors must be one of {', '.join(DESCRIPTOR_SETS)}, got {self.descriptors!r}"
+            )
+        if self.descriptors == "deliveries" and self.task.config().food_kinds < 2:
+            raise ConfigError(
+                f"descriptors deliveries bins swarms by the deliveries of each food kind: task "
+                f"{self.task.name} has one kind of food; give a task of several (multifood-arena9-kind2, ...)"
+            )
+        if self.parameters.crossover_operator == "mix" and self.algorithm != "qd":
+            raise ConfigError(
+                "crossover_operator mix draws its parents from two bins of MAP-Elites' grid: it goes with "
+                "algorithm qd"
+            )
         integer(self.evaluations, "evaluations", 1, error=ConfigError)
         integer(self.seed, "seed", 0, MAX_SEED, error=ConfigError)
         integer(self.trials, "trials", 1, error=ConfigError)
@@ -382,16 +517,28 @@ class CompositionConfig:
         return LABELS[self.algorithm]
 
     def world(self) -> Config:
-        """The model of every evaluation: the run's profile, the foraging task's trials."""
+        """The model of every evaluation: the run's task under its profile."""
+        return self.task.config(self.profile)
 
-        return task_named(TASK).config(self.profile)
+    @property
+    def space(self) -> DescriptorSet:
+        """The behaviour space of the run's grids."""
+        return descriptor_set(self.descriptors)
 
     def to_json(self) -> dict:
-        data = asdict(self)
+        data = {
+            f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in _NOT_IN_ORDER
+        }
         data["sources"] = list(self.sources)
-        if not self.parameters.homogeneous:  # written only when asked for: earlier runs' files unchanged
-            del data["parameters"]["homogeneous"]
-        return {"kind": KIND, "objective": OBJECTIVE, "task": TASK, **data}
+        data["parameters"] = asdict(self.parameters)
+        # written only when asked for: the files of earlier runs stay as they were
+        for name, default in _PARAMETER_DEFAULTS.items():
+            if data["parameters"][name] == default:
+                del data["parameters"][name]
+        document = {"kind": KIND, "objective": self.objective, "task": task_to_record(self.task), **data}
+        if self.descriptors != BEHAVIOUR.name:
+            document["descriptors"] = self.descriptors
+        return document
 
     @classmethod
     def from_json(cls, data: dict) -> CompositionConfig:
@@ -410,11 +557,20 @@ class CompositionConfig:
                 str(data["cells_digest"]),
                 CompositionParameters(**data["parameters"]),
                 str(data.get("library_digest", "")),
+                task_from_record(data.get("task", TASK), "config.json: task"),
+                str(data.get("objective", OBJECTIVE)),
+                str(data.get("descriptors", BEHAVIOUR.name)),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, ConfigError):
                 raise
             raise ConfigError(f"not a composition run's configuration: {error}") from error
+
+
+_NOT_IN_ORDER = ("task", "objective", "descriptors")
+"""Fields ``config.json`` writes elsewhere than in field order (they came later)."""
+_PARAMETER_DEFAULTS = {"homogeneous": 0, "cell_mutation": "one", "crossover_operator": "two-point"}
+"""The parameters ``config.json`` leaves out at these values, as runs made before them did not know them."""
 
 
 def layout_of(genome: Genome, cells: Sequence[Cell]) -> SwarmLayout:
@@ -431,19 +587,23 @@ def evaluate_genomes(
     trials: int,
     first: int,
     seeds: Sequence[int] | None = None,
+    objective: str = OBJECTIVE,
+    space: DescriptorSet = BEHAVIOUR,
 ) -> list[Member]:
     """Each genome evaluated as a heterogeneous swarm with ``seed`` (or genome ``i`` with ``seeds[i]``) over
-    ``trials`` trials; evaluation indices from ``first``."""
+    ``trials`` trials: its ``objective`` and its measured values of ``space``'s axes; evaluation indices from
+    ``first``."""
     if not genomes:
         return []
     chosen = [seed] * len(genomes) if seeds is None else list(seeds)
     requests = [SwarmRequest(layout_of(g, cells), s, trials) for g, s in zip(genomes, chosen, strict=True)]
     results = evaluator.evaluate(requests)  # type: ignore[arg-type]  # BatchEvaluator takes swarm requests
-    k = OBJECTIVES.index(OBJECTIVE)
+    k = OBJECTIVES.index(objective)
     members = []
     for offset, (genome, result) in enumerate(zip(genomes, results, strict=True)):
         if result.error is None and result.fitness is not None and result.descriptors is not None:
-            members.append(Member(genome, result.fitness[k], tuple(result.descriptors), first + offset))
+            values = space.values(result.fitness, result.descriptors)
+            members.append(Member(genome, result.fitness[k], values, first + offset))
         else:
             members.append(Member(genome, None, None, first + offset, result.error or "no fitness"))
     return members
@@ -451,16 +611,36 @@ def evaluate_genomes(
 
 # The run -------------------------------------------------------------------------------------------------
 class CompositionDirectory(RunFolder):
-    """The paths of a composition run's folder."""
+    """The paths of a composition run's folder; its logs' columns name the run's objective and axes (by
+    default those of the runs made before multi-food tasks)."""
 
-    def __init__(self, root: Path) -> None:
-        super().__init__(root, EVALUATION_HEADER, PROGRESS_HEADER)
+    def __init__(self, root: Path, objective: str = OBJECTIVE, axes: Sequence[str] = DESCRIPTORS) -> None:
+        super().__init__(
+            root,
+            ["evaluation", "seed", "genome", objective, *axes, "error"],
+            ["evaluations", f"best_{objective}", "coverage", "qd_score"],
+        )
         self.cells = self.root / "cells.json"
         self.repertoire = self.root / "repertoire_compositions.json"
 
     def read_library(self, config: CompositionConfig) -> Library | None:
         """The run's copy of its primitive library (None without one), checked against the digest."""
         return self.read_library_copy(config.library_digest, str(self.library))
+
+
+def _directory(root: Path, config: CompositionConfig) -> CompositionDirectory:
+    """The folder of ``config``'s run, its logs' columns named after its objective and axes."""
+    return CompositionDirectory(root, config.objective, config.space.names)
+
+
+def _preferred_axis(config: CompositionConfig) -> int | None:
+    """The axis of the preferred food kind when the run bins by deliveries and maximises
+    ``foraging_biased`` with a preferred kind (then a bin keeps the genome that delivers more of it, the
+    authors' rule); None otherwise."""
+    preferred = config.world().preferred_food
+    if config.descriptors != "deliveries" or config.objective != "foraging_biased" or not preferred:
+        return None
+    return preferred - 1
 
 
 class CompositionRun(RunLoop[Genome, Member]):
@@ -472,10 +652,14 @@ class CompositionRun(RunLoop[Genome, Member]):
         super().__init__()
         self.config = config
         self.cells = list(cells)
-        self.directory: CompositionDirectory = CompositionDirectory(root)
+        self.directory: CompositionDirectory = _directory(root, config)
         self.evaluator = evaluator
         self.rng = random.Random(derive_seed(config.seed, RUN_ALGORITHM))
         self.n_robots = config.world().n_robots
+        self.space = config.space
+        self.neighbours = axis_neighbours(self.cells) if config.parameters.cell_mutation == "axis" else ()
+        self.preferred = _preferred_axis(config)
+        """The axis whose deliveries decide between two genomes of one bin, or None: by fitness."""
         self.produced = 0
         """Genomes produced after the initial population (what the budget counts)."""
         self.population: list[Member] = []
@@ -510,7 +694,7 @@ class CompositionRun(RunLoop[Genome, Member]):
         if library is not None:
             files["library.json"] = library.as_json()
         return cls._begin(
-            CompositionDirectory(root), lambda building: cls(config, cells, building, evaluator), files
+            _directory(root, config), lambda building: cls(config, cells, building, evaluator), files
         )
 
     @classmethod
@@ -526,8 +710,8 @@ class CompositionRun(RunLoop[Genome, Member]):
                     raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
                 directory.read_library(config)  # the evaluator was made with it
                 run = cls(config, cells, root, evaluator)
-                state = directory.read_checkpoint()
-                directory.check_logs()
+                state = run.directory.read_checkpoint()
+                run.directory.check_logs()
                 run.restore(state)
             except (ConfigError, KeyError, TypeError, ValueError) as error:
                 raise RunDirectoryError(
@@ -565,7 +749,7 @@ class CompositionRun(RunLoop[Genome, Member]):
         self.produced = integer(state["produced"], "produced", 0)
         self.population = [Member.from_json(m) for m in state["population"]]
         members = [Member.from_json(m) for m in state["grid"]]
-        self.grid = {bin_of(m.descriptors): m for m in members if m.descriptors is not None}
+        self.grid = {self._bin(m.descriptors): m for m in members if m.descriptors is not None}
         self.best = None if state["best"] is None else Member.from_json(state["best"])
         for member in [*self.population, *members, *([self.best] if self.best else [])]:
             if len(member.genome) != self.n_robots or not all(
@@ -594,9 +778,39 @@ class CompositionRun(RunLoop[Genome, Member]):
             if not self.grid:  # the initial batch (again, if every genome of it failed)
                 return self._initial(p.init_batch)
             entries = [self.grid[b] for b in sorted(self.grid)]
+            if p.crossover_operator == "mix":
+                return self._mixed(entries)[: self.config.evaluations - self.produced]
             parents = tournament(entries, p.batch, p.tournament, self.rng)
-        children = vary(parents, self.rng, p.crossover, p.mutation, n)
+        children = vary(parents, self.rng, p.crossover, p.mutation, n, self._mutate)
         return children[: self.config.evaluations - self.produced]
+
+    def _mixed(self, entries: Sequence[Member]) -> list[Genome]:
+        """A batch after Mix-ME: each child, with probability ``crossover``, mixes two genomes of different
+        bins drawn uniformly (:func:`mix`), else is a tournament winner; then mutated with probability
+        ``mutation``."""
+        p = self.config.parameters
+        children = []
+        for _ in range(p.batch):
+            if len(entries) >= 2 and self.rng.random() < p.crossover:
+                a, b = self.rng.sample(range(len(entries)), 2)
+                child = mix(entries[a].genome, entries[b].genome, self.rng)
+            else:
+                child = tournament(entries, 1, p.tournament, self.rng)[0]
+            children.append(self._mutate(child, self.rng) if self.rng.random() < p.mutation else child)
+        return children
+
+    def _mutate(self, genome: Genome, rng: random.Random) -> Genome:
+        """``genome`` under the run's mutation (``cell_mutation``)."""
+        kind = self.config.parameters.cell_mutation
+        if kind == "all":
+            return mutate_all(genome, rng, len(self.cells))
+        if kind == "axis":
+            return mutate_axis(genome, rng, self.neighbours)
+        return mutate(genome, rng, len(self.cells))
+
+    def _bin(self, values: Sequence[float]) -> tuple[int, ...]:
+        """The grid bin of a genome's measured values of the run's axes."""
+        return bin_of(self.space.scaled(values))
 
     def _initial(self, size: int) -> list[Genome]:
         """``size`` genomes: the homogeneous swarms of the fittest cells asked for, then random ones."""
@@ -626,10 +840,18 @@ class CompositionRun(RunLoop[Genome, Member]):
             for member in members:
                 if member.descriptors is None or member.fitness is None:
                     continue
-                index = bin_of(member.descriptors)
+                index = self._bin(member.descriptors)
                 held = self.grid.get(index)
-                if held is None or member.fitness > held.rank:
+                if held is None or self._displaces(member, held):
                     self.grid[index] = member
+
+    def _displaces(self, member: Member, held: Member) -> bool:
+        """Whether ``member`` takes the bin of ``held``: the fitter, or under a preferred kind the one that
+        delivers more of it (the authors' grid)."""
+        assert member.fitness is not None and member.descriptors is not None
+        if self.preferred is None or held.descriptors is None:
+            return member.fitness > held.rank
+        return member.descriptors[self.preferred] > held.descriptors[self.preferred]
 
     def _evaluate(self, genomes: list[Genome]) -> list[Member]:
         """The genomes evaluated on the run's scenario; a genome this process evaluated before is answered
@@ -638,7 +860,14 @@ class CompositionRun(RunLoop[Genome, Member]):
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
         fresh = list(dict.fromkeys(g for g in genomes if g not in self.known))
         for member in evaluate_genomes(
-            self.evaluator, self.cells, fresh, self.config.scenario_seed, self.config.trials, 0
+            self.evaluator,
+            self.cells,
+            fresh,
+            self.config.scenario_seed,
+            self.config.trials,
+            0,
+            objective=self.config.objective,
+            space=self.space,
         ):
             self.known[member.genome] = member
         return [
@@ -654,7 +883,7 @@ class CompositionRun(RunLoop[Genome, Member]):
             values = (
                 [number(m.fitness), *(number(d) for d in m.descriptors)]
                 if m.fitness is not None and m.descriptors is not None
-                else [""] * (1 + len(DESCRIPTORS))
+                else [""] * (1 + len(self.space.names))
             )
             genome = " ".join(str(c) for c in m.genome)
             rows.append([str(m.evaluation), str(self.config.scenario_seed), genome, *values, m.error])
@@ -679,6 +908,74 @@ class CompositionRun(RunLoop[Genome, Member]):
             "trees": list(layout_of(member.genome, self.cells).trees),
         }
 
+    def _heldout_seeds(self) -> list[int]:
+        """The held-out scenarios: those of a tree run on the same scenario seed (``heldout_seed``)."""
+        return [derive_seed(self.config.scenario_seed, RUN_HELDOUT, r) for r in range(HELDOUT_EVALUATIONS)]
+
+    def _heldout(self, genome: Genome) -> tuple[float | None, list[float] | None]:
+        """``genome``'s mean objective and mean values of the run's axes over the held-out scenarios (None
+        when an evaluation failed)."""
+        assert self.evaluator is not None
+        seeds = self._heldout_seeds()
+        scored = evaluate_genomes(
+            self.evaluator,
+            self.cells,
+            [genome] * len(seeds),
+            0,
+            self.config.trials,
+            0,
+            seeds,
+            self.config.objective,
+            self.space,
+        )
+        if any(m.fitness is None or m.descriptors is None for m in scored):
+            return None, None
+        fitness = math.fsum(m.rank for m in scored) / len(scored)
+        axes = [math.fsum(m.descriptors[a] for m in scored if m.descriptors) / len(scored)
+                for a in range(len(self.space.names))]  # fmt: skip
+        return fitness, axes
+
+    def _homogeneous_baseline(self) -> dict | None:
+        """The best homogeneous swarm of the run's cells, what a composition has to beat: every cell's nine
+        copies on the run's scenario, the fittest (the first in cell order among equals) re-scored on the
+        held-out scenarios. None when no cell could be evaluated."""
+        assert self.evaluator is not None
+        genomes = [(c,) * self.n_robots for c in range(len(self.cells))]
+        members = evaluate_genomes(
+            self.evaluator,
+            self.cells,
+            genomes,
+            self.config.scenario_seed,
+            self.config.trials,
+            0,
+            objective=self.config.objective,
+            space=self.space,
+        )
+        scored = [m for m in members if m.fitness is not None]
+        if not scored:
+            return None
+        best = fittest(scored)
+        heldout, axes = self._heldout(best.genome)
+        return {
+            "cell": best.genome[0],
+            "tree": self.cells[best.genome[0]].tree,
+            "fitness": best.fitness,
+            "descriptors": None if best.descriptors is None else list(best.descriptors),
+            "heldout_best_fitness": heldout,
+            "heldout_descriptors": axes,
+        }
+
+    def _evaluated(self) -> list[tuple[tuple[float, ...], float]]:
+        """Every genome the run evaluated (``evaluations.csv``), at its point of the run's behaviour space
+        with its fitness; failed evaluations left out."""
+        rows = self.directory.evaluations.read()
+        axes = self.space.names
+        return [
+            (self.space.scaled([float(row[a]) for a in axes]), float(row[self.config.objective]))
+            for row in rows
+            if row[self.config.objective] != ""
+        ]
+
     def write_results(self) -> list[Path]:
         """``summary.json``, the best composition in ``best/``; for qd ``repertoire_compositions.json``."""
         directory = self.directory
@@ -698,32 +995,31 @@ class CompositionRun(RunLoop[Genome, Member]):
             best["cells"] = [self.cells[k].as_json() for k in self.best.genome]
             summary["best"] = best
         if self.done and self.best is not None and self.evaluator is not None:
-            seeds = [
-                derive_seed(self.config.scenario_seed, RUN_HELDOUT, r) for r in range(HELDOUT_EVALUATIONS)
-            ]
-            scored = evaluate_genomes(
-                self.evaluator, self.cells, [self.best.genome] * len(seeds), 0, self.config.trials, 0, seeds
-            )
-            values = [m.fitness for m in scored if m.fitness is not None]
+            seeds = self._heldout_seeds()
             summary["heldout"] = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
-            summary["heldout_best_fitness"] = (
-                math.fsum(values) / len(values) if len(values) == len(seeds) else None
-            )
+            summary["heldout_best_fitness"], summary["heldout_descriptors"] = self._heldout(self.best.genome)
+            summary["homogeneous"] = self._homogeneous_baseline()
         if self.config.algorithm == "qd":
             summary["coverage"] = len(self.grid) / 512
             summary["qd_score"] = math.fsum(m.rank for m in self.grid.values()) / 512
+            archive = [
+                (self.space.scaled(m.descriptors), m.rank)
+                for m in self.grid.values()
+                if m.descriptors is not None
+            ]
+            summary["qd_scores_archive"] = _by_bins(coarse_qd_scores(archive))
             summary["repertoire_size"] = len(self.grid)
             items = [{"bin": list(b), **self.composition_json(self.grid[b])} for b in sorted(self.grid)]
             write_json(
                 directory.repertoire,
                 {
-                    "objective": OBJECTIVE,
+                    "objective": self.config.objective,
                     "algorithm": self.config.algorithm,
                     "run": self.config.label,
                     "seed": self.config.seed,
                     "evaluations": self.evaluations,
                     "shape": [8, 8, 8],
-                    "descriptors": list(DESCRIPTORS),
+                    "descriptors": list(self.space.names),
                     "coverage": summary["coverage"],
                     "qd_score": summary["qd_score"],
                     "repertoire_size": len(self.grid),
@@ -731,17 +1027,23 @@ class CompositionRun(RunLoop[Genome, Member]):
                 },
             )
             written.append(directory.repertoire)
+        summary["qd_scores_evaluated"] = _by_bins(coarse_qd_scores(self._evaluated()))
         write_json(directory.summary, summary)
         written.append(directory.summary)
         if self.best is not None:
             with writing(directory.best):  # a link planted in the run folder is refused, never followed
                 make_folder(directory.best, directory.root)
             layout = layout_of(self.best.genome, self.cells)
-            path = directory.best / f"{OBJECTIVE}_swarm.json"
+            path = directory.best / f"{self.config.objective}_swarm.json"
             write_json(path, layout.as_json())
             written.append(path)
             for robot, tree in enumerate(layout.trees):
-                path = directory.best / f"{OBJECTIVE}_robot{robot}.txt"
+                path = directory.best / f"{self.config.objective}_robot{robot}.txt"
                 write_atomic(path, tree + "\n")
                 written.append(path)
         return written
+
+
+def _by_bins(scores: dict[int, float]) -> dict[str, float]:
+    """QD scores keyed as JSON keeps them: the bins per axis as text."""
+    return {str(k): v for k, v in scores.items()}

@@ -30,12 +30,23 @@ class DescriptorSet:
     names: tuple[str, ...]
     """The axes, as the grids, figures and repertoire files name them."""
     description: str
-    point: Callable[[Sequence[float], Sequence[float]], tuple[float, ...]]
-    """(every objective in ``OBJECTIVES`` order, the evaluator's descriptors) -> the point."""
+    values: Callable[[Sequence[float], Sequence[float]], tuple[float, ...]]
+    """(every objective in ``OBJECTIVES`` order, the evaluator's descriptors) -> the axes' measured values,
+    as a log records them."""
+    scaled: Callable[[Sequence[float]], tuple[float, ...]]
+    """The axes' measured values -> the point in [0, 1]^3."""
+
+    def point(self, fitness: Sequence[float], descriptors: Sequence[float]) -> tuple[float, ...]:
+        """The point of an evaluation (every objective, the evaluator's descriptors) in [0, 1]^3."""
+        return self.scaled(self.values(fitness, descriptors))
 
 
-def _deliveries(fitness: Sequence[float], _: Sequence[float]) -> tuple[float, ...]:
-    return tuple(min(1.0, max(0.0, fitness[OBJECTIVES.index(k)] / DELIVERY_DOMAIN)) for k in FOOD_KINDS)
+def _delivery_values(fitness: Sequence[float], _: Sequence[float]) -> tuple[float, ...]:
+    return tuple(float(fitness[OBJECTIVES.index(k)]) for k in FOOD_KINDS)
+
+
+def _delivery_point(values: Sequence[float]) -> tuple[float, ...]:
+    return tuple(min(1.0, max(0.0, v / DELIVERY_DOMAIN)) for v in values)
 
 
 BEHAVIOUR = DescriptorSet(
@@ -43,12 +54,14 @@ BEHAVIOUR = DescriptorSet(
     DESCRIPTORS,
     "movement, rotation and conditionality (the paper's)",
     lambda _, descriptors: tuple(float(d) for d in descriptors),
+    tuple,
 )
 DELIVERIES = DescriptorSet(
     "deliveries",
     FOOD_KINDS,
     f"deliveries of food kinds 1-3 per robot per trial over [0, {DELIVERY_DOMAIN:g}] (the authors' 2026)",
-    _deliveries,
+    _delivery_values,
+    _delivery_point,
 )
 DESCRIPTOR_SETS: dict[str, DescriptorSet] = {s.name: s for s in (BEHAVIOUR, DELIVERIES)}
 """Every behaviour space by name; ``behaviour`` is the default."""

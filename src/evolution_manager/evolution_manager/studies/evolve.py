@@ -47,7 +47,7 @@ from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, run_k
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
-from swarm_sim.tasks import TaskSpec, registered_name
+from swarm_sim.tasks import registered_name
 
 if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load late (see _evolve)
     from distributed import Client
@@ -109,8 +109,21 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         type=Path,
         metavar="RUN_DIR",
-        help="evolve compositions (a repertoire cell per robot; --task foraging, --algorithm ga or qd) of "
+        help="evolve compositions (a repertoire cell per robot; --task TASK, --algorithm ga or qd) of "
         "the repertoires in these run directories (docs/algorithms.md, 'Heterogeneous compositions')",
+    )
+    parser.add_argument(
+        "--swarm-mutation",
+        choices=("one", "all", "axis"),
+        help="with --swarm-from: how a child is mutated, one of the authors' three: one robot's cell "
+        "redrawn (one, the default), each robot's with probability 0.5 (all), each robot's moved along one "
+        "axis of its source repertoire (axis)",
+    )
+    parser.add_argument(
+        "--swarm-crossover",
+        choices=("two-point", "mix"),
+        help="with --swarm-from: two-point crossover (the default) or, with --algorithm qd, Mix-ME's "
+        "mixing of two genomes of different bins (mix)",
     )
     parser.add_argument(
         "--homogeneous",
@@ -356,7 +369,7 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
         raise UsageError(
             "--library cannot be combined with --swarm-from: a composition's cells are trees without one"
         )
-    for name in ("objectives", "nodes", "descriptors"):
+    for name in ("objectives", "nodes"):
         if getattr(args, name) is not None:
             raise UsageError(
                 f"--{name} applies to tree runs, not to compositions (--swarm-from); leave it out"
@@ -364,13 +377,6 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
     if args.scenarios == "fresh":
         raise UsageError("compositions are evaluated on fixed scenarios: leave out --scenarios fresh")
     if args.resume:
-        if (args.task is not None and not _is_foraging(args.task)) or args.objective not in (
-            None,
-            "foraging",
-        ):
-            raise UsageError(
-                "a composition run evolves on the foraging task: leave out --task and --objective"
-            )
         if args.swarm_from is not None:
             raise UsageError(
                 "--swarm-from: the run's cells are read from its directory; leave it out with --resume"
@@ -381,19 +387,13 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
             "--algorithm ga evolves compositions of repertoire cells: give --swarm-from RUN_DIR "
             "[RUN_DIR ...] (and --task foraging)"
         )
-    if args.task is None or not _is_foraging(args.task):
-        raise UsageError("--swarm-from evolves compositions on the foraging task: add --task foraging")
+    if args.task is None:
+        raise UsageError(
+            "--swarm-from evolves compositions on a task of foraging: add --task (foraging, "
+            "multifood-arena9-kind2, ...)"
+        )
     if args.algorithm not in ("ga", "qd"):
         raise UsageError("--swarm-from evolves compositions with --algorithm ga or --algorithm qd")
-    if args.objective not in (None, "foraging"):
-        raise UsageError(
-            f"--swarm-from: compositions are evolved on foraging, not on --objective {args.objective}"
-        )
-
-
-def _is_foraging(task: TaskSpec) -> bool:
-    """Whether ``task`` is the registered foraging task (compositions run on it alone)."""
-    return registered_name(task) == "foraging"
 
 
 def _check_homogeneous(algorithm: str, parameters: CompositionParameters, cells: int) -> None:
@@ -426,12 +426,32 @@ def _evolve_compositions(
         if args.resume:
             saved = comp.CompositionConfig.from_json(read_json_object(Path(args.out) / "config.json"))
             _check_as_saved(
-                args, saved, ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed")
+                args,
+                saved,
+                ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed", "objective"),
             )
-            if args.homogeneous is not None and args.homogeneous != saved.parameters.homogeneous:
+            if args.task is not None and args.task != saved.task:
                 raise UsageError(
-                    f"--homogeneous {args.homogeneous} differs from the run being resumed "
-                    f"({saved.parameters.homogeneous}); leave it out or start a new run in another --out"
+                    f"--task {args.task.name} differs from the run being resumed ({saved.task.name}); leave "
+                    "it out or start a new run in another --out"
+                )
+            given = {
+                "homogeneous": args.homogeneous,
+                "cell_mutation": args.swarm_mutation,
+                "crossover_operator": args.swarm_crossover,
+            }
+            for name, value in given.items():
+                if value is not None and value != getattr(saved.parameters, name):
+                    option = {"cell_mutation": "swarm-mutation", "crossover_operator": "swarm-crossover"}
+                    raise UsageError(
+                        f"--{option.get(name, name)} {value} differs from the run being resumed "
+                        f"({getattr(saved.parameters, name)}); leave it out or start a new run in another "
+                        "--out"
+                    )
+            if args.descriptors is not None and args.descriptors != saved.descriptors:
+                raise UsageError(
+                    f"--descriptors {args.descriptors} differs from the run being resumed "
+                    f"({saved.descriptors}); leave it out or start a new run in another --out"
                 )
             config = saved
             library = comp.CompositionDirectory(args.out).read_library(config)
@@ -442,7 +462,11 @@ def _evolve_compositions(
                 )
             comp.check_distinct_sources(args.swarm_from)
             cells, library = comp.read_sources(args.swarm_from)
-            parameters = comp.CompositionParameters(homogeneous=args.homogeneous or 0)
+            parameters = comp.CompositionParameters(
+                homogeneous=args.homogeneous or 0,
+                cell_mutation=args.swarm_mutation or "one",
+                crossover_operator=args.swarm_crossover or "two-point",
+            )
             _check_homogeneous(args.algorithm, parameters, len(cells))
             config = comp.CompositionConfig(
                 args.algorithm,
@@ -456,6 +480,9 @@ def _evolve_compositions(
                 comp.cells_digest(cells),
                 parameters,
                 library_digest="" if library is None else library.digest,
+                task=args.task,
+                objective=args.objective or comp.OBJECTIVE,
+                descriptors=args.descriptors or "behaviour",
             )
         from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
 
@@ -469,13 +496,14 @@ def _evolve_compositions(
             run = comp.CompositionRun.start(config, cells, args.out, evaluator, library)
     except (WriteError, UsageError, EvolutionError, OSError) as error:
         return _could_not_start(error, args.out)
-    failed = _execute_one(run, run.write_results, "foraging", args, argv, started, cluster)
+    objective = run.config.objective
+    failed = _execute_one(run, run.write_results, objective, args, argv, started, cluster)
     if failed is not None:
         return failed
     best = _best_shown(run)
     print(
         f"{run.config.label}: {run.evaluations} evaluations of compositions of {len(run.cells)} cells, best "
-        f"foraging {best}; the best swarm is {Path(args.out) / 'best' / 'foraging_swarm.json'}"
+        f"{objective} {best}; the best swarm is {Path(args.out) / 'best' / f'{objective}_swarm.json'}"
     )
     return 0
 

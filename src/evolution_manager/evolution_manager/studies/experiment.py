@@ -349,7 +349,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="paper: the 2023 paper's three algorithms on its three objectives (default); foraging: the 2024 "
         "study, primitives, libraries and foragers; replication: the 2024 comparison with a library per "
         "primitive seed, from --primitives-from; ablation: the 8-block QD library's ablations, from "
-        "--primitives-from; bt-vs-nn: trees against neural networks at equal budget (docs/algorithms.md)",
+        "--primitives-from; bt-vs-nn: trees against neural networks at equal budget; heterogeneity: "
+        "heterogeneous swarms composed from repertoires against the best homogeneous one on the multi-food "
+        "tasks (docs/algorithms.md)",
     )
     parser.add_argument(
         "--primitives-from",
@@ -362,6 +364,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="O1,O2",
         help="with --study bt-vs-nn: which of its seven objectives (default all: the six primitives and "
         "foraging)",
+    )
+    parser.add_argument(
+        "--swarm-evaluations",
+        type=positive_int,
+        metavar="N",
+        help="with --study heterogeneity: genomes per composition run (default 2000; --evaluations is each "
+        "repertoire's trees)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
@@ -454,6 +463,8 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             raise UsageError("--primitives-from applies to --study replication and ablation only")
         if args.objectives is not None and args.study != "bt-vs-nn":
             raise UsageError("--objectives applies to --study bt-vs-nn only")
+        if args.swarm_evaluations is not None and args.study != "heterogeneity":
+            raise UsageError("--swarm-evaluations applies to --study heterogeneity only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study  # late: loads scipy.stats (about 1 s)
 
@@ -469,6 +480,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
             document, stages, budgets = networks_study.plan_study(args, scenarios, design)
             report = networks_study.build_report
+        elif args.study == "heterogeneity":
+            from evolution_manager.studies import heterogeneity_study  # late: loads scipy.stats (about 1 s)
+
+            document, stages, budgets = heterogeneity_study.plan_study(args, scenarios, design)
+            report = heterogeneity_study.build_report
         elif args.study == "ablation":
             from evolution_manager.studies import ablation_study  # late: loads scipy.stats (about 1 s)
 

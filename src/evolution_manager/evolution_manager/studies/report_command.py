@@ -29,6 +29,7 @@ from evolution_manager.studies import (
     ablation_study,
     argos_transfer,
     foraging_study,
+    heterogeneity_study,
     networks_study,
     replication_study,
     scenarios,
@@ -90,13 +91,14 @@ def report(argv: Sequence[str] | None = None) -> int:
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
             print(scenarios.build_scenarios_report(args.dir))
-        elif _study(args.dir) in ("replication", "ablation", "bt-vs-nn"):
+        elif _study(args.dir) in ("replication", "ablation", "bt-vs-nn", "heterogeneity"):
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to the paper's and the foraging study")
             study = {
                 "replication": replication_study,
                 "ablation": ablation_study,
                 "bt-vs-nn": networks_study,
+                "heterogeneity": heterogeneity_study,
             }[str(_study(args.dir))]
             print(study.build_report(args.dir))
         elif _study(args.dir) == "foraging":

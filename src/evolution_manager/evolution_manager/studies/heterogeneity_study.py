@@ -1,0 +1,430 @@
+"""``experiment --study heterogeneity``: when does a heterogeneous swarm beat the best homogeneous one?
+(issue 36)
+
+    ws/run evolution_manager experiment --study heterogeneity --runs 10 --evaluations 10000 \\
+        --swarm-evaluations 2000 --out experiments/heterogeneity
+
+For every task of :data:`TASKS` (with its objective) and every run ``r``:
+
+1. **A repertoire** (``repertoires/<task>/run<r>``): MAP-Elites over trees on the task, binned by the
+   deliveries of each food kind (``--descriptors deliveries``), ``--evaluations`` trees.
+2. **The arms** (``arms/<task>/<arm>/run<r>``, :data:`ARMS`): compositions of that repertoire's cells, one per
+   robot (``evolution.compositions``), ``--swarm-evaluations`` genomes each: "generate, then allocate".
+
+Every run of task ``t`` and index ``r``, the repertoire and each arm, has the seed ``derive_seed(--seed,
+RUN_STUDY, HETEROGENEITY_STAGE, t, r)``, so the arms pair by seed, and composes from the same repertoire. The
+**homogeneous** baseline is measured by each composition run itself (``summary.json``, ``homogeneous``): the
+best of its cells' nine copies on the run's scenario, re-scored on the held-out scenarios; the study reads it
+from the run of the first arm. Every run is evaluated on fixed scenarios; under the ``shared`` design (the
+default) on one scenario seed for the whole study, otherwise each on its seed's own, which the repertoire and
+the arms of one index share.
+
+The stages go task by task, the repertoires first, so that each task's table fills before the next task's
+runs begin. The report (``report.md``, ``runs.csv``, ``figures/``), regenerated from the finished runs in the
+plan's order, has per task and arm the held-out median with its 95 % bootstrap interval, the ratio to the
+homogeneous median, paired tests of each arm against the homogeneous baseline (``compare_paired``:
+Shapiro-Wilk on the differences, then a paired t-test or Wilcoxon signed-rank) with Holm's correction over
+the family of every arm on every task, and the authors' QD score at 1, 2, 4 and 8 bins per axis of every
+composition run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bt_controller.draws import RUN_STUDY, derive_seed
+from evolution_manager.errors import EvolutionError, UsageError
+from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
+from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
+from evolution_manager.files import read_json, write_atomic
+from evolution_manager.studies.intervals import interval
+from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
+from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
+
+STUDY = "heterogeneity"
+HETEROGENEITY_STAGE = 7
+"""The stage index of this study's seeds (foraging 0 to 3, replication 4, ablation 5, bt-vs-nn 6)."""
+DEFAULT_SWARM_EVALUATIONS = 2000
+
+TASKS: tuple[tuple[str, str], ...] = (
+    ("multifood-arena9-kind2", "foraging_biased"),
+    ("multifood-arena6", "foraging"),
+)
+"""The tasks, each with the objective its runs maximise: the authors' arena 9 biased towards kind 2 (their
+bias and penalty fitness, penalty 0.5), and arena 6, three kinds of food and no bias."""
+
+BASELINE = "homogeneous"
+GOAL = 1.2
+"""The issue's goal: a heterogeneous arm's held-out median at least this many times the baseline's."""
+
+
+@dataclass(frozen=True)
+class Arm:
+    """A way of composing swarms from a repertoire."""
+
+    name: str
+    algorithm: str
+    what: str
+    homogeneous: int = 0
+    cell_mutation: str = "one"
+    crossover_operator: str = "two-point"
+
+    @property
+    def parameters(self) -> CompositionParameters:
+        return CompositionParameters(
+            homogeneous=self.homogeneous,
+            cell_mutation=self.cell_mutation,
+            crossover_operator=self.crossover_operator,
+        )
+
+
+ARMS: tuple[Arm, ...] = (
+    Arm("ga", "ga", "the GA over compositions, all random at first (the authors' GA)"),
+    Arm("ga-seeded", "ga", "the GA seeded with the homogeneous swarms of the 5 fittest cells", homogeneous=5),
+    Arm("qd", "qd", "the authors' MAP-Elites over compositions binned by deliveries (two-point crossover)"),
+    Arm("qd-mix", "qd", "MAP-Elites over compositions with Mix-ME's mixing", crossover_operator="mix"),
+)
+HEADER = [
+    "arm", "task", "seed", "best_fitness", "heldout_best_fitness",
+    "heldout_foraging1", "heldout_foraging2", "heldout_foraging3",
+    *(f"qd_score_{k}" for k in QD_SCORE_BINS),
+]  # fmt: skip
+"""``runs.csv``: one row per run; the QD scores (of every genome the run evaluated) are empty for the
+baseline."""
+
+
+def _folder(kind: str, task: str, r: int) -> str:
+    return f"{kind}/{task}/run{r:02d}"
+
+
+def plan_study(
+    args: argparse.Namespace, scenarios: str, design: str | None
+) -> tuple[dict, list[Stage], dict[str, int]]:
+    """The study's plan document, its stages and the budget of every run, from the command line."""
+    if scenarios != "fixed":
+        raise UsageError("--study heterogeneity runs under fixed scenarios only (compositions know no other)")
+    swarm_evaluations = args.swarm_evaluations or DEFAULT_SWARM_EVALUATIONS
+    profile = args.profile or DEFAULT_PROFILE
+    scenario_seed = args.scenario_seed
+    if design == "shared" and scenario_seed is None:
+        scenario_seed = shared_scenario_seed(args.seed)
+    out = Path(args.out).absolute()
+    entries: list[dict] = []
+    stages: list[Stage] = []
+    budgets: dict[str, int] = {}
+    for t, (task, objective) in enumerate(TASKS):
+        repertoires: list[tuple[RunConfig, str]] = []
+        for r in range(args.runs):
+            seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
+            made = RunConfig.make(
+                "qd", objective, args.evaluations, seed, args.trials, "fixed", scenario_seed, profile,
+                task=task, descriptors="deliveries",
+            )  # fmt: skip
+            folder = _folder("repertoires", task, r)
+            repertoires.append((made, folder))
+            entries.append({"kind": "repertoire", "task": task, "dir": folder, "config": made.to_json()})
+            budgets[folder] = made.evaluations
+        arms: list[dict] = []
+        for arm in ARMS:
+            for r in range(args.runs):
+                folder = f"arms/{task}/{arm.name}/run{r:02d}"
+                entry: dict[str, object] = {
+                    "kind": "composition",
+                    "arm": arm.name,
+                    "task": task,
+                    "objective": objective,
+                    "dir": folder,
+                    "from": _folder("repertoires", task, r),
+                    "seed": derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r),
+                    "evaluations": swarm_evaluations,
+                }
+                arms.append(entry)
+                entries.append(entry)
+                budgets[folder] = swarm_evaluations
+        stages.append(_given(repertoires))
+        stages.append(_composed(out, arms, args.trials, profile, scenario_seed))
+    document = {
+        "study": STUDY,
+        **document_head(args, profile, scenarios, design, scenario_seed),
+        "swarm_evaluations": swarm_evaluations,
+        "tasks": [{"task": task, "objective": objective} for task, objective in TASKS],
+        "arms": [arm.name for arm in ARMS],
+        "plan": entries,
+    }
+    return document, stages, budgets
+
+
+def _given(planned: list[tuple[RunConfig, str]]) -> Stage:
+    """A stage of runs known when the study is planned."""
+    return lambda: planned
+
+
+def _composed(out: Path, arms: Sequence[dict], trials: int, profile: str, scenario_seed: int | None) -> Stage:
+    """The stage of one task's composition runs: made when it starts, from its finished repertoires."""
+    return lambda: _compositions(out, arms, trials, profile, scenario_seed)
+
+
+def _compositions(
+    out: Path, arms: Sequence[dict], trials: int, profile: str, scenario_seed: int | None
+) -> list[tuple[CompositionConfig, str]]:
+    """The composition runs of one task, made once its repertoires have finished (their cells)."""
+    from evolution_manager.evolution import compositions as comp  # late: reads the source runs' files
+
+    by_name = {arm.name: arm for arm in ARMS}
+    planned = []
+    for entry in arms:
+        source = out / entry["from"]
+        cells, library = comp.read_sources([source])
+        made = comp.CompositionConfig(
+            by_name[entry["arm"]].algorithm,
+            entry["evaluations"],
+            entry["seed"],
+            trials,
+            profile,
+            -1 if scenario_seed is None else scenario_seed,
+            (str(source),),
+            len(cells),
+            comp.cells_digest(cells),
+            by_name[entry["arm"]].parameters,
+            library_digest="" if library is None else library.digest,
+            task=entry["task"],
+            objective=entry["objective"],
+            descriptors="deliveries",
+        )
+        planned.append((made, entry["dir"]))
+    return planned
+
+
+# Reading the runs -----------------------------------------------------------------------------------------
+def _number(value: object) -> str:
+    return "" if value is None else repr(float(value))  # type: ignore[arg-type]  # a JSON number
+
+
+def _summary(root: Path, folder: str) -> dict | None:
+    path = root / folder / "summary.json"
+    summary = read_json(path) if path.exists() else None
+    if isinstance(summary, dict) and summary.get("finished") and summary.get("heldout") is not None:
+        return summary
+    return None
+
+
+def _kinds(values: object) -> list[str]:
+    return [_number(v) for v in values] if isinstance(values, list) else ["", "", ""]
+
+
+def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
+    """The plan document and one row per finished composition run, in the plan's order, each task's and
+    index's baseline row (from its first arm's run) before its arms' rows."""
+    root = Path(root)
+    document = read_json(root / PLAN_FILE)
+    if not isinstance(document, dict) or document.get("study") != STUDY:
+        raise EvolutionError(f"{root} is not a {STUDY} study ({PLAN_FILE})")
+    rows: list[dict[str, str]] = []
+    baselines: list[dict[str, str]] = []
+    for entry in document["plan"]:
+        if entry["kind"] != "composition":
+            continue
+        summary = _summary(root, entry["dir"])
+        if summary is None:
+            continue
+        seed, task = str(entry["seed"]), entry["task"]
+        baseline = summary.get("homogeneous")
+        if baseline and not any(b["task"] == task and b["seed"] == seed for b in baselines):
+            baselines.append({
+                "arm": BASELINE, "task": task, "seed": seed,
+                "best_fitness": _number(baseline["fitness"]),
+                "heldout_best_fitness": _number(baseline["heldout_best_fitness"]),
+                **dict(zip(HEADER[5:8], _kinds(baseline["heldout_descriptors"]), strict=True)),
+                **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
+            })  # fmt: skip
+        scores = summary.get("qd_scores_evaluated", {})
+        rows.append({
+            "arm": entry["arm"], "task": task, "seed": seed,
+            "best_fitness": _number(summary["best_fitness"]),
+            "heldout_best_fitness": _number(summary["heldout_best_fitness"]),
+            **dict(zip(HEADER[5:8], _kinds(summary.get("heldout_descriptors")), strict=True)),
+            **{f"qd_score_{k}": _number(scores.get(str(k))) for k in QD_SCORE_BINS},
+        })  # fmt: skip
+    return document, baselines + rows
+
+
+def _paired(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> tuple[list[float], list[float]]:
+    """The arm's and the baseline's ``key`` on ``task``, paired by seed (seeds both have)."""
+    mine = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key]}
+    base = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == BASELINE and r[key]}
+    seeds = [s for s in mine if s in base]
+    return [mine[s] for s in seeds], [base[s] for s in seeds]
+
+
+def _values(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> list[float]:
+    return [float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key] != ""]
+
+
+def comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> list[Comparison]:
+    """Each arm against the homogeneous baseline on the held-out best fitness, paired by seed, per task:
+    one family, Holm-corrected (every arm on every task). Pairs of fewer than two runs are left out."""
+    found = []
+    for task in tasks:
+        for arm in ARMS:
+            a, b = _paired(rows, task, arm.name, "heldout_best_fitness")
+            if len(a) >= 2:
+                found.append(compare_paired("held-out best fitness", task, arm.name, a, BASELINE, b))
+    return holm(found) if found else []
+
+
+def _median(values: Sequence[float]) -> float:
+    return float(np.median(values))
+
+
+def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
+    """Per task and arm: runs, held-out median with a 95 % bootstrap interval, the ratio of medians to the
+    baseline's, the paired median difference with its interval, the median held-out deliveries per kind."""
+    rng = np.random.default_rng(0)
+    lines = [
+        "| task | arm | runs | held-out median [95 % CI] | / homogeneous | paired Δ median [95 % CI] | "
+        "kind 1 | kind 2 | kind 3 |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for task in tasks:
+        base = _values(rows, task, BASELINE, "heldout_best_fitness")
+        for name in (BASELINE, *(arm.name for arm in ARMS)):
+            held = _values(rows, task, name, "heldout_best_fitness")
+            if not held:
+                continue
+            bounds = interval(held, "median", rng)
+            ci = "" if bounds is None else f" [{bounds[0]:.4g}, {bounds[1]:.4g}]"
+            ratio = f"{_median(held) / _median(base):.3g}" if base and _median(base) > 0 else "n/a"
+            delta = ""
+            if name != BASELINE:
+                a, b = _paired(rows, task, name, "heldout_best_fitness")
+                differences = [x - y for x, y in zip(a, b, strict=True)]
+                if differences:
+                    d_bounds = interval(differences, "median", rng)
+                    delta = f"{_median(differences):+.4g}" + (
+                        "" if d_bounds is None else f" [{d_bounds[0]:+.4g}, {d_bounds[1]:+.4g}]"
+                    )
+            kinds = [_values(rows, task, name, f"heldout_foraging{k}") for k in (1, 2, 3)]
+            shown = [f"{_median(v):.3g}" if v else "" for v in kinds]
+            lines.append(
+                f"| {task} | {name} | {len(held)} | {_median(held):.4g}{ci} | {ratio} | {delta} | "
+                + " | ".join(shown)
+                + " |"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def qd_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
+    """Per task and arm, the mean of the authors' QD score at 1, 2, 4 and 8 bins per axis over every genome
+    each run evaluated (equal evaluations)."""
+    head = " | ".join(f"{k} bins" for k in QD_SCORE_BINS)
+    lines = [f"| task | arm | runs | {head} |", "|---|---|---|" + "---|" * len(QD_SCORE_BINS)]
+    for task in tasks:
+        for arm in ARMS:
+            columns = [_values(rows, task, arm.name, f"qd_score_{k}") for k in QD_SCORE_BINS]
+            if not columns[0]:
+                continue
+            means = " | ".join(f"{sum(c) / len(c):.4g}" for c in columns)
+            lines.append(f"| {task} | {arm.name} | {len(columns[0])} | {means} |")
+    return "\n".join(lines) + "\n"
+
+
+def goal_text(rows: Sequence[dict[str, str]], tested: Sequence[Comparison], tasks: Sequence[str]) -> str:
+    """Whether an arm reached the goal on a task: held-out median at least :data:`GOAL` times the
+    baseline's with the paired test significant after Holm's correction."""
+    lines = []
+    for task in tasks:
+        base = _values(rows, task, BASELINE, "heldout_best_fitness")
+        if not base:
+            continue
+        for arm in ARMS:
+            held = _values(rows, task, arm.name, "heldout_best_fitness")
+            row = next((c for c in tested if c.objective == task and c.first == arm.name), None)
+            if not held or row is None or _median(base) <= 0:
+                continue
+            ratio = _median(held) / _median(base)
+            reached = ratio >= GOAL and row.significant and _median(held) > _median(base)
+            lines.append(
+                f"- {task}, {arm.name}: {ratio:.3g} times the homogeneous median, Holm-adjusted p "
+                f"{row.p_holm:.3g} ({len(held)} runs): goal {'reached' if reached else 'not reached'}."
+            )
+    return "\n".join(lines) + "\n" if lines else "No arm has paired runs yet.\n"
+
+
+def _figure(root: Path, rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> list[str]:
+    # matplotlib (about 1.5 s to import) loads only when figures are drawn
+    from evolution_manager.viewing import figures
+
+    samples = {
+        task: {
+            name: _values(rows, task, name, "heldout_best_fitness")
+            for name in (BASELINE, *(arm.name for arm in ARMS))
+            if _values(rows, task, name, "heldout_best_fitness")
+        }
+        for task in tasks
+    }
+    samples = {task: by_arm for task, by_arm in samples.items() if by_arm}
+    if not samples:
+        return []
+    target = Path(root) / "figures" / "heldout_best_fitness.png"
+    path = figures.boxes(samples, "held-out best fitness", target)
+    return [f"![held-out best fitness](figures/{path.name})"]
+
+
+def build_report(root: Path) -> Path:
+    """Write ``runs.csv``, ``report.md`` and ``figures/`` of the study in ``root`` from its finished runs;
+    return the report's path."""
+    root = Path(root)
+    document, rows = finished_rows(root)
+    if not rows:
+        raise EvolutionError(f"{root} has no finished composition runs yet")
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, HEADER, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_atomic(root / "runs.csv", buffer.getvalue())
+    tasks = [t["task"] for t in document["tasks"]]
+    tested = comparisons(rows, tasks)
+    arms = "\n".join(f"- **{arm.name}**: {arm.what}." for arm in ARMS)
+    planned = sum(1 for e in document["plan"] if e["kind"] == "composition")
+    finished = len(rows) - sum(1 for r in rows if r["arm"] == BASELINE)
+    text = (
+        f"# When does a heterogeneous swarm beat the best homogeneous one? {root.name}\n\n"
+        f"{finished} of {planned} planned composition runs finished ({document['runs']} per arm and task; "
+        f"repertoires of {document['evaluations']:,} trees, compositions of "
+        f"{document['swarm_evaluations']:,} genomes; {document['trials']} trials per evaluation, profile "
+        f"{document['profile']}, design "
+        f"{document['design']}); one row per run in [runs.csv](runs.csv).\n\n"
+        "Each run composes one forager per robot from the cells of a MAP-Elites repertoire of trees evolved "
+        "on the same task (binned by the deliveries of each food kind). The arms:\n\n"
+        f"{arms}\n- **{BASELINE}**: the best homogeneous swarm of the same cells (every cell's nine copies "
+        "on the run's scenario, the fittest), measured by each composition run; the study takes it from the "
+        "first arm's run of each seed.\n\n"
+        "Held-out: the run's best swarm re-scored on five scenarios it never saw (mean); the baseline on the "
+        "same five. Arms pair with the baseline by seed.\n\n"
+        "## Scores\n\nMedians with 95 % bootstrap intervals (10,000 resamples); / homogeneous is the ratio "
+        "of medians; the paired Δ is the median of the run-by-run differences to the baseline. Kinds: "
+        "median held-out deliveries of each food kind per robot per trial.\n\n"
+        f"{scores_table(rows, tasks)}\n"
+        "## Does heterogeneity pay?\n\n"
+        "Each arm against the homogeneous baseline on the held-out best fitness, paired by seed "
+        "(Shapiro-Wilk on the differences, then a paired t-test or Wilcoxon signed-rank), Holm's "
+        "correction over the family of every row of this table. Significant rows in bold.\n\n"
+        + (markdown_table(tested) if tested else "No arm has two paired runs yet.\n")
+        + f"\n### Against the goal ({GOAL} times the homogeneous median, p < 0.05 paired)\n\n"
+        f"{goal_text(rows, tested, tasks)}\n"
+        "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
+        "Every genome a run evaluated, binned by the deliveries of each kind over [0, 0.5] per axis, the "
+        "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "
+        "runs, at equal evaluations.\n\n"
+        f"{qd_table(rows, tasks)}\n"
+        "## Figures\n\n" + "\n\n".join(_figure(root, rows, tasks)) + "\n"
+    )
+    write_atomic(root / "report.md", text)
+    return root / "report.md"

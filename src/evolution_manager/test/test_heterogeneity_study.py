@@ -1,0 +1,84 @@
+"""``experiment --study heterogeneity``: the plan (a repertoire per task and index, then the arms composing
+from it, all of one index on one seed), the whole study end to end on a tiny budget (runs.csv with the
+homogeneous baseline paired by seed, report with the tests and the QD scores, a figure), and a second start
+that runs nothing again and writes the same report."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+from evolution_manager.studies import heterogeneity_study as study
+from evolution_manager.studies.experiment import build_parser, experiment
+from evolution_manager.studies.report_command import report as report_command
+
+
+def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
+    args = build_parser().parse_args(
+        ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
+    )
+    document, stages, budgets = study.plan_study(args, "fixed", "shared")
+    assert len(stages) == 2 * len(study.TASKS)  # each task: its repertoires, then its arms
+    repertoires = stages[0]()
+    assert [folder for _, folder in repertoires] == [
+        "repertoires/multifood-arena9-kind2/run00",
+        "repertoires/multifood-arena9-kind2/run01",
+    ]
+    made, _ = repertoires[0]
+    assert (made.algorithm, made.descriptors, made.objective) == ("qd", "deliveries", "foraging_biased")
+    arms = [e for e in document["plan"] if e["kind"] == "composition"]
+    assert len(arms) == len(study.TASKS) * len(study.ARMS) * 2
+    for entry in arms:
+        repertoire = next(e for e in document["plan"] if e["dir"] == entry["from"])
+        assert entry["seed"] == repertoire["config"]["seed"] and entry["task"] == repertoire["task"]
+        assert budgets[entry["dir"]] == 300
+    seeds = {(e["task"], e["seed"]) for e in arms}
+    assert len(seeds) == len(study.TASKS) * 2  # one seed per task and index, shared by its arms
+    assert document["swarm_evaluations"] == 300 and document["arms"] == [a.name for a in study.ARMS]
+
+
+def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):
+    args = ["--study", "paper", "--swarm-evaluations", "10", "--out", str(tmp_path / "x")]
+    assert experiment(args) == 2
+    assert "--swarm-evaluations applies to --study heterogeneity only" in capsys.readouterr().err
+
+
+def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(study, "TASKS", study.TASKS[1:])  # one task (arena 6) is enough, in half the time
+    out = tmp_path / "study"
+    args = ["--study", "heterogeneity", "--runs", "2", "--evaluations", "20", "--swarm-evaluations", "10"]
+    args += ["--trials", "1", "--processes", "1", "--out", str(out), "--no-progress"]
+    assert experiment(args) == 0
+    rows = list(csv.DictReader(io.StringIO((out / "runs.csv").read_text())))
+    assert list(rows[0]) == study.HEADER
+    for task, _ in study.TASKS:
+        mine = [r for r in rows if r["task"] == task]
+        baselines = [r for r in mine if r["arm"] == study.BASELINE]
+        assert len(baselines) == 2 and all(r["qd_score_1"] == "" for r in baselines)
+        for arm in study.ARMS:
+            runs = [r for r in mine if r["arm"] == arm.name]
+            assert {r["seed"] for r in runs} == {r["seed"] for r in baselines}
+            # the evaluated QD score at one bin is the run's best fitness
+            assert all(float(r["qd_score_1"]) == float(r["best_fitness"]) for r in runs)
+            assert all(r["heldout_foraging1"] != "" for r in runs)
+    # the baseline is each composition run's own measure: the same for every arm of a seed
+    first = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())["homogeneous"]
+    other = json.loads((out / "arms/multifood-arena6/qd-mix/run00/summary.json").read_text())["homogeneous"]
+    assert first == other
+    report = (out / "report.md").read_text()
+    assert (
+        "## Does heterogeneity pay?" in report
+        and "Holm" in report
+        and "| multifood-arena6 | qd-mix |" in report
+    )
+    assert "Against the goal" in report and (out / "figures" / "heldout_best_fitness.png").stat().st_size > 0
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
+    capsys.readouterr()
+    assert experiment(args) == 0
+    after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
+    assert after.keys() == before.keys()
+    assert after[out / "report.md"] == before[out / "report.md"]
+    assert after[out / "runs.csv"] == before[out / "runs.csv"]
+    assert report_command([str(out)]) == 0
+    assert (out / "report.md").read_bytes() == before[out / "report.md"]
