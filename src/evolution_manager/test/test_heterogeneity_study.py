@@ -9,9 +9,12 @@ import csv
 import io
 import json
 
+import pytest
+
 from evolution_manager.studies import heterogeneity_study as study
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
+from swarm_sim.tasks import task_named
 
 
 def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
@@ -66,6 +69,13 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     first = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())["homogeneous"]
     other = json.loads((out / "arms/multifood-arena6/qd-mix/run00/summary.json").read_text())["homogeneous"]
     assert first == other
+    # who delivers what: the robots' deliveries, averaged over robots, are the held-out deliveries per kind
+    summary = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())
+    config = task_named("multifood-arena6").config("paper")
+    per_robot = study.robot_deliveries(summary["best"]["trees"], config, summary["heldout"]["seeds"], 1)
+    assert per_robot.shape == (9, 3)
+    assert per_robot.mean(axis=0).tolist() == pytest.approx(summary["heldout_descriptors"], abs=1e-12)
+    assert (out / "figures" / "robots_multifood-arena6.png").stat().st_size > 0
     report = (out / "report.md").read_text()
     assert (
         "## Does heterogeneity pay?" in report

@@ -47,6 +47,8 @@ from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
+from swarm_sim.model import Config, SwarmLayout
+from swarm_sim.tasks import task_named
 
 STUDY = "heterogeneity"
 HETEROGENEITY_STAGE = 7
@@ -377,6 +379,68 @@ def _figure(root: Path, rows: Sequence[dict[str, str]], tasks: Sequence[str]) ->
     return [f"![held-out best fitness](figures/{path.name})"]
 
 
+# Who delivers what --------------------------------------------------------------------------------------
+def robot_deliveries(trees: Sequence[str], config: Config, seeds: Sequence[int], trials: int) -> np.ndarray:
+    """Each robot's mean deliveries of each food kind per trial (robots x kinds) of the swarm whose robot
+    ``i`` runs ``trees[i]``, over ``trials`` trials of each of ``seeds`` (as an evaluation runs them: the
+    batch road's kernels, ``record_trial``). Averaged over robots, a kind's column is its objective."""
+    from swarm_sim.roads.recording import record_trial  # late: the kernels load only for the figure
+
+    layout = SwarmLayout(tuple(trees))
+    total = np.zeros((config.n_robots, config.food_kinds))
+    for seed in seeds:
+        for trial in range(trials):
+            total += record_trial(layout, seed, trial, config).deliveries[-1]
+    return total / (len(seeds) * trials)
+
+
+def _best_swarms(root: Path, document: dict, rows: Sequence[dict[str, str]], task: str) -> dict[str, dict]:
+    """The swarms of the figure on ``task``: the baseline and each arm's run of highest held-out best
+    fitness (the first in plan order among equals), each as its label and trees."""
+    shown: dict[str, dict] = {}
+    for entry in document["plan"]:
+        if entry["kind"] != "composition" or entry["task"] != task:
+            continue
+        summary = _summary(root, entry["dir"])
+        if summary is None or summary["best"] is None:
+            continue
+        candidates = [(entry["arm"], summary["heldout_best_fitness"], summary["best"]["trees"], summary)]
+        baseline = summary.get("homogeneous")
+        if baseline:
+            trees = [baseline["tree"]] * len(summary["best"]["trees"])
+            candidates.append((BASELINE, baseline["heldout_best_fitness"], trees, summary))
+        for name, held, trees, source in candidates:
+            if held is None:
+                continue
+            if name not in shown or held > shown[name]["held"]:
+                shown[name] = {"held": held, "trees": trees, "seeds": source["heldout"]["seeds"],
+                               "trials": source["heldout"]["trials"], "seed": entry["seed"]}  # fmt: skip
+    order = [BASELINE, *(arm.name for arm in ARMS)]
+    return {name: shown[name] for name in order if name in shown}
+
+
+def _deliveries_figures(root: Path, document: dict, rows: Sequence[dict[str, str]]) -> list[str]:
+    from evolution_manager.viewing import figures  # late: matplotlib
+
+    drawn = []
+    for spec in document["tasks"]:
+        task = spec["task"]
+        swarms = _best_swarms(root, document, rows, task)
+        if not swarms:
+            continue
+        config = task_named(task).config(document["profile"])
+        per_robot = {
+            f"{name} (seed {s['seed'] % 10_000}, held-out {s['held']:.3g})": robot_deliveries(
+                s["trees"], config, s["seeds"], s["trials"]
+            )
+            for name, s in swarms.items()
+        }
+        title = f"{task}: each robot's held-out deliveries per trial, by kind"
+        path = figures.robot_deliveries(per_robot, title, root / "figures" / f"robots_{task}.png")
+        drawn.append(f"![{title}](figures/{path.name})")
+    return drawn
+
+
 def build_report(root: Path) -> Path:
     """Write ``runs.csv``, ``report.md`` and ``figures/`` of the study in ``root`` from its finished runs;
     return the report's path."""
@@ -424,7 +488,12 @@ def build_report(root: Path) -> Path:
         "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "
         "runs, at equal evaluations.\n\n"
         f"{qd_table(rows, tasks)}\n"
-        "## Figures\n\n" + "\n\n".join(_figure(root, rows, tasks)) + "\n"
+        "## Figures\n\n" + "\n\n".join(_figure(root, rows, tasks)) + "\n\n"
+        "## Who delivers what\n\nFor each task the baseline and each arm's best run (highest held-out best "
+        "fitness): each robot's deliveries of each food kind per trial on the run's five held-out scenarios "
+        "(seeds shown modulo 10,000). A specialised swarm shows robots of different colours.\n\n"
+        + "\n\n".join(_deliveries_figures(root, document, rows))
+        + "\n"
     )
     write_atomic(root / "report.md", text)
     return root / "report.md"

@@ -259,3 +259,31 @@ __all__ = [
     "progress_bands",
     "transfer_scatter",
 ]
+
+
+def robot_deliveries(swarms: Mapping[str, np.ndarray], title: str, path: Path) -> Path:
+    """Who delivers what: one panel per swarm (``swarms[label]``: robots x food kinds, each robot's mean
+    deliveries of each kind per trial), one stacked bar per robot, a colour per kind (the animation's)."""
+    from evolution_manager.viewing.palette import carry_colour
+
+    labels = list(swarms)
+    figure, axes = subplots(1, len(labels), figsize=(3.2 * len(labels), 3.2), squeeze=False, sharey=True)
+    top = max((float(v.sum(axis=1).max()) for v in swarms.values() if v.size), default=0.0)
+    for axis, label in zip(axes[0], labels, strict=True):
+        values = np.asarray(swarms[label], dtype=float)
+        robots = np.arange(values.shape[0])
+        bottom = np.zeros(values.shape[0])
+        for kind in range(values.shape[1]):
+            colour = tuple(c / 255 for c in carry_colour(kind))
+            axis.bar(robots, values[:, kind], bottom=bottom, color=colour, label=f"kind {kind + 1}")
+            bottom += values[:, kind]
+        axis.set_title(label, fontsize=9)
+        axis.set_xticks(robots)
+        axis.set_xlabel("robot")
+        axis.set_ylim(0, max(top * 1.1, 0.05))
+        axis.grid(alpha=0.3, axis="y")
+    axes[0][0].set_ylabel("deliveries per trial")
+    axes[0][0].legend(fontsize=7)
+    figure.suptitle(title, fontsize=10)
+    figure.tight_layout()
+    return _save(figure, path)
