@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from evolution_manager.errors import ConfigError
+from evolution_manager.errors import ConfigError, EvolutionError
 from evolution_manager.evolution.deap_trees import make_primitive_set, tree_from_text, tree_to_text
 from evolution_manager.evolution.operators import full_tree, vary
 from evolution_manager.evolution.parameters import GPParameters
@@ -210,7 +210,7 @@ def test_a_run_stopped_and_resumed_ends_identical(tmp_path):
 
 
 def test_a_killed_run_resumes_to_the_same_files(tmp_path):
-    args = ["--team", "2", "--evaluations", "400", "--seed", "6"]
+    args = ["--team", "2", "--evaluations", "800", "--seed", "6"]
     straight = tmp_path / "straight"
     assert _team(straight, *args) == 0
     killed = tmp_path / "killed"
@@ -231,6 +231,27 @@ def test_a_killed_run_resumes_to_the_same_files(tmp_path):
     assert not (killed / "summary.json").exists(), "the kill came too late to interrupt the run"
     assert evolve(["--out", str(killed), "--resume", "--no-progress", "--checkpoint-every", "0"]) == 0
     assert _files(killed, team=2) == _files(straight, team=2)
+
+
+def test_an_experiment_runs_a_planned_team_run_to_the_files_of_evolve(tmp_path):
+    from evolution_manager.studies.experiment import finished, produced_so_far, run_one
+
+    assert _team(tmp_path / "evolved", "--team", "2", "--evaluations", "30", "--seed", "8") == 0
+    config = TeamConfig.make(2, "food", 30, 8, trials=1)
+    assert config.to_json() == json.loads((tmp_path / "evolved" / "config.json").read_text())
+    assert produced_so_far(tmp_path / "planned", 30) == 0
+    assert run_one(config.to_json(), str(tmp_path / "planned"), checkpoint_interval=0) == str(
+        tmp_path / "planned"
+    )
+    assert finished(tmp_path / "planned") and produced_so_far(tmp_path / "planned", 30) == 30
+    files = _files(tmp_path / "evolved", team=2)
+    assert _files(tmp_path / "planned", team=2) == files and len(files) == 8
+    other = TeamConfig.make(3, "food", 30, 8, trials=1)
+    (
+        tmp_path / "planned" / "summary.json"
+    ).unlink()  # unfinished: it would be continued, but it is not the plan
+    with pytest.raises(EvolutionError, match="another configuration"):
+        run_one(other.to_json(), str(tmp_path / "planned"))
 
 
 # Refusals ---------------------------------------------------------------------------------------------------

@@ -561,6 +561,8 @@ class TeamRun(RunLoop[Texts, Member]):
             others = [c for c in candidates if all(c is not r for r in ranked)]
             ranked.append(self._best_of(others))
         self.elites = ranked
+        alive = {text for member in [*self.population, *self.elites] for text in member.texts}
+        self._shapes = {text: shape for text, shape in self._shapes.items() if text in alive}
 
     def _record(self, members: Sequence[Member]) -> None:
         rows = []
