@@ -190,6 +190,15 @@ def test_same_seed_same_files_and_the_best_swarm_loads(tmp_path, capsys):
     assert list(evaluated["descriptors"].values()) == best["descriptors"]
 
 
+def test_the_best_swarm_animates(tmp_path):
+    from evolution_manager.viewing.animate import main as animate
+
+    assert _team(tmp_path / "run", "--team", "2", "--evaluations", "5") == 0
+    swarm = tmp_path / "run" / "best" / "food_swarm.json"
+    assert animate(["--swarm", str(swarm), "--seed", "1", "--out", str(tmp_path / "best.gif")]) == 0
+    assert (tmp_path / "best.gif").stat().st_size > 0
+
+
 def test_a_run_stopped_and_resumed_ends_identical(tmp_path):
     assert _team(tmp_path / "straight", "--team", "3", "--evaluations", "100", "--seed", "5") == 0
     config = TeamConfig.from_json(json.loads((tmp_path / "straight" / "config.json").read_text()))
