@@ -306,6 +306,30 @@ def test_resume_of_a_team_run_refuses_another_team(tmp_path, capsys):
         assert words in error and error.count("\n") == 1
 
 
+@pytest.mark.parametrize(
+    ("damage", "words"),
+    [
+        (lambda state: state["population"][0]["trees"].pop(), "a team of 1 trees in a run of 2"),
+        (lambda state: state["elites"][0]["trees"].__setitem__(0, "sel(forward"), "not a behaviour tree"),
+        (lambda state: state.__setitem__("produced", -3), "produced"),
+        (lambda state: state.pop("generation"), "generation"),
+    ],
+)
+def test_a_damaged_checkpoint_is_refused_in_one_line(tmp_path, capsys, damage, words):
+    assert _team(tmp_path / "run", "--team", "2", "--evaluations", "5") == 0
+    (tmp_path / "run" / "summary.json").unlink()
+    path = tmp_path / "run" / "checkpoint.json"
+    state = json.loads(path.read_text())
+    damage(state)
+    path.write_text(json.dumps(state))
+    before = (tmp_path / "run" / "evaluations.csv").read_bytes()
+    capsys.readouterr()
+    assert evolve(["--out", str(tmp_path / "run"), "--resume", "--no-progress"]) == 2
+    error = capsys.readouterr().err
+    assert "is damaged" in error and words in error and error.count("\n") == 1
+    assert (tmp_path / "run" / "evaluations.csv").read_bytes() == before
+
+
 def test_a_team_configuration_round_trips_and_takes_the_tasks_derating():
     config = TeamConfig.make(2, "foraging_biased", 200, 1, task=MULTIFOOD)
     assert TeamConfig.from_json(json.loads(json.dumps(config.to_json()))) == config
