@@ -9,8 +9,9 @@ tree runs and composition runs share (``run_folder``), a tree run with its check
 held-out scores (``heldout``), trees as people are shown them (``shown_trees``), what a run's result files
 show, computed (``run_results``), and primitive libraries made from runs' repertoires (``libraries``, the
 ``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA or MAP-Elites
-(``compositions``), and the optimisers over a neural controller's weights, CMA-ES, the authors' GA and
-MAP-Elites (``networks``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy, pycma and
+(``compositions``), the optimisers over a neural controller's weights, CMA-ES, the authors' GA and
+MAP-Elites (``networks``), and teams, K trees evolved together by the GP, robot i running tree i mod K
+(``teams``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy, pycma and
 pyribs; no other wing.
 """
 
@@ -30,4 +31,5 @@ __all__ = [
     "run_folder",
     "run_results",
     "shown_trees",
+    "teams",
 ]

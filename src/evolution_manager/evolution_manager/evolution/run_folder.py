@@ -1,5 +1,5 @@
-"""What every run shares, tree runs (``evolution.run``), composition runs (``evolution.compositions``) and
-network runs (``evolution.networks``): its folder and its loop.
+"""What every run shares, tree runs (``evolution.run``), composition runs (``evolution.compositions``),
+network runs (``evolution.networks``) and team runs (``evolution.teams``): its folder and its loop.
 
 A run folder holds ``config.json`` (never changed once the run starts; a composition run's says ``"kind":
 "compositions"``, a network run's ``"kind": "networks"``), ``evaluations.csv`` and ``progress.csv``
@@ -40,6 +40,8 @@ COMPOSITIONS = "compositions"
 """``config.json``'s ``kind`` of a composition run (a tree run's has no ``kind``)."""
 NETWORKS = "networks"
 """``config.json``'s ``kind`` of a network run (``evolution.networks``)."""
+TEAMS = "teams"
+"""``config.json``'s ``kind`` of a team run (``evolution.teams``)."""
 
 DAMAGE = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError)
 """What reading a damaged configuration or checkpoint raises (a missing key, a value of the wrong kind)."""
@@ -68,7 +70,7 @@ _Answer = TypeVar("_Answer")
 
 def run_kind(root: Path) -> str | None:
     """The kind of the run in ``root`` by its ``config.json``: ``"compositions"``, ``"networks"``,
-    ``"trees"``, or None when it holds no readable configuration."""
+    ``"teams"``, ``"trees"``, or None when it holds no readable configuration."""
     path = Path(root) / "config.json"
     if not path.is_file():
         return None
@@ -79,7 +81,7 @@ def run_kind(root: Path) -> str | None:
     if not isinstance(data, dict):
         return None
     kind = data.get("kind")
-    return kind if kind in (COMPOSITIONS, NETWORKS) else "trees"
+    return kind if kind in (COMPOSITIONS, NETWORKS, TEAMS) else "trees"
 
 
 def _remove_abandoned_starts(parent: Path, name: str) -> None:

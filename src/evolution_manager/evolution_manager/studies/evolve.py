@@ -6,6 +6,8 @@
         --evaluations 1000 --out runs/compositions     # a repertoire cell per robot (evolution.compositions)
     ws/run evolution_manager evolve --algorithm nn-cmaes --objective food --evaluations 25000 --seed 1 \
         --out runs/nn    # the 9-5-1 network's weights: CMA-ES, the GA (nn-ga) or MAP-Elites (nn-qd)
+    ws/run evolution_manager evolve --team 2 --algorithm gp --task multifood-arena9-kind2 \
+        --objective foraging_biased --out runs/team2    # 2 trees evolved together (evolution.teams)
 
 Bad options print one line saying what was expected and exit with status 2; nothing already saved is
 touched. An interrupted run (Ctrl-C) exits with status 130 and continues with ``--resume``.
@@ -43,11 +45,11 @@ from evolution_manager.evolution.options import (
     progress_bar,
 )
 from evolution_manager.evolution.run_config import ALGORITHMS, DEFAULT_EVALUATIONS, OBJECTIVES
-from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, run_kind
+from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, TEAMS, run_kind
 from evolution_manager.files import read_json, read_json_object
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from swarm_ros.safe_paths import UnsafePathError, describe
-from swarm_sim.tasks import registered_name
+from swarm_sim.tasks import registered_name, task_label, task_named
 
 if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load late (see _evolve)
     from distributed import Client
@@ -132,6 +134,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --swarm-from: start from the homogeneous swarms of the K fittest cells besides random "
         "genomes (default 0: all random, as the authors' GA)",
     )
+    parser.add_argument(
+        "--team",
+        type=int,
+        metavar="K",
+        help="with --algorithm gp: evolve K trees together, robot i running tree i mod K "
+        "(docs/algorithms.md, 'Teams')",
+    )
     add_cluster_options(parser)
     return parser
 
@@ -169,6 +178,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
         out = args.out
         cluster = settings_from_args(args)
         check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
+        if _teams_asked(args):
+            return _evolve_teams(args, argv, started, cluster)
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
         if _networks_asked(args):
@@ -581,6 +592,93 @@ def _evolve_networks(
     best = _best_shown(run)
     where = Path(args.out) / "best" / f"{run.config.objective}.json"
     print(f"{run.config.label}: {run.evaluations} evaluations, best {run.config.objective} {best}; {where}")
+    return 0
+
+
+def _teams_asked(args: argparse.Namespace) -> bool:
+    """Whether the command evolves teams: ``--team K`` given, or ``--resume`` of a team run."""
+    return args.team is not None or (bool(args.resume) and run_kind(args.out) == TEAMS)
+
+
+def _check_team_options(args: argparse.Namespace, cluster: ClusterSettings) -> None:
+    """Refuse the options a team run has no use for, each in one line saying what was expected."""
+    if not cluster.is_local:
+        raise UsageError("--team: teams are evaluated here (--workers threads); leave --cluster out")
+    for name in ("swarm_from", "homogeneous", "library", "objectives", "nodes", "descriptors"):
+        if getattr(args, name) is not None:
+            raise UsageError(
+                f"--{name.replace('_', '-')} does not apply to a team run (--team K: K trees evolved from "
+                "scratch over the task's node set); leave it out"
+            )
+    if args.scenarios == "fresh":
+        raise UsageError("teams are evaluated on fixed scenarios: leave out --scenarios fresh")
+    if args.algorithm not in (None, "gp"):
+        raise UsageError(f"--team K evolves K trees together with --algorithm gp, not {args.algorithm}")
+
+
+def _evolve_teams(
+    args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
+) -> int:
+    """``evolve --team K`` (``evolution.teams``): start or continue a team run, write its results."""
+    from evolution_manager.evolution import teams  # late, as the run's modules in _evolve
+
+    try:
+        _check_team_options(args, cluster)
+        if args.resume:
+            saved = teams.TeamConfig.from_json(read_json_object(Path(args.out) / "config.json"))
+            names = ("team", "objective", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            _check_as_saved(args, saved, names)
+            if args.task is not None and args.task != saved.task:
+                raise UsageError(
+                    f"--task {task_label(args.task)} differs from the run being resumed "
+                    f"({task_label(saved.task)}); leave it out or start a new run in another --out"
+                )
+            config = saved
+        else:
+            if (Path(args.out) / "config.json").exists():
+                raise UsageError(
+                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
+                )
+            if args.algorithm is None:
+                raise UsageError("--team K needs --algorithm gp")
+            if args.objective is None:
+                raise UsageError(f"--team needs --objective ({', '.join(OBJECTIVES)})")
+            task = args.task or task_named("primitives")
+            teams.check_team_size(args.team, task.config().n_robots, "--team")
+            config = teams.TeamConfig.make(
+                args.team,
+                args.objective,
+                args.evaluations,
+                0 if args.seed is None else args.seed,
+                args.trials or 10,
+                args.profile,
+                task,
+                args.scenario_seed,
+            )
+        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
+
+        try:
+            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
+        except ValueError as error:
+            raise UsageError(f"--workers: {error}") from None
+        if args.resume:
+            run = teams.TeamRun.resume(args.out, evaluator)
+        else:
+            run = teams.TeamRun.start(config, args.out, evaluator)
+    except (WriteError, UsageError, EvolutionError, OSError) as error:
+        return _could_not_start(error, args.out)
+    failed = _execute_one(run, run.write_results, run.config.objective, args, argv, started, cluster)
+    if failed is not None:
+        return failed
+    summary = read_json_object(Path(args.out) / "summary.json")
+    held = summary["heldout_best_fitness"]
+    where = Path(args.out) / "best" / f"{run.config.objective}_swarm.json"
+    print(
+        f"{run.config.label}: {run.evaluations} evaluations of teams of {run.config.team} trees, best "
+        f"{run.config.objective} {_best_shown(run)}"
+        + ("" if held is None else f" (held-out {held:.4f})")
+        + f"; the best swarm is {where}"
+    )
     return 0
 
 

@@ -61,7 +61,7 @@ from evolution_manager.cluster.settings import ClusterSettings, add_cluster_opti
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS
+from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, TEAMS
 from evolution_manager.files import read_json, read_json_object, write_json
 from evolution_manager.processes import (
     die_with_parent,
@@ -135,6 +135,8 @@ def run_one(
         return _run_composition(config_data, root, progress, checkpoint_interval)
     if config_data.get("kind") == NETWORKS:
         return _run_network(config_data, root, progress, checkpoint_interval)
+    if config_data.get("kind") == TEAMS:
+        return _run_team(config_data, root, progress, checkpoint_interval)
     config = RunConfig.from_json(config_data)
     directory = RunDirectory(Path(root))
     if finished(directory.root):
@@ -238,6 +240,33 @@ def _run_network(
         run = nets.NetworkRun.start(config, directory.root, evaluator)
     run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
     run.finish()
+    return root
+
+
+def _run_team(
+    config_data: dict,
+    root: str,
+    progress: queues.Queue[tuple[str, int]] | None,
+    checkpoint_interval: float,
+) -> str:
+    """:func:`run_one` of a planned team run (``evolution.teams``): started or continued, then its summary
+    (with the best team's held-out fitness) and best swarm written."""
+    from evolution_manager.evolution import teams  # late, as the run's modules in run_one
+    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
+
+    config = teams.TeamConfig.from_json(config_data)
+    directory = teams.TeamDirectory(Path(root))
+    if finished(directory.root):
+        return root
+    evaluator = BatchEvaluator(config.world(), threads=1)
+    if directory.started():
+        if teams.TeamConfig.from_json(read_json_object(directory.config)) != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+        run = teams.TeamRun.resume(directory.root, evaluator)
+    else:
+        run = teams.TeamRun.start(config, directory.root, evaluator)
+    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
+    run.write_results()
     return root
 
 
