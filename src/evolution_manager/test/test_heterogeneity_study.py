@@ -23,15 +23,20 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     )
     document, stages, budgets = study.plan_study(args, "fixed", "shared")
     assert len(stages) == 2 * len(study.TASKS)  # each task: its repertoires, then its arms
-    repertoires = stages[0]()
-    assert [folder for _, folder in repertoires] == [
+    first = stages[0]()  # the repertoires, and beside them the teams, which need none
+    assert [folder for _, folder in first] == [
         "repertoires/multifood-arena9-kind2/run00",
         "repertoires/multifood-arena9-kind2/run01",
+        *(f"arms/multifood-arena9-kind2/team{k}/run0{r}" for k in (2, 3, 9) for r in (0, 1)),
     ]
-    made, _ = repertoires[0]
+    made, _ = first[0]
     assert (made.algorithm, made.descriptors, made.objective) == ("qd", "deliveries", "foraging_biased")
+    teams = [e for e in document["plan"] if e["kind"] == "team"]
+    assert len(teams) == len(study.TASKS) * 3 * 2
+    assert all(budgets[e["dir"]] == 25_000 + 300 for e in teams)  # a repertoire's and a composition's budget
+    assert [made.team for made, _ in first[2:]] == [2, 2, 3, 3, 9, 9]
     arms = [e for e in document["plan"] if e["kind"] == "composition"]
-    assert len(arms) == len(study.TASKS) * len(study.ARMS) * 2
+    assert len(arms) == len(study.TASKS) * sum(1 for a in study.ARMS if not a.team) * 2
     for entry in arms:
         repertoire = next(e for e in document["plan"] if e["dir"] == entry["from"])
         assert entry["seed"] == repertoire["config"]["seed"] and entry["task"] == repertoire["task"]
@@ -39,6 +44,8 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     seeds = {(e["task"], e["seed"]) for e in arms}
     assert len(seeds) == len(study.TASKS) * 2  # one seed per task and index, shared by its arms
     assert document["swarm_evaluations"] == 300 and document["arms"] == [a.name for a in study.ARMS]
+    for entry in teams:  # the teams share the seeds of the repertoires and compositions they are set beside
+        assert (entry["task"], entry["seed"]) in seeds
 
 
 def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):
@@ -63,7 +70,8 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
             runs = [r for r in mine if r["arm"] == arm.name]
             assert {r["seed"] for r in runs} == {r["seed"] for r in baselines}
             # the evaluated QD score at one bin is the run's best fitness
-            assert all(float(r["qd_score_1"]) == float(r["best_fitness"]) for r in runs)
+            if not arm.team:
+                assert all(float(r["qd_score_1"]) == float(r["best_fitness"]) for r in runs)
             assert all(r["heldout_foraging1"] != "" for r in runs)
     # the baseline is each composition run's own measure: the same for every arm of a seed
     first = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())["homogeneous"]

@@ -9,7 +9,10 @@ For every task of :data:`TASKS` (with its objective) and every run ``r``:
 1. **A repertoire** (``repertoires/<task>/run<r>``): MAP-Elites over trees on the task, binned by the
    deliveries of each food kind (``--descriptors deliveries``), ``--evaluations`` trees.
 2. **The arms** (``arms/<task>/<arm>/run<r>``, :data:`ARMS`): compositions of that repertoire's cells, one per
-   robot (``evolution.compositions``), ``--swarm-evaluations`` genomes each: "generate, then allocate".
+   robot (``evolution.compositions``), ``--swarm-evaluations`` genomes each: "generate, then allocate"; and
+   the teams (``evolution.teams``): K trees evolved together by GP with no repertoire, robot i running tree
+   i mod K, for K = 2, 3 and 9, with ``--evaluations`` plus ``--swarm-evaluations`` teams each, the whole
+   budget of a repertoire and a composition run (equal evaluations, and so equal simulated time).
 
 Every run of task ``t`` and index ``r``, the repertoire and each arm, has the seed ``derive_seed(--seed,
 RUN_STUDY, HETEROGENEITY_STAGE, t, r)``, so the arms pair by seed, and composes from the same repertoire. The
@@ -43,6 +46,7 @@ from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
+from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
@@ -77,6 +81,8 @@ class Arm:
     homogeneous: int = 0
     cell_mutation: str = "one"
     crossover_operator: str = "two-point"
+    team: int = 0
+    """K, for a team arm (``evolution.teams``); 0 for a composition arm."""
 
     @property
     def parameters(self) -> CompositionParameters:
@@ -92,7 +98,12 @@ ARMS: tuple[Arm, ...] = (
     Arm("ga-seeded", "ga", "the GA seeded with the homogeneous swarms of the 5 fittest cells", homogeneous=5),
     Arm("qd", "qd", "the authors' MAP-Elites over compositions binned by deliveries (two-point crossover)"),
     Arm("qd-mix", "qd", "MAP-Elites over compositions with Mix-ME's mixing", crossover_operator="mix"),
-)
+    *(
+        Arm(f"team{k}", "gp", f"GP over {k} trees evolved together, no repertoire (robot i runs tree i "
+            f"mod {k})", team=k)
+        for k in (2, 3, 9)
+    ),
+)  # fmt: skip
 HEADER = [
     "arm", "task", "seed", "best_fitness", "heldout_best_fitness",
     "heldout_foraging1", "heldout_foraging2", "heldout_foraging3",
@@ -122,7 +133,7 @@ def plan_study(
     stages: list[Stage] = []
     budgets: dict[str, int] = {}
     for t, (task, objective) in enumerate(TASKS):
-        repertoires: list[tuple[RunConfig, str]] = []
+        repertoires: list[tuple[RunConfig | TeamConfig, str]] = []
         for r in range(args.runs):
             seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
             made = RunConfig.make(
@@ -134,7 +145,19 @@ def plan_study(
             entries.append({"kind": "repertoire", "task": task, "dir": folder, "config": made.to_json()})
             budgets[folder] = made.evaluations
         arms: list[dict] = []
-        for arm in ARMS:
+        for arm in (a for a in ARMS if a.team):
+            for r in range(args.runs):
+                seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
+                team = TeamConfig.make(
+                    arm.team, objective, args.evaluations + swarm_evaluations, seed, args.trials, profile,
+                    task, scenario_seed,
+                )  # fmt: skip
+                folder = f"arms/{task}/{arm.name}/run{r:02d}"
+                entries.append({"kind": "team", "arm": arm.name, "task": task, "dir": folder,
+                                "seed": seed, "config": team.to_json()})  # fmt: skip
+                repertoires.append((team, folder))  # they need no repertoire: beside them
+                budgets[folder] = team.evaluations
+        for arm in (a for a in ARMS if not a.team):
             for r in range(args.runs):
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entry: dict[str, object] = {
@@ -163,7 +186,7 @@ def plan_study(
     return document, stages, budgets
 
 
-def _given(planned: list[tuple[RunConfig, str]]) -> Stage:
+def _given(planned: list[tuple[RunConfig | TeamConfig, str]]) -> Stage:
     """A stage of runs known when the study is planned."""
     return lambda: planned
 
@@ -231,12 +254,22 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
     rows: list[dict[str, str]] = []
     baselines: list[dict[str, str]] = []
     for entry in document["plan"]:
-        if entry["kind"] != "composition":
+        if entry["kind"] == "repertoire":
             continue
         summary = _summary(root, entry["dir"])
         if summary is None:
             continue
         seed, task = str(entry["seed"]), entry["task"]
+        if entry["kind"] == "team":
+            means = summary.get("heldout_objectives") or {}
+            rows.append({
+                "arm": entry["arm"], "task": task, "seed": seed,
+                "best_fitness": _number(summary["best_fitness"]),
+                "heldout_best_fitness": _number(summary["heldout_best_fitness"]),
+                **{f"heldout_foraging{k}": _number(means.get(f"foraging{k}")) for k in (1, 2, 3)},
+                **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
+            })  # fmt: skip
+            continue
         baseline = summary.get("homogeneous")
         if baseline and not any(b["task"] == task and b["seed"] == seed for b in baselines):
             baselines.append({
@@ -399,16 +432,19 @@ def _best_swarms(root: Path, document: dict, rows: Sequence[dict[str, str]], tas
     fitness (the first in plan order among equals), each as its label and trees."""
     shown: dict[str, dict] = {}
     for entry in document["plan"]:
-        if entry["kind"] != "composition" or entry["task"] != task:
+        if entry["kind"] == "repertoire" or entry["task"] != task:
             continue
         summary = _summary(root, entry["dir"])
         if summary is None or summary["best"] is None:
             continue
-        candidates = [(entry["arm"], summary["heldout_best_fitness"], summary["best"]["trees"], summary)]
+        trees = summary["best"]["trees"]
+        if entry["kind"] == "team":  # a tree per sub-group: robot i runs tree i mod K
+            trees = [trees[i % len(trees)] for i in range(len(summary["robot_groups"]))]
+        candidates = [(entry["arm"], summary["heldout_best_fitness"], trees, summary)]
         baseline = summary.get("homogeneous")
         if baseline:
-            trees = [baseline["tree"]] * len(summary["best"]["trees"])
-            candidates.append((BASELINE, baseline["heldout_best_fitness"], trees, summary))
+            copies = [baseline["tree"]] * len(trees)
+            candidates.append((BASELINE, baseline["heldout_best_fitness"], copies, summary))
         for name, held, trees, source in candidates:
             if held is None:
                 continue
@@ -456,17 +492,19 @@ def build_report(root: Path) -> Path:
     tasks = [t["task"] for t in document["tasks"]]
     tested = comparisons(rows, tasks)
     arms = "\n".join(f"- **{arm.name}**: {arm.what}." for arm in ARMS)
-    planned = sum(1 for e in document["plan"] if e["kind"] == "composition")
+    planned = sum(1 for e in document["plan"] if e["kind"] != "repertoire")
     finished = len(rows) - sum(1 for r in rows if r["arm"] == BASELINE)
     text = (
         f"# When does a heterogeneous swarm beat the best homogeneous one? {root.name}\n\n"
-        f"{finished} of {planned} planned composition runs finished ({document['runs']} per arm and task; "
+        f"{finished} of {planned} planned runs of the arms finished ({document['runs']} per arm and task; "
         f"repertoires of {document['evaluations']:,} trees, compositions of "
         f"{document['swarm_evaluations']:,} genomes; {document['trials']} trials per evaluation, profile "
         f"{document['profile']}, design "
         f"{document['design']}); one row per run in [runs.csv](runs.csv).\n\n"
-        "Each run composes one forager per robot from the cells of a MAP-Elites repertoire of trees evolved "
-        "on the same task (binned by the deliveries of each food kind). The arms:\n\n"
+        "A composition arm composes one forager per robot from the cells of a MAP-Elites repertoire of trees "
+        "evolved on the same task (binned by the deliveries of each food kind); a team arm evolves K trees "
+        "together with no repertoire, on the budget of the repertoire and a composition run together. "
+        "The arms:\n\n"
         f"{arms}\n- **{BASELINE}**: the best homogeneous swarm of the same cells (every cell's nine copies "
         "on the run's scenario, the fittest), measured by each composition run; the study takes it from the "
         "first arm's run of each seed.\n\n"
