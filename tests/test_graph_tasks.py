@@ -42,6 +42,13 @@ KINDS = replace(
 )
 """Three kinds of food (the authors' arena 9, kind 2 preferred): the numbered conditions, carrying and
 deliveries per kind and the biased objective travel through the graph's messages and its bag."""
+TYPES = replace(
+    task_named("multifood-arena7-types"),
+    trials=Trials(ticks=14, chain_trials=2),
+    robots=replace(task_named("multifood-arena7-types").robots, count=5),
+)
+"""The authors' two robot types (arena 7, localised starts): the odd robots' swapped ground and messages are
+made on the simulator's side, so the graph's controllers run unchanged and the bag's world says the types."""
 TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
 KINDS_TREE = (
     "sel(seq(sel(got_food1, got_food2, got_food3), sel(seq(nest_left, forward_left), seq(nest_right, "
@@ -50,7 +57,9 @@ KINDS_TREE = (
 
 
 @pytest.mark.parametrize(
-    ("task", "tree"), [(SMALL, TREE), (DISCS, TREE), (KINDS, KINDS_TREE)], ids=["small", "discs", "kinds"]
+    ("task", "tree"),
+    [(SMALL, TREE), (DISCS, TREE), (KINDS, KINDS_TREE), (TYPES, TREE)],
+    ids=["small", "discs", "kinds", "types"],
 )
 def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(
     task, tree, tmp_path

@@ -77,10 +77,11 @@ def test_as_dict_names_every_field():
     d = DEFAULT.as_dict()
     assert d["gaps"] == [500.0, 700.0]
     # every field; a layout only when there is one (the papers' arena is nest_radius and gaps), faults only
-    # when some are given
-    assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout", *FAULT_FIELDS}
+    # when some are given, robot types only when there are two (files as before each)
+    quiet = {*FAULT_FIELDS, "robot_types"}
+    assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout", *quiet}
     nest = Piece("nest", "disc", 0.0, 0.0, 400.0)
-    laid_out = Config(layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),))
+    laid_out = Config(layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),), robot_types=2)
     assert set(laid_out.as_dict()) == {f.name for f in dataclasses.fields(Config)} - set(FAULT_FIELDS)
     assert config_from_dict(laid_out.as_dict()) == laid_out
     faulty = Config(fault_robots=((0, "wheel-dead"), (3, "disruptive")))

@@ -100,7 +100,8 @@ def test_neighbour_distance_is_the_mean_true_distance_from_the_others():
 def test_take_probes_writes_every_probe_of_a_robot_at_the_step_asked():
     x, y = np.array([300.0, 0.0]), np.array([400.0, 0.0])
     probes = np.zeros((2, 2, len(PROBES)))
-    world.take_all_probes(x, y, Config(gaps=(700.0,)).arena_arrays(0)[0], probes, 1)
+    config = Config(gaps=(700.0,))
+    world.take_all_probes(x, y, config.arena_arrays(0)[0], probes, 1, config.params())
     assert probes[:, 0].tolist() == [[0.0, 0.0], [0.0, 0.0]]  # the first step's row untouched
     assert probes[0, 1].tolist() == [_food_distance(300.0, 400.0, 700.0), 500.0]
     assert probes[1, 1].tolist() == [_food_distance(0.0, 0.0, 700.0), 500.0]

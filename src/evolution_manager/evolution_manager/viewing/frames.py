@@ -240,7 +240,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     p = config.params()
     entry, food_scale = config.arena_arrays(trial)
     probes = np.zeros((n, 2, N_PROBES))
-    world.take_all_probes(poses[0][:, 0], poses[0][:, 1], entry, probes, 0)  # at the trial's first step
+    world.take_all_probes(poses[0][:, 0], poses[0][:, 1], entry, probes, 0, p)  # at the trial's first step
     ticks, actions = [], np.full((len(steps), n), -1, np.int64)
     fitness = np.full((len(steps), world.N_OBJECTIVES), np.nan)
     # the robots enter trial K driving as the chain's last tick before it set them (model: motors carry over)
@@ -254,7 +254,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if timeline.is_initial(config.timeline, s):
             initial = smoothed[k]
         if initial is not None:
-            world.take_all_probes(poses[k][:, 0], poses[k][:, 1], entry, probes, 1)
+            world.take_all_probes(poses[k][:, 0], poses[k][:, 1], entry, probes, 1, p)
             fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], food_scale, p)
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)

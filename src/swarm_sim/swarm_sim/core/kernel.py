@@ -352,6 +352,7 @@ def _record_step(
         rec.poses[row, i, 2] = heading[i]
         rec.actions[row, i] = actions[i] if last >= 0 else -1
         world.ground(x[i], y[i], entry, rec.ground[row, i])
+        world.swap_ground(i, p, rec.ground[row, i])
         world.faulty_ground(faults[i], rec.ground[row, i])
         rec.heard[row, i] = heard[i]
         for c in range(heard[i]):
@@ -367,7 +368,7 @@ def _record_step(
         # The objectives only (counts and motion feed the descriptors), from this trial's initial values, the
         # robots' probes now and their deliveries so far.
         now = probes.copy()
-        world.take_all_probes(x, y, entry, now, 1)
+        world.take_all_probes(x, y, entry, now, 1, p)
         values = world.trial_values(
             initial,
             smooth,
@@ -553,6 +554,7 @@ def _steps(
     faulty = False  # without faults, the steps pay one test of this where a fault would act
     for i in range(n):
         faulty = faulty or faults[i] != 0
+    typed = p.robot_types == 2  # likewise for the odd robots' swapped regions (world.swaps_regions)
     (x, y, heading, dynamics, contacts, pairs, solver, _, broadcast, raw, window, smooth, ground_now, here,
      sources, positions, bearings, actions, resumed, memory, counts, motion, initial) = swarm  # fmt: skip
     counts_in, senders, ranges, values = inbox
@@ -582,9 +584,14 @@ def _steps(
         if sensing or position == recorded:
             # Every robot hears what the others broadcast at the step before (at a trial's first step the
             # robots ignore it, and only a recording looks).
+            # (``broadcast`` is rewritten whole at the step's end, so it may carry the air's sense until then)
+            if typed:
+                world.swap_sent(broadcast, p)
             if faulty:
                 world.disrupt(faults, broadcast)
             world.sense_step(x, y, broadcast, drop_keys, k, p, counts_in, senders, ranges, values)
+            if typed:
+                world.swap_received(counts_in, values, p)
             if faulty:
                 world.deafen(faults, counts_in)
         if not sensing:
@@ -593,15 +600,19 @@ def _steps(
             # a73e4af).
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
+                if typed:
+                    world.swap_ground(i, p, here[i])
                 if faulty:
                     world.faulty_ground(faults[i], here[i])
                 for f in range(kinds):
                     carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
-                world.take_probes(x, y, i, entry, probes, 0)
+                world.take_probes(x, y, i, entry, probes, 0, p)
         if sensing:
             for i in range(n):
                 inside = ground_now[i]
                 world.ground(x[i], y[i], entry, inside)
+                if typed:
+                    world.swap_ground(i, p, inside)
                 if faulty:
                     world.faulty_ground(faults[i], inside)
                 for f in range(kinds):
@@ -645,6 +656,8 @@ def _steps(
         if timeline.region_broadcast(p, k):
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
+                if typed:
+                    world.swap_ground(i, p, here[i])
                 if faulty:
                     world.faulty_ground(faults[i], here[i])
                 for r in range(regions):
@@ -678,7 +691,7 @@ def _steps(
                 faults,
             )
         if timeline.is_final(p, k):
-            world.take_all_probes(x, y, entry, probes, 1)
+            world.take_all_probes(x, y, entry, probes, 1, p)
             _score_trial(swarm, cargo, food_scale[row], p, values_out, position)
             for i in range(n):
                 poses_out[position, 1, i, 0] = x[i]

@@ -32,7 +32,9 @@ def sense_swarm(
     """Every robot's readings at sensing step ``step`` on the regions of ``entry`` (the simulator's side,
     robot by robot); ``broadcast`` (n x regions) is what each robot broadcast at the step before.
     ``faults``: each robot's fault code (``ChainSetup.faults``; None: none), with the robots' ``BEARINGS``
-    stream keys (``ChainSetup.bearing_keys``) for noisy bearings; ``broadcast`` is left as it is."""
+    stream keys (``ChainSetup.bearing_keys``) for noisy bearings; ``broadcast`` is left as it is. With two
+    robot types (``p.robot_types``) each odd robot's ground, the messages it receives and those it sends
+    have the nest and food kind 1 swapped (``world.swap_ground``, ``swap_received``, ``swap_sent``)."""
     n = x.shape[0]
     regions = broadcast.shape[1]
     if faults is None:
@@ -40,11 +42,13 @@ def sense_swarm(
     if bearing_keys is None:
         bearing_keys = np.zeros(n, dtype=np.uint64)
     sent = broadcast.copy()
+    world.swap_sent(sent, p)
     world.disrupt(faults, sent)
     counts = np.zeros(n, dtype=np.int64)
     senders = np.zeros((n, n), dtype=np.int64)
     ranges, values = np.zeros((n, n)), np.zeros((n, n, regions))
     world.sense_step(x, y, sent, drop_keys, step, p, counts, senders, ranges, values)
+    world.swap_received(counts, values, p)
     world.deafen(faults, counts)
     out = []
     for i in range(n):
@@ -56,6 +60,7 @@ def sense_swarm(
             bearings[m] = world.faulty_bearing(fault, seen, key, step, j, n)
         inside = np.zeros(regions, dtype=np.bool_)
         world.ground(x[i], y[i], entry, inside)
+        world.swap_ground(i, p, inside)
         world.faulty_ground(fault, inside)
         out.append(
             Readings(

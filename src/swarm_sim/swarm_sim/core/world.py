@@ -2,9 +2,11 @@
 (``docs/model.md``).
 
 (a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
-(b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``, and the
-per-robot faults that change them (``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``,
-``deafen``, ``faulty_bearing``, ``disrupt``;
+(b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``; the robot
+types that swap the nest and food kind 1 for odd robots (``Config.robot_types``): ``swaps_regions``,
+``swap_ground``, ``swap_sent``, ``swap_received``; and the per-robot faults that change them
+(``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``, ``deafen``, ``faulty_bearing``,
+``disrupt``;
 (c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
@@ -748,6 +750,56 @@ def bearing(x: float, y: float, heading: float, x_other: float, y_other: float) 
     return wrap_angle(math.atan2(y_other - y, x_other - x) - heading)
 
 
+# The authors' two robot types (``Config.robot_types`` 2; ``docs/model.md``, "Robot types"): a robot's type
+# is its id mod 2 (``bt_loop_functions.cpp:598`` at 1cd2358), and a type-1 (odd) robot perceives the nest and
+# food kind 1 the other way round. The world, and the messages on the air, keep the even robots' sense: the
+# swap happens where an odd robot reads the ground, receives and sends (``footbot_bt.cpp:242-254, 269,
+# 482-488, 527-533``), so its software (perception, tree) is that of an even robot. Region 0 is the nest and
+# region 1 food kind 1 (``vocabulary.REGIONS``).
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def swaps_regions(i: int, p: Params) -> bool:
+    """Whether robot ``i`` perceives the nest and food kind 1 swapped: with two robot types, the odd ones."""
+    return p.robot_types == 2 and i % 2 == 1
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def swap_ground(i: int, p: Params, inside: np.ndarray) -> None:
+    """What robot ``i``'s ground sensor reads, from where it is (``inside``, written by ``ground``), in
+    place: in the nest where food kind 1 is and on food kind 1 where the nest is, if it ``swaps_regions``."""
+    if swaps_regions(i, p):
+        nest = inside[0]
+        inside[0] = inside[1]
+        inside[1] = nest
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def swap_sent(broadcast: np.ndarray, p: Params) -> None:
+    """What each robot's message carries on the air, from what it broadcast in its own sense
+    (``broadcast``, n x regions), in place: an odd robot's nest and food-1 values exchanged when there are
+    two types (``footbot_bt.cpp:482-488``), so that the air carries the even robots' sense."""
+    for i in range(broadcast.shape[0]):
+        if swaps_regions(i, p):
+            nest = broadcast[i, 0]
+            broadcast[i, 0] = broadcast[i, 1]
+            broadcast[i, 1] = nest
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def swap_received(counts: np.ndarray, values: np.ndarray, p: Params) -> None:
+    """What each robot reads in the messages it received (``sense_step``'s ``counts`` and ``values``), in
+    place: the nest and food-1 values of an odd robot's messages exchanged when there are two types
+    (``footbot_bt.cpp:527-533``). An odd robot thus hears another odd one in their common sense, and an even
+    one swapped."""
+    for i in range(counts.shape[0]):
+        if swaps_regions(i, p):
+            for c in range(counts[i]):
+                nest = values[i, c, 0]
+                values[i, c, 0] = values[i, c, 1]
+                values[i, c, 1] = nest
+
+
 # Per-robot faults (``swarm_sim.model.faults``): ``faults`` holds each robot's fault code (0: none). Each
 # function changes only the faulty robots' values, after the fault-free computation, so every other robot's
 # values are those of a world without faults.
@@ -858,20 +910,24 @@ def neighbour_distance(x: np.ndarray, y: np.ndarray, i: int) -> float:
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def take_probes(
-    x: np.ndarray, y: np.ndarray, i: int, entry: np.ndarray, probes: np.ndarray, when: int
+    x: np.ndarray, y: np.ndarray, i: int, entry: np.ndarray, probes: np.ndarray, when: int, p: Params
 ) -> None:
     """Write robot ``i``'s probes (``objectives.PROBES``, true quantities of the world) into
     ``probes[i, when]``, ``when`` 0 at a trial's first step and 1 at its last (or the step being scored).
-    Every road calls this at those steps, so a probe added here reaches every road's objectives."""
-    probes[i, when, 0] = region_distance(x[i], y[i], entry, 1)
+    Every road calls this at those steps, so a probe added here reaches every road's objectives. The food
+    distance is from the robot's own food kind 1: the nest for a robot that ``swaps_regions`` (the
+    authors' odd robots measure their food distance to the other region, ``footbot_bt.cpp:242-260``)."""
+    probes[i, when, 0] = region_distance(x[i], y[i], entry, 0 if swaps_regions(i, p) else 1)
     probes[i, when, 1] = neighbour_distance(x, y, i)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def take_all_probes(x: np.ndarray, y: np.ndarray, entry: np.ndarray, probes: np.ndarray, when: int) -> None:
+def take_all_probes(
+    x: np.ndarray, y: np.ndarray, entry: np.ndarray, probes: np.ndarray, when: int, p: Params
+) -> None:
     """``take_probes`` for every robot."""
     for i in range(x.shape[0]):
-        take_probes(x, y, i, entry, probes, when)
+        take_probes(x, y, i, entry, probes, when, p)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -51,6 +51,9 @@ FORMATION_MARGIN = 150.0
 2.45 m arena."""
 DEFAULT_NEST_RADIUS = 500.0
 DEFAULT_GAPS = (500.0, 700.0)
+ROBOT_TYPES: tuple[int, ...] = (1, 2)
+"""The values of ``Config.robot_types``: 1, every robot perceives the regions as they are; 2, the authors'
+two robot types (``docs/model.md``, "Robot types")."""
 
 
 class Params(NamedTuple):
@@ -93,6 +96,7 @@ class Params(NamedTuple):
     preferred_food: int
     other_food_weight: float
     authors_code: int
+    robot_types: int
 
 
 _INT_MINIMUM = {
@@ -110,6 +114,7 @@ _INT_MINIMUM = {
     "weak_robots": 0,
     "preferred_food": 0,
     "authors_code": 0,
+    "robot_types": 1,
 }
 """The integer parameters and the least value each may take (the one list of them)."""
 
@@ -212,6 +217,12 @@ class Config:
     or 2026, their commit 1cd2358, whose robots start their estimates afresh at every trial of a chain and
     see no robot on either side when nobody is heard (``docs/model.md``, "Two profiles"). Under ``clean``
     both give the same model."""
+    robot_types: int = 1
+    """1: every robot perceives the regions as they are. 2: the authors' two robot types of their
+    ``generic`` projects (commit 1cd2358): a robot's type is its id mod 2, and an odd robot perceives the nest
+    and food kind 1 the other way round, on its ground sensor, in the estimates it receives and in those it
+    broadcasts, and in its true food distance (the probe); one tree serves both types (``docs/model.md``,
+    "Robot types")."""
     fault_rate: float = 0.0
     """Per-robot faults (``swarm_sim.model.faults``): each robot is faulty with this probability, drawn per
     evaluation seed (``trial_data.robot_faults``); 0: none."""
@@ -337,6 +348,8 @@ class Config:
                 value = layout_as_json(value)
             if f.name in FAULT_FIELDS and value == f.default:
                 continue  # no faults: written as before faults
+            if f.name == "robot_types" and value == f.default:
+                continue  # one type: written as before robot types
             if f.name == "fault_robots":
                 value = [list(pair) for pair in value]
             out[f.name] = list(value) if isinstance(value, tuple) else value
@@ -362,6 +375,11 @@ def _validate(c: Config) -> None:
         check_authors_code(c.authors_code)
     except ValueError as error:
         raise ConfigError(str(error)) from None
+    if isinstance(c.robot_types, bool) or c.robot_types not in ROBOT_TYPES:
+        raise ConfigError(
+            f"robot_types must be 1 (one type) or 2 (the authors' two types, odd robots with the nest and "
+            f"food kind 1 swapped), got {c.robot_types!r}"
+        )
     for name in (
         "arena_half",
         "nest_radius",

@@ -149,7 +149,12 @@ from swarm_sim.nodes.world_parameters import declare_world
 from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer, warm_up
 from tf2_msgs.msg import TFMessage
 
-WORLD_RANGES = {"delivery_probability": (0.0, 1.0), "gain_low": (0.0, 10.0), "gain_step": (0.0, 1.0)}
+WORLD_RANGES = {
+    "delivery_probability": (0.0, 1.0),
+    "gain_low": (0.0, 10.0),
+    "gain_step": (0.0, 1.0),
+    "robot_types": (1, 2),
+}
 """Closed ranges of world parameters beyond what ``Config`` checks itself."""
 ANSWER_TIMEOUT_RANGE = (0.1, 86400.0)
 """Seconds the ``answer_timeout`` parameter may be."""

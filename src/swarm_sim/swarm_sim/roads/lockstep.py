@@ -144,7 +144,7 @@ class LockstepChain:
         record = None
         if timeline.is_final(self.line, k):
             entry, food_scale = self.config.arena_arrays(self.trial)
-            world.take_all_probes(self.x, self.y, entry, self.probes, 1)
+            world.take_all_probes(self.x, self.y, entry, self.probes, 1, self.p)
             values = world.trial_values(
                 self.initial,
                 smoothed,
@@ -197,7 +197,7 @@ class LockstepChain:
             self._pairs,
         )
         if timeline.step_in_trial(self.line, k) == 1:
-            world.take_all_probes(self.x, self.y, entry, self.probes, 0)
+            world.take_all_probes(self.x, self.y, entry, self.probes, 0, self.p)
         return sense_swarm(
             self.x,
             self.y,
@@ -310,4 +310,4 @@ def warm_up(config: Config = DEFAULT) -> None:
         np.zeros((n, regions + 1)), np.zeros((n, regions + 1)), counts, np.zeros((n, 2), np.int64),
         np.zeros((n, 2, N_PROBES)), np.zeros((n, regions - 1), np.int64), 500.0, sim.p,
     )  # fmt: skip
-    world.take_all_probes(sim.x, sim.y, config.arena_arrays(0)[0], np.zeros((n, 2, N_PROBES)), 0)
+    world.take_all_probes(sim.x, sim.y, config.arena_arrays(0)[0], np.zeros((n, 2, N_PROBES)), 0, sim.p)

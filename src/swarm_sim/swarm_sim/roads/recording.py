@@ -206,7 +206,7 @@ def record_trial_reference(
         else:
             probes = sim.probes.copy()
             entry, food_scale = config.arena_arrays(trial)
-            world.take_all_probes(sim.x, sim.y, entry, probes, 1)
+            world.take_all_probes(sim.x, sim.y, entry, probes, 1, p)
             values = world.trial_values(
                 initial, smoothed, no_counts, no_motion, probes, delivered, food_scale, p
             )

@@ -36,14 +36,18 @@ def arena_task(
     points: int | None = None,
     bias: int | None = None,
     other_food_weight: float = 1.0,
+    types: int = 1,
+    formation: str | None = None,
     name: str | None = None,
 ) -> TaskSpec:
     """``base`` (a foraging task, say) on the regions of the authors' arena ``layout``, named ``name`` (by
     default ``<base>-arena<layout>``), with the 2026 random start area. Layout 9 needs ``bias``, the preferred
     food kind 0-based as theirs (``arenaBias``), which the task's ``foraging_biased`` objective prefers with
     ``other_food_weight`` for the others (their ``penalty``). A layout with several food kinds gets their
-    node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``TaskError`` in one line for
-    a bad setting."""
+    node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``types`` 2 gives the
+    authors' two robot types (``Robots.types``: odd robots perceive the nest and food kind 1 swapped, as in
+    their ``generic`` projects, where it matters in layouts 7 and 8); ``formation`` the start formation
+    (None: ``base``'s). ``TaskError`` in one line for a bad setting."""
     try:
         rows = [arena_entries(layout, nest_radius=nest_radius, food_radius=food_radius, gap=g, points=points,
                               bias=bias)
@@ -79,6 +83,16 @@ def arena_task(
         objectives = (*objectives, "foraging_biased")
     what = f"{len(kinds)} food kinds" if several else "one food kind"
     told = f", food kind {preferred} preferred (other kinds count {other_food_weight:g})" if preferred else ""
+    if types == 2:
+        told += ", two robot types (odd robots perceive the nest and food swapped)"
+    robots = replace(
+        base.robots,
+        start_half_size=START_HALF_2026,
+        types=types,
+        formation=base.robots.formation if formation is None else formation,
+    )
+    if robots.formation != "random":
+        told += f", {robots.formation} start"
     return replace(
         base,
         name=name or f"{base.name}-arena{layout}",
@@ -87,7 +101,7 @@ def arena_task(
         authors_code=CODE_2026,
         arena=Arena(half_size=base.arena.half_size, trial_entries=trial_entries),
         regions=regions,
-        robots=replace(base.robots, start_half_size=START_HALF_2026),
+        robots=robots,
         objectives=objectives,
         scoring=Scoring(preferred_food=preferred, other_food_weight=other_food_weight),
         nodes=Nodes(MULTIFOOD_CONDITIONS, base.nodes.actions) if several else base.nodes,

@@ -100,6 +100,14 @@ for _kind in (1, 2, 3):
         )
     )
 
+# The authors' two robot types (their ``generic`` projects) in the two layouts where a type changes what a
+# robot perceives, 7 and 8 (``footbot_bt.cpp:242-254, 269`` at 1cd2358), each robot starting around its own
+# food kind 1 (the ``localised`` formation: even robots at the food point, odd ones at the nest point).
+for _layout in (7, 8):
+    register(
+        arena_task(FORAGING, _layout, types=2, formation="localised", name=f"multifood-arena{_layout}-types")
+    )
+
 
 def task_names() -> tuple[str, ...]:
     """The registered tasks' names, in registration order."""

@@ -85,6 +85,10 @@ class Robots:
     formation: str = DEFAULT.formation
     """Where robots start each trial: ``random`` (uniform in the start square), ``lattice``, ``nest``,
     ``localised`` or ``two_robots`` (``swarm_sim.model.config.FORMATIONS``; ``docs/tasks.md``)."""
+    types: int = DEFAULT.robot_types
+    """1: every robot perceives the regions as they are. 2: the authors' two robot types (their ``generic``
+    projects): the odd robots perceive the nest and food kind 1 the other way round, one tree serving both
+    (``Config.robot_types``; ``docs/model.md``, "Robot types")."""
 
 
 @dataclass(frozen=True)
@@ -242,6 +246,7 @@ class TaskSpec:
             start_half=self.robots.start_half_size,
             max_start_attempts=self.robots.start_attempts,
             formation=self.robots.formation,
+            robot_types=self.robots.types,
             ticks=self.trials.ticks,
             chain_trials=self.trials.chain_trials,
             message_range=self.communication.range,
@@ -381,6 +386,7 @@ _TASK_KEY: dict[str, str] = {
     "start_half": "robots.start_half_size",
     "max_start_attempts": "robots.start_attempts",
     "formation": "robots.formation",
+    "robot_types": "robots.types",
     "ticks": "trials.ticks",
     "chain_trials": "trials.chain_trials",
     "message_range": "communication.range",

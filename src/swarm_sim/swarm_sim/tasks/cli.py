@@ -44,13 +44,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=1.0,
         help="what another kind than the preferred one counts in foraging_biased (their penalty; default 1)",
     )
+    arena.add_argument(
+        "--types",
+        type=int,
+        choices=(1, 2),
+        default=1,
+        help="2: the authors' two robot types, odd robots perceiving the nest and food swapped (default 1)",
+    )
+    arena.add_argument("--formation", help="the start formation (default: the task's)")
     args = parser.parse_args(argv)
     try:
         if args.verb == "list":
             for name in task_names():
                 task = task_named(name)
+                two = task.robots.types == 2
+                types = ", two robot types (odd robots: nest and food swapped)" if two else ""
                 print(
-                    f"{name}: {task.trial_seconds:g} s trials, {task.robots.count} robots, objectives "
+                    f"{name}: {task.trial_seconds:g} s trials, {task.robots.count} robots{types}, objectives "
                     f"{', '.join(task.objectives) or 'none'}"
                 )
             return 0
@@ -66,6 +76,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 points=args.points,
                 bias=args.bias,
                 other_food_weight=args.other_food_weight,
+                types=args.types,
+                formation=args.formation,
             )
             sys.stdout.write(task_to_yaml(task))
             return 0
