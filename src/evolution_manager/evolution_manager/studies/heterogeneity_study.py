@@ -62,9 +62,11 @@ DEFAULT_SWARM_EVALUATIONS = 2000
 TASKS: tuple[tuple[str, str], ...] = (
     ("multifood-arena9-kind2", "foraging_biased"),
     ("multifood-arena6", "foraging"),
+    ("multifood-arena7-types", "foraging"),
 )
 """The tasks, each with the objective its runs maximise: the authors' arena 9 biased towards kind 2 (their
-bias and penalty fitness, penalty 0.5), and arena 6, three kinds of food and no bias."""
+bias and penalty fitness, penalty 0.5); arena 6, three kinds of food and no bias; and arena 7 with their two
+robot types (odd robots perceive the nest and the food swapped), every robot starting at its own food."""
 
 BASELINE = "homogeneous"
 GOAL = 1.2
