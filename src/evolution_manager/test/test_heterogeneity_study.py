@@ -22,19 +22,22 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
         ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
     )
     document, stages, budgets = study.plan_study(args, "fixed", "shared")
-    assert len(stages) == 2 * len(study.TASKS)  # each task: its repertoires, then its arms
-    first = stages[0]()  # the repertoires, and beside them the teams, which need none
+    assert len(stages) == 3 * len(study.TASKS)  # each task: its repertoires, its compositions, its teams
+    first = stages[0]()
     assert [folder for _, folder in first] == [
         "repertoires/multifood-arena9-kind2/run00",
         "repertoires/multifood-arena9-kind2/run01",
-        *(f"arms/multifood-arena9-kind2/team{k}/run0{r}" for k in (2, 3, 9) for r in (0, 1)),
+    ]
+    third = stages[2]()  # the teams need no repertoire
+    assert [folder for _, folder in third] == [
+        f"arms/multifood-arena9-kind2/team{k}/run0{r}" for k in (2, 3, 9) for r in (0, 1)
     ]
     made, _ = first[0]
     assert (made.algorithm, made.descriptors, made.objective) == ("qd", "deliveries", "foraging_biased")
     teams = [e for e in document["plan"] if e["kind"] == "team"]
     assert len(teams) == len(study.TASKS) * 3 * 2
     assert all(budgets[e["dir"]] == 25_000 + 300 for e in teams)  # a repertoire's and a composition's budget
-    assert [made.team for made, _ in first[2:]] == [2, 2, 3, 3, 9, 9]
+    assert [made.team for made, _ in third] == [2, 2, 3, 3, 9, 9]
     arms = [e for e in document["plan"] if e["kind"] == "composition"]
     assert len(arms) == len(study.TASKS) * sum(1 for a in study.ARMS if not a.team) * 2
     for entry in arms:
@@ -62,7 +65,7 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert experiment(args) == 0
     rows = list(csv.DictReader(io.StringIO((out / "runs.csv").read_text())))
     assert list(rows[0]) == study.HEADER
-    for task, _ in study.TASKS:
+    for task, _, _ in study.TASKS:
         mine = [r for r in rows if r["task"] == task]
         baselines = [r for r in mine if r["arm"] == study.BASELINE]
         assert len(baselines) == 2 and all(r["qd_score_1"] == "" for r in baselines)

@@ -4,10 +4,11 @@
     ws/run evolution_manager experiment --study heterogeneity --runs 10 --evaluations 10000 \\
         --swarm-evaluations 2000 --out experiments/heterogeneity
 
-For every task of :data:`TASKS` (with its objective) and every run ``r``:
+For every task of :data:`TASKS` (with its objective and behaviour space) and every run ``r``:
 
 1. **A repertoire** (``repertoires/<task>/run<r>``): MAP-Elites over trees on the task, binned by the
-   deliveries of each food kind (``--descriptors deliveries``), ``--evaluations`` trees.
+   deliveries of each food kind (``--descriptors deliveries``; on a task of one kind, by the paper's
+   behaviour), ``--evaluations`` trees.
 2. **The arms** (``arms/<task>/<arm>/run<r>``, :data:`ARMS`): compositions of that repertoire's cells, one per
    robot (``evolution.compositions``), ``--swarm-evaluations`` genomes each: "generate, then allocate"; and
    the teams (``evolution.teams``): K trees evolved together by GP with no repertoire, robot i running tree
@@ -22,13 +23,14 @@ from the run of the first arm. Every run is evaluated on fixed scenarios; under 
 default) on one scenario seed for the whole study, otherwise each on its seed's own, which the repertoire and
 the arms of one index share.
 
-The stages go task by task, the repertoires first, so that each task's table fills before the next task's
-runs begin. The report (``report.md``, ``runs.csv``, ``figures/``), regenerated from the finished runs in the
-plan's order, has per task and arm the held-out median with its 95 % bootstrap interval, the ratio to the
-homogeneous median, paired tests of each arm against the homogeneous baseline (``compare_paired``:
-Shapiro-Wilk on the differences, then a paired t-test or Wilcoxon signed-rank) with Holm's correction over
-the family of every arm on every task, and the authors' QD score at 1, 2, 4 and 8 bins per axis of every
-composition run.
+The stages go task by task: the repertoires, the compositions, then the teams (the longest runs, needing no
+repertoire), so that each task's table fills before the next task's runs begin. The report (``report.md``,
+``runs.csv``, ``figures/``), regenerated from the finished runs in the plan's order, has per task and arm
+the held-out median with its 95 % bootstrap interval, the ratio to the homogeneous median, paired tests of
+each arm against the homogeneous baseline (``compare_paired``: Shapiro-Wilk on the differences, then a
+paired t-test or Wilcoxon signed-rank) with Holm's correction over the family of every arm on every task,
+the authors' QD score at 1, 2, 4 and 8 bins per axis of every composition run, and each robot's deliveries
+of each kind in the best swarms.
 """
 
 from __future__ import annotations
@@ -59,14 +61,16 @@ HETEROGENEITY_STAGE = 7
 """The stage index of this study's seeds (foraging 0 to 3, replication 4, ablation 5, bt-vs-nn 6)."""
 DEFAULT_SWARM_EVALUATIONS = 2000
 
-TASKS: tuple[tuple[str, str], ...] = (
-    ("multifood-arena9-kind2", "foraging_biased"),
-    ("multifood-arena6", "foraging"),
-    ("multifood-arena7-types", "foraging"),
+TASKS: tuple[tuple[str, str, str], ...] = (
+    ("multifood-arena9-kind2", "foraging_biased", "deliveries"),
+    ("multifood-arena6", "foraging", "deliveries"),
+    ("multifood-arena7-types", "foraging", "behaviour"),
 )
-"""The tasks, each with the objective its runs maximise: the authors' arena 9 biased towards kind 2 (their
-bias and penalty fitness, penalty 0.5); arena 6, three kinds of food and no bias; and arena 7 with their two
-robot types (odd robots perceive the nest and the food swapped), every robot starting at its own food."""
+"""The tasks, each with the objective its runs maximise and the behaviour space its repertoires and
+compositions are binned by: the authors' arena 9 biased towards kind 2 (their bias and penalty fitness,
+penalty 0.5); arena 6, three kinds of food and no bias; and arena 7 with their two robot types (odd robots
+perceive the nest and the food swapped), every robot starting at its own food: one kind of food, so binned by
+the paper's behaviour."""
 
 BASELINE = "homogeneous"
 GOAL = 1.2
@@ -134,19 +138,20 @@ def plan_study(
     entries: list[dict] = []
     stages: list[Stage] = []
     budgets: dict[str, int] = {}
-    for t, (task, objective) in enumerate(TASKS):
+    for t, (task, objective, descriptors) in enumerate(TASKS):
         repertoires: list[tuple[RunConfig | TeamConfig, str]] = []
         for r in range(args.runs):
             seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
             made = RunConfig.make(
                 "qd", objective, args.evaluations, seed, args.trials, "fixed", scenario_seed, profile,
-                task=task, descriptors="deliveries",
+                task=task, descriptors=descriptors,
             )  # fmt: skip
             folder = _folder("repertoires", task, r)
             repertoires.append((made, folder))
             entries.append({"kind": "repertoire", "task": task, "dir": folder, "config": made.to_json()})
             budgets[folder] = made.evaluations
         arms: list[dict] = []
+        teams: list[tuple[RunConfig | TeamConfig, str]] = []
         for arm in (a for a in ARMS if a.team):
             for r in range(args.runs):
                 seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
@@ -157,7 +162,7 @@ def plan_study(
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entries.append({"kind": "team", "arm": arm.name, "task": task, "dir": folder,
                                 "seed": seed, "config": team.to_json()})  # fmt: skip
-                repertoires.append((team, folder))  # they need no repertoire: beside them
+                teams.append((team, folder))
                 budgets[folder] = team.evaluations
         for arm in (a for a in ARMS if not a.team):
             for r in range(args.runs):
@@ -167,6 +172,7 @@ def plan_study(
                     "arm": arm.name,
                     "task": task,
                     "objective": objective,
+                    "descriptors": descriptors,
                     "dir": folder,
                     "from": _folder("repertoires", task, r),
                     "seed": derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r),
@@ -177,11 +183,12 @@ def plan_study(
                 budgets[folder] = swarm_evaluations
         stages.append(_given(repertoires))
         stages.append(_composed(out, arms, args.trials, profile, scenario_seed))
+        stages.append(_given(teams))  # they need no repertoire; last, so that the compositions report first
     document = {
         "study": STUDY,
         **document_head(args, profile, scenarios, design, scenario_seed),
         "swarm_evaluations": swarm_evaluations,
-        "tasks": [{"task": task, "objective": objective} for task, objective in TASKS],
+        "tasks": [{"task": t, "objective": o, "descriptors": d} for t, o, d in TASKS],
         "arms": [arm.name for arm in ARMS],
         "plan": entries,
     }
@@ -223,7 +230,7 @@ def _compositions(
             library_digest="" if library is None else library.digest,
             task=entry["task"],
             objective=entry["objective"],
-            descriptors="deliveries",
+            descriptors=entry["descriptors"],
         )
         planned.append((made, entry["dir"]))
     return planned
@@ -242,8 +249,13 @@ def _summary(root: Path, folder: str) -> dict | None:
     return None
 
 
-def _kinds(values: object) -> list[str]:
-    return [_number(v) for v in values] if isinstance(values, list) else ["", "", ""]
+def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
+    """The held-out deliveries of kinds 1 to 3 of a composition run: its held-out values of the deliveries
+    axes; binned by behaviour (a task of one kind of food, objective ``foraging``), its held-out fitness as
+    kind 1's and no other kind."""
+    if entry["descriptors"] == "deliveries":
+        return [_number(v) for v in values] if isinstance(values, list) else ["", "", ""]
+    return [_number(fitness) if entry["objective"] == "foraging" else "", "", ""]
 
 
 def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
@@ -278,7 +290,8 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                 "arm": BASELINE, "task": task, "seed": seed,
                 "best_fitness": _number(baseline["fitness"]),
                 "heldout_best_fitness": _number(baseline["heldout_best_fitness"]),
-                **dict(zip(HEADER[5:8], _kinds(baseline["heldout_descriptors"]), strict=True)),
+                **dict(zip(HEADER[5:8], _kinds(
+                    entry, baseline["heldout_best_fitness"], baseline["heldout_descriptors"]), strict=True)),
                 **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
             })  # fmt: skip
         scores = summary.get("qd_scores_evaluated", {})
@@ -286,7 +299,8 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
             "arm": entry["arm"], "task": task, "seed": seed,
             "best_fitness": _number(summary["best_fitness"]),
             "heldout_best_fitness": _number(summary["heldout_best_fitness"]),
-            **dict(zip(HEADER[5:8], _kinds(summary.get("heldout_descriptors")), strict=True)),
+            **dict(zip(HEADER[5:8], _kinds(
+                entry, summary["heldout_best_fitness"], summary.get("heldout_descriptors")), strict=True)),
             **{f"qd_score_{k}": _number(scores.get(str(k))) for k in QD_SCORE_BINS},
         })  # fmt: skip
     return document, baselines + rows
@@ -504,7 +518,8 @@ def build_report(root: Path) -> Path:
         f"{document['profile']}, design "
         f"{document['design']}); one row per run in [runs.csv](runs.csv).\n\n"
         "A composition arm composes one forager per robot from the cells of a MAP-Elites repertoire of trees "
-        "evolved on the same task (binned by the deliveries of each food kind); a team arm evolves K trees "
+        "evolved on the same task (binned by the deliveries of each food kind; on a task of one kind by the "
+        "paper's movement, rotation and conditionality); a team arm evolves K trees "
         "together with no repertoire, on the budget of the repertoire and a composition run together. "
         "The arms:\n\n"
         f"{arms}\n- **{BASELINE}**: the best homogeneous swarm of the same cells (every cell's nine copies "
@@ -524,7 +539,8 @@ def build_report(root: Path) -> Path:
         + f"\n### Against the goal ({GOAL} times the homogeneous median, p < 0.05 paired)\n\n"
         f"{goal_text(rows, tested, tasks)}\n"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
-        "Every genome a run evaluated, binned by the deliveries of each kind over [0, 0.5] per axis, the "
+        "Every genome a run evaluated, binned by the task's behaviour space (the deliveries of each kind "
+        "over [0, 0.5] per axis, or the paper's three descriptors), the "
         "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "
         "runs, at equal evaluations.\n\n"
         f"{qd_table(rows, tasks)}\n"
