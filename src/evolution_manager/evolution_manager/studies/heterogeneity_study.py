@@ -433,7 +433,7 @@ def robot_deliveries(trees: Sequence[str], config: Config, seeds: Sequence[int],
     """Each robot's mean deliveries of each food kind per trial (robots x kinds) of the swarm whose robot
     ``i`` runs ``trees[i]``, over ``trials`` trials of each of ``seeds`` (as an evaluation runs them: the
     batch road's kernels, ``record_trial``). Averaged over robots, a kind's column is its objective."""
-    from swarm_sim.roads.recording import record_trial  # late: the kernels load only for the figure
+    from swarm_sim.roads import record_trial  # late: the kernels load only for the figure
 
     layout = SwarmLayout(tuple(trees))
     total = np.zeros((config.n_robots, config.food_kinds))
