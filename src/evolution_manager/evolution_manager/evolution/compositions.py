@@ -58,8 +58,8 @@ from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.descriptor_sets import (
     BEHAVIOUR,
-    DESCRIPTOR_SETS,
     DescriptorSet,
+    checked_space,
     descriptor_set,
 )
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
@@ -442,7 +442,7 @@ def coarse_qd_scores(
     """The authors' QD score of a container at ``k`` bins per axis, for each ``k`` of ``bins``: its points
     (in [0, 1]^3, each with its fitness) binned ``k`` per axis (the top edge into the last bin), the fittest
     of each bin kept, their fitnesses summed and divided by ``k`` cubed (``utilities.py``, the foraging
-    description: no offset). A failed evaluation (fitness None) is no entry."""
+    description: no offset). Callers leave failed evaluations out."""
     entries = [(tuple(point), fitness) for point, fitness in scored]
     scores = {}
     for k in bins:
@@ -487,15 +487,10 @@ class CompositionConfig:
             object.__setattr__(self, "task", resolve_task(self.task))
         if self.objective not in OBJECTIVES:
             raise ConfigError(f"objective must be one of {', '.join(OBJECTIVES)}, got {self.objective!r}")
-        if self.descriptors not in DESCRIPTOR_SETS:
-            raise ConfigError(
-                f"descriptors must be one of {', '.join(DESCRIPTOR_SETS)}, got {self.descriptors!r}"
-            )
-        if self.descriptors == "deliveries" and self.task.config().food_kinds < 2:
-            raise ConfigError(
-                f"descriptors deliveries bins swarms by the deliveries of each food kind: task "
-                f"{self.task.name} has one kind of food; give a task of several (multifood-arena9-kind2, ...)"
-            )
+        try:
+            checked_space(self.descriptors, self.task, "swarms", "multifood-arena9-kind2")
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
         if self.parameters.crossover_operator == "mix" and self.algorithm != "qd":
             raise ConfigError(
                 "crossover_operator mix draws its parents from two bins of MAP-Elites' grid: it goes with "

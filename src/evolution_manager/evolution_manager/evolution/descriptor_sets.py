@@ -12,8 +12,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from swarm_sim.model import DESCRIPTORS, OBJECTIVES
+
+if TYPE_CHECKING:
+    from swarm_sim.tasks import TaskSpec
 
 DELIVERY_DOMAIN = 0.5
 """Deliveries of one kind per robot per trial at the top of a ``deliveries`` grid axis (8 bins of 0.0625):
@@ -72,3 +76,15 @@ def descriptor_set(name: str) -> DescriptorSet:
     if name not in DESCRIPTOR_SETS:
         raise ValueError(f"descriptors must be one of {', '.join(DESCRIPTOR_SETS)}, got {name!r}")
     return DESCRIPTOR_SETS[name]
+
+
+def checked_space(name: str, task: TaskSpec, what: str, example: str) -> DescriptorSet:
+    """The set named ``name`` for runs on ``task``; ValueError naming the choices, or, for ``deliveries`` on a
+    task of one food kind, saying that ``what`` (trees, swarms) need a task of several (``example``)."""
+    space = descriptor_set(name)
+    if space is DELIVERIES and task.config().food_kinds < 2:
+        raise ValueError(
+            f"descriptors deliveries bins {what} by the deliveries of each food kind: task {task.name} has "
+            f"one kind of food; give a task of several ({example}, ...)"
+        )
+    return space

@@ -42,7 +42,7 @@ from bt_controller.model_settings import PROFILES, Timeline
 from bt_controller.validate import integer
 from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
-from evolution_manager.evolution.descriptor_sets import descriptor_set
+from evolution_manager.evolution.descriptor_sets import checked_space
 from evolution_manager.evolution.parameters import (
     HIERARCHICAL_CONDITIONS,
     NODE_SETS,
@@ -144,14 +144,9 @@ class RunConfig:
         if bool(self.library) != bool(self.library_digest):
             raise ConfigError("a library needs its digest (and a digest its library)")
         try:
-            descriptor_set(self.descriptors)
+            checked_space(self.descriptors, self.task, "trees", "multifood-arena6")
         except ValueError as error:
             raise ConfigError(str(error)) from None
-        if self.descriptors == "deliveries" and self.task.config().food_kinds < 2:
-            raise ConfigError(
-                f"descriptors deliveries bins trees by the deliveries of each food kind: task "
-                f"{self.task.name} has one kind of food; give a task of several (multifood-arena6, ...)"
-            )
         if self.nodes not in NODE_SETS:
             raise ConfigError(f"nodes must be one of {', '.join(NODE_SETS)}, got {self.nodes!r}")
         if self.nodes == "hierarchical" and not self.library:
