@@ -443,7 +443,7 @@ def robot_deliveries(trees: Sequence[str], config: Config, seeds: Sequence[int],
     return total / (len(seeds) * trials)
 
 
-def _best_swarms(root: Path, document: dict, rows: Sequence[dict[str, str]], task: str) -> dict[str, dict]:
+def _best_swarms(root: Path, document: dict, task: str) -> dict[str, dict]:
     """The swarms of the figure on ``task``: the baseline and each arm's run of highest held-out best
     fitness (the first in plan order among equals), each as its label and trees."""
     shown: dict[str, dict] = {}
@@ -471,13 +471,13 @@ def _best_swarms(root: Path, document: dict, rows: Sequence[dict[str, str]], tas
     return {name: shown[name] for name in order if name in shown}
 
 
-def _deliveries_figures(root: Path, document: dict, rows: Sequence[dict[str, str]]) -> list[str]:
+def _deliveries_figures(root: Path, document: dict) -> list[str]:
     from evolution_manager.viewing import figures  # late: matplotlib
 
     drawn = []
     for spec in document["tasks"]:
         task = spec["task"]
-        swarms = _best_swarms(root, document, rows, task)
+        swarms = _best_swarms(root, document, task)
         if not swarms:
             continue
         config = task_named(task).config(document["profile"])
@@ -548,7 +548,7 @@ def build_report(root: Path) -> Path:
         "## Who delivers what\n\nFor each task the baseline and each arm's best run (highest held-out best "
         "fitness): each robot's deliveries of each food kind per trial on the run's five held-out scenarios "
         "(seeds shown modulo 10,000). A specialised swarm shows robots of different colours.\n\n"
-        + "\n\n".join(_deliveries_figures(root, document, rows))
+        + "\n\n".join(_deliveries_figures(root, document))
         + "\n"
     )
     write_atomic(root / "report.md", text)
