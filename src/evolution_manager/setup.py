@@ -48,6 +48,7 @@ setup(
             "explorer = evolution_manager.viewing.explorer:main",
             "adapt = evolution_manager.adaptation.adapt:main",
             "adapt-benchmark = evolution_manager.adaptation.adapt_benchmark:main",
+            "adapt-live = evolution_manager.adaptation.adapt_live:main",
         ],
     },
 )

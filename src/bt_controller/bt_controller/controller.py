@@ -71,6 +71,9 @@ class FootbotController:
         self.robot: ReferenceRobot | NetworkRobot | None = None
         self.action = STOP
         self.resumed = -1
+        self.tree_key = 0
+        self._swap: tuple[int, Node | Network] | None = None
+        """A tree to swap in at a step of the chain under way (``swap_at``)."""
         self.next_step = 1
         self.last_step = 0
 
@@ -92,14 +95,38 @@ class FootbotController:
             raise ValueError(f"a chain has 1 to {timeline.chain_length(line)} trials, got {trials!r}")
         self.timeline = line
         self.view = RobotView(perception)
-        if isinstance(self.tree, Network):
-            self.robot = NetworkRobot(self.tree)
-        else:
-            self.robot = ReferenceRobot(self.tree, tree_key, line.profile)
+        self.tree_key = tree_key
+        self._swap = None
+        self.robot = self._runner(self.tree)
         self.action = STOP
         self.resumed = -1
         self.next_step = 1
         self.last_step = trials * timeline.trial_steps(line)
+
+    def _runner(self, tree: Node | Network) -> ReferenceRobot | NetworkRobot:
+        """A fresh interpreter of ``tree`` (empty memory) for the chain under way."""
+        if isinstance(tree, Network):
+            return NetworkRobot(tree)
+        return ReferenceRobot(tree, self.tree_key, self.timeline.profile)
+
+    def swap_at(self, tree: Node | Network, step: int) -> None:
+        """Run ``tree`` from step ``step`` of the chain under way on (live adaptation): from that step the new
+        tree ticks with fresh memory, its ticks numbered on from the old tree's (the tree stream's draws
+        follow the chain's tick), while the perception (smoothing windows, estimates, carrying) carries on
+        and the motors keep the last action until the new tree's first tick. ValueError when no chain is
+        under way or ``step`` was already answered; a later ``swap_at`` replaces one not yet made."""
+        if not self.in_trial:
+            raise ValueError("no chain is under way: a tree swapped in at a step needs a running trial")
+        if (
+            isinstance(step, bool)
+            or not isinstance(step, int)
+            or not self.next_step <= step <= self.last_step
+        ):
+            raise ValueError(
+                f"cannot swap at step {step!r}: the chain's next step is {self.next_step} and its last "
+                f"{self.last_step}"
+            )
+        self._swap = (step, tree)
 
     @property
     def in_trial(self) -> bool:
@@ -113,6 +140,12 @@ class FootbotController:
             raise RuntimeError("no chain is under way: call start_chain first")
         if step != self.next_step:
             raise ValueError(f"expected the readings of step {self.next_step}, got step {step}")
+        if self._swap is not None and self._swap[0] == step:
+            ticks = self.robot.tick_index
+            self.tree, self._swap = self._swap[1], None
+            self.robot = self._runner(self.tree)
+            self.robot.tick_index = ticks
+            self.resumed = -1
         line = self.timeline
         if timeline.senses(line, step):
             self.view.sense(readings)

@@ -60,7 +60,9 @@ Publishers:
         used, lost, late and duplicated, and the seconds since the newest one.
 
 Services:
-    load_tree (swarm_msgs/LoadTree): parse, validate and load a tree (a clear error for a bad one).
+    load_tree (swarm_msgs/LoadTree): parse, validate and load a tree (a clear error for a bad one); with
+        ``from_step`` N > 0 (lockstep), swap it in from step N of the chain under way (live adaptation:
+        ``FootbotController.swap_at``).
     start_trial (swarm_msgs/StartTrial): reset for a chain of trials (called by the simulator).
 
 The node keeps the 7-sample smoothing and the blackboard from its topics and ticks its tree with the reference
@@ -278,7 +280,20 @@ class FootbotControllerNode(RosNode):
             response.message = str(error)
             self.get_logger().error(f"refused a tree: {error}")
             return response
-        self._load(tree)
+        if request.from_step > 0:  # live adaptation: swapped in during the chain under way
+            try:
+                if self.settings.free:
+                    raise ValueError("a tree swapped in at a step needs timing lockstep")
+                self.controller.swap_at(tree, int(request.from_step))
+            except ValueError as error:
+                response.success = False
+                response.message = str(error)
+                self.get_logger().warning(f"refused to swap a tree in at step {request.from_step}: {error}")
+                return response
+            self.loaded = self._text(tree)
+            self.get_logger().info(f"swapping in {self.loaded} at step {request.from_step}")
+        else:
+            self._load(tree)
         response.success = True
         response.canonical_tree = self._text(tree)
         return response

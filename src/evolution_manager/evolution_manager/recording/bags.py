@@ -55,7 +55,7 @@ from swarm_ros.safe_paths import describe
 
 INTERFACE_PACKAGE = "swarm_msgs"
 
-LATCHED_TOPICS = ("trial_start", "markers", "tf_static")
+LATCHED_TOPICS = ("trial_start", "markers", "tf_static", "faults")
 """The last names of the simulator's transient-local (latched) topics; every other topic is volatile."""
 
 

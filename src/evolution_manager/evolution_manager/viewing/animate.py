@@ -5,7 +5,9 @@ come from ``evolution_manager.viewing.frames``.
 gap, the food region outside it), robots with heading and id (a robot carrying food with a green ring), a
 trail, message links, and a side panel with step, tick, fitness so far (the paper's three objectives, or
 foraging with the deliveries so far in a foraging trial) and each robot's action; in a heterogeneous swarm
-each robot's tree is named by a letter beside its action, and the letters' trees are written out below.
+each robot's tree is named by a letter beside its action, and the letters' trees are written out below; a
+live adaptation's bag (``adapt-live``) crosses its faulty robots, rings those running a swapped-in tree and
+lists its last windows and swaps.
 ``write_animation`` writes a GIF (or an MP4 through ffmpeg when it is installed).
 """
 
@@ -36,11 +38,13 @@ from evolution_manager.arguments import Parser, int_in, non_negative_int, positi
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
 from evolution_manager.viewing.palette import (
+    FAULT_COLOUR,
     FOOD_COLOUR,
     GAP_COLOUR,
     NEST_COLOUR,
     REGION_COLOURS,
     ROBOT_COLOURS,
+    SWAP_COLOUR,
     carry_colour,
 )
 from swarm_ros.safe_paths import check_output, describe, replace_file
@@ -153,7 +157,13 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
             ring = radius + 3 + 3 * int(f)
             ink = carry_colour(int(f))
             draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=ink, width=3)
+        if frames.swapped is not None and frames.swapped[k, i]:  # runs a tree a live adaptation swapped in
+            ring = radius + 7
+            draw.ellipse((x - ring, y - ring, x + ring, y + ring), outline=SWAP_COLOUR, width=2)
         draw.ellipse((x - radius, y - radius, x + radius, y + radius), fill=ROBOT_COLOURS[i % 9])
+        if frames.faulty is not None and frames.faulty[k, i]:  # faulty: a red cross
+            draw.line((x - radius, y - radius, x + radius, y + radius), fill=FAULT_COLOUR, width=3)
+            draw.line((x - radius, y + radius, x + radius, y - radius), fill=FAULT_COLOUR, width=3)
         tip = (x + 1.8 * radius * math.cos(heading), y - 1.8 * radius * math.sin(heading))
         draw.line(((x, y), tip), fill=(0, 0, 0), width=2)
         draw.text((x + radius + 1, y - radius - 9), str(i), font=font, fill=(0, 0, 0))
@@ -193,6 +203,14 @@ def render_frame(frames: TrialFrames, k: int) -> Image.Image:
         for line in tree_legend(frames):
             draw.text((panel, y), line, font=font, fill=(0, 0, 0))
             y += 15
+    if frames.notes and frames.notes[k]:  # a live adaptation: its last events
+        y += 5
+        draw.text((panel, y), "adaptation (x faulty, o swapped):", font=font, fill=SWAP_COLOUR)
+        y += 15
+        for line in frames.notes[k].split("\n"):
+            for part in textwrap.wrap(line, 36) or [""]:
+                draw.text((panel, y), part, font=font, fill=(0, 0, 0))
+                y += 15
     return image
 
 

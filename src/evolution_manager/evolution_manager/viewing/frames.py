@@ -65,6 +65,13 @@ class TrialFrames:
     regions: tuple[Piece, ...] = ()
     """The trial's regions (``Config.arena_entry``) when they are not the papers' arena (``gap`` is then
     NaN); empty for the papers' arena, drawn from ``gap`` and ``nest_radius``."""
+    faulty: np.ndarray | None = None
+    """(T, n) bool: whether each robot is faulty at this step (a bag with ``/faults``; None: not known)."""
+    swapped: np.ndarray | None = None
+    """(T, n) bool: whether each robot runs a tree a live adaptation swapped in (a bag with
+    ``/adaptation``; None: not known)."""
+    notes: tuple[str, ...] = ()
+    """Per frame, the live adaptation's last events as lines (empty: none)."""
 
     @property
     def n_robots(self) -> int:
@@ -256,6 +263,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         if initial is not None:
             world.take_all_probes(poses[k][:, 0], poses[k][:, 1], entry, probes, 1, p)
             fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], food_scale, p)
+    faulty, swapped, notes = _live_marks(messages, steps, n)
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
     trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()
@@ -273,4 +281,54 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         carrying=carrying,
         deliveries=deliveries,
         trees=trees,
+        faulty=faulty,
+        swapped=swapped,
+        notes=notes,
     )
+
+
+def _live_marks(
+    messages: list[Any], steps: list[int], n: int
+) -> tuple[np.ndarray | None, np.ndarray | None, tuple[str, ...]]:
+    """A live adaptation's marks per frame (``adapt-live``'s bag): each robot faulty or not (``/faults``),
+    swapped or not, and the last events as lines (``/adaptation``); (None, None, ()) for a bag without
+    them."""
+    faults = sorted(
+        (int(m.message.step), [bool(k) for k in m.message.kinds]) for m in messages if m.topic == "/faults"
+    )
+    events = [m.message for m in messages if m.topic == "/adaptation"]
+    if not faults and not events:
+        return None, None, ()
+    faulty = np.zeros((len(steps), n), dtype=np.bool_)
+    swapped = np.zeros((len(steps), n), dtype=np.bool_)
+    original = list(events[0].trees) if events else []
+    lines: list[str] = []
+    shown: list[str] = []
+    notes: list[str] = []
+    f = e = 0
+    current = [False] * n
+    running = list(original)
+    for k, step in enumerate(steps):
+        while f < len(faults) and faults[f][0] <= step:
+            current = faults[f][1]
+            f += 1
+        while e < len(events) and int(events[e].step) <= step:
+            event = events[e]
+            e += 1
+            if event.kind == "swap":
+                running = list(event.trees)
+                robots = ",".join(str(r) for r in event.robots)
+                what = f"trial {event.trial}" if event.trial else "best tried"
+                lines.append(f"swap ({what}): robots {robots}")
+            elif event.kind == "window":
+                target = "" if math.isnan(event.target) else f" / target {event.target:.3f}"
+                lines.append(f"{event.phase}: {event.objective} {event.measure:.3f}{target}")
+            elif event.kind == "fault":
+                lines.append(f"fault: {event.note}")
+            else:
+                lines.append(f"done: {event.note}")
+            shown = lines[-4:]
+        faulty[k] = current[:n]
+        swapped[k] = [bool(original) and running[i] != original[i] for i in range(n)]
+        notes.append("\n".join(shown))
+    return faulty, swapped, tuple(notes)

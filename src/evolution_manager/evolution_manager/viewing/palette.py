@@ -17,6 +17,10 @@ FOOD_COLOUR: RGB = (196, 230, 180)
 GAP_COLOUR: RGB = (250, 250, 250)
 CARRY_COLOUR: RGB = (30, 130, 30)
 """The ring of a robot carrying food of kind 1."""
+FAULT_COLOUR: RGB = (200, 0, 0)
+"""The cross over a faulty robot (a live adaptation's bag)."""
+SWAP_COLOUR: RGB = (20, 60, 200)
+"""The ring of a robot running a tree a live adaptation swapped in, and the adaptation's heading."""
 REGION_COLOURS: dict[str, tuple[RGB, RGB]] = {
     "food": (FOOD_COLOUR, (40, 100, 40)),
     "food2": ((184, 208, 240), (40, 70, 150)),

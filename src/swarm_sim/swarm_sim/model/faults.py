@@ -142,3 +142,27 @@ def read_fault_file(path: str) -> tuple[tuple[int, str], ...]:
             raise ConfigError(f"fault file {path}: robot {number}: expected a fault kind, got {kind!r}")
         out.append((number, kind))
     return tuple(sorted(out))
+
+
+def parse_fault_pairs(text: str, n_robots: int) -> tuple[tuple[int, str], ...]:
+    """The faults of ``ROBOT:KIND`` pairs separated by spaces (``"0:wheel-dead 4:disruptive"``; empty: none)
+    for a swarm of ``n_robots``, sorted by robot (the simulator's ``inject_faults`` service); ConfigError in
+    one line naming the first bad pair."""
+    out = []
+    for pair in text.split():
+        robot, colon, kind = pair.partition(":")
+        try:
+            number = int(robot)
+        except ValueError:
+            number = -1
+        if not colon or number < 0:
+            raise ConfigError(f"expected ROBOT:KIND pairs such as 0:wheel-dead, got {pair!r}")
+        out.append((number, kind))
+    pairs = tuple(sorted(out))
+    check_faults(0.0, (), pairs, n_robots)
+    return pairs
+
+
+def fault_kinds_of(codes: list[int] | tuple[int, ...]) -> list[str]:
+    """Each robot's fault kind from its code (``""`` for none)."""
+    return [FAULT_KINDS[c - 1] if c else "" for c in codes]

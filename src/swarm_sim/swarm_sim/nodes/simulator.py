@@ -37,6 +37,8 @@ Publishers:
         and goals waiting.
     trial_start (swarm_msgs/TrialStart, transient-local): each trial's seed, index and the robots' stream
         keys.
+    faults (swarm_msgs/RobotFaults, transient-local): each robot's fault kind ("" for none), at each trial's
+        start and when faults injected through ``~/inject_faults`` strike (with the step they hold from).
     markers (visualization_msgs/MarkerArray, transient-local): walls, nest and food region of the trial's
         arena, frame ``arena``, metres.
     robot_markers (visualization_msgs/MarkerArray): every step, each robot's body, heading and label (index,
@@ -66,6 +68,10 @@ Actions and services:
         cancel stops the trial after the step under way. Before its first step the simulator calls each
         controller's <robot>/start_trial (swarm_msgs/StartTrial).
     ~/run_trial (swarm_msgs/srv/RunTrial): the same without feedback or cancel, a thin wrapper.
+    ~/inject_faults (swarm_msgs/srv/InjectFaults): per-robot faults (``ROBOT:KIND`` pairs) that replace the
+        robots' faults from a given step of the trial under way (``LockstepChain.schedule_faults``; a step
+        already begun: the next one), or from the next trial's start when none is under way, and stay for
+        every later trial (live adaptation, ``evolution_manager``'s ``adapt-live``).
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
 step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.roads.lockstep``.
@@ -119,13 +125,14 @@ from swarm_msgs.msg import (
     GroundSensor,
     RangeAndBearing,
     RangeAndBearingReadings,
+    RobotFaults,
     RobotPose,
     SwarmState,
     TreeStatus,
     TrialStart,
     WheelCommand,
 )
-from swarm_msgs.srv import RunTrial, StartTrial
+from swarm_msgs.srv import InjectFaults, RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frames, robot_namespaces
 from swarm_ros.parameters import (
@@ -143,6 +150,7 @@ from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
 from swarm_sim.model import DEFAULT, FAULT_FIELDS, Config, apply_conditions, layout_from_text, layout_to_text
+from swarm_sim.model.faults import fault_kinds_of, parse_fault_pairs
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
 from swarm_sim.nodes.world_parameters import declare_world
@@ -283,6 +291,8 @@ class SimulatorNode(ManagedNode):
         self.trial_under_way = ""
         self._last = (time.monotonic(), 0)
         self._made: list[Any] = []  # what on_configure made, for release
+        self._injected: tuple[int, Config] | None = None  # faults asked for, not yet taken by a chain
+        self._chain_running = False
         self._action_server: ActionServer | None = None
 
     # --- lifecycle
@@ -298,6 +308,7 @@ class SimulatorNode(ManagedNode):
         self._poses = publisher(PoseArray, "poses")
         self._tf = publisher(TFMessage, "/tf")
         self._tf_static = publisher(TFMessage, "/tf_static", LATCHED)
+        self._faults = publisher(RobotFaults, "faults", LATCHED)
         self._ground: list[Publisher] = []
         self._readings: list[Publisher] = []
         self._pose: list[Publisher] = []
@@ -328,6 +339,11 @@ class SimulatorNode(ManagedNode):
         trials = MutuallyExclusiveCallbackGroup()
         self._made.append(
             self.create_service(RunTrial, "~/run_trial", self._on_run_trial, callback_group=trials)
+        )
+        self._made.append(
+            self.create_service(
+                InjectFaults, "~/inject_faults", self._on_inject_faults, callback_group=listeners
+            )
         )
         self._action_server = ActionServer(
             self,
@@ -483,6 +499,38 @@ class SimulatorNode(ManagedNode):
             return result
         return fill(result, trial_fields(record, RobotPose))
 
+    def _on_inject_faults(
+        self, request: InjectFaults.Request, response: InjectFaults.Response
+    ) -> InjectFaults.Response:
+        """Faults that strike from a step of the trial under way (or of the next one), and stay."""
+        try:
+            pairs = parse_fault_pairs(request.faults, self.robots)
+        except ConfigError as error:
+            response.success, response.message = False, f"inject_faults: {error}"
+            self.get_logger().error(response.message)
+            return response
+        with self._lock:
+            config = replace(self.config, fault_rate=0.0, fault_kinds=(), fault_robots=pairs)
+            step = int(request.at_step)
+            if not self._chain_running and step <= 1:
+                self.config = config  # from the next trial's start
+            else:
+                self._injected = (step, config)
+        self.get_logger().info(f"faults {request.faults or 'none'} from step {max(step, 1)}")
+        response.success = True
+        return response
+
+    def _publish_faults(self, world: LockstepChain, step: int, codes: np.ndarray) -> None:
+        self._faults.publish(
+            RobotFaults(
+                header=self._header("arena"),
+                seed=world.seed,
+                trial=world.trial,
+                step=step,
+                kinds=fault_kinds_of([int(c) for c in codes]),
+            )
+        )
+
     def _on_run_trial(self, request: RunTrial.Request, response: RunTrial.Response) -> RunTrial.Response:
         return self._run(request, response)
 
@@ -507,9 +555,13 @@ class SimulatorNode(ManagedNode):
         world = LockstepChain(seed, chain, position + 1, self.config)
         with self._figures:
             self.trial_under_way = f"trial {trial} of seed {seed}"
+        with self._lock:
+            self._chain_running = True
         try:
             return self._run_chain(world, seed, trial, goal)
         finally:
+            with self._lock:
+                self._chain_running = False
             with self._figures:
                 self.trial_under_way = ""
                 self.trials += 1
@@ -531,6 +583,7 @@ class SimulatorNode(ManagedNode):
         self._trial_start.publish(
             trial_start_message(world, self._stamp(), seed, trial, self.robots, self.config)
         )
+        self._publish_faults(world, world.step, world.setup.faults)
         record: TrialRecord | None = None
         late = 0
         started = time.monotonic()
@@ -569,8 +622,16 @@ class SimulatorNode(ManagedNode):
                         f"expected 0..{len(ACTIONS) - 1}"
                     )
             self._actions = [ACTIONS[a.action] for a in robot_answers]
+            with self._lock:
+                injected, self._injected = self._injected, None
+            if injected is not None:
+                world.schedule_faults(injected[1], injected[0])
+            changes = len(world.fault_changes)
             record = world.advance(robot_answers)
             self.sim_time_ns += self.step_ns
+            if len(world.fault_changes) > changes:  # injected faults struck at this new step
+                self.config = world.config
+                self._publish_faults(world, *world.fault_changes[-1])
             with self._figures:
                 self.steps += 1
             with self._lock:

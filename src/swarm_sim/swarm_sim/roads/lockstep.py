@@ -13,7 +13,7 @@ so the node graph, the reference road and the batch evaluator compute the same n
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -66,6 +66,7 @@ class LockstepChain:
 
     def __init__(self, seed: int, chain: int, trials: int, config: Config = DEFAULT) -> None:
         self.config = config
+        self.seed = seed
         self.p = config.params()
         self.line = config.timeline
         if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= config.chain_length:
@@ -93,8 +94,37 @@ class LockstepChain:
         self.start_poses = np.zeros((n, 3))
         self.records: list[TrialRecord] = []
         self.last_step = trials * timeline.trial_steps(self.line)
+        self._scheduled: tuple[int, Config] | None = None
+        self.fault_changes: list[tuple[int, np.ndarray]] = []
+        """The faults injected into the chain (``schedule_faults``) as they took effect: (step, each robot's
+        fault code)."""
         self.step = 1
         self._readings = self._begin_step()
+
+    def schedule_faults(self, config: Config, step: int) -> int:
+        """Let the faults of ``config`` (``swarm_sim.model.faults``; everything else must be this chain's)
+        strike from step ``step`` on (live fault injection): the robots move with the faulty wheels from that
+        step's motion and read that step's readings through the faults; a step already begun means the next
+        one. Returns the step they will hold from; replaces faults scheduled and not yet in effect."""
+        if replace(config, fault_rate=0.0, fault_kinds=(), fault_robots=()) != replace(
+            self.config, fault_rate=0.0, fault_kinds=(), fault_robots=()
+        ):
+            raise ValueError("injected faults may change the robots' faults only, not the rest of the world")
+        step = max(int(step), self.step + 1)
+        self._scheduled = (step, config)
+        return step
+
+    def _strike(self) -> None:
+        """Put the scheduled faults into effect when the step about to begin is theirs."""
+        if self._scheduled is None or self._scheduled[0] > self.step:
+            return
+        config = self._scheduled[1]
+        self._scheduled = None
+        fresh = setup_chain(self.seed, self.setup.chain, config)  # the same streams: only faults differ
+        self.setup = replace(self.setup, gains=fresh.gains, faults=fresh.faults)
+        self.drive = world.drive(self.setup.gains, self.p)
+        self.config = config
+        self.fault_changes.append((self.step, fresh.faults.copy()))
 
     @property
     def done(self) -> bool:
@@ -167,6 +197,7 @@ class LockstepChain:
             self.motion[:] = 0
         if k < self.last_step:
             self.step = k + 1
+            self._strike()
             self._readings = self._begin_step()
         return record
 
