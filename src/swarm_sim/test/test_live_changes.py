@@ -10,8 +10,7 @@ import pytest
 from bt_controller.controller import FootbotController
 from bt_controller.tree import parse
 from bt_controller.vocabulary import ACTIONS
-from swarm_sim.model import Config
-from swarm_sim.model.faults import fault_kinds_of, parse_fault_pairs
+from swarm_sim.model import Config, fault_kinds_of, parse_fault_pairs
 from swarm_sim.roads import LockstepChain, RobotAnswer
 
 SHORT = Config(ticks=12)

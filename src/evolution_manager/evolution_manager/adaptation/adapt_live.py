@@ -54,8 +54,7 @@ from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import Config
-from swarm_sim.model.faults import parse_fault_pairs
+from swarm_sim.model import Config, parse_fault_pairs
 from swarm_sim.tasks import DEFAULT_TASK, resolve_task
 
 RESULT = "adaptation_live.json"

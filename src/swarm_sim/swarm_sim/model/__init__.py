@@ -12,7 +12,7 @@ from swarm_sim.model.arenas import FOOD_KINDS, arena_entries, pieces_from_points
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
 from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
 from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
-from swarm_sim.model.faults import FAULT_KINDS
+from swarm_sim.model.faults import FAULT_KINDS, fault_kinds_of, parse_fault_pairs
 from swarm_sim.model.objectives import (
     DESCRIPTORS,
     FAMILIES,
@@ -75,6 +75,7 @@ __all__ = [
     "condition_texts",
     "config_from_dict",
     "default_config",
+    "fault_kinds_of",
     "fitness_ceiling",
     "label_point",
     "layout_from_json",
@@ -83,6 +84,7 @@ __all__ = [
     "layout_to_text",
     "load_layout",
     "of_trees",
+    "parse_fault_pairs",
     "pieces_from_points",
     "scatter_points",
 ]

@@ -149,8 +149,16 @@ from swarm_ros.spinning import spin_until_shutdown
 from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, ConfigError, TrialAbandonedError
 from swarm_sim.evaluation import fill, trial_fields
-from swarm_sim.model import DEFAULT, FAULT_FIELDS, Config, apply_conditions, layout_from_text, layout_to_text
-from swarm_sim.model.faults import fault_kinds_of, parse_fault_pairs
+from swarm_sim.model import (
+    DEFAULT,
+    FAULT_FIELDS,
+    Config,
+    apply_conditions,
+    fault_kinds_of,
+    layout_from_text,
+    layout_to_text,
+    parse_fault_pairs,
+)
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.settings import RATE_RANGE, SENSINGS, TIMINGS, EvaluatorSettings
 from swarm_sim.nodes.world_parameters import declare_world
