@@ -243,9 +243,10 @@ def tree_legend(frames: TrialFrames) -> list[str]:
 
 
 def shown_objectives(frames: TrialFrames) -> tuple[str, ...]:
-    """The objectives a frame's panel shows: foraging in a foraging trial (the task's 200 ticks), else the
-    paper's three."""
-
+    """The objectives a frame's panel shows: a live adaptation's objective, foraging in a foraging trial (the
+    task's 200 ticks), else the paper's three."""
+    if frames.objective in OBJECTIVES:
+        return (frames.objective,)
     foraging = len(frames.steps) >= FORAGING.trials.ticks * 4  # 800 steps (816 under clean)
     return ("foraging",) if foraging else PAPER_OBJECTIVES
 

@@ -72,6 +72,8 @@ class TrialFrames:
     ``/adaptation``; None: not known)."""
     notes: tuple[str, ...] = ()
     """Per frame, the live adaptation's last events as lines (empty: none)."""
+    objective: str = ""
+    """The objective a live adaptation measured (its panel shows it; empty: none)."""
 
     @property
     def n_robots(self) -> int:
@@ -264,6 +266,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
             world.take_all_probes(poses[k][:, 0], poses[k][:, 1], entry, probes, 1, p)
             fitness[k] = _fitness_so_far(initial, smoothed[k], probes, deliveries[k], food_scale, p)
     faulty, swapped, notes = _live_marks(messages, steps, n)
+    measured = next((m.message.objective for m in messages if m.topic == "/adaptation"), "")
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
     trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()
@@ -284,6 +287,7 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
         faulty=faulty,
         swapped=swapped,
         notes=notes,
+        objective=measured,
     )
 
 
