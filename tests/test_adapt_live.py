@@ -33,12 +33,14 @@ def test_a_fault_injected_live_is_answered_by_a_swap_recorded_in_the_bag(tmp_pat
     out = tmp_path / "live"
     args = ["--repertoire", str(run), "--objective", "food", "--robots", "3", "--seed", "3", "--every", "0"]
     args += ["--faults", "0:ground-stuck 1:ground-stuck", "--fault-at", "4", "--duration", "14"]
-    args += ["--window", "2", "--lead", "1", "--budget", "1", "--stop-fraction", "1", "--out", str(out)]
+    args += ["--window", "2", "--budget", "1", "--stop-fraction", "1", "--out", str(out)]
     assert main(args) == 0
     document = json.loads((out / "adaptation_live.json").read_text())
     assert document["faulty"] == [0, 1] and document["fault_step"] == 33
     swaps = [e for e in document["events"] if e["kind"] == "swap"]
     assert swaps and swaps[0]["robots"] == [0, 1] and swaps[0]["trial"] == 1
+    # held at each window's end (hold_step), the swap lands on the step after the window that chose it
+    assert document["swaps_retimed"] == 0 and swaps[0]["step"] == document["windows"][2]["end"] + 1
     messages = list(read_bag(out / "live.bag"))
     faults = [m.message for m in messages if m.topic == "/faults"]
     assert [list(f.kinds) for f in faults] == [["", "", ""], ["ground-stuck", "ground-stuck", ""]]

@@ -137,3 +137,12 @@ def test_settings_and_measures_are_checked():
             LiveSettings(**bad)
     with pytest.raises(AdaptationError, match="finite"):
         LiveAdaptation(CANDIDATES, 3, SETTINGS).close_window(math.nan)
+
+
+def test_a_fault_announced_before_the_window_before_it_was_measured_waits_for_that_window():
+    core = _before_fault(LiveAdaptation(CANDIDATES, 3, SETTINGS), (0.8,))
+    core.fault(81, [2])  # the window 41..80 is still under way: its last answers have not come
+    assert core.phase == "before-fault" and core.start == 41
+    assert core.close_window(0.6) is None
+    assert [w.end for w in core.windows] == [40, 80] and core.target == pytest.approx(0.63)
+    assert (core.phase, core.start, core.faulty) == ("after-fault", 81, (2,))

@@ -3,7 +3,7 @@ until the swarm's performance is back.
 
     ws/run evolution_manager adapt-live --repertoire RUN_DIR --objective food \\
         --faults "1:wheel-reversed 4:wheel-reversed" --fault-at 30 --duration 150 --out DIR \\
-        [--window 10] [--lead 1] [--budget 8] [--stop-fraction 0.9] [--swap faulty|all] [--seed S] \\
+        [--window 10] [--lead 0.125] [--budget 8] [--stop-fraction 0.9] [--swap faulty|all] [--seed S] \\
         [--robots N] [--every 8]
 
 The node graph (the simulator node and one footbot controller node per robot, in lockstep) runs one trial
@@ -16,8 +16,10 @@ step (``adaptation.live.window_measure``); when the first window after the fault
 ``--stop-fraction`` of the mean of the last ``--reference`` windows before it, it tries trees of the
 repertoire, one window each, chosen by Intelligent Trial and Error, loading each into the faulty robots
 (``--swap all``: every robot) through their ``load_tree`` service from ``--lead`` seconds after the window
-that chose it. It stops at the first window back at the target, or after ``--budget`` trials with the best
-tree tried (``adaptation.live``).
+that chose it (the next step by default). The simulator is held at each window's end (its
+``hold_step`` service) until the node has decided and every swapped robot has its tree, so a run makes the
+same swaps on any machine, however loaded. It stops at the first window back at the target, or after
+``--budget`` trials with the best tree tried (``adaptation.live``).
 
 Writes ``DIR/live.bag`` (MCAP: the trial's state, readings and answers, ``/faults``, ``/adaptation`` and the
 trial's result), ``DIR/adaptation_live.json`` (settings, every window, fault and swap, why it stopped) and
@@ -76,7 +78,7 @@ def build_parser() -> Parser:
     parser.add_argument("--out", type=Path, required=True, help="output directory (no live adaptation in it)")
     parser.add_argument("--window", type=seconds, default=10.0, help="seconds per measured window (10)")
     parser.add_argument(
-        "--lead", type=seconds, default=1.0, help="seconds from a window's end to its swap (1)"
+        "--lead", type=seconds, default=0.125, help="seconds from a window's end to its swap (0.125: a step)"
     )
     parser.add_argument("--budget", type=positive_int, default=8, help="most trials after the fault (8)")
     parser.add_argument(

@@ -13,9 +13,9 @@ as they strike, and answers with the swaps to make:
    target or above, nothing changes. Below it, that measure is told to Intelligent Trial and Error
    (``search.IntelligentTrialAndError``, never stopping by its own rule) as the fitness of the tree the robots
    run, the repertoire's best;
-3. *trials*: each asked tree is loaded into the faulty robots (or every robot: ``swap="all"``), ``lead``
-   steps after the window that decided it ended (the time the decision takes to reach the robots), and the
-   next window from that step measures it. The adaptation ends at the first window at the target (the tree
+3. *trials*: each asked tree is loaded into the faulty robots (or every robot: ``swap="all"``) from ``lead``
+   steps after the last step of the window that decided it (the next step by default), and the next window
+   from that step measures it. The adaptation ends at the first window at the target (the tree
    stays) or when the budget of trials is spent (the best tree tried comes back, unless it is the one
    running);
 4. *kept*: windows go on being measured until the trial ends.
@@ -96,8 +96,8 @@ class LiveSettings:
 
     window: int = 80
     """Steps per measured window (80: 10 s)."""
-    lead: int = 8
-    """Steps between a window's end and the swap it decided (the decision's way to the robots)."""
+    lead: int = 1
+    """Steps from a window's last step to the swap it decided (1: the next step)."""
     budget: int = 10
     """Most trials (trees tried) after a fault."""
     stop_fraction: float = 0.9
@@ -170,6 +170,7 @@ class LiveAdaptation:
         self.unchanged = math.nan
         """The first window's measure after the fault, with the trees it struck."""
         self.stop_reason = ""
+        self._pending: tuple[int, tuple[int, ...]] | None = None
 
     @property
     def end(self) -> int:
@@ -185,15 +186,23 @@ class LiveAdaptation:
 
     def fault(self, step: int, faulty: Sequence[int]) -> None:
         """Faults struck ``faulty`` robots from ``step``: the window under way is dropped and the next
-        measures the trees as they are. AdaptationError before any window was measured (nothing to recover
-        to)."""
-        if not [w for w in self.windows if w.phase == "before-fault" and w.end < step]:
+        measures the trees as they are; a fault after the window under way (announced before its last
+        answers came) waits for that window to be measured. AdaptationError before any window was measured
+        (nothing to recover to)."""
+        if step > self.end:
+            self._pending = (step, tuple(faulty))
+            return
+        self._strike(step, faulty)
+
+    def _strike(self, step: int, faulty: Sequence[int]) -> None:
+        self._pending = None
+        # a window that ended at or after the fault's step (its announcement came late) measured it: dropped
+        self.windows = [w for w in self.windows if w.end < step]
+        if not [w for w in self.windows if w.phase == "before-fault"]:
             raise AdaptationError(
                 f"a fault at step {step}, before the first window ended (step {self.end}): there is no "
                 "performance to recover to; strike later or use shorter windows"
             )
-        # a window that ended at or after the fault's step (its announcement came late) measured it: dropped
-        self.windows = [w for w in self.windows if w.end < step]
         self.faulty = tuple(sorted(int(r) for r in faulty))
         self.fault_step = step
         self.phase, self.trial, self.search, self.stop_reason = "after-fault", 0, None, ""
@@ -230,6 +239,8 @@ class LiveAdaptation:
             else:
                 swap = self._next_trial()
         self.start = swap.step if swap is not None else self.end + 1
+        if self._pending is not None:  # a fault announced before this window's last answers
+            self._strike(*self._pending)
         return swap
 
     def swap_refused(self, step: int) -> Swap:

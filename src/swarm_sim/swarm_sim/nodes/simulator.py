@@ -72,6 +72,10 @@ Actions and services:
         robots' faults from a given step of the trial under way (``LockstepChain.schedule_faults``; a step
         already begun: the next one), or from the next trial's start when none is under way, and stay for
         every later trial (live adaptation, ``evolution_manager``'s ``adapt-live``).
+    ~/hold_step (swarm_msgs/srv/HoldStep): publish no step of the chain at or after a given step until a
+        later hold replaces it (0 releases it; one left at the chain's end is dropped; one not replaced within
+        ``answer_timeout`` abandons the trial): a client acts between two steps whatever the machine's speed
+        (the adaptation node decides and swaps trees at each window's end).
 
 Lockstep: after publishing a step's readings the simulator waits until every controller has answered that
 step, so results do not depend on the machine's speed. The world itself is ``swarm_sim.roads.lockstep``.
@@ -132,7 +136,7 @@ from swarm_msgs.msg import (
     TrialStart,
     WheelCommand,
 )
-from swarm_msgs.srv import InjectFaults, RunTrial, StartTrial
+from swarm_msgs.srv import HoldStep, InjectFaults, RunTrial, StartTrial
 from swarm_ros.lifecycle import ManagedNode
 from swarm_ros.names import NamespaceError, check_robot_namespaces, robot_frames, robot_namespaces
 from swarm_ros.parameters import (
@@ -301,6 +305,7 @@ class SimulatorNode(ManagedNode):
         self._made: list[Any] = []  # what on_configure made, for release
         self._injected: tuple[int, Config] | None = None  # faults asked for, not yet taken by a chain
         self._chain_running = False
+        self._hold = 0  # the first step of the chain not to publish (hold_step); 0: none
         self._action_server: ActionServer | None = None
 
     # --- lifecycle
@@ -352,6 +357,9 @@ class SimulatorNode(ManagedNode):
             self.create_service(
                 InjectFaults, "~/inject_faults", self._on_inject_faults, callback_group=listeners
             )
+        )
+        self._made.append(
+            self.create_service(HoldStep, "~/hold_step", self._on_hold_step, callback_group=listeners)
         )
         self._action_server = ActionServer(
             self,
@@ -528,6 +536,31 @@ class SimulatorNode(ManagedNode):
         response.success = True
         return response
 
+    def _on_hold_step(self, request: HoldStep.Request, response: HoldStep.Response) -> HoldStep.Response:
+        """Hold the chain before step ``request.step`` (0: release), replacing any hold."""
+        with self._lock:
+            self._hold = int(request.step)
+            self._lock.notify_all()
+        response.success = True
+        return response
+
+    def _wait_while_held(self, step: int, goal: ServerGoalHandle | None) -> None:
+        """Wait while a hold forbids publishing ``step`` (``hold_step``); a cancel or deactivation ends the
+        wait (the loop then stops the trial). TrialAbandonedError when no later hold came in
+        ``answer_timeout``."""
+        timeout = self.answer_timeout
+        deadline = time.monotonic() + timeout
+        with self._lock:
+            while 0 < self._hold <= step:
+                if (goal is not None and goal.is_cancel_requested) or not self.active:
+                    return
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise TrialAbandonedError(
+                        f"held before step {step} for {timeout} s: no later hold came (is the holder gone?)"
+                    )
+                self._lock.wait(min(0.1, left))  # woken by hold_step; a cancel is seen within 0.1 s
+
     def _publish_faults(self, world: LockstepChain, step: int, codes: np.ndarray) -> None:
         self._faults.publish(
             RobotFaults(
@@ -570,6 +603,7 @@ class SimulatorNode(ManagedNode):
         finally:
             with self._lock:
                 self._chain_running = False
+                self._hold = 0
             with self._figures:
                 self.trial_under_way = ""
                 self.trials += 1
@@ -597,6 +631,7 @@ class SimulatorNode(ManagedNode):
         started = time.monotonic()
         published = 0
         while not world.done:
+            self._wait_while_held(world.step, goal)
             if goal is not None and goal.is_cancel_requested:
                 with self._lock:
                     self._inbox = _Inbox()

@@ -43,7 +43,7 @@ from swarm_msgs.msg import (
     TrialStart,
     WheelCommand,
 )
-from swarm_msgs.srv import InjectFaults, LoadTree
+from swarm_msgs.srv import HoldStep, InjectFaults, LoadTree
 from swarm_ros.names import robot_namespaces
 from swarm_ros.qos import RELIABLE
 from swarm_sim.core import TrialRecord
@@ -146,6 +146,10 @@ class AdaptationNode:
         self.events: list[dict[str, object]] = []
         self.refused = 0
         self._last_swap: LiveSwap | None = None
+        self.held = 0
+        """The step the simulator is held before (``hold_step``), as last asked; 0: none."""
+        self._swapping = False
+        self.hold_client: rclpy.client.Client = self.node.create_client(HoldStep, "simulator/hold_step")
         self._events = self.node.create_publisher(AdaptationEvent, "adaptation", RELIABLE)
         self._load: list[rclpy.client.Client] = [
             self.node.create_client(LoadTree, f"{robot}/load_tree") for robot in robot_namespaces(self.robots)
@@ -174,6 +178,8 @@ class AdaptationNode:
             return
         note = ", ".join(f"{i}:{kinds[i]}" for i in faulty) or "no robot faulty"
         self._publish("fault", step, step, robots=faulty, note=note)
+        if not self._swapping:
+            self._renew_hold()
 
     def _on_wheels(self, robot: int, msg: WheelCommand) -> None:
         step = int(msg.step)
@@ -205,7 +211,9 @@ class AdaptationNode:
             swap = core.close_window(measure)
             self._publish("window", end, start, phase=phase, trial=trial, measure=measure)
             if swap is not None:
-                self._swap(swap)
+                self._swap(swap)  # the hold moves on once every robot has the tree
+            else:
+                self._renew_hold()
 
     def measure(self, start: int, end: int) -> float:
         """The objective over the window from step ``start`` to ``end`` (``window_measure``)."""
@@ -228,6 +236,18 @@ class AdaptationNode:
         )
 
     # --- what goes out
+    def hold_step(self) -> int:
+        """The step to hold the simulator before: the one after the window under way (0 past the trial)."""
+        step = self.core.end + 1
+        return step if step <= self.last_step and not self.done else 0
+
+    def _renew_hold(self) -> None:
+        """Move the simulator's hold to the end of the window under way, releasing the one before."""
+        step = self.hold_step()
+        if step != self.held:
+            self.held = step
+            self.hold_client.call_async(HoldStep.Request(step=step))
+
     def _swap(self, swap: LiveSwap) -> None:
         self._publish(
             "swap",
@@ -245,6 +265,7 @@ class AdaptationNode:
         }
 
         self._last_swap = swap
+        self._swapping = True
         handled = [False]
 
         def answered(_future: Future) -> None:
@@ -257,6 +278,10 @@ class AdaptationNode:
             if late and not self.done and self._last_swap is swap:
                 self.refused += 1
                 self._swap(self.core.swap_refused(max(self.newest)))
+                return
+            if self._last_swap is swap:
+                self._swapping = False
+                self._renew_hold()
 
         for future in pending.values():
             future.add_done_callback(answered)
@@ -264,6 +289,7 @@ class AdaptationNode:
     def _finish(self, note: str, step: int) -> None:
         self.done = True
         self.note = note
+        self._renew_hold()  # released
         self._publish("done", step, step, phase=self.core.phase, note=note)
 
     def _stamp(self, step: int) -> Time:
@@ -376,6 +402,9 @@ def run_live_graph(
                 response = runner.call(inject, request, "the simulator's inject_faults")
                 if not response.success:
                     raise TrialFailedError(f"the simulator refused the faults: {response.message}")
+                # the swarm waits at each window's end while the node decides: the same swaps on any machine
+                adaptation.held = adaptation.hold_step()
+                runner.call(adaptation.hold_client, HoldStep.Request(step=adaptation.held), "hold_step")
                 record = runner.run_trial(seed, 0)
                 runner.spin_while_progressing(
                     lambda: (
