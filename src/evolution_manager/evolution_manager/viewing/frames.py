@@ -270,6 +270,10 @@ def frames_from_bag(path: Path | str) -> TrialFrames:
     label = result.tree if result is not None else ""
     # a heterogeneous swarm's result keeps the JSON list of its robots' trees (SwarmLayout.label)
     trees = tuple(json.loads(label)) if label.lstrip().startswith("[") else (label,) * n if label else ()
+    if (
+        notes
+    ):  # a live adaptation: the trees changed during the trial (its notes say when), the label is the last
+        trees = ()
     return TrialFrames(
         tree=label,
         seed=int(start.seed),
@@ -323,7 +327,7 @@ def _live_marks(
                 running = list(event.trees)
                 robots = ",".join(str(r) for r in event.robots)
                 what = f"trial {event.trial}" if event.trial else "best tried"
-                lines.append(f"swap ({what}): robots {robots}")
+                lines.append(f"swap ({what}): robots {robots} get bin {[int(b) for b in event.bin]}")
             elif event.kind == "window":
                 target = "" if math.isnan(event.target) else f" / target {event.target:.3f}"
                 lines.append(f"{event.phase}: {event.objective} {event.measure:.3f}{target}")
