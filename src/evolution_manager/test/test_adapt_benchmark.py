@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 from small_repertoires import top_food_repertoire
 
-from bt_controller.draws import root_key
 from evolution_manager.adaptation import adapt_benchmark
 from evolution_manager.adaptation.adapt import adapt
 from evolution_manager.adaptation.search import (
@@ -24,7 +23,7 @@ from evolution_manager.adaptation.search import (
     run_picker,
     struck_robots,
 )
-from swarm_sim.core.trial_data import robot_faults
+from swarm_sim.core.trial_data import setup_chain
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import DEFAULT, apply_conditions
 
@@ -54,7 +53,9 @@ def test_struck_robots_under_a_fault_rate_or_file_are_the_faulty_ones(tmp_path):
     config, _ = apply_conditions(["faults=0.4:wheel-dead,rab-deaf"])
     seen = set()
     for seed in range(1, 6):
-        faulty = tuple(int(i) for i in np.flatnonzero(robot_faults(config, root_key(seed))))
+        # The robots the simulator makes faulty in every chain of that seed's trials.
+        faulty = tuple(int(i) for i in np.flatnonzero(setup_chain(seed, 0, config).faults))
+        assert faulty == tuple(int(i) for i in np.flatnonzero(setup_chain(seed, 1, config).faults))
         assert struck_robots(config, seed) == faulty
         seen.add(faulty)
     assert len(seen) > 1  # drawn per seed
