@@ -116,6 +116,16 @@ def test_the_filter_keeps_a_condition_below_70_percent_of_the_fault_free_score(r
     assert adapt_benchmark.kept(ratios) is expected
 
 
+def test_fractions_count_from_the_floor():
+    assert adapt_benchmark.relative(0.6, 0.8) == pytest.approx(0.75)
+    assert adapt_benchmark.relative(0.6, 0.8, 0.5) == pytest.approx(1 / 3)
+    assert math.isnan(adapt_benchmark.relative(0.6, 0.5, 0.5))
+    run = adapt_benchmark.Run("ite", "r", 1, ["a", "b", "c"], [0.55, 0.73, 0.8], 0.8, 0.8)
+    assert run.trials_to_90() == 2  # the bar 0.9 x 0.8 = 0.72
+    run.floor = 0.5
+    assert run.trials_to_90() == 3  # the bar 0.5 + 0.9 x 0.3 = 0.77
+
+
 def test_condition_sets_split_at_commas_but_keep_fault_kinds_and_name_their_family():
     split = adapt_benchmark.split_condition_set("faults=0.3:wheel-dead,wheel-weak,message-loss=0.5")
     assert split == ["faults=0.3:wheel-dead,wheel-weak", "message-loss=0.5"]
@@ -206,7 +216,7 @@ def test_the_benchmark_keeps_a_harsh_condition_drops_a_mild_one_and_resumes(tmp_
     table = _rows(out / "conditions.csv")
     for row in table:
         if row[0] == "message-loss=0":
-            row[6] = "0.100000"
+            row[5] = f"{0.1 * float(row[4]):.6f}"  # the score under the condition, as if it fell to 10 %
     with (out / "conditions.csv").open("w", newline="") as handle:
         csv.writer(handle, lineterminator="\n").writerows(table)
     ceilings = []

@@ -37,6 +37,10 @@ objective is the repertoires' own unless ``--objective`` names another.
    best so far after 10 trials and at the budget) is re-scored on ``--heldout`` (20) held-out scenarios,
    seeded and disjoint from every adaptation and filter scenario (``scenario_seeds``), beside the best tree's
    fault-free score on the same scenarios: the winner's curse of a maximum of noisy scores shows there.
+   Every fraction (the filter's included) counts from ``--floor`` (default 0), the score of a swarm that
+   does nothing useful (``relative``). A primitive's fitness such as food is 0.5 when its estimate never
+   changes, so 70 % of a fault-free 0.78 is 0.55, barely above doing nothing: ``--floor 0.5`` measures such
+   an objective from there.
 
 Writes ``DIR/runs.csv`` (one row per method, task, condition, seed and repertoire: ``RUN_HEADER``),
 ``DIR/trials.csv`` (every trial of every run: its tree, fitness and best so far), ``DIR/conditions.csv``,
@@ -227,6 +231,16 @@ def _fraction(text: str) -> float:
     return value
 
 
+def _number_option(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``adapt-benchmark`` command line."""
     parser = Parser(prog="adapt-benchmark", description=__doc__.split("\n")[0])
@@ -261,6 +275,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=_fraction,
         default=KEEP_BELOW,
         help="keep a condition where the unchanged best keeps less than this of its score (0.7)",
+    )
+    parser.add_argument(
+        "--floor",
+        type=_number_option,
+        default=0.0,
+        help="the score of a swarm that does nothing useful; every fraction counts from it (default 0)",
     )
     parser.add_argument(
         "--filter-scenarios", type=positive_int, default=20, help="fresh scenarios of the filter (20)"
@@ -421,6 +441,8 @@ class Run:
     heldout_at_10: float = math.nan
     heldout_final: float = math.nan
     stopping_rule: float = math.nan
+    floor: float = 0.0
+    """The score of a swarm that does nothing useful (``--floor``): fractions count from it."""
 
     def curve(self, budget: int) -> list[float]:
         """Best so far at every trial up to the budget (a method that stops early keeps its best)."""
@@ -433,7 +455,8 @@ class Run:
         return self.trees[int(np.argmax(head))]
 
     def trials_to_90(self) -> float:
-        return trials_to_target(best_so_far(self.fitness), TARGET * self.pre_fault)
+        bar = self.floor + TARGET * (self.pre_fault - self.floor)
+        return trials_to_target(best_so_far(self.fitness), bar)
 
 
 OUTPUTS = (
@@ -553,12 +576,14 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
             if row is None or row[3] != str(len(filter_seeds)) or row[-1] != profile:
                 say(f"{condition}: filter, {name}")
                 free, hit = normal_filter.homogeneous(top.tree), changed.homogeneous(top.tree)
-                ratio = hit / free if free > 0 else math.nan
                 row = [condition, family, name, str(len(filter_seeds)), f"{free:.6f}", f"{hit:.6f}"]
-                row += [f"{ratio:.6f}", profile]
+                row += ["", profile]
                 filtered[(condition, name)] = row
                 write_atomic(filter_path, _csv_text(FILTER_HEADER, list(filtered.values())))
-            ratios.append(float(row[6]))
+            # The ratio from the scores as written, counted from this run's floor.
+            ratio = relative(float(row[5]), float(row[4]), args.floor)
+            row[6] = f"{ratio:.6f}"
+            ratios.append(ratio)
         candidates_summary[condition] = {
             "family": family,
             "conditions": record,
@@ -566,6 +591,7 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
             "median_ratio": float(np.median(ratios)),
             "kept": kept(ratios, args.keep_below),
         }
+    write_atomic(filter_path, _csv_text(FILTER_HEADER, list(filtered.values())))
     chosen = [c for c in worlds if candidates_summary[c]["kept"]]
     say(f"kept {len(chosen)} of {len(worlds)} candidate conditions: {', '.join(chosen) or 'none'}")
 
@@ -613,18 +639,18 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
                 trees, fitness = reevolve(algorithm, args.objective, args.budget, own, evaluate, setting)
                 means = (float(np.mean(list(pre.values()))), float(np.mean(list(pre_heldout.values()))))
                 run = Run(f"{algorithm}-scratch", "", seed, trees, fitness, *means)
-                found.append(_rescored(run, heldout.homogeneous, args.budget))
+                found.append(_rescored(run, heldout.homogeneous, args.budget, args.floor))
             for r, (name, candidates) in enumerate(repertoires.items()):
                 top = tops[name]
                 reference = (pre[name], pre_heldout[name])
                 value = evaluate([top.tree])[0].objective(k)
                 run = Run("unchanged", name, seed, [top.tree], [value], *reference)
-                found.append(_rescored(run, heldout.homogeneous, args.budget))
+                found.append(_rescored(run, heldout.homogeneous, args.budget, args.floor))
                 ite = IntelligentTrialAndError(candidates, args.budget, ITEParameters(stop_fraction=None))
                 run_picker(ite, evaluate, args.objective)
                 run = _picked("ite", name, seed, ite.tried, reference)
                 run.stopping_rule = _stopping_rule(ite.tried)
-                found.append(_rescored(run, heldout.homogeneous, args.budget))
+                found.append(_rescored(run, heldout.homogeneous, args.budget, args.floor))
                 per_robot = IntelligentTrialAndError(
                     candidates, args.budget, ITEParameters(stop_fraction=None)
                 )
@@ -632,12 +658,14 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
                            args.objective)  # fmt: skip
                 run = _picked("ite-per-robot", name, seed, per_robot.tried, reference)
                 run.stopping_rule = _stopping_rule(per_robot.tried)
-                found.append(_rescored(run, functools.partial(heldout.per_robot, top.tree), args.budget))
+                found.append(
+                    _rescored(run, functools.partial(heldout.per_robot, top.tree), args.budget, args.floor)
+                )
                 seed_random = derive_seed(seed, _PURPOSE_RANDOM, r) & MAX_SEED
                 picks = RandomPicks(candidates, args.budget, seed_random)
                 run_picker(picks, evaluate, args.objective)
                 run = _picked("random", name, seed, picks.tried, reference)
-                found.append(_rescored(run, heldout.homogeneous, args.budget))
+                found.append(_rescored(run, heldout.homogeneous, args.budget, args.floor))
 
     write_atomic(args.out / "runs.csv", _csv_text(RUN_HEADER, run_rows(runs, task, args.budget)))
     write_atomic(args.out / "trials.csv", _csv_text(TRIAL_HEADER, trial_rows(runs, task, args.budget)))
@@ -649,8 +677,10 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
     return summary
 
 
-def _rescored(run: Run, rescore: Callable[[str], float], budget: int) -> Run:
-    """``run`` with its picks (at ``EARLY`` trials and at the budget) re-scored by ``rescore``."""
+def _rescored(run: Run, rescore: Callable[[str], float], budget: int, floor: float) -> Run:
+    """``run`` with its picks (at ``EARLY`` trials and at the budget) re-scored by ``rescore``, its fractions
+    counted from ``floor``."""
+    run.floor = floor
     run.heldout_at_10 = rescore(run.pick(EARLY))
     run.heldout_final = rescore(run.pick(budget))
     return run
@@ -705,8 +735,10 @@ def trial_rows(runs: dict[str, list[Run]], task: str, budget: int) -> list[list[
     return rows
 
 
-def _ratio(a: float, b: float) -> float:
-    return a / b if b != 0 else math.nan
+def relative(value: float, reference: float, floor: float = 0.0) -> float:
+    """``value`` as a fraction of ``reference``, both counted from ``floor``; nan where the reference is at
+    the floor or below it."""
+    return (value - floor) / (reference - floor) if reference > floor else math.nan
 
 
 def _median(values: Sequence[float]) -> float:
@@ -731,20 +763,20 @@ def method_summary(found: Sequence[Run], budget: int, ceiling_of: dict[int, floa
             "median_trials_to_90": _median(hits),
             "reached": sum(math.isfinite(h) for h in hits),
             "median_best_at_budget_fraction": _median(
-                [_ratio(r.curve(budget)[-1], r.pre_fault) for r in mine]
+                [relative(r.curve(budget)[-1], r.pre_fault, r.floor) for r in mine]
             ),
             "median_heldout_final_fraction": _median(
-                [_ratio(r.heldout_final, r.heldout_pre_fault) for r in mine]
+                [relative(r.heldout_final, r.heldout_pre_fault, r.floor) for r in mine]
             ),
             "median_heldout_at_10_fraction": _median(
-                [_ratio(r.heldout_at_10, r.heldout_pre_fault) for r in mine]
+                [relative(r.heldout_at_10, r.heldout_pre_fault, r.floor) for r in mine]
             ),
         }
         for at in RECOVERED_AT:
             data[f"recovered_at_{at}"] = None if at > budget else sum(h <= at for h in hits) / len(hits)
         if ceiling_of is not None:
             data["median_fraction_of_ceiling"] = _median(
-                [_ratio(r.curve(budget)[-1], ceiling_of[r.seed]) for r in mine]
+                [relative(r.curve(budget)[-1], ceiling_of[r.seed], r.floor) for r in mine]
             )
         out[method] = data
     # The loss regained on the held-out scenarios, against the unchanged tree there (SMBO's kind of measure).
@@ -779,6 +811,7 @@ def summarise(
         "ceiling_evaluations": args.ceiling,
         "ceiling_seeds": args.ceiling_seeds,
         "keep_below": args.keep_below,
+        "floor": args.floor,
         "filter_scenarios": args.filter_scenarios,
         "heldout_scenarios": args.heldout,
         "candidates": candidates,
@@ -837,7 +870,7 @@ def curves_figure(summary: dict, runs: dict[str, list[Run]], path: Path, objecti
             mine = [r for r in runs.get(condition, []) if r.method == method]
             if not mine:
                 continue
-            data = np.array([np.array(r.curve(budget)) / r.pre_fault for r in mine])
+            data = np.array([(np.array(r.curve(budget)) - r.floor) / (r.pre_fault - r.floor) for r in mine])
             x = np.arange(1, budget + 1)
             axis.plot(x, np.median(data, axis=0), label=LABELS[method], drawstyle="steps-post")
             axis.fill_between(
@@ -891,7 +924,10 @@ def report_text(summary: dict, args: argparse.Namespace) -> str:
         + [f"--condition-set {c}" for c in args.condition_set]
         + [f"--seeds {args.seeds} --budget {args.budget} --ceiling {args.ceiling} --trials {args.trials}"]
         + [f"--ceiling-seeds {args.ceiling_seeds}"]
-        + [f"--keep-below {args.keep_below:g} --filter-scenarios {args.filter_scenarios}"]
+        + [
+            f"--keep-below {args.keep_below:g} --floor {args.floor:g} "
+            f"--filter-scenarios {args.filter_scenarios}"
+        ]
         + [f"--heldout {args.heldout} --out {args.out}"]
     )
     budget = summary["budget"]
@@ -906,7 +942,9 @@ def report_text(summary: dict, args: argparse.Namespace) -> str:
         "scenarios (median over the repertoires). The pre-fault score: the best tree's score without the "
         f"condition on the same scenario. Each method's pick (best so far at {EARLY} trials and at the "
         f"budget) is re-scored on {args.heldout} held-out scenarios, beside the best tree's fault-free score "
-        "there. Made by:",
+        f"there. Every fraction counts from a floor of {args.floor:g} (the score of a swarm that does "
+        "nothing useful: 0 for a count, 0.5 for the food, nest and density primitives, whose fitness is "
+        "0.5 when the estimate never changes). Made by:",
         "",
         f"    {command}",
         "",
