@@ -1,7 +1,9 @@
 """Using a repertoire: recover from damage or a changed world in a few trials (Intelligent Trial and Error).
 
-``search`` is the Bayesian search over a repertoire's bins; ``adapt`` is the command (in-process, or through
-the node graph with ``--graph``); ``adapt_benchmark`` compares it with its baselines. Imports: the base
+``search`` is the Bayesian search over a repertoire's bins, for every robot or only the robots a condition
+strikes; ``adapt`` is the command (in-process, or through the node graph with ``--graph``);
+``adapt_benchmark`` compares it with its baselines on the conditions where the repertoire's best tree falls
+below 70 % of its fault-free score. Imports: the base
 modules and every wing below it (``graph`` only for ``adapt --graph``).
 """
 
