@@ -30,8 +30,10 @@ Seeds of a run (``evolution_manager``), each ``derive_seed(run seed, purpose, ..
 ``RUN_EVALUATION, i`` is the simulator seed of evaluation ``i``; ``RUN_ALGORITHM`` seeds the algorithm's own
 generator; ``RUN_EXPERIMENT, a, o, r`` is the run seed of repetition ``r`` of algorithm ``a`` and objective
 ``o`` in an experiment (keyed by the experiment's seed); ``RUN_SCENARIO`` is the default scenario seed of a
-run under fixed scenarios, and ``RUN_HELDOUT, k`` (keyed by the scenario seed) the seed of held-out
-evaluation ``k`` at the end of a run.
+run under fixed scenarios, ``RUN_HELDOUT, k`` (keyed by the scenario seed) the seed of held-out
+evaluation ``k`` at the end of a run, and ``RUN_VALIDATION, k`` (keyed by the scenario seed) that of
+validation scenario ``k``, on which a run's best candidates are re-scored to choose its final one;
+``RUN_STUDY, ...`` the run seeds of a study.
 
 All draw functions are numba ``njit`` functions: they can be called from other compiled kernels and, more
 slowly, from plain Python. From Python, pass keys as ``np.uint64`` (e.g. ``derive(np.uint64(key), 3)``): a
@@ -116,6 +118,7 @@ RUN_EXPERIMENT = 3
 RUN_SCENARIO = 4
 RUN_HELDOUT = 5
 RUN_STUDY = 6
+RUN_VALIDATION = 7
 
 
 def key_path(seed: int, *path: int) -> np.uint64:

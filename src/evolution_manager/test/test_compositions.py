@@ -184,6 +184,7 @@ def test_same_seed_same_files_and_the_best_swarm_loads(source, tmp_path, capsys,
     evaluated = json.loads(capsys.readouterr().out)
     assert evaluated["fitness"]["foraging"] == summary["best_fitness"]
     assert list(evaluated["descriptors"].values()) == best["descriptors"]
+    _check_validated(summary, rows, cells)
     if algorithm == "qd":  # the grid: one composition per bin, the bin its descriptors', the fittest there
         repertoire = json.loads(a["repertoire_compositions.json"])
         fittest = {}
@@ -192,6 +193,41 @@ def test_same_seed_same_files_and_the_best_swarm_loads(source, tmp_path, capsys,
             fittest[key] = max(fittest.get(key, -1.0), float(r["foraging"]))
         assert {tuple(i["bin"]): i["fitness"] for i in repertoire["items"]} == fittest
         assert all(tuple(i["bin"]) == bin_of(i["descriptors"]) for i in repertoire["items"])
+
+
+def _check_validated(summary, rows, cells):
+    """The validated choice: the run's best distinct genomes by their first fitness, the one of highest mean
+    on the validation scenarios (re-scored here), its held-out score on the held-out scenarios; the
+    homogeneous baseline chosen alike among the cells' nine copies."""
+    validation = summary["validation"]
+    assert validation["evaluations"] == 5 and validation["candidates"] == 10 and validation["trials"] == 1
+    assert not set(validation["seeds"]) & set(summary["heldout"]["seeds"])
+    first = {}
+    for r in rows:
+        first.setdefault(tuple(int(c) for c in r["genome"].split()), float(r["foraging"]))
+    ranked = sorted(first.items(), key=lambda item: -item[1])  # stable: the earlier among equals
+    validated = summary["validated"]
+    candidates = validated["candidates"]
+    assert [(tuple(c["genome"]), c["fitness"]) for c in candidates] == ranked[:10]
+    means = [c["validation_fitness"] for c in candidates]
+    assert validated["validation_fitness"] == max(means)
+    assert validated["genome"] == candidates[means.index(max(means))]["genome"]
+    assert validated["trees"] == [cells[k].tree for k in validated["genome"]]
+    evaluator = BatchEvaluator(FORAGING.config("paper"))
+    genome = tuple(validated["genome"])
+    for seeds, key in (
+        (validation["seeds"], "validation_fitness"),
+        (summary["heldout"]["seeds"], "heldout_best_fitness"),
+    ):
+        again = evaluate_genomes(evaluator, cells, [genome] * len(seeds), 0, 1, 0, seeds)
+        assert validated[key] == pytest.approx(sum(m.fitness for m in again) / len(again), abs=1e-12)
+    homogeneous = summary["homogeneous"]["validated"]
+    assert len(homogeneous["candidates"]) == min(10, len(cells))
+    assert all(len(set(c["genome"])) == 1 for c in homogeneous["candidates"])
+    assert (
+        homogeneous["cell"] == homogeneous["genome"][0]
+        and homogeneous["tree"] == cells[homogeneous["cell"]].tree
+    )
 
 
 @pytest.mark.parametrize("algorithm", ["ga", "qd"])

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -36,6 +37,26 @@ FIGURES = [
 ]
 
 
+ONE_RUN_ARGS = ["--runs", "1", "--evaluations", "50", "--processes", "2", "--checkpoint-every", "0"]
+"""A small experiment, one run per group: several tests start from it run straight through, and the kill and
+signal tests stop it and continue it (each runs most of it twice, before the stop and after it; its seven runs
+still outlast the moment of the stop by several seconds)."""
+
+
+@pytest.fixture(scope="module")
+def one_run_experiment(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """That experiment run straight through, once for the module: tests that change it take a copy."""
+    straight = tmp_path_factory.mktemp("one-run") / "experiment"
+    assert experiment([*ONE_RUN_ARGS, "--out", str(straight), "--no-progress"]) == 0
+    return straight
+
+
+@pytest.fixture
+def never_stopped_runs_csv(one_run_experiment: Path) -> bytes:
+    """runs.csv of the experiment never stopped: what every way of stopping it must continue to."""
+    return (one_run_experiment / "runs.csv").read_bytes()
+
+
 def test_the_plan_covers_every_algorithm_objective_and_run_with_distinct_seeds():
     planned = plan(runs=3, evaluations=100, seed=4)
     labels = sorted({config.label for config, _ in planned})
@@ -59,10 +80,10 @@ def test_the_authors_design_is_the_default_one_scenario_for_every_run_and_per_ru
     assert [c.seed for c, _ in per_run] == [c.seed for c, _ in shared]  # only the scenarios differ
 
 
-def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsys):
+def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsys, one_run_experiment):
     out = tmp_path / "experiment"
+    shutil.copytree(one_run_experiment, out)
     args = ["--runs", "1", "--evaluations", "50", "--out", str(out), "--processes", "2", "--no-progress"]
-    assert experiment(args) == 0
     document = json.loads((out / "experiment.json").read_text())
     assert document["design"] == "shared" and document["scenario_seed"] == shared_scenario_seed(0)
     configs = [json.loads(p.read_text()) for p in out.glob("runs/*/run*/config.json")]
@@ -113,12 +134,14 @@ def test_a_small_experiment_writes_the_report_with_every_figure_and_the_table(tm
     assert (out / "report.md").read_text() == before
 
 
-def test_more_runs_continue_an_experiment_and_leave_its_finished_runs_as_they_are(tmp_path, capsys):
+def test_more_runs_continue_an_experiment_and_leave_its_finished_runs_as_they_are(
+    tmp_path, capsys, one_run_experiment
+):
     """``--runs`` raised on an experiment folder: the runs it planned keep their seeds, folders and files,
     and only the new ones run (issue 38's scenarios grow from 10 to 20 runs per group this way)."""
     out = tmp_path / "experiment"
+    shutil.copytree(one_run_experiment, out)
     args = ["--evaluations", "50", "--out", str(out), "--processes", "2", "--no-progress"]
-    assert experiment(["--runs", "1", *args]) == 0
     first = {p: p.read_bytes() for p in sorted(out.glob("runs/*/run00/*.json"))}
     plan = json.loads((out / "experiment.json").read_text())["plan"]
     assert experiment(["--runs", "2", *args]) == 0
@@ -199,10 +222,8 @@ def _finished_runs(out):
     return sum(1 for p in out.glob("runs/*/run*/summary.json") if json.loads(p.read_text()).get("heldout"))
 
 
-def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path):
-    args = ["--runs", "1", "--evaluations", "50", "--processes", "2", "--checkpoint-every", "0"]
-    straight = tmp_path / "straight"
-    assert experiment([*args, "--out", str(straight), "--no-progress"]) == 0
+def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path, never_stopped_runs_csv):
+    args = ONE_RUN_ARGS
     killed = tmp_path / "killed"
     call = f"experiment({[*args, '--out', str(killed)]!r})"
     code = f"from evolution_manager.studies.experiment import experiment; {call}"
@@ -217,7 +238,7 @@ def test_an_experiment_killed_and_continued_writes_the_same_runs_csv(tmp_path):
     assert 2 <= _finished_runs(killed) < 7, "the kill came too late to interrupt the experiment"
     assert not (killed / "runs.csv").exists()
     assert experiment([*args, "--out", str(killed), "--no-progress"]) == 0
-    assert (killed / "runs.csv").read_bytes() == (straight / "runs.csv").read_bytes()
+    assert (killed / "runs.csv").read_bytes() == never_stopped_runs_csv
 
 
 def _children(pid: int) -> set[int]:
@@ -246,25 +267,12 @@ def _alive(pids: set[int]) -> set[int]:
     return alive
 
 
-SIGNALLED_ARGS = ["--runs", "1", "--evaluations", "400", "--processes", "2", "--checkpoint-every", "0"]
-"""The experiment the signal tests stop and continue."""
-
-
-@pytest.fixture(scope="module")
-def never_stopped_runs_csv(tmp_path_factory: pytest.TempPathFactory) -> bytes:
-    """runs.csv of the signal tests' experiment run straight through: the same for every signal, so it is run
-    once for all of them (about 40 s of evaluations each time on two cores)."""
-    straight = tmp_path_factory.mktemp("signalled") / "straight"
-    assert experiment([*SIGNALLED_ARGS, "--out", str(straight), "--no-progress"]) == 0
-    return (straight / "runs.csv").read_bytes()
-
-
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
 def test_a_signal_to_the_command_alone_stops_its_runs_too(tmp_path, signum, never_stopped_runs_csv):
     """SIGTERM to the experiment's process (not its group, as a scheduler or `kill PID` sends it) stops it as
     Ctrl-C does, exit 143, and its runs stop at once; SIGKILL takes its workers with it. The experiment
     then continues to the same runs.csv as one never stopped."""
-    args = SIGNALLED_ARGS
+    args = ONE_RUN_ARGS
     out = tmp_path / "stopped"
     call = f"experiment({[*args, '--out', str(out), '--no-progress']!r})"
     code = f"import sys; from evolution_manager.studies.experiment import experiment; sys.exit({call})"

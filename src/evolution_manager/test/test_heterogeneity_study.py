@@ -76,6 +76,8 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
             if not arm.team:
                 assert all(float(r["qd_score_1"]) == float(r["best_fitness"]) for r in runs)
             assert all(r["heldout_foraging1"] != "" for r in runs)
+            assert all(r[study.VALIDATED] != "" for r in runs)  # every arm, teams too, ends validated
+        assert all(r[study.VALIDATED] != "" for r in baselines)
     # the baseline is each composition run's own measure: the same for every arm of a seed
     first = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())["homogeneous"]
     other = json.loads((out / "arms/multifood-arena6/qd-mix/run00/summary.json").read_text())["homogeneous"]
@@ -94,6 +96,11 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
         and "| multifood-arena6 | qd-mix |" in report
     )
     assert "Against the goal" in report and (out / "figures" / "heldout_best_fitness.png").stat().st_size > 0
+    # the validated choices: their own table and family, the baseline's from the run's summary
+    validated = report[report.index("## The validated choice") :]
+    assert "| multifood-arena6 | qd-mix |" in validated and "validated held-out fitness" in validated
+    baseline = next(r for r in rows if r["arm"] == study.BASELINE and r["seed"] == rows[0]["seed"])
+    assert float(baseline[study.VALIDATED]) == first["validated"]["heldout_best_fitness"]
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
     capsys.readouterr()
     assert experiment(args) == 0

@@ -188,6 +188,30 @@ def test_same_seed_same_files_and_the_best_swarm_loads(tmp_path, capsys):
     evaluated = json.loads(capsys.readouterr().out)
     assert evaluated["fitness"]["food"] == summary["best_fitness"]
     assert list(evaluated["descriptors"].values()) == best["descriptors"]
+    # the validated choice: the best distinct teams by their first fitness, the highest validation mean
+    first = {}
+    for r in rows:
+        first.setdefault(tuple(json.loads(r["trees"])), float(r["fitness"]))
+    ranked = sorted(first.items(), key=lambda item: -item[1])
+    validated = summary["validated"]
+    assert [(tuple(c["trees"]), c["fitness"]) for c in validated["candidates"]] == ranked[:10]
+    means = [c["validation_fitness"] for c in validated["candidates"]]
+    assert validated["validation_fitness"] == max(means)
+    assert validated["trees"] == validated["candidates"][means.index(max(means))]["trees"]
+    assert not set(summary["validation"]["seeds"]) & set(summary["heldout"]["seeds"])
+    chosen = team_layout(tuple(validated["trees"]), 9)
+    for seeds, key in (
+        (summary["validation"]["seeds"], "validation_fitness"),
+        (summary["heldout"]["seeds"], "heldout_best_fitness"),
+    ):
+        scores = []
+        for s in seeds:
+            capsys.readouterr()
+            layout_file = tmp_path / "validated_swarm.json"
+            layout_file.write_text(json.dumps(chosen.as_json()))
+            assert evaluate_main(["--swarm", str(layout_file), "--seed", str(s), "--trials", "1"]) == 0
+            scores.append(json.loads(capsys.readouterr().out)["fitness"]["food"])
+        assert validated[key] == pytest.approx(sum(scores) / len(scores), abs=1e-12)
 
 
 def test_the_best_swarm_animates(tmp_path):

@@ -1,14 +1,17 @@
 """``adapt``: recover from damage or a changed world by searching a repertoire (Intelligent Trial and Error).
 
     ws/run evolution_manager adapt --repertoire RUN_DIR --objective food --condition dead-robots=3 \\
-        --budget 20 --out DIR [--seed S] [--trials 10] [--graph] [--no-stop]
+        --budget 20 --out DIR [--seed S] [--trials 10] [--graph | --per-robot] [--no-stop]
 
 Each adaptation trial evaluates one tree of the repertoire in the changed world (``--condition``, repeatable:
 ``swarm_sim.model.conditions``), every tree on the same scenario (``--seed``), so ``ws/run swarm_sim evaluate
 --tree T --seed S --condition ...`` reproduces any fitness it reports. ``--graph`` runs each trial through the
 node graph instead (the simulator node in the changed world and one controller node per robot, each tree
 loaded with ``load_tree``), recording every simulated trial to a bag under ``DIR/bags/``; it chooses the same
-tree with the same fitness as the batch road.
+tree with the same fitness as the batch road. ``--per-robot`` adapts only the robots the condition strikes
+(``search.CompositionEvaluation``: they share the tried tree, the others keep the repertoire's best). The
+changed world is the repertoire's own (its task under its profile, its trees built with its library), so a
+foraging repertoire adapts as a primitive's does.
 
 Writes ``DIR/adaptation.json`` (the chosen ``tree`` and its ``fitness``, ``tried``: every tried tree with its
 fitness in order, ``seed``, ``conditions``, why it stopped, the parameters) and ``DIR/adaptation.png`` (the
@@ -27,12 +30,13 @@ from pathlib import Path
 from evolution_manager.adaptation.search import (
     AdaptationError,
     Candidate,
+    CompositionEvaluation,
     ConditionEvaluation,
     IntelligentTrialAndError,
     ITEParameters,
     Tried,
     load_candidates,
-    repertoire_profile,
+    repertoire_setting,
     run_picker,
 )
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seed_int
@@ -42,7 +46,7 @@ from evolution_manager.files import write_json
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.errors import ConditionError
 from swarm_sim.evaluation import BatchEvaluator
-from swarm_sim.model import apply_conditions, default_config
+from swarm_sim.model import apply_conditions
 
 RESULT = "adaptation.json"
 FIGURE = "adaptation.png"
@@ -79,6 +83,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--graph", action="store_true", help="run every trial through the node graph, recorded"
     )
+    parser.add_argument(
+        "--per-robot",
+        action="store_true",
+        help="change only the struck robots' tree (the others keep theirs)",
+    )
     parser.add_argument("--no-stop", action="store_true", help="spend the whole budget (no stopping rule)")
     defaults = ITEParameters()
     parser.add_argument("--stop-fraction", type=_fraction, default=defaults.stop_fraction, help="alpha (0.9)")
@@ -111,8 +120,10 @@ def adaptation_document(
     seed: int,
     trials: int,
     road: str,
+    robots: Sequence[int] | None = None,
 ) -> dict[str, object]:
-    """The content of ``adaptation.json``."""
+    """The content of ``adaptation.json`` (``robots``: the robots a per-robot adaptation changed, None
+    for every robot)."""
     best = search.best
     assert best is not None
     top = max(candidates, key=lambda c: c.prior)
@@ -126,6 +137,7 @@ def adaptation_document(
         "seed": seed,
         "trials_per_evaluation": trials,
         "road": road,
+        "robots": None if robots is None else list(robots),
         "repertoire": str(repertoire),
         "bins": len(candidates),
         "repertoire_best": {"tree": top.tree, "prior": top.prior, "bin": list(top.bin)},
@@ -165,9 +177,12 @@ def adapt(argv: Sequence[str] | None = None) -> int:
 
     try:
         args = build_parser().parse_args(argv)
-        profile = repertoire_profile(args.repertoire)
+        setting = repertoire_setting(args.repertoire)
+        profile = setting.config.profile
+        if args.graph and args.per_robot:
+            raise UsageError("--per-robot runs on the batch road only: drop --graph or --per-robot")
         try:
-            config, conditions = apply_conditions(args.condition, default_config(profile))
+            config, conditions = apply_conditions(args.condition, setting.world)
         except ConditionError as error:
             raise UsageError(f"--condition: {error}") from None
         stop = None if args.no_stop else args.stop_fraction
@@ -175,7 +190,7 @@ def adapt(argv: Sequence[str] | None = None) -> int:
             parameters = ITEParameters(args.length_scale, kappa=args.kappa, stop_fraction=stop)
         except EvolutionError as error:
             raise UsageError(str(error)) from None
-        candidates = load_candidates(args.repertoire, args.objective)
+        candidates = load_candidates(args.repertoire, args.objective, setting.library)
         for name in (RESULT, FIGURE):  # a planted link is refused before any trial, never written through
             try:
                 refuse_links(args.out / name)
@@ -194,6 +209,7 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
 
     search = IntelligentTrialAndError(candidates, args.budget, parameters)
+    robots = None
 
     def show(t: Tried) -> None:
         number = len(search.tried)
@@ -210,8 +226,16 @@ def adapt(argv: Sequence[str] | None = None) -> int:
 
         with graph_evaluator(args.condition, args.out / "bags", profile=profile) as graph:
             run_picker(search, ConditionEvaluation(graph, args.seed, args.trials), args.objective, show)
+    elif args.per_robot:
+        top = max(candidates, key=lambda c: c.prior)
+        batch = BatchEvaluator(config, library=setting.library)
+        swarms = CompositionEvaluation(batch, config, args.seed, top.tree, args.trials)
+        robots = swarms.robots
+        run_picker(search, swarms, args.objective, show)
     else:
-        evaluate = ConditionEvaluation(BatchEvaluator(config), args.seed, args.trials)
+        evaluate = ConditionEvaluation(
+            BatchEvaluator(config, library=setting.library), args.seed, args.trials
+        )
         run_picker(search, evaluate, args.objective, show)
     document = adaptation_document(
         search,
@@ -223,6 +247,7 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         seed=args.seed,
         trials=args.trials,
         road="graph" if args.graph else "batch",
+        robots=robots,
     )
     try:
         write_json(args.out / RESULT, document)

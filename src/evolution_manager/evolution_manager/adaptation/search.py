@@ -15,10 +15,24 @@ variance 0.04 (a fitness change of about 0.2 is one standard deviation), observa
 (a fixed scenario gives each tree one exact fitness; the noise keeps the GP well conditioned), kappa 0.05 (the
 paper's value: the search follows the posterior mean and explores only to break near ties).
 
+Adaptation per robot (``CompositionEvaluation``): the same search, but the asked tree goes only to the robots
+a condition strikes (``struck_robots``: the robots with a per-robot fault, the dead ones, the ones with a
+weak wheel) while every other robot keeps the swarm's tree from before the fault (the repertoire's best); the
+swarm's fitness is scored as the task's. Why this search space: the robots that must change are the ones
+whose body changed, and a fault is known where it struck (a robot can tell that its own wheel or sensor
+failed). One tree shared by the struck robots keeps the space the repertoire's bins, so Intelligent Trial and
+Error's prior (the repertoire's fitness) and its Gaussian process over the descriptors still apply and the
+budget of a few tens of trials still covers it; one tree per struck robot would multiply the space by the
+number of bins per robot, beyond any such budget. On a scenario where no robot is struck every composition is
+the swarm from before (one simulation, cached). The healthy robots keep the best tree: that tree is what made
+the swarm good before the fault, and changing them is what homogeneous Intelligent Trial and Error already
+tries.
+
 Every algorithm here is an ask/tell object that never evaluates: the caller evaluates the asked tree on
 the changed world (one "trial" of adaptation is one evaluation, 10 simulated trials) and tells its fitness.
 Baselines: ``RandomPicks`` (distinct bins drawn at random) and ``reevolve`` (GP_o or MAP-Elites from
-scratch). Nothing here imports ``rclpy`` or the simulator.
+scratch). Nothing here imports ``rclpy``; of the simulator, only which robots a condition strikes
+(``swarm_sim.core.trial_data.robot_faults``).
 """
 
 from __future__ import annotations
@@ -32,7 +46,9 @@ import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
+from bt_controller.draws import root_key
 from bt_controller.errors import TreeError
+from bt_controller.library import Library
 from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
@@ -41,7 +57,9 @@ from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
 from evolution_manager.files import read_json_object
-from swarm_sim.evaluation import EvaluationRequest, Evaluator
+from swarm_sim.core.trial_data import robot_faults
+from swarm_sim.evaluation import EvaluationRequest, Evaluator, SwarmRequest
+from swarm_sim.model import Config, SwarmLayout
 
 
 class AdaptationError(EvolutionError, ValueError):
@@ -59,8 +77,9 @@ class Candidate:
     descriptors: tuple[float, float, float]
 
 
-def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
-    """Every filled bin's best tree of ``run_dir/repertoire_<objective>.json``, in bin order."""
+def load_candidates(run_dir: Path, objective: str, library: Library | None = None) -> list[Candidate]:
+    """Every filled bin's best tree of ``run_dir/repertoire_<objective>.json``, in bin order (trees that name
+    primitives parse with the run's ``library``: ``repertoire_setting``)."""
     if objective not in OBJECTIVES:
         raise AdaptationError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
     path = Path(run_dir) / f"repertoire_{objective}.json"
@@ -87,7 +106,7 @@ def load_candidates(run_dir: Path, objective: str) -> list[Candidate]:
             if not isinstance(tree, str):
                 raise ValueError(f"the tree of bin {list(index)} must be tree text, got {tree!r}")
             try:
-                parse(tree)
+                parse(tree, library=library)
             except TreeError as error:
                 raise ValueError(f"the tree of bin {list(index)} is not a tree: {error}") from None
             if index not in best or fitness > best[index].prior:
@@ -106,6 +125,30 @@ def repertoire_profile(run_dir: Path) -> str:
     runs the changed world on the same model."""
     try:
         return RunDirectory(Path(run_dir)).read_config().profile
+    except EvolutionError as error:
+        raise AdaptationError(f"{run_dir} is not a run directory: {error}") from None
+
+
+@dataclass(frozen=True)
+class RepertoireSetting:
+    """What a repertoire was evolved in, which adaptation keeps: the run's configuration (its profile, task,
+    objective and budget) and its copy of the primitive library (None for a run without one)."""
+
+    config: RunConfig
+    library: Library | None
+
+    @property
+    def world(self) -> Config:
+        """The task's world under the run's profile, before any condition."""
+        return self.config.world()
+
+
+def repertoire_setting(run_dir: Path) -> RepertoireSetting:
+    """The setting of the repertoire in ``run_dir`` (its ``config.json`` and library copy)."""
+    directory = RunDirectory(Path(run_dir))
+    try:
+        config = directory.read_config()
+        return RepertoireSetting(config, directory.read_library(config))
     except EvolutionError as error:
         raise AdaptationError(f"{run_dir} is not a run directory: {error}") from None
 
@@ -300,6 +343,60 @@ class ConditionEvaluation:
         return [self._cache[t] for t in trees]
 
 
+def struck_robots(config: Config, seed: int) -> tuple[int, ...]:
+    """The robots that ``config``'s conditions strike in evaluations of ``seed``, in id order: a per-robot
+    fault (drawn from the seed under a fault rate), one of the ``dead_robots`` first robots, or one of the
+    ``weak_robots`` last ones. Swarm-wide conditions (message loss, the swarm's size, the gap) strike none."""
+    faults = robot_faults(config, root_key(int(seed)))
+    n = config.n_robots
+    return tuple(
+        i for i in range(n) if faults[i] != 0 or i < config.dead_robots or i >= n - config.weak_robots
+    )
+
+
+def composition(base: str, tree: str, robots: Sequence[int], n_robots: int) -> SwarmLayout:
+    """A swarm of ``n_robots`` where the robots in ``robots`` run ``tree`` and every other robot ``base``."""
+    chosen = set(robots)
+    if not all(isinstance(r, int) and 0 <= r < n_robots for r in chosen):
+        raise AdaptationError(f"robots must be robot ids in [0, {n_robots - 1}], got {sorted(chosen)}")
+    return SwarmLayout(tuple(tree if i in chosen else base for i in range(n_robots)))
+
+
+class CompositionEvaluation:
+    """Adaptation per robot (module docstring): each asked tree evaluated as the swarm where the robots
+    ``struck_robots`` names for ``seed`` run it and the others keep ``base``; every layout with the same seed
+    and each layout simulated once (as ``ConditionEvaluation``). Takes the same ``Evaluator`` (it must take
+    ``SwarmRequest``s, as ``BatchEvaluator`` does)."""
+
+    def __init__(self, evaluator: Evaluator, config: Config, seed: int, base: str, trials: int = 10) -> None:
+        self.evaluator = evaluator
+        self.seed = seed
+        self.trials = trials
+        self.base = base
+        self.n_robots = config.n_robots
+        self.robots = struck_robots(config, seed)
+        self.simulated = 0
+        self._cache: dict[tuple[str, ...], Outcome] = {}
+
+    def layout(self, tree: str) -> SwarmLayout:
+        """The swarm that trying ``tree`` evaluates."""
+        return composition(self.base, tree, self.robots, self.n_robots)
+
+    def __call__(self, trees: Sequence[str]) -> list[Outcome]:
+        layouts = [self.layout(t) for t in trees]
+        new = [layout for layout in dict.fromkeys(layouts) if layout.trees not in self._cache]
+        if new:
+            requests = [SwarmRequest(layout, self.seed, self.trials) for layout in new]
+            results = self.evaluator.evaluate(requests)  # type: ignore[arg-type]  # BatchEvaluator takes them
+            self.simulated += len(new)
+            for layout, result in zip(new, results, strict=True):
+                outcome = as_outcome(result)
+                if not outcome.ok:
+                    raise AdaptationError(f"the evaluator could not evaluate {layout.trees}: {outcome.error}")
+                self._cache[layout.trees] = outcome
+        return [self._cache[layout.trees] for layout in layouts]
+
+
 Evaluate = Callable[[Sequence[str]], list[Outcome]]
 """Outcomes of tree texts under the changed condition (one adaptation trial each), in order."""
 
@@ -319,14 +416,36 @@ def run_picker(
 
 
 def reevolve(
-    algorithm: str, objective: str, budget: int, seed: int, evaluate: Evaluate
+    algorithm: str,
+    objective: str,
+    budget: int,
+    seed: int,
+    evaluate: Evaluate,
+    setting: RepertoireSetting | None = None,
 ) -> tuple[list[str], list[float]]:
     """Evolve from scratch under the changed condition with ``algorithm`` (``gp``: GP_o, ``qd``:
     MAP-Elites, with the paper's parameters) for ``budget`` evaluations; every evaluated tree and its fitness
-    in the order produced."""
+    in the order produced. With ``setting``, on the repertoire's task, profile and library (a foraging
+    repertoire's primitives as leaves); without, the default task's flat node set."""
     if algorithm not in ("gp", "qd"):
         raise ConfigError(f"re-evolution uses gp or qd, got {algorithm!r}")
-    search = RunConfig.make(algorithm, objective, budget, seed).make_algorithm()
+    if setting is None:
+        search = RunConfig.make(algorithm, objective, budget, seed).make_algorithm()
+    else:
+        c = setting.config
+        made = RunConfig.make(
+            algorithm,
+            objective,
+            budget,
+            seed,
+            trials=c.trials,
+            profile=c.profile,
+            task=c.task,
+            library=c.library,
+            library_digest=c.library_digest,
+            nodes=c.nodes,
+        )
+        search = made.make_algorithm(setting.library)
     k = OBJECTIVES.index(objective)
     trees: list[str] = []
     fitness: list[float] = []

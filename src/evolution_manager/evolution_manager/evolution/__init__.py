@@ -11,8 +11,9 @@ show, computed (``run_results``), and primitive libraries made from runs' repert
 ``library`` command), and heterogeneous compositions of repertoire cells evolved by a GA or MAP-Elites
 (``compositions``), the optimisers over a neural controller's weights, CMA-ES, the authors' GA and
 MAP-Elites (``networks``), and teams, K trees evolved together by the GP, robot i running tree i mod K
-(``teams``). Imports: the base modules, bt_controller, swarm_sim, DEAP, qdpy, pycma and
-pyribs; no other wing.
+(``teams``), and the validated choice that ends a composition or team run: its best candidates
+re-scored on validation scenarios (``validation``). Imports: the base modules, bt_controller, swarm_sim,
+DEAP, qdpy, pycma and pyribs; no other wing.
 """
 
 __all__ = [
@@ -32,4 +33,5 @@ __all__ = [
     "run_results",
     "shown_trees",
     "teams",
+    "validation",
 ]

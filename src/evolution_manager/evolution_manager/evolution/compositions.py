@@ -30,7 +30,8 @@ A run directory holds ``config.json``, ``cells.json`` (the run's copy of its cel
 space's measured values, error),
 ``progress.csv``, ``checkpoint.json`` (written atomically, with the lengths of the two CSV files and the
 random generator's state); when the run ends ``summary.json`` (with the authors' QD score at 1, 2, 4 and 8
-bins per axis, :func:`coarse_qd_scores`), ``best/<objective>_swarm.json`` (the best composition as a
+bins per axis, :func:`coarse_qd_scores`; the validated choice, ``validation``, of the run and of its
+homogeneous baseline), ``best/<objective>_swarm.json`` (the best composition as a
 swarm layout file, for ``evaluate --swarm``, ``trial --swarm``, ``animate --swarm``),
 ``best/<objective>_robot<i>.txt`` (its trees) and for ``qd`` ``repertoire_compositions.json``. A resumed
 run cuts the CSV files back to its checkpoint and ends with the very bytes of an uninterrupted run.
@@ -65,6 +66,12 @@ from evolution_manager.evolution.descriptor_sets import (
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
 from evolution_manager.evolution.run_folder import COMPOSITIONS, RunFolder, RunLoop
+from evolution_manager.evolution.validation import (
+    best_distinct,
+    choose_on_validation,
+    validation_seeds,
+    validation_settings,
+)
 from evolution_manager.files import (
     number,
     read_json_object,
@@ -907,28 +914,72 @@ class CompositionRun(RunLoop[Genome, Member]):
         """The held-out scenarios: those of a tree run on the same scenario seed (``heldout_seed``)."""
         return [derive_seed(self.config.scenario_seed, RUN_HELDOUT, r) for r in range(HELDOUT_EVALUATIONS)]
 
-    def _heldout(self, genome: Genome) -> tuple[float | None, list[float] | None]:
-        """``genome``'s mean objective and mean values of the run's axes over the held-out scenarios (None
-        when an evaluation failed)."""
+    def _means_on(
+        self, genomes: Sequence[Genome], seeds: Sequence[int]
+    ) -> list[tuple[float | None, list[float] | None]]:
+        """Each genome's mean objective and mean values of the run's axes over the scenarios ``seeds`` (None
+        and None when one of its evaluations failed), all evaluated in one batch."""
         assert self.evaluator is not None
-        seeds = self._heldout_seeds()
         scored = evaluate_genomes(
             self.evaluator,
             self.cells,
-            [genome] * len(seeds),
+            [genome for genome in genomes for _ in seeds],
             0,
             self.config.trials,
             0,
-            seeds,
+            [seed for _ in genomes for seed in seeds],
             self.config.objective,
             self.space,
         )
-        if any(m.fitness is None or m.descriptors is None for m in scored):
-            return None, None
-        fitness = math.fsum(m.rank for m in scored) / len(scored)
-        axes = [math.fsum(m.descriptors[a] for m in scored if m.descriptors) / len(scored)
-                for a in range(len(self.space.names))]  # fmt: skip
-        return fitness, axes
+        means: list[tuple[float | None, list[float] | None]] = []
+        for start in range(0, len(scored), len(seeds)):
+            own = scored[start : start + len(seeds)]
+            if any(m.fitness is None or m.descriptors is None for m in own):
+                means.append((None, None))
+                continue
+            fitness = math.fsum(m.rank for m in own) / len(own)
+            axes = [math.fsum(m.descriptors[a] for m in own if m.descriptors) / len(own)
+                    for a in range(len(self.space.names))]  # fmt: skip
+            means.append((fitness, axes))
+        return means
+
+    def _heldout(self, genome: Genome) -> tuple[float | None, list[float] | None]:
+        """``genome``'s mean objective and mean values of the run's axes over the held-out scenarios (None
+        when an evaluation failed)."""
+        return self._means_on([genome], self._heldout_seeds())[0]
+
+    def _validated(self, scored: Iterable[tuple[Genome, float]]) -> dict | None:
+        """The validated choice among ``scored`` (genomes with their fitness on the run's scenario, in the
+        order the run met them; ``validation``): the best distinct candidates re-scored on the validation
+        scenarios, the chosen one on the held-out scenarios. None when no candidate could be scored."""
+        seeds = validation_seeds(self.config.scenario_seed)
+        chosen = choose_on_validation(
+            best_distinct(scored), lambda genomes: [f for f, _ in self._means_on(genomes, seeds)]
+        )
+        if chosen is None:
+            return None
+        heldout, axes = self._heldout(chosen.genome)
+        return {
+            "genome": list(chosen.genome),
+            "trees": list(layout_of(chosen.genome, self.cells).trees),
+            "fitness": chosen.fitness,
+            "validation_fitness": chosen.validation_fitness,
+            "heldout_best_fitness": heldout,
+            "heldout_descriptors": axes,
+            "candidates": [
+                {"genome": list(genome), "fitness": fitness, "validation_fitness": validation}
+                for genome, fitness, validation in chosen.candidates
+            ],
+        }
+
+    def _scored_genomes(self) -> list[tuple[Genome, float]]:
+        """Every genome the run evaluated (``evaluations.csv``) with its fitness, in evaluation order; failed
+        evaluations left out."""
+        return [
+            (tuple(int(c) for c in row["genome"].split()), float(row[self.config.objective]))
+            for row in self.directory.evaluations.read()
+            if row[self.config.objective] != ""
+        ]
 
     def _homogeneous_baseline(self) -> dict | None:
         """The best homogeneous swarm of the run's cells, what a composition has to beat: every cell's nine
@@ -951,6 +1002,9 @@ class CompositionRun(RunLoop[Genome, Member]):
             return None
         best = fittest(scored)
         heldout, axes = self._heldout(best.genome)
+        validated = self._validated((m.genome, m.rank) for m in scored)
+        if validated is not None:
+            validated = {"cell": validated["genome"][0], "tree": validated["trees"][0], **validated}
         return {
             "cell": best.genome[0],
             "tree": self.cells[best.genome[0]].tree,
@@ -958,6 +1012,7 @@ class CompositionRun(RunLoop[Genome, Member]):
             "descriptors": None if best.descriptors is None else list(best.descriptors),
             "heldout_best_fitness": heldout,
             "heldout_descriptors": axes,
+            "validated": validated,
         }
 
     def _evaluated(self) -> list[tuple[tuple[float, ...], float]]:
@@ -993,6 +1048,8 @@ class CompositionRun(RunLoop[Genome, Member]):
             seeds = self._heldout_seeds()
             summary["heldout"] = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
             summary["heldout_best_fitness"], summary["heldout_descriptors"] = self._heldout(self.best.genome)
+            summary["validation"] = validation_settings(self.config.scenario_seed, self.config.trials)
+            summary["validated"] = self._validated(self._scored_genomes())
             summary["homogeneous"] = self._homogeneous_baseline()
         if self.config.algorithm == "qd":
             summary["coverage"] = len(self.grid) / 512

@@ -28,7 +28,8 @@ A run directory is a run folder as every run's (``run_folder``): ``config.json``
 ``evaluations.csv`` (evaluation, seed, the sub-group varied, the K trees as a JSON list, the objective, the
 descriptors, error), ``progress.csv``, ``checkpoint.json`` (atomic, with the lengths of the CSV files and the
 generator's state) and when the run ends ``summary.json`` (with the best team's held-out fitness on fresh
-scenario seeds, and its held-out mean of every objective, the deliveries of each food kind among them),
+scenario seeds, and its held-out mean of every objective, the deliveries of each food kind among them; the
+validated choice, ``validation``),
 ``best/<objective>_swarm.json`` (the best team as a swarm layout file, for ``evaluate --swarm``, ``trial
 --swarm`` and ``animate --swarm``) and ``best/<objective>_group<g>.txt`` (its trees). A resumed run ends
 with the very bytes of an uninterrupted one.
@@ -60,6 +61,12 @@ from evolution_manager.evolution.run_config import (
     heldout_seed,
 )
 from evolution_manager.evolution.run_folder import DAMAGE, TEAMS, RunFolder, RunLoop
+from evolution_manager.evolution.validation import (
+    best_distinct,
+    choose_on_validation,
+    validation_seeds,
+    validation_settings,
+)
 from evolution_manager.files import number, read_json_object, write_atomic, write_json, writing
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.evaluation import Evaluator, SwarmRequest
@@ -591,14 +598,62 @@ class TeamRun(RunLoop[Texts, Member]):
         if self.evaluator is None or not self.done or self.best is None:
             return None, None, None
         seeds = self.config.heldout_seeds()
-        teams = [self.best.texts] * len(seeds)
-        results = evaluate_teams(self.evaluator, teams, self.n_robots, seeds, self.config.trials)
         done = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
-        scored = [fitness for fitness, _, _ in results if fitness is not None]
-        if len(scored) != len(seeds):
-            return done, None, None
-        means = {o: math.fsum(f[k] for f in scored) / len(seeds) for k, o in enumerate(OBJECTIVES)}
-        return done, means[self.config.objective], means
+        means = self._means_on([self.best.texts], seeds)[0]
+        return done, None if means is None else means[self.config.objective], means
+
+    def _means_on(self, teams: Sequence[Texts], seeds: Sequence[int]) -> list[dict[str, float] | None]:
+        """Each team's mean of every objective over the scenarios ``seeds`` (None when one of its
+        evaluations failed), all evaluated in one batch."""
+        assert self.evaluator is not None
+        results = evaluate_teams(
+            self.evaluator,
+            [team for team in teams for _ in seeds],
+            self.n_robots,
+            [seed for _ in teams for seed in seeds],
+            self.config.trials,
+        )
+        means: list[dict[str, float] | None] = []
+        for start in range(0, len(results), len(seeds)):
+            scored = [fitness for fitness, _, _ in results[start : start + len(seeds)] if fitness is not None]
+            if len(scored) != len(seeds):
+                means.append(None)
+                continue
+            means.append({o: math.fsum(f[k] for f in scored) / len(seeds) for k, o in enumerate(OBJECTIVES)})
+        return means
+
+    def validated(self) -> dict | None:
+        """The validated choice (``validation``): the run's best distinct teams on its scenario re-scored on
+        the validation scenarios, the one of highest mean re-scored on the held-out scenarios. None where
+        :meth:`heldout` gives nothing, or when no candidate could be scored."""
+        if self.evaluator is None or not self.done or self.best is None:
+            return None
+        seeds = validation_seeds(self.config.scenario_seed)
+        objective = self.config.objective
+
+        def score(teams: Sequence[Texts]) -> list[float | None]:
+            return [None if m is None else m[objective] for m in self._means_on(teams, seeds)]
+
+        scored = [
+            (tuple(json.loads(row["trees"])), float(row["fitness"]))
+            for row in self.directory.evaluations.read()
+            if row["fitness"] != ""
+        ]
+        chosen = choose_on_validation(best_distinct(scored), score)
+        if chosen is None:
+            return None
+        means = self._means_on([chosen.genome], self.config.heldout_seeds())[0]
+        return {
+            "trees": list(chosen.genome),
+            "fitness": chosen.fitness,
+            "validation_fitness": chosen.validation_fitness,
+            "heldout_best_fitness": None if means is None else means[objective],
+            "heldout_objectives": means,
+            "candidates": [
+                {"trees": list(team), "fitness": fitness, "validation_fitness": validation}
+                for team, fitness, validation in chosen.candidates
+            ],
+        }
 
     def write_results(self) -> list[Path]:
         """``summary.json`` and, when a team was evaluated, the best team in ``best/``: its swarm layout
@@ -619,6 +674,10 @@ class TeamRun(RunLoop[Texts, Member]):
             "heldout_best_fitness": heldout_best,
             "heldout_objectives": means,
         }
+        validated = self.validated()
+        if validated is not None:
+            summary["validation"] = validation_settings(self.config.scenario_seed, self.config.trials)
+            summary["validated"] = validated
         directory = self.directory
         write_json(directory.summary, summary)
         written = [directory.summary]

@@ -113,10 +113,16 @@ ARMS: tuple[Arm, ...] = (
 HEADER = [
     "arm", "task", "seed", "best_fitness", "heldout_best_fitness",
     "heldout_foraging1", "heldout_foraging2", "heldout_foraging3",
-    *(f"qd_score_{k}" for k in QD_SCORE_BINS),
+    *(f"qd_score_{k}" for k in QD_SCORE_BINS), "validated_heldout_best_fitness",
 ]  # fmt: skip
 """``runs.csv``: one row per run; the QD scores (of every genome the run evaluated) are empty for the
-baseline."""
+baseline; the validated choice's held-out score (``evolution.validation``) is empty for runs made before
+it."""
+
+HELDOUT = "heldout_best_fitness"
+VALIDATED = "validated_heldout_best_fitness"
+"""The two held-out scores the report compares arms by: of the run's best on its scenario, and of its
+validated choice."""
 
 
 def _folder(kind: str, task: str, r: int) -> str:
@@ -249,6 +255,11 @@ def _summary(root: Path, folder: str) -> dict | None:
     return None
 
 
+def _validated(choice: object) -> str:
+    """The held-out score of a validated choice (``summary.json``'s ``validated``), empty without one."""
+    return _number(choice.get("heldout_best_fitness")) if isinstance(choice, dict) else ""
+
+
 def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
     """The held-out deliveries of kinds 1 to 3 of a composition run: its held-out values of the deliveries
     axes; binned by behaviour (a task of one kind of food, objective ``foraging``), its held-out fitness as
@@ -282,6 +293,7 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                 "heldout_best_fitness": _number(summary["heldout_best_fitness"]),
                 **{f"heldout_foraging{k}": _number(means.get(f"foraging{k}")) for k in (1, 2, 3)},
                 **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
+                VALIDATED: _validated(summary.get("validated")),
             })  # fmt: skip
             continue
         baseline = summary.get("homogeneous")
@@ -293,6 +305,7 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                 **dict(zip(HEADER[5:8], _kinds(
                     entry, baseline["heldout_best_fitness"], baseline["heldout_descriptors"]), strict=True)),
                 **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
+                VALIDATED: _validated(baseline.get("validated")),
             })  # fmt: skip
         scores = summary.get("qd_scores_evaluated", {})
         rows.append({
@@ -302,6 +315,7 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
             **dict(zip(HEADER[5:8], _kinds(
                 entry, summary["heldout_best_fitness"], summary.get("heldout_descriptors")), strict=True)),
             **{f"qd_score_{k}": _number(scores.get(str(k))) for k in QD_SCORE_BINS},
+            VALIDATED: _validated(summary.get("validated")),
         })  # fmt: skip
     return document, baselines + rows
 
@@ -318,15 +332,17 @@ def _values(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> li
     return [float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key] != ""]
 
 
-def comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> list[Comparison]:
-    """Each arm against the homogeneous baseline on the held-out best fitness, paired by seed, per task:
-    one family, Holm-corrected (every arm on every task). Pairs of fewer than two runs are left out."""
+def comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT) -> list[Comparison]:
+    """Each arm against the homogeneous baseline on the held-out score ``key`` (of the best on the run's
+    scenario, or of the validated choice), paired by seed, per task: one family, Holm-corrected (every arm
+    on every task). Pairs of fewer than two runs are left out."""
+    metric = "held-out best fitness" if key == HELDOUT else "validated held-out fitness"
     found = []
     for task in tasks:
         for arm in ARMS:
-            a, b = _paired(rows, task, arm.name, "heldout_best_fitness")
+            a, b = _paired(rows, task, arm.name, key)
             if len(a) >= 2:
-                found.append(compare_paired("held-out best fitness", task, arm.name, a, BASELINE, b))
+                found.append(compare_paired(metric, task, arm.name, a, BASELINE, b))
     return holm(found) if found else []
 
 
@@ -334,9 +350,10 @@ def _median(values: Sequence[float]) -> float:
     return float(np.median(values))
 
 
-def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
-    """Per task and arm: runs, held-out median with a 95 % bootstrap interval, the ratio of medians to the
-    baseline's, the paired median difference with its interval, the median held-out deliveries per kind."""
+def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT) -> str:
+    """Per task and arm: runs, median of the held-out score ``key`` with a 95 % bootstrap interval, the
+    ratio of medians to the baseline's, the paired median difference with its interval, and for the best on
+    the run's scenario the median held-out deliveries per kind."""
     rng = np.random.default_rng(0)
     lines = [
         "| task | arm | runs | held-out median [95 % CI] | / homogeneous | paired Δ median [95 % CI] | "
@@ -344,9 +361,9 @@ def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for task in tasks:
-        base = _values(rows, task, BASELINE, "heldout_best_fitness")
+        base = _values(rows, task, BASELINE, key)
         for name in (BASELINE, *(arm.name for arm in ARMS)):
-            held = _values(rows, task, name, "heldout_best_fitness")
+            held = _values(rows, task, name, key)
             if not held:
                 continue
             bounds = interval(held, "median", rng)
@@ -354,7 +371,7 @@ def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
             ratio = f"{_median(held) / _median(base):.3g}" if base and _median(base) > 0 else "n/a"
             delta = ""
             if name != BASELINE:
-                a, b = _paired(rows, task, name, "heldout_best_fitness")
+                a, b = _paired(rows, task, name, key)
                 differences = [x - y for x, y in zip(a, b, strict=True)]
                 if differences:
                     d_bounds = interval(differences, "median", rng)
@@ -362,7 +379,7 @@ def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
                         "" if d_bounds is None else f" [{d_bounds[0]:+.4g}, {d_bounds[1]:+.4g}]"
                     )
             kinds = [_values(rows, task, name, f"heldout_foraging{k}") for k in (1, 2, 3)]
-            shown = [f"{_median(v):.3g}" if v else "" for v in kinds]
+            shown = [f"{_median(v):.3g}" if v and key == HELDOUT else "" for v in kinds]
             lines.append(
                 f"| {task} | {name} | {len(held)} | {_median(held):.4g}{ci} | {ratio} | {delta} | "
                 + " | ".join(shown)
@@ -386,16 +403,18 @@ def qd_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def goal_text(rows: Sequence[dict[str, str]], tested: Sequence[Comparison], tasks: Sequence[str]) -> str:
-    """Whether an arm reached the goal on a task: held-out median at least :data:`GOAL` times the
-    baseline's with the paired test significant after Holm's correction."""
+def goal_text(
+    rows: Sequence[dict[str, str]], tested: Sequence[Comparison], tasks: Sequence[str], key: str = HELDOUT
+) -> str:
+    """Whether an arm reached the goal on a task: the median of the held-out score ``key`` at least
+    :data:`GOAL` times the baseline's with the paired test significant after Holm's correction."""
     lines = []
     for task in tasks:
-        base = _values(rows, task, BASELINE, "heldout_best_fitness")
+        base = _values(rows, task, BASELINE, key)
         if not base:
             continue
         for arm in ARMS:
-            held = _values(rows, task, arm.name, "heldout_best_fitness")
+            held = _values(rows, task, arm.name, key)
             row = next((c for c in tested if c.objective == task and c.first == arm.name), None)
             if not held or row is None or _median(base) <= 0:
                 continue
@@ -493,6 +512,25 @@ def _deliveries_figures(root: Path, document: dict) -> list[str]:
     return drawn
 
 
+def _validated_section(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
+    """The scores, tests and goal again on the validated choices' held-out scores: a family of its own;
+    nothing when no run has one."""
+    if not any(r[VALIDATED] for r in rows):
+        return ""
+    tested = comparisons(rows, tasks, VALIDATED)
+    return (
+        "## The validated choice\n\n"
+        "A run's best on its one scenario is partly that scenario's luck. Each run also re-scores its 10 "
+        "best distinct genomes on 5 validation scenarios, apart from the held-out ones, and keeps the best "
+        "there; the baseline is chosen alike among the cells' nine copies (`evolution/validation.py`). The "
+        "same table, tests (a family of their own, Holm-corrected) and goal on the held-out scores of those "
+        "choices:\n\n"
+        f"{scores_table(rows, tasks, VALIDATED)}\n"
+        + (markdown_table(tested) if tested else "No arm has two paired runs yet.\n")
+        + f"\n{goal_text(rows, tested, tasks, VALIDATED)}\n"
+    )
+
+
 def build_report(root: Path) -> Path:
     """Write ``runs.csv``, ``report.md`` and ``figures/`` of the study in ``root`` from its finished runs;
     return the report's path."""
@@ -538,6 +576,7 @@ def build_report(root: Path) -> Path:
         + (markdown_table(tested) if tested else "No arm has two paired runs yet.\n")
         + f"\n### Against the goal ({GOAL} times the homogeneous median, p < 0.05 paired)\n\n"
         f"{goal_text(rows, tested, tasks)}\n"
+        f"{_validated_section(rows, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
         "Every genome a run evaluated, binned by the task's behaviour space (the deliveries of each kind "
         "over [0, 0.5] per axis, or the paper's three descriptors), the "
