@@ -100,8 +100,7 @@ from evolution_manager.files import write_atomic, write_json
 from swarm_ros.safe_paths import make_folder, refuse_links
 from swarm_sim.errors import ConditionError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, Evaluator, SwarmRequest
-from swarm_sim.model import Config, apply_conditions
-from swarm_sim.model.faults import FAULT_KINDS
+from swarm_sim.model import FAULT_KINDS, Config, apply_conditions
 
 if TYPE_CHECKING:  # Dask loads only for a cluster
     from distributed import Client

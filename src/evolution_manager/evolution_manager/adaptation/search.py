@@ -57,7 +57,7 @@ from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
 from evolution_manager.files import read_json_object
-from swarm_sim.core.trial_data import robot_faults
+from swarm_sim.core import robot_faults
 from swarm_sim.evaluation import EvaluationRequest, Evaluator, SwarmRequest
 from swarm_sim.model import Config, SwarmLayout
 
