@@ -152,7 +152,7 @@ class FootbotController:
             if timeline.refreshes(line, step):
                 self.view.refresh()
         else:
-            self.view.first_step(readings.ground)
+            self.view.first_step(readings.standing)
         tick = None
         if timeline.ticks_at(line, step):
             conditions_before = self.robot.counts[0]

@@ -85,7 +85,8 @@ class FreeTick:
     """Seconds since the newest step was used (since the start when none was)."""
 
 
-_Ground = tuple[bool, ...]
+_Ground = tuple[tuple[bool, ...], tuple[bool, ...] | None]
+"""A ground reading and where the robot really stands (None: where it reads)."""
 
 
 class FreeRunningController:
@@ -117,14 +118,20 @@ class FreeRunningController:
         self._ground: dict[int, _Ground] = {}
         self._rab: dict[int, Readings] = {}
 
-    def offer_ground(self, step: int, ground: Sequence[bool], now: float) -> None:
+    def offer_ground(
+        self, step: int, ground: Sequence[bool], now: float, footing: Sequence[bool] | None = None
+    ) -> None:
         """The ground reading of sensing step ``step`` (per region: nest, food, food2, food3), received at
-        ``now``."""
+        ``now``, with where the robot really stands when the sensor is faulty (``Readings.footing``)."""
         if self._stale(step) or self._duplicate(step, self._ground):
             return
-        if len(ground) != self.view.regions:
-            raise ValueError(f"a ground reading of {len(ground)} regions, expected {self.view.regions}")
-        self._ground[step] = tuple(bool(g) for g in ground)
+        for name, given in (("ground reading", ground), ("footing", footing)):
+            if given is not None and len(given) != self.view.regions:
+                raise ValueError(f"a {name} of {len(given)} regions, expected {self.view.regions}")
+        self._ground[step] = (
+            tuple(bool(g) for g in ground),
+            None if footing is None else tuple(bool(f) for f in footing),
+        )
         self._use_complete(now)
 
     def offer_range_and_bearing(self, step: int, readings: Readings, now: float) -> None:
@@ -155,7 +162,9 @@ class FreeRunningController:
             return
         step = complete[-1]
         rab = self._rab[step]
-        self.view.sense(replace(rab, ground=np.array(self._ground[step], dtype=np.bool_)))
+        ground, footing = self._ground[step]
+        standing = None if footing is None else np.array(footing, dtype=np.bool_)
+        self.view.sense(replace(rab, ground=np.array(ground, dtype=np.bool_), footing=standing))
         self.counts.lost += step - self.newest - 1
         self.counts.used += 1
         self.newest = step

@@ -3,7 +3,8 @@
 From one sensing step's readings (the ground sensor and the range-and-bearing messages it received) a robot
 computes its raw distance estimates of the nest and of each food kind (hop gradients through its neighbours'
 broadcasts) and its neighbourhood density, keeps the last ``window`` samples for the smoothed values, keeps a
-carrying flag per food kind and counts its deliveries (``carry``: foraging), and fills the blackboard its
+carrying flag per food kind and counts its deliveries (``carry``: foraging, from where the robot really
+stands, which a faulty ground sensor does not change: ``Readings.footing``), and fills the blackboard its
 behaviour tree reads (``docs/model.md``, "One step of a robot", "Foraging" and "Blackboard").
 
 This is robot-side software, so it lives with the controller; the simulator's batch kernels call the same
@@ -127,7 +128,9 @@ def carry(carrying: bool, in_nest: bool, on_food: bool) -> tuple:
     """``(carrying, delivered)`` of one food kind after a sensing step's ground reading
     (``footbot_bt.cpp:243-254`` at a73e4af; per kind, ``footbot_bt.cpp:634-661`` at 1cd2358): a robot on
     food carries food (it is unlimited: no item, no pick-up time); a robot in the nest that carries delivers
-    it and carries nothing more. A robot can carry every kind at once."""
+    it and carries nothing more. A robot can carry every kind at once. ``in_nest`` and ``on_food`` say where
+    the robot really is (``Readings.standing``): a faulty ground sensor changes what the robot perceives, not
+    the food it picks up or delivers, so the carrying flag (the ``got_food`` conditions) stays true."""
     carrying = carrying or on_food
     if in_nest and carrying:
         return False, True
@@ -195,9 +198,13 @@ class Readings:
     """One robot's readings of one sensing step: the ground sensor and the messages it received.
 
     ``ground`` (bool, one per region of the world: ``vocabulary.REGIONS`` order, nest first) says which
-    regions the robot stands in. The message arrays are ordered by sender id: ``senders`` (int), ``ranges``
-    (mm), ``bearings`` (rad, from the receiver's heading), and ``values`` (messages x regions): the senders'
-    broadcast estimates (mm) per region.
+    regions the ground sensor reads the robot in: what its conditions, estimates and broadcasts perceive. The
+    message arrays are ordered by sender id: ``senders`` (int), ``ranges`` (mm), ``bearings`` (rad, from the
+    receiver's heading), and ``values`` (messages x regions): the senders' broadcast estimates (mm) per
+    region. ``footing`` (same layout), when given, says where the robot really stands, for picking up and
+    delivering food (``carry``, ``start_carrying``): the simulator gives it for a robot whose ground sensor is
+    faulty (``swarm_sim.model.faults``), so that a false reading neither makes nor destroys food; None: the
+    reading is true (``standing`` is ``ground``).
     """
 
     ground: np.ndarray
@@ -205,6 +212,12 @@ class Readings:
     ranges: np.ndarray
     bearings: np.ndarray
     values: np.ndarray
+    footing: np.ndarray | None = None
+
+    @property
+    def standing(self) -> np.ndarray:
+        """Where the robot really stands, per region: ``footing`` if given, else the ground reading."""
+        return self.ground if self.footing is None else self.footing
 
     @property
     def in_nest(self) -> bool:
@@ -267,19 +280,22 @@ class RobotView:
             readings.ground, len(readings.senders), readings.ranges, readings.values, self.p, self.raw,
             self.sources,
         )  # fmt: skip
-        in_nest = bool(readings.ground[0])
+        standing = readings.standing  # food is picked up and delivered where the robot is, whatever it reads
+        self._check(standing)
+        in_nest = bool(standing[0])
         for k in range(self.regions - 1):
-            self.carrying[k], delivered = carry(self.carrying[k], in_nest, readings.ground[k + 1])
+            self.carrying[k], delivered = carry(self.carrying[k], in_nest, standing[k + 1])
             self.deliveries[k] += int(delivered)
         self.samples = push_sample(self.window, self.samples, self.raw, self.density)
         self.fresh += 1
         self.latest = readings
 
-    def first_step(self, ground: np.ndarray) -> None:
-        """A trial's first step: the start pose's ground sets the carrying flags (``start_carrying``)."""
-        self._check(ground)
+    def first_step(self, standing: np.ndarray) -> None:
+        """A trial's first step: the ground the robot starts on (``Readings.standing``: where it really is,
+        not what a faulty sensor reads) sets the carrying flags (``start_carrying``)."""
+        self._check(standing)
         for k in range(self.regions - 1):
-            self.carrying[k] = start_carrying(self.carrying[k], ground[k + 1])
+            self.carrying[k] = start_carrying(self.carrying[k], standing[k + 1])
 
     def end_trial(self) -> None:
         """A trial's last step, after its tick and its scores: no carrying, no deliveries; where

@@ -87,3 +87,20 @@ def test_a_clock_not_started_counts_the_timeout_from_the_first_tick():
     assert not c.tick(100.0).timed_out  # a simulated clock that started at 100 s: not 100 s of silence
     assert not c.tick(100.9).timed_out
     assert c.tick(101.1).timed_out
+
+
+def test_a_faulty_ground_reading_is_perceived_and_food_follows_where_the_robot_stands():
+    """A ground message with a footing (a faulty ground sensor): the tree reads the reading, while the robot
+    picks up and delivers where it stands; a footing of the wrong size is refused by name."""
+    c = controller("sel(seq(on_food, stop), forward)")
+    c.offer_ground(1, (True, True), 0.1, footing=(False, False))  # reads nest and food, stands on neither
+    c.offer_range_and_bearing(1, empty_readings(), 0.1)
+    assert c.tick(0.15).action == STOP  # it perceives food
+    assert c.view.carrying.tolist() == [False] and c.view.deliveries.tolist() == [0]
+    c.offer_ground(2, (False, False), 0.2, footing=(False, True))  # on food, reads nothing
+    c.offer_range_and_bearing(2, empty_readings(), 0.2)
+    c.offer_ground(3, (False, True), 0.3, footing=(True, False))  # in the nest, reads food
+    c.offer_range_and_bearing(3, empty_readings(), 0.3)
+    assert c.view.carrying.tolist() == [False] and c.view.deliveries.tolist() == [1]
+    with pytest.raises(ValueError, match="a footing of 3 regions, expected 2"):
+        c.offer_ground(4, (False, False), 0.4, footing=(False, False, True))

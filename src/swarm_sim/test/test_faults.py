@@ -157,3 +157,69 @@ def test_bad_fault_settings_are_refused_by_name():
         Config(fault_rate=0.1, fault_robots=((0, "rab-deaf"),))
     with pytest.raises(ConfigError, match="robot 3 is given two faults"):
         Config(fault_robots=((3, "rab-deaf"), (3, "wheel-dead")))
+
+
+GROUND_KINDS = ("ground-stuck", "ground-inverted")
+ALL_ROBOTS = tuple(range(SHORT.n_robots))
+
+
+def _every_robot(kind: str, config: Config = SHORT) -> Config:
+    return replace(config, fault_robots=tuple((robot, kind) for robot in ALL_ROBOTS))
+
+
+@pytest.mark.parametrize("kind", GROUND_KINDS)
+@pytest.mark.parametrize("road", [record_trial, record_trial_reference])
+def test_a_faulty_ground_sensor_makes_no_food_where_the_robot_stands_still(kind, road):
+    """Robots that never move deliver nothing, whatever their ground sensors read: a robot off food and out of
+    the nest that reads the nest and food (ground-inverted) neither picks up nor delivers there."""
+    plain = road("stop", 2, 0, SHORT)
+    faulty = road("stop", 2, 0, _every_robot(kind))
+    assert plain.deliveries.sum() == 0 and faulty.deliveries.sum() == 0
+    assert np.array_equal(plain.carrying, faulty.carrying)
+    assert not np.array_equal(plain.ground, faulty.ground)  # the sensors do read falsely
+    if kind == "ground-inverted":  # some robot stands off food and out of the nest, and reads both
+        assert (faulty.ground[-1].all(axis=1) & ~plain.ground[-1].any(axis=1)).any()
+    else:
+        assert not faulty.ground.any()
+
+
+@pytest.mark.parametrize("kind", GROUND_KINDS)
+@pytest.mark.parametrize("seed", [0, 3])
+def test_a_faulty_robot_carries_and_delivers_as_it_would_without_the_fault(kind, seed):
+    """Along a path that does not depend on what the robots read (forward), the carrying flags and the
+    deliveries of robots with a faulty ground sensor are those of the same robots without it, on both roads;
+    only what they read differs."""
+    config = replace(SHORT, ticks=60)
+    plain = record_trial("forward", seed, 1, config)
+    assert plain.carrying.any()  # some robot does pick up food on the way
+    for road in (record_trial, record_trial_reference):
+        faulty = road("forward", seed, 1, _every_robot(kind, config))
+        assert np.array_equal(plain.poses, faulty.poses)
+        assert np.array_equal(plain.carrying, faulty.carrying)
+        assert np.array_equal(plain.deliveries, faulty.deliveries)
+        assert not np.array_equal(plain.ground, faulty.ground)
+
+
+def test_a_faulty_robot_broadcasts_what_it_reads_and_knows_truly_whether_it_carries():
+    """At a chain's first step a ground-inverted robot standing in the nest reads itself on food and out of
+    the nest: it broadcasts so (the cap for the nest, 0 for food: it says what it believes), while its
+    carrying flag, which its got_food condition reads, stays false (it is not on food). The simulator tells it
+    where it stands (``Readings.footing``) and tells a sound robot nothing more."""
+    config = replace(SHORT, fault_robots=((4, "ground-inverted"),))
+    readings, outcomes = [], []
+
+    def on_step(world):
+        if not readings:
+            readings.append(world.readings())
+
+    def on_outcomes(world, answers):
+        if not outcomes:
+            outcomes.append(answers)
+
+    run_with_controllers(parse("stop"), 0, 0, config, on_step, on_outcomes=on_outcomes)
+    faulty, sound = readings[0][4], readings[0][3]
+    assert faulty.footing is not None and faulty.footing.tolist() == [True, False]  # it stands in the nest
+    assert faulty.ground.tolist() == [False, True] and sound.footing is None
+    first = outcomes[0][4]
+    assert first.broadcast == (SHORT.estimate_cap, 0.0)
+    assert first.carrying == (False,) and first.deliveries == (0,)

@@ -341,7 +341,7 @@ class FootbotControllerNode(RosNode):
     def _on_ground(self, msg: GroundSensor) -> None:
         if self.settings.free:
             if self.free is not None:
-                self.free.offer_ground(msg.step, ground_of(msg), self._now())
+                self.free.offer_ground(msg.step, ground_of(msg), self._now(), footing_of(msg))
             return
         self._ground[msg.step] = msg
         self._answer_ready_steps()
@@ -434,7 +434,8 @@ class FootbotControllerNode(RosNode):
             and controller.next_step in self._readings
         ):
             ground = self._ground.pop(controller.next_step)
-            readings = readings_of(ground_of(ground), self._readings.pop(controller.next_step))
+            rab = self._readings.pop(controller.next_step)
+            readings = readings_of(ground_of(ground), rab, footing_of(ground))
             outcome = controller.on_step(ground.step, readings)
             status, wheels = answer_messages(outcome, ground.header, self.robot, self.wheel_speed)
             if status is not None:
@@ -473,11 +474,21 @@ def ground_of(msg: GroundSensor) -> list[bool]:
     return [bool(msg.in_nest), bool(msg.on_food), *(bool(f) for f in msg.on_other_food)]
 
 
-def readings_of(inside: Sequence[bool], msg: RangeAndBearingReadings) -> Readings:
-    """The perception's readings of one step: its ground values (``ground_of``) and its range-and-bearing
-    message (the nest, food kind 1, then the other food kinds the world has)."""
+def footing_of(msg: GroundSensor) -> list[bool] | None:
+    """Where a ground message says the robot really stands (its ``footing``, given when the ground sensor is
+    faulty), in perception's order; None when it gives none (the reading is true)."""
+    return [bool(f) for f in msg.footing] if len(msg.footing) else None
+
+
+def readings_of(
+    inside: Sequence[bool], msg: RangeAndBearingReadings, footing: Sequence[bool] | None = None
+) -> Readings:
+    """The perception's readings of one step: its ground values (``ground_of``), its range-and-bearing
+    message (the nest, food kind 1, then the other food kinds the world has) and where it really stands
+    (``footing_of``; None: where it reads)."""
     rab = msg.readings
     return Readings(
+        footing=None if footing is None else np.array(footing, dtype=np.bool_),
         ground=np.array(inside, dtype=np.bool_),
         senders=np.array([m.sender for m in rab], dtype=np.int64),
         ranges=np.array([m.range for m in rab], dtype=np.float64),

@@ -149,9 +149,10 @@ CANDIDATES: tuple[str, ...] = (
 )
 """The candidate conditions when no ``--condition-set`` is given: each fault family at two or three rates,
 every kind together, more dead robots than the first benchmark's 3 and a near-deaf radio. Without
-``ground-inverted``: an inverted ground sensor picks up and delivers food by its false reading, so on the
-foraging task it multiplies the score (25 to 65 times at rates 0.3 and 0.6 on the foragers-qd run 0)
-instead of lowering it."""
+``ground-inverted``: when this list was drawn up an inverted ground sensor picked up and delivered food by
+its false reading, so on the foraging task it multiplied the score (25 to 65 times at rates 0.3 and 0.6 on
+the foragers-qd run 0) instead of lowering it. Food now follows where a robot really stands
+(``swarm_sim.model.faults``), so the kind could join a later list; this one stays as it was run."""
 FAMILIES: dict[str, str] = {
     "ground-stuck": "ground sensor",
     "ground-inverted": "ground sensor",

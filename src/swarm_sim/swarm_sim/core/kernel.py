@@ -597,13 +597,12 @@ def _steps(
         if not sensing:
             # A trial's first step: the start pose's ground sets the carrying flag, and the probes are taken
             # (the food distance: the inverse food objective's first, footbot_bt.cpp:134-137, 495-496 at
-            # a73e4af).
+            # a73e4af). Food follows where the robot is: the flag is set before a ground fault (which only
+            # changes what the robot reads) applies.
             for i in range(n):
                 world.ground(x[i], y[i], entry, here[i])
                 if typed:
                     world.swap_ground(i, p, here[i])
-                if faulty:
-                    world.faulty_ground(faults[i], here[i])
                 for f in range(kinds):
                     carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
                 world.take_probes(x, y, i, entry, probes, 0, p)
@@ -613,11 +612,13 @@ def _steps(
                 world.ground(x[i], y[i], entry, inside)
                 if typed:
                     world.swap_ground(i, p, inside)
-                if faulty:
-                    world.faulty_ground(faults[i], inside)
+                # Food is picked up and delivered where the robot is; a ground fault then changes only what
+                # it reads (its estimates and conditions: perception.Readings.footing).
                 for f in range(kinds):
                     carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], inside[f + 1])
                     deliveries[i, f] += 1 if delivered else 0
+                if faulty:
+                    world.faulty_ground(faults[i], inside)
                 density, nearest = world.estimate(
                     inside, counts_in[i], ranges[i], values[i], p, raw[i], positions
                 )

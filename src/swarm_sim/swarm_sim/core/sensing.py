@@ -13,6 +13,7 @@ import numpy as np
 from bt_controller.perception import Readings
 from swarm_sim.core import world
 from swarm_sim.model import Params
+from swarm_sim.model.faults import GROUND_FAULTS
 
 __all__ = ["sense_swarm"]
 
@@ -34,7 +35,9 @@ def sense_swarm(
     ``faults``: each robot's fault code (``ChainSetup.faults``; None: none), with the robots' ``BEARINGS``
     stream keys (``ChainSetup.bearing_keys``) for noisy bearings; ``broadcast`` is left as it is. With two
     robot types (``p.robot_types``) each odd robot's ground, the messages it receives and those it sends
-    have the nest and food kind 1 swapped (``world.swap_ground``, ``swap_received``, ``swap_sent``)."""
+    have the nest and food kind 1 swapped (``world.swap_ground``, ``swap_received``, ``swap_sent``). A robot
+    whose ground sensor is faulty reads the faulty ground (``world.faulty_ground``) and is also told where it
+    really stands (``Readings.footing``: the ground after the swap), where it picks up and delivers food."""
     n = x.shape[0]
     regions = broadcast.shape[1]
     if faults is None:
@@ -61,6 +64,7 @@ def sense_swarm(
         inside = np.zeros(regions, dtype=np.bool_)
         world.ground(x[i], y[i], entry, inside)
         world.swap_ground(i, p, inside)
+        footing = inside.copy() if fault in GROUND_FAULTS else None
         world.faulty_ground(fault, inside)
         out.append(
             Readings(
@@ -69,6 +73,7 @@ def sense_swarm(
                 ranges[i, :count].copy(),
                 bearings,
                 values[i, :count].copy(),
+                footing,
             )
         )
     return out

@@ -6,11 +6,21 @@ them (``faulty_wheels``, ``faulty_ground``, ``deafen``, ``faulty_bearing``, ``di
 kernels, the reference road and the simulator node alike. The kinds:
 
 ``ground-stuck``
-    the ground sensor reads nothing: the robot is in no region, wherever it stands (so it never picks up or
-    delivers food, and broadcasts the "not here" value of every region).
+    the ground sensor reads nothing: the robot perceives no region, wherever it stands (its ``in_nest`` and
+    ``on_food`` conditions never hold, its estimates never drop to 0 and it broadcasts the "not here" value
+    of every region). It still picks up and delivers food where it really goes: a robot that crosses from
+    food to the nest delivers.
 ``ground-inverted``
     the ground sensor reads every region the other way round: in a region where it is not, out of one where
-    it is.
+    it is. What it perceives (conditions, estimates, broadcasts) follows the false reading; the food it picks
+    up and delivers follows where it really is, so standing off food and out of the nest makes no food.
+
+A ground fault changes only what the robot reads. Picking up and delivering food follow the ground the robot
+really stands on (after the robot-type swap, ``world.swap_ground``), as does its carrying flag, which the
+``got_food`` conditions read: a faulty sensor neither makes nor destroys food, and the robot knows truly
+whether it carries (the gripper is not the ground sensor). The simulator hands such a robot both its false
+reading and where it stands (``bt_controller.perception.Readings.footing``; the ``footing`` field of
+``swarm_msgs/GroundSensor``).
 ``rab-deaf``
     the range-and-bearing receiver hears no message (the robot still broadcasts, and others hear it).
 ``rab-noisy``
@@ -73,6 +83,10 @@ NO_FAULT = 0
     WHEEL_REVERSED,
     DISRUPTIVE,
 ) = range(1, len(FAULT_KINDS) + 1)
+
+GROUND_FAULTS: tuple[int, ...] = (GROUND_STUCK, GROUND_INVERTED)
+"""The codes of the ground-sensor faults: a robot with one reads a false ground, and is told where it really
+stands for picking up and delivering food (``bt_controller.perception.Readings.footing``)."""
 
 BEARING_NOISE = math.pi / 3.0
 """Half the width of a ``rab-noisy`` receiver's bearing error (rad): 60 degrees either way."""

@@ -823,7 +823,12 @@ def reading_messages(
         inside = [bool(g) for g in sensed.ground]
         ground.append(
             GroundSensor(
-                header=header, step=step, in_nest=inside[0], on_food=inside[1], on_other_food=inside[2:]
+                header=header,
+                step=step,
+                in_nest=inside[0],
+                on_food=inside[1],
+                on_other_food=inside[2:],
+                footing=[] if sensed.footing is None else [bool(f) for f in sensed.footing],
             )
         )
         messages = [
