@@ -5,14 +5,10 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import random
-import signal
-import subprocess
-import sys
-import time
 
 import pytest
+from killed_runs import straight_and_killed
 
 from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.compositions import (
@@ -257,26 +253,9 @@ def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
 
 
 def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
-    args = ["--evaluations", "1500", "--seed", "6", "--trials", "2"]
-    straight = tmp_path / "straight"
-    assert _compose(source, straight, "ga", *args) == 0
-    killed = tmp_path / "killed"
-    argv = ["--task", "foraging", "--swarm-from", str(source), "--algorithm", "ga", *args]
-    argv += ["--out", str(killed), "--no-progress", "--checkpoint-every", "0"]
-    code = f"from evolution_manager.studies.evolve import evolve; evolve({argv!r})"
-    process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
-    progress = killed / "progress.csv"
-    try:
-        deadline = time.monotonic() + 300
-        while process.poll() is None and time.monotonic() < deadline:
-            if progress.exists() and len(progress.read_text().splitlines()) > 6:
-                break
-            time.sleep(0.05)
-    finally:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
-    assert not (killed / "summary.json").exists(), "the kill came too late to interrupt the run"
-    assert evolve(["--out", str(killed), "--resume", "--no-progress", "--checkpoint-every", "0"]) == 0
+    argv = ["--task", "foraging", "--swarm-from", str(source), "--algorithm", "ga"]
+    argv += ["--evaluations", "1500", "--seed", "6", "--trials", "2"]
+    straight, killed = straight_and_killed(argv, tmp_path, rows=6)
     assert _files(killed) == _files(straight)
 
 

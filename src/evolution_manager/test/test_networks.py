@@ -10,6 +10,7 @@ import random
 import numpy as np
 import pytest
 from deap import base, tools
+from killed_runs import straight_and_killed
 
 from bt_controller.network import N_WEIGHTS, load_network
 from evolution_manager.evolution.networks import (
@@ -155,6 +156,12 @@ def test_a_run_stopped_and_resumed_ends_identical(tmp_path, algorithm):
     assert evolve([*args, "--seed", "3", "--out", str(tmp_path / "straight"), "--no-progress"]) == 2
     assert evolve(["--out", str(tmp_path / "straight"), "--resume", "--no-progress"]) == 0
     assert _files(tmp_path / "straight")["evaluations.csv"] == _files(tmp_path / "stopped")["evaluations.csv"]
+
+
+def test_a_killed_run_resumes_to_the_same_files(tmp_path):
+    argv = ["--algorithm", "nn-ga", "--objective", "food", "--evaluations", "400", "--trials", "1"]
+    straight, killed = straight_and_killed([*argv, "--seed", "4"], tmp_path, rows=4)
+    assert _files(killed) == _files(straight)
 
 
 def test_bad_network_run_options_are_one_line_refusals(tmp_path, capsys):

@@ -7,6 +7,7 @@ import itertools
 import json
 
 import pytest
+from killed_runs import straight_and_killed
 from recompute import check_metrics, check_repertoires
 from toy import ToyEvaluator
 
@@ -67,6 +68,13 @@ def test_a_resumed_run_ends_identical_to_an_uninterrupted_one(tmp_path, algorith
     )
     assert straight.simulations_saved > 0
     assert ("inherited" in straight.answers) == (profile == "paper")
+
+
+def test_a_killed_run_resumes_to_the_same_files(tmp_path):
+    argv = ["--algorithm", "gp", "--objective", "food", "--evaluations", "300", "--trials", "1"]
+    straight, killed = straight_and_killed([*argv, "--seed", "4", "--no-figures"], tmp_path, rows=4)
+    assert _files(killed) == _files(straight)
+    assert (straight / "heldout.json").exists() and len(_files(straight)) == len(RESULT_FILES)
 
 
 def test_passive_grids_agree_with_a_recomputation_from_the_evaluation_log(tmp_path):

@@ -4,14 +4,10 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import random
-import signal
-import subprocess
-import sys
-import time
 
 import pytest
+from killed_runs import straight_and_killed
 
 from evolution_manager.errors import ConfigError, EvolutionError
 from evolution_manager.evolution.deap_trees import make_primitive_set, tree_from_text, tree_to_text
@@ -243,26 +239,9 @@ def test_a_run_stopped_and_resumed_ends_identical(tmp_path):
 
 
 def test_a_killed_run_resumes_to_the_same_files(tmp_path):
-    args = ["--team", "2", "--evaluations", "800", "--seed", "6"]
-    straight = tmp_path / "straight"
-    assert _team(straight, *args) == 0
-    killed = tmp_path / "killed"
-    argv = ["--algorithm", "gp", "--objective", "food", "--trials", "1", *args]
-    argv += ["--out", str(killed), "--no-progress", "--checkpoint-every", "0"]
-    code = f"from evolution_manager.studies.evolve import evolve; evolve({argv!r})"
-    process = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
-    progress = killed / "progress.csv"
-    try:
-        deadline = time.monotonic() + 300
-        while process.poll() is None and time.monotonic() < deadline:
-            if progress.exists() and len(progress.read_text().splitlines()) > 4:
-                break
-            time.sleep(0.02)
-    finally:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
-    assert not (killed / "summary.json").exists(), "the kill came too late to interrupt the run"
-    assert evolve(["--out", str(killed), "--resume", "--no-progress", "--checkpoint-every", "0"]) == 0
+    argv = ["--algorithm", "gp", "--objective", "food", "--trials", "1"]
+    argv += ["--team", "2", "--evaluations", "800", "--seed", "6"]
+    straight, killed = straight_and_killed(argv, tmp_path, rows=4)
     assert _files(killed, team=2) == _files(straight, team=2)
 
 

@@ -36,6 +36,7 @@ from evolution_manager.evolution.deap_trees import (
 )
 from evolution_manager.evolution.operators import best_of, full_tree, tournament, vary
 from evolution_manager.evolution.parameters import DERATINGS, GPParameters, QDParameters
+from evolution_manager.evolution.run_folder import generator_state, restore_generator
 from swarm_sim.model import fitness_ceiling
 
 FAILED = -1.0
@@ -158,14 +159,13 @@ class AskTell:
         """Everything needed to continue, as JSON-able data (only between a tell and the next ask)."""
         if self._asked is not None:
             raise AskTellError("to_state() between ask() and tell(): the asked batch would be lost")
-        version, internal, gauss = self.rng.getstate()
         return {
             "algorithm": self.name,
             "budget": self.budget,
             "seed": self.seed,
             "evaluations": self.evaluations,
             "produced": self.produced,
-            "rng": [version, list(internal), gauss],
+            "rng": generator_state(self.rng),
             **self._state(),
         }
 
@@ -175,8 +175,7 @@ class AskTell:
         self.budget = int(state["budget"])
         self.evaluations = int(state["evaluations"])
         self.produced = int(state.get("produced", state["evaluations"]))
-        version, internal, gauss = state["rng"]
-        self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
+        restore_generator(self.rng, state["rng"])
 
     def _tree(
         self, text: str, fitness: Sequence[float] | None, descriptors: Sequence[float] | None = None

@@ -65,7 +65,14 @@ from evolution_manager.evolution.descriptor_sets import (
 )
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
-from evolution_manager.evolution.run_folder import COMPOSITIONS, RunFolder, RunLoop
+from evolution_manager.evolution.run_folder import (
+    COMPOSITIONS,
+    CountedRun,
+    EvaluatedGenome,
+    RunFolder,
+    generator_state,
+    restore_generator,
+)
 from evolution_manager.evolution.validation import (
     best_distinct,
     choose_on_validation,
@@ -75,11 +82,8 @@ from evolution_manager.evolution.validation import (
 from evolution_manager.files import (
     number,
     read_json_object,
-    write_atomic,
     write_json,
-    writing,
 )
-from swarm_ros.safe_paths import make_folder
 from swarm_sim.evaluation import Evaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import TaskSpec, resolve_task, task_from_record, task_named, task_to_record
@@ -382,40 +386,12 @@ def vary(
     return [change(c, rng) if rng.random() < mutation else c for c in children]
 
 
-@dataclass(frozen=True)
-class Member:
-    """An evaluated genome: foraging fitness and descriptors (None when the evaluation failed)."""
-
-    genome: Genome
-    fitness: float | None
-    descriptors: tuple[float, ...] | None
-    evaluation: int
-    error: str = ""
-
-    @property
-    def rank(self) -> float:
-        """What selection compares: the fitness, a failed evaluation below every other."""
-        return -math.inf if self.fitness is None else self.fitness
-
-    def as_json(self) -> dict:
-        return {
-            "genome": list(self.genome),
-            "fitness": self.fitness,
-            "descriptors": None if self.descriptors is None else list(self.descriptors),
-            "evaluation": self.evaluation,
-            "error": self.error,
-        }
+class Member(EvaluatedGenome[Genome]):
+    """An evaluated genome (its cell indices): the run's objective and the measured values of its axes."""
 
     @classmethod
-    def from_json(cls, data: dict) -> Member:
-        descriptors = data["descriptors"]
-        return cls(
-            tuple(int(c) for c in data["genome"]),
-            None if data["fitness"] is None else float(data["fitness"]),
-            None if descriptors is None else tuple(float(d) for d in descriptors),
-            int(data["evaluation"]),
-            str(data["error"]),
-        )
+    def _genome(cls, values: Sequence) -> Genome:
+        return tuple(int(c) for c in values)
 
 
 def fittest(members: Sequence[Member]) -> Member:
@@ -645,14 +621,15 @@ def _preferred_axis(config: CompositionConfig) -> int | None:
     return preferred - 1
 
 
-class CompositionRun(RunLoop[Genome, Member]):
-    """One composition run; create with :meth:`start` or :meth:`resume`, then :meth:`execute`."""
+class CompositionRun(CountedRun[Genome, Member]):
+    """One composition run; create with :meth:`start` or :meth:`resume`, then :meth:`execute` (the loop
+    every run shares, ``run_folder.RunLoop``, with what network and team runs share, ``CountedRun``)."""
 
     def __init__(
         self, config: CompositionConfig, cells: Sequence[Cell], root: Path, evaluator: Evaluator | None
     ) -> None:
         super().__init__()
-        self.config = config
+        self.config: CompositionConfig = config
         self.cells = list(cells)
         self.directory: CompositionDirectory = _directory(root, config)
         self.evaluator = evaluator
@@ -704,51 +681,27 @@ class CompositionRun(RunLoop[Genome, Member]):
         """The run in ``root`` at its last checkpoint, its CSV files cut back to it (``RunLoop._reopen``)."""
         directory = CompositionDirectory(root)
 
-        def load() -> CompositionRun:
-            try:
-                config = CompositionConfig.from_json(read_json_object(directory.config))
-                cells = [Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
-                if len(cells) != config.cells or cells_digest(cells) != config.cells_digest:
-                    raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
-                directory.read_library(config)  # the evaluator was made with it
-                run = cls(config, cells, root, evaluator)
-                state = run.directory.read_checkpoint()
-                run.directory.check_logs()
-                run.restore(state)
-            except (ConfigError, KeyError, TypeError, ValueError) as error:
-                raise RunDirectoryError(
-                    f"{root}: the run cannot be continued, it is damaged: {error}"
-                ) from error
-            return run
+        def build() -> CompositionRun:
+            config = CompositionConfig.from_json(read_json_object(directory.config))
+            cells = [Cell.from_json(c) for c in read_json_object(directory.cells)["cells"]]
+            if len(cells) != config.cells or cells_digest(cells) != config.cells_digest:
+                raise RunDirectoryError(f"{directory.cells} is not the cell list the run started with")
+            directory.read_library(config)  # the evaluator was made with it
+            return cls(config, cells, root, evaluator)
 
-        return cls._reopen(directory, load)
+        return cls._resume(directory, build)
 
     # State -------------------------------------------------------------------------------------------------
-    def checkpoint(self) -> None:
-        """Write the checkpoint atomically (between batches only)."""
-        version, internal, gauss = self.rng.getstate()
-        self.directory.write_checkpoint(
-            {
-                "config": self.config.to_json(),
-                "evaluations": self.evaluations,
-                "produced": self.produced,
-                "rng": [version, list(internal), gauss],
-                "population": [m.as_json() for m in self.population],
-                "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
-                "best": None if self.best is None else self.best.as_json(),
-                "offsets": self.offsets,
-            }
-        )
+    def _state(self) -> dict:
+        return {
+            "rng": generator_state(self.rng),
+            "population": [m.as_json() for m in self.population],
+            "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
+            "best": None if self.best is None else self.best.as_json(),
+        }
 
-    def restore(self, state: dict) -> None:
-        """The run's state from its checkpoint (``checkpoint.json``); a ValueError or KeyError when it is
-        damaged."""
-        if CompositionConfig.from_json(state["config"]) != self.config:
-            raise ValueError("the checkpoint belongs to another configuration than config.json")
-        version, internal, gauss = state["rng"]
-        self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
-        self.evaluations = integer(state["evaluations"], "evaluations", 0)
-        self.produced = integer(state["produced"], "produced", 0)
+    def _restore(self, state: dict) -> None:
+        restore_generator(self.rng, state["rng"])
         self.population = [Member.from_json(m) for m in state["population"]]
         members = [Member.from_json(m) for m in state["grid"]]
         self.grid = {self._bin(m.descriptors): m for m in members if m.descriptors is not None}
@@ -758,16 +711,8 @@ class CompositionRun(RunLoop[Genome, Member]):
                 0 <= c < len(self.cells) for c in member.genome
             ):
                 raise ValueError(f"genome {list(member.genome)} is not {self.n_robots} cell indices")
-        self.offsets = self.directory.read_offsets(state["offsets"])
 
     # Execution ---------------------------------------------------------------------------------------------
-    @property
-    def done(self) -> bool:
-        return self.produced >= self.config.evaluations
-
-    def progress(self) -> tuple[int, int]:
-        return self.produced, self.config.evaluations
-
     def _ask(self) -> list[Genome]:
         """The next batch of genomes: the initial population, or offspring cut to the budget left."""
         p = self.config.parameters
@@ -829,9 +774,7 @@ class CompositionRun(RunLoop[Genome, Member]):
         initial = not self.population if self.config.algorithm == "ga" else not self.grid
         if not initial:
             self.produced += len(members)
-        for member in members:
-            if member.fitness is not None and (self.best is None or member.rank > self.best.rank):
-                self.best = member
+        self._keep_best(members)
         if self.config.algorithm == "ga":
             if initial:
                 self.population = members
@@ -880,25 +823,18 @@ class CompositionRun(RunLoop[Genome, Member]):
         ]
 
     def _record(self, members: Sequence[Member]) -> None:
-        rows = []
-        for m in members:
-            values = (
-                [number(m.fitness), *(number(d) for d in m.descriptors)]
-                if m.fitness is not None and m.descriptors is not None
-                else [""] * (1 + len(self.space.names))
-            )
-            genome = " ".join(str(c) for c in m.genome)
-            rows.append([str(m.evaluation), str(self.config.scenario_seed), genome, *values, m.error])
+        seed, axes = str(self.config.scenario_seed), len(self.space.names)
+        rows = [
+            [str(m.evaluation), seed, " ".join(str(c) for c in m.genome), *m.logged(axes), m.error]
+            for m in members
+        ]
         self.evaluations += len(members)
-        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
         coverage = qd_score = ""
         if self.config.algorithm == "qd":
             coverage = number(len(self.grid) / 512)
             qd_score = number(math.fsum(m.rank for m in self.grid.values()) / 512)
         best = number(self.best.fitness) if self.best is not None else ""
-        self.offsets["progress"] = self.directory.progress.append(
-            [[str(self.evaluations), best, coverage, qd_score]]
-        )
+        self._append_logs(rows, [str(self.evaluations), best, coverage, qd_score])
 
     # Results -----------------------------------------------------------------------------------------------
     def composition_json(self, member: Member) -> dict:
@@ -1083,16 +1019,10 @@ class CompositionRun(RunLoop[Genome, Member]):
         write_json(directory.summary, summary)
         written.append(directory.summary)
         if self.best is not None:
-            with writing(directory.best):  # a link planted in the run folder is refused, never followed
-                make_folder(directory.best, directory.root)
             layout = layout_of(self.best.genome, self.cells)
-            path = directory.best / f"{self.config.objective}_swarm.json"
-            write_json(path, layout.as_json())
-            written.append(path)
-            for robot, tree in enumerate(layout.trees):
-                path = directory.best / f"{self.config.objective}_robot{robot}.txt"
-                write_atomic(path, tree + "\n")
-                written.append(path)
+            written += directory.write_best_swarm(
+                self.config.objective, layout.as_json(), layout.trees, "robot"
+            )
         return written
 
 

@@ -67,7 +67,14 @@ from evolution_manager.evolution.run_config import (
     default_scenario_seed,
     heldout_seed,
 )
-from evolution_manager.evolution.run_folder import DAMAGE, NETWORKS, RunFolder, RunLoop
+from evolution_manager.evolution.run_folder import (
+    NETWORKS,
+    CountedRun,
+    EvaluatedGenome,
+    RunFolder,
+    generator_state,
+    restore_generator,
+)
 from evolution_manager.files import number, read_json_object, write_json
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.core import world
@@ -219,16 +226,14 @@ class WeightGA:
         return not self.population
 
     def to_state(self) -> dict:
-        version, internal, gauss = self.rng.getstate()
         return {
-            "rng": [version, list(internal), gauss],
+            "rng": generator_state(self.rng),
             "population": self.population,
             "fitness": self.fitness,
         }
 
     def restore(self, state: dict) -> None:
-        version, internal, gauss = state["rng"]
-        self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
+        restore_generator(self.rng, state["rng"])
         self.population = [[float(w) for w in weights] for weights in state["population"]]
         self.fitness = [float(f) for f in state["fitness"]]
         if len(self.population) != len(self.fitness) or any(len(w) != N_WEIGHTS for w in self.population):
@@ -485,33 +490,18 @@ class NetworkConfig:
         return cls(**fields)
 
 
-@dataclass(frozen=True)
-class Evaluated:
-    """One evaluated network."""
+class Evaluated(EvaluatedGenome[tuple[float, ...]]):
+    """One evaluated network: its weights (``"weights"`` in JSON, where a success's error is null)."""
 
-    weights: tuple[float, ...]
-    fitness: float | None
-    descriptors: tuple[float, ...] | None
-    evaluation: int
-    error: str | None = None
-
-    @property
-    def rank(self) -> float:
-        return FAILED if self.fitness is None else self.fitness
-
-    def as_json(self) -> dict:
-        return asdict(self)
+    GENOME = "weights"
+    FAILED = FAILED
 
     @classmethod
-    def from_json(cls, data: dict) -> Evaluated:
-        descriptors = data["descriptors"]
-        return cls(
-            tuple(float(w) for w in data["weights"]),
-            None if data["fitness"] is None else float(data["fitness"]),
-            None if descriptors is None else tuple(float(d) for d in descriptors),
-            int(data["evaluation"]),
-            data["error"],
-        )
+    def _genome(cls, values: Sequence) -> tuple[float, ...]:
+        return tuple(float(w) for w in values)
+
+    def as_json(self) -> dict:
+        return {**super().as_json(), "error": self.error or None}
 
 
 EVALUATION_HEADER = ["evaluation", "seed", "weights", "fitness", *DESCRIPTORS, "error"]
@@ -528,13 +518,14 @@ class NetworkDirectory(RunFolder):
         return self.root / f"repertoire_{objective}.json"
 
 
-class NetworkRun(RunLoop[list[float], Evaluated]):
+class NetworkRun(CountedRun[list[float], Evaluated]):
     """One network run; create with :meth:`start` or :meth:`resume`, then :meth:`execute` (the loop every
-    run shares, ``run_folder.RunLoop``) and :meth:`finish`."""
+    run shares, ``run_folder.RunLoop``, with what composition and team runs share, ``CountedRun``) and
+    :meth:`finish`."""
 
     def __init__(self, config: NetworkConfig, root: Path, evaluator: Evaluator | None) -> None:
         super().__init__()
-        self.config = config
+        self.config: NetworkConfig = config
         self.directory: NetworkDirectory = NetworkDirectory(root)
         self.evaluator = evaluator
         self.optimiser = make_optimiser(config.algorithm, config.parameters, config.seed)
@@ -561,57 +552,26 @@ class NetworkRun(RunLoop[list[float], Evaluated]):
     def resume(cls, root: Path, evaluator: Evaluator | None) -> NetworkRun:
         """The run in ``root`` at its last checkpoint, its CSV files cut back to it (``RunLoop._reopen``)."""
         directory = NetworkDirectory(root)
-
-        def load() -> NetworkRun:
-            try:
-                config = NetworkConfig.from_json(read_json_object(directory.config))
-                run = cls(config, root, evaluator)
-                state = directory.read_checkpoint()
-                directory.check_logs()
-                run.restore(state)
-            except (ConfigError, *DAMAGE) as error:
-                raise RunDirectoryError(
-                    f"{root}: the run cannot be continued, it is damaged: {error}"
-                ) from error
-            return run
-
-        return cls._reopen(directory, load)
-
-    # State -------------------------------------------------------------------------------------------
-    def checkpoint(self) -> None:
-        """Write the checkpoint atomically (between batches only)."""
-        self.directory.write_checkpoint(
-            {
-                "config": self.config.to_json(),
-                "evaluations": self.evaluations,
-                "produced": self.produced,
-                "optimiser": self.optimiser.to_state(),
-                "best": None if self.best is None else self.best.as_json(),
-                "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
-                "offsets": self.offsets,
-            }
+        return cls._resume(
+            directory,
+            lambda: cls(NetworkConfig.from_json(read_json_object(directory.config)), root, evaluator),
         )
 
-    def restore(self, state: dict) -> None:
-        """The run's state from its checkpoint; a ValueError or KeyError when it is damaged."""
-        if NetworkConfig.from_json(state["config"]) != self.config:
-            raise ValueError("the checkpoint belongs to another configuration than config.json")
-        self.evaluations = integer(state["evaluations"], "evaluations", 0)
-        self.produced = integer(state["produced"], "produced", 0)
+    # State -------------------------------------------------------------------------------------------
+    def _state(self) -> dict:
+        return {
+            "optimiser": self.optimiser.to_state(),
+            "best": None if self.best is None else self.best.as_json(),
+            "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
+        }
+
+    def _restore(self, state: dict) -> None:
         self.optimiser.restore(state["optimiser"])
         self.best = None if state["best"] is None else Evaluated.from_json(state["best"])
         members = [Evaluated.from_json(e) for e in state["grid"]]
         self.grid = {bin_of(e.descriptors): e for e in members if e.descriptors is not None}
-        self.offsets = self.directory.read_offsets(state["offsets"])
 
     # Execution ---------------------------------------------------------------------------------------
-    @property
-    def done(self) -> bool:
-        return self.produced >= self.config.evaluations
-
-    def progress(self) -> tuple[int, int]:
-        return self.produced, self.config.evaluations
-
     def _ask(self) -> list[list[float]]:
         self._counted = not self.optimiser.initial()
         return self.optimiser.ask()
@@ -639,9 +599,8 @@ class NetworkRun(RunLoop[list[float], Evaluated]):
         self.evaluations += len(answers)
         if self._counted:
             self.produced += len(answers)
+        self._keep_best(answers)
         for e in answers:
-            if e.fitness is not None and (self.best is None or e.fitness > self.best.rank):
-                self.best = e
             if e.fitness is not None and e.descriptors is not None:
                 index = bin_of(e.descriptors)
                 held = self.grid.get(index)
@@ -650,19 +609,13 @@ class NetworkRun(RunLoop[list[float], Evaluated]):
         self._record(answers)
 
     def _record(self, evaluated: Sequence[Evaluated]) -> None:
-        rows = []
-        for e in evaluated:
-            values = (
-                [number(e.fitness), *(number(d) for d in e.descriptors)]
-                if e.fitness is not None and e.descriptors is not None
-                else [""] * (1 + len(DESCRIPTORS))
-            )
-            weights = " ".join(number(w) for w in e.weights)
-            rows.append([str(e.evaluation), str(self.config.scenario_seed), weights, *values, e.error or ""])
-        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
+        seed, axes = str(self.config.scenario_seed), len(DESCRIPTORS)
+        rows = [
+            [str(e.evaluation), seed, " ".join(number(w) for w in e.genome), *e.logged(axes), e.error]
+            for e in evaluated
+        ]
         best = "" if self.best is None else number(self.best.fitness)
-        row = [str(self.evaluations), best, number(self.coverage), number(self.qd_score)]
-        self.offsets["progress"] = self.directory.progress.append([row])
+        self._append_logs(rows, [str(self.evaluations), best, number(self.coverage), number(self.qd_score)])
 
     @property
     def coverage(self) -> float:
@@ -682,7 +635,7 @@ class NetworkRun(RunLoop[list[float], Evaluated]):
         if self.evaluator is None or not self.done or self.best is None:
             return None, None
         seeds = self.config.heldout_seeds()
-        text = to_text(Network(self.best.weights))
+        text = to_text(Network(self.best.genome))
         results = self.evaluator.evaluate([EvaluationRequest(text, s, self.config.trials) for s in seeds])
         k = world.OBJECTIVES.index(self.config.objective)
         scored = [r.fitness[k] for r in results if r.error is None and r.fitness is not None]
@@ -711,6 +664,6 @@ class NetworkRun(RunLoop[list[float], Evaluated]):
         write_json(self.directory.repertoire(self.config.objective), {"kind": KIND, "items": items})
         if self.best is not None:
             make_folder(self.directory.best)
-            network = Network(self.best.weights)
+            network = Network(self.best.genome)
             write_json(self.directory.best / f"{self.config.objective}.json", network_document(network))
         return summary

@@ -447,8 +447,7 @@ class Run(RunLoop[EvaluationRequest, Evaluated]):
             self._first.setdefault(request.tree, index)
         self.evaluations += len(requests)
         self._offer_generations()  # before the progress row, which measures the repertoires
-        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
-        self.offsets["progress"] = self.directory.progress.append([self.progress_row()])
+        self._append_logs(rows, self.progress_row())
 
     def progress_row(self) -> list[str]:
         """Evaluations so far, then best, coverage and QD score of each objective's repertoire (empty for an

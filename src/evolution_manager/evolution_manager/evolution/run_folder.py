@@ -11,12 +11,17 @@ uninterrupted one.
 
 :class:`RunLoop` is the loop every kind executes: ask for a batch, evaluate it, tell the outcome and record
 it, checkpoint now and then and at the end. Each kind keeps its own configuration, log columns and checkpoint
-contents (format 1 of each, as the runs already made wrote them).
+contents (format 1 of each, as the runs already made wrote them). :class:`CountedRun` is what composition,
+network and team runs add to it alike: a budget of genomes produced, a checkpoint of the configuration, the
+counts and the kind's state, one resume that refuses a damaged run in one line, and the best genome so far,
+each an :class:`EvaluatedGenome` (one JSON shape for the three).
 """
 
 from __future__ import annotations
 
+import math
 import os
+import random
 import shutil
 import tempfile
 import time
@@ -24,15 +29,15 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Generic, TypeVar
+from typing import Any, ClassVar, Generic, Protocol, Self, TypeVar
 
 from bt_controller.library import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
 from bt_controller.validate import number as finite_number
-from evolution_manager.errors import RunDirectoryError
-from evolution_manager.files import CsvLog, _umask, read_json, write_json
+from evolution_manager.errors import ConfigError, RunDirectoryError
+from evolution_manager.files import CsvLog, _umask, number, read_json, write_atomic, write_json, writing
 from evolution_manager.processes import Lock, exclusive_lock, is_locked
-from swarm_ros.safe_paths import refuse_links
+from swarm_ros.safe_paths import make_folder, refuse_links
 
 LOCK_NAME = ".lock"  # in the run folder: held by the process writing the run
 CHECKPOINT_FORMAT = 1
@@ -66,6 +71,7 @@ _Filled = TypeVar("_Filled")
 _Run = TypeVar("_Run", bound="RunLoop")
 _Asked = TypeVar("_Asked")
 _Answer = TypeVar("_Answer")
+_Genome = TypeVar("_Genome", bound=tuple)
 
 
 def run_kind(root: Path) -> str | None:
@@ -134,6 +140,18 @@ def refuse_planted_links(root: Path) -> None:
             raise RunDirectoryError(str(error)) from None
 
 
+def generator_state(rng: random.Random) -> list:
+    """``rng``'s state as a checkpoint holds it in JSON: ``[version, [internal state...], gauss]``."""
+    version, internal, gauss = rng.getstate()
+    return [version, list(internal), gauss]
+
+
+def restore_generator(rng: random.Random, state: Sequence) -> None:
+    """Set ``rng`` to a state :func:`generator_state` gave; a ValueError or TypeError when it is not one."""
+    version, internal, gauss = state
+    rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
+
+
 @dataclass
 class Timing:
     """Wall-clock seconds spent in the evaluator and in everything else (algorithm, grids, files)."""
@@ -154,6 +172,67 @@ class Timing:
         if min(seconds.values()) < 0:
             raise ValueError(f"timing seconds must not be negative, got {state!r}")
         return cls(**seconds)
+
+
+@dataclass(frozen=True)
+class EvaluatedGenome(Generic[_Genome]):
+    """One evaluated genome of a composition, network or team run, as its checkpoint, summary and repertoire
+    record it: the genome, the objective's fitness and the measured values of the run's axes (both None when
+    the evaluation failed), the index of the evaluation that gave them, and the error ("" when none). A kind
+    says how its genome is written (:attr:`GENOME`, :meth:`_genome`) and how a failed one ranks."""
+
+    genome: _Genome
+    fitness: float | None
+    descriptors: tuple[float, ...] | None
+    evaluation: int
+    error: str = ""
+
+    GENOME: ClassVar[str] = "genome"
+    """The genome's key in JSON."""
+    FAILED: ClassVar[float] = -math.inf
+    """The rank of a failed evaluation: below every fitness."""
+
+    @property
+    def rank(self) -> float:
+        """What selection compares: the fitness, a failed evaluation at :attr:`FAILED`."""
+        return self.FAILED if self.fitness is None else self.fitness
+
+    @classmethod
+    def _genome(cls, values: Sequence) -> _Genome:
+        """The genome from its JSON list (a TypeError or ValueError for values of the wrong kind)."""
+        raise NotImplementedError
+
+    def as_json(self) -> dict:
+        return {
+            self.GENOME: list(self.genome),
+            "fitness": self.fitness,
+            "descriptors": None if self.descriptors is None else list(self.descriptors),
+            "evaluation": self.evaluation,
+            "error": self.error,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> Self:
+        return cls(**cls._fields_from_json(data))
+
+    @classmethod
+    def _fields_from_json(cls, data: dict) -> dict[str, Any]:
+        """The fields :meth:`as_json` writes, read back and checked, by name."""
+        descriptors, error = data["descriptors"], data["error"]
+        return {
+            "genome": cls._genome(data[cls.GENOME]),
+            "fitness": None if data["fitness"] is None else float(data["fitness"]),
+            "descriptors": None if descriptors is None else tuple(float(d) for d in descriptors),
+            "evaluation": int(data["evaluation"]),
+            "error": "" if error is None else str(error),
+        }
+
+    def logged(self, axes: int) -> list[str]:
+        """The fitness and the ``axes`` measured values as ``evaluations.csv`` writes them: empty cells for a
+        failed evaluation."""
+        if self.fitness is None or self.descriptors is None:
+            return [""] * (1 + axes)
+        return [number(self.fitness), *(number(d) for d in self.descriptors)]
 
 
 class RunFolder:
@@ -218,6 +297,21 @@ class RunFolder:
                 raise ValueError(f"offsets.{name} {offset} is beyond the end of {log.path.name}")
             offsets[name] = offset
         return offsets
+
+    def write_best_swarm(self, objective: str, layout: dict, trees: Sequence[str], each: str) -> list[Path]:
+        """Write a run's best swarm in ``best/``: its layout file ``<objective>_swarm.json`` (``layout``, for
+        ``evaluate --swarm``, ``trial --swarm``, ``animate --swarm``) and each of its ``trees`` as
+        ``<objective>_<each><i>.txt``; return the paths written."""
+        with writing(self.best):  # a link planted in the run folder is refused, never followed
+            make_folder(self.best, self.root)
+        path = self.best / f"{objective}_swarm.json"
+        write_json(path, layout)
+        written = [path]
+        for i, tree in enumerate(trees):
+            path = self.best / f"{objective}_{each}{i}.txt"
+            write_atomic(path, tree + "\n")
+            written.append(path)
+        return written
 
     def temporary_files(self) -> list[Path]:
         """The temporary files of atomic writes a killed writer left behind (``.<name>.*.tmp``)."""
@@ -295,6 +389,12 @@ class RunLoop(ABC, Generic[_Asked, _Answer]):
         run.directory.progress.cut(run.offsets["progress"])
         return run
 
+    def _append_logs(self, rows: list[list[str]], progress: list[str]) -> None:
+        """Append a batch's rows to ``evaluations.csv`` and its row to ``progress.csv``, and keep their
+        lengths."""
+        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
+        self.offsets["progress"] = self.directory.progress.append([progress])
+
     # The kind's part ---------------------------------------------------------------------------------
     @property
     @abstractmethod
@@ -359,3 +459,93 @@ class RunLoop(ABC, Generic[_Asked, _Answer]):
         started = time.perf_counter()
         self.checkpoint()
         self.timing.manager += time.perf_counter() - started
+
+
+class KindConfig(Protocol):
+    """The configuration of a :class:`CountedRun`: its budget, and its ``config.json`` both ways."""
+
+    @property
+    def evaluations(self) -> int: ...
+
+    def to_json(self) -> dict: ...
+
+    @classmethod
+    def from_json(cls, data: dict) -> Any: ...
+
+
+_Member = TypeVar("_Member", bound=EvaluatedGenome)
+_Counted = TypeVar("_Counted", bound="CountedRun")
+
+
+class CountedRun(RunLoop[_Asked, _Member]):
+    """A composition, network or team run: a :class:`RunLoop` whose budget counts the genomes it
+    ``produced`` against its configuration's ``evaluations``, which keeps the ``best`` genome evaluated (the
+    first among equals), and whose checkpoint holds its configuration, its counts, the kind's state
+    (:meth:`_state`, :meth:`_restore`) and the lengths of its logs, in that order."""
+
+    config: KindConfig
+    produced: int
+    best: _Member | None
+
+    @classmethod
+    def _resume(cls, folder: RunFolder, build: Callable[[], _Counted]) -> _Counted:
+        """The run ``build()`` makes from the configuration (and whatever else) in ``folder``, restored from
+        its checkpoint and reopened to continue (``RunLoop._reopen``); a run whose files are damaged is
+        refused in one line before anything changes."""
+
+        def load() -> _Counted:
+            try:
+                run = build()
+                state = run.directory.read_checkpoint()
+                run.directory.check_logs()
+                run.restore(state)
+            except (ConfigError, *DAMAGE) as error:
+                raise RunDirectoryError(
+                    f"{folder.root}: the run cannot be continued, it is damaged: {error}"
+                ) from error
+            return run
+
+        return cls._reopen(folder, load)
+
+    @abstractmethod
+    def _state(self) -> dict:
+        """The kind's part of the checkpoint, in the order it is written."""
+
+    @abstractmethod
+    def _restore(self, state: dict) -> None:
+        """The kind's part of the run from its checkpoint; a ValueError, KeyError or TypeError when it is
+        damaged."""
+
+    def checkpoint(self) -> None:
+        """Write the checkpoint atomically (between batches only)."""
+        self.directory.write_checkpoint(
+            {
+                "config": self.config.to_json(),
+                "evaluations": self.evaluations,
+                "produced": self.produced,
+                **self._state(),
+                "offsets": self.offsets,
+            }
+        )
+
+    def restore(self, state: dict) -> None:
+        """The run's state from its checkpoint; a ValueError, KeyError or TypeError when it is damaged."""
+        if type(self.config).from_json(state["config"]) != self.config:
+            raise ValueError("the checkpoint belongs to another configuration than config.json")
+        self.evaluations = integer(state["evaluations"], "evaluations", 0)
+        self.produced = integer(state["produced"], "produced", 0)
+        self._restore(state)
+        self.offsets = self.directory.read_offsets(state["offsets"])
+
+    @property
+    def done(self) -> bool:
+        return self.produced >= self.config.evaluations
+
+    def progress(self) -> tuple[int, int]:
+        return self.produced, self.config.evaluations
+
+    def _keep_best(self, members: Sequence[_Member]) -> None:
+        """Keep the fittest of ``members`` as :attr:`best` when it is fitter than the best so far."""
+        for member in members:
+            if member.fitness is not None and (self.best is None or member.fitness > self.best.rank):
+                self.best = member

@@ -60,15 +60,21 @@ from evolution_manager.evolution.run_config import (
     default_scenario_seed,
     heldout_seed,
 )
-from evolution_manager.evolution.run_folder import DAMAGE, TEAMS, RunFolder, RunLoop
+from evolution_manager.evolution.run_folder import (
+    TEAMS,
+    CountedRun,
+    EvaluatedGenome,
+    RunFolder,
+    generator_state,
+    restore_generator,
+)
 from evolution_manager.evolution.validation import (
     best_distinct,
     choose_on_validation,
     validation_seeds,
     validation_settings,
 )
-from evolution_manager.files import number, read_json_object, write_atomic, write_json, writing
-from swarm_ros.safe_paths import make_folder
+from evolution_manager.files import number, read_json_object, write_json
 from swarm_sim.evaluation import Evaluator, SwarmRequest
 from swarm_sim.model import DESCRIPTORS, OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, resolve_task, task_from_record, task_named, task_to_record
@@ -282,42 +288,25 @@ class TeamConfig:
 
 # Evaluation ------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class Member:
-    """An evaluated team: the objective's fitness and the descriptors (None when the evaluation failed), the
-    evaluation that gave them, and the sub-group varied to make it (-1: the initial population)."""
+class Member(EvaluatedGenome[Texts]):
+    """An evaluated team (its trees, ``"trees"`` in JSON), and the sub-group varied to make it (-1: the
+    initial population)."""
 
-    texts: Texts
-    fitness: float | None
-    descriptors: tuple[float, ...] | None
-    evaluation: int
-    error: str = ""
     group: int = -1
 
-    @property
-    def rank(self) -> float:
-        return FAILED if self.fitness is None else self.fitness
+    GENOME = "trees"
+    FAILED = FAILED
+
+    @classmethod
+    def _genome(cls, values: Sequence) -> Texts:
+        return tuple(str(t) for t in values)
 
     def as_json(self) -> dict:
-        return {
-            "trees": list(self.texts),
-            "fitness": self.fitness,
-            "descriptors": None if self.descriptors is None else list(self.descriptors),
-            "evaluation": self.evaluation,
-            "error": self.error,
-            "group": self.group,
-        }
+        return {**super().as_json(), "group": self.group}
 
     @classmethod
     def from_json(cls, data: dict) -> Member:
-        descriptors = data["descriptors"]
-        return cls(
-            tuple(str(t) for t in data["trees"]),
-            None if data["fitness"] is None else float(data["fitness"]),
-            None if descriptors is None else tuple(float(d) for d in descriptors),
-            int(data["evaluation"]),
-            str(data["error"]),
-            int(data["group"]),
-        )
+        return cls(**cls._fields_from_json(data), group=int(data["group"]))
 
 
 def evaluate_teams(
@@ -358,13 +347,14 @@ class TeamDirectory(RunFolder):
         super().__init__(root, EVALUATION_HEADER, PROGRESS_HEADER)
 
 
-class TeamRun(RunLoop[Texts, Member]):
+class TeamRun(CountedRun[Texts, Member]):
     """One team run; create with :meth:`start` or :meth:`resume`, then :meth:`execute` (the loop every run
-    shares, ``run_folder.RunLoop``) and :meth:`write_results`."""
+    shares, ``run_folder.RunLoop``, with what composition and network runs share, ``CountedRun``) and
+    :meth:`write_results`."""
 
     def __init__(self, config: TeamConfig, root: Path, evaluator: Evaluator | None) -> None:
         super().__init__()
-        self.config = config
+        self.config: TeamConfig = config
         self.directory: TeamDirectory = TeamDirectory(root)
         self.evaluator = evaluator
         self.rng = random.Random(derive_seed(config.seed, RUN_ALGORITHM))
@@ -401,58 +391,31 @@ class TeamRun(RunLoop[Texts, Member]):
     def resume(cls, root: Path, evaluator: Evaluator | None) -> TeamRun:
         """The run in ``root`` at its last checkpoint, its CSV files cut back to it (``RunLoop._reopen``)."""
         directory = TeamDirectory(root)
-
-        def load() -> TeamRun:
-            try:
-                config = TeamConfig.from_json(read_json_object(directory.config))
-                run = cls(config, root, evaluator)
-                state = directory.read_checkpoint()
-                directory.check_logs()
-                run.restore(state)
-            except (ConfigError, *DAMAGE) as error:
-                raise RunDirectoryError(
-                    f"{root}: the run cannot be continued, it is damaged: {error}"
-                ) from error
-            return run
-
-        return cls._reopen(directory, load)
-
-    # State -------------------------------------------------------------------------------------------
-    def checkpoint(self) -> None:
-        """Write the checkpoint atomically (between batches only)."""
-        version, internal, gauss = self.rng.getstate()
-        self.directory.write_checkpoint(
-            {
-                "config": self.config.to_json(),
-                "evaluations": self.evaluations,
-                "produced": self.produced,
-                "generation": self.generation,
-                "rng": [version, list(internal), gauss],
-                "population": [m.as_json() for m in self.population],
-                "elites": [m.as_json() for m in self.elites],
-                "best": None if self.best is None else self.best.as_json(),
-                "offsets": self.offsets,
-            }
+        return cls._resume(
+            directory, lambda: cls(TeamConfig.from_json(read_json_object(directory.config)), root, evaluator)
         )
 
-    def restore(self, state: dict) -> None:
-        """The run's state from its checkpoint; a ValueError or KeyError when it is damaged."""
-        if TeamConfig.from_json(state["config"]) != self.config:
-            raise ValueError("the checkpoint belongs to another configuration than config.json")
-        version, internal, gauss = state["rng"]
-        self.rng.setstate((int(version), tuple(int(x) for x in internal), gauss))
-        self.evaluations = integer(state["evaluations"], "evaluations", 0)
-        self.produced = integer(state["produced"], "produced", 0)
+    # State -------------------------------------------------------------------------------------------
+    def _state(self) -> dict:
+        return {
+            "generation": self.generation,
+            "rng": generator_state(self.rng),
+            "population": [m.as_json() for m in self.population],
+            "elites": [m.as_json() for m in self.elites],
+            "best": None if self.best is None else self.best.as_json(),
+        }
+
+    def _restore(self, state: dict) -> None:
+        restore_generator(self.rng, state["rng"])
         self.generation = integer(state["generation"], "generation", 0)
         self.population = [Member.from_json(m) for m in state["population"]]
         self.elites = [Member.from_json(m) for m in state["elites"]]
         self.best = None if state["best"] is None else Member.from_json(state["best"])
         for member in [*self.population, *self.elites, *([self.best] if self.best else [])]:
-            if len(member.texts) != self.config.team:
-                raise ValueError(f"a team of {len(member.texts)} trees in a run of {self.config.team}")
-            for text in member.texts:
+            if len(member.genome) != self.config.team:
+                raise ValueError(f"a team of {len(member.genome)} trees in a run of {self.config.team}")
+            for text in member.genome:
                 tree_from_text(text, self.pset)  # TreeTextError (a ValueError) for one that does not parse
-        self.offsets = self.directory.read_offsets(state["offsets"])
 
     # Selection ---------------------------------------------------------------------------------------
     def _shape(self, text: str) -> tuple[int, int]:
@@ -466,7 +429,7 @@ class TeamRun(RunLoop[Texts, Member]):
         """Whether ``challenger`` beats ``holder``: higher fitness derated by the mean size of the team's
         trees, or an exact tie given to a team whose tallest tree is shorter when the holder's is taller than
         ``PARSIMONY_HEIGHT`` (the tree GP's ``operators.preferred`` over a team)."""
-        shapes = [[self._shape(t) for t in m.texts] for m in (challenger, holder)]
+        shapes = [[self._shape(t) for t in m.genome] for m in (challenger, holder)]
         members = (challenger, holder)
         a, b = (
             m.rank * _derated(self.derating, [n for n, _ in s]) for m, s in zip(members, shapes, strict=True)
@@ -491,13 +454,6 @@ class TeamRun(RunLoop[Texts, Member]):
         ]
 
     # Execution ---------------------------------------------------------------------------------------
-    @property
-    def done(self) -> bool:
-        return self.produced >= self.config.evaluations
-
-    def progress(self) -> tuple[int, int]:
-        return self.produced, self.config.evaluations
-
     def _ask(self) -> list[Texts]:
         """The teams to evaluate next: the initial population, or the children of the next generation that
         an operator touched (a generation of untouched children only is completed without evaluating)."""
@@ -518,7 +474,7 @@ class TeamRun(RunLoop[Texts, Member]):
         while True:
             self._kept = list(self.elites)
             self._parents = self._tournament(p.population - len(self._kept))
-            self._children = vary_teams([m.texts for m in self._parents], self.pset, self.rng, p)
+            self._children = vary_teams([m.genome for m in self._parents], self.pset, self.rng, p)
             self.produced += len(self._kept) + len(self._children)
             batch = [c.texts for c in self._children if c.touched]
             if batch:
@@ -559,35 +515,26 @@ class TeamRun(RunLoop[Texts, Member]):
         self.population = [*self._kept, *children]
         self._kept, self._children, self._parents = [], [], []
         self.generation += 1
-        for member in answers:
-            if member.fitness is not None and (self.best is None or member.fitness > self.best.rank):
-                self.best = member
+        self._keep_best(answers)
         candidates = self.elites + self.population
         ranked: list[Member] = []
         for _ in range(min(self.config.gp.elites_per_objective, len(candidates))):
             others = [c for c in candidates if all(c is not r for r in ranked)]
             ranked.append(self._best_of(others))
         self.elites = ranked
-        alive = {text for member in [*self.population, *self.elites] for text in member.texts}
+        alive = {text for member in [*self.population, *self.elites] for text in member.genome}
         self._shapes = {text: shape for text, shape in self._shapes.items() if text in alive}
 
     def _record(self, members: Sequence[Member]) -> None:
-        rows = []
-        for m in members:
-            values = (
-                [number(m.fitness), *(number(d) for d in m.descriptors)]
-                if m.fitness is not None and m.descriptors is not None
-                else [""] * (1 + len(DESCRIPTORS))
-            )
-            group = "" if m.group < 0 else str(m.group)
-            trees = json.dumps(list(m.texts))
-            rows.append([str(m.evaluation), str(self.config.scenario_seed), group, trees, *values, m.error])
+        seed = str(self.config.scenario_seed)
+        rows = [
+            [str(m.evaluation), seed, "" if m.group < 0 else str(m.group), json.dumps(list(m.genome)),
+             *m.logged(len(DESCRIPTORS)), m.error]
+            for m in members
+        ]  # fmt: skip
         self.evaluations += len(members)
-        self.offsets["evaluations"] = self.directory.evaluations.append(rows)
         best = "" if self.best is None else number(self.best.fitness)
-        self.offsets["progress"] = self.directory.progress.append(
-            [[str(self.evaluations), str(self.generation), best]]
-        )
+        self._append_logs(rows, [str(self.evaluations), str(self.generation), best])
 
     # Results -----------------------------------------------------------------------------------------
     def heldout(self) -> tuple[dict | None, float | None, dict[str, float] | None]:
@@ -599,7 +546,7 @@ class TeamRun(RunLoop[Texts, Member]):
             return None, None, None
         seeds = self.config.heldout_seeds()
         done = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
-        means = self._means_on([self.best.texts], seeds)[0]
+        means = self._means_on([self.best.genome], seeds)[0]
         return done, None if means is None else means[self.config.objective], means
 
     def _means_on(self, teams: Sequence[Texts], seeds: Sequence[int]) -> list[dict[str, float] | None]:
@@ -682,13 +629,6 @@ class TeamRun(RunLoop[Texts, Member]):
         write_json(directory.summary, summary)
         written = [directory.summary]
         if self.best is not None:
-            with writing(directory.best):  # a link planted in the run folder is refused, never followed
-                make_folder(directory.best, directory.root)
-            path = directory.best / f"{self.config.objective}_swarm.json"
-            write_json(path, team_layout(self.best.texts, self.n_robots).as_json())
-            written.append(path)
-            for group, text in enumerate(self.best.texts):
-                path = directory.best / f"{self.config.objective}_group{group}.txt"
-                write_atomic(path, text + "\n")
-                written.append(path)
+            layout = team_layout(self.best.genome, self.n_robots).as_json()
+            written += directory.write_best_swarm(self.config.objective, layout, self.best.genome, "group")
         return written

@@ -63,7 +63,11 @@ from evolution_manager.evolution.libraries import (
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic, write_json
 from evolution_manager.studies import foraging_tables, intervals
-from evolution_manager.studies.planning import finished_foraging_runs, primitives_study_document
+from evolution_manager.studies.planning import (
+    finished_foraging_runs,
+    primitives_study_document,
+    primitives_study_forager,
+)
 from swarm_sim.tasks import task_named
 
 ABLATION_STAGE = 5
@@ -167,12 +171,9 @@ def plan_study(
         for a, arm in enumerate(ARMS)
         for r in range(args.runs)
     ]
-    document = {
-        **primitives_study_document(
-            "ablation", source_folder, source, args, scenarios, scenario_seed, libraries
-        ),
-        "plan": plan,
-    }
+    document, budgets = primitives_study_document(
+        "ablation", source_folder, source, args, scenarios, scenario_seed, libraries, "plan", plan
+    )
     out = Path(args.out).absolute()
     primitives_folder = source_folder.absolute()
 
@@ -181,26 +182,19 @@ def plan_study(
             name: ablation_library(name, out / "libraries", primitives_folder, libraries[name])
             for name in LIBRARIES
         }
-        planned = []
-        for entry in plan:
-            library = built[entry["library"]]
-            made = RunConfig.make(
-                entry["algorithm"],
-                "foraging",
-                int(entry["evaluations"]),
-                int(entry["seed"]),
-                source["trials"],
+        return [
+            primitives_study_forager(
+                entry,
+                str(entry["algorithm"]),
+                source,
                 scenarios,
                 scenario_seed,
-                source["profile"],
-                task="foraging",
-                library=library.label,
-                library_digest=library.digest,
+                built[str(entry["library"])].label,
+                built[str(entry["library"])].digest,
             )
-            planned.append((made, str(entry["dir"])))
-        return planned
+            for entry in plan
+        ]
 
-    budgets = {str(entry["dir"]): int(entry["evaluations"]) for entry in plan}
     return document, [foragers], budgets
 
 

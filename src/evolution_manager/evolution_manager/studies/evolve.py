@@ -58,8 +58,8 @@ if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load la
     from bt_controller.library import Library
     from evolution_manager.cluster.settings import ClusterSettings
     from evolution_manager.evolution.compositions import CompositionParameters
-    from evolution_manager.evolution.run_config import RunConfig
     from swarm_sim.evaluation import Evaluator
+    from swarm_sim.model import Config
 
 
 NETWORK_ALGORITHMS = ("nn-cmaes", "nn-ga", "nn-qd")
@@ -145,11 +145,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _HasWorld(Protocol):
+    def world(self) -> Config: ...
+
+
 def _evaluator(
-    workers: int | None, config: RunConfig, library: Library | None, client: Client | None = None
+    workers: int | None, config: _HasWorld, library: Library | None = None, client: Client | None = None
 ) -> Evaluator:
     """The run's evaluator of the run's world (profile and trial length) and library: the cluster's workers
-    through ``client``, else ``workers`` threads here."""
+    through ``client``, else ``workers`` threads here (every kind of run)."""
     if client is not None:
         # Dask (about 0.3 s to import) loads only for a cluster
         from evolution_manager.cluster.evaluator import DaskEvaluator
@@ -161,6 +165,13 @@ def _evaluator(
         return BatchEvaluator(config.world(), threads=workers or 1, library=library)
     except ValueError as error:
         raise UsageError(f"--workers: {error}") from None
+
+
+def _refuse_a_started_run(out: Path) -> None:
+    """Raise ``UsageError`` when ``out`` holds a run already (its ``config.json``): a new run is never
+    started over it."""
+    if (Path(out) / "config.json").exists():
+        raise UsageError(f"{out} already holds a run: add --resume to continue it, or use another --out")
 
 
 def evolve(argv: Sequence[str] | None = None) -> int:
@@ -209,10 +220,7 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
             config = saved
             library = directory.read_library(saved)
         else:
-            if directory.started():
-                raise UsageError(
-                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
-                )
+            _refuse_a_started_run(args.out)
             assert config is not None  # made from the options when not resuming
             library = library_from_args(args)
         with signals_as_interrupts():  # Ctrl-C or SIGTERM while waiting for a cluster's workers: one line
@@ -467,10 +475,7 @@ def _evolve_compositions(
             config = saved
             library = comp.CompositionDirectory(args.out).read_library(config)
         else:
-            if comp.CompositionDirectory(args.out).config.exists():
-                raise UsageError(
-                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
-                )
+            _refuse_a_started_run(args.out)
             comp.check_distinct_sources(args.swarm_from)
             cells, library = comp.read_sources(args.swarm_from)
             parameters = comp.CompositionParameters(
@@ -495,12 +500,7 @@ def _evolve_compositions(
                 objective=args.objective or comp.OBJECTIVE,
                 descriptors=args.descriptors or "behaviour",
             )
-        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
-
-        try:
-            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1, library=library)
-        except ValueError as error:
-            raise UsageError(f"--workers: {error}") from None
+        evaluator = _evaluator(args.workers, config, library)
         if args.resume:
             run = comp.CompositionRun.resume(args.out, evaluator)
         else:
@@ -555,10 +555,7 @@ def _evolve_networks(
             _check_as_saved(args, saved, names)
             config = saved
         else:
-            if (Path(args.out) / "config.json").exists():
-                raise UsageError(
-                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
-                )
+            _refuse_a_started_run(args.out)
             if args.objective is None:
                 raise UsageError(f"--algorithm {args.algorithm} needs --objective")
             task = "primitives" if args.task is None else registered_name(args.task)
@@ -574,12 +571,7 @@ def _evolve_networks(
                 task,
                 -1 if args.scenario_seed is None else args.scenario_seed,
             )
-        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
-
-        try:
-            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
-        except ValueError as error:
-            raise UsageError(f"--workers: {error}") from None
+        evaluator = _evaluator(args.workers, config)
         if args.resume:
             run = nets.NetworkRun.resume(args.out, evaluator)
         else:
@@ -635,10 +627,7 @@ def _evolve_teams(
                 )
             config = saved
         else:
-            if (Path(args.out) / "config.json").exists():
-                raise UsageError(
-                    f"{args.out} already holds a run: add --resume to continue it, or use another --out"
-                )
+            _refuse_a_started_run(args.out)
             if args.algorithm is None:
                 raise UsageError("--team K needs --algorithm gp")
             if args.objective is None:
@@ -655,12 +644,7 @@ def _evolve_teams(
                 task,
                 args.scenario_seed,
             )
-        from swarm_sim.evaluation import BatchEvaluator  # late, as the run's modules in _evolve
-
-        try:
-            evaluator = BatchEvaluator(config.world(), threads=args.workers or 1)
-        except ValueError as error:
-            raise UsageError(f"--workers: {error}") from None
+        evaluator = _evaluator(args.workers, config)
         if args.resume:
             run = teams.TeamRun.resume(args.out, evaluator)
         else:

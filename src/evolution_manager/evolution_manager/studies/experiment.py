@@ -44,7 +44,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import ExitStack
 from multiprocessing import get_context, managers
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 from bt_controller.draws import MAX_SEED
 from bt_controller.library import Library, LibraryError, load_library
@@ -83,6 +83,8 @@ from swarm_ros.safe_paths import refuse_links_within
 
 if TYPE_CHECKING:  # imported where used (run_one): the module is read by every command
     from evolution_manager.evolution.compositions import CompositionConfig, CompositionDirectory
+    from swarm_sim.evaluation import Evaluator
+    from swarm_sim.model import Config
 
 SESSIONS_FILE = "sessions.json"
 
@@ -225,21 +227,12 @@ def _run_network(
     """:func:`run_one` of a planned network run (``evolution.networks``): started or continued, then its
     summary (with the best network's held-out fitness) and best network written."""
     from evolution_manager.evolution import networks as nets  # late, as the run's modules in run_one
-    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
 
     config = nets.NetworkConfig.from_json(config_data)
-    directory = nets.NetworkDirectory(Path(root))
-    if finished(directory.root):
-        return root
-    evaluator = BatchEvaluator(config.world(), threads=1)
-    if directory.started():
-        if nets.NetworkConfig.from_json(read_json_object(directory.config)) != config:
-            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
-        run = nets.NetworkRun.resume(directory.root, evaluator)
-    else:
-        run = nets.NetworkRun.start(config, directory.root, evaluator)
-    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
-    run.finish()
+    run = _started_or_continued(config, nets.NetworkRun.start, nets.NetworkRun.resume, root)
+    if run is not None:
+        run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
+        run.finish()
     return root
 
 
@@ -252,22 +245,48 @@ def _run_team(
     """:func:`run_one` of a planned team run (``evolution.teams``): started or continued, then its summary
     (with the best team's held-out fitness) and best swarm written."""
     from evolution_manager.evolution import teams  # late, as the run's modules in run_one
-    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
 
     config = teams.TeamConfig.from_json(config_data)
-    directory = teams.TeamDirectory(Path(root))
-    if finished(directory.root):
-        return root
-    evaluator = BatchEvaluator(config.world(), threads=1)
-    if directory.started():
-        if teams.TeamConfig.from_json(read_json_object(directory.config)) != config:
-            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
-        run = teams.TeamRun.resume(directory.root, evaluator)
-    else:
-        run = teams.TeamRun.start(config, directory.root, evaluator)
-    run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
-    run.write_results()
+    run = _started_or_continued(config, teams.TeamRun.start, teams.TeamRun.resume, root)
+    if run is not None:
+        run.execute(on_batch=_reporter(root, progress), checkpoint_interval=checkpoint_interval)
+        run.write_results()
     return root
+
+
+class _Planned(Protocol):
+    """The configuration of a network or team run: its world, and read from ``config.json``."""
+
+    def world(self) -> Config: ...
+
+    @classmethod
+    def from_json(cls, data: dict) -> Any: ...
+
+
+_Config = TypeVar("_Config", bound=_Planned)
+_Run = TypeVar("_Run")
+
+
+def _started_or_continued(
+    config: _Config,
+    start: Callable[[_Config, Path, Evaluator], _Run],
+    resume: Callable[[Path, Evaluator], _Run],
+    root: str,
+) -> _Run | None:
+    """The planned run of ``config`` (a network or team run) in ``root``: ``start``-ed, or ``resume``-d where
+    a run of the same configuration is there; None when it has finished. ``EvolutionError`` when ``root``
+    holds a run of another configuration."""
+    from swarm_sim.evaluation import BatchEvaluator  # late, as in run_one
+
+    directory = Path(root)
+    if finished(directory):
+        return None
+    evaluator = BatchEvaluator(config.world(), threads=1)
+    if (directory / "config.json").exists():
+        if type(config).from_json(read_json_object(directory / "config.json")) != config:
+            raise EvolutionError(f"{root} holds a run of another configuration than the experiment's plan")
+        return resume(directory, evaluator)
+    return start(config, directory, evaluator)
 
 
 def planned_library(config: RunConfig) -> Library | None:

@@ -181,11 +181,14 @@ def primitives_study_document(
     scenarios: str,
     scenario_seed: int | None,
     libraries: dict,
-) -> dict:
-    """The head of the plan document of a study over a foraging study's primitives (``--primitives-from``):
-    the study, its source, the source's profile, trials and design, the options and the libraries; the
-    study appends its runs."""
-    return {
+    runs_key: str,
+    runs: list[dict],
+) -> tuple[dict, dict[str, int]]:
+    """The plan document of a study over a foraging study's primitives (``--primitives-from``): the study,
+    its source, the source's profile, trials and design, the options, the libraries and last, under
+    ``runs_key``, its ``runs`` (plan entries, each with its ``dir`` and ``evaluations``); and each run's
+    budget by its folder."""
+    document = {
         "study": study,
         "primitives_from": str(source_folder),
         "profile": source["profile"],
@@ -197,7 +200,37 @@ def primitives_study_document(
         "design": source["design"],
         "scenario_seed": scenario_seed,
         "libraries": libraries,
+        runs_key: runs,
     }
+    return document, {str(entry["dir"]): int(entry["evaluations"]) for entry in runs}
+
+
+def primitives_study_forager(
+    entry: dict,
+    algorithm: str,
+    source: dict,
+    scenarios: str,
+    scenario_seed: int | None,
+    library: str,
+    library_digest: str,
+) -> tuple[RunConfig, str]:
+    """The foraging run of a plan entry of a study over a foraging study's primitives (its budget, seed and
+    folder) with ``algorithm`` on the library ``library`` (of ``library_digest``), at the trials and profile
+    of the ``source`` study and the study's scenarios; and the run's folder in the study."""
+    made = RunConfig.make(
+        algorithm,
+        "foraging",
+        int(entry["evaluations"]),
+        int(entry["seed"]),
+        source["trials"],
+        scenarios,
+        scenario_seed,
+        source["profile"],
+        task="foraging",
+        library=library,
+        library_digest=library_digest,
+    )
+    return made, str(entry["dir"])
 
 
 def finished_foraging_runs(

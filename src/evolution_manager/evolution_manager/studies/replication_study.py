@@ -33,7 +33,11 @@ from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
-from evolution_manager.studies.planning import finished_foraging_runs, primitives_study_document
+from evolution_manager.studies.planning import (
+    finished_foraging_runs,
+    primitives_study_document,
+    primitives_study_forager,
+)
 
 REPLICATION_STAGE = 4
 """The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
@@ -99,12 +103,9 @@ def plan_study(
         for index, name in enumerate(libraries)
         for r in range(args.runs)
     ]
-    document = {
-        **primitives_study_document(
-            "replication", source_folder, source, args, scenarios, scenario_seed, libraries
-        ),
-        "arms": arms,
-    }
+    document, budgets = primitives_study_document(
+        "replication", source_folder, source, args, scenarios, scenario_seed, libraries, "arms", arms
+    )
     out = Path(args.out).absolute()
     primitives_folder = source_folder.absolute()
 
@@ -114,23 +115,12 @@ def plan_study(
             spec = libraries[entry["library"]]
             path = out / "libraries" / f"{entry['library']}.json"
             library = study_library(path, [primitives_folder / rel for rel in spec["from"]], spec["blocks"])
-            made = RunConfig.make(
-                "gp",
-                "foraging",
-                int(entry["evaluations"]),
-                int(entry["seed"]),
-                source["trials"],
-                scenarios,
-                scenario_seed,
-                source["profile"],
-                task="foraging",
-                library=str(path),
-                library_digest=library.digest,
+            digest = library.digest
+            planned.append(
+                primitives_study_forager(entry, "gp", source, scenarios, scenario_seed, str(path), digest)
             )
-            planned.append((made, str(entry["dir"])))
         return planned
 
-    budgets = {str(entry["dir"]): int(entry["evaluations"]) for entry in arms}
     return document, [foragers], budgets
 
 
