@@ -25,6 +25,7 @@ from evolution_manager.evolution.compositions import (
     vary,
 )
 from evolution_manager.evolution.parameters import GPParameters
+from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.studies.evolve import evolve
 from evolution_manager.studies.experiment import produced_so_far
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
@@ -226,9 +227,10 @@ def _check_validated(summary, rows, cells):
     )
 
 
-@pytest.mark.parametrize("algorithm", ["ga", "qd"])
-def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
-    assert _compose(source, tmp_path / "straight", algorithm, "--evaluations", "120", "--seed", "5") == 0
+@pytest.mark.parametrize(("algorithm", "scenarios"), [("ga", "fixed"), ("qd", "fixed"), ("ga", "fresh")])
+def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm, scenarios):
+    extra = ["--evaluations", "120", "--seed", "5", "--scenarios", scenarios]
+    assert _compose(source, tmp_path / "straight", algorithm, *extra) == 0
     cells = read_sources([source])[0]
     straight = json.loads((tmp_path / "straight" / "config.json").read_text())
     config = CompositionConfig.from_json(straight)
@@ -250,6 +252,40 @@ def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm):
     stopped.write_results()
     files = _files(tmp_path / "straight")
     assert _files(tmp_path / "stopped") == files and len(files) >= 14
+
+
+def test_fresh_scenarios_give_each_evaluation_a_scenario_of_its_own(source, tmp_path, capsys):
+    """--scenarios fresh: evaluation i on evaluation_seed(seed, i), as a tree run's; recorded in config.json
+    (a fixed run's file stays as before, without the key), the same seed the same files, and a resume with
+    the other design refused in one line."""
+    extra = ["--evaluations", "30", "--seed", "3"]
+    assert _compose(source, tmp_path / "a", "qd", *extra, "--scenarios", "fresh") == 0
+    assert _compose(source, tmp_path / "b", "qd", *extra, "--scenarios", "fresh") == 0
+    assert _compose(source, tmp_path / "fixed", "qd", *extra) == 0
+    assert _files(tmp_path / "a") == _files(tmp_path / "b")
+    config = json.loads((tmp_path / "a" / "config.json").read_text())
+    assert config["scenarios"] == "fresh" and "scenarios" not in json.loads(
+        (tmp_path / "fixed" / "config.json").read_text()
+    )
+    rows = list(csv.DictReader((tmp_path / "a" / "evaluations.csv").open()))
+    assert [int(r["seed"]) for r in rows] == [evaluation_seed(3, i) for i in range(len(rows))]
+    # a row's fitness is its genome's on its own scenario
+    cells = read_sources([source])[0]
+    evaluator = BatchEvaluator(FORAGING.config("paper"))
+    for row in (rows[0], rows[-1]):
+        genome = tuple(int(c) for c in row["genome"].split())
+        [member] = evaluate_genomes(evaluator, cells, [genome], int(row["seed"]), 1, 0)
+        assert member.fitness == float(row["foraging"])
+    # held-out and validation scenarios come from the scenario seed, as a fixed run's: shared by both designs
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    fixed = json.loads((tmp_path / "fixed" / "summary.json").read_text())
+    assert summary["heldout"] == fixed["heldout"] and summary["validation"] == fixed["validation"]
+    assert summary["homogeneous"] == fixed["homogeneous"]
+    capsys.readouterr()
+    resume = ["--out", str(tmp_path / "a"), "--resume", "--scenarios", "fixed", "--no-progress"]
+    assert evolve(resume) == 2
+    error = capsys.readouterr().err
+    assert "--scenarios fixed differs from the run being resumed (fresh)" in error and error.count("\n") == 1
 
 
 def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
@@ -275,8 +311,6 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
          "goes with algorithm qd"),
         (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--descriptors", "deliveries"],
          "has one kind of food"),
-        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
-         "fixed scenarios"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "SOURCE"], "is given twice"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--homogeneous", "100000"],
          "--homogeneous 100000: the runs hold"),

@@ -8,7 +8,8 @@ The *cells* are the best tree of every filled bin of every repertoire file
 found in the given run directories, listed in a fixed order (:func:`read_sources`): directory by directory
 as given, then the objectives in ``OBJECTIVES`` order (``repertoire_<objective>.json``), then the bins
 in index order. A *genome* is one cell index per robot (robot 0 first); it is evaluated as a heterogeneous
-swarm (``swarm_sim.model.swarm_layout``) on the run's task, every evaluation on the run's scenario seed.
+swarm (``swarm_sim.model.swarm_layout``) on the run's task, every evaluation on the run's scenario seed
+(``fixed``, the authors' design) or on a scenario of its own (``fresh``; ``CompositionConfig.scenarios``).
 
 ``ga``: a population of ``population`` genomes; each generation keeps ``elites`` best and fills the rest with
 tournament winners (``tournament``), varied pairwise by two-point crossover (probability ``crossover``) and
@@ -64,7 +65,13 @@ from evolution_manager.evolution.descriptor_sets import (
     descriptor_set,
 )
 from evolution_manager.evolution.parameters import GPParameters, QDParameters
-from evolution_manager.evolution.run_config import DEFAULT_PROFILE, HELDOUT_EVALUATIONS, default_scenario_seed
+from evolution_manager.evolution.run_config import (
+    DEFAULT_PROFILE,
+    HELDOUT_EVALUATIONS,
+    SCENARIOS,
+    default_scenario_seed,
+    evaluation_seed,
+)
 from evolution_manager.evolution.run_folder import (
     COMPOSITIONS,
     CountedRun,
@@ -462,6 +469,11 @@ class CompositionConfig:
     """What the run maximises: one of ``OBJECTIVES``."""
     descriptors: str = BEHAVIOUR.name
     """The behaviour space the grids bin compositions by (``descriptor_sets``)."""
+    scenarios: str = "fixed"
+    """``fixed``: every evaluation on the scenario seed (the authors' design); ``fresh``: evaluation ``i``
+    on a scenario of its own (``run_config.evaluation_seed``), so that no swarm is chosen for one
+    scenario's luck. The held-out, validation and baseline scenarios come from the scenario seed either
+    way, so the two designs of one seed share them."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -489,6 +501,8 @@ class CompositionConfig:
         if self.scenario_seed == -1:
             object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
+        if self.scenarios not in SCENARIOS:
+            raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
 
     @property
     def label(self) -> str:
@@ -516,7 +530,13 @@ class CompositionConfig:
         document = {"kind": KIND, "objective": self.objective, "task": task_to_record(self.task), **data}
         if self.descriptors != BEHAVIOUR.name:
             document["descriptors"] = self.descriptors
+        if self.scenarios != "fixed":  # written only when asked for, as the descriptors
+            document["scenarios"] = self.scenarios
         return document
+
+    def evaluation_seed(self, index: int) -> int:
+        """The scenario of evaluation ``index``: the scenario seed, or under fresh scenarios its own."""
+        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
 
     @classmethod
     def from_json(cls, data: dict) -> CompositionConfig:
@@ -538,6 +558,7 @@ class CompositionConfig:
                 task_from_record(data.get("task", TASK), "config.json: task"),
                 str(data.get("objective", OBJECTIVE)),
                 str(data.get("descriptors", BEHAVIOUR.name)),
+                str(data.get("scenarios", "fixed")),
             )
         except (KeyError, TypeError, ValueError) as error:
             if isinstance(error, ConfigError):
@@ -545,7 +566,7 @@ class CompositionConfig:
             raise ConfigError(f"not a composition run's configuration: {error}") from error
 
 
-_NOT_IN_ORDER = ("task", "objective", "descriptors")
+_NOT_IN_ORDER = ("task", "objective", "descriptors", "scenarios")
 """Fields ``config.json`` writes elsewhere than in field order (they came later)."""
 _PARAMETER_DEFAULTS = {"homogeneous": 0, "cell_mutation": "one", "crossover_operator": "two-point"}
 """The parameters ``config.json`` leaves out at these values, as runs made before them did not know them."""
@@ -800,9 +821,23 @@ class CompositionRun(CountedRun[Genome, Member]):
 
     def _evaluate(self, genomes: list[Genome]) -> list[Member]:
         """The genomes evaluated on the run's scenario; a genome this process evaluated before is answered
-        from memory (the same request, the same result)."""
+        from memory (the same request, the same result). Under fresh scenarios each on its own scenario,
+        nothing remembered."""
         if self.evaluator is None:
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
+        if self.config.scenarios == "fresh":
+            seeds = [self.config.evaluation_seed(self.evaluations + i) for i in range(len(genomes))]
+            return evaluate_genomes(
+                self.evaluator,
+                self.cells,
+                genomes,
+                0,
+                self.config.trials,
+                self.evaluations,
+                seeds,
+                self.config.objective,
+                self.space,
+            )
         fresh = list(dict.fromkeys(g for g in genomes if g not in self.known))
         for member in evaluate_genomes(
             self.evaluator,
@@ -823,9 +858,15 @@ class CompositionRun(CountedRun[Genome, Member]):
         ]
 
     def _record(self, members: Sequence[Member]) -> None:
-        seed, axes = str(self.config.scenario_seed), len(self.space.names)
+        axes = len(self.space.names)
         rows = [
-            [str(m.evaluation), seed, " ".join(str(c) for c in m.genome), *m.logged(axes), m.error]
+            [
+                str(m.evaluation),
+                str(self.config.evaluation_seed(m.evaluation)),
+                " ".join(str(c) for c in m.genome),
+                *m.logged(axes),
+                m.error,
+            ]
             for m in members
         ]
         self.evaluations += len(members)

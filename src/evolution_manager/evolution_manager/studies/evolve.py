@@ -393,8 +393,6 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
             raise UsageError(
                 f"--{name} applies to tree runs, not to compositions (--swarm-from); leave it out"
             )
-    if args.scenarios == "fresh":
-        raise UsageError("compositions are evaluated on fixed scenarios: leave out --scenarios fresh")
     if args.resume:
         if args.swarm_from is not None:
             raise UsageError(
@@ -447,7 +445,16 @@ def _evolve_compositions(
             _check_as_saved(
                 args,
                 saved,
-                ("algorithm", "evaluations", "seed", "trials", "profile", "scenario_seed", "objective"),
+                (
+                    "algorithm",
+                    "evaluations",
+                    "seed",
+                    "trials",
+                    "profile",
+                    "scenario_seed",
+                    "objective",
+                    "scenarios",
+                ),
             )
             if args.task is not None and args.task != saved.task:
                 raise UsageError(
@@ -499,6 +506,7 @@ def _evolve_compositions(
                 task=args.task,
                 objective=args.objective or comp.OBJECTIVE,
                 descriptors=args.descriptors or "behaviour",
+                scenarios=args.scenarios or "fixed",
             )
         evaluator = _evaluator(args.workers, config, library)
         if args.resume:
