@@ -12,6 +12,7 @@ import json
 import pytest
 
 from evolution_manager.studies import heterogeneity_study as study
+from evolution_manager.studies import planning
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
 from swarm_sim.tasks import task_named
@@ -49,6 +50,39 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     assert document["swarm_evaluations"] == 300 and document["arms"] == [a.name for a in study.ARMS]
     for entry in teams:  # the teams share the seeds of the repertoires and compositions they are set beside
         assert (entry["task"], entry["seed"]) in seeds
+
+
+def test_new_arms_grow_the_plan_and_keep_the_runs_planned_before(tmp_path, monkeypatch):
+    """The fresh-scenario arms came after the study began: a plan made without them grows by them (as by more
+    runs), every run planned before planned again alike; a plan with other options does not grow."""
+    args = build_parser().parse_args(
+        ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
+    )
+    full, _, _ = study.plan_study(args, "fixed", "shared")
+    every_arm = study.ARMS
+    earlier = tuple(arm for arm in every_arm if arm.scenarios == "fixed")
+    monkeypatch.setattr(study, "ARMS", earlier)
+    before, _, _ = study.plan_study(args, "fixed", "shared")
+    saved, given = json.loads(json.dumps(before)), json.loads(json.dumps(full))
+    assert planning.more_runs(saved, given) and not planning.more_runs(given, saved)
+    assert planning.growth(saved, given) == "by the arms ga-fresh, qd-fresh"
+    fresh = [e for e in given["plan"] if e.get("scenarios") == "fresh"]
+    assert len(fresh) == len(study.TASKS) * 2 * 2 and {e["arm"] for e in fresh} == {"ga-fresh", "qd-fresh"}
+    assert all("scenarios" not in e for e in saved["plan"])  # the runs planned before, unchanged
+    more = build_parser().parse_args(
+        ["--study", "heterogeneity", "--runs", "3", "--swarm-evaluations", "300", "--out", str(tmp_path)]
+    )
+    monkeypatch.setattr(study, "ARMS", every_arm)
+    both, _, _ = study.plan_study(more, "fixed", "shared")
+    assert (
+        planning.growth(saved, json.loads(json.dumps(both)))
+        == "to 3 runs per group and by the arms ga-fresh, qd-fresh"
+    )
+    other = build_parser().parse_args(
+        ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "400", "--out", str(tmp_path)]
+    )
+    changed, _, _ = study.plan_study(other, "fixed", "shared")
+    assert not planning.more_runs(saved, json.loads(json.dumps(changed)))
 
 
 def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):

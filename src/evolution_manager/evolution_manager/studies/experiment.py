@@ -76,6 +76,7 @@ from evolution_manager.studies.planning import (
     STUDIES,
     Stage,
     differences,
+    growth,
     more_runs,
     paper_study,
 )
@@ -551,7 +552,7 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             given = json.loads(json.dumps(document))
             if saved != given and more_runs(saved, given):
                 print(
-                    f"experiment: {args.out} grows to {args.runs} runs per group; "
+                    f"experiment: {args.out} grows {growth(saved, given)}; "
                     "the runs it planned keep their seeds and folders",
                     file=sys.stderr,
                 )

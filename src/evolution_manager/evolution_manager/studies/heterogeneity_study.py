@@ -19,9 +19,11 @@ Every run of task ``t`` and index ``r``, the repertoire and each arm, has the se
 RUN_STUDY, HETEROGENEITY_STAGE, t, r)``, so the arms pair by seed, and composes from the same repertoire. The
 **homogeneous** baseline is measured by each composition run itself (``summary.json``, ``homogeneous``): the
 best of its cells' nine copies on the run's scenario, re-scored on the held-out scenarios; the study reads it
-from the run of the first arm. Every run is evaluated on fixed scenarios; under the ``shared`` design (the
-default) on one scenario seed for the whole study, otherwise each on its seed's own, which the repertoire and
-the arms of one index share.
+from the run of the first arm. Every run is evaluated on fixed scenarios, but for the arms ``ga-fresh`` and
+``qd-fresh``, whose every evaluation has a scenario of its own (``--scenarios fresh``); under the ``shared``
+design (the default) on one scenario seed for the whole study, otherwise each on its seed's own, which the
+repertoire and the arms of one index share (with their held-out, validation and baseline scenarios). Arms
+added to the study later grow its plan (``planning.more_runs``): the runs planned before keep their folders.
 
 The stages go task by task: the repertoires, the compositions, then the teams (the longest runs, needing no
 repertoire), so that each task's table fills before the next task's runs begin. The report (``report.md``,
@@ -89,6 +91,8 @@ class Arm:
     crossover_operator: str = "two-point"
     team: int = 0
     """K, for a team arm (``evolution.teams``); 0 for a composition arm."""
+    scenarios: str = "fixed"
+    """A composition arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
 
     @property
     def parameters(self) -> CompositionParameters:
@@ -104,6 +108,10 @@ ARMS: tuple[Arm, ...] = (
     Arm("ga-seeded", "ga", "the GA seeded with the homogeneous swarms of the 5 fittest cells", homogeneous=5),
     Arm("qd", "qd", "the authors' MAP-Elites over compositions binned by deliveries (two-point crossover)"),
     Arm("qd-mix", "qd", "MAP-Elites over compositions with Mix-ME's mixing", crossover_operator="mix"),
+    Arm("ga-fresh", "ga", "the authors' GA with every evaluation on a scenario of its own (fresh scenarios)",
+        scenarios="fresh"),
+    Arm("qd-fresh", "qd", "the authors' MAP-Elites with every evaluation on a scenario of its own",
+        scenarios="fresh"),
     *(
         Arm(f"team{k}", "gp", f"GP over {k} trees evolved together, no repertoire (robot i runs tree i "
             f"mod {k})", team=k)
@@ -184,6 +192,8 @@ def plan_study(
                     "seed": derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r),
                     "evaluations": swarm_evaluations,
                 }
+                if arm.scenarios != "fixed":  # only then: the entries of the first arms stay as planned
+                    entry["scenarios"] = arm.scenarios
                 arms.append(entry)
                 entries.append(entry)
                 budgets[folder] = swarm_evaluations
@@ -237,6 +247,7 @@ def _compositions(
             task=entry["task"],
             objective=entry["objective"],
             descriptors=entry["descriptors"],
+            scenarios=str(entry.get("scenarios", "fixed")),
         )
         planned.append((made, entry["dir"]))
     return planned

@@ -80,21 +80,39 @@ its directory relative to the study's folder)."""
 
 
 def more_runs(saved: object, given: object) -> bool:
-    """Whether the plan document ``given`` only adds runs to ``saved``: more runs per group, every other
-    option the same, and every run ``saved`` planned planned again with the same folder and configuration
-    (run seeds are derived from the run's index, so raising ``--runs`` keeps the first runs as they were)."""
+    """Whether the plan document ``given`` only adds runs to ``saved``: more runs per group, or (a study
+    that lists its arms) more arms, every other option the same, and every run ``saved`` planned planned
+    again with the same folder and configuration (run seeds are derived from the run's index, so raising
+    ``--runs`` keeps the first runs as they were; an arm's runs never change another's)."""
     if not (isinstance(saved, dict) and isinstance(given, dict)) or saved.keys() != given.keys():
         return False
-    if any(saved[key] != given[key] for key in saved if key not in ("runs", "plan")):
+    if any(saved[key] != given[key] for key in saved if key not in ("runs", "plan", "arms")):
         return False
     old_runs, new_runs = saved.get("runs"), given.get("runs")
+    old_arms, new_arms = saved.get("arms", []), given.get("arms", [])
     old_plan, new_plan = saved.get("plan"), given.get("plan")
-    if not (isinstance(old_runs, int) and isinstance(new_runs, int) and new_runs > old_runs):
+    if not (isinstance(old_runs, int) and isinstance(new_runs, int) and new_runs >= old_runs):
+        return False
+    if not (isinstance(old_arms, list) and isinstance(new_arms, list) and set(old_arms) <= set(new_arms)):
+        return False
+    if new_runs == old_runs and len(new_arms) == len(old_arms):
         return False
     if not (isinstance(old_plan, list) and isinstance(new_plan, list)):
         return False
     planned = {json.dumps(entry, sort_keys=True) for entry in new_plan}
     return all(json.dumps(entry, sort_keys=True) in planned for entry in old_plan)
+
+
+def growth(saved: object, given: object) -> str:
+    """How a plan ``more_runs`` accepts grows, for the message: more runs per group, new arms, or both."""
+    assert isinstance(saved, dict) and isinstance(given, dict)  # what more_runs accepted
+    parts = []
+    if given["runs"] > saved["runs"]:
+        parts.append(f"to {given['runs']} runs per group")
+    added = [arm for arm in given.get("arms", []) if arm not in saved.get("arms", [])]
+    if added:
+        parts.append(f"by the arm{'s' if len(added) > 1 else ''} {', '.join(added)}")
+    return " and ".join(parts)
 
 
 def differences(saved: object, given: object, shown: int = 3) -> str:
