@@ -17,9 +17,9 @@ def spin_until_shutdown(node: Node, executor: Executor | None = None, *, events:
     ``KeyboardInterrupt``; both are a normal stop.
 
     ``events`` (no ``executor`` then): rclpy's experimental ``EventsExecutor`` (C++, woken by the middleware's
-    events; it ignores callback groups, so only for a node whose callbacks run one at a time). It cost a
-    footbot controller in lockstep about a fifth less CPU per step than the Python single-threaded executor,
-    which rebuilds its wait set for every callback. Its ``spin()`` took no callback at all in Kilted (rclpy
+    events; it ignores callback groups, so only for a node whose callbacks run one at a time). It cost the
+    lockstep footbot controllers about 40% less CPU per step than the Python single-threaded executor, which
+    rebuilds its wait set for every callback. Its ``spin()`` took no callback at all in Kilted (rclpy
     9.1: a service was never answered, a subscription never called), while ``spin_once`` works: so it is
     spun one ``spin_once`` after another, and stops when the context is shut down (Ctrl-C: rclpy's signal
     handler shuts it down, which wakes the executor)."""
