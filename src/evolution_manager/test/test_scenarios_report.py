@@ -60,6 +60,13 @@ def test_the_mixed_model_recovers_a_known_difference_with_scenario_offsets():
     assert scenarios._mixed(same, shifted)[3] > 0.5
 
 
+def test_a_p_value_that_underflows_is_shown_as_below_the_smallest_not_zero():
+    assert scenarios.shown_p(0.0) == "< 1e-300" and scenarios.shown_p(1e-301) == "< 1e-300"
+    assert scenarios.shown_p(0.04287) == "0.0429" and scenarios.shown_p(2.5e-12) == "2.5e-12"
+    row = scenarios.Pooled("QD score", "food", "GP_food", "QD_food", 3, 60, 0.172, 0.163, 0.181, 0.0, 0.0)
+    assert "| < 1e-300 | < 1e-300 |" in scenarios._pooled_table([row])
+
+
 def test_the_committed_scenarios_report_recomputes_from_its_runs_csv():
     rows = scenarios.read_scenarios_csv(COMMITTED / "runs.csv")
     per_scenario, pooled = scenarios.tables_from_rows(rows)

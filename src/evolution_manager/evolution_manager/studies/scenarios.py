@@ -169,7 +169,7 @@ def tables_from_rows(rows: Sequence[dict[str, str]]) -> tuple[str, str]:
                     same += said == "same conclusion"
                     cells.append(
                         ("same" if said == "same conclusion" else "differs")
-                        + f" (p = {row.p_value:.3g}, n = {row.n_first}/{row.n_second})"
+                        + f" (p = {shown_p(row.p_value)}, n = {row.n_first}/{row.n_second})"
                     )
                 per_scenario.append(
                     f"| {name} | {objective} | {first} vs {second} | {paper_p} | "
@@ -189,6 +189,12 @@ def tables_from_rows(rows: Sequence[dict[str, str]]) -> tuple[str, str]:
 def _holm(rows: Sequence[Pooled]) -> list[Pooled]:
     corrected = holm_adjusted([r.p_value for r in rows])
     return [replace(r, p_holm=p) for r, p in zip(rows, corrected, strict=True)]
+
+
+def shown_p(p: float) -> str:
+    """A p-value as the report prints it: three significant figures, and below the smallest a double keeps
+    apart from zero (a Wald p of a very large effect underflows to 0) as ``< 1e-300``, never ``0``."""
+    return "< 1e-300" if p < 1e-300 else f"{p:.3g}"
 
 
 def _pooled_table(rows: Sequence[Pooled]) -> str:
@@ -211,8 +217,8 @@ def _pooled_table(rows: Sequence[Pooled]) -> str:
             said = "different: " + ("not significant pooled" if paper_significant else "significant pooled")
         lines.append(
             f"| {r.metric} | {r.objective} | {r.first} vs {r.second} | {r.scenarios} | {r.n} "
-            f"| {r.estimate:.4g} ({r.low:.4g}, {r.high:.4g}) | {r.p_value:.3g} | {r.p_holm:.3g} | {paper_p} "
-            f"| {said} |"
+            f"| {r.estimate:.4g} ({r.low:.4g}, {r.high:.4g}) | {shown_p(r.p_value)} | {shown_p(r.p_holm)} "
+            f"| {paper_p} | {said} |"
         )
     return "\n".join(lines) + "\n"
 
