@@ -91,7 +91,7 @@ from evolution_manager.adaptation.search import (
     run_picker,
     struck_robots,
 )
-from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, finite, positive_int
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterError, add_cluster_options, settings_from_args
 from evolution_manager.errors import DispatchError, UsageError, WriteError
@@ -218,16 +218,6 @@ _PURPOSE_FILTER = 73
 _PURPOSE_HELDOUT = 74
 
 
-def _fraction(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
 def _number_option(text: str) -> float:
     try:
         value = float(text)
@@ -269,7 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--trials", type=positive_int, default=10, help="simulated trials per evaluation")
     parser.add_argument(
         "--keep-below",
-        type=_fraction,
+        type=finite(0.0, strictly=True, what="number"),
         default=KEEP_BELOW,
         help="keep a condition where the unchanged best keeps less than this of its score (0.7)",
     )
@@ -419,7 +409,7 @@ class Scores:
                 SwarmRequest(composition(base, tree, struck_robots(self.config, seed), n), seed, self.trials)
                 for seed in self.seeds
             ]
-            self._cache[key] = self._mean(self.local.evaluate(requests))  # type: ignore[arg-type]
+            self._cache[key] = self._mean(self.local.evaluate(requests))  # type: ignore[arg-type]  # BatchEvaluator takes swarm requests
         return self._cache[key]
 
 
@@ -814,15 +804,15 @@ def summarise(
         "candidates": candidates,
     }
     families: dict[str, dict[str, object]] = {}
-    for condition, data in candidates.items():
-        family = families.setdefault(str(data["family"]), {"candidates": 0, "kept": 0, "conditions": []})
-        family["candidates"] = int(family["candidates"]) + 1  # type: ignore[call-overload]
-        if data["kept"]:
-            family["kept"] = int(family["kept"]) + 1  # type: ignore[call-overload]
-            family["conditions"].append(condition)  # type: ignore[attr-defined]
-    for family in families.values():
-        found = [run for c in family["conditions"] for run in runs.get(c, [])]  # type: ignore[attr-defined]
-        family["methods"] = method_summary(found, args.budget)
+    for name in dict.fromkeys(str(data["family"]) for data in candidates.values()):  # in candidate order
+        members = [c for c, data in candidates.items() if str(data["family"]) == name]
+        kept = [c for c in members if candidates[c]["kept"]]
+        families[name] = {
+            "candidates": len(members),
+            "kept": len(kept),
+            "conditions": kept,
+            "methods": method_summary([run for c in kept for run in runs.get(c, [])], args.budget),
+        }
     out["families"] = families
     out["conditions"] = {
         condition: {

@@ -949,13 +949,15 @@ class CompositionRun(CountedRun[Genome, Member]):
             ],
         }
 
-    def _scored_genomes(self) -> list[tuple[Genome, float]]:
-        """Every genome the run evaluated (``evaluations.csv``) with its fitness, in evaluation order; failed
-        evaluations left out."""
+    def _scored_rows(self) -> list[dict[str, str]]:
+        """The rows of ``evaluations.csv``, every genome the run evaluated in evaluation order, failed
+        evaluations left out: what the validated choice and the evaluated QD scores are computed from."""
+        return [row for row in self.directory.evaluations.read() if row[self.config.objective] != ""]
+
+    def _scored_genomes(self, rows: Sequence[dict[str, str]]) -> list[tuple[Genome, float]]:
+        """Each evaluated genome (``_scored_rows``) with its fitness."""
         return [
-            (tuple(int(c) for c in row["genome"].split()), float(row[self.config.objective]))
-            for row in self.directory.evaluations.read()
-            if row[self.config.objective] != ""
+            (tuple(int(c) for c in row["genome"].split()), float(row[self.config.objective])) for row in rows
         ]
 
     def _homogeneous_baseline(self) -> dict | None:
@@ -992,20 +994,19 @@ class CompositionRun(CountedRun[Genome, Member]):
             "validated": validated,
         }
 
-    def _evaluated(self) -> list[tuple[tuple[float, ...], float]]:
-        """Every genome the run evaluated (``evaluations.csv``), at its point of the run's behaviour space
-        with its fitness; failed evaluations left out."""
-        rows = self.directory.evaluations.read()
+    def _evaluated(self, rows: Sequence[dict[str, str]]) -> list[tuple[tuple[float, ...], float]]:
+        """Each evaluated genome (``_scored_rows``) at its point of the run's behaviour space, with its
+        fitness."""
         axes = self.space.names
         return [
             (self.space.scaled([float(row[a]) for a in axes]), float(row[self.config.objective]))
             for row in rows
-            if row[self.config.objective] != ""
         ]
 
     def write_results(self) -> list[Path]:
         """``summary.json``, the best composition in ``best/``; for qd ``repertoire_compositions.json``."""
         directory = self.directory
+        rows = self._scored_rows()  # read once, for the validated choice and the evaluated QD scores
         written = []
         summary: dict = {
             "run": self.config.label,
@@ -1026,7 +1027,7 @@ class CompositionRun(CountedRun[Genome, Member]):
             summary["heldout"] = {"seeds": seeds, "evaluations": len(seeds), "trials": self.config.trials}
             summary["heldout_best_fitness"], summary["heldout_descriptors"] = self._heldout(self.best.genome)
             summary["validation"] = validation_settings(self.config.scenario_seed, self.config.trials)
-            summary["validated"] = self._validated(self._scored_genomes())
+            summary["validated"] = self._validated(self._scored_genomes(rows))
             summary["homogeneous"] = self._homogeneous_baseline()
         if self.config.algorithm == "qd":
             summary["coverage"] = len(self.grid) / 512
@@ -1056,7 +1057,7 @@ class CompositionRun(CountedRun[Genome, Member]):
                 },
             )
             written.append(directory.repertoire)
-        summary["qd_scores_evaluated"] = _by_bins(coarse_qd_scores(self._evaluated()))
+        summary["qd_scores_evaluated"] = _by_bins(coarse_qd_scores(self._evaluated(rows)))
         write_json(directory.summary, summary)
         written.append(directory.summary)
         if self.best is not None:
