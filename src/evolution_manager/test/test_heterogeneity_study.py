@@ -31,14 +31,18 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     ]
     third = stages[2]()  # the teams need no repertoire
     assert [folder for _, folder in third] == [
-        f"arms/multifood-arena9-kind2/team{k}/run0{r}" for k in (2, 3, 9) for r in (0, 1)
+        f"arms/multifood-arena9-kind2/team{k}{fresh}/run0{r}"
+        for fresh in ("", "-fresh")
+        for k in (2, 3, 9)
+        for r in (0, 1)
     ]
     made, _ = first[0]
     assert (made.algorithm, made.descriptors, made.objective) == ("qd", "deliveries", "foraging_biased")
     teams = [e for e in document["plan"] if e["kind"] == "team"]
-    assert len(teams) == len(study.TASKS) * 3 * 2
+    assert len(teams) == len(study.TASKS) * 6 * 2
     assert all(budgets[e["dir"]] == 25_000 + 300 for e in teams)  # a repertoire's and a composition's budget
-    assert [made.team for made, _ in third] == [2, 2, 3, 3, 9, 9]
+    assert [made.team for made, _ in third] == [2, 2, 3, 3, 9, 9] * 2
+    assert [made.scenarios for made, _ in third] == ["fixed"] * 6 + ["fresh"] * 6
     arms = [e for e in document["plan"] if e["kind"] == "composition"]
     assert len(arms) == len(study.TASKS) * sum(1 for a in study.ARMS if not a.team) * 2
     for entry in arms:
@@ -54,7 +58,8 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
 
 def test_new_arms_grow_the_plan_and_keep_the_runs_planned_before(tmp_path, monkeypatch):
     """The fresh-scenario arms came after the study began: a plan made without them grows by them (as by more
-    runs), every run planned before planned again alike; a plan with other options does not grow."""
+    runs), every run planned before planned again alike (the fixed-scenario entries, of compositions and
+    teams, without a scenarios key); a plan with other options does not grow."""
     args = build_parser().parse_args(
         ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
     )
@@ -65,18 +70,19 @@ def test_new_arms_grow_the_plan_and_keep_the_runs_planned_before(tmp_path, monke
     before, _, _ = study.plan_study(args, "fixed", "shared")
     saved, given = json.loads(json.dumps(before)), json.loads(json.dumps(full))
     assert planning.more_runs(saved, given) and not planning.more_runs(given, saved)
-    assert planning.growth(saved, given) == "by the arms ga-fresh, qd-fresh"
-    fresh = [e for e in given["plan"] if e.get("scenarios") == "fresh"]
-    assert len(fresh) == len(study.TASKS) * 2 * 2 and {e["arm"] for e in fresh} == {"ga-fresh", "qd-fresh"}
-    assert all("scenarios" not in e for e in saved["plan"])  # the runs planned before, unchanged
+    added = "ga-fresh, qd-fresh, team2-fresh, team3-fresh, team9-fresh"
+    assert planning.growth(saved, given) == f"by the arms {added}"
+    fresh = [e for e in given["plan"] if e.get("scenarios", e.get("config", {}).get("scenarios")) == "fresh"]
+    assert len(fresh) == len(study.TASKS) * 5 * 2 and {e["arm"] for e in fresh} == set(added.split(", "))
+    assert all("scenarios" not in e for e in saved["plan"])
+    assert all("scenarios" not in e["config"] for e in saved["plan"] if e["kind"] == "team")
     more = build_parser().parse_args(
         ["--study", "heterogeneity", "--runs", "3", "--swarm-evaluations", "300", "--out", str(tmp_path)]
     )
     monkeypatch.setattr(study, "ARMS", every_arm)
     both, _, _ = study.plan_study(more, "fixed", "shared")
     assert (
-        planning.growth(saved, json.loads(json.dumps(both)))
-        == "to 3 runs per group and by the arms ga-fresh, qd-fresh"
+        planning.growth(saved, json.loads(json.dumps(both))) == f"to 3 runs per group and by the arms {added}"
     )
     other = build_parser().parse_args(
         ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "400", "--out", str(tmp_path)]

@@ -13,6 +13,7 @@ from evolution_manager.errors import ConfigError, EvolutionError
 from evolution_manager.evolution.deap_trees import make_primitive_set, tree_from_text, tree_to_text
 from evolution_manager.evolution.operators import full_tree, vary
 from evolution_manager.evolution.parameters import GPParameters
+from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.evolution.run_folder import TEAMS, run_kind
 from evolution_manager.evolution.teams import (
     TeamConfig,
@@ -266,6 +267,38 @@ def test_an_experiment_runs_a_planned_team_run_to_the_files_of_evolve(tmp_path):
         run_one(other.to_json(), str(tmp_path / "planned"))
 
 
+def test_fresh_scenarios_give_each_evaluated_team_a_scenario_of_its_own(tmp_path, capsys):
+    """--scenarios fresh: evaluation i on evaluation_seed(seed, i), nothing answered from memory; recorded in
+    config.json (a fixed run's file stays without the key); held-out and validation scenarios shared with a
+    fixed run of the same scenario seed; a resume with the other design refused in one line."""
+    extra = ["--team", "2", "--evaluations", "50", "--seed", "3"]
+    assert _team(tmp_path / "a", *extra, "--scenarios", "fresh") == 0
+    assert _team(tmp_path / "b", *extra, "--scenarios", "fresh") == 0
+    assert _team(tmp_path / "fixed", *extra) == 0
+    assert _files(tmp_path / "a", team=2) == _files(tmp_path / "b", team=2)
+    config = json.loads((tmp_path / "a" / "config.json").read_text())
+    assert config["scenarios"] == "fresh"
+    assert "scenarios" not in json.loads((tmp_path / "fixed" / "config.json").read_text())
+    rows = list(csv.DictReader((tmp_path / "a" / "evaluations.csv").open()))
+    assert [int(r["seed"]) for r in rows] == [evaluation_seed(3, i) for i in range(len(rows))]
+    # a row's fitness is its team's on its own scenario, even for a team evaluated before on another
+    evaluator = BatchEvaluator(TeamConfig.from_json(config).world())
+    k = OBJECTIVES.index("food")
+    for row in (rows[0], rows[-1]):
+        [(fitness, _, _)] = evaluate_teams(
+            evaluator, [tuple(json.loads(row["trees"]))], 9, [int(row["seed"])], 1
+        )
+        assert fitness is not None and fitness[k] == float(row["fitness"])
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    fixed = json.loads((tmp_path / "fixed" / "summary.json").read_text())
+    assert summary["heldout"] == fixed["heldout"] and summary["validation"] == fixed["validation"]
+    capsys.readouterr()
+    resume = ["--out", str(tmp_path / "a"), "--resume", "--scenarios", "fixed", "--no-progress"]
+    assert evolve(resume) == 2
+    error = capsys.readouterr().err
+    assert "--scenarios fixed differs from the run being resumed (fresh)" in error and error.count("\n") == 1
+
+
 # Refusals ---------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("extra", "words"),
@@ -276,7 +309,6 @@ def test_an_experiment_runs_a_planned_team_run_to_the_files_of_evolve(tmp_path):
         (["--team", "2", "--algorithm", "qd"], "with --algorithm gp, not qd"),
         (["--team", "2", "--algorithm", "gp-fnd"], "with --algorithm gp, not gp-fnd"),
         (["--team", "2", "--swarm-from", "runs/x"], "--swarm-from does not apply to a team run"),
-        (["--team", "2", "--scenarios", "fresh"], "fixed scenarios"),
         (["--team", "2", "--nodes", "hierarchical"], "--nodes does not apply"),
         (["--team", "2", "--algorithm", "gp", "--objective", None], "--team needs --objective"),
     ],
@@ -338,5 +370,9 @@ def test_a_team_configuration_round_trips_and_takes_the_tasks_derating():
     assert TeamConfig.from_json(json.loads(json.dumps(config.to_json()))) == config
     assert config.gp.derating == "baseline" and config.label == "GP_team2_foraging_biased"
     assert TeamConfig.make(2, "food", 200, 1).gp.derating == "standard"
+    fresh = TeamConfig.make(2, "food", 200, 1, scenarios="fresh")
+    assert TeamConfig.from_json(json.loads(json.dumps(fresh.to_json()))) == fresh
+    with pytest.raises(ConfigError, match="scenarios must be one of fixed, fresh, got 'new'"):
+        TeamConfig.make(2, "food", 200, 1, scenarios="new")
     with pytest.raises(ConfigError, match="not a team run's configuration"):
         TeamConfig.from_json({**config.to_json(), "kind": "networks"})

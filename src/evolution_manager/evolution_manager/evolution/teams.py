@@ -21,8 +21,10 @@ the generations after the initial population (25 per generation, the elite inclu
 generation that reaches it is completed.
 
 Every team is evaluated as a heterogeneous swarm (``swarm_sim.evaluation.SwarmRequest``) on the run's
-scenario seed (fixed scenarios; a team this process evaluated before is answered from memory). Every random
-draw comes from one ``random.Random`` seeded with ``derive_seed(seed, RUN_ALGORITHM)``.
+scenario seed (fixed scenarios, the default; a team this process evaluated before is answered from
+memory), or under ``--scenarios fresh`` evaluation ``i`` on a scenario of its own
+(``run_config.evaluation_seed``), so that no team is chosen for one scenario's luck. Every random draw comes
+from one ``random.Random`` seeded with ``derive_seed(seed, RUN_ALGORITHM)``.
 
 A run directory is a run folder as every run's (``run_folder``): ``config.json`` (``"kind": "teams"``),
 ``evaluations.csv`` (evaluation, seed, the sub-group varied, the K trees as a JSON list, the objective, the
@@ -57,7 +59,9 @@ from evolution_manager.evolution.parameters import DERATINGS, Derating, GPParame
 from evolution_manager.evolution.run_config import (
     DEFAULT_PROFILE,
     HELDOUT_EVALUATIONS,
+    SCENARIOS,
     default_scenario_seed,
+    evaluation_seed,
     heldout_seed,
 )
 from evolution_manager.evolution.run_folder import (
@@ -170,6 +174,10 @@ class TeamConfig:
     """-1: derived from ``seed`` as every run's (``run_config.default_scenario_seed``)."""
     gp: GPParameters = field(default_factory=GPParameters)
     algorithm: str = "gp"
+    scenarios: str = "fixed"
+    """``fixed``: every evaluation on the scenario seed; ``fresh``: evaluation ``i`` on a scenario of its own
+    (``run_config.evaluation_seed``), as a tree or composition run's. The held-out and validation scenarios
+    come from the scenario seed either way."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -192,6 +200,8 @@ class TeamConfig:
         if self.scenario_seed == -1:
             object.__setattr__(self, "scenario_seed", default_scenario_seed(self.seed))
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
+        if self.scenarios not in SCENARIOS:
+            raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
         p = self.gp
         if p.population < 2 or p.elites_per_objective >= p.population or p.tournament < 1:
             raise ConfigError(
@@ -210,6 +220,7 @@ class TeamConfig:
         profile: str | None = None,
         task: TaskSpec | str = DEFAULT_TASK,
         scenario_seed: int | None = None,
+        scenarios: str = "fixed",
     ) -> TeamConfig:
         """A configuration with the 2023 GP's parameters and the derating the tree GP of ``task`` would use
         (``RunConfig.make``: the 2024 flat baseline's on a foraging task, else the 2023 one)."""
@@ -225,6 +236,7 @@ class TeamConfig:
             task,
             -1 if scenario_seed is None else scenario_seed,
             GPParameters(derating=derating),
+            scenarios=scenarios,
         )
 
     @property
@@ -240,6 +252,10 @@ class TeamConfig:
         """The node set's conditions: the task's, in blackboard order (as a tree run's)."""
         return tuple(c for c in CONDITIONS if c in self.task.nodes.conditions)
 
+    def evaluation_seed(self, index: int) -> int:
+        """The scenario of evaluation ``index``: the scenario seed, or under fresh scenarios its own."""
+        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+
     def heldout_seeds(self) -> list[int]:
         """The seeds of the best team's held-out evaluations, as a tree run's (``heldout``)."""
         return [heldout_seed(self.scenario_seed, repeat) for repeat in range(HELDOUT_EVALUATIONS)]
@@ -247,7 +263,7 @@ class TeamConfig:
     def to_json(self) -> dict:
         gp = asdict(self.gp)
         gp["mutations"] = [list(m) for m in self.gp.mutations]
-        return {
+        document = {
             "kind": KIND,
             "algorithm": self.algorithm,
             "team": self.team,
@@ -260,6 +276,11 @@ class TeamConfig:
             "scenario_seed": self.scenario_seed,
             "gp": gp,
         }
+        if (
+            self.scenarios != "fixed"
+        ):  # written only when asked for: the files of fixed runs stay as they were
+            document["scenarios"] = self.scenarios
+        return document
 
     @classmethod
     def from_json(cls, data: dict) -> TeamConfig:
@@ -279,6 +300,7 @@ class TeamConfig:
                 data["scenario_seed"],
                 GPParameters(**gp),
                 str(data["algorithm"]),
+                str(data.get("scenarios", "fixed")),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as error:
             if isinstance(error, ConfigError):
@@ -485,18 +507,24 @@ class TeamRun(CountedRun[Texts, Member]):
 
     def _evaluate(self, batch: list[Texts]) -> list[Member]:
         """Each team on the run's scenario seed; a team this process evaluated before is answered from memory
-        (the same request, the same result)."""
+        (the same request, the same result). Under fresh scenarios each on its own scenario, nothing
+        remembered."""
         if self.evaluator is None:
             raise RunDirectoryError("this run was opened for reading: it has no evaluator")
-        fresh = list(dict.fromkeys(t for t in batch if t not in self.known))
-        seeds = [self.config.scenario_seed] * len(fresh)
-        results = evaluate_teams(self.evaluator, fresh, self.n_robots, seeds, self.config.trials)
-        self.known.update(zip(fresh, results, strict=True))
+        if self.config.scenarios == "fresh":
+            seeds = [self.config.evaluation_seed(self.evaluations + i) for i in range(len(batch))]
+            answers = evaluate_teams(self.evaluator, batch, self.n_robots, seeds, self.config.trials)
+        else:
+            unseen = list(dict.fromkeys(t for t in batch if t not in self.known))
+            seeds = [self.config.scenario_seed] * len(unseen)
+            results = evaluate_teams(self.evaluator, unseen, self.n_robots, seeds, self.config.trials)
+            self.known.update(zip(unseen, results, strict=True))
+            answers = [self.known[texts] for texts in batch]
         k = OBJECTIVES.index(self.config.objective)
         groups = [c.group for c in self._children if c.touched]
         members = []
-        for i, (texts, group) in enumerate(zip(batch, groups, strict=True)):
-            fitness, descriptors, error = self.known[texts]
+        for i, (texts, group, answer) in enumerate(zip(batch, groups, answers, strict=True)):
+            fitness, descriptors, error = answer
             value = None if fitness is None else fitness[k]
             members.append(Member(texts, value, descriptors, self.evaluations + i, error, group))
         return members
@@ -526,10 +554,10 @@ class TeamRun(CountedRun[Texts, Member]):
         self._shapes = {text: shape for text, shape in self._shapes.items() if text in alive}
 
     def _record(self, members: Sequence[Member]) -> None:
-        seed = str(self.config.scenario_seed)
         rows = [
-            [str(m.evaluation), seed, "" if m.group < 0 else str(m.group), json.dumps(list(m.genome)),
-             *m.logged(len(DESCRIPTORS)), m.error]
+            [str(m.evaluation), str(self.config.evaluation_seed(m.evaluation)),
+             "" if m.group < 0 else str(m.group), json.dumps(list(m.genome)), *m.logged(len(DESCRIPTORS)),
+             m.error]
             for m in members
         ]  # fmt: skip
         self.evaluations += len(members)

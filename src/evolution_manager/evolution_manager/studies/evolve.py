@@ -610,8 +610,6 @@ def _check_team_options(args: argparse.Namespace, cluster: ClusterSettings) -> N
                 f"--{name.replace('_', '-')} does not apply to a team run (--team K: K trees evolved from "
                 "scratch over the task's node set); leave it out"
             )
-    if args.scenarios == "fresh":
-        raise UsageError("teams are evaluated on fixed scenarios: leave out --scenarios fresh")
     if args.algorithm not in (None, "gp"):
         raise UsageError(f"--team K evolves K trees together with --algorithm gp, not {args.algorithm}")
 
@@ -626,7 +624,16 @@ def _evolve_teams(
         _check_team_options(args, cluster)
         if args.resume:
             saved = teams.TeamConfig.from_json(read_json_object(Path(args.out) / "config.json"))
-            names = ("team", "objective", "evaluations", "seed", "trials", "profile", "scenario_seed")
+            names = (
+                "team",
+                "objective",
+                "evaluations",
+                "seed",
+                "trials",
+                "profile",
+                "scenario_seed",
+                "scenarios",
+            )
             _check_as_saved(args, saved, names)
             if args.task is not None and args.task != saved.task:
                 raise UsageError(
@@ -651,6 +658,7 @@ def _evolve_teams(
                 args.profile,
                 task,
                 args.scenario_seed,
+                args.scenarios or "fixed",
             )
         evaluator = _evaluator(args.workers, config)
         if args.resume:

@@ -19,8 +19,9 @@ Every run of task ``t`` and index ``r``, the repertoire and each arm, has the se
 RUN_STUDY, HETEROGENEITY_STAGE, t, r)``, so the arms pair by seed, and composes from the same repertoire. The
 **homogeneous** baseline is measured by each composition run itself (``summary.json``, ``homogeneous``): the
 best of its cells' nine copies on the run's scenario, re-scored on the held-out scenarios; the study reads it
-from the run of the first arm. Every run is evaluated on fixed scenarios, but for the arms ``ga-fresh`` and
-``qd-fresh``, whose every evaluation has a scenario of its own (``--scenarios fresh``); under the ``shared``
+from the run of the first arm. Every run is evaluated on fixed scenarios, but for the arms ``ga-fresh``,
+``qd-fresh`` and ``team<K>-fresh``, whose every evaluation has a scenario of its own (``--scenarios
+fresh``); under the ``shared``
 design (the default) on one scenario seed for the whole study, otherwise each on its seed's own, which the
 repertoire and the arms of one index share (with their held-out, validation and baseline scenarios). Arms
 added to the study later grow its plan (``planning.more_runs``): the runs planned before keep their folders.
@@ -92,7 +93,7 @@ class Arm:
     team: int = 0
     """K, for a team arm (``evolution.teams``); 0 for a composition arm."""
     scenarios: str = "fixed"
-    """A composition arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
+    """The arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
 
     @property
     def parameters(self) -> CompositionParameters:
@@ -115,6 +116,11 @@ ARMS: tuple[Arm, ...] = (
     *(
         Arm(f"team{k}", "gp", f"GP over {k} trees evolved together, no repertoire (robot i runs tree i "
             f"mod {k})", team=k)
+        for k in (2, 3, 9)
+    ),
+    *(
+        Arm(f"team{k}-fresh", "gp", f"GP over {k} trees evolved together with every evaluation on a scenario "
+            "of its own", team=k, scenarios="fresh")
         for k in (2, 3, 9)
     ),
 )  # fmt: skip
@@ -171,7 +177,7 @@ def plan_study(
                 seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
                 team = TeamConfig.make(
                     arm.team, objective, args.evaluations + swarm_evaluations, seed, args.trials, profile,
-                    task, scenario_seed,
+                    task, scenario_seed, arm.scenarios,
                 )  # fmt: skip
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entries.append({"kind": "team", "arm": arm.name, "task": task, "dir": folder,
