@@ -15,9 +15,20 @@ from bt_controller.random_trees import random_trees
 from bt_controller.tree import parse
 from bt_controller.vocabulary import CONDITIONS, MULTIFOOD_CONDITIONS
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
-from swarm_sim.model import OBJECTIVES, of_trees
+from swarm_sim.model import OBJECTIVES, arena_entries, of_trees
 from swarm_sim.roads import record_trial, record_trial_reference, reference_road
-from swarm_sim.tasks import FORAGING, TaskError, Trials, arena_task, task_from_yaml, task_named, task_to_yaml
+from swarm_sim.tasks import (
+    FORAGING,
+    UNSEEN_FIRST_ENTRY,
+    TaskError,
+    Trials,
+    arena_task,
+    task_from_yaml,
+    task_named,
+    task_names,
+    task_to_yaml,
+    unseen_twin,
+)
 
 GATHERER = (
     "sel(seq(sel(got_food1, got_food2, got_food3), sel(seq(nest_left, forward_left), seq(nest_right, "
@@ -103,6 +114,34 @@ def test_the_registered_arena_tasks():
         task = task_named(f"multifood-arena9-kind{kind}")
         assert task.scoring.preferred_food == kind and "foraging_biased" in task.objectives
         assert task_from_yaml(task_to_yaml(task)) == task
+
+
+def test_the_unseen_twins_take_the_arenas_no_run_evolves_on():
+    """``<task>-unseen``: the same task, trial k of a block on generated arena 5 + k, never on 0 to 4."""
+    names = [n for n in task_names() if n.endswith("-unseen")]
+    assert len(names) == 8 and all(unseen_twin(n.removesuffix("-unseen")).name == n for n in names)
+    for name in names:
+        seen, unseen = task_named(name.removesuffix("-unseen")), task_named(name)
+        layout = int(name.split("arena")[1][0])
+        bias = seen.scoring.preferred_food - 1 if layout == 9 else None
+        entries = arena_entries(layout, bias=bias)
+        assert UNSEEN_FIRST_ENTRY == 5 and len(entries) == 10
+        for region, m in ((unseen.regions[i], i) for i in range(len(unseen.regions))):
+            assert region.centre == tuple((e[m].x, e[m].y) for e in entries[5:10]), (name, m)
+            assert seen.regions[m].centre == tuple((e[m].x, e[m].y) for e in entries[:5])
+        assert replace(unseen, name=seen.name, description=seen.description, regions=seen.regions) == seen
+        assert task_from_yaml(task_to_yaml(unseen)) == unseen
+    # a tree scores differently on arenas it never met (the same seed and trials)
+    evaluator = BatchEvaluator(_short("multifood-arena6").config())
+    other = BatchEvaluator(_short("multifood-arena6-unseen").config())
+    request = [EvaluationRequest(GATHERER, 3, 5)]
+    assert evaluator.evaluate(request)[0].fitness != other.evaluate(request)[0].fitness
+    with pytest.raises(TaskError, match="task 'foraging' has no unseen arenas; the tasks that have: multi"):
+        unseen_twin("foraging")
+    with pytest.raises(TaskError, match="first_entry applies only to the generated layouts 6-9"):
+        arena_task(FORAGING, 5, first_entry=1)
+    with pytest.raises(TaskError, match="first_entry must be 0 to 9, got 10"):
+        arena_task(FORAGING, 6, first_entry=10)
 
 
 def test_bad_settings_of_the_2026_arenas_are_refused_in_one_line():

@@ -8,7 +8,13 @@ are pieces of ground (``regions``), and the authors' 2026 arena layouts 1-9 are 
 Other packages import these names from here.
 """
 
-from swarm_sim.model.arenas import FOOD_KINDS, arena_entries, pieces_from_points, scatter_points
+from swarm_sim.model.arenas import (
+    FOOD_KINDS,
+    GENERATED_LAYOUTS,
+    arena_entries,
+    pieces_from_points,
+    scatter_points,
+)
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
 from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
 from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
@@ -53,6 +59,7 @@ __all__ = [
     "FAULT_FIELDS",
     "FAULT_KINDS",
     "FOOD_KINDS",
+    "GENERATED_LAYOUTS",
     "N_OBJECTIVES",
     "N_PROBES",
     "N_VALUES",

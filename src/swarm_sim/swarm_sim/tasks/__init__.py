@@ -9,7 +9,7 @@ The named tasks live in one registry (``register``, ``task_named``, ``task_names
 and default, and how to add a task, a condition and an objective.
 """
 
-from swarm_sim.tasks._arenas import arena_task
+from swarm_sim.tasks._arenas import UNSEEN_FIRST_ENTRY, arena_task
 from swarm_sim.tasks._files import (
     read_task_file,
     task_from_mapping,
@@ -31,6 +31,7 @@ from swarm_sim.tasks._registry import (
     task_named,
     task_names,
     task_to_record,
+    unseen_twin,
 )
 from swarm_sim.tasks._spec import (
     TASK_CONFIG_FIELDS,
@@ -54,6 +55,7 @@ __all__ = [
     "FORAGING_2026",
     "PRIMITIVES",
     "TASK_CONFIG_FIELDS",
+    "UNSEEN_FIRST_ENTRY",
     "Arena",
     "Communication",
     "Motors",
@@ -80,5 +82,6 @@ __all__ = [
     "task_to_mapping",
     "task_to_record",
     "task_to_yaml",
+    "unseen_twin",
     "world_parameters",
 ]

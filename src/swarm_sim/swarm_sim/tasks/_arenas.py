@@ -16,7 +16,7 @@ from dataclasses import replace
 from bt_controller.model_settings import CODE_2026
 from bt_controller.vocabulary import MULTIFOOD_CONDITIONS
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import FOOD_KINDS, arena_entries
+from swarm_sim.model import FOOD_KINDS, GENERATED_LAYOUTS, arena_entries
 from swarm_sim.model.regions import ArenaEntry
 from swarm_sim.tasks._spec import Arena, Nodes, Region, Scoring, TaskError, TaskSpec
 
@@ -25,6 +25,10 @@ START_HALF_2026 = 1500.0
 
 GAPS = (500.0, 700.0)
 """Their two runs' gaps (``arena_params``), one block of trials each."""
+
+UNSEEN_FIRST_ENTRY = 5
+"""The first of the generated arenas that neither the authors' runs nor ours evolve on: a block has five
+trials, which take entries 0 to 4 of the ten."""
 
 
 def arena_task(
@@ -38,6 +42,7 @@ def arena_task(
     other_food_weight: float = 1.0,
     types: int = 1,
     formation: str | None = None,
+    first_entry: int = 0,
     name: str | None = None,
 ) -> TaskSpec:
     """``base`` (a foraging task, say) on the regions of the authors' arena ``layout``, named ``name`` (by
@@ -47,7 +52,10 @@ def arena_task(
     node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``types`` 2 gives the
     authors' two robot types (``Robots.types``: odd robots perceive the nest and food kind 1 swapped, as in
     their ``generic`` projects, where it matters in layouts 7 and 8); ``formation`` the start formation
-    (None: ``base``'s). ``TaskError`` in one line for a bad setting."""
+    (None: ``base``'s). ``first_entry``: trial k of a block takes the generated layout's entry
+    ``first_entry + k`` (wrapping round its ten); 0 is the authors' choice, and since a block has five trials
+    their runs never see entries 5 to 9, which :data:`UNSEEN_FIRST_ENTRY` gives (arenas none of their runs or
+    ours evolved on). ``TaskError`` in one line for a bad setting."""
     try:
         rows = [arena_entries(layout, nest_radius=nest_radius, food_radius=food_radius, gap=g, points=points,
                               bias=bias)
@@ -57,10 +65,21 @@ def arena_task(
     kinds = sorted(
         {piece.kind for row in rows for entry in row for piece in entry} - {"nest"}, key=FOOD_KINDS.index
     )
+    if first_entry and layout not in GENERATED_LAYOUTS:
+        raise TaskError(
+            f"arena {layout}: first_entry applies only to the generated layouts 6-9 (ten arenas each), got "
+            f"{first_entry!r}"
+        )
+    if (
+        isinstance(first_entry, bool)
+        or not isinstance(first_entry, int)
+        or not 0 <= first_entry < len(rows[0])
+    ):
+        raise TaskError(f"arena {layout}: first_entry must be 0 to {len(rows[0]) - 1}, got {first_entry!r}")
     per_block = base.trials.chain_trials
     entries: list[ArenaEntry] = []
     for row in rows if rows[0] != rows[1] else rows[:1]:  # generated layouts do not change with the gap
-        entries += [row[k % len(row)] for k in range(per_block if len(row) > 1 else 1)]
+        entries += [row[(first_entry + k) % len(row)] for k in range(per_block if len(row) > 1 else 1)]
     trial_entries = per_block if len(rows[0]) > 1 else 1
     regions = tuple(
         Region(
@@ -93,6 +112,8 @@ def arena_task(
     )
     if robots.formation != "random":
         told += f", {robots.formation} start"
+    if first_entry:
+        told += f", trial k on its arena {first_entry} + k"
     return replace(
         base,
         name=name or f"{base.name}-arena{layout}",

@@ -14,7 +14,7 @@ from typing import Any
 from bt_controller.model_settings import CODE_2026
 from bt_controller.vocabulary import CONDITIONS_2023, CONDITIONS_2024
 from swarm_sim.model import PAPER_OBJECTIVES
-from swarm_sim.tasks._arenas import arena_task
+from swarm_sim.tasks._arenas import UNSEEN_FIRST_ENTRY, arena_task
 from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping
 from swarm_sim.tasks._spec import Nodes, TaskError, TaskSpec, Trials
 
@@ -107,6 +107,46 @@ for _layout in (7, 8):
     register(
         arena_task(FORAGING, _layout, types=2, formation="localised", name=f"multifood-arena{_layout}-types")
     )
+
+# Each generated layout's task again on the arenas no run evolves on (``UNSEEN_FIRST_ENTRY``: entries 5 to 9
+# of the ten), named ``<task>-unseen``: where a controller evolved on a task is tested on arenas it never met.
+UNSEEN_SUFFIX = "-unseen"
+for _layout in (6, 7, 8):
+    register(
+        arena_task(FORAGING, _layout, first_entry=UNSEEN_FIRST_ENTRY, name=f"multifood-arena{_layout}-unseen")
+    )
+for _kind in (1, 2, 3):
+    register(
+        arena_task(
+            FORAGING,
+            9,
+            bias=_kind - 1,
+            other_food_weight=ARENA9_OTHER_FOOD_WEIGHT,
+            first_entry=UNSEEN_FIRST_ENTRY,
+            name=f"multifood-arena9-kind{_kind}-unseen",
+        )
+    )
+for _layout in (7, 8):
+    register(
+        arena_task(
+            FORAGING,
+            _layout,
+            types=2,
+            formation="localised",
+            first_entry=UNSEEN_FIRST_ENTRY,
+            name=f"multifood-arena{_layout}-types-unseen",
+        )
+    )
+
+
+def unseen_twin(name: str) -> TaskSpec:
+    """The registered task ``name`` on the arenas no run evolves on (``<name>-unseen``); ``TaskError`` in one
+    line for a task that has none (only the generated layouts 6-9 have more arenas than a block's trials)."""
+    twin = name + UNSEEN_SUFFIX
+    if twin not in _REGISTRY:
+        with_twins = [n for n in _REGISTRY if n + UNSEEN_SUFFIX in _REGISTRY]
+        raise TaskError(f"task {name!r} has no unseen arenas; the tasks that have: {', '.join(with_twins)}")
+    return _REGISTRY[twin]
 
 
 def task_names() -> tuple[str, ...]:

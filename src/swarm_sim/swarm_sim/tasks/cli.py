@@ -52,6 +52,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="2: the authors' two robot types, odd robots perceiving the nest and food swapped (default 1)",
     )
     arena.add_argument("--formation", help="the start formation (default: the task's)")
+    arena.add_argument(
+        "--first-entry",
+        type=int,
+        default=0,
+        help="layouts 6-9: trial k takes generated arena FIRST_ENTRY + k (default 0, the authors'; 5: the "
+        "arenas no run evolves on)",
+    )
     args = parser.parse_args(argv)
     try:
         if args.verb == "list":
@@ -78,6 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 other_food_weight=args.other_food_weight,
                 types=args.types,
                 formation=args.formation,
+                first_entry=args.first_entry,
             )
             sys.stdout.write(task_to_yaml(task))
             return 0
