@@ -15,7 +15,9 @@ from evolution_manager.studies import heterogeneity_study as study
 from evolution_manager.studies import planning
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
-from swarm_sim.tasks import task_named
+from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
+from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.tasks import task_named, unseen_twin
 
 
 def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
@@ -141,6 +143,26 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert "| multifood-arena6 | qd-mix |" in validated and "validated held-out fitness" in validated
     baseline = next(r for r in rows if r["arm"] == study.BASELINE and r["seed"] == rows[0]["seed"])
     assert float(baseline[study.VALIDATED]) == first["validated"]["heldout_best_fitness"]
+    # the validated choices on the arenas no run evolved on: every row scored, each score that choice's mean
+    # on the task's unseen twin over the run's held-out seeds; a section of its own
+    assert all(r[study.UNSEEN] != "" for r in rows)
+    recorded = list(csv.DictReader(io.StringIO((out / study.UNSEEN_FILE).read_text())))
+    assert len(recorded) == len(rows) and list(recorded[0]) == study.UNSEEN_HEADER
+    evaluator = BatchEvaluator(unseen_twin("multifood-arena6").config("paper"))
+    summary = json.loads((out / "arms/multifood-arena6/ga/run00/summary.json").read_text())
+    for swarm, chosen in (
+        (study.BASELINE, summary["homogeneous"]["validated"]["trees"]),
+        ("validated", summary["validated"]["trees"]),
+    ):
+        results = evaluator.evaluate(
+            [SwarmRequest(SwarmLayout(tuple(chosen)), s, 1) for s in summary["heldout"]["seeds"]]
+        )
+        mean = sum(r.fitness[OBJECTIVES.index("foraging")] for r in results) / len(results)
+        row = next(
+            r for r in recorded if r["dir"] == "arms/multifood-arena6/ga/run00" and r["swarm"] == swarm
+        )
+        assert float(row["fitness"]) == pytest.approx(mean, abs=1e-12)
+    assert "## Unseen arenas" in report and "unseen-arena held-out fitness" in report
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
     capsys.readouterr()
     assert experiment(args) == 0

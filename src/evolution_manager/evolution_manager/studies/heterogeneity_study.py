@@ -33,7 +33,9 @@ the held-out median with its 95 % bootstrap interval, the ratio to the homogeneo
 each arm against the homogeneous baseline (``compare_paired``: Shapiro-Wilk on the differences, then a
 paired t-test or Wilcoxon signed-rank) with Holm's correction over the family of every arm on every task,
 the authors' QD score at 1, 2, 4 and 8 bins per axis of every composition run, and each robot's deliveries
-of each kind in the best swarms.
+of each kind in the best swarms. Two more tables with their own families: the runs' validated choices
+(``evolution.validation``), and the same choices on arenas no run evolved on (the task's ``-unseen`` twin,
+``swarm_sim.tasks.unseen_twin``, on the run's held-out seeds; measured once into ``unseen.csv``).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,8 +59,9 @@ from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
-from swarm_sim.model import Config, SwarmLayout
-from swarm_sim.tasks import task_named
+from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
+from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
+from swarm_sim.tasks import TaskError, task_named, unseen_twin
 
 STUDY = "heterogeneity"
 HETEROGENEITY_STAGE = 7
@@ -127,16 +131,26 @@ ARMS: tuple[Arm, ...] = (
 HEADER = [
     "arm", "task", "seed", "best_fitness", "heldout_best_fitness",
     "heldout_foraging1", "heldout_foraging2", "heldout_foraging3",
-    *(f"qd_score_{k}" for k in QD_SCORE_BINS), "validated_heldout_best_fitness",
+    *(f"qd_score_{k}" for k in QD_SCORE_BINS), "validated_heldout_best_fitness", "unseen_heldout_fitness",
 ]  # fmt: skip
 """``runs.csv``: one row per run; the QD scores (of every genome the run evaluated) are empty for the
 baseline; the validated choice's held-out score (``evolution.validation``) is empty for runs made before
-it."""
+it; the validated choice's score on unseen arenas is empty where the task has none."""
 
 HELDOUT = "heldout_best_fitness"
 VALIDATED = "validated_heldout_best_fitness"
-"""The two held-out scores the report compares arms by: of the run's best on its scenario, and of its
-validated choice."""
+UNSEEN = "unseen_heldout_fitness"
+"""The three held-out scores the report compares arms by: of the run's best on its scenario, of its
+validated choice, and of that choice on the task's unseen arenas (``swarm_sim.tasks.unseen_twin``)."""
+METRICS = {
+    HELDOUT: "held-out best fitness",
+    VALIDATED: "validated held-out fitness",
+    UNSEEN: "unseen-arena held-out fitness",
+}
+UNSEEN_FILE = "unseen.csv"
+UNSEEN_HEADER = ["dir", "swarm", "seeds", "trials", "fitness"]
+"""The study folder's record of every score on unseen arenas (a run's folder, ``validated`` or the
+baseline's ``homogeneous``, the held-out seeds and trials): measured once, read back by every report."""
 
 
 def _folder(kind: str, task: str, r: int) -> str:
@@ -286,13 +300,23 @@ def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
     return [_number(fitness) if entry["objective"] == "foraging" else "", "", ""]
 
 
-def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
-    """The plan document and one row per finished composition run, in the plan's order, each task's and
-    index's baseline row (from its first arm's run) before its arms' rows."""
-    root = Path(root)
-    document = read_json(root / PLAN_FILE)
+def study_plan(root: Path) -> dict:
+    """The plan document of the study in ``root``; ``EvolutionError`` when it holds none."""
+    document = read_json(Path(root) / PLAN_FILE)
     if not isinstance(document, dict) or document.get("study") != STUDY:
         raise EvolutionError(f"{root} is not a {STUDY} study ({PLAN_FILE})")
+    return document
+
+
+def finished_rows(
+    root: Path, unseen: dict[tuple[str, str], float] | None = None
+) -> tuple[dict, list[dict[str, str]]]:
+    """The plan document and one row per finished composition run, in the plan's order, each task's and
+    index's baseline row (from its first arm's run) before its arms' rows; ``unseen`` (:func:`unseen_scores`)
+    gives the unseen-arena column."""
+    root = Path(root)
+    unseen = unseen or {}
+    document = study_plan(root)
     rows: list[dict[str, str]] = []
     baselines: list[dict[str, str]] = []
     for entry in document["plan"]:
@@ -311,6 +335,7 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                 **{f"heldout_foraging{k}": _number(means.get(f"foraging{k}")) for k in (1, 2, 3)},
                 **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
                 VALIDATED: _validated(summary.get("validated")),
+                UNSEEN: _number(unseen.get((entry["dir"], "validated"))),
             })  # fmt: skip
             continue
         baseline = summary.get("homogeneous")
@@ -323,6 +348,7 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                     entry, baseline["heldout_best_fitness"], baseline["heldout_descriptors"]), strict=True)),
                 **{f"qd_score_{k}": "" for k in QD_SCORE_BINS},
                 VALIDATED: _validated(baseline.get("validated")),
+                UNSEEN: _number(unseen.get((entry["dir"], BASELINE))),
             })  # fmt: skip
         scores = summary.get("qd_scores_evaluated", {})
         rows.append({
@@ -333,8 +359,103 @@ def finished_rows(root: Path) -> tuple[dict, list[dict[str, str]]]:
                 entry, summary["heldout_best_fitness"], summary.get("heldout_descriptors")), strict=True)),
             **{f"qd_score_{k}": _number(scores.get(str(k))) for k in QD_SCORE_BINS},
             VALIDATED: _validated(summary.get("validated")),
+            UNSEEN: _number(unseen.get((entry["dir"], "validated"))),
         })  # fmt: skip
     return document, baselines + rows
+
+
+# Unseen arenas --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Chosen:
+    """A validated choice to score on unseen arenas: its run folder, whose it is (``validated``: the run's;
+    ``homogeneous``: the baseline's), the task, each robot's tree and the run's held-out seeds and trials."""
+
+    folder: str
+    swarm: str
+    task: str
+    trees: tuple[str, ...]
+    seeds: tuple[int, ...]
+    trials: int
+
+
+def _chosen_swarms(root: Path, document: dict) -> list[_Chosen]:
+    """Every finished arm run's validated choice, and each task's and index's baseline choice (from the
+    first arm's run, as :func:`finished_rows` takes it), in the plan's order."""
+    found: list[_Chosen] = []
+    baselines: set[tuple[str, int]] = set()
+    for entry in document["plan"]:
+        if entry["kind"] == "repertoire":
+            continue
+        summary = _summary(root, entry["dir"])
+        if summary is None:
+            continue
+        held = (tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"]))
+        chosen = summary.get("validated")
+        if isinstance(chosen, dict):
+            trees = list(chosen["trees"])
+            if entry["kind"] == "team":  # a tree per sub-group: robot i runs tree i mod K
+                trees = [trees[g] for g in summary["robot_groups"]]
+            found.append(_Chosen(entry["dir"], "validated", entry["task"], tuple(trees), *held))
+        if entry["kind"] != "composition" or not summary.get("homogeneous"):
+            continue
+        if (entry["task"], entry["seed"]) not in baselines:
+            baselines.add((entry["task"], entry["seed"]))
+            choice = summary["homogeneous"].get("validated")
+            if isinstance(choice, dict):
+                found.append(_Chosen(entry["dir"], BASELINE, entry["task"], tuple(choice["trees"]), *held))
+    return found
+
+
+def unseen_scores(root: Path, document: dict) -> dict[tuple[str, str], float]:
+    """Each validated choice's mean fitness on its task's unseen arenas (``unseen_twin``: the generated
+    arenas no run evolves on) over the run's held-out seeds and trials, by (run folder, ``validated`` or
+    ``homogeneous``). Scores are kept in the study's ``unseen.csv`` and measured only once; a task without
+    unseen arenas gets none."""
+    root = Path(root)
+    path = root / UNSEEN_FILE
+    kept: dict[tuple[str, str], dict[str, str]] = {}
+    if path.exists():
+        kept = {(r["dir"], r["swarm"]): r for r in csv.DictReader(io.StringIO(path.read_text()))}
+    objectives = {t["task"]: t["objective"] for t in document["tasks"]}
+    twins = {}
+    for task in objectives:
+        try:
+            twins[task] = unseen_twin(task)
+        except TaskError:  # a task of one arena (or five) has none: its column stays empty
+            continue
+    wanted = [c for c in _chosen_swarms(root, document) if c.task in twins]
+
+    def recorded(c: _Chosen) -> bool:
+        row = kept.get((c.folder, c.swarm))
+        return (
+            row is not None and row["seeds"] == " ".join(map(str, c.seeds)) and int(row["trials"]) == c.trials
+        )
+
+    missing = [c for c in wanted if not recorded(c)]
+    for task in dict.fromkeys(c.task for c in missing):
+        mine = [c for c in missing if c.task == task]
+        evaluator = BatchEvaluator(twins[task].config(document["profile"]))
+        requests = [SwarmRequest(SwarmLayout(c.trees), s, c.trials) for c in mine for s in c.seeds]
+        results = iter(evaluator.evaluate(requests))
+        k = OBJECTIVES.index(objectives[task])
+        for c in mine:
+            scores = [next(results) for _ in c.seeds]
+            if any(r.fitness is None for r in scores):
+                raise EvolutionError(
+                    f"{c.folder}: its {c.swarm} swarm could not be evaluated on unseen arenas"
+                )
+            fitness = math.fsum(r.fitness[k] for r in scores) / len(scores)  # type: ignore[index]  # checked
+            kept[(c.folder, c.swarm)] = {
+                "dir": c.folder, "swarm": c.swarm, "seeds": " ".join(map(str, c.seeds)),
+                "trials": str(c.trials), "fitness": repr(fitness),
+            }  # fmt: skip
+    if missing:
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, UNSEEN_HEADER, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(kept[(c.folder, c.swarm)] for c in wanted)
+        write_atomic(path, buffer.getvalue())
+    return {(c.folder, c.swarm): float(kept[(c.folder, c.swarm)]["fitness"]) for c in wanted}
 
 
 def _paired(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> tuple[list[float], list[float]]:
@@ -353,7 +474,7 @@ def comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str =
     """Each arm against the homogeneous baseline on the held-out score ``key`` (of the best on the run's
     scenario, or of the validated choice), paired by seed, per task: one family, Holm-corrected (every arm
     on every task). Pairs of fewer than two runs are left out."""
-    metric = "held-out best fitness" if key == HELDOUT else "validated held-out fitness"
+    metric = METRICS[key]
     found = []
     for task in tasks:
         for arm in ARMS:
@@ -548,11 +669,30 @@ def _validated_section(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> 
     )
 
 
+def _unseen_section(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
+    """The validated choices on arenas no run evolved on: the table, tests (a family of their own) and goal;
+    nothing when no run has such a score."""
+    if not any(r[UNSEEN] for r in rows):
+        return ""
+    tested = comparisons(rows, tasks, UNSEEN)
+    return (
+        "## Unseen arenas\n\n"
+        "A block of five trials takes the generated arenas 0 to 4 of a layout's ten, so no run evolves on "
+        "arenas 5 to 9. Each validated choice (the baseline's too) is scored on its task's twin on those "
+        "arenas (`<task>-unseen`), on the run's held-out seeds and trials: the same table, tests (a family "
+        "of their own, Holm-corrected) and goal:\n\n"
+        f"{scores_table(rows, tasks, UNSEEN)}\n"
+        + (markdown_table(tested) if tested else "No arm has two paired runs yet.\n")
+        + f"\n{goal_text(rows, tested, tasks, UNSEEN)}\n"
+    )
+
+
 def build_report(root: Path) -> Path:
-    """Write ``runs.csv``, ``report.md`` and ``figures/`` of the study in ``root`` from its finished runs;
-    return the report's path."""
+    """Write ``runs.csv``, ``report.md`` and ``figures/`` of the study in ``root`` from its finished runs (the
+    validated choices' scores on unseen arenas measured first where missing, ``unseen.csv``); return the
+    report's path."""
     root = Path(root)
-    document, rows = finished_rows(root)
+    document, rows = finished_rows(root, unseen_scores(root, study_plan(root)))
     if not rows:
         raise EvolutionError(f"{root} has no finished composition runs yet")
     buffer = io.StringIO()
@@ -594,6 +734,7 @@ def build_report(root: Path) -> Path:
         + f"\n### Against the goal ({GOAL} times the homogeneous median, p < 0.05 paired)\n\n"
         f"{goal_text(rows, tested, tasks)}\n"
         f"{_validated_section(rows, tasks)}"
+        f"{_unseen_section(rows, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
         "Every genome a run evaluated, binned by the task's behaviour space (the deliveries of each kind "
         "over [0, 0.5] per axis, or the paper's three descriptors), the "
