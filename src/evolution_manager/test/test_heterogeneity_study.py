@@ -9,6 +9,7 @@ import csv
 import io
 import json
 
+import numpy as np
 import pytest
 
 from evolution_manager.studies import heterogeneity_study as study
@@ -172,3 +173,25 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert after[out / "runs.csv"] == before[out / "runs.csv"]
     assert report_command([str(out)]) == 0
     assert (out / "report.md").read_bytes() == before[out / "report.md"]
+
+
+def test_the_goals_power_is_the_paired_t_tests_from_the_noncentral_t():
+    """paired_power: the power of a two-sided paired t-test to detect the goal's gain, as the noncentral t
+    distribution gives it, and the smallest number of pairs reaching 80 %."""
+    from scipy import stats
+
+    rng = np.random.default_rng(5)
+    differences = list(rng.normal(0.01, 0.05, 10))
+    gain = 0.04
+    power, needed = study.paired_power(differences, gain)
+    effect = gain / np.std(differences, ddof=1)
+
+    def exact(n: int) -> float:
+        critical = stats.t.ppf(0.975, n - 1)
+        shifted = stats.nct(n - 1, effect * np.sqrt(n))
+        return float(shifted.sf(critical) + shifted.cdf(-critical))
+
+    assert power == pytest.approx(exact(10), abs=1e-6)
+    assert exact(needed) >= 0.8 > exact(needed - 1)
+    assert study.paired_power(differences[:2], gain) is None and study.paired_power([0.1] * 5, gain) is None
+    assert "power to detect the goal's gain" in study.goal_power(differences, gain)

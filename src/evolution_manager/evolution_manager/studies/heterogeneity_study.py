@@ -558,11 +558,45 @@ def goal_text(
                 continue
             ratio = _median(held) / _median(base)
             reached = ratio >= GOAL and row.significant and _median(held) > _median(base)
+            a, b = _paired(rows, task, arm.name, key)
+            power = goal_power([x - y for x, y in zip(a, b, strict=True)], (GOAL - 1) * _median(base))
             lines.append(
                 f"- {task}, {arm.name}: {ratio:.3g} times the homogeneous median, Holm-adjusted p "
-                f"{row.p_holm:.3g} ({len(held)} runs): goal {'reached' if reached else 'not reached'}."
+                f"{row.p_holm:.3g} ({len(held)} runs): goal {'reached' if reached else 'not reached'}{power}."
             )
     return "\n".join(lines) + "\n" if lines else "No arm has paired runs yet.\n"
+
+
+def paired_power(differences: Sequence[float], gain: float, alpha: float = 0.05) -> tuple[float, int] | None:
+    """The power of a two-sided paired t-test at ``alpha`` to detect a mean paired difference of ``gain``,
+    given the spread of ``differences`` and their number, and the number of pairs that would give it 80 %
+    power (``statsmodels`` ``TTestPower``); None for fewer than three pairs or no spread. An upper bound
+    for the report's tests, whose Holm correction asks for more."""
+    if len(differences) < 3 or gain <= 0:
+        return None
+    spread = float(np.std(differences, ddof=1))
+    if not spread > 0:
+        return None
+    # statsmodels (seconds to import, with scipy and pandas) loads only when a report is written
+    from statsmodels.stats.power import TTestPower
+
+    effect = gain / spread
+    analysis = TTestPower()
+    power = float(analysis.power(effect_size=effect, nobs=len(differences), alpha=alpha))
+    needed = analysis.solve_power(effect_size=effect, power=0.8, alpha=alpha)
+    return power, math.ceil(float(needed))
+
+
+def goal_power(differences: Sequence[float], gain: float) -> str:
+    """The goal line's power clause: the power to detect the goal's paired gain, and the runs 80 % needs."""
+    found = paired_power(differences, gain)
+    if found is None:
+        return ""
+    power, needed = found
+    return (
+        f"; power to detect the goal's gain ({gain:.3g}, paired t-test at 0.05, before Holm) "
+        f"{power:.2f}, 80 % at {needed} runs"
+    )
 
 
 def _figure(root: Path, rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> list[str]:
