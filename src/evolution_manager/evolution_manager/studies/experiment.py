@@ -400,13 +400,14 @@ def build_parser() -> argparse.ArgumentParser:
         "primitive seed, from --primitives-from; ablation: the 8-block QD library's ablations, from "
         "--primitives-from; bt-vs-nn: trees against neural networks at equal budget; heterogeneity: "
         "heterogeneous swarms composed from repertoires against the best homogeneous one on the multi-food "
-        "tasks (docs/algorithms.md)",
+        "tasks; qd-schedule: the foraging study's QD primitives again on the authors' 2024 MAP-Elites "
+        "schedule, from --primitives-from (docs/algorithms.md)",
     )
     parser.add_argument(
         "--primitives-from",
         metavar="FOLDER",
-        help="with --study replication or ablation: the foraging study whose primitive runs and libraries "
-        "give the libraries",
+        help="with --study replication, ablation or qd-schedule: the foraging study whose primitive runs and "
+        "libraries give the libraries (or, for qd-schedule, the runs run again)",
     )
     parser.add_argument(
         "--objectives",
@@ -508,8 +509,10 @@ def experiment(argv: Sequence[str] | None = None) -> int:
         exclusive_lock(lock_path_for(args.out, "experiment"), f"the experiment folder {args.out}")
         scenarios = args.scenarios or "fixed"
         design = args.design if scenarios == "fixed" else None  # fresh: every evaluation its own scenario
-        if args.primitives_from is not None and args.study not in ("replication", "ablation"):
-            raise UsageError("--primitives-from applies to --study replication and ablation only")
+        if args.primitives_from is not None and args.study not in ("replication", "ablation", "qd-schedule"):
+            raise UsageError(
+                "--primitives-from applies to --study replication, ablation and qd-schedule only"
+            )
         if args.objectives is not None and args.study != "bt-vs-nn":
             raise UsageError("--objectives applies to --study bt-vs-nn only")
         if args.swarm_evaluations is not None and args.study != "heterogeneity":
@@ -539,6 +542,11 @@ def experiment(argv: Sequence[str] | None = None) -> int:
 
             document, stages, budgets = ablation_study.plan_study(args, scenarios, design)
             report = ablation_study.build_report
+        elif args.study == "qd-schedule":
+            from evolution_manager.studies import schedule_study  # late: loads scipy.stats (about 1 s)
+
+            document, stages, budgets = schedule_study.plan_study(args, scenarios, design)
+            report = schedule_study.build_report
         else:
             from evolution_manager.studies import (
                 report as paper_report,  # late: its figures load matplotlib (about 1.5 s)

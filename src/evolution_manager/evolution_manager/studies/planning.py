@@ -22,7 +22,7 @@ from evolution_manager.files import read_json
 from swarm_sim.model import PAPER_OBJECTIVES
 
 PLAN_FILE = "experiment.json"
-STUDIES = ("paper", "foraging", "replication", "ablation", "bt-vs-nn", "heterogeneity")
+STUDIES = ("paper", "foraging", "replication", "ablation", "bt-vs-nn", "heterogeneity", "qd-schedule")
 DESIGNS = ("shared", "per-run")
 """Under fixed scenarios: every run on one scenario (the authors' design), or each run on its own."""
 

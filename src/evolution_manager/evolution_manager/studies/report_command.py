@@ -33,6 +33,7 @@ from evolution_manager.studies import (
     networks_study,
     replication_study,
     scenarios,
+    schedule_study,
 )
 from evolution_manager.studies.report import build_report
 from evolution_manager.viewing.results import write_results
@@ -91,7 +92,7 @@ def report(argv: Sequence[str] | None = None) -> int:
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
             print(scenarios.build_scenarios_report(args.dir))
-        elif _study(args.dir) in ("replication", "ablation", "bt-vs-nn", "heterogeneity"):
+        elif _study(args.dir) in ("replication", "ablation", "bt-vs-nn", "heterogeneity", "qd-schedule"):
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to the paper's and the foraging study")
             study = {
@@ -99,6 +100,7 @@ def report(argv: Sequence[str] | None = None) -> int:
                 "ablation": ablation_study,
                 "bt-vs-nn": networks_study,
                 "heterogeneity": heterogeneity_study,
+                "qd-schedule": schedule_study,
             }[str(_study(args.dir))]
             print(study.build_report(args.dir))
         elif _study(args.dir) == "foraging":
