@@ -216,6 +216,18 @@ def test_damaged_swarm_runs_are_refused_in_one_line(runs, tmp_path, capsys):
     (copy / "summary.json").write_text(json.dumps(summary))
     _refused(capsys, [str(copy), "--no-animations"], "summary.json", "best genome", "cell indices")
     (copy / "summary.json").write_text((runs / "qd" / "summary.json").read_text())
+    archive = json.loads((copy / "repertoire_compositions.json").read_text())
+    archive["items"][0]["bin"] = 7
+    (copy / "repertoire_compositions.json").write_text(json.dumps(archive))
+    _refused(capsys, [str(copy), "--no-animations"], "repertoire_compositions.json", "item 0: bin must be")
+    archive["items"][0]["bin"] = [0, 0, 0]
+    archive["items"][0]["trees"] = "not read: the genome names the cells"
+    archive["items"][0]["genome"][0] = "sel(on_food, forward)"
+    (copy / "repertoire_compositions.json").write_text(json.dumps(archive))
+    _refused(capsys, [str(copy), "--no-animations"], "item 0: genome must be 9 cell indices")
+    (copy / "repertoire_compositions.json").write_text(
+        (runs / "qd" / "repertoire_compositions.json").read_text()
+    )
     _refused(capsys, [str(copy), "--library", str(copy / "cells.json")], "--library", "compositions run")
     config = json.loads((copy / "config.json").read_text())
     (copy / "config.json").write_text(json.dumps({**config, "evaluations": "many"}))
@@ -225,6 +237,17 @@ def test_damaged_swarm_runs_are_refused_in_one_line(runs, tmp_path, capsys):
     subprocess.run(["cp", "-r", str(runs / "team"), str(team)], check=True)
     (team / "summary.json").unlink()
     _refused(capsys, [str(team), "--no-animations"], "no summary.json with a best team")
+
+
+def test_a_ga_runs_damaged_log_is_refused_in_one_line(runs, tmp_path, capsys):
+    copy = tmp_path / "copy"
+    subprocess.run(["cp", "-r", str(runs / "ga"), str(copy)], check=True)
+    lines = (copy / "evaluations.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    row = lines[3].split(",")
+    row[header.index("rotation")] = "nan"
+    (copy / "evaluations.csv").write_text("\n".join([*lines[:3], ",".join(row), *lines[4:]]) + "\n")
+    _refused(capsys, [str(copy), "--no-animations"], "evaluations.csv", "evaluation 2 has no finite numbers")
 
 
 def test_nothing_is_written_through_a_link(runs, tmp_path, capsys):
@@ -245,3 +268,58 @@ def test_a_page_without_animations_says_so(runs, tmp_path):
     subprocess.run(["cp", "-r", str(runs / "team"), str(copy)], check=True)
     assert explorer([str(copy), "--no-animations"]) == 0
     assert 'id="no-animation"' in dump_dom(copy / "explorer.html", "swarm=best")
+
+
+@pytest.fixture(scope="module")
+def multifood(tmp_path_factory):
+    """A composition run on the authors' arena 9 (three food kinds, kind 1 preferred; trials shortened to
+    20 ticks) maximising foraging_biased, binned by the deliveries of each kind, from a tiny MAP-Elites run
+    there."""
+    root = tmp_path_factory.mktemp("multifood")
+    shown = subprocess.run(
+        [str(executable("swarm_sim", "task")), "arena", "9", "--bias", "1"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    task = root / "arena9.yaml"
+    task.write_text(shown.stdout.replace("ticks: 200", "ticks: 20"))
+    source, run = root / "source", root / "swarms"
+    args = ["--algorithm", "qd", "--objective", "foraging", "--task", str(task), "--evaluations", "20"]
+    assert (
+        evolve([*args, "--trials", "1", "--seed", "2", "--out", str(source), "--no-figures", "--no-progress"])
+        == 0
+    )
+    args = [
+        "--task",
+        str(task),
+        "--swarm-from",
+        str(source),
+        "--algorithm",
+        "qd",
+        "--objective",
+        "foraging_biased",
+    ]
+    args += ["--descriptors", "deliveries", "--evaluations", "20", "--seed", "3", "--out", str(run)]
+    assert evolve([*args, "--trials", "1", "--no-progress", "--checkpoint-every", "0"]) == 0
+    assert explorer([str(run)]) == 0
+    return run
+
+
+def test_a_multifood_composition_run_shows_the_deliveries_of_each_kind(multifood):
+    kinds = ["foraging1", "foraging2", "foraging3"]
+    data = payload(multifood / "explorer.html")
+    assert data["axes"] == kinds and data["objective"] == "foraging_biased"
+    summary = json.loads((multifood / "summary.json").read_text())
+    with open(multifood / "evaluations.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    genome = " ".join(map(str, summary["validated"]["genome"]))
+    first = next(r for r in rows if r["genome"] == genome)
+    assert data["marked"]["validated"]["values"] == [float(first[k]) for k in kinds]
+    assert data["marked"]["validated"]["evaluation"] == int(first["evaluation"])
+    for name in ("best", "validated"):
+        dom = rendered(multifood / "explorer.html", f"swarm={name}")
+        assert {r["data-name"] for r in dom.find("tr") if "data-name" in r} >= set(kinds)
+        for k, value in enumerate(summary["heldout_descriptors"] if name == "best" else []):
+            assert f"{value:.4f}" in " ".join(dom.values_text), kinds[k]
+        (canvas,) = dom.find("canvas", id="animation")
+        assert "food2 disc" in canvas["data-regions"] and "nest disc" in canvas["data-regions"]
+        check_swarm(dom, *simplified_of(data, data["marked"][name]), frames_of(multifood))

@@ -220,8 +220,24 @@ def _composition_data(root: Path, config_document: dict, page_of: Callable[..., 
     ]  # fmt: skip
     rows = _rows(root / "evaluations.csv")
     first_seed: dict[str, int] = {}
+    first_row: dict[str, dict[str, str]] = {}
     for row in rows:
         first_seed.setdefault(row.get("genome") or "", int(row["seed"]))
+        first_row.setdefault(row.get("genome") or "", row)
+
+    def logged(genome: list[int]) -> dict[str, Any]:
+        """The evaluation that first scored ``genome`` and its logged values of the run's axes (what a
+        validated choice's in-run fitness is), or nothing when the log lacks it."""
+        row = first_row.get(" ".join(map(str, genome)))
+        if row is None:
+            return {}
+        try:
+            values = [float(row[a]) for a in space.names]
+        except (KeyError, TypeError, ValueError):
+            return {"evaluation": int(row["evaluation"])}
+        finite = all(math.isfinite(v) for v in values)
+        return {"evaluation": int(row["evaluation"]), **({"values": values} if finite else {})}
+
     by_evaluation = {int(row["evaluation"]): int(row["seed"]) for row in rows}
 
     def seed_of(genome: list[int], evaluation: object) -> int:
@@ -255,12 +271,22 @@ def _composition_data(root: Path, config_document: dict, page_of: Callable[..., 
                 raise ExplorerError(
                     f"{where} has no bin, genome and fitness: not a composition run's archive"
                 )
-            key = ",".join(str(b) for b in item["bin"])
+            place = item["bin"]
+            if not (
+                isinstance(place, list)
+                and len(place) == 3
+                and all(isinstance(b, int) and not isinstance(b, bool) and 0 <= b < 8 for b in place)
+            ):
+                raise ExplorerError(f"{where}: bin must be 3 bin numbers from 0 to 7, got {place!r}")
+            fitness = _number(item["fitness"], f"{where}: fitness")
+            if fitness is None:
+                raise ExplorerError(f"{where}: fitness must be a number, got None")
+            key = ",".join(str(b) for b in place)
             bins[key] = composition(
                 _genome(item["genome"], len(cells), n, f"{where}: genome"),
                 where,
                 item.get("evaluation"),
-                fitness=_number(item["fitness"], f"{where}: fitness"),
+                fitness=fitness,
                 values=_numbers(item.get("descriptors"), axes, f"{where}: descriptors"),
             )
     else:
@@ -272,12 +298,14 @@ def _composition_data(root: Path, config_document: dict, page_of: Callable[..., 
             try:
                 fitness = float(row[config.objective])
                 values = [float(row[a]) for a in space.names]
+                if not all(math.isfinite(v) for v in (fitness, *values)):
+                    raise ValueError("not finite")
+                key = ",".join(map(str, bin_of(space.scaled(values))))
             except (KeyError, TypeError, ValueError):
                 raise ExplorerError(
-                    f"{root / 'evaluations.csv'}: evaluation {row['evaluation']} has no numbers for "
-                    f"{config.objective} and {', '.join(space.names)}: not this run's log"
+                    f"{root / 'evaluations.csv'}: evaluation {row['evaluation']} has no finite numbers for "
+                    f"{config.objective} and {', '.join(space.names)} in their ranges: not this run's log"
                 ) from None
-            key = ",".join(map(str, bin_of(space.scaled(values))))
             if key not in best or fitness > best[key][0]:
                 best[key] = (fitness, row)
         for key, (fitness, row) in best.items():
@@ -311,11 +339,15 @@ def _composition_data(root: Path, config_document: dict, page_of: Callable[..., 
             ),
         )
     for name, chosen, title in _validated_of(summary, "validated", "the run's validated choice"):
+        genome = _genome(chosen.get("genome"), len(cells), n, f"{where}: {name} genome")
+        found = logged(genome)
         marked[name] = composition(
-            _genome(chosen.get("genome"), len(cells), n, f"{where}: {name} genome"),
+            genome,
             f"{where}: {name}",
+            found.get("evaluation"),
             title=title,
             **_validated_values(chosen, axes, f"{where}: {name}"),
+            **({"values": found["values"]} if "values" in found else {}),
         )
     homogeneous = summary.get("homogeneous")
     if isinstance(homogeneous, dict):
