@@ -18,12 +18,13 @@ one of the same evaluation when there is one, else the command that renders it).
 (``library_view``: block boundaries, this run's primitives on their bins, other runs' beside the grid),
 through a style and a script that only such a page holds (``explorer_page.LIBRARY_STYLE`` and
 ``LIBRARY_SCRIPT``): without it the page is byte for byte what it was before the option existed.
+
+A composition run's or a team run's folder (``config.json``'s ``kind``) gets its swarms' page instead
+(``swarm_explorer``).
 """
 
 from __future__ import annotations
 
-import base64
-import csv
 import html
 import json
 import math
@@ -33,33 +34,26 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from bt_controller.errors import TreeError
 from bt_controller.library import Library, LibraryError, library_from_json, load_library
-from bt_controller.tree import parse
-from bt_controller.validate import strict_json
-from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.evolution.shown_trees import simplified as simplified_text
 from evolution_manager.files import printable, write_atomic
 from evolution_manager.viewing.explorer_page import LIBRARY_SCRIPT, LIBRARY_STYLE, PAGE
-from evolution_manager.viewing.frames import TrialFrames, frames_from_tree
-from evolution_manager.viewing.palette import (
-    GAP_COLOUR,
-    REGION_COLOURS,
-    ROBOT_COLOURS,
-    carry_colour,
-    hex_colour,
-)
+from evolution_manager.viewing.explorer_parts import STRIDE
+from evolution_manager.viewing.explorer_parts import actions as _actions
+from evolution_manager.viewing.explorer_parts import arena as _arena
+from evolution_manager.viewing.explorer_parts import check_tree as _check_tree
+from evolution_manager.viewing.explorer_parts import evaluation_seeds as _evaluation_seeds
+from evolution_manager.viewing.explorer_parts import pack as _pack
+from evolution_manager.viewing.explorer_parts import palette as _palette
+from evolution_manager.viewing.explorer_parts import read_object as _read
+from evolution_manager.viewing.frames import frames_from_tree
+from evolution_manager.viewing.swarm_explorer import swarm_kind, write_swarm_explorer
 from swarm_ros.safe_paths import refuse_links
-from swarm_sim.model import DEFAULT, OBJECTIVES, Config
+from swarm_sim.model import DEFAULT, OBJECTIVES
 from swarm_sim.tasks import task_from_record
-
-STRIDE = 2
-"""One animation frame per this many sensing steps."""
 
 
 def _held_out_scores(root: Path, config: dict) -> dict[tuple[str, str, str], float]:
@@ -94,18 +88,6 @@ def _group_copies(items: list[dict]) -> list[dict]:
     return list(groups.values())
 
 
-def _evaluation_seeds(root: Path) -> dict[int, int]:
-    path = root / "evaluations.csv"
-    if not path.exists():
-        return {}
-    with open(path, newline="") as handle:
-        return {
-            int(row["evaluation"]): int(row["seed"])
-            for row in csv.DictReader(handle)
-            if row.get("evaluation", "").isdigit() and row.get("seed", "").isdigit()
-        }
-
-
 def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
     evaluation = item.get("evaluation")
     if isinstance(item.get("seed"), int):
@@ -114,57 +96,6 @@ def _seed_of(item: dict, seeds: dict[int, int], run_seed: int) -> int:
         return seeds[evaluation]
 
     return evaluation_seed(run_seed, int(evaluation or 0))
-
-
-def _pack(frames: TrialFrames, stride: int, objectives: Sequence[str]) -> dict:
-    """One animation as bytes, base64: per kept frame, per robot x and y ((mm + arena_half) * 10, u16) and
-    heading (u8, 256 steps a turn); then each of ``objectives`` so far (the page's, in its order; u16, value *
-    10000, at most 65534; 65535: not yet); the last tick (u16, 65535: none); each robot's action (u8, 255:
-    none); the food kinds each robot carries (u8, bit k for kind k + 1). Little-endian, packed (no
-    padding)."""
-
-    columns = [OBJECTIVES.index(o) for o in objectives]
-    keep = list(range(0, len(frames.steps), stride))
-    if keep[-1] != len(frames.steps) - 1:
-        keep.append(len(frames.steps) - 1)
-    rows = np.asarray(keep)
-    poses = np.asarray(frames.poses, dtype=np.float64)[rows]
-    fitness = np.asarray(frames.fitness, dtype=np.float64)[rows][:, columns]
-    ticks = np.asarray(frames.ticks)[rows]
-    actions = np.asarray(frames.actions)[rows]
-    carried = np.asarray(frames.carrying, dtype=np.uint8)  # steps x robots x food kinds
-    carrying = (carried << np.arange(carried.shape[2], dtype=np.uint8)).sum(axis=2)[rows]
-    robots = poses.shape[1]
-    # One record per kept frame; a dtype given as a list of fields is packed, as struct's "<" formats.
-    record = np.dtype(
-        [
-            ("pose", [("x", "<u2"), ("y", "<u2"), ("heading", "u1")], (robots,)),
-            ("fitness", "<u2", (len(columns),)),
-            ("tick", "<u2"),
-            ("action", "u1", (robots,)),
-            ("carrying", "u1", (robots,)),
-        ]
-    )
-    packed = np.zeros(len(rows), dtype=record)
-    half, turn = frames.arena_half, 2 * math.pi
-    # np.rint rounds halves to even, as Python's round does, and np.mod is Python's % on floats.
-    packed["pose"]["x"] = np.rint((poses[:, :, 0] + half) * 10)
-    packed["pose"]["y"] = np.rint((poses[:, :, 1] + half) * 10)
-    packed["pose"]["heading"] = np.rint(np.mod(poses[:, :, 2], turn) / turn * 256) % 256
-    scaled = np.minimum(np.rint(np.nan_to_num(fitness) * 10000), 65534)  # foraging may pass 6.5534: capped
-    packed["fitness"] = np.where(np.isnan(fitness), 65535, scaled)
-    packed["tick"] = np.where(ticks < 0, 65535, ticks)
-    packed["action"] = np.where(actions < 0, 255, actions)
-    packed["carrying"] = carrying
-    out = packed.tobytes()
-    return {
-        "seed": str(frames.seed),  # a string: seeds reach 2**63, beyond JavaScript's exact integers
-        "trial": frames.trial,
-        "gap": None if math.isnan(frames.gap) else frames.gap,
-        **({"regions": [piece._asdict() for piece in frames.regions]} if frames.regions else {}),
-        "steps": [int(frames.steps[k]) for k in keep],
-        "data": base64.b64encode(out).decode("ascii"),
-    }
 
 
 Progress = Callable[[int, int], None] | None
@@ -287,20 +218,6 @@ def _items(document: dict, path: Path) -> list[dict]:
                 f"{path}: item {k} has no {', '.join(missing)}: not a repertoire file of a run"
             )
     return items
-
-
-def _check_tree(text: object, library: Library | None, where: str) -> None:
-    """Refuse a tree text that does not parse (as ``library``, ``adapt`` and ``--swarm-from`` refuse it),
-    naming where it is and why."""
-
-    if not isinstance(text, str):
-        raise ExplorerError(f"{where} must be tree text, got {type(text).__name__}")
-    try:
-        parse(text, library=library)
-    except (TreeError, LibraryError) as error:
-        raise ExplorerError(
-            f"{where} does not parse: {error}; expected tree text of the run's nodes"
-        ) from None
 
 
 def _library(root: Path, config: dict) -> Library | None:
@@ -527,43 +444,6 @@ def _is_index(value: object) -> bool:
     )
 
 
-def _arena(model: Config) -> dict:
-    """The run's arena as the page draws it (mm); a trial's own regions travel with its animation."""
-    return {
-        "half": model.arena_half,
-        "nest_radius": model.nest_radius,
-        "robot_radius": model.robot_radius,
-        "range": model.message_range,
-        "robots": model.n_robots,
-    }
-
-
-def _palette() -> dict:
-    """The colours of ``palette`` as the page draws them: robots, region kinds (fill and ink, in drawing
-    order), the ring of each carried food kind, and the ground outside every region."""
-    return {
-        "robots": [hex_colour(c) for c in ROBOT_COLOURS],
-        "regions": {kind: [hex_colour(c) for c in colours] for kind, colours in REGION_COLOURS.items()},
-        "carry": [hex_colour(carry_colour(k)) for k in range(MAX_FOOD_KINDS)],
-        "gap": hex_colour(GAP_COLOUR),
-    }
-
-
-def _actions() -> list[str]:
-
-    return list(ACTIONS)
-
-
-def _read(path: Path) -> dict:
-    try:  # strict: NaN, Infinity and a key given twice are refused (the page could not be written)
-        data = strict_json(path.read_text())
-    except (OSError, ValueError) as error:
-        raise ExplorerError(f"{path} is not a readable JSON file: {error}") from None
-    if not isinstance(data, dict):
-        raise ExplorerError(f"{path} does not hold a JSON object")
-    return data
-
-
 def write_explorer(
     root: Path | str, animate: bool = True, progress: Progress = None, library: Path | str | None = None
 ) -> Path:
@@ -577,6 +457,13 @@ def write_explorer(
         raise ExplorerError(str(error)) from None
     if (root / "explorer.html").is_dir():
         raise ExplorerError(f"{root / 'explorer.html'} is a folder: the page cannot be written there")
+    kind = swarm_kind(root)
+    if kind is not None:  # a composition or team run: its swarms' page
+        if library is not None:
+            raise ExplorerError(
+                f"--library shows a library on a tree run's grids; {root} is a {kind} run (no tree grids)"
+            )
+        return write_swarm_explorer(root, animate, progress)
     shown = None
     if library is not None:
         chosen = load_library_file(library)  # its errors before the animations' minutes
@@ -601,7 +488,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``explorer RUN_DIR``: (re)build a run directory's explorer.html."""
 
     parser = OneLineParser(prog="explorer", description="Build RUN_DIR/explorer.html.")
-    parser.add_argument("run", type=Path, help="a run directory (with repertoire_<objective>.json files)")
+    parser.add_argument(
+        "run", type=Path,
+        help="a run directory: a tree run's (with repertoire_<objective>.json files), a composition "
+        "run's or a team run's (its swarms' page: swarm_explorer)",
+    )  # fmt: skip
     parser.add_argument("--no-animations", action="store_true", help="leave the trial animations out")
     parser.add_argument(
         "--library", type=Path, metavar="LIB.json",

@@ -521,3 +521,281 @@ render();
 </script>
 """
 """JavaScript of the library view (only in pages built with ``--library``), run after the page's own."""
+
+
+def _section(start: str, end: str) -> str:
+    """The part of the tree page's script from ``start`` up to ``end``: what the swarm page shares with it,
+    taken from it so that the two never drift apart (and the tree page stays byte for byte as it was)."""
+    return PAGE[PAGE.index(start) : PAGE.index(end)]
+
+
+SHARED_SCRIPT = _section("const VIRIDIS", "function hasHeldOut") + _section(
+    "// ---- trees:", "function drawDetail"
+)
+"""The tree page's colour scale, element and number helpers, tree drawing and trial animation (unpacking
+``explorer_parts.pack``'s bytes, drawing a frame with robot ``i`` in ``COLOURS[i]``), which the swarm page
+runs as they are."""
+
+SWARM_PAGE = r"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>__TITLE__</title>
+<style>
+body { font: 14px/1.4 system-ui, sans-serif; margin: 0; color: #222; }
+header { padding: 8px 16px; background: #f3f3f3; border-bottom: 1px solid #ccc; }
+header h1 { font-size: 18px; margin: 0 0 4px 0; }
+button.swarm { margin-right: 4px; }
+button.active { font-weight: bold; background: #dde8f7; }
+main { display: flex; flex-wrap: wrap; gap: 16px; padding: 12px 16px; }
+#heatmaps { display: grid; grid-template-columns: repeat(4, auto); gap: 8px 12px; align-content: start; }
+.panel h3 { font-size: 12px; font-weight: normal; margin: 0; text-align: center; }
+.cell { stroke: #fff; stroke-width: 1; }
+.cell.empty { fill: #eee; }
+.cell.filled { cursor: pointer; }
+.cell.selected { stroke: #e00; stroke-width: 3; }
+#legend, #no-grid { grid-column: 1 / span 4; font-size: 12px; max-width: 760px; }
+#tooltip { position: fixed; pointer-events: none; background: #fffbe6; border: 1px solid #aaa; padding: 4px 6px;
+  font-size: 12px; display: none; max-width: 420px; z-index: 2; }
+#detail { flex: 1 1 520px; min-width: 0; }
+#detail table { border-collapse: collapse; margin: 6px 0; }
+#detail td, #detail th { border: 1px solid #ccc; padding: 2px 6px; font-size: 13px; }
+.mark { display: inline-block; background: #ffe08a; border: 1px solid #c90; padding: 0 6px; font-size: 12px;
+  margin-left: 8px; vertical-align: middle; }
+.swatch { display: inline-block; width: 14px; height: 14px; border: 1px solid #333; border-radius: 7px;
+  vertical-align: middle; margin-right: 4px; }
+#swarm-legend div { margin: 2px 0; font-size: 13px; }
+.tree { margin: 6px 0 12px 0; overflow-x: auto; max-width: 100%; }
+.tree code { display: block; font-size: 12px; white-space: pre-wrap; word-break: break-all; color: #333; }
+.tree h4 { margin: 4px 0; font-size: 13px; }
+#player { margin-top: 8px; }
+#animation { border: 1px solid #999; }
+.note { color: #666; font-size: 12px; }
+</style>
+</head>
+<body>
+<header>
+<h1>__TITLE__</h1>
+<div id="info"></div>
+<div>marked swarms: <span id="swarms"></span></div>
+</header>
+<main>
+<div id="heatmaps"></div>
+<section id="detail"><p class="note">Click a bin or a marked swarm to see its trees, values and trial.</p></section>
+</main>
+<div id="tooltip"></div>
+<script type="application/json" id="data">__DATA__</script>
+<script>
+"use strict";
+const DATA = JSON.parse(document.getElementById("data").textContent);
+const state = { swarm: null, bin: null, timer: null };
+__SHARED_SCRIPT__
+// ---- the swarm page (swarm_explorer): a composition run's grid and marked swarms, or a team run's teams
+const GROUP_COLOURS = COLOURS.slice();  // tree k of a swarm in colour k; drawFrame draws robot i in COLOURS[i]
+const LETTERS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ";
+const TEAM = DATA.kind === "teams";
+const MARKS = { best: TEAM ? "best team" : "best swarm", validated: "validated choice",
+  homogeneous: "homogeneous baseline", "homogeneous-validated": "homogeneous baseline, validated" };
+function letter(g) { return LETTERS[g % 26] + (g >= 26 ? String(Math.floor(g / 26)) : ""); }
+function groupColour(g) { return GROUP_COLOURS[g % GROUP_COLOURS.length]; }
+function range(grid) {
+  const v = Object.values(grid.bins).map(s => s.fitness).filter(x => x !== null && x !== undefined);
+  const lo = Math.min(0, ...v), hi = Math.max(lo + 1e-9, ...v);  // 0 (or below) to the grid's best
+  return [lo, hi];
+}
+
+function drawControls() {
+  const box = document.getElementById("swarms");
+  box.textContent = "";
+  for (const name of Object.keys(DATA.marked)) {
+    const b = el("button", { class: "swarm" + (name === state.swarm ? " active" : ""), "data-swarm": name }, MARKS[name] || name);
+    b.onclick = () => select(name, null);
+    box.appendChild(b);
+  }
+  if (!Object.keys(DATA.marked).length) box.appendChild(el("span", { class: "note" }, "none (the run has no summary.json yet)"));
+  const parts = [`run ${DATA.run} (${DATA.label}), seed ${DATA.seed}, scenario seed ${DATA.scenario_seed}`,
+    `${DATA.evaluations ?? "?"} evaluations${DATA.finished === false ? " (not finished)" : ""}`,
+    `task ${DATA.task}, objective ${DATA.objective}`];
+  if (TEAM) parts.push(`${DATA.team} sub-group(s): robot i runs tree i mod ${DATA.team}`);
+  else {
+    parts.push(`${DATA.cells.length} cells from ${DATA.sources.join(", ")}`);
+    const g = DATA.grid;
+    parts.push(`grid by ${DATA.axes.join(", ")}: ${Object.keys(g.bins).length} filled bins of 512` +
+      (g.coverage !== null && g.coverage !== undefined ? `, coverage ${fmt(g.coverage)}, QD score ${fmt(g.qd_score)}` : ""));
+    if (g.qd_scores) parts.push("QD score at " + Object.entries(g.qd_scores).map(([k, v]) => `${k}: ${fmt(v)}`).join(", ") + " bins per axis");
+  }
+  document.getElementById("info").textContent = parts.join("; ");
+}
+
+function drawHeatmaps() {
+  const box = document.getElementById("heatmaps");
+  box.textContent = "";
+  const grid = DATA.grid;
+  if (!grid) {
+    box.appendChild(el("p", { id: "no-grid", class: "note" }, "A team run has no grid: it evolves one team of " +
+      `${DATA.team} tree(s) at a time, kept by fitness alone (no behaviour space bins it). Its best team and validated ` +
+      "choice are the marked swarms above."));
+    return;
+  }
+  box.setAttribute("data-source", grid.source);
+  const [nx, ny, nz] = grid.shape, d = DATA.axes, size = 22, [lo, hi] = range(grid);
+  for (let k = 0; k < nz; k++) {
+    const panel = el("div", { class: "panel" });
+    panel.appendChild(el("h3", {}, `${d[2]} bin ${k}`));
+    const svg = el("svg:svg", { width: nx * size + 18, height: ny * size + 16, "data-panel": k });
+    for (let i = 0; i < nx; i++) for (let j = 0; j < ny; j++) {
+      const key = `${i},${j},${k}`, swarm = grid.bins[key];
+      const rect = el("svg:rect", { x: 18 + i * size, y: (ny - 1 - j) * size, width: size, height: size,
+        "data-bin": key, class: "cell " + (swarm ? "filled" : "empty") });
+      if (swarm) {
+        rect.setAttribute("fill", colourOf((swarm.fitness - lo) / (hi - lo)));
+        rect.setAttribute("data-value", swarm.fitness.toFixed(4));
+        rect.onclick = () => select(null, key);
+        if (key === state.bin) rect.classList.add("selected");
+      }
+      rect.onmousemove = ev => tooltip(ev, key, swarm);
+      rect.onmouseleave = () => { document.getElementById("tooltip").style.display = "none"; };
+      svg.appendChild(rect);
+    }
+    svg.appendChild(el("svg:text", { x: 18, y: ny * size + 12, "font-size": 10 }, `${d[0]} →`));
+    svg.appendChild(el("svg:text", { x: 0, y: 10, "font-size": 10 }, "↑"));
+    panel.appendChild(svg);
+    box.appendChild(panel);
+  }
+  const what = grid.source === "archive" ? "MAP-Elites' archive (one composition per bin)" :
+    "every evaluated composition binned by the run's behaviour space, the fittest of each bin (the run keeps no archive)";
+  box.appendChild(el("div", { id: "legend" }, `${what}; x: ${d[0]} bin, y: ${d[1]} bin (up), panels: ${d[2]}; ` +
+    `colour: in-run ${DATA.objective}, ${fmt(lo)} (purple) to ${fmt(hi)} (yellow); light: empty. The run's files hold ` +
+    "no held-out score per bin: the marked swarms above carry theirs."));
+}
+
+function tooltip(ev, key, swarm) {
+  const t = document.getElementById("tooltip");
+  t.textContent = !swarm ? `bin ${key}: empty` : `bin ${key}: fitness ${fmt(swarm.fitness)}; ` +
+    (swarm.values ? DATA.axes.map((a, i) => `${a} ${fmt(swarm.values[i])}`).join(", ") + "; " : "") +
+    `${swarm.groups.length} distinct tree(s)`;
+  t.style.display = "block";
+  t.style.left = (ev.clientX + 14) + "px";
+  t.style.top = (ev.clientY + 14) + "px";
+}
+
+function groupText(s, g, n) {
+  const robots = `robot${g.robots.length > 1 ? "s" : ""} ${g.robots.join(", ")}`;
+  if (TEAM) {
+    const sub = [...new Set(g.robots.map(r => s.subgroups[r]))];
+    return `tree ${letter(n)} (sub-group${sub.length > 1 ? "s" : ""} ${sub.join(", ")}): ${robots}`;
+  }
+  const cells = [...new Set(g.robots.map(r => s.cells[r]))].map(k => DATA.cells[k]);
+  return `tree ${letter(n)}: ${robots}; repertoire cell${cells.length > 1 ? "s" : ""} ` +
+    cells.map(c => `${c.index} (run ${c.source}, ${c.objective} bin ${c.bin}, fitness ${fmt(c.fitness)})`).join(", ");
+}
+
+function drawDetail() {
+  const box = document.getElementById("detail");
+  if (state.timer) { clearInterval(state.timer); state.timer = null; }
+  box.textContent = "";
+  box.setAttribute("data-swarm", state.swarm || "");
+  box.setAttribute("data-bin", state.bin || "");
+  const s = state.swarm ? DATA.marked[state.swarm] : state.bin && DATA.grid ? DATA.grid.bins[state.bin] : null;
+  if (!state.swarm && !state.bin) { box.appendChild(el("p", { class: "note" }, "Click a bin or a marked swarm to see its trees, values and trial.")); return; }
+  if (!s) { box.appendChild(el("p", { class: "note", id: "empty-bin" }, state.swarm ? `the run has no ${state.swarm} swarm` : `bin ${state.bin} is empty`)); return; }
+  const h2 = el("h2", {}, state.swarm ? s.title : `bin ${state.bin} (${DATA.axes.join(", ")})`);
+  if (state.swarm) h2.appendChild(el("span", { class: "mark", id: "mark" }, MARKS[state.swarm] || state.swarm));
+  box.appendChild(h2);
+  const table = el("table", { id: "values" }), head = el("tr");
+  ["", "in-run", "held-out", "validation"].forEach(h => head.appendChild(el("th", {}, h)));
+  table.appendChild(head);
+  const row = (name, ...cells) => { const r = el("tr", { "data-name": name }); [name, ...cells].forEach(v => r.appendChild(el("td", {}, String(v)))); table.appendChild(r); };
+  row(`fitness (${DATA.objective})`, fmt(s.fitness), fmt(s.held_out), fmt(s.validation_fitness));
+  DATA.axes.forEach((a, i) => row(a, fmt(s.values ? s.values[i] : null), fmt(s.held_out_values ? s.held_out_values[i] : null), "-"));
+  if (s.held_out_objectives) for (const [o, v] of Object.entries(s.held_out_objectives))
+    if (!DATA.axes.includes(o) && o !== DATA.objective) row(o, "-", fmt(v), "-");
+  row("evaluation", s.evaluation ?? "-", "", "");
+  row("seed of the trial shown", s.seed, "", "");
+  box.appendChild(table);
+  const legend = el("div", { id: "swarm-legend" });
+  legend.appendChild(el("h3", {}, "robots by the tree they run (their colour in the trial)"));
+  s.groups.forEach((g, n) => {
+    const line = el("div", { class: "group", "data-group": n, "data-robots": g.robots.join(","), "data-colour": groupColour(n) });
+    line.appendChild(el("span", { class: "swatch", style: `background:${groupColour(n)}` }));
+    line.appendChild(document.createTextNode(groupText(s, g, n)));
+    legend.appendChild(line);
+  });
+  box.appendChild(legend);
+  const robotTable = el("table", { id: "robots" }), rh = el("tr");
+  ["robot", "tree", TEAM ? "sub-group" : "cell"].forEach(h => rh.appendChild(el("th", {}, h)));
+  robotTable.appendChild(rh);
+  s.robots.forEach((g, i) => {
+    const r = el("tr", { class: "robot", "data-robot": i, "data-tree": DATA.trees[s.groups[g].tree].simplified });
+    [String(i), letter(g), TEAM ? s.subgroups[i] : s.cells[i]].forEach(v => r.appendChild(el("td", {}, String(v))));
+    robotTable.appendChild(r);
+  });
+  box.appendChild(robotTable);
+  const anim = s.animation && DATA.animations[s.animation];
+  const player = el("div", { id: "player" });
+  box.appendChild(player);
+  if (!anim) player.appendChild(el("p", { class: "note", id: "no-animation" }, Object.keys(DATA.animations).length ?
+    `No animation stored for this bin: the page keeps the marked swarms' trials and the fittest bins' up to ` +
+    `${DATA.animation_bytes / 1e6} MB of poses. Its trees are below; the seed of its trial is ${s.seed}.` :
+    "No animation stored (the page was built with --no-animations)."));
+  else {
+    const colours = s.robots.map(groupColour);
+    COLOURS.splice(0, COLOURS.length, ...colours);
+    const frames = unpack(anim);
+    player.appendChild(el("h3", {}, `trial ${anim.trial} of seed ${anim.seed} (${anim.gap === null ? "the task's regions" : `gap ${anim.gap} mm`}); robots coloured by their tree`));
+    const canvas = el("canvas", { id: "animation", width: 460, height: 460, "data-frames": frames.length,
+      "data-robot-colours": colours.join(",") });
+    player.appendChild(canvas);
+    const controls = el("div");
+    const play = el("button", { id: "play" }, "pause");
+    const slider = el("input", { id: "frame-slider", type: "range", min: 0, max: frames.length - 1, value: 0 });
+    controls.append(play, slider, el("div", { id: "frame-status", class: "note" }));
+    player.appendChild(controls);
+    let k = 0;
+    const draw = j => { drawFrame(canvas, anim, frames, j); canvas.setAttribute("data-drawn", j); };
+    const tick = () => { draw(k); k = (k + 1) % frames.length; };
+    slider.oninput = () => { k = Number(slider.value); draw(k); };
+    play.onclick = () => {
+      if (state.timer) { clearInterval(state.timer); state.timer = null; play.textContent = "play"; }
+      else { state.timer = setInterval(tick, 125); play.textContent = "pause"; }
+    };
+    tick();
+    state.timer = setInterval(tick, 125);
+  }
+  s.groups.forEach((g, n) => {
+    const t = DATA.trees[g.tree];
+    for (const [kind, text] of [["simplified", t.simplified], ["original", t.tree]]) {
+      if (kind === "original" && text === t.simplified) continue;
+      const div = el("div", { class: `tree ${kind}`, "data-tree": text, "data-group": n });
+      div.appendChild(el("h4", {}, `${groupText(s, g, n)}; ${kind}` + (kind === "simplified" && text === t.tree ? " (the original is already simplest)" : "")));
+      div.appendChild(drawTree(text));
+      div.appendChild(el("code", {}, text));
+      box.appendChild(div);
+    }
+  });
+}
+
+function render() { drawControls(); drawHeatmaps(); drawDetail(); }
+function select(swarm, bin) {
+  state.swarm = swarm; state.bin = bin;
+  const hash = swarm ? `#swarm=${swarm}` : bin ? `#bin=${bin}` : "";
+  if (location.hash !== hash) history.replaceState(null, "", hash || location.pathname);
+  render();
+}
+function fromHash() {
+  const params = new URLSearchParams(location.hash.replace(/^#/, ""));
+  const swarm = params.get("swarm"), bin = params.get("bin");
+  state.swarm = swarm && DATA.marked[swarm] ? swarm : null;
+  state.bin = !state.swarm && bin && /^\d+,\d+,\d+$/.test(bin) ? bin : null;
+  if (!state.swarm && !state.bin && !location.hash && DATA.marked.best) state.swarm = "best";
+  render();
+}
+window.addEventListener("hashchange", fromHash);
+fromHash();
+</script>
+</body>
+</html>
+""".replace("__SHARED_SCRIPT__", SHARED_SCRIPT)
+"""The swarm page (``swarm_explorer``; ``__TITLE__`` and ``__DATA__`` filled in as the tree page's): the grid of
+a composition run (or a note that a team run has none), its marked swarms, and a swarm's values, robots by
+tree (a legend in the trial's colours), trees and trial. ``#swarm=best`` or ``#bin=3,4,2`` opens one."""
