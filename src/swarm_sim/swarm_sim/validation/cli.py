@@ -50,6 +50,7 @@ from typing import NoReturn
 
 from bt_controller.authors import from_authors, is_authors_syntax
 from bt_controller.library import Library, library_option
+from bt_controller.network import to_text
 from swarm_ros.safe_paths import check_output, refuse_links, replace_file
 from swarm_sim.errors import ConfigError, UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
@@ -122,7 +123,11 @@ def model_config(profile: str | None) -> Config:
 
 
 def ours(tree: str) -> str:
-    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.authors``)."""
+    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.authors``); a network in
+    the harness's form (``nn: w1 ... w56``, ``reference.network_of_subject``) as a network's text."""
+    network = validation.network_of_subject(tree)
+    if network is not None:
+        return to_text(network)
     return from_authors(tree) if is_authors_syntax(tree) else tree
 
 

@@ -6,7 +6,8 @@ A reference file is a TSV with one row per tree (as written by the ARGoS harness
 primitives' objectives, its foraging build foraging, each with the three descriptors). Movement and rotation
 are in the authors' raw units there, [-T, T] per trial for T ticks; they are mapped to [0, 1] as the model
 does, (x + T) / 2T (standard errors / 2T), unless ``movement01_mean`` etc. are given. Trees in the authors'
-syntax are read into ours (``bt_controller.authors``).
+syntax are read into ours (``bt_controller.authors``); a row ``nn: w1 ... w56`` is a neural controller
+(``network_of_subject``).
 
 Tolerance (``docs/model.md``, "validation"): our mean **agrees** with the reference when
 ``|ours - theirs| <= 3 * sqrt(2) * SE + 0.03``, SE being the reference's standard error; it is
@@ -22,6 +23,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from bt_controller.network import Network
 from swarm_sim.errors import ReferenceFileError
 from swarm_sim.model import VALUE_NAMES
 
@@ -54,6 +56,7 @@ __all__ = [
     "compare",
     "estimate",
     "estimates",
+    "network_of_subject",
     "read_multifood_reference",
     "read_reference",
     "render",
@@ -194,6 +197,25 @@ def swarm_trees(subject: str) -> tuple[str, ...] | None:
     if not subject.startswith(SWARM_PREFIX):
         return None
     return tuple(tree.strip() for tree in subject[len(SWARM_PREFIX) :].split(";"))
+
+
+NETWORK_PREFIX = "nn:"
+"""A reference row whose subject starts so is a neural controller in the harness's form (``nn: w1 ... w56``:
+the 56 weights of ``bt_controller.network`` in the authors' order, space-separated)."""
+
+
+def network_of_subject(subject: str) -> Network | None:
+    """The network of a reference subject in the harness's form (``nn: w1 ... w56``), else None;
+    ValueError (one line) when the weights are not 56 finite numbers."""
+    if not subject.startswith(NETWORK_PREFIX):
+        return None
+    weights = []
+    for word in subject[len(NETWORK_PREFIX) :].split():
+        try:
+            weights.append(float(word))
+        except ValueError:
+            raise ValueError(f"network weight {word!r} is not a number") from None
+    return Network(tuple(weights))
 
 
 def read_multifood_reference(path: Path, ticks: int = 200) -> dict[str, dict[str, dict[str, Estimate]]]:
