@@ -1,0 +1,52 @@
+"""The heterogeneity study's swarms in the authors' ARGoS (``docs/results/heterogeneity/transfer``): our side
+recomputed from the model, the README's table from the two committed tables, and the agreement it claims."""
+
+from __future__ import annotations
+
+import csv
+import statistics
+from pathlib import Path
+
+from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
+from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.tasks import task_named
+
+FOLDER = Path(__file__).resolve().parent.parent / "docs" / "results" / "heterogeneity" / "transfer"
+
+
+def _table(name: str) -> list[dict[str, str]]:
+    with open(FOLDER / name, newline="") as handle:
+        return list(csv.DictReader(handle, delimiter="\t"))
+
+
+def _trees(line: str) -> tuple[str, ...]:
+    return tuple(tree.strip() for tree in line.removeprefix("swarm: ").split(" ; "))
+
+
+def test_our_side_is_the_models_and_the_readme_shows_both_tables():
+    ours = _table("ours_stats.tsv")
+    argos = {row["tree"]: row for row in _table("argos_stats.tsv")}
+    lines = (FOLDER / "swarms.txt").read_text().splitlines()
+    swarms = [line for line in lines if line.startswith("swarm: ")]
+    assert [row["tree"] for row in ours] == swarms and set(argos) == set(swarms)
+    # the baseline (nine copies of one tree, the cheapest) recomputed: seeds 1-20 of 10 trials each
+    baseline = next(row for row in ours if row["label"].startswith("homogeneous"))
+    evaluator = BatchEvaluator(task_named("multifood-arena9-kind2").config("paper"))
+    results = evaluator.evaluate(
+        [SwarmRequest(SwarmLayout(_trees(baseline["tree"])), s, 10) for s in range(1, 21)]
+    )
+    values = [r.fitness[OBJECTIVES.index("foraging_biased")] for r in results]
+    assert float(baseline["fitness_mean"]) == statistics.mean(values)
+    assert float(baseline["fitness_sem"]) == statistics.stdev(values) / len(values) ** 0.5
+    readme = (FOLDER / "README.md").read_text()
+    largest = 0.0
+    for row in ours:
+        theirs = argos[row["tree"]]
+        mine, mine_sem = float(row["fitness_mean"]), float(row["fitness_sem"])
+        other, other_sem = float(theirs["fitness_mean"]), float(theirs["fitness_sem"])
+        z = (mine - other) / (mine_sem**2 + other_sem**2) ** 0.5
+        cells = f"| {mine:.3f} ± {mine_sem:.3f} | {other:.3f} ± {other_sem:.3f} | {mine - other:+.3f} "
+        cells += f"| {z:+.2f} |"
+        assert cells in readme, cells
+        largest = max(largest, abs(z))
+    assert f"the largest |z| is {largest:.2f}" in readme
