@@ -11,8 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_controller.library import load_library
-from bt_controller.tree import parse
+from bt_controller.language import load_library, parse
 from evolution_manager.errors import EvolutionError
 from evolution_manager.studies import ablation_study, planning
 from evolution_manager.studies.experiment import build_parser, experiment

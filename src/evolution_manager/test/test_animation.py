@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from bt_controller import timeline
-from bt_controller.library import load_library
+from bt_controller.language import load_library
+from bt_controller.robot import timeline
 from evolution_manager.errors import AnimationError
 from evolution_manager.viewing.animate import (
     ARENA_PX,

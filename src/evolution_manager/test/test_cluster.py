@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from distributed import Client, LocalCluster
 
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
 from evolution_manager.cluster.client import open_client, slurm_cluster_options
 from evolution_manager.cluster.evaluator import DaskEvaluator, chunks, evaluate_chunk
 from evolution_manager.cluster.runs import map_runs
@@ -299,7 +299,7 @@ def test_a_changed_world_travels_whole_to_the_workers(client):
 
 def test_a_foraging_world_and_a_library_travel_to_the_workers(client):
     # the run's trial length in its world, its library as JSON text: every objective comes back, foraging too
-    from bt_controller.library import library_from_json
+    from bt_controller.language import library_from_json
 
     library = library_from_json(
         {

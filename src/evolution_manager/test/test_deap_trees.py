@@ -7,9 +7,7 @@ import random
 import deap.creator
 import pytest
 
-from bt_controller.library import library_from_json
-from bt_controller.tree import parse, to_text
-from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2023
+from bt_controller.language import ACTIONS, CONDITIONS, CONDITIONS_2023, library_from_json, parse, to_text
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.deap_trees import (
     BehaviourTree,
@@ -82,7 +80,7 @@ def test_bad_text_is_refused_with_a_reason(pset, bad):
 
 
 def test_the_size_limit_of_trees_is_the_evaluators():
-    from bt_controller.tree import MAX_DEPTH, MAX_NODES
+    from bt_controller.language import MAX_DEPTH, MAX_NODES
     from evolution_manager.evolution.parameters import GPParameters, QDParameters
 
     assert GPParameters().max_nodes == QDParameters().max_nodes == MAX_NODES

@@ -15,8 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_controller.library import load_library
-from bt_controller.tree import parse
+from bt_controller.language import load_library, parse
 from evolution_manager.evolution.libraries import FAMILIES
 from evolution_manager.studies import foraging_tables, foraging_transfer
 from evolution_manager.studies.experiment import experiment

@@ -13,8 +13,7 @@ from collections import Counter
 import pytest
 from toy import ToyEvaluator
 
-from bt_controller.library import library_from_json
-from bt_controller.vocabulary import ACTIONS, CONDITIONS, CONDITIONS_2024
+from bt_controller.language import ACTIONS, CONDITIONS, CONDITIONS_2024, library_from_json
 from evolution_manager.evolution.algorithms import GeneticProgramming, MapElites, as_outcome
 from evolution_manager.evolution.deap_trees import HIERARCHICAL_CONDITIONS, OBJECTIVES, make_primitive_set
 from evolution_manager.evolution.operators import choose_leaf

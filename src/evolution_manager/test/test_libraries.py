@@ -8,9 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_controller.library import load_library
-from bt_controller.simplify import simplify
-from bt_controller.tree import parse, success, to_text, without_draw_keys
+from bt_controller.language import load_library, parse, simplify, success, to_text, without_draw_keys
 from evolution_manager.evolution.libraries import (
     FAMILIES,
     block_of,

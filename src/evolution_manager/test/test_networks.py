@@ -12,7 +12,7 @@ import pytest
 from deap import base, tools
 from killed_runs import straight_and_killed
 
-from bt_controller.network import N_WEIGHTS, load_network
+from bt_controller.interpreters import N_WEIGHTS, load_network
 from evolution_manager.evolution.networks import (
     NetworkConfig,
     NetworkParameters,

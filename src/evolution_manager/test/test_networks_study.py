@@ -12,7 +12,7 @@ import random
 
 import pytest
 
-from bt_controller.network import N_WEIGHTS, Network, load_network
+from bt_controller.interpreters import N_WEIGHTS, Network, load_network
 from evolution_manager.studies import networks_study
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command

@@ -10,7 +10,7 @@ import pytest
 from deap import gp
 from scipy.stats import chi2_contingency
 
-from bt_controller.tree import Composite, parse
+from bt_controller.language import Composite, parse
 from evolution_manager.evolution import operators
 from evolution_manager.evolution.deap_trees import OBJECTIVES, BehaviourTree, tree_from_text, tree_to_text
 from evolution_manager.evolution.operators import (

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import OBJECTIVES
 from swarm_sim.roads import record_trial, record_trial_reference, reference_road

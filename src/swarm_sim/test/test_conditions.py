@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.core import setup_chain, world
 from swarm_sim.errors import ConditionError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest

@@ -109,7 +109,7 @@ def test_a_new_condition_and_objective_act_alike_on_the_batch_and_reference_road
 
 
 def test_the_copy_is_what_the_document_says_and_the_installed_packages_are_untouched(extended):
-    from bt_controller.vocabulary import CONDITIONS
+    from bt_controller.language import CONDITIONS
     from swarm_sim.model import OBJECTIVES
 
     assert "nest_ahead" not in CONDITIONS and "near_nest" not in OBJECTIVES

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from bt_controller.vocabulary import ACTION_INDEX
+from bt_controller.language import ACTION_INDEX
 from swarm_sim.core import fast_world, setup_chain, world
 from swarm_sim.model import DEFAULT, Config
 

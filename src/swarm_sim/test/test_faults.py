@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.core import robot_faults, setup_chain
 from swarm_sim.errors import ConditionError, ConfigError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest

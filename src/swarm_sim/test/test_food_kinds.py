@@ -11,9 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_controller.random_trees import random_trees
-from bt_controller.tree import parse
-from bt_controller.vocabulary import CONDITIONS, MULTIFOOD_CONDITIONS
+from bt_controller.language import CONDITIONS, MULTIFOOD_CONDITIONS, parse, random_trees
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
 from swarm_sim.model import OBJECTIVES, of_trees
 from swarm_sim.roads import record_trial, record_trial_reference, reference_road

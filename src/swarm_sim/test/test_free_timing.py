@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from bt_controller.vocabulary import STOP
+from bt_controller.language import STOP
 from swarm_sim.model import DEFAULT
 from swarm_sim.roads import FreeAnswers, LockstepChain, RobotAnswer
 

@@ -7,9 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_controller.controller import FootbotController
-from bt_controller.tree import parse
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.language import ACTIONS, parse
+from bt_controller.robot import FootbotController
 from swarm_sim.model import Config, fault_kinds_of, parse_fault_pairs
 from swarm_sim.roads import LockstepChain, RobotAnswer
 

@@ -4,7 +4,7 @@ clear refusals of misuse."""
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.model import Config
 from swarm_sim.roads import (
     LockstepChain,

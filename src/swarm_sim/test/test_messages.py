@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from bt_controller.draws import DROPS, stream_key, uniform
-from bt_controller.perception import Readings, RobotView
-from bt_controller.vocabulary import CONDITIONS, N_CONDITIONS
+from bt_controller.language import CONDITIONS, N_CONDITIONS
+from bt_controller.robot import Readings, RobotView
 from swarm_sim.core import sense_swarm, setup_chain, world
 from swarm_sim.model import DEFAULT, Config, Piece
 

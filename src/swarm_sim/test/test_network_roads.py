@@ -1,11 +1,12 @@
-"""Networks (``bt_controller.network``) on both roads, bit for bit: alone, in swarms mixed with trees, and
-step by step in recordings."""
+"""Networks (``bt_controller.interpreters.network``) on both roads, bit for bit: alone, in swarms mixed with
+trees, and step by step in recordings."""
 
 import numpy as np
 import pytest
 
-from bt_controller.network import N_WEIGHTS, Network, parse_controller, to_text
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.interpreters import N_WEIGHTS, Network, parse_controller
+from bt_controller.interpreters import network_text as to_text
+from bt_controller.language import ACTIONS
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
 from swarm_sim.model import Config, of_trees
 from swarm_sim.roads import record_trial, record_trial_reference, reference_road

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import DEFAULT, PROBES, Config, Piece

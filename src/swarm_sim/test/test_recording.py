@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from bt_controller.errors import TreeError
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
 from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import DEFAULT, apply_conditions, default_config

@@ -175,7 +175,7 @@ def test_a_formation_the_arena_cannot_hold_is_refused_in_one_line(settings, expe
 
 
 def test_a_formation_runs_alike_on_both_roads():
-    from bt_controller.tree import parse
+    from bt_controller.language import parse
     from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
     from swarm_sim.roads import reference_road
 

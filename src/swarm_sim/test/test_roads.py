@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from bt_controller.random_trees import random_trees
-from bt_controller.tree import parse
+from bt_controller.language import parse, random_trees
 from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, Evaluator
 from swarm_sim.model import Config
@@ -115,7 +114,7 @@ PRIMITIVES = {
 def test_roads_agree_on_foraging_trees(profile):
     # 100 s trials: got_food, success and named primitives (each use its own success copy), random trees among
     # them; the forager delivers, so the carrying flag and the deliveries are exercised, not only zeros.
-    from bt_controller.library import library_from_json
+    from bt_controller.language import library_from_json
 
     library = library_from_json(
         {"format": 1, "primitives": [{"name": n, "tree": t} for n, t in PRIMITIVES.items()]}, "test"

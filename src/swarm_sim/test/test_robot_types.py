@@ -13,9 +13,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from bt_controller.perception import RobotView
-from bt_controller.tree import parse
-from bt_controller.vocabulary import CONDITION_INDEX
+from bt_controller.language import CONDITION_INDEX, parse
+from bt_controller.robot import RobotView
 from swarm_sim.core import sense_swarm, setup_chain, world
 from swarm_sim.errors import ConfigError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest

@@ -8,10 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bt_controller.language import Composite, Node, random_tree_grow, simplify, to_text
 from bt_controller.model_settings import PROFILES
-from bt_controller.random_trees import random_tree_grow
-from bt_controller.simplify import simplify
-from bt_controller.tree import Composite, Node, to_text
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import default_config
 

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest
 from swarm_sim.model import Config, LayoutError, SwarmLayout, layout_from_json, load_layout, of_trees
 from swarm_sim.roads import record_trial, record_trial_reference, reference_road

@@ -14,10 +14,15 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bt_controller.compiled import pack
-from bt_controller.random_trees import random_trees
-from bt_controller.tree import parse
-from bt_controller.vocabulary import CONDITION_TABLE, CONDITIONS_2023, CONDITIONS_2024, SIDES
+from bt_controller.interpreters import pack
+from bt_controller.language import (
+    CONDITION_TABLE,
+    CONDITIONS_2023,
+    CONDITIONS_2024,
+    SIDES,
+    parse,
+    random_trees,
+)
 from swarm_sim.core import kernel
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.evaluation.cli import run as evaluate_run

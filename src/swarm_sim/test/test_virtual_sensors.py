@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
 
-from bt_controller.controller import FootbotController
-from bt_controller.tree import parse
+from bt_controller.language import parse
+from bt_controller.robot import FootbotController
 from swarm_sim.model import DEFAULT
 from swarm_sim.nodes import visualisation
 from swarm_sim.nodes.virtual_sensors import Delivery, VirtualSensors, heading_of

@@ -36,10 +36,16 @@ from typing import Any
 import numpy as np
 
 from bt_controller.errors import TreeError
-from bt_controller.library import Library, LibraryError, library_from_json, load_library
-from bt_controller.tree import parse
+from bt_controller.language import (
+    ACTIONS,
+    MAX_FOOD_KINDS,
+    Library,
+    LibraryError,
+    library_from_json,
+    load_library,
+    parse,
+)
 from bt_controller.validate import strict_json
-from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.evolution.run_config import evaluation_seed

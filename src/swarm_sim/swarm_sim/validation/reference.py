@@ -6,7 +6,7 @@ A reference file is a TSV with one row per tree (as written by the ARGoS harness
 primitives' objectives, its foraging build foraging, each with the three descriptors). Movement and rotation
 are in the authors' raw units there, [-T, T] per trial for T ticks; they are mapped to [0, 1] as the model
 does, (x + T) / 2T (standard errors / 2T), unless ``movement01_mean`` etc. are given. Trees in the authors'
-syntax are read into ours (``bt_controller.authors``).
+syntax are read into ours (``bt_controller.language.authors``).
 
 Tolerance (``docs/model.md``, "validation"): our mean **agrees** with the reference when
 ``|ours - theirs| <= 3 * sqrt(2) * SE + 0.03``, SE being the reference's standard error; it is
