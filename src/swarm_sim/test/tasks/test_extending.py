@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[2]
+SRC = Path(__file__).resolve().parents[3]
 CONDITION_ROW = '    Condition("nest_ahead", ("nest",), "nest", "the nest estimate\'s source is ahead"),\n'
 CONDITION_LINE = "    out[N_CONDITIONS - 1] = 0.0 < raw[0] < cap and abs(bearings[0]) < 0.5\n"
 OBJECTIVE_ROW = (
@@ -42,12 +42,12 @@ def extended(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
         shutil.copytree(
             SRC / package / package, root / package, ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]")
         )
-    vocabulary = root / "bt_controller" / "vocabulary.py"
+    vocabulary = root / "bt_controller" / "language" / "vocabulary.py"
     text = vocabulary.read_text()
     end = text.index(')\n"""Every condition')  # the table's end
     vocabulary.write_text(text[:end] + CONDITION_ROW + text[end:])
     _edit(
-        root / "bt_controller" / "perception.py",
+        root / "bt_controller" / "robot" / "perception.py",
         "            out[at] = out[at + 1] = out[at + 2] = out[at + 3] = False\n",  # blackboard's last line
         CONDITION_LINE,
     )
@@ -114,5 +114,5 @@ def test_the_copy_is_what_the_document_says_and_the_installed_packages_are_untou
 
     assert "nest_ahead" not in CONDITIONS and "near_nest" not in OBJECTIVES
     copy = Path(extended["PYTHONPATH"].split(os.pathsep)[0])
-    assert CONDITION_ROW in (copy / "bt_controller" / "vocabulary.py").read_text()
+    assert CONDITION_ROW in (copy / "bt_controller" / "language" / "vocabulary.py").read_text()
     assert OBJECTIVE_ROW in (copy / "swarm_sim" / "model" / "objectives.py").read_text()

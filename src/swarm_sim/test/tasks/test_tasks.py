@@ -319,7 +319,7 @@ def test_an_arena_task_runs_alike_on_both_roads_and_the_command_shows_it(tmp_pat
 
 def test_docs_tasks_md_gives_every_key_of_a_task():
     """The schema table of ``docs/tasks.md`` names every key a task file holds."""
-    docs = (Path(__file__).resolve().parents[3] / "docs" / "tasks.md").read_text()
+    docs = (Path(__file__).resolve().parents[4] / "docs" / "tasks.md").read_text()
     mapping = task_to_mapping(FORAGING)
     keys = [
         f"{section}.{key}" for section, value in mapping.items() if isinstance(value, dict) for key in value

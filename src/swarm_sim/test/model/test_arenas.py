@@ -12,7 +12,7 @@ from swarm_sim.model.regions import distance as region_distance
 
 KINDS = ("nest", *FOOD_KINDS)
 
-DATA = Path(__file__).resolve().parent / "data" / "authors_arenas_1cd2358.tsv"
+DATA = Path(__file__).resolve().parent.parent / "data" / "authors_arenas_1cd2358.tsv"
 HARNESS_POINTS = {6: 4, 7: 2, 8: 6, 9: 6}
 """Points per arena as the reference harness generated each layout (the data file's header)."""
 
