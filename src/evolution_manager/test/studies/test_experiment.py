@@ -91,7 +91,7 @@ def test_the_design_is_recorded_and_a_per_run_table_shown_beside(tmp_path, capsy
     assert "every run on one shared scenario" in (out / "report.md").read_text()
     assert experiment([*args, "--design", "per-run"]) == 2  # another design is another experiment
     assert 'other options (design "shared" there, "per-run" given' in capsys.readouterr().err
-    committed = Path(__file__).resolve().parents[3] / "docs/results/paper/per-run-design/runs.csv"
+    committed = Path(__file__).resolve().parents[4] / "docs/results/paper/per-run-design/runs.csv"
     beside = out / "per-run" / "runs.csv"
     beside.parent.mkdir()
     beside.write_text(committed.read_text())

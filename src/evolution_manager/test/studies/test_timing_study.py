@@ -19,7 +19,7 @@ from evolution_manager.studies.timing_study import (
     write_rows,
 )
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = Path(__file__).resolve().parents[4]
 
 
 def row(task: str, timing: str, trial: int, fitness: float) -> dict:

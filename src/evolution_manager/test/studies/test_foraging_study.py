@@ -35,7 +35,7 @@ from evolution_manager.studies.foraging_study import (
 from evolution_manager.studies.report_command import report
 from swarm_sim.validation import transfer
 
-REPOSITORY = Path(__file__).resolve().parents[3]
+REPOSITORY = Path(__file__).resolve().parents[4]
 COMMITTED = REPOSITORY / "docs/results/foraging"
 """The published report of the study committed in ``experiments/foraging``."""
 

@@ -16,7 +16,7 @@ from evolution_manager.errors import EvolutionError
 from evolution_manager.studies import ablation_study, planning
 from evolution_manager.studies.experiment import build_parser, experiment
 
-FORAGING = Path(__file__).resolve().parents[3] / "experiments" / "foraging"
+FORAGING = Path(__file__).resolve().parents[4] / "experiments" / "foraging"
 
 
 def _plan(out: Path, *more: str):

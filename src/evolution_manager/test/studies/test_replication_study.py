@@ -12,7 +12,7 @@ import numpy as np
 from evolution_manager.studies import replication_study
 from evolution_manager.studies.experiment import build_parser, experiment
 
-FORAGING = Path(__file__).resolve().parents[3] / "experiments" / "foraging"
+FORAGING = Path(__file__).resolve().parents[4] / "experiments" / "foraging"
 
 
 def _plan(tmp_path, *more):

@@ -13,8 +13,8 @@ import pytest
 from evolution_manager.studies import scenarios
 from evolution_manager.studies.report_command import report
 
-PAPER = Path(__file__).resolve().parents[3] / "experiments" / "paper"
-COMMITTED = Path(__file__).resolve().parents[3] / "docs" / "results" / "paper" / "scenarios"
+PAPER = Path(__file__).resolve().parents[4] / "experiments" / "paper"
+COMMITTED = Path(__file__).resolve().parents[4] / "docs" / "results" / "paper" / "scenarios"
 
 
 def _scenario(root: Path, name: str, scenario_seed: int, runs: range) -> None:
