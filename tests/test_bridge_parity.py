@@ -7,8 +7,8 @@ step (lockstep, the model's own losses)."""
 import numpy as np
 import pytest
 
-from bt_controller.controller import FootbotController
-from bt_controller.tree import parse
+from bt_controller.language import parse
+from bt_controller.robot import FootbotController
 from evolution_manager.graph.nodes.trial import run_recorded_trial
 from evolution_manager.recording.bags import read_bag
 from swarm_sim.core import setup_chain

@@ -10,7 +10,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
 from evolution_manager.evolution.run_config import evaluation_seed
 from evolution_manager.graph.service_evaluator import ServiceEvaluator, ServiceSettings
 from evolution_manager.graph.startup import Graph, executable

@@ -14,9 +14,8 @@ import pytest
 from headless import dump_dom
 from PIL import Image
 
-from bt_controller import timeline
-from bt_controller.simplify import simplify
-from bt_controller.tree import parse, to_text
+from bt_controller.language import parse, simplify, to_text
+from bt_controller.robot import timeline
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.viewing.frames import frames_from_bag, frames_from_tree

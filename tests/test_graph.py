@@ -12,9 +12,7 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from bt_controller.library import load_library
-from bt_controller.random_trees import random_trees
-from bt_controller.tree import parse, to_text
+from bt_controller.language import load_library, parse, random_trees, to_text
 from evolution_manager.graph.nodes.trial import RESULT_TOPIC, TrialGraph, expected_messages
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag

@@ -1,13 +1,14 @@
-"""A network (``bt_controller.network``) through the node graph: `trial --network FILE` gives exactly the
-batch evaluator's values and poses, its bag records the network's text, `replay --verify` re-runs it and the
-animation of the bag shows the in-process twin's frames."""
+"""A network (``bt_controller.interpreters.network``) through the node graph: `trial --network FILE` gives
+exactly the batch evaluator's values and poses, its bag records the network's text, `replay --verify` re-runs
+it and the animation of the bag shows the in-process twin's frames."""
 
 import json
 import subprocess
 
 import numpy as np
 
-from bt_controller.network import N_WEIGHTS, Network, to_text
+from bt_controller.interpreters import N_WEIGHTS, Network
+from bt_controller.interpreters import network_text as to_text
 from evolution_manager.graph.nodes.trial import RESULT_TOPIC
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import read_bag

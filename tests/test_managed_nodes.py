@@ -16,7 +16,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS
+from bt_controller.language import ACTION_WHEELS, ACTIONS
 from evolution_manager.graph.startup import Graph
 from swarm_msgs.action import EvaluateBatch, RunTrial
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, WheelCommand

@@ -12,7 +12,7 @@ from mcap.reader import make_reader
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from bt_controller.tree import parse
+from bt_controller.language import parse
 from evolution_manager.graph.nodes.trial import write_result
 from evolution_manager.graph.startup import executable
 from evolution_manager.recording.bags import BagRecorder

@@ -16,8 +16,7 @@ from rosbags.interfaces import QosDurability
 from rosbags.rosbag2 import Reader
 from visualization_msgs.msg import MarkerArray
 
-from bt_controller.random_trees import random_trees
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.language import ACTIONS, random_trees
 from evolution_manager.graph.nodes.trial import TrialGraph, expected_messages
 from evolution_manager.graph.startup import Graph, executable
 from evolution_manager.recording.bags import read_bag

@@ -16,7 +16,7 @@ import pytest
 from headless import dump_dom
 from test_explorer_and_animation import rendered
 
-from bt_controller import timeline
+from bt_controller.robot import timeline
 from evolution_manager.evolution.compositions import CompositionConfig, bin_of
 from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.graph.startup import executable

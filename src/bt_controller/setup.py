@@ -28,8 +28,8 @@ setup(
     entry_points={
         "console_scripts": [
             # "EXECUTABLE = bt_controller.MODULE:main": run with `ws/run bt_controller EXECUTABLE`.
-            "bt = bt_controller.cli:main",
-            "bench = bt_controller.tick_bench:main",
+            "bt = bt_controller.tools.cli:main",
+            "bench = bt_controller.bench.tick_bench:main",
             "footbot_controller = bt_controller.nodes.footbot_controller:main",
         ],
     },

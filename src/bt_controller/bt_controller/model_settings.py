@@ -1,8 +1,8 @@
 """The model's settings as plain named tuples, free of compiled code: the profiles, the trial timeline's
 parameters and a robot's perception parameters.
 
-``bt_controller.timeline`` and ``bt_controller.perception`` hold the ``njit`` functions that read these;
-everything that only needs the settings (``swarm_sim.model``, the command lines, the evolution manager)
+``bt_controller.robot.timeline`` and ``bt_controller.robot.perception`` hold the ``njit`` functions that read
+these; everything that only needs the settings (``swarm_sim.model``, the command lines, the evolution manager)
 imports them from here without starting numba.
 """
 

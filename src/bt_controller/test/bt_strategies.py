@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from bt_controller.tree import MAX_DRAW_KEY, Action, Composite, Condition, Node
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS
+from bt_controller.language.tree import MAX_DRAW_KEY, Action, Composite, Condition, Node
+from bt_controller.language.vocabulary import ACTIONS, COMPOSITES, CONDITIONS
 
 leaves = st.one_of(st.sampled_from(CONDITIONS).map(Condition), st.sampled_from(ACTIONS).map(Action))
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
 from evolution_manager.evolution.run_config import RunConfig
 
 REPOSITORY = Path(__file__).resolve().parents[3]

@@ -15,7 +15,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bt_controller.library import LibraryError, load_library
+from bt_controller.language import LibraryError, load_library
 from evolution_manager.cluster.settings import ClusterError, parse_cluster
 from evolution_manager.errors import UsageError
 from swarm_ros.parameters import ParameterError, read_parameter_file
@@ -150,7 +150,7 @@ def test_a_link_a_dangling_link_or_a_folder_is_loaded_or_refused_in_one_line(tmp
 
 
 def _parsers() -> dict[str, Callable[[], argparse.ArgumentParser]]:
-    from bt_controller.cli import build_parser as bt
+    from bt_controller.tools.cli import build_parser as bt
     from evolution_manager.adaptation.adapt import build_parser as adapt
     from evolution_manager.adaptation.adapt_benchmark import build_parser as adapt_benchmark
     from evolution_manager.evolution.libraries import build_parser as library

@@ -12,7 +12,7 @@ import re
 from collections import Counter
 from collections.abc import Sequence
 
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.language import ACTIONS
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult
 
 _WORD = re.compile(r"[a-z_]+")

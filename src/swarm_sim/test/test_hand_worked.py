@@ -9,12 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bt_controller.controller import FootbotController
 from bt_controller.draws import DROPS, stream_key
+from bt_controller.language import ACTION_INDEX, CONDITION_INDEX, N_CONDITIONS, parse
 from bt_controller.model_settings import CLEAN, CODE_2024, CODE_2026, PAPER, PerceptionParams, Timeline
-from bt_controller.perception import Readings, blackboard
-from bt_controller.tree import parse
-from bt_controller.vocabulary import ACTION_INDEX, CONDITION_INDEX, N_CONDITIONS
+from bt_controller.robot import FootbotController, Readings, blackboard
 from swarm_sim.core import world
 from swarm_sim.model import Config
 from swarm_sim.roads import reference_road

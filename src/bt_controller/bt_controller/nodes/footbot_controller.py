@@ -9,12 +9,13 @@ with one line, exit status 2):
         Default -1: taken from the namespace, whose last part must then be ``footbot_<i>``. When both are
         given they must agree: ``__ns:=/footbot_4 -p robot:=0`` stops the node with an error saying so.
     tree (string, read-only): a tree to load at start (default: none; use the load_tree service); a network's
-        text, ``nn(w1, ..., w56)`` (``bt_controller.network``), loads that network instead (so does the
-        load_tree service's).
+        text, ``nn(w1, ..., w56)`` (``bt_controller.interpreters.network``), loads that network instead (so
+        does the load_tree service's).
     network (string, read-only): a network file (JSON ``{"weights": [56 numbers]}``) to load at start
         (default: none); not with ``tree``. A file that cannot be used stops the node with one line, exit
         status 2.
-    library (string, read-only): a primitive library file (``bt_controller.library``) whose primitives'
+    library (string, read-only): a primitive library file (``bt_controller.language.library``) whose
+    primitives'
         names the trees may use (default: none). A path: the library is fixed for the node's life, as its
         other parameters; a library that cannot be read stops the node with one line, exit status 2.
     commands (string, read-only): what each step's answer is published as: ``wheels`` (default; what the
@@ -23,8 +24,8 @@ with one line, exit status 2):
         takes since Jazzy) or ``Twist`` (older bases).
     timing (string, read-only): ``lockstep`` (default): answer every sensing step of the simulator, exactly;
         ``free``: tick on the node's own timer at ``tick_rate`` against the latest sensing, as on a robot
-        (``bt_controller.free_running``: the policy for lost, late and duplicated readings), the timer on the
-        node's clock (simulated time under ``use_sim_time``, else wall time).
+        (``bt_controller.robot.free_running``: the policy for lost, late and duplicated readings), the timer
+        on the node's clock (simulated time under ``use_sim_time``, else wall time).
     tick_rate (float, Hz, read-only, free only): the tree's ticks per second (default 2.0).
     sensing_timeout (float, s, read-only, free only): after this long without a complete sensing step the
         robot is stopped (zero command every tick), with a warning and a WARN on ``/diagnostics`` (default
@@ -66,7 +67,7 @@ Services:
     start_trial (swarm_msgs/StartTrial): reset for a chain of trials (called by the simulator).
 
 The node keeps the 7-sample smoothing and the blackboard from its topics and ticks its tree with the reference
-interpreter; the logic is ``bt_controller.controller``.
+interpreter; the logic is ``bt_controller.robot.controller``.
 """
 
 from __future__ import annotations
@@ -83,15 +84,24 @@ from rclpy.node import Node as RosNode
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 
-from bt_controller.controller import FootbotController, StepOutcome
 from bt_controller.errors import TreeError
-from bt_controller.free_running import FreeRunningController, FreeTick
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.interpreters import (
+    Network,
+    NetworkError,
+    controller_text,
+    load_network,
+    parse_controller,
+)
+from bt_controller.language import ACTIONS, MAX_FOOD_KINDS, Library, LibraryError, Node, load_library
 from bt_controller.model_settings import PerceptionParams, Timeline, check_authors_code, profile_number
-from bt_controller.network import Network, NetworkError, controller_text, load_network, parse_controller
-from bt_controller.perception import Readings, warm_up
-from bt_controller.tree import Node
-from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
+from bt_controller.robot import (
+    FootbotController,
+    FreeRunningController,
+    FreeTick,
+    Readings,
+    StepOutcome,
+    warm_up,
+)
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
 from swarm_ros.names import NamespaceError, robot_frame, robot_index

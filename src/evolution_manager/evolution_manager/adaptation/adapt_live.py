@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, replace
 from pathlib import Path
 
-from bt_controller import timeline
+from bt_controller.robot import timeline
 from evolution_manager.adaptation.live import MEASURABLE, SWAPS, LiveAdaptation, LiveSettings, window_measure
 from evolution_manager.adaptation.search import load_candidates, repertoire_profile
 from evolution_manager.arguments import (

@@ -48,8 +48,7 @@ from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
 from bt_controller.draws import root_key
 from bt_controller.errors import TreeError
-from bt_controller.library import Library
-from bt_controller.tree import parse
+from bt_controller.language import Library, parse
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.algorithms import Outcome, as_outcome

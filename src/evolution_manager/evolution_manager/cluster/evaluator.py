@@ -30,7 +30,7 @@ from distributed import WorkerPlugin
 from distributed.client import FutureCancelledError
 from distributed.scheduler import KilledWorker
 
-from bt_controller.library import Library, library_from_json
+from bt_controller.language import Library, library_from_json
 from evolution_manager.cluster.settings import CHUNK
 from evolution_manager.errors import DispatchError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, EvaluationResult, failed

@@ -22,9 +22,8 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from bt_controller.library import Library
+from bt_controller.language import CONDITIONS_2023, Library
 from bt_controller.validate import integer
-from bt_controller.vocabulary import CONDITIONS_2023
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.archive import Entry, Repertoire, SimplifiedForms
 from evolution_manager.evolution.deap_trees import (

@@ -30,9 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller.library import Library
-from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import parse, to_text
+from bt_controller.language import Library, parse, simplify_if_small, to_text
 from evolution_manager.evolution.qdpy_grid import Features, Fitness, Grid, ScoresDict
 
 GRID_SHAPE: tuple[int, int, int] = (8, 8, 8)
@@ -43,8 +41,8 @@ WEIGHTS = (1.0,)
 class SimplifiedForms:
     """The simplified form of a tree text, ``to_text(simplify_if_small(parse(text)))``, once per text.
 
-    ``bt_controller.simplify`` keeps every motor of every tick (so fitness, movement and rotation) and may
-    change only the count of condition ticks (conditionality); it takes about a millisecond or two per
+    ``bt_controller.language.simplify`` keeps every motor of every tick (so fitness, movement and rotation)
+    and may change only the count of condition ticks (conditionality); it takes about a millisecond or two per
     evolved tree, so one instance is shared by everything that asks (a run's grids and its cache). A run
     with a primitive library gives it: its names are parsed into their ``success`` copies, and the form is
     the expanded tree's (two trees that expand to the same simplified tree are clones, names or not)."""

@@ -52,9 +52,8 @@ from pathlib import Path
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, RUN_HELDOUT, derive_seed
 from bt_controller.errors import TreeError
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.language import Library, LibraryError, load_library, parse
 from bt_controller.model_settings import PROFILES
-from bt_controller.tree import parse
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.archive import Repertoire

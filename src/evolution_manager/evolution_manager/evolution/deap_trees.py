@@ -2,11 +2,11 @@
 
 The primitive set is built by :func:`make_primitive_set` (no global ``creator`` classes): one primitive per
 composite and number of children (``seq2`` ... ``prob4``, DEAP needs a fixed arity) and one terminal per
-condition and action, all named as in :mod:`bt_controller.vocabulary` (the conditions of the run's task:
-the paper's eight, or all nine with ``got_food`` for foraging), and one terminal per primitive of a library
-(``bt_controller.library``: a name that stands for ``success(<its tree>)``); the hierarchical node set of
-the 2024 follow-up has no actions and three conditions (``HIERARCHICAL_CONDITIONS``). Primitives are never
-compiled: a tree is data, turned into text with :func:`tree_to_text` and read back with
+condition and action, all named as in :mod:`bt_controller.language.vocabulary` (the conditions of the run's
+task: the paper's eight, or all nine with ``got_food`` for foraging), and one terminal per primitive of a
+library (``bt_controller.language.library``: a name that stands for ``success(<its tree>)``); the hierarchical
+node set of the 2024 follow-up has no actions and three conditions (``HIERARCHICAL_CONDITIONS``). Primitives
+are never compiled: a tree is data, turned into text with :func:`tree_to_text` and read back with
 :func:`tree_from_text` through ``bt_controller``'s parser (DEAP's ``PrimitiveTree.from_string`` falls back to
 ``eval`` on unknown tokens).
 """
@@ -18,9 +18,20 @@ from collections.abc import Sequence
 from deap import base, gp
 
 from bt_controller.errors import TreeError
-from bt_controller.library import Library
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Composite, is_decorator, leaf_name, parse
-from bt_controller.vocabulary import ACTIONS, COMPOSITES, CONDITIONS_2023, MAX_CHILDREN, MIN_CHILDREN
+from bt_controller.language import (
+    ACTIONS,
+    COMPOSITES,
+    CONDITIONS_2023,
+    MAX_CHILDREN,
+    MAX_DEPTH,
+    MAX_NODES,
+    MIN_CHILDREN,
+    Composite,
+    Library,
+    is_decorator,
+    leaf_name,
+    parse,
+)
 from evolution_manager.errors import TreeTextError
 from evolution_manager.evolution.parameters import HIERARCHICAL_CONDITIONS, MAX_TREE_NODES, NODE_SETS
 from swarm_sim.model import DESCRIPTORS, OBJECTIVES

@@ -4,7 +4,7 @@ The authors' 2024 follow-up builds its named primitives from the final grids of 
 (``docs/algorithms.md``, "Primitive libraries from repertoires"; their code at a73e4af:
 ``charts/sub-behaviours.py:26-66``, ``analysis.py:1296-1358``). This module does the same from our run
 directories (``repertoire_<objective>.json``, ``config.json`` and ``heldout.json`` of ``evolve`` or
-``experiment`` runs), and writes a library that ``--library`` reads (``bt_controller.library``):
+``experiment`` runs), and writes a library that ``--library`` reads (``bt_controller.language.library``):
 
 1. **Families.** Each primitive objective has a family name (``FAMILIES``; the primitive's own objective as
    the authors' ARGoS code measures it, ``docs/validation/README.md``): density ``increaseDensity``, nest
@@ -24,7 +24,8 @@ directories (``repertoire_<objective>.json``, ``config.json`` and ``heldout.json
 4. **Across runs** the runs' winners are compared by *raw* fitness under the ``paper`` profile (the authors'
    rule, foraging.md item 4, artefact A5), by derated fitness under ``clean`` (section 6). Exact ties go to
    the run named first. Every run must have the same profile.
-5. **Simplified.** The winner is simplified with ``bt_controller.simplify`` (the same motors on every tick;
+5. **Simplified.** The winner is simplified with ``bt_controller.language.simplify`` (the same motors on every
+tick;
    the authors strip redundancy likewise, ``redundancy.py:1871-1908``, which also keeps motors and not
    conditionality), and its draw keys are dropped: in a composed tree each use of a primitive is a copy
    whose probabilistic nodes then draw with their own pre-order index, independently of every other copy,
@@ -46,9 +47,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_controller.errors import TreeError
-from bt_controller.library import LIBRARY_FORMAT, Library, library_from_json
-from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import parse, to_text, without_draw_keys
+from bt_controller.language import (
+    LIBRARY_FORMAT,
+    Library,
+    library_from_json,
+    parse,
+    simplify_if_small,
+    to_text,
+    without_draw_keys,
+)
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser
 from evolution_manager.errors import EvolutionError, RunDirectoryError, UsageError, WriteError
 from evolution_manager.evolution.operators import selection_fitness

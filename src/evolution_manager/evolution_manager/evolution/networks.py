@@ -1,6 +1,6 @@
-"""Optimisers over a neural controller's 56 weights (``bt_controller.network``, issue 37): CMA-ES with
-pycma, the authors' GA with DEAP's operators and MAP-Elites with pyribs, as ask/tell objects, and a run of any
-of them with its run directory.
+"""Optimisers over a neural controller's 56 weights (``bt_controller.interpreters.network``, issue 37): CMA-ES
+with pycma, the authors' GA with DEAP's operators and MAP-Elites with pyribs, as ask/tell objects, and a run
+of any of them with its run directory.
 
 ``evolve --algorithm nn-cmaes|nn-ga|nn-qd --objective O [--task T] --evaluations N --seed S --out DIR``
 (``--resume``; ``docs/algorithms.md``, "Networks"). Every network of a run is evaluated on the run's scenario
@@ -56,8 +56,9 @@ from typing import Any
 import numpy as np
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, derive_seed
+from bt_controller.interpreters import N_WEIGHTS, Network, network_document
+from bt_controller.interpreters import network_text as to_text
 from bt_controller.model_settings import PROFILES
-from bt_controller.network import N_WEIGHTS, Network, network_document, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.compositions import bin_of

@@ -8,7 +8,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from bt_controller.draws import MAX_SEED
-from bt_controller.library import Library, library_option
+from bt_controller.language import Library, library_option
 from evolution_manager.arguments import seed_int
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.descriptor_sets import DESCRIPTOR_SETS

@@ -16,13 +16,14 @@ if TYPE_CHECKING:  # typeshed's name for "an instance of any dataclass"
     from _typeshed import DataclassInstance
 
 MAX_TREE_NODES = 1000
-"""The most nodes a tree may have: the evaluator's limit (``bt_controller.tree.MAX_NODES``; a test checks
-they agree), so that the operators never make a tree the evaluator would refuse."""
+"""The most nodes a tree may have: the evaluator's limit (``bt_controller.language.tree.MAX_NODES``; a test
+checks they agree), so that the operators never make a tree the evaluator would refuse."""
 
 MAX_TREE_HEIGHT = 17
-"""The tallest tree the operators make: the evaluator's depth limit (``bt_controller.tree.MAX_DEPTH``, a
-leaf has height 0 as in DEAP; a test checks they agree). The authors' operators have no height limit
-(gp/ea.py:73-77); their selection derates long trees instead (see ``operators.selection_fitness``)."""
+"""The tallest tree the operators make: the evaluator's depth limit
+(``bt_controller.language.tree.MAX_DEPTH``, a leaf has height 0 as in DEAP; a test checks they agree). The
+authors' operators have no height limit (gp/ea.py:73-77); their selection derates long trees instead (see
+``operators.selection_fitness``)."""
 
 
 NODE_SETS: tuple[str, ...] = ("flat", "hierarchical")

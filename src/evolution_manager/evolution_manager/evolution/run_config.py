@@ -19,9 +19,9 @@ the 2023 20 s trials with the paper's 8 conditions, ``foraging``, the 2024 100 s
 ``got_food`` too, or a task file), kept whole in ``config.json``. Objectives: GP_o and QD_o evolve one of
 ``OBJECTIVES``, GP_fnd any set of them (``fnd_objectives``; by default the task's: the paper's three, or
 foraging alone). A run also keeps a passive grid per objective of ``grids``: the task's objectives and the
-evolved ones. Library: a primitive library (``bt_controller.library``) whose names become terminals of the
-node set; the run keeps a copy of it (``library.json`` in the run directory) and records the file and its
-digest here.
+evolved ones. Library: a primitive library (``bt_controller.language.library``) whose names become terminals
+of the node set; the run keeps a copy of it (``library.json`` in the run directory) and records the file and
+its digest here.
 """
 
 from __future__ import annotations
@@ -37,10 +37,9 @@ from bt_controller.draws import (
     RUN_SCENARIO,
     derive_seed,
 )
-from bt_controller.library import Library
+from bt_controller.language import ACTIONS, CONDITIONS, Library
 from bt_controller.model_settings import PROFILES, Timeline
 from bt_controller.validate import integer
-from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.descriptor_sets import checked_space
 from evolution_manager.evolution.parameters import (
@@ -57,7 +56,7 @@ if TYPE_CHECKING:  # see make_algorithm
     from evolution_manager.evolution.archive import SimplifiedForms
 
 DEFAULT_PROFILE: str = PROFILES[Timeline().profile]
-"""The model's default profile (``bt_controller.timeline``): runs that name none use it."""
+"""The model's default profile (``bt_controller.robot.timeline``): runs that name none use it."""
 
 ALGORITHMS: tuple[str, ...] = ("gp", "gp-fnd", "qd")
 """Command-line names: GP_o, GP_fnd, QD_o (MAP-Elites)."""
@@ -107,7 +106,7 @@ class RunConfig:
     library: str = ""
     """The primitive library file the run was started with ("" for none); the run uses its copy."""
     library_digest: str = ""
-    """The digest of that library (``bt_controller.library.Library.digest``)."""
+    """The digest of that library (``bt_controller.language.library.Library.digest``)."""
     nodes: str = "flat"
     """The node set (``parameters.NODE_SETS``): ``flat`` or ``hierarchical`` (needs a library)."""
     descriptors: str = "behaviour"

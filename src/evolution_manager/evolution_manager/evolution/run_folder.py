@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Generic, Protocol, Self, TypeVar
 
-from bt_controller.library import Library, LibraryError, library_from_json
+from bt_controller.language import Library, LibraryError, library_from_json
 from bt_controller.validate import integer
 from bt_controller.validate import number as finite_number
 from evolution_manager.errors import ConfigError, RunDirectoryError

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bt_controller.tree import Node, parse, to_text
+from bt_controller.language import Node, parse, to_text
 from evolution_manager.evolution.heldout import saved_heldout, score_heldout
 from evolution_manager.evolution.run import Run
 from evolution_manager.evolution.shown_trees import simplified, simplified_tree

@@ -1,4 +1,5 @@
-"""Trees as people are shown them: simplified (``bt_controller.simplify``), each primitive's copy kept whole.
+"""Trees as people are shown them: simplified (``bt_controller.language.simplify``), each primitive's copy
+kept whole.
 
 The results files, the explorer and the foraging study's report all show trees this way; this module sits
 below them so that none imports another for it.
@@ -8,14 +9,12 @@ from __future__ import annotations
 
 from functools import cache
 
-from bt_controller.library import Library
-from bt_controller.simplify import simplify_if_small
-from bt_controller.tree import Node, parse, to_text
+from bt_controller.language import Library, Node, parse, simplify_if_small, to_text
 
 
 @cache
 def simplified(tree: str, library: Library | None = None) -> str:
-    """The simplified text of a tree text (``bt_controller.simplify``); each copy of a primitive of
+    """The simplified text of a tree text (``bt_controller.language.simplify``); each copy of a primitive of
     ``library`` is kept whole and written by its name."""
     simple = simplified_tree(parse(tree, library=library), library)
     return to_text(simple) if library is None else library.fold(simple)

@@ -49,9 +49,9 @@ from pathlib import Path
 from deap import gp
 
 from bt_controller.draws import MAX_SEED, RUN_ALGORITHM, derive_seed
+from bt_controller.language import ACTIONS, CONDITIONS
 from bt_controller.model_settings import PROFILES
 from bt_controller.validate import integer
-from bt_controller.vocabulary import ACTIONS, CONDITIONS
 from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.deap_trees import make_primitive_set, tree_from_text, tree_to_text
 from evolution_manager.evolution.operators import PARSIMONY_HEIGHT, full_tree, vary

@@ -27,7 +27,7 @@ from ament_index_python.packages import (
     get_package_share_directory,
 )
 
-from bt_controller.library import load_library
+from bt_controller.language import load_library
 from evolution_manager.errors import GraphError
 from evolution_manager.processes import die_with_parent
 from swarm_ros.isolation import domain_environment

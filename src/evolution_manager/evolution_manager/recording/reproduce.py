@@ -34,10 +34,9 @@ from pathlib import Path
 from typing import Any
 
 from bt_controller.errors import TreeError
+from bt_controller.interpreters import Network, parse_controller
+from bt_controller.language import ACTIONS, Node
 from bt_controller.model_settings import PROFILES
-from bt_controller.network import Network, parse_controller
-from bt_controller.tree import Node
-from bt_controller.vocabulary import ACTIONS
 from evolution_manager.recording.bags import BagError, check_crcs, read_bag
 from swarm_ros.names import robot_frames, robot_namespaces
 from swarm_sim.evaluation import named_values

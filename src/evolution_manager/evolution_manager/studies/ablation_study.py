@@ -13,7 +13,8 @@ it came from):
 - ``random8``: for each family and block, one primitive drawn uniformly from every tree that the block holds
   in any of the study's QD runs of that family, instead of the best (simplified as the ``library`` command
   simplifies its winners);
-- ``unevolved8``: random trees never evolved (``bt_controller.random_trees.random_tree``), each with the node
+- ``unevolved8``: random trees never evolved (``bt_controller.language.random_trees.random_tree``), each with
+the node
   count of the ``elite8`` primitive of its name;
 - ``padded1``: the study's ``qd1`` library (one primitive per family), each primitive copied to eight names,
   so that the node set has ``elite8``'s 48 names;
@@ -46,9 +47,15 @@ from typing import cast
 import numpy as np
 
 from bt_controller.draws import RUN_STUDY, derive_seed
-from bt_controller.library import LIBRARY_FORMAT, Library, LibraryError, library_from_json, load_library
-from bt_controller.random_trees import random_tree
-from bt_controller.tree import parse
+from bt_controller.language import (
+    LIBRARY_FORMAT,
+    Library,
+    LibraryError,
+    library_from_json,
+    load_library,
+    parse,
+    random_tree,
+)
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.libraries import (
     BLOCKS,
@@ -106,7 +113,7 @@ REFERENCE = "elite8"
 LIBRARIES: dict[str, str] = {
     "elite8": "copied from the foraging study's libraries/qd8.json",
     "random8": "a tree drawn uniformly from each family's block over the study's QD runs, simplified",
-    "unevolved8": "bt_controller.random_trees.random_tree of each elite8 primitive's node count",
+    "unevolved8": "bt_controller.language.random_trees.random_tree of each elite8 primitive's node count",
     "padded1": "the foraging study's libraries/qd1.json, each primitive copied to eight names",
 }
 """Library name -> how it is made."""
@@ -286,7 +293,7 @@ def unevolved(library: Library, rng: np.random.Generator, seed: int) -> list[dic
         source = {
             "ablation": {
                 "arm": "unevolved8",
-                "generator": "bt_controller.random_trees.random_tree, the primitives task's nodes",
+                "generator": "bt_controller.language.random_trees.random_tree, the primitives task's nodes",
                 "rng": f"numpy.random.default_rng({seed}), drawn in the library's order",
                 "nodes": size,
                 "size_of": {"name": p.name, "tree": p.text},

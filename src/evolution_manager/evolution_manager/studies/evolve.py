@@ -55,7 +55,7 @@ if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load la
     from distributed import Client
     from tqdm import tqdm
 
-    from bt_controller.library import Library
+    from bt_controller.language import Library
     from evolution_manager.cluster.settings import ClusterSettings
     from evolution_manager.evolution.compositions import CompositionParameters
     from swarm_sim.evaluation import Evaluator

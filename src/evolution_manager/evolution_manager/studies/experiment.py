@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 from bt_controller.draws import MAX_SEED
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.language import Library, LibraryError, load_library
 from evolution_manager.arguments import (
     EXIT_IO,
     EXIT_USAGE,

@@ -49,9 +49,15 @@ from pathlib import Path
 
 from bt_controller.draws import RUN_STUDY, derive_seed
 from bt_controller.errors import TreeLimitError
-from bt_controller.library import LIBRARY_FORMAT, Library, LibraryError, library_from_json, load_library
-from bt_controller.render import render
-from bt_controller.tree import parse
+from bt_controller.language import (
+    LIBRARY_FORMAT,
+    Library,
+    LibraryError,
+    library_from_json,
+    load_library,
+    parse,
+)
+from bt_controller.tools import render
 from evolution_manager.errors import EvolutionError
 from evolution_manager.evolution import compositions as comp
 from evolution_manager.evolution.compositions import CompositionConfig

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from bt_controller.library import LibraryError, load_library
+from bt_controller.language import LibraryError, load_library
 from evolution_manager.errors import UsageError
 from evolution_manager.files import write_atomic
 from swarm_sim.errors import UsageError as SimUsageError

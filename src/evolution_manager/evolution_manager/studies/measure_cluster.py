@@ -32,7 +32,7 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
 from evolution_manager.arguments import EXIT_USAGE, Parser, positive_int
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, SlurmSettings

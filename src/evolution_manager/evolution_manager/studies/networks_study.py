@@ -40,8 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from bt_controller.draws import RUN_STUDY, derive_seed
-from bt_controller.network import INPUT_NAMES, INPUTS, N_INPUTS, act, load_network
-from bt_controller.vocabulary import ACTIONS, N_CONDITIONS
+from bt_controller.interpreters import INPUT_NAMES, INPUTS, N_INPUTS, act, load_network
+from bt_controller.language import ACTIONS, N_CONDITIONS
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.networks import ALGORITHMS as NETWORK_ARMS
 from evolution_manager.evolution.networks import NetworkConfig

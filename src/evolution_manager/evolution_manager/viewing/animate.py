@@ -30,10 +30,8 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from bt_controller.errors import TreeError
-from bt_controller.library import library_option
-from bt_controller.network import NetworkError, controller_text, load_network
-from bt_controller.tree import parse, to_text
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.interpreters import NetworkError, controller_text, load_network
+from bt_controller.language import ACTIONS, library_option, parse, to_text
 from evolution_manager.arguments import Parser, int_in, non_negative_int, positive_int, seed_in_range
 from evolution_manager.errors import AnimationError, UsageError
 from evolution_manager.viewing.frames import TrialFrames, frames_from_bag, frames_from_tree
@@ -52,7 +50,7 @@ from swarm_sim.model import OBJECTIVES, PAPER_OBJECTIVES, LayoutError, label_poi
 from swarm_sim.tasks import DEFAULT_TASK, FORAGING, TaskSpec, add_task_option, task_named
 
 if TYPE_CHECKING:
-    from bt_controller.library import Library
+    from bt_controller.language import Library
     from swarm_sim.model import Config, SwarmLayout
 
 

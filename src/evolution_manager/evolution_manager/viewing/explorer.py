@@ -34,7 +34,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_controller.library import Library, LibraryError, library_from_json, load_library
+from bt_controller.language import Library, LibraryError, library_from_json, load_library
 from evolution_manager.arguments import EXIT_IO, OneLineParser
 from evolution_manager.errors import ExplorerError, WriteError
 from evolution_manager.evolution.run_config import evaluation_seed

@@ -13,10 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from bt_controller.errors import TreeError
-from bt_controller.library import Library, LibraryError
-from bt_controller.tree import parse
+from bt_controller.language import ACTIONS, MAX_FOOD_KINDS, Library, LibraryError, parse
 from bt_controller.validate import strict_json
-from bt_controller.vocabulary import ACTIONS, MAX_FOOD_KINDS
 from evolution_manager.errors import ExplorerError
 from evolution_manager.viewing.frames import TrialFrames
 from evolution_manager.viewing.palette import (

@@ -20,15 +20,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bt_controller import timeline
-from bt_controller.compiled import N_COUNTS
+from bt_controller.interpreters import N_COUNTS
+from bt_controller.robot import timeline
 from evolution_manager.errors import AnimationError
 from swarm_sim.core import world
 from swarm_sim.model import DEFAULT, N_PROBES, Piece
 from swarm_sim.roads import record_trial
 
 if TYPE_CHECKING:
-    from bt_controller.library import Library
+    from bt_controller.language import Library
     from swarm_sim.model import Config, Params, SwarmLayout
 
 

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from bt_controller.vocabulary import food_kind_name
+from bt_controller.language import food_kind_name
 
 RGB = tuple[int, int, int]
 

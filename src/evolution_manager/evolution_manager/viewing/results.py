@@ -14,9 +14,9 @@
 ``figures/``
     ``heatmap_<objective>.png`` (fig. 7), ``histogram.png`` (fig. 8), ``progress.png``;
 ``best/<objective>.*``
-    the best tree of each evolved objective, simplified (``bt_controller.simplify``: the same motors on every
-    tick), as text, an indented view, BehaviorTree.CPP XML, Graphviz DOT, an SVG and a PNG drawing, and the
-    tree as evolved in ``<objective>.original.txt``; a format that cannot be written is an error;
+    the best tree of each evolved objective, simplified (``bt_controller.language.simplify``: the same motors
+    on every tick), as text, an indented view, BehaviorTree.CPP XML, Graphviz DOT, an SVG and a PNG drawing,
+    and the tree as evolved in ``<objective>.original.txt``; a format that cannot be written is an error;
 ``explorer.html``
     the repertoire explorer (``evolution_manager.viewing.explorer``), one self-contained page.
 
@@ -34,9 +34,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bt_controller.formats import to_dot, to_xml
-from bt_controller.render import render
-from bt_controller.tree import to_indented
+from bt_controller.language import to_dot, to_indented, to_xml
+from bt_controller.tools import render
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.descriptor_sets import descriptor_set
 from evolution_manager.evolution.run import Run, RunDirectory

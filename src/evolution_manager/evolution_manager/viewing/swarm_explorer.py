@@ -51,7 +51,7 @@ from evolution_manager.viewing.frames import frames_from_tree
 from swarm_sim.model import SwarmLayout
 
 if TYPE_CHECKING:
-    from bt_controller.library import Library
+    from bt_controller.language import Library
 
 KINDS = (COMPOSITIONS, TEAMS)
 """The ``kind`` values of ``config.json`` whose page this module builds."""

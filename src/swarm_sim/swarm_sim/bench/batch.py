@@ -3,9 +3,9 @@
     bench [--trees 200] [--reference-trees 4] [--trials 10] [--seed 0] [--parity N] [--threads K]
           [--profile paper|clean] [--task primitives|foraging]
 
-Trees are ``bt_controller.random_trees.random_trees(seed, n)`` (11 to 60 nodes; with ``--task foraging``
-some inner nodes are success decorators, and got_food is among the conditions of both tasks' trees).
-``--task foraging`` times 100 s trials (800 steps each; ``swarm_sim.tasks``). The batch evaluator is
+Trees are ``bt_controller.language.random_trees.random_trees(seed, n)`` (11 to 60 nodes; with ``--task
+foraging`` some inner nodes are success decorators, and got_food is among the conditions of both tasks'
+trees). ``--task foraging`` times 100 s trials (800 steps each; ``swarm_sim.tasks``). The batch evaluator is
 timed after a warm-up batch (compilation excluded) on one batch of ``--trees`` requests, in wall-clock time
 and in CPU time of this process (the fairer figure on a shared machine); the reference road on the first
 ``--reference-trees`` of them. ``--parity N`` then evaluates N random trees by both roads and counts
@@ -21,9 +21,8 @@ from collections.abc import Sequence
 
 import numba
 
+from bt_controller.language import parse, random_trees
 from bt_controller.model_settings import PROFILES
-from bt_controller.random_trees import random_trees
-from bt_controller.tree import parse
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.model import DEFAULT, Config
 from swarm_sim.roads import reference_road

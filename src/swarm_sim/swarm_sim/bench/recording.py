@@ -3,9 +3,9 @@
     record-bench [--trees 300] [--trial 0] [--seed 0] [--reference-trees 3] [--profile paper|clean]
 
 Prints the first call (compiling or loading the kernels), then, for ``--trees`` different random trees
-(``bt_controller.random_trees``; the repertoire explorer animates one trial of the best tree of each filled
-bin, up to 512), the total and per-trial time of ``record_trial``, in wall-clock time and CPU time of this
-process (the fairer figure on a shared machine); then ``record_trial_reference`` on the first
+(``bt_controller.language.random_trees``; the repertoire explorer animates one trial of the best tree of each
+filled bin, up to 512), the total and per-trial time of ``record_trial``, in wall-clock time and CPU time of
+this process (the fairer figure on a shared machine); then ``record_trial_reference`` on the first
 ``--reference-trees`` of them (after a warm-up), and the ratio.
 """
 
@@ -16,8 +16,8 @@ import sys
 import time
 from collections.abc import Sequence
 
+from bt_controller.language import random_trees
 from bt_controller.model_settings import PROFILES
-from bt_controller.random_trees import random_trees
 from swarm_sim.model import DEFAULT, default_config
 from swarm_sim.roads import record_trial, record_trial_reference, warm_up
 

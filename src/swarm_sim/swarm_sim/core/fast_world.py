@@ -37,9 +37,9 @@ drop_stale_cache(
     __file__,
     (
         "bt_controller.draws",
-        "bt_controller.perception",
-        "bt_controller.timeline",
-        "bt_controller.vocabulary",
+        "bt_controller.robot.perception",
+        "bt_controller.robot.timeline",
+        "bt_controller.language.vocabulary",
         "swarm_sim.model.config",
         "swarm_sim.core.world",
     ),

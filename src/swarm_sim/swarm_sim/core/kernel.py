@@ -1,14 +1,14 @@
 """The batch road: whole chains of trials in compiled kernels, with the compiled tree interpreter.
 
-``simulate_chain`` runs the trials of one chain (``bt_controller.timeline``: 5 trials as one simulation under
-``paper``, one trial under ``clean``), each robot with its own tree of a pack (the same for every robot in a
-homogeneous swarm), exactly as the reference road
+``simulate_chain`` runs the trials of one chain (``bt_controller.robot.timeline``: 5 trials as one simulation
+under ``paper``, one trial under ``clean``), each robot with its own tree of a pack (the same for every robot
+in a homogeneous swarm), exactly as the reference road
 (``swarm_sim.roads.reference_road``: the simulator of ``swarm_sim.roads.lockstep`` with one
-``bt_controller.controller.FootbotController`` per robot) does, with the same ``swarm_sim.core.world``,
-``bt_controller.perception``, ``bt_controller.motors`` and ``bt_controller.timeline`` functions in the same
-order; it only skips work whose result is never read (a bearing is computed for the three senders the
-blackboard needs, at ticks, rather than for every message) or known (``fast_world.physics_step``, the
-physics to the same bits).
+``bt_controller.robot.controller.FootbotController`` per robot) does, with the same ``swarm_sim.core.world``,
+``bt_controller.robot.perception``, ``bt_controller.robot.motors`` and ``bt_controller.robot.timeline``
+functions in the same order; it only skips work whose result is never read (a bearing is computed for the
+three senders the blackboard needs, at ticks, rather than for every message) or known
+(``fast_world.physics_step``, the physics to the same bits).
 ``run_jobs(trees, params, jobs, out)`` runs many (robots' trees, seed, chain) jobs; each job writes only its
 own output rows (one per trial), so a job's result never depends on the others, their order or their number.
 ``record_chain`` runs one chain through the very same ``simulate_chain`` and also writes, step by step, what
@@ -31,21 +31,27 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from bt_controller import timeline
-from bt_controller.compiled import (
+from bt_controller.draws import BEARINGS, DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
+from bt_controller.interpreters import (
     N_COUNTS,
     OP_CONDITION,
     OP_NETWORK,
     PackedTrees,
+    act,
     start_memory,
     tick,
     tree_at,
 )
-from bt_controller.draws import BEARINGS, DROPS, GAINS, HEADING, POSITION, TREE, chain_keys
-from bt_controller.motors import motors_after_tick, movement_of, rotation_of, running_action
-from bt_controller.network import act
-from bt_controller.perception import ROBOT_SIDE, region_column
-from bt_controller.vocabulary import CONDITION_SIDE, N_CONDITIONS, RUNNING, SIDES, STOP
+from bt_controller.language import CONDITION_SIDE, N_CONDITIONS, RUNNING, SIDES, STOP
+from bt_controller.robot import (
+    ROBOT_SIDE,
+    motors_after_tick,
+    movement_of,
+    region_column,
+    rotation_of,
+    running_action,
+    timeline,
+)
 from swarm_sim.core import fast_world, world
 from swarm_sim.core._numba_cache import drop_stale_cache
 from swarm_sim.core.trial_data import chain_plan, robot_faults
@@ -54,13 +60,13 @@ from swarm_sim.model import N_PROBES, Config, Params
 drop_stale_cache(
     __file__,
     (
-        "bt_controller.compiled",
+        "bt_controller.interpreters.compiled",
         "bt_controller.draws",
-        "bt_controller.motors",
-        "bt_controller.network",
-        "bt_controller.perception",
-        "bt_controller.timeline",
-        "bt_controller.vocabulary",
+        "bt_controller.robot.motors",
+        "bt_controller.interpreters.network",
+        "bt_controller.robot.perception",
+        "bt_controller.robot.timeline",
+        "bt_controller.language.vocabulary",
         "swarm_sim.model.config",
         "swarm_sim.model.faults",
         "swarm_sim.model.regions",

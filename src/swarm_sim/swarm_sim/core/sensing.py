@@ -2,7 +2,7 @@
 
 ``sense_swarm`` produces every robot's ``Readings`` (what the simulator node publishes). ``Readings`` and
 ``RobotView`` (raw estimates, smoothing window, blackboard) are robot-side software and live in
-``bt_controller.perception``; they are re-exported here. The batch kernels inline the same functions
+``bt_controller.robot.perception``; they are re-exported here. The batch kernels inline the same functions
 (``swarm_sim.core.world``, section (c)).
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bt_controller.perception import Readings
+from bt_controller.robot import Readings
 from swarm_sim.core import world
 from swarm_sim.model import Params
 from swarm_sim.model.faults import GROUND_FAULTS

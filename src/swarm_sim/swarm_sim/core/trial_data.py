@@ -1,11 +1,11 @@
 """What a chain starts from and what its trials leave; shared by the reference road, the batch road and the
 nodes.
 
-A chain is one continuous simulation of one or more trials (``bt_controller.timeline``): the 5 trials of a
-block under ``paper``, a single trial under ``clean``. ``setup_chain`` draws what is fixed for the whole chain
-(wheel gains, the robots' stream keys, their faults: ``robot_faults``, the same for every chain of a seed);
-start poses are drawn at each trial's first step by ``world.place_robots``. Trial ``k`` of an evaluation is
-trial ``k % chain_length`` of chain ``k // chain_length`` and uses the gap ``config.gap(k)``.
+A chain is one continuous simulation of one or more trials (``bt_controller.robot.timeline``): the 5 trials of
+a block under ``paper``, a single trial under ``clean``. ``setup_chain`` draws what is fixed for the whole
+chain (wheel gains, the robots' stream keys, their faults: ``robot_faults``, the same for every chain of a
+seed); start poses are drawn at each trial's first step by ``world.place_robots``. Trial ``k`` of an
+evaluation is trial ``k % chain_length`` of chain ``k // chain_length`` and uses the gap ``config.gap(k)``.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ types that swap the nest and food kind 1 for odd robots (``Config.robot_types``)
 ``swap_ground``, ``swap_sent``, ``swap_received``; and the per-robot faults that change them
 (``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``, ``deafen``, ``faulty_bearing``,
 ``disrupt``;
-(c) one robot's view from its own readings (from ``bt_controller.perception``, inlined): ``estimate``,
+(c) one robot's view from its own readings (from ``bt_controller.robot.perception``, inlined): ``estimate``,
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
 (d) objectives and descriptors: ``region_distance``, ``neighbour_distance``, ``take_probes``,
@@ -31,9 +31,9 @@ import math
 import numba
 import numpy as np
 
-from bt_controller import perception
 from bt_controller.draws import uniform
-from bt_controller.vocabulary import ACTION_WHEELS
+from bt_controller.language import ACTION_WHEELS
+from bt_controller.robot import perception
 from swarm_sim.core._numba_cache import drop_stale_cache
 from swarm_sim.model import N_OBJECTIVES, N_VALUES, Params
 from swarm_sim.model import (
@@ -66,9 +66,9 @@ drop_stale_cache(
     __file__,
     (
         "bt_controller.draws",
-        "bt_controller.perception",
-        "bt_controller.timeline",
-        "bt_controller.vocabulary",
+        "bt_controller.robot.perception",
+        "bt_controller.robot.timeline",
+        "bt_controller.language.vocabulary",
         "swarm_sim.model.config",
         "swarm_sim.model.faults",
         "swarm_sim.model.objectives",
@@ -864,7 +864,7 @@ def disrupt(faults: np.ndarray, broadcast: np.ndarray) -> None:
 
 
 # ---------------------------------------------------------------------------------------------------- (c)
-# A robot's perception is robot-side software, defined once in ``bt_controller.perception`` (what the
+# A robot's perception is robot-side software, defined once in ``bt_controller.robot.perception`` (what the
 # controller node runs, and the reference road through its ``RobotView``). The batch kernels inline the very
 # same source: numba does not inline calls between separately compiled functions, and inlining these saves
 # ~15 %. These wrappers are compiled only where a kernel inlines them (or on a first call from Python); no

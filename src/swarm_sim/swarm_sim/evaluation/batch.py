@@ -8,8 +8,8 @@ depends only on its request.
 
 A ``SwarmRequest`` evaluates a heterogeneous swarm (``swarm_sim.model.swarm_layout``: a tree per robot) the
 same way; a layout of one tree on every robot gives the very bits of the ``EvaluationRequest`` of that tree.
-A request's tree text may be a network's (``nn(...)``, ``bt_controller.network``): it runs in a tree's
-place.
+A request's tree text may be a network's (``nn(...)``, ``bt_controller.interpreters.network``): it runs in a
+tree's place.
 """
 
 from __future__ import annotations
@@ -22,12 +22,10 @@ from typing import Protocol, runtime_checkable
 import numba
 import numpy as np
 
-from bt_controller.compiled import FlatTree, flatten, pack
 from bt_controller.draws import check_seed, root_key
 from bt_controller.errors import TreeError
-from bt_controller.library import Library
-from bt_controller.network import Network, parse_controller
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node
+from bt_controller.interpreters import FlatTree, Network, flatten, pack, parse_controller
+from bt_controller.language import MAX_DEPTH, MAX_NODES, Library, Node
 from bt_controller.validate import integer
 from swarm_sim.core import TrialRecord, combine, kernel, world
 from swarm_sim.model import DEFAULT, Config, SwarmLayout
@@ -144,7 +142,7 @@ class BatchEvaluator:
 
     ``evaluate`` answers the contract; ``evaluate_trials`` also returns each trial's record (values and
     poses). Trees are refused beyond ``max_nodes`` nodes or ``max_depth`` depth (primitives expanded). A
-    tree may name the primitives of ``library`` (``bt_controller.library``): each use is its own
+    tree may name the primitives of ``library`` (``bt_controller.language.library``): each use is its own
     ``success`` copy. With ``threads`` > 1 the trials are spread over that many numba threads; results are the
     same bits either way.
     """

@@ -10,13 +10,14 @@ Prints ``{"tree", "seed", "trials", "profile", "task", "conditions", "fitness": 
 ``foraging``, 100 s trials) or, for a task file's or an edited task, every key of it (``swarm_sim.tasks``);
 ``"per_trial"`` added with ``--per-trial``: each
 trial's values, gap and the robots' start and end poses as [x, y, heading]). The tree is printed in canonical
-form. With ``--library FILE`` (a primitive library, ``bt_controller.library``) the tree may name its
+form. With ``--library FILE`` (a primitive library, ``bt_controller.language.library``) the tree may name its
 primitives, each use its own ``success`` copy; the tree is printed with the names, and ``"library": {"file",
 "digest"}`` is added. ``--swarm FILE`` (a swarm layout, ``swarm_sim.model.swarm_layout``: ``{"trees": [one
 tree text per robot]}`` or ``{"tree": TREE}``) gives each robot its own tree; ``"trees"`` (each robot's tree,
 robot 0 first, canonical) then stands in place of ``"tree"``. ``--network FILE`` (``{"weights": [56
-numbers]}``, ``bt_controller.network``) runs that network on every robot instead of a tree; ``"network"`` (its
-56 weights) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status 2.
+numbers]}``, ``bt_controller.interpreters.network``) runs that network on every robot instead of a tree;
+``"network"`` (its 56 weights) then stands in place of ``"tree"``. Bad input: one line on stderr, exit status
+2.
 """
 
 from __future__ import annotations
@@ -28,9 +29,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
-from bt_controller.library import Library, library_option
-from bt_controller.model_settings import PROFILES
-from bt_controller.network import (
+from bt_controller.interpreters import (
     Network,
     NetworkError,
     controller_text,
@@ -38,7 +37,8 @@ from bt_controller.network import (
     load_network,
     parse_network,
 )
-from bt_controller.tree import Node
+from bt_controller.language import Library, Node, library_option
+from bt_controller.model_settings import PROFILES
 from swarm_sim.core import TrialRecord
 from swarm_sim.errors import ConditionError, UsageError
 from swarm_sim.evaluation.batch import (

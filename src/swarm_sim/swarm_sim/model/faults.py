@@ -19,7 +19,7 @@ A ground fault changes only what the robot reads. Picking up and delivering food
 really stands on (after the robot-type swap, ``world.swap_ground``), as does its carrying flag, which the
 ``got_food`` conditions read: a faulty sensor neither makes nor destroys food, and the robot knows truly
 whether it carries (the gripper is not the ground sensor). The simulator hands such a robot both its false
-reading and where it stands (``bt_controller.perception.Readings.footing``; the ``footing`` field of
+reading and where it stands (``bt_controller.robot.perception.Readings.footing``; the ``footing`` field of
 ``swarm_msgs/GroundSensor``).
 ``rab-deaf``
     the range-and-bearing receiver hears no message (the robot still broadcasts, and others hear it).
@@ -86,7 +86,7 @@ NO_FAULT = 0
 
 GROUND_FAULTS: tuple[int, ...] = (GROUND_STUCK, GROUND_INVERTED)
 """The codes of the ground-sensor faults: a robot with one reads a false ground, and is told where it really
-stands for picking up and delivering food (``bt_controller.perception.Readings.footing``)."""
+stands for picking up and delivering food (``bt_controller.robot.perception.Readings.footing``)."""
 
 BEARING_NOISE = math.pi / 3.0
 """Half the width of a ``rab-noisy`` receiver's bearing error (rad): 60 degrees either way."""

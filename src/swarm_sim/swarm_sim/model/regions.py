@@ -22,12 +22,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from bt_controller.vocabulary import REGIONS
+from bt_controller.language import REGIONS
 from swarm_sim.errors import ConfigError
 
 REGION_KINDS: tuple[str, ...] = REGIONS
 """The kinds of region, in the order compiled code numbers them (a piece's kind column): the nest and the
-food kinds 1-3 (``food``, ``food2``, ``food3``; ``bt_controller.vocabulary.REGIONS``)."""
+food kinds 1-3 (``food``, ``food2``, ``food3``; ``bt_controller.language.vocabulary.REGIONS``)."""
 
 PIECE_SHAPES: tuple[str, ...] = ("disc", "beyond", "above", "below")
 """The shapes of a piece, in the order compiled code numbers them (a piece's shape column)."""

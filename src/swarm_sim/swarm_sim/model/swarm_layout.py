@@ -3,8 +3,8 @@
 A homogeneous swarm runs one tree on every robot; a heterogeneous one gives robot ``i`` (in id order) tree
 ``trees[i]``. Both roads (``swarm_sim.roads.reference_road``, ``swarm_sim.evaluation.batch.BatchEvaluator``)
 and the node graph (one controller node per robot, each loading its own tree) take a layout. A network's text
-(``nn(...)``, ``bt_controller.network``) may stand wherever a tree's does, so a swarm may mix trees and
-networks.
+(``nn(...)``, ``bt_controller.interpreters.network``) may stand wherever a tree's does, so a swarm may mix
+trees and networks.
 
 The file format (JSON) is one object, either
 
@@ -22,9 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bt_controller.errors import TreeError
-from bt_controller.library import Library
-from bt_controller.network import Network, parse_controller
-from bt_controller.tree import MAX_DEPTH, MAX_NODES, Node
+from bt_controller.interpreters import Network, parse_controller
+from bt_controller.language import MAX_DEPTH, MAX_NODES, Library, Node
 from bt_controller.validate import strict_json
 
 EXPECTED_SHAPE = '{"trees": ["tree text", ...] (one per robot)} or {"tree": "tree text"} (every robot)'

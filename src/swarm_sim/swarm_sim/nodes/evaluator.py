@@ -9,7 +9,8 @@ It configures and activates itself at start unless ``-p autostart:=false``.
 Parameters (``config/swarm_sim.yaml``; a bad one stops the node with one line, exit status 2):
     every field of ``swarm_sim.model.config.Config`` (read-only), as the simulator's: the world evaluated.
     slice (int, 1..1000, default 10): evaluations between two feedback messages and cancel checks.
-    library (string, default none): a primitive library file (``bt_controller.library``) whose primitives'
+    library (string, default none): a primitive library file (``bt_controller.language.library``) whose
+    primitives'
         names the trees may use; the manager that starts evaluators passes its run's library. A library that
         cannot be read stops the node with one line, exit status 2.
     autostart (bool, default true): configure and activate at start.
@@ -44,7 +45,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.lifecycle import LifecycleState, TransitionCallbackReturn
 
-from bt_controller.library import LibraryError, load_library
+from bt_controller.language import LibraryError, load_library
 from bt_controller.nodes.footbot_controller import ControllerSettings
 from swarm_msgs.action import EvaluateBatch as EvaluateBatchAction
 from swarm_msgs.msg import EvaluationResult

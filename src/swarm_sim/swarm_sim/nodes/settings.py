@@ -14,7 +14,8 @@ class EvaluatorSettings:
     slice: int = 10
     """Evaluations between two feedback messages and cancel checks of the evaluate action."""
     library: str = ""
-    """A primitive library file (``bt_controller.library``) whose names the trees may use; empty: none."""
+    """A primitive library file (``bt_controller.language.library``) whose names the trees may use; empty:
+    none."""
 
 
 EVALUATOR_RANGES = {"slice": (1, 1000)}

@@ -119,11 +119,10 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
-from bt_controller import timeline
+from bt_controller.language import ACTIONS
 from bt_controller.model_settings import chain_of_trial
 from bt_controller.nodes.footbot_controller import ControllerSettings
-from bt_controller.perception import Readings
-from bt_controller.vocabulary import ACTIONS
+from bt_controller.robot import Readings, timeline
 from swarm_msgs.action import RunTrial as RunTrialAction
 from swarm_msgs.msg import (
     GroundSensor,

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from bt_controller.model_settings import chain_of_trial
-from bt_controller.perception import Readings
+from bt_controller.robot import Readings
 from swarm_sim.core import sense_swarm, setup_chain
 from swarm_sim.model import Config
 

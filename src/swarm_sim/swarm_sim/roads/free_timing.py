@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from bt_controller.vocabulary import STOP
+from bt_controller.language import STOP
 from swarm_sim.roads.lockstep import RobotAnswer
 
 

@@ -6,8 +6,8 @@ robots' minds. At each step ``k`` of the chain it first
 teleports the robots if a trial starts (``world.place_robots``), moves them with the motors they answered at
 step ``k - 1``, and hands every robot its readings (the messages carry what the senders broadcast at ``k -
 1``); then it waits for every robot's answer: the motors, the values it broadcasts, its smoothed values and,
-at a tick, what the tick did. It scores each trial from those answers (``bt_controller.timeline`` says when),
-so the node graph, the reference road and the batch evaluator compute the same numbers.
+at a tick, what the tick did. It scores each trial from those answers (``bt_controller.robot.timeline`` says
+when), so the node graph, the reference road and the batch evaluator compute the same numbers.
 """
 
 from __future__ import annotations
@@ -17,14 +17,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bt_controller import timeline
-from bt_controller.controller import FootbotController, StepOutcome
+from bt_controller.interpreters import Network
+from bt_controller.language import ACTION_WHEELS, ACTIONS, STOP, Node
 from bt_controller.model_settings import chain_of_trial
-from bt_controller.motors import movement_of, rotation_of
-from bt_controller.network import Network
-from bt_controller.perception import Readings
-from bt_controller.tree import Node
-from bt_controller.vocabulary import ACTION_WHEELS, ACTIONS, STOP
+from bt_controller.robot import FootbotController, Readings, StepOutcome, movement_of, rotation_of, timeline
 from swarm_sim.core import TrialRecord, sense_swarm, setup_chain, world
 from swarm_sim.model import DEFAULT, N_PROBES, Config
 
@@ -245,8 +241,8 @@ class LockstepChain:
 
 def robot_trees(tree: Node | Network | Sequence[Node | Network], n_robots: int) -> list[Node | Network]:
     """Each robot's tree: ``tree`` on every robot (a homogeneous swarm), or one tree per robot in id order
-    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); a network (``bt_controller.network``) in place
-    of any tree. ValueError for a count that is not ``n_robots``."""
+    (``swarm_sim.model.swarm_layout.SwarmLayout.parsed``); a network (``bt_controller.interpreters.network``)
+    in place of any tree. ValueError for a count that is not ``n_robots``."""
     if isinstance(tree, Node | Network):
         return [tree] * n_robots
     trees = list(tree)

@@ -2,8 +2,8 @@
 and ``record_trial_reference`` (the reference road, as the node graph runs it; about a tenth of a second).
 
 Both give a ``RecordedTrial``: per control step of trial ``trial`` of ``seed`` (its chain's earlier trials are
-run first, not recorded; ``bt_controller.timeline``) the robots' poses, the motors their last tick set, the
-last tick's number, the messages each robot received, its smoothed values, its ground sensor, its carrying
+run first, not recorded; ``bt_controller.robot.timeline``) the robots' poses, the motors their last tick set,
+the last tick's number, the messages each robot received, its smoothed values, its ground sensor, its carrying
 flag and deliveries, and the fitness so far (each objective scored from the values of the step as if the trial
 ended there). The two are
 equal array for array, as the two roads' results are (``test_recording.py``).
@@ -19,12 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_controller import timeline
-from bt_controller.compiled import N_COUNTS, pack
 from bt_controller.draws import check_seed, root_key
-from bt_controller.library import Library
+from bt_controller.interpreters import N_COUNTS, pack, parse_controller
+from bt_controller.language import Library
 from bt_controller.model_settings import chain_of_trial
-from bt_controller.network import parse_controller
+from bt_controller.robot import timeline
 from bt_controller.validate import integer
 from swarm_sim.core import kernel, robot_faults, world
 from swarm_sim.model import DEFAULT, Config, SwarmLayout

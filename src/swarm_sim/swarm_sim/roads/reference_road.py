@@ -3,16 +3,16 @@ interpreter. Slow and plain; the oracle that the batch evaluator is tested again
 
 It is orchestrated the way the ROS 2 node graph is: the simulator's side (``swarm_sim.roads.lockstep``:
 teleports, physics, message delivery, ground sensing, scoring) and one
-``bt_controller.controller.FootbotController`` per robot (perception, the tree, the motors), exchanging only
-readings and answers.
+``bt_controller.robot.controller.FootbotController`` per robot (perception, the tree, the motors), exchanging
+only readings and answers.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from bt_controller.network import Network
-from bt_controller.tree import Node
+from bt_controller.interpreters import Network
+from bt_controller.language import Node
 from swarm_sim.core import TrialRecord, chain_plan, combine
 from swarm_sim.model import DEFAULT, Config
 from swarm_sim.roads.lockstep import run_chain_with_controllers

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from bt_controller.language import MULTIFOOD_CONDITIONS
 from bt_controller.model_settings import CODE_2026
-from bt_controller.vocabulary import MULTIFOOD_CONDITIONS
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import FOOD_KINDS, GENERATED_LAYOUTS, arena_entries
 from swarm_sim.model.regions import ArenaEntry

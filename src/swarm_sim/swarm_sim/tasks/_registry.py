@@ -11,8 +11,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from bt_controller.language import CONDITIONS_2023, CONDITIONS_2024
 from bt_controller.model_settings import CODE_2026
-from bt_controller.vocabulary import CONDITIONS_2023, CONDITIONS_2024
 from swarm_sim.model import PAPER_OBJECTIVES
 from swarm_sim.tasks._arenas import UNSEEN_FIRST_ENTRY, arena_task
 from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping

@@ -14,7 +14,7 @@ import math
 import re
 from dataclasses import dataclass, field, replace
 
-from bt_controller.vocabulary import ACTIONS, CONDITION_TABLE, CONDITIONS_2024
+from bt_controller.language import ACTIONS, CONDITION_TABLE, CONDITIONS_2024
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
 from swarm_sim.model.regions import Layout, check_layout, kinds_needed
@@ -134,9 +134,10 @@ class Nodes:
     """The node set trees of the task are made of (composites are always available)."""
 
     conditions: tuple[str, ...] = CONDITIONS_2024
-    """Condition nodes, by name (``bt_controller.vocabulary.CONDITION_TABLE``); by default the 2024 nine."""
+    """Condition nodes, by name (``bt_controller.language.vocabulary.CONDITION_TABLE``); by default the 2024
+    nine."""
     actions: tuple[str, ...] = ACTIONS
-    """Action nodes, by name (``bt_controller.vocabulary.ACTIONS``)."""
+    """Action nodes, by name (``bt_controller.language.vocabulary.ACTIONS``)."""
 
 
 def _default_regions() -> tuple[Region, ...]:

@@ -16,10 +16,10 @@ error of each quantity the reference measured are set beside the reference's wit
 ``--multifood-reference`` files in the 2026 code's multi-food settings (a ``setting`` column per row, read
 as the task of that arena, ``multifood_task``; rows labelled with the task's name; a row may be a swarm,
 ``swarm: T1 ; T2 ; ...``, one tree per robot); trees in the authors' syntax are read into ours
-(``bt_controller.authors``), and a tree may name the primitives of ``--library``. ``--notes`` is markdown
-appended as it is (the explanations of what is outside tolerance, kept in the repository so that regenerating
-keeps them); ``--transfer-table`` adds the summary of a transfer table. ``--tsv`` also writes our statistics
-in the reference's format.
+(``bt_controller.language.authors``), and a tree may name the primitives of ``--library``. ``--notes`` is
+markdown appended as it is (the explanations of what is outside tolerance, kept in the repository so that
+regenerating keeps them); ``--transfer-table`` adds the summary of a transfer table. ``--tsv`` also writes our
+statistics in the reference's format.
 
 Transfer mode (``swarm_sim.validation.transfer``): trees picked from evolution run directories of the
 primitives' task without a library (each evolved grid's best and ``--per-run`` more by farthest-point sampling
@@ -48,9 +48,8 @@ from dataclasses import fields, replace
 from pathlib import Path
 from typing import NoReturn
 
-from bt_controller.authors import from_authors, is_authors_syntax
-from bt_controller.library import Library, library_option
-from bt_controller.network import to_text
+from bt_controller.interpreters import network_text
+from bt_controller.language import Library, from_authors, is_authors_syntax, library_option
 from swarm_ros.safe_paths import check_output, refuse_links, replace_file
 from swarm_sim.errors import ConfigError, UsageError
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, SwarmRequest, check_request
@@ -123,11 +122,12 @@ def model_config(profile: str | None) -> Config:
 
 
 def ours(tree: str) -> str:
-    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.authors``); a network in
-    the harness's form (``nn: w1 ... w56``, ``reference.network_of_subject``) as a network's text."""
+    """A reference tree in our syntax (the authors' read into ours, ``bt_controller.language.authors``); a
+    network in the harness's form (``nn: w1 ... w56``, ``reference.network_of_subject``) as a network's
+    text."""
     network = validation.network_of_subject(tree)
     if network is not None:
-        return to_text(network)
+        return network_text(network)
     return from_authors(tree) if is_authors_syntax(tree) else tree
 
 

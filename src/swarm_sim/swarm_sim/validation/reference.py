@@ -6,8 +6,8 @@ A reference file is a TSV with one row per tree (as written by the ARGoS harness
 primitives' objectives, its foraging build foraging, each with the three descriptors). Movement and rotation
 are in the authors' raw units there, [-T, T] per trial for T ticks; they are mapped to [0, 1] as the model
 does, (x + T) / 2T (standard errors / 2T), unless ``movement01_mean`` etc. are given. Trees in the authors'
-syntax are read into ours (``bt_controller.authors``); a row ``nn: w1 ... w56`` is a neural controller
-(``network_of_subject``).
+syntax are read into ours (``bt_controller.language.authors``); a row ``nn: w1 ... w56`` is a neural
+controller (``network_of_subject``).
 
 Tolerance (``docs/model.md``, "validation"): our mean **agrees** with the reference when
 ``|ours - theirs| <= 3 * sqrt(2) * SE + 0.03``, SE being the reference's standard error; it is
@@ -23,7 +23,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from bt_controller.network import Network
+from bt_controller.interpreters import Network
 from swarm_sim.errors import ReferenceFileError
 from swarm_sim.model import VALUE_NAMES
 

@@ -28,7 +28,7 @@ from rclpy.task import Future
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
-from bt_controller import timeline
+from bt_controller.robot import timeline
 from evolution_manager.errors import TrialFailedError
 from evolution_manager.graph.nodes.recorder import GraphRecorder
 from evolution_manager.graph.nodes.trial import TrialGraph, write_result

@@ -19,8 +19,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from bt_controller import timeline
-from bt_controller.random_trees import random_trees
+from bt_controller.language import random_trees
+from bt_controller.robot import timeline
 from evolution_manager.graph.nodes.trial import TrialGraph
 from swarm_sim.model import DEFAULT
 

@@ -16,8 +16,8 @@ instance ``src/swarm_sim/config/swarm_sim.yaml`` with a world setting changed). 
 
 ``--task foraging`` runs the authors' 100 s foraging trials (default ``primitives``, 20 s); ``--task FILE``
 a task file's world (``docs/tasks.md``): the simulator is given every world parameter the task sets.
-``--library FILE`` (a primitive library, ``bt_controller.library``) is handed to every controller as its
-``library`` parameter: the tree may then name its primitives.
+``--library FILE`` (a primitive library, ``bt_controller.language.library``) is handed to every controller as
+its ``library`` parameter: the tree may then name its primitives.
 
 ``--tree`` is tree text, or a file holding it when it names an existing file. Every node process dies with
 this one, whatever kills it. Exit status: 0 done; 2 a bad tree or option, a bag that cannot be written or a
@@ -46,13 +46,18 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
-from bt_controller import timeline
 from bt_controller.errors import TreeError
-from bt_controller.library import Library, LibraryError, load_library
+from bt_controller.interpreters import (
+    Network,
+    controller_text,
+    is_network_text,
+    load_network,
+    parse_controller,
+)
+from bt_controller.language import Library, LibraryError, load_library, to_text
+from bt_controller.language import Node as TreeNode
 from bt_controller.model_settings import PROFILES, chain_of_trial
-from bt_controller.network import Network, controller_text, is_network_text, load_network, parse_controller
-from bt_controller.tree import Node as TreeNode
-from bt_controller.tree import to_text
+from bt_controller.robot import timeline
 from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics

@@ -1,0 +1,95 @@
+"""``experiment --study replication``: a library per seed of the foraging study's primitive runs, its plan,
+its libraries from the committed runs, and its report's mixed model and equivalence test."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+from evolution_manager.studies import replication_study
+from evolution_manager.studies.experiment import build_parser, experiment
+
+FORAGING = Path(__file__).resolve().parents[4] / "experiments" / "foraging"
+
+
+def _plan(tmp_path, *more):
+    args = build_parser().parse_args(
+        ["--study", "replication", "--primitives-from", str(FORAGING), "--out", str(tmp_path / "r"), *more]
+    )
+    return replication_study.plan_study(args, "fixed", "shared")
+
+
+def test_the_plan_has_a_library_per_primitive_seed_and_kind_with_distinct_run_seeds(tmp_path):
+    document, stages, budgets = _plan(tmp_path, "--runs", "3", "--evaluations", "500")
+    libraries = document["libraries"]
+    assert len(libraries) == 20 and libraries["qd8-s4"]["from"] == [
+        f"primitives/{label}/run04"
+        for label in ("QD_density", "QD_nest", "QD_food", "QD_idensity", "QD_inest", "QD_ifood")
+    ]
+    assert libraries["gpfnd8-s4"]["from"] == ["primitives/GP_fnd/run04"]
+    assert len(document["arms"]) == 60 and len({arm["seed"] for arm in document["arms"]}) == 60
+    assert set(budgets.values()) == {500} and document["scenario_seed"] is not None
+    # the one stage builds each library from its own seed's runs, and its runs evolve over that library
+    planned = stages[0]()
+    assert len(planned) == 60
+    first, directory = planned[0]
+    assert directory == "arms/qd8-s0/run00" and first.library.endswith("libraries/qd8-s0.json")
+    built = (tmp_path / "r" / "libraries" / "qd8-s0.json").read_text()
+    assert "primitives/QD_density/run00" in built and "run01" not in built
+
+
+def test_the_study_is_refused_without_a_foraging_study_to_draw_from(tmp_path, capsys):
+    out = str(tmp_path / "r")
+    assert experiment(["--study", "replication", "--out", out]) == 2
+    assert "needs --primitives-from" in capsys.readouterr().err
+    assert experiment(["--study", "replication", "--primitives-from", str(tmp_path), "--out", out]) == 2
+    assert experiment(["--primitives-from", str(FORAGING), "--out", out]) == 2  # the paper's study: no
+    assert capsys.readouterr().err.count("\n") == 2 and not (tmp_path / "r").exists()
+
+
+def _rows(rng, gap):
+    rows = []
+    for kind, shift in (("qd8", 0.0), ("gpfnd8", gap)):
+        for k in range(6):
+            library_effect = rng.normal(0.0, 0.05)
+            for r in range(3):
+                value = 1.5 + shift + library_effect + rng.normal(0.0, 0.03)
+                rows.append(
+                    {
+                        "arm": f"hier-{kind}-s{k}",
+                        "library": f"{kind}-s{k}",
+                        "seed": str(100 * k + r),
+                        "best_fitness": repr(value + 0.1),
+                        "heldout_best_fitness": repr(value),
+                    }
+                )
+    return rows
+
+
+def test_the_mixed_model_finds_a_difference_and_equivalence_where_they_are():
+    different = replication_study.mixed_comparison(
+        _rows(np.random.default_rng(1), 0.3), "heldout_best_fitness"
+    )
+    estimate, low, high, p, p_tost = different
+    assert abs(estimate - 0.3) < 0.1
+    assert low < 0.3 < high and p < 0.001 and p_tost > 0.5
+    same = replication_study.mixed_comparison(_rows(np.random.default_rng(2), 0.0), "heldout_best_fitness")
+    assert same[4] < 0.05  # within the margin: equivalent
+    assert (
+        replication_study.mixed_comparison(_rows(np.random.default_rng(3), 0.0)[:12], "best_fitness") is None
+    )
+
+
+def test_the_report_tables_recompute_from_runs_csv(tmp_path):
+    rows = _rows(np.random.default_rng(5), 0.05)
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, replication_study.CSV_HEADER, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    again = list(csv.DictReader(io.StringIO(buffer.getvalue())))
+    assert replication_study.tables_from_rows(again) == replication_study.tables_from_rows(rows)
+    per_library, verdicts = replication_study.tables_from_rows(rows)
+    assert per_library.count("\n") == 2 + 12 and "TOST" in verdicts
