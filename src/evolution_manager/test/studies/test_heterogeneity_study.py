@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -195,3 +196,14 @@ def test_the_goals_power_is_the_paired_t_tests_from_the_noncentral_t():
     assert exact(needed) >= 0.8 > exact(needed - 1)
     assert study.paired_power(differences[:2], gain) is None and study.paired_power([0.1] * 5, gain) is None
     assert "power to detect the goal's gain" in study.goal_power(differences, gain)
+
+
+def test_the_committed_reports_tables_are_its_runs_csv():
+    """docs/results/heterogeneity/study: the report's three score tables recomputed from its runs.csv."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / "study"
+    rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
+    report = (folder / "report.md").read_text()
+    tasks = [task for task, _, _ in study.TASKS]
+    for key in (study.HELDOUT, study.VALIDATED, study.UNSEEN):
+        assert study.scores_table(rows, tasks, key) in report
+    assert study.qd_table(rows, tasks) in report
