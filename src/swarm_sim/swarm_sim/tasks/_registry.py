@@ -13,7 +13,7 @@ from typing import Any
 
 from bt_controller.language import CONDITIONS_2023, CONDITIONS_2024
 from bt_controller.model_settings import CODE_2026
-from swarm_sim.model import PAPER_OBJECTIVES
+from swarm_sim.model import GENERATED_LAYOUTS, PAPER_OBJECTIVES
 from swarm_sim.tasks._arenas import UNSEEN_FIRST_ENTRY, arena_task
 from swarm_sim.tasks._files import read_task_file, task_from_mapping, task_to_mapping
 from swarm_sim.tasks._spec import Nodes, TaskError, TaskSpec, Trials
@@ -86,57 +86,35 @@ ARENA9_OTHER_FOOD_WEIGHT = 0.5
 
 # The authors' 2026 arenas as tasks (``arena_task``): ``multifood-arena1`` to ``-arena8``, and arena 9 with
 # each food kind preferred (``multifood-arena9-kind2``: their 0-based ``arenaBias`` 1, the setting of their
-# public reference data beside ``multifood-arena6``).
-for _layout in range(1, 9):
-    register(arena_task(FORAGING, _layout, name=f"multifood-arena{_layout}"))
-for _kind in (1, 2, 3):
-    register(
-        arena_task(
-            FORAGING,
-            9,
-            bias=_kind - 1,
-            other_food_weight=ARENA9_OTHER_FOOD_WEIGHT,
-            name=f"multifood-arena9-kind{_kind}",
+# public reference data beside ``multifood-arena6``); and the authors' two robot types (their ``generic``
+# projects) in the two layouts where a type changes what a robot perceives, 7 and 8 (``footbot_bt.cpp:242-254,
+# 269`` at 1cd2358), each robot starting around its own food kind 1 (the ``localised`` formation: even robots
+# at the food point, odd ones at the nest point).
+_ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
+    *((f"multifood-arena{layout}", {"layout": layout}) for layout in range(1, 9)),
+    *(
+        (
+            f"multifood-arena9-kind{kind}",
+            {"layout": 9, "bias": kind - 1, "other_food_weight": ARENA9_OTHER_FOOD_WEIGHT},
         )
-    )
-
-# The authors' two robot types (their ``generic`` projects) in the two layouts where a type changes what a
-# robot perceives, 7 and 8 (``footbot_bt.cpp:242-254, 269`` at 1cd2358), each robot starting around its own
-# food kind 1 (the ``localised`` formation: even robots at the food point, odd ones at the nest point).
-for _layout in (7, 8):
-    register(
-        arena_task(FORAGING, _layout, types=2, formation="localised", name=f"multifood-arena{_layout}-types")
-    )
+        for kind in (1, 2, 3)
+    ),
+    *(
+        (f"multifood-arena{layout}-types", {"layout": layout, "types": 2, "formation": "localised"})
+        for layout in (7, 8)
+    ),
+)
+for _name, _settings in _ARENA_TASKS:
+    register(arena_task(FORAGING, name=_name, **_settings))
 
 # Each generated layout's task again on the arenas no run evolves on (``UNSEEN_FIRST_ENTRY``: entries 5 to 9
 # of the ten), named ``<task>-unseen``: where a controller evolved on a task is tested on arenas it never met.
 UNSEEN_SUFFIX = "-unseen"
-for _layout in (6, 7, 8):
-    register(
-        arena_task(FORAGING, _layout, first_entry=UNSEEN_FIRST_ENTRY, name=f"multifood-arena{_layout}-unseen")
-    )
-for _kind in (1, 2, 3):
-    register(
-        arena_task(
-            FORAGING,
-            9,
-            bias=_kind - 1,
-            other_food_weight=ARENA9_OTHER_FOOD_WEIGHT,
-            first_entry=UNSEEN_FIRST_ENTRY,
-            name=f"multifood-arena9-kind{_kind}-unseen",
+for _name, _settings in _ARENA_TASKS:
+    if _settings["layout"] in GENERATED_LAYOUTS:
+        register(
+            arena_task(FORAGING, first_entry=UNSEEN_FIRST_ENTRY, name=_name + UNSEEN_SUFFIX, **_settings)
         )
-    )
-for _layout in (7, 8):
-    register(
-        arena_task(
-            FORAGING,
-            _layout,
-            types=2,
-            formation="localised",
-            first_entry=UNSEEN_FIRST_ENTRY,
-            name=f"multifood-arena{_layout}-types-unseen",
-        )
-    )
 
 
 def unseen_twin(name: str) -> TaskSpec:
