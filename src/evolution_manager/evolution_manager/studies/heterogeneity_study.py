@@ -44,7 +44,7 @@ import argparse
 import csv
 import io
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -300,6 +300,17 @@ def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
     return [_number(fitness) if entry["objective"] == "foraging" else "", "", ""]
 
 
+def finished_arm_runs(root: Path, document: dict) -> Iterator[tuple[dict, dict]]:
+    """Each finished run of an arm (a composition or team run) of the plan ``document``, in the plan's
+    order, with its summary."""
+    for entry in document["plan"]:
+        if entry["kind"] == "repertoire":
+            continue
+        summary = _summary(root, entry["dir"])
+        if summary is not None:
+            yield entry, summary
+
+
 def study_plan(root: Path) -> dict:
     """The plan document of the study in ``root``; ``EvolutionError`` when it holds none."""
     document = read_json(Path(root) / PLAN_FILE)
@@ -319,12 +330,7 @@ def finished_rows(
     document = study_plan(root)
     rows: list[dict[str, str]] = []
     baselines: list[dict[str, str]] = []
-    for entry in document["plan"]:
-        if entry["kind"] == "repertoire":
-            continue
-        summary = _summary(root, entry["dir"])
-        if summary is None:
-            continue
+    for entry, summary in finished_arm_runs(root, document):
         seed, task = str(entry["seed"]), entry["task"]
         if entry["kind"] == "team":
             means = summary.get("heldout_objectives") or {}
@@ -383,12 +389,7 @@ def _chosen_swarms(root: Path, document: dict) -> list[_Chosen]:
     first arm's run, as :func:`finished_rows` takes it), in the plan's order."""
     found: list[_Chosen] = []
     baselines: set[tuple[str, int]] = set()
-    for entry in document["plan"]:
-        if entry["kind"] == "repertoire":
-            continue
-        summary = _summary(root, entry["dir"])
-        if summary is None:
-            continue
+    for entry, summary in finished_arm_runs(root, document):
         held = (tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"]))
         chosen = summary.get("validated")
         if isinstance(chosen, dict):
@@ -638,11 +639,8 @@ def _best_swarms(root: Path, document: dict, task: str) -> dict[str, dict]:
     """The swarms of the figure on ``task``: the baseline and each arm's run of highest held-out best
     fitness (the first in plan order among equals), each as its label and trees."""
     shown: dict[str, dict] = {}
-    for entry in document["plan"]:
-        if entry["kind"] == "repertoire" or entry["task"] != task:
-            continue
-        summary = _summary(root, entry["dir"])
-        if summary is None or summary["best"] is None:
+    for entry, summary in finished_arm_runs(root, document):
+        if entry["task"] != task or summary["best"] is None:
             continue
         trees = summary["best"]["trees"]
         if entry["kind"] == "team":  # a tree per sub-group: robot i runs tree i mod K
