@@ -4,8 +4,10 @@ one row per method, task, condition, seed and repertoire; the held-out scenarios
 scenario; an interrupted benchmark reuses its filter scores and ceilings."""
 
 import csv
+import io
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -234,3 +236,30 @@ def test_the_benchmark_keeps_a_harsh_condition_drops_a_mild_one_and_resumes(tmp_
     summary = json.loads((out / "summary.json").read_text())
     assert summary["candidates"]["message-loss=0"]["kept"]  # the edited score was read back
     assert len(ceilings) == 4  # the new condition's 2 seeds x 2 algorithms; the old ceilings were reused
+
+
+def test_the_committed_primitives_reports_condition_table_is_its_runs_csv():
+    """docs/results/adaptation/primitives: per kept condition and method, the runs, the fraction recovered
+    within 10 and 30 trials and the median held-out re-scores recomputed from its runs.csv (floor 0.5)."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "adaptation" / "primitives"
+    rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
+    report = (folder / "report.md").read_text()
+    floor = 0.5
+    conditions = list(dict.fromkeys(r["condition"] for r in rows))
+    assert len(conditions) == 6
+    for condition in conditions:
+        for method in adapt_benchmark.METHODS:
+            mine = [r for r in rows if r["condition"] == condition and r["method"] == method]
+            hits = [int(r["trials_to_90"]) if r["trials_to_90"] else math.inf for r in mine]
+            held = [
+                adapt_benchmark.relative(float(r[key]), float(r["heldout_pre_fault"]), floor)
+                for key in ("heldout_at_10", "heldout_final")
+                for r in mine
+            ]
+            at_10, final = held[: len(mine)], held[len(mine) :]
+            middle = float(np.median(hits))
+            trials = "never in 30" if math.isinf(middle) else f"{middle:g}"
+            cells = f"| {condition} | {adapt_benchmark.LABELS[method]} | {len(mine)} | {trials}"
+            percent = [f"{100 * sum(h <= at for h in hits) / len(hits):.0f} %" for at in (10, 30)]
+            scores = [f"{100 * float(np.median(v)):.0f} %" for v in (at_10, final)]
+            assert f"{cells} | {percent[0]} | {percent[1]} | {scores[0]} | {scores[1]} |" in report, cells
