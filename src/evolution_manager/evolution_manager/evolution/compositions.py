@@ -69,7 +69,7 @@ from evolution_manager.evolution.run_config import (
     HELDOUT_EVALUATIONS,
     SCENARIOS,
     default_scenario_seed,
-    evaluation_seed,
+    scenario_of_evaluation,
 )
 from evolution_manager.evolution.run_folder import (
     COMPOSITIONS,
@@ -535,7 +535,7 @@ class CompositionConfig:
 
     def evaluation_seed(self, index: int) -> int:
         """The scenario of evaluation ``index``: the scenario seed, or under fresh scenarios its own."""
-        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+        return scenario_of_evaluation(self.scenarios, self.scenario_seed, self.seed, index)
 
     @classmethod
     def from_json(cls, data: dict) -> CompositionConfig:

@@ -219,9 +219,8 @@ class RunConfig:
         )
 
     def request_seed(self, index: int) -> int:
-        """The simulator seed of evaluation ``index`` (0-based) of this run: the scenario seed under
-        ``fixed``; under ``fresh`` a seed of its own, a pure function of the run seed and the index."""
-        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+        """The simulator seed of evaluation ``index`` (0-based) of this run (``scenario_of_evaluation``)."""
+        return scenario_of_evaluation(self.scenarios, self.scenario_seed, self.seed, index)
 
     def heldout_seed(self, repeat: int) -> int:
         """The seed of held-out evaluation ``repeat`` (0 to ``HELDOUT_EVALUATIONS`` - 1), the same for every
@@ -359,6 +358,12 @@ class RunConfig:
         return GeneticProgramming(
             objectives, self.evaluations, algorithm_seed, self.gp, self.conditions, library, self.nodes
         )
+
+
+def scenario_of_evaluation(scenarios: str, scenario_seed: int, run_seed: int, index: int) -> int:
+    """The simulator seed of evaluation ``index`` (0-based) of a run of any kind: the scenario seed under
+    ``fixed`` scenarios; under ``fresh`` a seed of its own (:func:`evaluation_seed`)."""
+    return scenario_seed if scenarios == "fixed" else evaluation_seed(run_seed, index)
 
 
 def evaluation_seed(run_seed: int, index: int) -> int:

@@ -61,8 +61,8 @@ from evolution_manager.evolution.run_config import (
     HELDOUT_EVALUATIONS,
     SCENARIOS,
     default_scenario_seed,
-    evaluation_seed,
     heldout_seed,
+    scenario_of_evaluation,
 )
 from evolution_manager.evolution.run_folder import (
     TEAMS,
@@ -254,7 +254,7 @@ class TeamConfig:
 
     def evaluation_seed(self, index: int) -> int:
         """The scenario of evaluation ``index``: the scenario seed, or under fresh scenarios its own."""
-        return self.scenario_seed if self.scenarios == "fixed" else evaluation_seed(self.seed, index)
+        return scenario_of_evaluation(self.scenarios, self.scenario_seed, self.seed, index)
 
     def heldout_seeds(self) -> list[int]:
         """The seeds of the best team's held-out evaluations, as a tree run's (``heldout``)."""
@@ -276,9 +276,8 @@ class TeamConfig:
             "scenario_seed": self.scenario_seed,
             "gp": gp,
         }
-        if (
-            self.scenarios != "fixed"
-        ):  # written only when asked for: the files of fixed runs stay as they were
+        # written only when asked for: the configuration files of fixed runs stay as they were
+        if self.scenarios != "fixed":
             document["scenarios"] = self.scenarios
         return document
 
