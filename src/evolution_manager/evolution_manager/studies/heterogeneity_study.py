@@ -320,17 +320,15 @@ def study_plan(root: Path) -> dict:
 
 
 def finished_rows(
-    root: Path, unseen: dict[tuple[str, str], float] | None = None
-) -> tuple[dict, list[dict[str, str]]]:
-    """The plan document and one row per finished composition run, in the plan's order, each task's and
-    index's baseline row (from its first arm's run) before its arms' rows; ``unseen`` (:func:`unseen_scores`)
-    gives the unseen-arena column."""
-    root = Path(root)
+    finished: Sequence[tuple[dict, dict]], unseen: dict[tuple[str, str], float] | None = None
+) -> list[dict[str, str]]:
+    """One row per finished arm run (``finished``: :func:`finished_arm_runs`), in the plan's order, each
+    task's and index's baseline row (from its first arm's run) before its arms' rows; ``unseen``
+    (:func:`unseen_scores`) gives the unseen-arena column."""
     unseen = unseen or {}
-    document = study_plan(root)
     rows: list[dict[str, str]] = []
     baselines: list[dict[str, str]] = []
-    for entry, summary in finished_arm_runs(root, document):
+    for entry, summary in finished:
         seed, task = str(entry["seed"]), entry["task"]
         if entry["kind"] == "team":
             means = summary.get("heldout_objectives") or {}
@@ -367,7 +365,7 @@ def finished_rows(
             VALIDATED: _validated(summary.get("validated")),
             UNSEEN: _number(unseen.get((entry["dir"], "validated"))),
         })  # fmt: skip
-    return document, baselines + rows
+    return baselines + rows
 
 
 # Unseen arenas --------------------------------------------------------------------------------------------
@@ -384,12 +382,12 @@ class _Chosen:
     trials: int
 
 
-def _chosen_swarms(root: Path, document: dict) -> list[_Chosen]:
+def _chosen_swarms(finished: Sequence[tuple[dict, dict]]) -> list[_Chosen]:
     """Every finished arm run's validated choice, and each task's and index's baseline choice (from the
     first arm's run, as :func:`finished_rows` takes it), in the plan's order."""
     found: list[_Chosen] = []
     baselines: set[tuple[str, int]] = set()
-    for entry, summary in finished_arm_runs(root, document):
+    for entry, summary in finished:
         held = (tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"]))
         chosen = summary.get("validated")
         if isinstance(chosen, dict):
@@ -407,11 +405,13 @@ def _chosen_swarms(root: Path, document: dict) -> list[_Chosen]:
     return found
 
 
-def unseen_scores(root: Path, document: dict) -> dict[tuple[str, str], float]:
-    """Each validated choice's mean fitness on its task's unseen arenas (``unseen_twin``: the generated
-    arenas no run evolves on) over the run's held-out seeds and trials, by (run folder, ``validated`` or
-    ``homogeneous``). Scores are kept in the study's ``unseen.csv`` and measured only once; a task without
-    unseen arenas gets none."""
+def unseen_scores(
+    root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
+) -> dict[tuple[str, str], float]:
+    """The mean fitness of each validated choice of the finished arm runs ``finished`` on its task's unseen
+    arenas (``unseen_twin``: the generated arenas no run evolves on) over the run's held-out seeds and
+    trials, by (run folder, ``validated`` or ``homogeneous``). Scores are kept in the study's ``unseen.csv``
+    and measured only once; a task without unseen arenas gets none."""
     root = Path(root)
     path = root / UNSEEN_FILE
     kept: dict[tuple[str, str], dict[str, str]] = {}
@@ -424,7 +424,7 @@ def unseen_scores(root: Path, document: dict) -> dict[tuple[str, str], float]:
             twins[task] = unseen_twin(task)
         except TaskError:  # a task of one arena (or five) has none: its column stays empty
             continue
-    wanted = [c for c in _chosen_swarms(root, document) if c.task in twins]
+    wanted = [c for c in _chosen_swarms(finished) if c.task in twins]
 
     def recorded(c: _Chosen) -> bool:
         row = kept.get((c.folder, c.swarm))
@@ -440,12 +440,13 @@ def unseen_scores(root: Path, document: dict) -> dict[tuple[str, str], float]:
         results = iter(evaluator.evaluate(requests))
         k = OBJECTIVES.index(objectives[task])
         for c in mine:
-            scores = [next(results) for _ in c.seeds]
-            if any(r.fitness is None for r in scores):
+            outcomes = [next(results) for _ in c.seeds]
+            scores = [r.fitness[k] for r in outcomes if r.fitness is not None]
+            if len(scores) != len(c.seeds):
                 raise EvolutionError(
                     f"{c.folder}: its {c.swarm} swarm could not be evaluated on unseen arenas"
                 )
-            fitness = math.fsum(r.fitness[k] for r in scores) / len(scores)  # type: ignore[index]  # checked
+            fitness = math.fsum(scores) / len(scores)
             kept[(c.folder, c.swarm)] = {
                 "dir": c.folder, "swarm": c.swarm, "seeds": " ".join(map(str, c.seeds)),
                 "trials": str(c.trials), "fitness": repr(fitness),
@@ -635,11 +636,11 @@ def robot_deliveries(trees: Sequence[str], config: Config, seeds: Sequence[int],
     return total / (len(seeds) * trials)
 
 
-def _best_swarms(root: Path, document: dict, task: str) -> dict[str, dict]:
+def _best_swarms(finished: Sequence[tuple[dict, dict]], task: str) -> dict[str, dict]:
     """The swarms of the figure on ``task``: the baseline and each arm's run of highest held-out best
     fitness (the first in plan order among equals), each as its label and trees."""
     shown: dict[str, dict] = {}
-    for entry, summary in finished_arm_runs(root, document):
+    for entry, summary in finished:
         if entry["task"] != task or summary["best"] is None:
             continue
         trees = summary["best"]["trees"]
@@ -660,13 +661,13 @@ def _best_swarms(root: Path, document: dict, task: str) -> dict[str, dict]:
     return {name: shown[name] for name in order if name in shown}
 
 
-def _deliveries_figures(root: Path, document: dict) -> list[str]:
+def _deliveries_figures(root: Path, document: dict, finished: Sequence[tuple[dict, dict]]) -> list[str]:
     from evolution_manager.viewing import figures  # late: matplotlib
 
     drawn = []
     for spec in document["tasks"]:
         task = spec["task"]
-        swarms = _best_swarms(root, document, task)
+        swarms = _best_swarms(finished, task)
         if not swarms:
             continue
         config = task_named(task).config(document["profile"])
@@ -724,7 +725,9 @@ def build_report(root: Path) -> Path:
     validated choices' scores on unseen arenas measured first where missing, ``unseen.csv``); return the
     report's path."""
     root = Path(root)
-    document, rows = finished_rows(root, unseen_scores(root, study_plan(root)))
+    document = study_plan(root)
+    arm_runs = list(finished_arm_runs(root, document))  # every summary read once, for every table and figure
+    rows = finished_rows(arm_runs, unseen_scores(root, document, arm_runs))
     if not rows:
         raise EvolutionError(f"{root} has no finished composition runs yet")
     buffer = io.StringIO()
@@ -777,7 +780,7 @@ def build_report(root: Path) -> Path:
         "## Who delivers what\n\nFor each task the baseline and each arm's best run (highest held-out best "
         "fitness): each robot's deliveries of each food kind per trial on the run's five held-out scenarios "
         "(seeds shown modulo 10,000). A specialised swarm shows robots of different colours.\n\n"
-        + "\n\n".join(_deliveries_figures(root, document))
+        + "\n\n".join(_deliveries_figures(root, document, arm_runs))
         + "\n"
     )
     write_atomic(root / "report.md", text)
