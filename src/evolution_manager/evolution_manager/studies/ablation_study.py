@@ -72,6 +72,7 @@ from evolution_manager.files import read_json, write_atomic, write_json
 from evolution_manager.studies import foraging_tables, intervals
 from evolution_manager.studies.planning import (
     finished_foraging_runs,
+    foraging_study_plan,
     primitives_study_document,
     primitives_study_forager,
 )
@@ -129,11 +130,11 @@ CSV_HEADER = ["arm", "run", "seed", "best_fitness", "heldout_best_fitness"]
 
 def _source_plan(source: Path) -> dict:
     try:
-        document = read_json(source / "experiment.json")
-    except (EvolutionError, OSError):
-        document = None
-    if not isinstance(document, dict) or document.get("study") != "foraging":
-        raise UsageError(f"--primitives-from {source} is not a foraging study folder (experiment.json)")
+        document = foraging_study_plan(source)
+    except (EvolutionError, OSError):  # unreadable: said as for another kind of folder
+        raise UsageError(
+            f"--primitives-from {source} is not a foraging study folder (experiment.json)"
+        ) from None
     for name in ("qd8", "qd1"):
         if not (source / "libraries" / f"{name}.json").exists():
             raise UsageError(f"--primitives-from {source} has no libraries/{name}.json yet")

@@ -191,6 +191,15 @@ def paper_study(
     return document, [lambda: planned], {path: config.evaluations for config, path in planned}
 
 
+def foraging_study_plan(source: Path) -> dict:
+    """The plan document of the foraging study in ``source`` (a study's ``--primitives-from``); UsageError
+    in one line when the folder holds another kind of experiment."""
+    document = read_json(Path(source) / PLAN_FILE)
+    if not isinstance(document, dict) or document.get("study") != "foraging":
+        raise UsageError(f"--primitives-from {source} is not a foraging study folder ({PLAN_FILE})")
+    return document
+
+
 def primitives_study_document(
     study: str,
     source_folder: Path,

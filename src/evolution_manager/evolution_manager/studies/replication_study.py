@@ -31,10 +31,11 @@ from statistics import median
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.files import read_json, write_atomic
+from evolution_manager.files import write_atomic
 from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
 from evolution_manager.studies.planning import (
     finished_foraging_runs,
+    foraging_study_plan,
     primitives_study_document,
     primitives_study_forager,
 )
@@ -55,13 +56,6 @@ ideal robot's 2.6): chosen before any run, as small as the study's ten runs per 
 CSV_HEADER = ["arm", "library", "seed", "best_fitness", "heldout_best_fitness"]
 
 
-def _source_plan(source: Path) -> dict:
-    document = read_json(source / "experiment.json")
-    if not isinstance(document, dict) or document.get("study") != "foraging":
-        raise UsageError(f"--primitives-from {source} is not a foraging study folder (experiment.json)")
-    return document
-
-
 def plan_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list, dict[str, int]]:
@@ -69,7 +63,7 @@ def plan_study(
     if args.primitives_from is None:
         raise UsageError("--study replication needs --primitives-from FOLDER, a foraging study's folder")
     source_folder = Path(args.primitives_from)
-    source = _source_plan(source_folder)
+    source = foraging_study_plan(source_folder)
     for option, value in (("profile", args.profile), ("trials", args.trials)):
         if value is not None and value != source[option]:
             raise UsageError(f"--{option} {value} differs from the primitives' study ({source[option]})")

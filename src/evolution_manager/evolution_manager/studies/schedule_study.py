@@ -34,7 +34,7 @@ from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.foraging_study import PRIMITIVES
 from evolution_manager.studies.intervals import interval
-from evolution_manager.studies.planning import PLAN_FILE
+from evolution_manager.studies.planning import PLAN_FILE, foraging_study_plan
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
 
 STUDY = "qd-schedule"
@@ -52,13 +52,6 @@ METRICS: tuple[tuple[str, str], ...] = (
 CSV_HEADER = ["objective", "run", "schedule", "seed", *(key for key, _ in METRICS)]
 
 
-def _source_plan(source: Path) -> dict:
-    document = read_json(source / PLAN_FILE)
-    if not isinstance(document, dict) or document.get("study") != "foraging":
-        raise UsageError(f"--primitives-from {source} is not a foraging study folder ({PLAN_FILE})")
-    return document
-
-
 def plan_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list, dict[str, int]]:
@@ -66,7 +59,7 @@ def plan_study(
     if args.primitives_from is None:
         raise UsageError("--study qd-schedule needs --primitives-from FOLDER, a foraging study's folder")
     source_folder = Path(args.primitives_from)
-    source = _source_plan(source_folder)
+    source = foraging_study_plan(source_folder)
     given = {"profile": args.profile, "trials": args.trials, "evaluations": args.evaluations}
     for option, value in given.items():
         if value is not None and value != source[option]:
