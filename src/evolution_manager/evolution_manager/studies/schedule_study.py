@@ -111,9 +111,7 @@ def rows(root: Path) -> list[dict[str, str]]:
     document = read_json(root / PLAN_FILE)
     if not isinstance(document, dict) or document.get("study") != STUDY:
         raise EvolutionError(f"{root} is not a {STUDY} study ({PLAN_FILE})")
-    source = Path(document["primitives_from"])
-    if not source.is_absolute():
-        source = Path.cwd() / source
+    source = Path(document["primitives_from"])  # as given to the study: relative to where it is reported
     out = []
     for entry in document["plan"]:
         mine = _scores(root / entry["dir"])
