@@ -94,3 +94,54 @@ def test_the_graph_sees_imports_inside_functions():
 
 def test_no_module_of_the_workspace_is_in_an_import_cycle():
     assert cycles(import_graph()) == []
+
+
+def late_imports_without_a_reason(path: Path) -> list[int]:
+    """The lines of ``path``'s imports inside functions that give no reason: an import is deliberate late
+    load only with a comment on its own lines, on the line above it, or on the first of the run of late
+    imports it belongs to (a block of them shares one comment)."""
+    lines = path.read_text().splitlines()
+    spans = sorted(
+        {
+            (node.lineno, node.end_lineno or node.lineno)
+            for function in ast.walk(ast.parse("\n".join(lines)))
+            if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef))
+            for node in ast.walk(function)
+            if isinstance(node, (ast.Import, ast.ImportFrom))
+        }
+    )
+    ends = {end: start for start, end in spans}
+    unexplained = []
+    for start, end in spans:
+        first = start
+        while first - 1 in ends:  # the run of late imports this one closes
+            first = ends[first - 1]
+        said = lines[first - 2 : first - 1] + lines[first - 1 : end]
+        if not any("#" in line for line in said):
+            unexplained.append(start)
+    return unexplained
+
+
+def test_the_reason_finder_reads_a_block_of_late_imports_as_one(tmp_path):
+    module = tmp_path / "late.py"
+    module.write_text(
+        "def a():\n"
+        "    # late: loads a library\n"
+        "    import json\n"
+        "    import os\n"
+        "\n"
+        "def b():\n"
+        "    x = 1\n"
+        "    import re\n"
+        "    import sys  # late: a reason\n"
+    )
+    assert late_imports_without_a_reason(module) == [8]
+
+
+def test_every_import_inside_a_function_says_why_it_is_late():
+    unexplained = [
+        f"{path.relative_to(SRC)}:{line}"
+        for path in sorted(_modules().values())
+        for line in late_imports_without_a_reason(path)
+    ]
+    assert unexplained == []

@@ -17,6 +17,7 @@ import contextlib
 import errno
 import os
 import stat
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -177,8 +178,6 @@ def replace_file(path: Path | str, write: Callable[[Path], object]) -> Path:
     """Write ``path`` whole: ``write(temporary)`` (a callable taking a ``Path``, e.g. an image's ``save``)
     writes a new file beside it, which is then renamed over ``path``; a link at ``path`` is refused
     (:class:`UnsafePathError`), and a failed write leaves ``path`` as it was. Returns ``path``."""
-    import tempfile
-
     path = Path(path)
     refuse_links(path)
     descriptor, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)

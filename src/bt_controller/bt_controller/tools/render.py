@@ -151,7 +151,7 @@ def render(
 
 
 def _save(figure: Figure, path: Path, fmt: str) -> Path:
-    import matplotlib
+    import matplotlib  # late: the tools' face loads this module; matplotlib (about 1 s) only for a picture
 
     # no date and a fixed salt for the SVG's element ids: the same tree gives the same bytes
     with matplotlib.rc_context({"svg.hashsalt": "bt_controller.tools.render"}):
@@ -172,6 +172,7 @@ def _render_outline(
 ) -> Path:
     """The vertical layout: row ``k`` holds the ``k``-th node of ``placed`` (pre-order), indented by its
     depth; axes in inches."""
+    # late: as in _save, matplotlib loads only when a picture is drawn
     from matplotlib.figure import Figure
     from matplotlib.patches import FancyBboxPatch
 

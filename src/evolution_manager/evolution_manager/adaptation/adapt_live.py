@@ -199,6 +199,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             document = live_adaptation(args)
         write_json(args.out / RESULT, document)
         if args.every:
+            # late: the animation loads matplotlib and Pillow (about 1.5 s), wanted only with --every
             from evolution_manager.viewing.animate import write_animation
             from evolution_manager.viewing.frames import frames_from_bag
 

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.deap_trees import DESCRIPTORS, OBJECTIVES
 from evolution_manager.files import writing
+from evolution_manager.viewing.palette import carry_colour
 from swarm_ros.safe_paths import make_folder, replace_file
 
 _SAVE: dict[str, Any] = {"dpi": 110, "bbox_inches": "tight", "metadata": {"Software": None}}
@@ -264,8 +265,6 @@ __all__ = [
 def robot_deliveries(swarms: Mapping[str, np.ndarray], title: str, path: Path) -> Path:
     """Who delivers what: one panel per swarm (``swarms[label]``: robots x food kinds, each robot's mean
     deliveries of each kind per trial), one stacked bar per robot, a colour per kind (the animation's)."""
-    from evolution_manager.viewing.palette import carry_colour
-
     labels = list(swarms)
     figure, axes = subplots(1, len(labels), figsize=(3.2 * len(labels), 3.2), squeeze=False, sharey=True)
     top = max((float(v.sum(axis=1).max()) for v in swarms.values() if v.size), default=0.0)
