@@ -312,12 +312,21 @@ def _named(c: Comparison) -> str:
     return f"[{c.group}] {c.tree}" if c.group else c.tree
 
 
+def _shown(subject: str) -> str:
+    """A subject as the report shows it: a network's 56 weights cut to the first three and the last (the
+    reference file holds them all)."""
+    if network_of_subject(subject) is None:
+        return subject
+    weights = subject[len(NETWORK_PREFIX) :].split()
+    return f"{NETWORK_PREFIX} {' '.join(weights[:3])} … {weights[-1]}"
+
+
 def _code(name: str) -> str:
     """A tree's name as markdown: the tree as code, its group (``[foraging] ``) before it as text."""
     if name.startswith("["):
         group, tree = name.split("] ", 1)
-        return f"{group}] `{tree}`"
-    return f"`{name}`"
+        return f"{group}] `{_shown(tree)}`"
+    return f"`{_shown(name)}`"
 
 
 def _fmt(e: Estimate) -> str:

@@ -79,6 +79,16 @@ def test_report_counts_and_lists_what_is_not_indistinguishable():
     assert text.rstrip().endswith("## Notes\nwhy")
 
 
+def test_a_network_is_shown_by_its_first_weights_and_its_last():
+    weights = " ".join(f"{0.01 * k:.2f}" for k in range(56))
+    theirs = {q: Estimate(0.5, 0.01, 20) for q in SIX}
+    comparisons = validation.compare(f"nn: {weights}", theirs, theirs, group="foraging")
+    text = validation.render(comparisons, ["# title"])
+    assert "| 1 | [foraging] `nn: 0.00 0.01 0.02 … 0.55` |" in text
+    assert "### 1. [foraging] `nn: 0.00 0.01 0.02 … 0.55`" in text
+    assert weights not in text
+
+
 def test_validate_command_writes_the_report_and_our_statistics(tmp_path, capsys):
     # stop: movement and rotation exactly 0.5 (raw 0) and conditionality 0 in every model; the rest is
     # whatever the model gives
