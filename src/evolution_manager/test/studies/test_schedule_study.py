@@ -85,3 +85,13 @@ def test_the_study_runs_pairs_its_runs_with_the_sources_and_reports(tmp_path, ca
     error = capsys.readouterr().err
     assert "has 2 QD primitive runs below index 2, not 4" in error and error.count("\n") == 1
     assert not (tmp_path / "more").exists()
+
+
+def test_the_committed_reports_tables_are_its_runs_csv():
+    """docs/results/foraging/schedule: the report's medians and tests recomputed from its runs.csv."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "foraging" / "schedule"
+    table = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
+    report = (folder / "report.md").read_text()
+    assert len(table) == 2 * 5 * len(PRIMITIVES)
+    assert schedule_study.medians_table(table) in report
+    assert schedule_study.markdown_table(schedule_study.comparisons(table)) in report
