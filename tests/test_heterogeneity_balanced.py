@@ -1,0 +1,40 @@
+"""The division-of-labour benchmark on the balanced task (``docs/results/heterogeneity/balanced``): the
+README's table recomputed from the committed rows, and one row recomputed from the model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from swarm_sim.bench import division
+from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
+from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.tasks import task_named
+
+FOLDER = Path(__file__).resolve().parent.parent / "docs" / "results" / "heterogeneity" / "balanced"
+
+
+def _rows() -> list[dict[str, str]]:
+    return division.read_rows((FOLDER / "runs.csv").read_text())
+
+
+def test_the_readme_table_is_the_rows_table():
+    rows = _rows()
+    assert list(rows[0]) == list(division.HEADER)
+    names = division.swarms(9)
+    assert [r["swarm"] for r in rows] == [name for name in names for _ in range(20)]
+    assert {r["seed"] for r in rows} == {str(s) for s in range(1, 21)}
+    assert {r["trials"] for r in rows} == {"10"}
+    assert division.table(rows) in (FOLDER / "README.md").read_text()
+
+
+def test_a_row_is_the_models():
+    """The specialists on seed 1 (10 trials), recomputed on the batch road: the committed values exactly."""
+    row = next(r for r in _rows() if r["swarm"] == division.SPECIALISTS and r["seed"] == "1")
+    config = task_named(division.TASK).config()
+    trees = division.swarms(config.n_robots)[division.SPECIALISTS][1]
+    (result,) = BatchEvaluator(config).evaluate([SwarmRequest(SwarmLayout(trees), 1, 10)])
+    named = dict(zip(OBJECTIVES, result.fitness, strict=True))
+    for column in division.COLUMNS:
+        assert float(row[column]) == pytest.approx(named[column], abs=0.0), column
