@@ -15,15 +15,16 @@ from swarm_sim.tasks import task_named
 FOLDER = Path(__file__).resolve().parent.parent / "docs" / "results" / "heterogeneity" / "balanced"
 
 
-def _rows() -> list[dict[str, str]]:
-    return division.read_rows((FOLDER / "runs.csv").read_text())
+def _rows(name: str = "runs.csv") -> list[dict[str, str]]:
+    return division.read_rows((FOLDER / name).read_text())
 
 
-def test_the_readme_table_is_the_rows_table():
-    rows = _rows()
+@pytest.mark.parametrize("name", ["runs.csv", "runs-300s.csv"])
+def test_the_readme_tables_are_the_rows_tables(name):
+    rows = _rows(name)
     assert list(rows[0]) == list(division.HEADER)
     names = division.swarms(9)
-    assert [r["swarm"] for r in rows] == [name for name in names for _ in range(20)]
+    assert [r["swarm"] for r in rows] == [swarm for swarm in names for _ in range(20)]
     assert {r["seed"] for r in rows} == {str(s) for s in range(1, 21)}
     assert {r["trials"] for r in rows} == {"10"}
     assert division.table(rows) in (FOLDER / "README.md").read_text()
