@@ -39,3 +39,10 @@ def test_a_row_is_the_models():
     named = dict(zip(OBJECTIVES, result.fitness, strict=True))
     for column in division.COLUMNS:
         assert float(row[column]) == pytest.approx(named[column], abs=0.0), column
+
+
+def test_the_estimate_shares_are_the_recordings():
+    """The README's shares of robot-steps with a food estimate, recomputed from recordings of the trials."""
+    readme = (FOLDER / "README.md").read_text()
+    for line in division.estimates_lines(division.TASK).splitlines():
+        assert f"  {line}\n" in readme, line

@@ -80,7 +80,9 @@ compositions are binned by: the authors' arena 9 biased towards kind 2 (their bi
 penalty 0.5); arena 6, three kinds of food and no bias; arena 7 with their two robot types (odd robots
 perceive the nest and the food swapped), every robot starting at its own food: one kind of food, so binned by
 the paper's behaviour; and arena 6 scored by the swarm's least delivered kind (``foraging_balanced``, issue
-36), where a division of labour can pay. A task's seeds derive from its index here, whichever are planned."""
+36), meant as a task where a division of labour could pay (hand-written specialists do not:
+``docs/results/heterogeneity/balanced``). A task's seeds derive from its index here, whichever are
+planned."""
 DEFAULT_TASKS: tuple[str, ...] = tuple(task for task, _, _ in TASKS[:3])
 """The tasks planned when ``--tasks`` is not given: the study's first three, whose plan (``experiment.json``)
 is the one studies begun before the fourth keep."""

@@ -1,6 +1,6 @@
 """``ws/run swarm_sim division-bench``: does a division of labour pay on ``multifood-arena6-balanced``?
 
-    division-bench [--seeds 20] [--trials 10] [--task NAME|FILE] [--threads K] [--out CSV]
+    division-bench [--seeds 20] [--trials 10] [--task NAME|FILE] [--threads K] [--out CSV] [--estimates]
 
 Hand-written controllers, no evolution (issue 36's first, cheap evidence): every swarm of :func:`swarms` is
 evaluated on seeds 1 to ``--seeds`` with ``--trials`` trials each, on the batch road. The homogeneous swarms
@@ -17,7 +17,9 @@ world's, not the tree's) and delivers all it carries in the nest.
 
 Writes one CSV row per swarm and seed (the evaluation's mean per trial of ``foraging_balanced``, ``foraging``
 and the deliveries of each kind per robot); prints :func:`table` (mean and standard error over the seeds,
-and the ratio of the specialists' ``foraging_balanced`` to the best homogeneous swarm's).
+and the ratio of each heterogeneous swarm's ``foraging_balanced`` to the best homogeneous swarm's).
+``--estimates`` also prints, for the wanderer and the specialists, how often a robot knows where each kind
+is (:func:`estimate_shares`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from collections.abc import Sequence
 
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, SwarmLayout
+from swarm_sim.roads import record_trial
 from swarm_sim.tasks import TaskError, resolve_task
 
 TASK = "multifood-arena6-balanced"
@@ -124,6 +127,39 @@ def measure(task: str, seeds: int, trials: int, threads: int = 1) -> list[dict[s
     return rows
 
 
+FOOD_COLUMNS: tuple[int, ...] = (1, 3, 4)
+"""The smoothed values' columns of food kinds 1, 2 and 3 (nest, food, density, food2, food3)."""
+ESTIMATE_SWARMS: tuple[str, ...] = ("wanderer (no food condition)", SPECIALISTS)
+ESTIMATE_SEEDS = 5
+"""``--estimates`` records trials 0 to 4 of seeds 1 to 5 of each of :data:`ESTIMATE_SWARMS`."""
+
+
+def estimate_shares(task: str, swarm: str, seeds: int = ESTIMATE_SEEDS) -> tuple[float, ...]:
+    """The share of the robots' steps, over trials 0 to 4 of seeds 1 to ``seeds`` of ``swarm`` (recorded on
+    the batch road), in which the robot's smoothed estimate of each food kind is below the cap: it heard of
+    the kind (or stood on it) within its last window of samples. The food conditions of a kind can hold only
+    then."""
+    config = resolve_task(task).config()
+    cap = config.params().estimate_cap
+    trees = SwarmLayout(swarms(config.n_robots)[swarm][1])
+    known = [
+        [float((record.smoothed[:, :, column] < cap).mean()) for column in FOOD_COLUMNS]
+        for record in (
+            record_trial(trees, seed, trial, config) for seed in range(1, seeds + 1) for trial in range(5)
+        )
+    ]
+    return tuple(statistics.mean(share[k] for share in known) for k in range(len(FOOD_COLUMNS)))
+
+
+def estimates_lines(task: str) -> str:
+    """One line per swarm of :data:`ESTIMATE_SWARMS`: its :func:`estimate_shares`, as percentages."""
+    lines = []
+    for swarm in ESTIMATE_SWARMS:
+        shares = ", ".join(f"{100 * s:.0f} %" for s in estimate_shares(task, swarm))
+        lines.append(f"- {swarm}: a food estimate of kinds 1, 2, 3 in {shares} of robot-steps")
+    return "\n".join(lines) + "\n"
+
+
 def _mean_sem(values: Sequence[float]) -> tuple[float, float]:
     return statistics.mean(values), statistics.stdev(values) / len(values) ** 0.5
 
@@ -186,6 +222,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--threads", type=int, default=1, help="numba threads (default 1)")
     parser.add_argument("--out", help="write the rows to this CSV (default: only the table)")
+    parser.add_argument(
+        "--estimates",
+        action="store_true",
+        help="also how often robots have a food estimate (wanderer and specialists, seeds 1-5, trials 0-4)",
+    )
     args = parser.parse_args(argv)
     for name, least in (("seeds", 2), ("trials", 1), ("threads", 1)):
         if getattr(args, name) < least:
@@ -199,6 +240,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with open(args.out, "w", newline="") as handle:
             handle.write(rows_csv(rows))
     sys.stdout.write(table(rows))
+    if args.estimates:
+        sys.stdout.write("\n" + estimates_lines(args.task))
     return 0
 
 

@@ -90,7 +90,7 @@ ARENA9_OTHER_FOOD_WEIGHT = 0.5
 # projects) in the two layouts where a type changes what a robot perceives, 7 and 8 (``footbot_bt.cpp:242-254,
 # 269`` at 1cd2358), each robot starting around its own food kind 1 (the ``localised`` formation: even robots
 # at the food point, odd ones at the nest point). ``multifood-arena6-balanced`` is arena 6 scored by
-# ``foraging_balanced`` (this project's, issue 36: a task where a division of labour can pay).
+# ``foraging_balanced`` (this project's, issue 36: meant as a task where a division of labour could pay).
 _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
     *((f"multifood-arena{layout}", {"layout": layout}) for layout in range(1, 9)),
     *(
