@@ -31,6 +31,7 @@ setup(
             "evaluate = swarm_sim.evaluation.cli:evaluate_main",
             "bench = swarm_sim.bench.batch:main",
             "record-bench = swarm_sim.bench.recording:main",
+            "division-bench = swarm_sim.bench.division:main",
             "validate = swarm_sim.validation.cli:main",
             "task = swarm_sim.tasks.cli:main",
             "simulator = swarm_sim.nodes.simulator:main",

@@ -242,6 +242,7 @@ def test_nest_objective_is_one_when_the_final_smoothed_nest_value_is_zero():
         np.zeros(2),
         np.zeros(2),
         np.zeros(1, np.int64),
+        np.zeros(1),
         1000.0,
         p,
     )

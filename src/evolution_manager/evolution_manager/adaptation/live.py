@@ -50,6 +50,7 @@ MEASURABLE: tuple[str, ...] = (
     "foraging2",
     "foraging3",
     "foraging_biased",
+    "foraging_balanced",
 )
 """The objectives a window is measured with: those scored from the robots' smoothed values and deliveries,
 which their controllers publish every step (``wheels``). ``ifood`` and ``aggregation`` read true distances
@@ -65,7 +66,8 @@ def window_measure(
     """The swarm's ``objective`` over one window: each robot's objective (``swarm_sim.core.world``'s
     ``robot_objectives``, the one a trial is scored with) from its smoothed values at the window's first step
     (``initial``, robots x (nest, food, density, ...)) and last step (``final``) and its deliveries in the
-    window (``delivered``, robots x food kinds), averaged over the robots."""
+    window (``delivered``, robots x food kinds; the swarm's, for ``foraging_balanced``), averaged over the
+    robots."""
     if objective not in MEASURABLE:
         raise AdaptationError(
             f"objective {objective!r} cannot be measured live; expected one of {', '.join(MEASURABLE)}"
@@ -83,8 +85,9 @@ def window_measure(
     p = config.params()
     k = OBJECTIVES.index(objective)
     probes = np.zeros(N_PROBES)
+    swarm = world.swarm_deliveries(delivered)
     values = [
-        world.robot_objectives(initial[i], final[i], probes, probes, delivered[i], 1.0, p)[k]
+        world.robot_objectives(initial[i], final[i], probes, probes, delivered[i], swarm, 1.0, p)[k]
         for i in range(initial.shape[0])
     ]
     return float(np.mean(values))

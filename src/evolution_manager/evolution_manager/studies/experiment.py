@@ -422,6 +422,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --study heterogeneity: genomes per composition run (default 2000; --evaluations is each "
         "repertoire's trees)",
     )
+    parser.add_argument(
+        "--tasks",
+        metavar="T1,T2",
+        help="with --study heterogeneity: which of its tasks to plan, comma-separated (default: its first "
+        "three; multifood-arena6-balanced is the fourth)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
     return parser
@@ -517,6 +523,8 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             raise UsageError("--objectives applies to --study bt-vs-nn only")
         if args.swarm_evaluations is not None and args.study != "heterogeneity":
             raise UsageError("--swarm-evaluations applies to --study heterogeneity only")
+        if args.tasks is not None and args.study != "heterogeneity":
+            raise UsageError("--tasks applies to --study heterogeneity only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study  # late: loads scipy.stats (about 1 s)
 

@@ -2,9 +2,10 @@
 (issue 36)
 
     ws/run evolution_manager experiment --study heterogeneity --runs 10 --evaluations 10000 \\
-        --swarm-evaluations 2000 --out experiments/heterogeneity
+        --swarm-evaluations 2000 [--tasks T1,T2] --out experiments/heterogeneity
 
-For every task of :data:`TASKS` (with its objective and behaviour space) and every run ``r``:
+For every task of :data:`TASKS` that ``--tasks`` names (by default :data:`DEFAULT_TASKS`), with its objective
+and behaviour space, and every run ``r``:
 
 1. **A repertoire** (``repertoires/<task>/run<r>``): MAP-Elites over trees on the task, binned by the
    deliveries of each food kind (``--descriptors deliveries``; on a task of one kind, by the paper's
@@ -72,12 +73,19 @@ TASKS: tuple[tuple[str, str, str], ...] = (
     ("multifood-arena9-kind2", "foraging_biased", "deliveries"),
     ("multifood-arena6", "foraging", "deliveries"),
     ("multifood-arena7-types", "foraging", "behaviour"),
+    ("multifood-arena6-balanced", "foraging_balanced", "deliveries"),
 )
 """The tasks, each with the objective its runs maximise and the behaviour space its repertoires and
 compositions are binned by: the authors' arena 9 biased towards kind 2 (their bias and penalty fitness,
-penalty 0.5); arena 6, three kinds of food and no bias; and arena 7 with their two robot types (odd robots
+penalty 0.5); arena 6, three kinds of food and no bias; arena 7 with their two robot types (odd robots
 perceive the nest and the food swapped), every robot starting at its own food: one kind of food, so binned by
-the paper's behaviour."""
+the paper's behaviour; and arena 6 scored by the swarm's least delivered kind (``foraging_balanced``, issue
+36), meant as a task where a division of labour could pay (hand-written specialists do not:
+``docs/results/heterogeneity/balanced``). A task's seeds derive from its index here, whichever are
+planned."""
+DEFAULT_TASKS: tuple[str, ...] = tuple(task for task, _, _ in TASKS[:3])
+"""The tasks planned when ``--tasks`` is not given: the study's first three, whose plan (``experiment.json``)
+is the one studies begun before the fourth keep."""
 
 BASELINE = "homogeneous"
 GOAL = 1.2
@@ -157,6 +165,21 @@ def _folder(kind: str, task: str, r: int) -> str:
     return f"{kind}/{task}/run{r:02d}"
 
 
+def chosen_tasks(text: str | None) -> list[int]:
+    """The indices in :data:`TASKS` of the tasks ``--tasks`` names (comma-separated; in ``TASKS`` order),
+    those of :data:`DEFAULT_TASKS` when None; ``UsageError`` in one line listing the choices for an unknown
+    one."""
+    names = [task for task, _, _ in TASKS]
+    if text is None:
+        return [names.index(task) for task in DEFAULT_TASKS]
+    given = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in given if name not in names]
+    if unknown or not given:
+        what = f"unknown task {unknown[0]!r}" if unknown else f"no task in {text!r}"
+        raise UsageError(f"--tasks: {what}; expected some of {','.join(names)}")
+    return [t for t, name in enumerate(names) if name in given]
+
+
 def plan_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list[Stage], dict[str, int]]:
@@ -169,10 +192,12 @@ def plan_study(
     if design == "shared" and scenario_seed is None:
         scenario_seed = shared_scenario_seed(args.seed)
     out = Path(args.out).absolute()
+    chosen = chosen_tasks(args.tasks)
     entries: list[dict] = []
     stages: list[Stage] = []
     budgets: dict[str, int] = {}
-    for t, (task, objective, descriptors) in enumerate(TASKS):
+    for t in chosen:
+        task, objective, descriptors = TASKS[t]
         repertoires: list[tuple[RunConfig | TeamConfig, str]] = []
         for r in range(args.runs):
             seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
@@ -224,7 +249,7 @@ def plan_study(
         "study": STUDY,
         **document_head(args, profile, scenarios, design, scenario_seed),
         "swarm_evaluations": swarm_evaluations,
-        "tasks": [{"task": t, "objective": o, "descriptors": d} for t, o, d in TASKS],
+        "tasks": [{"task": t, "objective": o, "descriptors": d} for t, o, d in (TASKS[k] for k in chosen)],
         "arms": [arm.name for arm in ARMS],
         "plan": entries,
     }

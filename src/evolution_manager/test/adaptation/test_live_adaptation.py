@@ -34,6 +34,9 @@ def test_the_food_measure_is_the_food_objective_over_the_window_averaged_over_ro
     assert window_measure("foraging", initial, final, np.array([[2], [0], [1]]), DEFAULT) == pytest.approx(
         1.0
     )
+    # the balanced measure is the swarm's: 3 x its least kind per robot (kinds 2 and 3 once each, of 3 robots)
+    kinds = np.array([[2, 0, 1], [0, 1, 0], [1, 0, 0]])
+    assert window_measure("foraging_balanced", initial, final, kinds, DEFAULT) == pytest.approx(1.0)
 
 
 def test_objectives_read_from_true_positions_are_not_measured_live():

@@ -27,7 +27,8 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
         ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
     )
     document, stages, budgets = study.plan_study(args, "fixed", "shared")
-    assert len(stages) == 3 * len(study.TASKS)  # each task: its repertoires, its compositions, its teams
+    assert len(study.DEFAULT_TASKS) == 3  # without --tasks, the first three tasks
+    assert len(stages) == 3 * 3  # each task: its repertoires, its compositions, its teams
     first = stages[0]()
     assert [folder for _, folder in first] == [
         "repertoires/multifood-arena9-kind2/run00",
@@ -43,18 +44,18 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     made, _ = first[0]
     assert (made.algorithm, made.descriptors, made.objective) == ("qd", "deliveries", "foraging_biased")
     teams = [e for e in document["plan"] if e["kind"] == "team"]
-    assert len(teams) == len(study.TASKS) * 6 * 2
+    assert len(teams) == 3 * 6 * 2
     assert all(budgets[e["dir"]] == 25_000 + 300 for e in teams)  # a repertoire's and a composition's budget
     assert [made.team for made, _ in third] == [2, 2, 3, 3, 9, 9] * 2
     assert [made.scenarios for made, _ in third] == ["fixed"] * 6 + ["fresh"] * 6
     arms = [e for e in document["plan"] if e["kind"] == "composition"]
-    assert len(arms) == len(study.TASKS) * sum(1 for a in study.ARMS if not a.team) * 2
+    assert len(arms) == 3 * sum(1 for a in study.ARMS if not a.team) * 2
     for entry in arms:
         repertoire = next(e for e in document["plan"] if e["dir"] == entry["from"])
         assert entry["seed"] == repertoire["config"]["seed"] and entry["task"] == repertoire["task"]
         assert budgets[entry["dir"]] == 300
     seeds = {(e["task"], e["seed"]) for e in arms}
-    assert len(seeds) == len(study.TASKS) * 2  # one seed per task and index, shared by its arms
+    assert len(seeds) == 3 * 2  # one seed per task and index, shared by its arms
     assert document["swarm_evaluations"] == 300 and document["arms"] == [a.name for a in study.ARMS]
     for entry in teams:  # the teams share the seeds of the repertoires and compositions they are set beside
         assert (entry["task"], entry["seed"]) in seeds
@@ -77,7 +78,7 @@ def test_new_arms_grow_the_plan_and_keep_the_runs_planned_before(tmp_path, monke
     added = "ga-fresh, qd-fresh, team2-fresh, team3-fresh, team9-fresh"
     assert planning.growth(saved, given) == f"by the arms {added}"
     fresh = [e for e in given["plan"] if e.get("scenarios", e.get("config", {}).get("scenarios")) == "fresh"]
-    assert len(fresh) == len(study.TASKS) * 5 * 2 and {e["arm"] for e in fresh} == set(added.split(", "))
+    assert len(fresh) == 3 * 5 * 2 and {e["arm"] for e in fresh} == set(added.split(", "))
     assert all("scenarios" not in e for e in saved["plan"])
     assert all("scenarios" not in e["config"] for e in saved["plan"] if e["kind"] == "team")
     more = build_parser().parse_args(
@@ -101,15 +102,73 @@ def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):
     assert "--swarm-evaluations applies to --study heterogeneity only" in capsys.readouterr().err
 
 
-def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(study, "TASKS", study.TASKS[1:2])  # one task (arena 6) is enough, in half the time
+def _plan(tmp_path, *more):
+    args = ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
+    document, _, _ = study.plan_study(build_parser().parse_args([*args, *more]), "fixed", "shared")
+    return document
+
+
+def test_tasks_plans_the_tasks_named_each_on_the_seeds_of_its_row(tmp_path):
+    """--tasks names the rows of TASKS to plan; a task's runs are the same whichever others are planned
+    (their seeds derive from its row), and without --tasks the plan is the first three tasks'."""
+    every = ",".join(task for task, _, _ in study.TASKS)
+    whole = _plan(tmp_path, "--tasks", every)
+    assert [t["task"] for t in whole["tasks"]] == [task for task, _, _ in study.TASKS]
+    balanced = _plan(tmp_path, "--tasks", "multifood-arena6-balanced")
+    assert balanced["tasks"] == [
+        {"task": "multifood-arena6-balanced", "objective": "foraging_balanced", "descriptors": "deliveries"}
+    ]
+    assert balanced["plan"] == [e for e in whole["plan"] if e["task"] == "multifood-arena6-balanced"]
+    repertoire = balanced["plan"][0]
+    assert repertoire["dir"] == "repertoires/multifood-arena6-balanced/run00"
+    assert repertoire["config"]["objective"] == "foraging_balanced"
+    default = _plan(tmp_path)
+    assert [t["task"] for t in default["tasks"]] == list(study.DEFAULT_TASKS)
+    assert default == _plan(tmp_path, "--tasks", ",".join(reversed(study.DEFAULT_TASKS)))  # in TASKS order
+    assert default["plan"] == [e for e in whole["plan"] if e["task"] in study.DEFAULT_TASKS]
+
+
+def test_the_running_studys_plan_is_still_planned_alike():
+    """experiments/heterogeneity/experiment.json: the plan the study's own options give today (no --tasks)."""
+    folder = Path(__file__).resolve().parents[4] / "experiments" / "heterogeneity"
+    saved = json.loads((folder / planning.PLAN_FILE).read_text())
+    args = [
+        "--study",
+        "heterogeneity",
+        "--runs",
+        str(saved["runs"]),
+        "--evaluations",
+        str(saved["evaluations"]),
+    ]
+    args += ["--seed", str(saved["seed"]), "--trials", str(saved["trials"]), "--out", str(folder)]
+    args += ["--swarm-evaluations", str(saved["swarm_evaluations"]), "--profile", saved["profile"]]
+    document, _, _ = study.plan_study(build_parser().parse_args(args), saved["scenarios"], saved["design"])
+    assert json.loads(json.dumps(document)) == saved
+
+
+def test_tasks_refuses_an_unknown_task_and_other_studies(tmp_path, capsys):
+    out = str(tmp_path / "x")
+    assert experiment(["--study", "heterogeneity", "--tasks", "multifood-arena6,arena6", "--out", out]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--tasks: unknown task 'arena6'; expected some of " in error
+    assert ",".join(task for task, _, _ in study.TASKS) in error
+    assert experiment(["--study", "heterogeneity", "--tasks", " , ", "--out", out]) == 2
+    assert "--tasks: no task in ' , '" in capsys.readouterr().err
+    assert experiment(["--study", "paper", "--tasks", "multifood-arena6", "--out", out]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--tasks applies to --study heterogeneity only" in error
+    assert not (tmp_path / "x").exists()
+
+
+def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_path, capsys):
     out = tmp_path / "study"
     args = ["--study", "heterogeneity", "--runs", "2", "--evaluations", "20", "--swarm-evaluations", "10"]
+    args += ["--tasks", "multifood-arena6"]  # one task is enough, in a third of the time
     args += ["--trials", "1", "--processes", "1", "--out", str(out), "--no-progress"]
     assert experiment(args) == 0
     rows = list(csv.DictReader(io.StringIO((out / "runs.csv").read_text())))
     assert list(rows[0]) == study.HEADER
-    for task, _, _ in study.TASKS:
+    for task in ("multifood-arena6",):
         mine = [r for r in rows if r["task"] == task]
         baselines = [r for r in mine if r["arm"] == study.BASELINE]
         assert len(baselines) == 2 and all(r["qd_score_1"] == "" for r in baselines)
@@ -203,7 +262,7 @@ def test_the_committed_reports_tables_are_its_runs_csv():
     folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / "study"
     rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
-    tasks = [task for task, _, _ in study.TASKS]
+    tasks = list(study.DEFAULT_TASKS)
     for key in (study.HELDOUT, study.VALIDATED, study.UNSEEN):
         assert study.scores_table(rows, tasks, key) in report
     assert study.qd_table(rows, tasks) in report

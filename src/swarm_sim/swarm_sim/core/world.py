@@ -11,7 +11,8 @@ types that swap the nest and food kind 1 for odd robots (``Config.robot_types``)
 ``push_sample``, ``smoothed``, ``broadcast_value``, ``region_value``, ``blackboard``, ``carry``,
 ``start_carrying``;
 (d) objectives and descriptors: ``region_distance``, ``neighbour_distance``, ``take_probes``,
-``take_all_probes``, ``robot_objectives``, ``robot_descriptors``, ``trial_values``, ``mean_values``.
+``take_all_probes``, ``swarm_deliveries``, ``robot_objectives``, ``robot_descriptors``, ``trial_values``,
+``mean_values``.
 
 Every function but ``new_dynamics`` (which makes a swarm's physics arrays) is an ``njit`` function: the batch
 kernels call them inline and the reference road and the nodes call the very same compiled code from Python,
@@ -937,6 +938,7 @@ def robot_objectives(
     first: np.ndarray,
     last: np.ndarray,
     deliveries: np.ndarray,
+    swarm: np.ndarray,
     food_radius: float,
     p: Params,
 ) -> tuple:
@@ -948,7 +950,8 @@ def robot_objectives(
 
     ``initial`` and ``final`` are the smoothed (nest, food, density) at the trial's initial and last steps;
     ``first`` and ``last`` the robot's probes (``take_probes``) at the trial's first and last steps;
-    ``deliveries`` its deliveries per food kind.
+    ``deliveries`` its deliveries per food kind; ``swarm`` the swarm's deliveries per food kind per robot
+    (``swarm_deliveries``), for the objectives that are the swarm's.
     Density: (final - initial + 1) / 2, clipped to [0, 1]; nest and food: distances normalised by the cap,
     ((initial - final) / cap + 1) / 2, or 1 when the final smoothed value is 0. Inverse density: (initial -
     final + 1) / 2, clipped; inverse nest: ((final - initial) / cap + 1) / 2, with no rule for the nest;
@@ -957,7 +960,9 @@ def robot_objectives(
     ``regions.food_scale``: nest_radius + gap in the 2023 arena). Foraging: the deliveries of every kind;
     foraging1-3 those of one kind (0 for a kind the world lacks); foraging_biased those of
     ``p.preferred_food`` plus ``p.other_food_weight`` times the others' (all of them when none is
-    preferred). Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
+    preferred); foraging_balanced the swarm's: K times the least over the arena's K food kinds of ``swarm``
+    (every robot gets it, so the mean over robots is the swarm's value; ``foraging``'s mean for one kind).
+    Aggregation: from the mean true distances from the other robots (``neighbour_distance``),
     ((first - last) / first + 1) / 2, clipped to [0, 1]; 0.5 for a robot alone.
     """
     density = min(max(0.5 * (final[2] - initial[2] + 1.0), 0.0), 1.0)
@@ -977,7 +982,28 @@ def robot_objectives(
     if p.preferred_food > 0:
         preferred = float(deliveries[p.preferred_food - 1])
         biased = preferred + p.other_food_weight * (total - preferred)
-    return density, nest, food, idensity, inest, ifood, total, aggregation, kind1, kind2, kind3, biased
+    least = swarm[0]
+    for k in range(1, swarm.shape[0]):
+        least = min(least, swarm[k])
+    balanced = swarm.shape[0] * least
+    return (
+        density, nest, food, idensity, inest, ifood, total, aggregation,
+        kind1, kind2, kind3, biased, balanced,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, error_model="numpy")
+def swarm_deliveries(deliveries: np.ndarray) -> np.ndarray:
+    """The swarm's deliveries of each food kind per robot: ``deliveries`` (robots x food kinds) summed over
+    the robots, in id order, and divided by their number (the ``swarm`` of ``robot_objectives``)."""
+    n, kinds = deliveries.shape
+    out = np.zeros(kinds)
+    for i in range(n):
+        for f in range(kinds):
+            out[f] += deliveries[i, f]
+    for f in range(kinds):
+        out[f] /= n
+    return out
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1018,8 +1044,11 @@ def trial_values(
     n = initial.shape[0]
     radius = food_scale
     out = np.zeros(N_VALUES)
+    swarm = swarm_deliveries(deliveries)
     for i in range(n):
-        o = robot_objectives(initial[i], final[i], probes[i, 0], probes[i, 1], deliveries[i], radius, p)
+        o = robot_objectives(
+            initial[i], final[i], probes[i, 0], probes[i, 1], deliveries[i], swarm, radius, p
+        )
         d = robot_descriptors(counts[i], motion[i, 0], motion[i, 1], p)
         for k in range(N_OBJECTIVES):
             out[k] += o[k]

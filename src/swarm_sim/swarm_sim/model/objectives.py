@@ -118,12 +118,21 @@ OBJECTIVE_TABLE: tuple[Objective, ...] = (
         math.inf,
         "",
     ),
+    Objective(
+        "foraging_balanced",
+        "the swarm's deliveries of each food kind counted over the trial",
+        "K x the least over the arena's K food kinds of the swarm's deliveries of the kind per robot per "
+        "trial, every robot given the swarm's value; foraging for one kind",
+        math.inf,
+        "",
+    ),
 )
 """Every objective, in fitness order: the paper's three, the 2024 follow-up's three inverse primitives,
-foraging (every kind of food), aggregation (the ``aggregation`` task's, which neither paper has), and the
-authors' 2026 multi-food objectives: foraging of one kind each, and their bias and penalty fitness. A new
-objective is a row appended here and its mapping appended to ``world.robot_objectives``
-(``docs/tasks.md``)."""
+foraging (every kind of food), aggregation (the ``aggregation`` task's, which neither paper has), the
+authors' 2026 multi-food objectives: foraging of one kind each, and their bias and penalty fitness; and
+this project's balanced foraging (issue 36), a property of the swarm that only a swarm delivering every kind
+alike maximises. A new objective is a row appended here and its mapping appended to
+``world.robot_objectives`` (``docs/tasks.md``)."""
 
 PROBES: tuple[str, ...] = ("food_distance", "neighbour_distance")
 """What every road measures of each robot's true state at a trial's first and last steps

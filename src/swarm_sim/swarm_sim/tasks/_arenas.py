@@ -40,6 +40,7 @@ def arena_task(
     points: int | None = None,
     bias: int | None = None,
     other_food_weight: float = 1.0,
+    balanced: bool = False,
     types: int = 1,
     formation: str | None = None,
     first_entry: int = 0,
@@ -49,7 +50,9 @@ def arena_task(
     default ``<base>-arena<layout>``), with the 2026 random start area. Layout 9 needs ``bias``, the preferred
     food kind 0-based as theirs (``arenaBias``), which the task's ``foraging_biased`` objective prefers with
     ``other_food_weight`` for the others (their ``penalty``). A layout with several food kinds gets their
-    node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``types`` 2 gives the
+    node set (``vocabulary.MULTIFOOD_CONDITIONS``) and the per-kind objectives. ``balanced`` adds the
+    objective ``foraging_balanced`` (the swarm's least delivered kind, this project's: issue 36), which only a
+    swarm delivering every kind alike maximises. ``types`` 2 gives the
     authors' two robot types (``Robots.types``: odd robots perceive the nest and food kind 1 swapped, as in
     their ``generic`` projects, where it matters in layouts 7 and 8); ``formation`` the start formation
     (None: ``base``'s). ``first_entry``: trial k of a block takes the generated layout's entry
@@ -100,8 +103,12 @@ def arena_task(
         )
     if preferred and "foraging_biased" not in objectives:
         objectives = (*objectives, "foraging_biased")
+    if balanced and "foraging_balanced" not in objectives:
+        objectives = (*objectives, "foraging_balanced")
     what = f"{len(kinds)} food kinds" if several else "one food kind"
     told = f", food kind {preferred} preferred (other kinds count {other_food_weight:g})" if preferred else ""
+    if balanced:
+        told += ", scored by its least delivered kind (foraging_balanced)"
     if types == 2:
         told += ", two robot types (odd robots perceive the nest and food swapped)"
     robots = replace(

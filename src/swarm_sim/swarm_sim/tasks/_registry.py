@@ -89,7 +89,8 @@ ARENA9_OTHER_FOOD_WEIGHT = 0.5
 # public reference data beside ``multifood-arena6``); and the authors' two robot types (their ``generic``
 # projects) in the two layouts where a type changes what a robot perceives, 7 and 8 (``footbot_bt.cpp:242-254,
 # 269`` at 1cd2358), each robot starting around its own food kind 1 (the ``localised`` formation: even robots
-# at the food point, odd ones at the nest point).
+# at the food point, odd ones at the nest point). ``multifood-arena6-balanced`` is arena 6 scored by
+# ``foraging_balanced`` (this project's, issue 36: meant as a task where a division of labour could pay).
 _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
     *((f"multifood-arena{layout}", {"layout": layout}) for layout in range(1, 9)),
     *(
@@ -103,6 +104,7 @@ _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
         (f"multifood-arena{layout}-types", {"layout": layout, "types": 2, "formation": "localised"})
         for layout in (7, 8)
     ),
+    ("multifood-arena6-balanced", {"layout": 6, "balanced": True}),
 )
 for _name, _settings in _ARENA_TASKS:
     register(arena_task(FORAGING, name=_name, **_settings))

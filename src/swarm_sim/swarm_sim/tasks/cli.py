@@ -45,6 +45,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="what another kind than the preferred one counts in foraging_biased (their penalty; default 1)",
     )
     arena.add_argument(
+        "--balanced",
+        action="store_true",
+        help="add the objective foraging_balanced (the swarm's least delivered kind x the kinds)",
+    )
+    arena.add_argument(
         "--types",
         type=int,
         choices=(1, 2),
@@ -83,6 +88,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 points=args.points,
                 bias=args.bias,
                 other_food_weight=args.other_food_weight,
+                balanced=args.balanced,
                 types=args.types,
                 formation=args.formation,
                 first_entry=args.first_entry,

@@ -81,6 +81,38 @@ def test_random_trees_over_every_condition_agree_on_both_roads_in_a_heterogeneou
     assert result.fitness + result.descriptors == values
 
 
+def _specialist(kind: int) -> str:
+    home = "sel(seq(nest_left, forward_left), seq(nest_right, forward_right), forward)"
+    return (
+        f"sel(seq(got_food{kind}, {home}), "
+        f"sel(seq(food_left{kind}, forward_left), seq(food_right{kind}, forward_right), forward))"
+    )
+
+
+def test_the_balanced_fitness_of_a_swarm_of_specialists_agrees_on_every_road():
+    """Three groups of three robots, each fetching one kind, on the balanced task: the batch road, the
+    reference road (the node graph's lockstep) and both recordings give every value alike, the balanced
+    one included; per trial it is three times the swarm's least delivered kind per robot. Seed 3, whose
+    last trial delivers every kind (rare in 60 s trials; the other trials score 0)."""
+    config = _short("multifood-arena6-balanced", ticks=120).config("paper")
+    swarm = of_trees([_specialist(1 + i // 3) for i in range(9)], config.n_robots)
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([SwarmRequest(swarm, 3, 5)])
+    values, _ = reference_road.evaluate(swarm.parsed(), 3, 5, config)
+    assert result.fitness + result.descriptors == values
+    named = _named(values)
+    per_trial = [_named(r.values) for r in records]
+    balanced = [3 * min(t["foraging1"], t["foraging2"], t["foraging3"]) for t in per_trial]
+    assert [t["foraging_balanced"] for t in per_trial] == pytest.approx(balanced, abs=1e-12)
+    assert [t["foraging_balanced"] > 0 for t in per_trial] == [False] * 4 + [True]
+    assert 0.0 < named["foraging_balanced"] <= named["foraging"]
+    batch, slow = record_trial(swarm, 3, 4, config), record_trial_reference(swarm, 3, 4, config)
+    assert np.array_equal(batch.fitness, slow.fitness, equal_nan=True) and batch.values == slow.values
+    k = OBJECTIVES.index("foraging_balanced")
+    assert batch.fitness[-1, k] == pytest.approx(3 * batch.deliveries[-1].sum(axis=0).min() / 9, abs=1e-12)
+    assert batch.fitness[-1, k] == pytest.approx(per_trial[4]["foraging_balanced"], abs=1e-12)
+    assert batch.fitness[-1, k] > 0
+
+
 def test_the_biased_fitness_prefers_its_kind():
     task = _short("multifood-arena9-kind2")
     assert task.scoring.preferred_food == 2 and task.scoring.other_food_weight == 0.5
@@ -112,12 +144,20 @@ def test_the_registered_arena_tasks():
         task = task_named(f"multifood-arena9-kind{kind}")
         assert task.scoring.preferred_food == kind and "foraging_biased" in task.objectives
         assert task_from_yaml(task_to_yaml(task)) == task
+    # arena 6 scored by its least delivered kind: arena 6's task but for the objective and the words
+    balanced, six = task_named("multifood-arena6-balanced"), task_named("multifood-arena6")
+    assert balanced.objectives == (*six.objectives, "foraging_balanced")
+    assert "foraging_balanced" in balanced.description and balanced.config().food_kinds == 3
+    assert replace(balanced, name=six.name, description=six.description, objectives=six.objectives) == six
+    assert task_from_yaml(task_to_yaml(balanced)) == balanced
+    assert arena_task(FORAGING, 6, balanced=True, name="multifood-arena6-balanced") == balanced
+    assert unseen_twin("multifood-arena6-balanced").objectives == balanced.objectives
 
 
 def test_the_unseen_twins_take_the_arenas_no_run_evolves_on():
     """``<task>-unseen``: the same task, trial k of a block on generated arena 5 + k, never on 0 to 4."""
     names = [n for n in task_names() if n.endswith("-unseen")]
-    assert len(names) == 8 and all(unseen_twin(n.removesuffix("-unseen")).name == n for n in names)
+    assert len(names) == 9 and all(unseen_twin(n.removesuffix("-unseen")).name == n for n in names)
     for name in names:
         seen, unseen = task_named(name.removesuffix("-unseen")), task_named(name)
         layout = int(name.split("arena")[1][0])

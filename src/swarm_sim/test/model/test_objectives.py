@@ -5,15 +5,18 @@ import math
 import numpy as np
 import pytest
 
+from bt_controller.interpreters import N_COUNTS
 from bt_controller.language import parse
 from swarm_sim.core import world
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.model import DEFAULT, PROBES, Config, Piece
 from swarm_sim.roads import reference_road
+from swarm_sim.tasks import task_named
 
 TRIALS = 4
 MOVEMENT = world.VALUE_NAMES.index("movement")
 DESCRIPTORS = slice(world.N_OBJECTIVES, None)
+OBJECTIVE = {name: k for k, name in enumerate(world.OBJECTIVES)}
 
 
 def both_roads(tree, seed, config, trials=TRIALS):
@@ -24,21 +27,25 @@ def both_roads(tree, seed, config, trials=TRIALS):
     return values, records
 
 
-def objectives(initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0, spread=(0.0, 0.0), p=None):
+def objectives(
+    initial, final, food=(0.0, 0.0), deliveries=0, radius=1000.0, spread=(0.0, 0.0), p=None, swarm=None
+):
     """One robot's objectives; ``food`` and ``spread``: its food and neighbour distances (``PROBES``) at the
-    trial's first and last steps; ``deliveries``: a count of kind 1, or one per food kind."""
+    trial's first and last steps; ``deliveries``: a count of kind 1, or one per food kind; ``swarm``: the
+    swarm's deliveries per kind per robot (by default the robot's own, a swarm of one)."""
     p = p or DEFAULT.params()
     initial, final = np.array(initial, float), np.array(final, float)
     first, last = np.array([food[0], spread[0]]), np.array([food[1], spread[1]])
     kinds = np.array(deliveries if isinstance(deliveries, tuple) else (deliveries,), np.int64)
-    return world.robot_objectives(initial, final, first, last, kinds, radius, p)
+    swarm = kinds.astype(float) if swarm is None else np.array(swarm, float)
+    return world.robot_objectives(initial, final, first, last, kinds, swarm, radius, p)
 
 
 def test_objective_formulas():
     initial, final = [4000.0, 1000.0, 0.2], [1500.0, 3000.0, 0.5]
     # 300 mm from food at the start, on food at the end; food radius 1200 mm (gap 700); 3 deliveries.
     values = objectives(initial, final, (300.0, 0.0), 3, 1200.0, (1600.0, 400.0))
-    density, nest, food, idensity, inest, ifood, foraging, aggregation, *kinds, biased = values
+    density, nest, food, idensity, inest, ifood, foraging, aggregation, *kinds, biased, balanced = values
     assert density == pytest.approx((0.5 - 0.2 + 1) / 2)
     assert nest == pytest.approx(((4000 - 1500) / 5000 + 1) / 2)
     assert food == pytest.approx(((1000 - 3000) / 5000 + 1) / 2)
@@ -47,6 +54,7 @@ def test_objective_formulas():
     assert inest == pytest.approx(((1500 - 4000) / 5000 + 1) / 2)
     assert ifood == pytest.approx((0.0 - 300.0 + 1200.0) / 2400.0)
     assert foraging == 3.0 and kinds == [3.0, 0.0, 0.0] and biased == 3.0
+    assert balanced == 3.0  # one kind of food: the swarm's foraging, here a swarm of one
     # Aggregation: the mean distance from the others fell from 1600 to 400 mm.
     assert aggregation == pytest.approx(((1600 - 400) / 1600 + 1) / 2)
     assert objectives(initial, final, spread=(500.0, 1500.0))[7] == 0.0  # spread out threefold: clipped
@@ -77,7 +85,44 @@ def test_the_food_kinds_objectives_and_the_bias():
     named = dict(zip(world.OBJECTIVES, objectives(initial, final, deliveries=(2, 5), p=biased), strict=True))
     assert named["foraging_biased"] == 5.0 + 0.5 * 2.0 and named["foraging3"] == 0.0
     penalised = Config(layout=layout, preferred_food=1, other_food_weight=-1.0).params()
-    assert objectives(initial, final, deliveries=(2, 5), p=penalised)[-1] == 2.0 - 5.0
+    assert (
+        objectives(initial, final, deliveries=(2, 5), p=penalised)[OBJECTIVE["foraging_biased"]] == 2.0 - 5.0
+    )
+
+
+def _trial(deliveries, p=None):
+    """A hand-made trial's values (``world.trial_values``) by name: robots standing still, each with the given
+    deliveries of each food kind (a row per robot)."""
+    p = p or DEFAULT.params()
+    delivered = np.array(deliveries, np.int64)
+    n = delivered.shape[0]
+    smoothed = np.full((n, p.regions + 1), 1000.0)
+    counts, motion = np.zeros((n, N_COUNTS), np.int64), np.zeros((n, 2), np.int64)
+    probes = np.full((n, 2, len(PROBES)), 500.0)
+    values = world.trial_values(smoothed, smoothed, counts, motion, probes, delivered, 1000.0, p)
+    return dict(zip(world.VALUE_NAMES, values, strict=True))
+
+
+def test_balanced_foraging_is_the_swarms_least_kind_times_the_kinds():
+    three = task_named("multifood-arena6").config().params()  # three kinds of food
+    # Every kind delivered alike, 3 per kind over 3 robots, though no robot delivers every kind: 3 x 1.
+    even = _trial([[2, 0, 1], [0, 3, 0], [1, 0, 2]], three)
+    assert even["foraging_balanced"] == pytest.approx(3.0) and even["foraging"] == pytest.approx(3.0)
+    # Kind 1 four times, the others once each: per robot (4/3, 1/3, 1/3), so 3 x 1/3, half of foraging.
+    skewed = _trial([[4, 0, 0], [0, 1, 0], [0, 0, 1]], three)
+    assert skewed["foraging_balanced"] == pytest.approx(1.0) and skewed["foraging"] == pytest.approx(2.0)
+    # A kind nobody delivers: 0, however much of the others.
+    assert _trial([[5, 5, 0], [5, 5, 0], [0, 0, 0]], three)["foraging_balanced"] == 0.0
+    # Each robot is given the swarm's value, whatever it delivered itself (nothing, say).
+    swarm = world.swarm_deliveries(np.array([[4, 0, 0], [0, 1, 0], [0, 0, 1]], np.int64))
+    assert list(swarm) == pytest.approx([4 / 3, 1 / 3, 1 / 3])
+    k = OBJECTIVE["foraging_balanced"]
+    for robot in ((4, 0, 0), (0, 0, 0)):
+        own = objectives([0, 0, 0.0], [0, 0, 0.0], deliveries=robot, p=three, swarm=swarm)
+        assert own[k] == pytest.approx(1.0)
+    # One kind of food: the swarm's foraging (the mean of the robots' deliveries).
+    one = _trial([[3], [1], [2]])
+    assert one["foraging_balanced"] == pytest.approx(one["foraging"]) == pytest.approx(2.0)
 
 
 def _food_distance(x: float, y: float, gap: float) -> float:

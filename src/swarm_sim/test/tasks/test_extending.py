@@ -56,13 +56,11 @@ def extended(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     end = text.index(')\n"""Every objective')
     objectives.write_text(text[:end] + OBJECTIVE_ROW + text[end:])
     world = root / "swarm_sim" / "core" / "world.py"
-    returned = "density, nest, food, idensity, inest, ifood, total, aggregation, kind1, kind2, kind3, biased"
-    old = f"    return {returned}\n"
-    new = (
-        f"    near_nest = 1.0 - final[0] / p.estimate_cap\n    return ({returned},\n            near_nest)\n"
-    )
-    assert world.read_text().count(old) == 1
-    world.write_text(world.read_text().replace(old, new))
+    old = "    return (\n        density, nest, food, idensity, inest, ifood, total, aggregation,\n"
+    new = f"    near_nest = 1.0 - final[0] / p.estimate_cap\n{old}"
+    tail = "        kind1, kind2, kind3, biased, balanced,\n"
+    assert world.read_text().count(old + tail) == 1
+    world.write_text(world.read_text().replace(old + tail, new + tail + "        near_nest,\n"))
     env = dict(os.environ, PYTHONSAFEPATH="1")  # the copy, never the sources beside the working directory
     env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
     env["NUMBA_CACHE_DIR"] = str(root / "numba-cache")
