@@ -6,19 +6,20 @@ until the swarm's performance is back.
         [--window 10] [--lead 0.125] [--budget 8] [--stop-fraction 0.9] [--swap faulty|all] [--seed S] \\
         [--robots N] [--every 8]
 
-The node graph (the simulator node and one footbot controller node per robot, in lockstep) runs one trial
-of ``--duration`` simulated seconds of the repertoire's task (its world), every robot on the repertoire's
-best tree, under the repertoire's model profile. At ``--fault-at`` seconds the faults strike (``ROBOT:KIND``
-pairs, kinds of ``swarm_sim.model.faults``), injected through the simulator's ``inject_faults`` service,
-which announces them on its ``faults`` topic. The adaptation node (``graph.nodes.adaptation_node``)
-measures every window of ``--window`` simulated seconds with the objective, from what the robots answer each
-step (``adaptation.live.window_measure``); when the first window after the fault falls below
-``--stop-fraction`` of the mean of the last ``--reference`` windows before it, it tries trees of the
-repertoire, one window each, chosen by Intelligent Trial and Error, loading each into the faulty robots
-(``--swap all``: every robot) through their ``load_tree`` service from ``--lead`` seconds after the window
-that chose it (the next step by default). The simulator is held at each window's end (its
-``hold_step`` service) until the node has decided and every swapped robot has its tree, so a run makes the
-same swaps on any machine, however loaded. It stops at the first window back at the target, or after
+The node graph (the simulator node and one footbot controller node per robot, in lockstep) runs one trial of
+``--duration`` simulated seconds of the repertoire's task (its world), every robot on the repertoire's best
+tree, under the repertoire's model profile. A repertoire built of a primitive library (its run's copy,
+``library.json``) sends its trees with the primitives written out, so the controllers need no library. At
+``--fault-at`` seconds the faults strike (``ROBOT:KIND`` pairs, kinds of ``swarm_sim.model.faults``), injected
+through the simulator's ``inject_faults`` service, which announces them on its ``faults`` topic. The
+adaptation node (``graph.nodes.adaptation_node``) measures every window of ``--window`` simulated seconds with
+the objective, from what the robots answer each step (``adaptation.live.window_measure``); when the first
+window after the fault falls below ``--stop-fraction`` of the mean of the last ``--reference`` windows before
+it, it tries trees of the repertoire, one window each, chosen by Intelligent Trial and Error, loading each
+into the faulty robots (``--swap all``: every robot) through their ``load_tree`` service from ``--lead``
+seconds after the window that chose it (the next step by default). The simulator is held at each window's end
+(its ``hold_step`` service) until the node has decided and every swapped robot has its tree, so a run makes
+the same swaps on any machine, however loaded. It stops at the first window back at the target, or after
 ``--budget`` trials with the best tree tried (``adaptation.live``).
 
 Writes ``DIR/live.bag`` (MCAP: the trial's state, readings and answers, ``/faults``, ``/adaptation`` and the
@@ -40,7 +41,7 @@ from pathlib import Path
 
 from bt_controller.robot import timeline
 from evolution_manager.adaptation.live import MEASURABLE, SWAPS, LiveAdaptation, LiveSettings, window_measure
-from evolution_manager.adaptation.search import load_candidates, repertoire_profile
+from evolution_manager.adaptation.search import load_candidates, repertoire_setting, written_out
 from evolution_manager.arguments import (
     EXIT_USAGE,
     Parser,
@@ -102,8 +103,12 @@ def steps_of(seconds: float, config: Config) -> int:
 
 def live_adaptation(args: argparse.Namespace) -> dict[str, object]:
     """Run the live adaptation the parsed command line ``args`` asks for; return the result document."""
-    profile = repertoire_profile(args.repertoire)
-    candidates = load_candidates(args.repertoire, args.objective)
+    setting = repertoire_setting(args.repertoire)
+    profile = setting.config.profile
+    # a repertoire built of a library's primitives: its trees go to the robots with the primitives written out
+    candidates = written_out(
+        load_candidates(args.repertoire, args.objective, setting.library), setting.library
+    )
     try:
         task = resolve_task(RunDirectory(args.repertoire).read_config().task or DEFAULT_TASK)
     except EvolutionError as error:
