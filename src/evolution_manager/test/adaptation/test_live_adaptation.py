@@ -217,6 +217,7 @@ def _seed_row(run: dict) -> str:
     robots = run["robots"]
     kind = "control" if run["settings"]["stop_fraction"] < 0.5 else "adapted"
     kind += ", --watch" if run["settings"].get("watch") else ""
+    kind += ", --swap all" if run["settings"]["swap"] == "all" else ""
     before = [w["measure"] for w in run["windows"] if w["phase"] == "before-fault"]
     reference = float(np.mean(before[-run["settings"]["reference"] :]))
     after = next(w["measure"] for w in run["windows"] if w["phase"] == "after-fault")
@@ -247,6 +248,6 @@ def test_the_committed_live_foraging_readmes_table_is_its_adaptation_live_json()
     assert adapted["stopped"] in readme and windows[-1][1] == "kept"
     assert f"target {adapted['target']:.3f}" in readme
     runs = sorted(folder.glob("**/adaptation_live.json"))
-    assert len(runs) >= 4
+    assert len(runs) == 7
     for path in runs:
         assert _seed_row(json.loads(path.read_text())) in readme, path
