@@ -4,22 +4,24 @@ until the swarm's performance is back.
     ws/run evolution_manager adapt-live --repertoire RUN_DIR --objective food \\
         --faults "1:wheel-reversed 4:wheel-reversed" --fault-at 30 --duration 150 --out DIR \\
         [--window 10] [--lead 0.125] [--budget 8] [--stop-fraction 0.9] [--swap faulty|all] [--seed S] \\
-        [--robots N] [--every 8]
+        [--robots N] [--every 8] [--watch]
 
-The node graph (the simulator node and one footbot controller node per robot, in lockstep) runs one trial
-of ``--duration`` simulated seconds of the repertoire's task (its world), every robot on the repertoire's
-best tree, under the repertoire's model profile. At ``--fault-at`` seconds the faults strike (``ROBOT:KIND``
-pairs, kinds of ``swarm_sim.model.faults``), injected through the simulator's ``inject_faults`` service,
-which announces them on its ``faults`` topic. The adaptation node (``graph.nodes.adaptation_node``)
-measures every window of ``--window`` simulated seconds with the objective, from what the robots answer each
-step (``adaptation.live.window_measure``); when the first window after the fault falls below
-``--stop-fraction`` of the mean of the last ``--reference`` windows before it, it tries trees of the
+The node graph (the simulator node and one footbot controller node per robot, in lockstep) runs one trial of
+``--duration`` simulated seconds of the repertoire's task (its world), every robot on the repertoire's best
+tree, under the repertoire's model profile. A repertoire built of a primitive library (its run's copy,
+``library.json``) sends its trees with the primitives written out, so the controllers need no library. At
+``--fault-at`` seconds the faults strike (``ROBOT:KIND`` pairs, kinds of ``swarm_sim.model.faults``), injected
+through the simulator's ``inject_faults`` service, which announces them on its ``faults`` topic. The
+adaptation node (``graph.nodes.adaptation_node``) measures every window of ``--window`` simulated seconds with
+the objective, from what the robots answer each step (``adaptation.live.window_measure``); when the first
+window after the fault falls below ``--stop-fraction`` of the mean of the last ``--reference`` windows before
+it (with ``--watch``, or any later window, when the first was still at the target), it tries trees of the
 repertoire, one window each, chosen by Intelligent Trial and Error, loading each into the faulty robots
 (``--swap all``: every robot) through their ``load_tree`` service from ``--lead`` seconds after the window
-that chose it (the next step by default). The simulator is held at each window's end (its
-``hold_step`` service) until the node has decided and every swapped robot has its tree, so a run makes the
-same swaps on any machine, however loaded. It stops at the first window back at the target, or after
-``--budget`` trials with the best tree tried (``adaptation.live``).
+that chose it (the next step by default). The simulator is held at each window's end (its ``hold_step``
+service) until the node has decided and every swapped robot has its tree, so a run makes the same swaps on any
+machine, however loaded. It stops at the first window back at the target, or after ``--budget`` trials with
+the best tree tried (``adaptation.live``).
 
 Writes ``DIR/live.bag`` (MCAP: the trial's state, readings and answers, ``/faults``, ``/adaptation`` and the
 trial's result), ``DIR/adaptation_live.json`` (settings, every window, fault and swap, why it stopped) and
@@ -40,7 +42,7 @@ from pathlib import Path
 
 from bt_controller.robot import timeline
 from evolution_manager.adaptation.live import MEASURABLE, SWAPS, LiveAdaptation, LiveSettings, window_measure
-from evolution_manager.adaptation.search import load_candidates, repertoire_profile
+from evolution_manager.adaptation.search import load_candidates, repertoire_setting, written_out
 from evolution_manager.arguments import (
     EXIT_USAGE,
     Parser,
@@ -87,6 +89,11 @@ def build_parser() -> Parser:
     parser.add_argument(
         "--reference", type=positive_int, default=2, help="windows before the fault that set the target (2)"
     )
+    parser.add_argument(
+        "--watch",
+        action="store_true",
+        help="after a fault that left the swarm at the target, adapt at the first later window below it",
+    )
     parser.add_argument("--swap", choices=SWAPS, default="faulty", help="robots that get the trees (faulty)")
     parser.add_argument("--seed", type=seed_in_range, default=0, help="the trial's seed (0)")
     parser.add_argument("--robots", type=positive_int, default=None, help="swarm size (the task's: 9)")
@@ -102,8 +109,12 @@ def steps_of(seconds: float, config: Config) -> int:
 
 def live_adaptation(args: argparse.Namespace) -> dict[str, object]:
     """Run the live adaptation the parsed command line ``args`` asks for; return the result document."""
-    profile = repertoire_profile(args.repertoire)
-    candidates = load_candidates(args.repertoire, args.objective)
+    setting = repertoire_setting(args.repertoire)
+    profile = setting.config.profile
+    # a repertoire built of a library's primitives: its trees go to the robots with the primitives written out
+    candidates = written_out(
+        load_candidates(args.repertoire, args.objective, setting.library), setting.library
+    )
     try:
         task = resolve_task(RunDirectory(args.repertoire).read_config().task or DEFAULT_TASK)
     except EvolutionError as error:
@@ -124,6 +135,7 @@ def live_adaptation(args: argparse.Namespace) -> dict[str, object]:
         stop_fraction=args.stop_fraction,
         swap=args.swap,
         reference=args.reference,
+        watch=args.watch,
     )
     last_step = timeline.trial_steps(config.timeline)
     fault_step = steps_of(args.fault_at, config) + 1

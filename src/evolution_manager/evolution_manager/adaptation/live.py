@@ -12,7 +12,9 @@ as they strike, and answers with the swaps to make:
 2. *after the fault*: the first window from the fault's step measures the trees the fault struck. At the
    target or above, nothing changes. Below it, that measure is told to Intelligent Trial and Error
    (``search.IntelligentTrialAndError``, never stopping by its own rule) as the fitness of the tree the robots
-   run, the repertoire's best;
+   run, the repertoire's best. With ``watch``, a fault that left the swarm at the target is watched on: the
+   first later window below the target starts the trials as this window would have (a fault's harm can
+   show late: blind robots drifting off with the swarm's food);
 3. *trials*: each asked tree is loaded into the faulty robots (or every robot: ``swap="all"``) from ``lead``
    steps after the last step of the window that decided it (the next step by default), and the next window
    from that step measures it. The adaptation ends at the first window at the target (the tree
@@ -109,6 +111,9 @@ class LiveSettings:
     """Which robots get a trial's tree (``SWAPS``)."""
     reference: int = 2
     """How many of the last windows before the fault make the performance to recover (their mean)."""
+    watch: bool = False
+    """After a fault that left the swarm at the target, start the trials at the first later window below it
+    (else nothing changes after such a fault)."""
 
     def __post_init__(self) -> None:
         for name in ("window", "lead", "budget", "reference"):
@@ -117,6 +122,8 @@ class LiveSettings:
                 raise AdaptationError(f"{name} must be a positive whole number, got {value!r}")
         if not (isinstance(self.stop_fraction, int | float) and 0.0 < self.stop_fraction <= 1.0):
             raise AdaptationError(f"stop_fraction must be in (0, 1], got {self.stop_fraction!r}")
+        if not isinstance(self.watch, bool):
+            raise AdaptationError(f"watch must be True or False, got {self.watch!r}")
         if self.swap not in SWAPS:
             raise AdaptationError(f"swap must be one of {', '.join(SWAPS)}, got {self.swap!r}")
 
@@ -171,8 +178,11 @@ class LiveAdaptation:
         self.search: IntelligentTrialAndError | None = None
         self.trial = 0
         self.unchanged = math.nan
-        """The first window's measure after the fault, with the trees it struck."""
+        """The measure of the trees the fault struck that decided: the first window after the fault (with
+        ``watch``, the first later window below the target where the first was at it)."""
         self.stop_reason = ""
+        self.watching = False
+        """A fault left the swarm at the target and ``watch`` is on: a window below it starts the trials."""
         self._pending: tuple[int, tuple[int, ...]] | None = None
 
     @property
@@ -209,6 +219,7 @@ class LiveAdaptation:
         self.faulty = tuple(sorted(int(r) for r in faulty))
         self.fault_step = step
         self.phase, self.trial, self.search, self.stop_reason = "after-fault", 0, None, ""
+        self.watching = False
         self.start = step
 
     def close_window(self, measure: float) -> Swap | None:
@@ -219,19 +230,10 @@ class LiveAdaptation:
         self.windows.append(Window(self.start, self.end, self.phase, self.trial, float(measure)))
         swap = None
         if self.phase == "after-fault":
-            self.unchanged = measure
-            if measure >= self.target:
-                self._stop("the fault left the swarm at the target: nothing to adapt")
-            elif not self._robots():
-                self._stop("no robot to swap: the fault struck none")
-            else:
-                search = IntelligentTrialAndError(self.candidates, self.settings.budget + 1, self.parameters)
-                first = search.ask()  # the repertoire's best, the tree the robots run: measured already
-                if first.tree != self.best.tree:  # the same prior twice: the first in bin order
-                    raise AdaptationError("the search's first pick is not the tree the swarm runs")
-                search.tell(measure)
-                self.search = search
-                swap = self._next_trial()
+            swap = self._begin(measure)
+        elif self.phase == "kept" and self.watching and measure < self.target:
+            self.watching, self.stop_reason = False, ""  # the fault's harm showed late: adapt now
+            swap = self._begin(measure)
         elif self.phase == "trial":
             assert self.search is not None
             self.search.tell(measure)
@@ -245,6 +247,27 @@ class LiveAdaptation:
         if self._pending is not None:  # a fault announced before this window's last answers
             self._strike(*self._pending)
         return swap
+
+    def _begin(self, measure: float) -> Swap | None:
+        """The unchanged trees measured ``measure`` under the fault: the first trial's swap, or none."""
+        self.unchanged = measure
+        if measure >= self.target:
+            self.watching = self.settings.watch
+            self._stop(
+                "the fault left the swarm at the target: "
+                + ("watching for a window below it" if self.watching else "nothing to adapt")
+            )
+            return None
+        if not self._robots():
+            self._stop("no robot to swap: the fault struck none")
+            return None
+        search = IntelligentTrialAndError(self.candidates, self.settings.budget + 1, self.parameters)
+        first = search.ask()  # the repertoire's best, the tree the robots run: measured already
+        if first.tree != self.best.tree:  # the same prior twice: the first in bin order
+            raise AdaptationError("the search's first pick is not the tree the swarm runs")
+        search.tell(measure)
+        self.search = search
+        return self._next_trial()
 
     def swap_refused(self, step: int) -> Swap:
         """The last swap reached a robot too late (it had answered ``step`` already): the same swap again,

@@ -48,7 +48,7 @@ from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
 from bt_controller.draws import root_key
 from bt_controller.errors import TreeError
-from bt_controller.language import Library, parse
+from bt_controller.language import Library, parse, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
 from evolution_manager.evolution.algorithms import Outcome, as_outcome
@@ -117,6 +117,15 @@ def load_candidates(run_dir: Path, objective: str, library: Library | None = Non
     if not best:
         raise AdaptationError(f"the repertoire {path} is empty: nothing to adapt from")
     return [best[index] for index in sorted(best)]
+
+
+def written_out(candidates: Sequence[Candidate], library: Library | None) -> list[Candidate]:
+    """``candidates`` with each tree's primitives of ``library`` written out (the same tree, in text a
+    controller parses without the library: what ``load_tree`` sends to a running robot); as given for a
+    repertoire without a library."""
+    if library is None:
+        return list(candidates)
+    return [Candidate(c.bin, to_text(library.parse(c.tree)), c.prior, c.descriptors) for c in candidates]
 
 
 def repertoire_profile(run_dir: Path) -> str:

@@ -9,7 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from bt_controller.language import library_from_json, parse
 from evolution_manager.adaptation.adapt import adapt
+from evolution_manager.adaptation.adapt_live import main as adapt_live_main
 from evolution_manager.adaptation.search import (
     AdaptationError,
     Candidate,
@@ -19,6 +21,8 @@ from evolution_manager.adaptation.search import (
     RandomPicks,
     load_candidates,
     reevolve,
+    repertoire_setting,
+    written_out,
 )
 from evolution_manager.errors import AskTellError
 from evolution_manager.evolution.deap_trees import ACTIONS
@@ -179,6 +183,45 @@ def test_load_candidates_keeps_each_bins_best_and_refuses_bad_files(tmp_path):
         damaged = [{**SMALL[0], "tree": tree}, *SMALL[1:]]
         with pytest.raises(AdaptationError, match=f"the tree of bin \\[2, 4, 7\\] {reason}"):
             load_candidates(_repertoire_file(tmp_path / f"tree-{tree}", damaged), "food")
+
+
+def test_a_repertoire_of_primitives_is_adapted_from_with_its_trees_written_out(tmp_path, capsys):
+    document = {
+        "format": 1,
+        "primitives": [{"name": "toFood", "tree": "sel(seq(food_left, forward_left), forward)"}],
+    }
+    library = library_from_json(document, "lib.json")
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "library.json").write_text(json.dumps(document))
+    config = RunConfig.make(
+        "qd", "foraging", 50, 0, task="foraging", library="lib.json", library_digest=library.digest
+    )
+    (run / "config.json").write_text(json.dumps(config.to_json()))
+    items = [
+        {"bin": [4, 4, 7], "tree": "sel(seq(got_food, in_nest), toFood)", "descriptors": [0.55, 0.55, 0.9]},
+        {"bin": [7, 0, 0], "tree": "seq(food_left, forward)", "descriptors": [0.9, 0.1, 0.0]},
+    ]
+    items = [{**item, "fitness": 0.9 - k / 2, "evaluation": k} for k, item in enumerate(items)]
+    (run / "repertoire_foraging.json").write_text(json.dumps({"items": items}))
+    with pytest.raises(AdaptationError, match="unknown node 'toFood'"):
+        load_candidates(run, "foraging")  # the primitive's name means nothing without the run's library
+    setting = repertoire_setting(run)
+    named = load_candidates(run, "foraging", setting.library)
+    plain = written_out(named, setting.library)
+    assert [c.tree for c in named] == [item["tree"] for item in items]
+    assert "toFood" not in plain[0].tree and plain[1] == named[1]
+    # the same tree, in text a controller without the library reads (what load_tree sends a robot)
+    assert parse(plain[0].tree) == library.parse(items[0]["tree"])
+    assert [(c.bin, c.prior, c.descriptors) for c in plain] == [
+        (c.bin, c.prior, c.descriptors) for c in named
+    ]
+    assert written_out(named, None) == named
+    # adapt-live takes such a run: it gets past the repertoire to the first check of its options
+    args = ["--repertoire", str(run), "--objective", "foraging", "--faults", "1:ground-stuck"]
+    args += ["--fault-at", "50", "--duration", "10", "--out", str(tmp_path / "live"), "--every", "0"]
+    assert adapt_live_main(args) == 2
+    assert "--fault-at 50.0 s is not before the trial's end" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("profile", ["paper", "clean"])

@@ -2,7 +2,10 @@
 objective, and the state machine goes from the windows before a fault, through the trials Intelligent Trial
 and Error asks for, to the tree that brings the swarm back (or the best tried)."""
 
+import json
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -116,6 +119,25 @@ def test_a_fault_the_swarm_shrugs_off_changes_nothing():
     assert core.phase == "kept" and "nothing to adapt" in core.stop_reason and core.swaps == []
 
 
+def test_watching_a_fault_that_left_the_swarm_at_the_target_adapts_when_its_harm_shows_late():
+    core = _before_fault(LiveAdaptation(CANDIDATES, 3, replace(SETTINGS, watch=True)))
+    core.fault(81, [1])
+    assert core.close_window(0.79) is None and core.swaps == []  # at the target (0.72): nothing yet
+    assert core.phase == "kept" and "watching" in core.stop_reason and core.watching
+    assert core.close_window(0.75) is None and core.swaps == []  # still at the target
+    swap = core.close_window(0.3)  # the harm shows: the trials start as after the fault
+    assert swap is not None and swap.trial == 1 and swap.robots == (1,) and swap.step == 200 + 4
+    assert core.unchanged == 0.3 and core.phase == "trial" and not core.watching and core.stop_reason == ""
+    assert [t.tree for t in core.search.tried] == ["forward"]  # told the late window as the best's fitness
+    assert [(w.phase, w.trial) for w in core.windows[2:]] == [("after-fault", 0), ("kept", 0), ("kept", 0)]
+    assert core.close_window(0.8) is None and core.stop_reason.startswith("recovered at trial 1")
+    assert core.close_window(0.1) is None and core.swaps == [swap]  # once recovered, no more watching
+    unwatched = _before_fault(LiveAdaptation(CANDIDATES, 3, SETTINGS))
+    unwatched.fault(81, [1])
+    assert unwatched.close_window(0.79) is None and unwatched.close_window(0.3) is None
+    assert unwatched.swaps == [] and "nothing to adapt" in unwatched.stop_reason
+
+
 def test_a_fault_before_the_first_window_ended_is_refused_and_a_late_one_drops_the_windows_it_struck():
     core = LiveAdaptation(CANDIDATES, 3, SETTINGS)
     with pytest.raises(AdaptationError, match="before the first window ended"):
@@ -135,7 +157,7 @@ def test_a_swap_that_came_too_late_is_made_again_later_with_its_window():
 
 
 def test_settings_and_measures_are_checked():
-    for bad in ({"window": 0}, {"lead": 1.5}, {"stop_fraction": 0.0}, {"swap": "some"}):
+    for bad in ({"window": 0}, {"lead": 1.5}, {"stop_fraction": 0.0}, {"swap": "some"}, {"watch": 1}):
         with pytest.raises(AdaptationError):
             LiveSettings(**bad)
     with pytest.raises(AdaptationError, match="finite"):
@@ -149,3 +171,86 @@ def test_a_fault_announced_before_the_window_before_it_was_measured_waits_for_th
     assert core.close_window(0.6) is None
     assert [w.end for w in core.windows] == [40, 80] and core.target == pytest.approx(0.63)
     assert (core.phase, core.start, core.faulty) == ("after-fault", 81, (2,))
+
+
+def _live_table(adapted: dict, control: dict) -> list[str]:
+    """The window table of docs/results/adaptation/live-foraging/README.md: each window of the adapted run
+    beside the same window of the control run (the same command, nothing adapted), each as deliveries per
+    robot and as the swarm's deliveries."""
+    robots = adapted["robots"]
+    seconds = adapted["settings"]["window"] / 8  # 8 steps a simulated second
+    bins = {e["trial"]: e["bin"] for e in adapted["events"] if e["kind"] == "swap"}
+    before = len([w for w in adapted["windows"] if w["phase"] == "before-fault"])
+    reference = before - adapted["settings"]["reference"]
+
+    def cell(measure: float) -> str:
+        count = round(measure * robots)
+        assert math.isclose(measure * robots, count)  # the foraging measure: deliveries per robot
+        return f"{measure:.3f} ({count})"
+
+    rows = []
+    for k, (mine, theirs) in enumerate(zip(adapted["windows"], control["windows"], strict=True)):
+        assert (mine["start"], mine["end"]) == (theirs["start"], theirs["end"])
+        span = f"{(mine['start'] - 1) / 8:g}-{mine['end'] / 8:g}"
+        phase, trial = mine["phase"], mine["trial"]
+        if phase == "before-fault":
+            label, trees = (
+                ("before the fault (the reference)" if k >= reference else "before the fault"),
+                "best",
+            )
+        elif phase == "after-fault":
+            label, trees = "after the fault", "best"
+        elif phase == "trial":
+            label, trees = f"trial {trial}", f"bin {bins[trial]}"
+        else:
+            label, trees = "kept", f"bin {bins[trial]} (trial {trial})"
+        rows.append(f"| {span} | {label} | {trees} | {cell(mine['measure'])} | {cell(theirs['measure'])} |")
+        assert mine["end"] - mine["start"] + 1 == seconds * 8
+    after = [k for k, w in enumerate(adapted["windows"]) if w["phase"] == "kept"]
+    means = [np.mean([run["windows"][k]["measure"] for k in after]) for run in (adapted, control)]
+    rows.append(f"| mean of the {len(after)} kept windows | | | {means[0]:.3f} | {means[1]:.3f} |")
+    totals = [round(sum(w["measure"] for w in run["windows"]) * robots) for run in (adapted, control)]
+    rows.append(f"| the whole trial (every window) | | | {totals[0]} deliveries | {totals[1]} deliveries |")
+    return rows
+
+
+def _seed_row(run: dict) -> str:
+    """One row of the README's table of seeds: the run's kind, the reference, the window after the fault, the
+    trees tried, why it stopped, the mean of its last 10 windows (320-720 s) and its deliveries."""
+    robots = run["robots"]
+    kind = "control" if run["settings"]["stop_fraction"] < 0.5 else "adapted"
+    kind += ", --watch" if run["settings"].get("watch") else ""
+    kind += ", --swap all" if run["settings"]["swap"] == "all" else ""
+    before = [w["measure"] for w in run["windows"] if w["phase"] == "before-fault"]
+    reference = float(np.mean(before[-run["settings"]["reference"] :]))
+    after = next(w["measure"] for w in run["windows"] if w["phase"] == "after-fault")
+    tried = ", ".join(str(e["bin"]) for e in run["events"] if e["kind"] == "swap" and e["trial"]) or "none"
+    last = float(np.mean([w["measure"] for w in run["windows"][-10:]]))
+    total = round(sum(w["measure"] for w in run["windows"]) * robots)
+    return (
+        f"| {run['seed']} | {kind} | {reference:.3f} | {after:.3f} | {tried} | {run['stopped']} | "
+        f"{last:.3f} | {total} |"
+    )
+
+
+def test_the_committed_live_foraging_readmes_table_is_its_adaptation_live_json():
+    """docs/results/adaptation/live-foraging: the README's windows, phases, trees and measures, the adapted
+    run's beside the control's, recomputed from the two adaptation_live.json; the control ran the same trial
+    to the fault and kept the repertoire's best tree."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "adaptation" / "live-foraging"
+    adapted = json.loads((folder / "adaptation_live.json").read_text())
+    control = json.loads((folder / "control" / "adaptation_live.json").read_text())
+    readme = (folder / "README.md").read_text()
+    for row in _live_table(adapted, control):
+        assert row in readme, row
+    windows = [(w["measure"], w["phase"]) for w in adapted["windows"]]
+    first_swap = min(e["step"] for e in adapted["events"] if e["kind"] == "swap")
+    same = [w for w in adapted["windows"] if w["end"] < first_swap]
+    assert [w["measure"] for w in same] == [w["measure"] for w in control["windows"][: len(same)]]
+    assert control["trials_used"] == 0 and "nothing to adapt" in control["stopped"]
+    assert adapted["stopped"] in readme and windows[-1][1] == "kept"
+    assert f"target {adapted['target']:.3f}" in readme
+    runs = sorted(folder.glob("**/adaptation_live.json"))
+    assert len(runs) == 7
+    for path in runs:
+        assert _seed_row(json.loads(path.read_text())) in readme, path
