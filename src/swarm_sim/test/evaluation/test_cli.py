@@ -35,7 +35,7 @@ def test_stdout_is_one_json_object_and_byte_identical_for_a_seed():
     assert document["tree"] == "sel(seq(in_nest, stop), forward)"
     assert (document["seed"], document["trials"]) == (5, 4)
     names = ["density", "nest", "food", "idensity", "inest", "ifood", "foraging", "aggregation"]
-    names += ["foraging1", "foraging2", "foraging3", "foraging_biased"]
+    names += ["foraging1", "foraging2", "foraging3", "foraging_biased", "foraging_balanced"]
     assert list(document["fitness"]) == names
     assert list(document["descriptors"]) == ["movement", "rotation", "conditionality"]
 
