@@ -55,8 +55,9 @@ class ToyEvaluator:
         foraging = (words["got_food"] + words["forward_right"]) / total
         aggregation = (words["robot_left"] + words["robot_right"]) / total
         fitness = tuple(min(1.0, 0.5 * v + n) for v in (density, nest, food, *inverse, foraging, aggregation))
-        # one kind of food: foraging1 and foraging_biased are foraging, foraging2 and foraging3 none
-        fitness += (fitness[6], 0.0, 0.0, fitness[6])
+        # one kind of food: foraging1, foraging_biased and foraging_balanced are foraging, foraging2 and
+        # foraging3 none
+        fitness += (fitness[6], 0.0, 0.0, fitness[6], fitness[6])
         a = max(1, actions)
         movement = 0.5 + 0.5 * (words["forward"] - words["reverse"]) / a
         rotation = (
