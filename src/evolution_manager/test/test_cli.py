@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import evolution_manager.studies.evolve as evolve_command
 from evolution_manager.studies.evolve import evolve
 from swarm_ros.isolation import Workspace
 from swarm_sim.model import VALUE_NAMES
@@ -331,3 +332,20 @@ def csv_rows(path: Path) -> list[dict[str, str]]:
 
     with path.open(newline="") as handle:
         return list(csv.DictReader(handle))
+
+
+def test_an_interrupt_after_the_run_is_made_and_before_it_executes_says_how_to_continue(
+    tmp_path, capsys, monkeypatch
+):
+    # a SIGTERM that lands between Run.start and the protected execution (here: while the progress bar is
+    # made) used to kill the process with no word; it is now the one line of any other interrupt
+    def interrupted(*_args, **_kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(evolve_command, "progress_bar", interrupted)
+    out = tmp_path / "run"
+    status = evolve(["--algorithm", "gp", "--objective", "nest", "--evaluations", "40", "--out", str(out)])
+    assert status == 130
+    assert (out / "config.json").exists()
+    said = capsys.readouterr().err.strip()
+    assert said == f"evolve: interrupted; continue with: evolve --out {out} --resume"

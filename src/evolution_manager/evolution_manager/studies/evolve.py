@@ -176,17 +176,29 @@ def _refuse_a_started_run(out: Path) -> None:
 
 def evolve(argv: Sequence[str] | None = None) -> int:
     """Run ``evolve``; return the exit status."""
-    with ExitStack() as stack:  # the cluster's client, open until the results are written
-        status = _evolve(argv, stack)
+    given: dict[str, Path] = {}  # the run directory, once the options are read
+    # Ctrl-C and SIGTERM raise from the start, so that one arriving between the steps that answer it
+    # themselves (after a run directory is made, before the run executes) still ends in one line; the
+    # stack holds the cluster's client, open until the results are written
+    with ExitStack() as stack, signals_as_interrupts():
+        try:
+            status = _evolve(argv, stack, given)
+        except KeyboardInterrupt as interruption:
+            out = given.get("out")
+            if out is not None and (out / "config.json").exists():
+                print(f"evolve: interrupted; continue with: evolve --out {out} --resume", file=sys.stderr)
+            else:
+                print("evolve: interrupted before the run started; nothing was written", file=sys.stderr)
+            status = exit_status(interruption)
     return status
 
 
-def _evolve(argv: Sequence[str] | None, stack: ExitStack) -> int:
+def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]) -> int:
     started = time.time()
     out: Path | None = None  # known once the options are read
     try:
         args = build_parser().parse_args(argv)
-        out = args.out
+        out = given["out"] = args.out
         cluster = settings_from_args(args)
         check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
         if _teams_asked(args):
