@@ -52,14 +52,12 @@ from evolution_manager.arguments import (
     seed_in_range,
 )
 from evolution_manager.errors import AnimationError, EvolutionError, GraphError, TrialFailedError, UsageError
-from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.files import write_json
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError
 from swarm_ros.safe_paths import refuse_links
 from swarm_sim.errors import ConfigError
 from swarm_sim.model import Config, parse_fault_pairs
-from swarm_sim.tasks import DEFAULT_TASK, resolve_task
 
 RESULT = "adaptation_live.json"
 BAG = "live.bag"
@@ -115,10 +113,7 @@ def live_adaptation(args: argparse.Namespace) -> dict[str, object]:
     candidates = written_out(
         load_candidates(args.repertoire, args.objective, setting.library), setting.library
     )
-    try:
-        task = resolve_task(RunDirectory(args.repertoire).read_config().task or DEFAULT_TASK)
-    except EvolutionError as error:
-        raise UsageError(f"--repertoire {args.repertoire}: {error}") from None
+    task = setting.config.task
     base = task.config(profile)
     robots = args.robots or base.n_robots
     ticks = max(1, round(args.duration / (base.steps_per_tick * base.step_dt)))

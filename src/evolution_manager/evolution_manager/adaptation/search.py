@@ -128,15 +128,6 @@ def written_out(candidates: Sequence[Candidate], library: Library | None) -> lis
     return [Candidate(c.bin, to_text(library.parse(c.tree)), c.prior, c.descriptors) for c in candidates]
 
 
-def repertoire_profile(run_dir: Path) -> str:
-    """The model profile the repertoire in ``run_dir`` was evolved under (its ``config.json``): adaptation
-    runs the changed world on the same model."""
-    try:
-        return RunDirectory(Path(run_dir)).read_config().profile
-    except EvolutionError as error:
-        raise AdaptationError(f"{run_dir} is not a run directory: {error}") from None
-
-
 @dataclass(frozen=True)
 class RepertoireSetting:
     """What a repertoire was evolved in, which adaptation keeps: the run's configuration (its profile, task,

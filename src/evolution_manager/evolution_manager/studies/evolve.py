@@ -167,10 +167,14 @@ def _evaluator(
         raise UsageError(f"--workers: {error}") from None
 
 
+def _holds_a_run(out: Path) -> bool:
+    """Whether ``out`` holds a run (its ``config.json``, written when the run directory is made)."""
+    return (Path(out) / "config.json").exists()
+
+
 def _refuse_a_started_run(out: Path) -> None:
-    """Raise ``UsageError`` when ``out`` holds a run already (its ``config.json``): a new run is never
-    started over it."""
-    if (Path(out) / "config.json").exists():
+    """Raise ``UsageError`` when ``out`` holds a run already: a new run is never started over it."""
+    if _holds_a_run(out):
         raise UsageError(f"{out} already holds a run: add --resume to continue it, or use another --out")
 
 
@@ -185,7 +189,7 @@ def evolve(argv: Sequence[str] | None = None) -> int:
             status = _evolve(argv, stack, given)
         except KeyboardInterrupt as interruption:
             out = given.get("out")
-            if out is not None and (out / "config.json").exists():
+            if out is not None and _holds_a_run(out):
                 print(f"evolve: interrupted; continue with: evolve --out {out} --resume", file=sys.stderr)
             else:
                 print("evolve: interrupted before the run started; nothing was written", file=sys.stderr)
@@ -235,8 +239,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]
             _refuse_a_started_run(args.out)
             assert config is not None  # made from the options when not resuming
             library = library_from_args(args)
-        with signals_as_interrupts():  # Ctrl-C or SIGTERM while waiting for a cluster's workers: one line
-            client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
+        # Ctrl-C or SIGTERM while waiting for a cluster's workers: one line (the handler is evolve's)
+        client = stack.enter_context(open_client(cluster, say=lambda line: print(line, file=sys.stderr)))
         evaluator = _evaluator(args.workers, config, library, client)
         if args.resume:
             run = Run.resume(args.out, evaluator)
@@ -353,14 +357,13 @@ def _execute(
 
     command = "ws/run evolution_manager evolve " + " ".join(argv if argv is not None else sys.argv[1:])
     resume = f"continue with: evolve --out {args.out} --resume"
-    try:
-        with signals_as_interrupts():
-            record_session(args.out, started, command, cluster)
-            run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
-            if bar is not None:
-                bar.close()
-            write()
-            record_session(args.out, started, command, cluster)
+    try:  # Ctrl-C and SIGTERM raise here as anywhere in evolve (its signals_as_interrupts)
+        record_session(args.out, started, command, cluster)
+        run.execute(on_batch=on_batch, checkpoint_interval=args.checkpoint_every)
+        if bar is not None:
+            bar.close()
+        write()
+        record_session(args.out, started, command, cluster)
     except KeyboardInterrupt as interruption:  # Ctrl-C or SIGTERM: the last checkpoint holds the run
         if bar is not None:
             bar.close()
