@@ -32,6 +32,7 @@ import statistics
 import sys
 from collections.abc import Sequence
 
+from swarm_ros.safe_paths import UnsafePathError, check_output, replace_file
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, SwarmLayout
 from swarm_sim.roads import record_trial
@@ -232,13 +233,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, name) < least:
             parser.error(f"--{name} must be at least {least}, got {getattr(args, name)}")
     try:
+        # before measuring: a link, a folder or a place under a file is refused (a file is replaced)
+        if args.out:
+            check_output(args.out, force=True)
         rows = measure(args.task, args.seeds, args.trials, args.threads)
-    except TaskError as error:
+    except (TaskError, UnsafePathError) as error:
         print(f"division-bench: error: {error}", file=sys.stderr)
         return 2
     if args.out:
-        with open(args.out, "w", newline="") as handle:
-            handle.write(rows_csv(rows))
+        text = rows_csv(rows)
+        replace_file(args.out, lambda temporary: temporary.write_text(text))
     sys.stdout.write(table(rows))
     if args.estimates:
         sys.stdout.write("\n" + estimates_lines(args.task))

@@ -92,3 +92,14 @@ def test_a_task_of_one_food_kind_is_refused_in_one_line():
     assert "needs a task with 3 food kinds, got 'foraging'" in done.stderr
     with pytest.raises(SystemExit):
         division.main(["--seeds", "1"])
+
+
+def test_an_out_that_is_a_link_is_refused_before_measuring_and_nothing_is_written(tmp_path, capsys):
+    elsewhere = tmp_path / "elsewhere.csv"
+    elsewhere.write_text("kept\n")
+    link = tmp_path / "rows.csv"
+    link.symlink_to(elsewhere)
+    assert division.main(["--seeds", "2", "--trials", "1", "--out", str(link)]) == 2
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and said.startswith("division-bench: error: --out") and "link" in said
+    assert elsewhere.read_text() == "kept\n" and link.is_symlink()
