@@ -7,11 +7,11 @@ Each adaptation trial evaluates one tree of the repertoire in the changed world 
 ``swarm_sim.model.conditions``), every tree on the same scenario (``--seed``), so ``ws/run swarm_sim evaluate
 --tree T --seed S --condition ...`` reproduces any fitness it reports. ``--graph`` runs each trial through the
 node graph instead (the simulator node in the changed world and one controller node per robot, each tree
-loaded with ``load_tree``), recording every simulated trial to a bag under ``DIR/bags/``; it chooses the same
-tree with the same fitness as the batch road. ``--per-robot`` adapts only the robots the condition strikes
-(``search.CompositionEvaluation``: they share the tried tree, the others keep the repertoire's best). The
-changed world is the repertoire's own (its task under its profile, its trees built with its library), so a
-foraging repertoire adapts as a primitive's does.
+loaded with ``load_tree``, a library's primitives written out in it), recording every simulated trial to a
+bag under ``DIR/bags/``; it chooses the same tree with the same fitness as the batch road. ``--per-robot``
+adapts only the robots the condition strikes (``search.CompositionEvaluation``: they share the tried tree,
+the others keep the repertoire's best). The changed world is the repertoire's own on every road (its task
+under its profile, its trees built with its library), so a foraging repertoire adapts as a primitive's does.
 
 Writes ``DIR/adaptation.json`` (the chosen ``tree`` and its ``fitness``, ``tried``: every tried tree with its
 fitness in order, ``seed``, ``conditions``, why it stopped, the parameters) and ``DIR/adaptation.png`` (the
@@ -38,6 +38,7 @@ from evolution_manager.adaptation.search import (
     load_candidates,
     repertoire_setting,
     run_picker,
+    written_out,
 )
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seed_int
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
@@ -191,6 +192,8 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         except EvolutionError as error:
             raise UsageError(str(error)) from None
         candidates = load_candidates(args.repertoire, args.objective, setting.library)
+        if args.graph:  # the controller nodes read no library: the primitives go to them written out
+            candidates = written_out(candidates, setting.library)
         for name in (RESULT, FIGURE):  # a planted link is refused before any trial, never written through
             try:
                 refuse_links(args.out / name)
@@ -224,7 +227,8 @@ def adapt(argv: Sequence[str] | None = None) -> int:
         # rclpy: adaptation is ROS-free but --graph
         from evolution_manager.graph.graph_evaluator import graph_evaluator
 
-        with graph_evaluator(args.condition, args.out / "bags", profile=profile) as graph:
+        bags, task = args.out / "bags", setting.config.task
+        with graph_evaluator(args.condition, bags, profile=profile, task=task) as graph:
             run_picker(search, ConditionEvaluation(graph, args.seed, args.trials), args.objective, show)
     elif args.per_robot:
         top = max(candidates, key=lambda c: c.prior)

@@ -13,6 +13,7 @@ from swarm_ros.safe_paths import make_folder
 from swarm_sim.core import combine
 from swarm_sim.evaluation import EvaluationRequest, EvaluationResult, from_values
 from swarm_sim.model import DEFAULT
+from swarm_sim.tasks import TaskSpec
 
 
 class GraphEvaluator:
@@ -44,10 +45,12 @@ def graph_evaluator(
     bags: Path | None,
     timeout: float = 120.0,
     profile: str = DEFAULT.profile,
+    task: TaskSpec | str | None = None,
 ) -> Iterator[GraphEvaluator]:
-    """A node graph of the model's ``profile`` in the changed world (``conditions``), started for the block,
-    as an evaluator whose trials are recorded under ``bags`` when given."""
-    with TrialGraph(conditions=conditions, timeout=timeout, profile=profile) as graph:
+    """A node graph of the model's ``profile`` on ``task`` (its name or spec; None: the primitives' task) in
+    the changed world (``conditions``), started for the block, as an evaluator whose trials are recorded
+    under ``bags`` when given."""
+    with TrialGraph(conditions=conditions, timeout=timeout, profile=profile, task=task) as graph:
         if bags is not None:
             make_folder(bags)
         yield GraphEvaluator(graph, bags)
