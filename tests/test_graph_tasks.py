@@ -49,17 +49,27 @@ TYPES = replace(
 )
 """The authors' two robot types (arena 7, localised starts): the odd robots' swapped ground and messages are
 made on the simulator's side, so the graph's controllers run unchanged and the bag's world says the types."""
+CARRIERS = replace(
+    task_named("multifood-arena6-carriers"),
+    trials=Trials(ticks=14, chain_trials=2),
+    robots=replace(task_named("multifood-arena6-carriers").robots, count=5, start_half_size=800.0),
+)
+"""Robot groups that pick up one kind each (ids 0-1 food, 2-3 food2, 4 food3 of five): the simulator node
+takes the groups as a parameter and tells each controller where it stands for picking up food
+(``Readings.footing``, the ground message's ``footing``), so the controllers run unchanged."""
 TREE = "sel(seq(got_food, nest_left, forward_left), seq(food_right, forward_right), forward)"
 KINDS_TREE = (
     "sel(seq(sel(got_food1, got_food2, got_food3), sel(seq(nest_left, forward_left), seq(nest_right, "
     "forward_right), forward)), sel(seq(food_left2, forward_left), seq(food_right3, forward_right), forward))"
 )
+CARRY_TREE = "sel(seq(got_food1, forward_left), seq(got_food2, forward_right), forward)"
+"""A tree whose moves follow what a robot carries, so that a pick-up the groups forbid would show."""
 
 
 @pytest.mark.parametrize(
     ("task", "tree"),
-    [(SMALL, TREE), (DISCS, TREE), (KINDS, KINDS_TREE), (TYPES, TREE)],
-    ids=["small", "discs", "kinds", "types"],
+    [(SMALL, TREE), (DISCS, TREE), (KINDS, KINDS_TREE), (TYPES, TREE), (CARRIERS, CARRY_TREE)],
+    ids=["small", "discs", "kinds", "types", "carriers"],
 )
 def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_from_its_bag(
     task, tree, tmp_path
@@ -73,6 +83,11 @@ def test_an_edited_task_runs_through_the_graph_as_on_the_batch_road_and_replays_
     _, records = evaluator.evaluate_trials([EvaluationRequest(tree, seed, trial + 1)])[0]
     assert record.values == records[trial].values
     assert np.array_equal(record.end_poses, records[trial].end_poses)
+    if task.robots.carries:  # the groups change this trial: a graph that ignored them would differ
+        free = BatchEvaluator(replace(config, carries=())).evaluate_trials(
+            [EvaluationRequest(tree, seed, trial + 1)]
+        )
+        assert not np.array_equal(record.end_poses, free[0][1][trial].end_poses)
     replay = verify_trial_bag(bag)
     assert replay.reproduced, replay
     frames = frames_from_bag(bag)

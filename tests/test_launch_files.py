@@ -142,6 +142,7 @@ def test_the_parameter_files_hold_the_defaults():
     expected["layout"] = ""  # no layout: the papers' arena (the parameter holds a layout's JSON text)
     # one robot type: a parameter all the same, which as_dict leaves out so that files read as before types
     expected["robot_types"] = DEFAULT.robot_types
+    expected["carries"] = ""  # every robot carries every kind (the parameter holds the groups' JSON text)
     assert {k: v for k, v in world.items() if k in expected} == expected
     assert world["answer_timeout"] == 60.0
     controller = yaml.safe_load(package_config("bt_controller").read_text())["/**"]["ros__parameters"]

@@ -17,7 +17,12 @@ world's, not the tree's) and delivers all it carries in the nest.
 
 Writes one CSV row per swarm and seed (the evaluation's mean per trial of ``foraging_balanced``, ``foraging``
 and the deliveries of each kind per robot); prints :func:`table` (mean and standard error over the seeds,
-and the ratio of each heterogeneous swarm's ``foraging_balanced`` to the best homogeneous swarm's).
+and the ratio of each heterogeneous swarm's ``foraging_balanced`` to the best homogeneous swarm's) and
+:func:`paired_table` (each heterogeneous swarm against the best homogeneous one seed by seed: a seed is the
+same scenario for every swarm, its start poses, wheel gains and message losses). On
+``multifood-arena6-carriers`` (``robots.carries``: robot i picks up only food kind i * 3 // 9 + 1) the
+specialists' groups are the task's, so each specialist seeks the one kind it can carry, while a homogeneous
+swarm's robots seek kinds that two thirds of them cannot pick up.
 ``--estimates`` also prints, for the wanderer and the specialists, how often a robot knows where each kind
 is (:func:`estimate_shares`).
 """
@@ -31,6 +36,8 @@ import math
 import statistics
 import sys
 from collections.abc import Sequence
+
+import numpy as np
 
 from swarm_ros.safe_paths import UnsafePathError, check_output, replace_file
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
@@ -197,6 +204,61 @@ def table(rows: Sequence[dict[str, str]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+PAIRED_COLUMNS: tuple[str, ...] = ("foraging", "foraging_balanced")
+"""The objectives :func:`paired_table` compares."""
+BOOTSTRAP_RESAMPLES = 10_000
+BOOTSTRAP_SEED = 36
+"""The paired intervals' resamples and generator seed (issue 36), so that a table is recomputed exactly."""
+LEVEL = 0.95
+
+
+def paired(differences: Sequence[float], rng: np.random.Generator) -> tuple[float, float, float, float]:
+    """The mean of per-seed ``differences``, its percentile bootstrap interval at :data:`LEVEL` (the seeds
+    resampled with replacement, :data:`BOOTSTRAP_RESAMPLES` times, from ``rng``) and the two-sided Wilcoxon
+    signed-rank p-value (zero differences dropped; 1.0 when every difference is zero)."""
+    from scipy.stats import wilcoxon  # only the paired table needs scipy (a slow import)
+
+    data = np.asarray(differences, dtype=float)
+    picks = rng.integers(0, len(data), size=(BOOTSTRAP_RESAMPLES, len(data)))
+    tail = (1.0 - LEVEL) / 2.0
+    low, high = np.quantile(data[picks].mean(axis=1), [tail, 1.0 - tail])
+    p = 1.0 if not data.any() else float(wilcoxon(data).pvalue)
+    return float(data.mean()), float(low), float(high), p
+
+
+def paired_table(rows: Sequence[dict[str, str]]) -> str:
+    """The Markdown table of each heterogeneous swarm against the best homogeneous swarm (highest mean) on
+    each of :data:`PAIRED_COLUMNS`, seed by seed (:func:`paired`): the mean difference, its 95 % bootstrap
+    interval and the Wilcoxon p-value. One generator (:data:`BOOTSTRAP_SEED`) draws every interval, in the
+    table's order."""
+    names = list(dict.fromkeys(row["swarm"] for row in rows))
+    composition = {row["swarm"]: row["composition"] for row in rows}
+    by_seed = {(row["swarm"], row["seed"]): row for row in rows}
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    lines = [
+        "| swarm | objective | best homogeneous | mean difference | 95 % CI | Wilcoxon p |",
+        "|---|---|---|---|---|---|",
+    ]
+    for column in PAIRED_COLUMNS:
+        homogeneous = [n for n in names if composition[n] == "homogeneous"]
+        best = max(
+            homogeneous,
+            key=lambda n: statistics.mean(float(r[column]) for r in rows if r["swarm"] == n),
+        )
+        for name in (n for n in names if composition[n] != "homogeneous"):
+            seeds = [row["seed"] for row in rows if row["swarm"] == name]
+            if {row["seed"] for row in rows if row["swarm"] == best} != set(seeds):
+                raise ValueError(f"{name} and {best} were not run on the same seeds: no pairs to compare")
+            differences = [
+                float(by_seed[name, seed][column]) - float(by_seed[best, seed][column]) for seed in seeds
+            ]
+            mean, low, high, p = paired(differences, rng)
+            lines.append(
+                f"| {name} | {column} | {best} | {mean:+.3f} | [{low:+.3f}, {high:+.3f}] | {p:.3g} |"
+            )
+    return "\n".join(lines) + "\n"
+
+
 def read_rows(text: str) -> list[dict[str, str]]:
     """The rows of a CSV the benchmark wrote."""
     return list(csv.DictReader(io.StringIO(text)))
@@ -244,6 +306,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         text = rows_csv(rows)
         replace_file(args.out, lambda temporary: temporary.write_text(text))
     sys.stdout.write(table(rows))
+    sys.stdout.write("\n" + paired_table(rows))
     if args.estimates:
         sys.stdout.write("\n" + estimates_lines(args.task))
     return 0

@@ -610,7 +610,8 @@ def _steps(
                 if typed:
                     world.swap_ground(i, p, here[i])
                 for f in range(kinds):
-                    carrying[i, f] = world.start_carrying(carrying[i, f], here[i, f + 1])
+                    on_food = here[i, f + 1] and world.can_carry(i, f, p)  # only the kinds it can carry
+                    carrying[i, f] = world.start_carrying(carrying[i, f], on_food)
                 world.take_probes(x, y, i, entry, probes, 0, p)
         if sensing:
             for i in range(n):
@@ -618,10 +619,12 @@ def _steps(
                 world.ground(x[i], y[i], entry, inside)
                 if typed:
                     world.swap_ground(i, p, inside)
-                # Food is picked up and delivered where the robot is; a ground fault then changes only what
-                # it reads (its estimates and conditions: perception.Readings.footing).
+                # Food is picked up and delivered where the robot is (a kind of those its group can carry:
+                # world.can_carry); a ground fault then changes only what it reads (its estimates and
+                # conditions: perception.Readings.footing).
                 for f in range(kinds):
-                    carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], inside[f + 1])
+                    on_food = inside[f + 1] and world.can_carry(i, f, p)  # only the kinds it can carry
+                    carrying[i, f], delivered = world.carry(carrying[i, f], inside[0], on_food)
                     deliveries[i, f] += 1 if delivered else 0
                 if faulty:
                     world.faulty_ground(faults[i], inside)

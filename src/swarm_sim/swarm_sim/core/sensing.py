@@ -37,7 +37,10 @@ def sense_swarm(
     robot types (``p.robot_types``) each odd robot's ground, the messages it receives and those it sends
     have the nest and food kind 1 swapped (``world.swap_ground``, ``swap_received``, ``swap_sent``). A robot
     whose ground sensor is faulty reads the faulty ground (``world.faulty_ground``) and is also told where it
-    really stands (``Readings.footing``: the ground after the swap), where it picks up and delivers food."""
+    really stands (``Readings.footing``: the ground after the swap), where it picks up and delivers food. So
+    is a robot whose group cannot carry every food kind (``Config.carries``): its footing is the ground after
+    the swap with the kinds it cannot carry cleared (``world.clear_uncarried``), so that it senses them but
+    never picks them up."""
     n = x.shape[0]
     regions = broadcast.shape[1]
     if faults is None:
@@ -64,7 +67,10 @@ def sense_swarm(
         inside = np.zeros(regions, dtype=np.bool_)
         world.ground(x[i], y[i], entry, inside)
         world.swap_ground(i, p, inside)
-        footing = inside.copy() if fault in GROUND_FAULTS else None
+        footing = None
+        if fault in GROUND_FAULTS or any(not world.can_carry(i, f, p) for f in range(regions - 1)):
+            footing = inside.copy()
+            world.clear_uncarried(i, p, footing)  # the kinds it cannot carry (none: left as it is)
         world.faulty_ground(fault, inside)
         out.append(
             Readings(

@@ -4,7 +4,8 @@
 (a) physics: ``place_robots``, ``wheel_gains``, ``drive``, ``new_dynamics``, ``physics_step``;
 (b) message delivery and ground sensing: ``ground``, ``occluded``, ``sense_step``, ``bearing``; the robot
 types that swap the nest and food kind 1 for odd robots (``Config.robot_types``): ``swaps_regions``,
-``swap_ground``, ``swap_sent``, ``swap_received``; and the per-robot faults that change them
+``swap_ground``, ``swap_sent``, ``swap_received``; the robot groups that pick up only some food kinds
+(``Config.carries``): ``can_carry``, ``clear_uncarried``; and the per-robot faults that change them
 (``swarm_sim.model.faults``): ``faulty_wheels``, ``faulty_ground``, ``deafen``, ``faulty_bearing``,
 ``disrupt``;
 (c) one robot's view from its own readings (from ``bt_controller.robot.perception``, inlined): ``estimate``,
@@ -42,6 +43,7 @@ from swarm_sim.model import (
 )  # re-exported: the values' order, for world.X readers
 from swarm_sim.model import VALUE_NAMES as VALUE_NAMES
 from swarm_sim.model.config import (
+    CARRY_KIND_BITS,
     FORMATION_LATTICE,
     FORMATION_LOCALISED,
     FORMATION_MARGIN,
@@ -804,6 +806,29 @@ def swap_received(counts: np.ndarray, values: np.ndarray, p: Params) -> None:
 # Per-robot faults (``swarm_sim.model.faults``): ``faults`` holds each robot's fault code (0: none). Each
 # function changes only the faulty robots' values, after the fault-free computation, so every other robot's
 # values are those of a world without faults.
+
+
+# Robot groups that pick up only some food kinds (``Config.carries``; ``docs/model.md``, "Robot types"): robot
+# i is in group i * groups // n, and a group's kinds are bits of ``Params.carry_masks``. A pick-up rule, not a
+# perception one: a robot on a kind it cannot carry senses it as any other, and does not pick it up.
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def can_carry(i: int, f: int, p: Params) -> bool:
+    """Whether robot ``i`` picks up food kind ``f + 1`` (region ``f + 1``): always without groups."""
+    if p.carry_groups == 0:
+        return True
+    group = i * p.carry_groups // p.n_robots
+    return (p.carry_masks >> (CARRY_KIND_BITS * group + f)) & 1 == 1
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def clear_uncarried(i: int, p: Params, standing: np.ndarray) -> None:
+    """Where robot ``i`` stands for picking up food (``standing``, regions), in place: the food kinds it
+    cannot carry cleared (``can_carry``)."""
+    for f in range(standing.shape[0] - 1):
+        if not can_carry(i, f, p):
+            standing[f + 1] = False
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -16,7 +16,15 @@ from swarm_sim.model.arenas import (
     scatter_points,
 )
 from swarm_sim.model.conditions import CONDITION_NAMES, apply_conditions, condition_texts
-from swarm_sim.model.config import DEFAULT, Config, Params, config_from_dict, default_config
+from swarm_sim.model.config import (
+    DEFAULT,
+    Config,
+    Params,
+    carries_from_text,
+    carries_to_text,
+    config_from_dict,
+    default_config,
+)
 from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
 from swarm_sim.model.faults import FAULT_KINDS, fault_kinds_of, parse_fault_pairs
 from swarm_sim.model.objectives import (
@@ -78,6 +86,8 @@ __all__ = [
     "SwarmLayout",
     "apply_conditions",
     "arena_entries",
+    "carries_from_text",
+    "carries_to_text",
     "concentric",
     "condition_texts",
     "config_from_dict",

@@ -9,6 +9,7 @@ Units: millimetres, seconds, radians.
 from __future__ import annotations
 
 import functools
+import json
 import math
 from dataclasses import dataclass, fields, replace
 from typing import Any, NamedTuple
@@ -28,6 +29,7 @@ from swarm_sim.errors import ConfigError
 from swarm_sim.model.faults import CONFIG_FIELDS as FAULT_FIELDS
 from swarm_sim.model.faults import check_faults
 from swarm_sim.model.regions import (
+    REGION_KINDS,
     ArenaEntry,
     Layout,
     check_layout,
@@ -54,6 +56,11 @@ DEFAULT_GAPS = (500.0, 700.0)
 ROBOT_TYPES: tuple[int, ...] = (1, 2)
 """The values of ``Config.robot_types``: 1, every robot perceives the regions as they are; 2, the authors'
 two robot types (``docs/model.md``, "Robot types")."""
+CARRY_KIND_BITS = 3
+"""Bits per robot group in ``Params.carry_masks``: bit f of group g's bits says whether the group picks up
+food kind f + 1 (``world.can_carry``)."""
+MAX_CARRY_GROUPS = 63 // CARRY_KIND_BITS
+"""The most robot groups ``Config.carries`` may have: their masks fill one int64 (``Params.carry_masks``)."""
 
 
 class Params(NamedTuple):
@@ -97,6 +104,10 @@ class Params(NamedTuple):
     other_food_weight: float
     authors_code: int
     robot_types: int
+    carry_groups: int
+    """``len(Config.carries)``: 0, every robot picks up every kind."""
+    carry_masks: int
+    """Each group's food kinds, ``CARRY_KIND_BITS`` bits a group (``carry_masks``)."""
 
 
 _INT_MINIMUM = {
@@ -223,6 +234,12 @@ class Config:
     and food kind 1 the other way round, on its ground sensor, in the estimates it receives and in those it
     broadcasts, and in its true food distance (the probe); one tree serves both types (``docs/model.md``,
     "Robot types")."""
+    carries: tuple[tuple[str, ...], ...] = ()
+    """Which food kinds each group of robots can pick up: one entry per group, each the names of the food
+    kinds (``food``, ``food2``, ``food3``) its robots pick up (an empty entry: robots that carry nothing).
+    Robot i belongs to group ``i * len(carries) // n_robots`` (contiguous blocks of ids). A robot standing on
+    a kind it cannot carry still senses it (ground sensor, estimates, conditions) but does not pick it up
+    (``world.can_carry``; ``docs/model.md``, "Robot types"). Empty: every robot picks up every kind."""
     fault_rate: float = 0.0
     """Per-robot faults (``swarm_sim.model.faults``): each robot is faulty with this probability, drawn per
     evaluation seed (``trial_data.robot_faults``); 0: none."""
@@ -332,6 +349,10 @@ class Config:
                 return bool(self.occlusion)
             if name == "regions":
                 return self.regions
+            if name == "carry_groups":
+                return len(self.carries)
+            if name == "carry_masks":
+                return carry_masks(self.carries)
             return (int if name in _INT_MINIMUM else float)(getattr(self, name))
 
         return Params._make(field(f) for f in Params._fields)
@@ -350,6 +371,10 @@ class Config:
                 continue  # no faults: written as before faults
             if f.name == "robot_types" and value == f.default:
                 continue  # one type: written as before robot types
+            if f.name == "carries":
+                if not value:
+                    continue  # every robot carries every kind: written as before carries
+                value = [list(group) for group in value]
             if f.name == "fault_robots":
                 value = [list(pair) for pair in value]
             out[f.name] = list(value) if isinstance(value, tuple) else value
@@ -446,6 +471,7 @@ def _validate(c: Config) -> None:
             f"got {c.initial_step}"
         )
     _validate_formation(c)
+    check_carries(c.carries, c.food_kinds, c.n_robots)
     if c.preferred_food > food_kinds(c.layout):
         raise ConfigError(
             f"preferred_food must be 0 (none) or a food kind of the arena, 1 to {food_kinds(c.layout)}, "
@@ -461,6 +487,70 @@ def _validate(c: Config) -> None:
             f"start_half = {c.start_half} (they would cover {area_ratio:.0%} of the start square; "
             "at most 50%)"
         )
+
+
+def check_carries(carries: object, kinds: int, n_robots: int, key: str = "carries") -> None:
+    """``ConfigError`` in one line unless ``carries`` is a tuple of groups (at most ``n_robots`` and
+    ``MAX_CARRY_GROUPS``), each a tuple of distinct names of the arena's ``kinds`` food kinds; ``key`` names
+    the setting in the message."""
+    names = REGION_KINDS[1:]
+    if not isinstance(carries, tuple):
+        raise ConfigError(
+            f"{key} must be a list of robot groups, each a list of food kinds ({', '.join(names)}), "
+            f"got {carries!r}"
+        )
+    if len(carries) > min(n_robots, MAX_CARRY_GROUPS):
+        raise ConfigError(
+            f"{key} has {len(carries)} robot groups, more than the {n_robots} robots"
+            if len(carries) > n_robots
+            else f"{key} has {len(carries)} robot groups; at most {MAX_CARRY_GROUPS}"
+        )
+    for g, group in enumerate(carries):
+        if not isinstance(group, tuple):
+            raise ConfigError(f"{key}[{g}] must be a list of food kinds ({', '.join(names)}), got {group!r}")
+        for kind in group:
+            if kind not in names:
+                raise ConfigError(
+                    f"{key}[{g}]: {kind!r} is not a food kind; expected among {', '.join(names)}"
+                )
+            if names.index(kind) >= kinds:
+                raise ConfigError(
+                    f"{key}[{g}]: the arena has no {kind} (its food kinds: {', '.join(names[:kinds])})"
+                )
+        if len(set(group)) != len(group):
+            raise ConfigError(f"{key}[{g}] names a food kind twice, got {list(group)}")
+
+
+def carry_masks(carries: tuple[tuple[str, ...], ...]) -> int:
+    """``Params.carry_masks`` of ``Config.carries``: group g's food kinds in bits ``CARRY_KIND_BITS * g`` up,
+    bit f for food kind f + 1."""
+    names = REGION_KINDS[1:]
+    mask = 0
+    for g, group in enumerate(carries):
+        for kind in group:
+            mask |= 1 << (CARRY_KIND_BITS * g + names.index(kind))
+    return mask
+
+
+def carries_to_text(carries: tuple[tuple[str, ...], ...]) -> str:
+    """``Config.carries`` as one line of JSON (a ROS parameter's text, as ``layout``'s); "" for none."""
+    return json.dumps([list(group) for group in carries], separators=(",", ":")) if carries else ""
+
+
+def carries_from_text(text: str, key: str = "carries") -> tuple[tuple[str, ...], ...]:
+    """The groups ``carries_to_text`` wrote ("" gives none); ``ConfigError`` in one line for text that is not
+    a JSON list of lists of names (the names are ``Config``'s to check)."""
+    if not text.strip():
+        return ()
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ConfigError(
+            f"{key} must be JSON, a list of lists of food kinds, got {text!r} ({error.msg})"
+        ) from None
+    if not isinstance(data, list) or not all(isinstance(group, list) for group in data):
+        raise ConfigError(f"{key} must be a JSON list of lists of food kinds, got {text!r}")
+    return tuple(tuple(group) for group in data)
 
 
 def _validate_formation(c: Config) -> None:
@@ -519,6 +609,8 @@ def config_from_dict(data: object) -> Config:
         values["fault_kinds"] = tuple(values["fault_kinds"])
     if isinstance(values.get("fault_robots"), list):
         values["fault_robots"] = tuple(tuple(p) if isinstance(p, list) else p for p in values["fault_robots"])
+    if isinstance(values.get("carries"), list):
+        values["carries"] = tuple(tuple(g) if isinstance(g, list) else g for g in values["carries"])
     if "layout" in values:
         values["layout"] = layout_from_json(values["layout"])
     return Config(**values)

@@ -157,6 +157,8 @@ from swarm_sim.model import (
     FAULT_FIELDS,
     Config,
     apply_conditions,
+    carries_from_text,
+    carries_to_text,
     fault_kinds_of,
     layout_from_text,
     layout_to_text,
@@ -1015,6 +1017,7 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
         if f.name not in FAULT_FIELDS
     }
     declared["layout"] = (layout_to_text(config.layout), None)
+    declared["carries"] = (carries_to_text(config.carries), None)
     declared["conditions"] = ("", None)
     declared["robot_namespaces"] = (tuple(robot_namespaces(config.n_robots)), None)
     declared["answer_timeout"] = (60.0, ANSWER_TIMEOUT_RANGE)
@@ -1029,6 +1032,8 @@ def check_parameter_file(path: Path, fully_qualified_name: str, config: Config) 
     try:
         if "layout" in world:
             world["layout"] = layout_from_text(world["layout"])
+        if "carries" in world:
+            world["carries"] = carries_from_text(world["carries"])
         return replace(config, **world)
     except ConfigError as error:
         raise ConfigError(f"{path}: {error}") from None

@@ -42,6 +42,8 @@ def arena_task(
     other_food_weight: float = 1.0,
     balanced: bool = False,
     types: int = 1,
+    carries: tuple[tuple[str, ...], ...] = (),
+    ticks: int | None = None,
     formation: str | None = None,
     first_entry: int = 0,
     name: str | None = None,
@@ -54,11 +56,12 @@ def arena_task(
     objective ``foraging_balanced`` (the swarm's least delivered kind, this project's: issue 36), which only a
     swarm delivering every kind alike maximises. ``types`` 2 gives the
     authors' two robot types (``Robots.types``: odd robots perceive the nest and food kind 1 swapped, as in
-    their ``generic`` projects, where it matters in layouts 7 and 8); ``formation`` the start formation
-    (None: ``base``'s). ``first_entry``: trial k of a block takes the generated layout's entry
-    ``first_entry + k`` (wrapping round its ten); 0 is the authors' choice, and since a block has five trials
-    their runs never see entries 5 to 9, which :data:`UNSEEN_FIRST_ENTRY` gives (arenas none of their runs or
-    ours evolved on). ``TaskError`` in one line for a bad setting."""
+    their ``generic`` projects, where it matters in layouts 7 and 8); ``carries`` the food kinds each robot
+    group can pick up (``Robots.carries``; empty: every kind); ``ticks`` the trials' length (None:
+    ``base``'s); ``formation`` the start formation (None: ``base``'s). ``first_entry``: trial k of a block
+    takes the generated layout's entry ``first_entry + k`` (wrapping round its ten); 0 is the authors' choice,
+    and since a block has five trials their runs never see entries 5 to 9, which :data:`UNSEEN_FIRST_ENTRY`
+    gives (arenas none of their runs or ours evolved on). ``TaskError`` in one line for a bad setting."""
     try:
         rows = [arena_entries(layout, nest_radius=nest_radius, food_radius=food_radius, gap=g, points=points,
                               bias=bias)
@@ -111,16 +114,23 @@ def arena_task(
         told += ", scored by its least delivered kind (foraging_balanced)"
     if types == 2:
         told += ", two robot types (odd robots perceive the nest and food swapped)"
+    if carries:
+        groups = " / ".join("+".join(group) or "nothing" for group in carries)
+        told += f", {len(carries)} robot groups, each picking up only its food kinds ({groups})"
     robots = replace(
         base.robots,
         start_half_size=START_HALF_2026,
         types=types,
+        carries=carries,
         formation=base.robots.formation if formation is None else formation,
     )
     if robots.formation != "random":
         told += f", {robots.formation} start"
     if first_entry:
         told += f", trial k on its arena {first_entry} + k"
+    trials = base.trials if ticks is None else replace(base.trials, ticks=ticks)
+    if ticks is not None:
+        told += f", trials of {ticks / 2:g} s"
     return replace(
         base,
         name=name or f"{base.name}-arena{layout}",
@@ -129,6 +139,7 @@ def arena_task(
         authors_code=CODE_2026,
         arena=Arena(half_size=base.arena.half_size, trial_entries=trial_entries),
         regions=regions,
+        trials=trials,
         robots=robots,
         objectives=objectives,
         scoring=Scoring(preferred_food=preferred, other_food_weight=other_food_weight),

@@ -120,7 +120,8 @@ def _value(hint: Any, value: object, key: str) -> Any:
         if not isinstance(value, list):
             raise TaskError(f"{key} must be a list, got {value!r}")
         if len(args) == 2 and args[1] is Ellipsis:
-            if typing.get_origin(args[0]) is tuple and value and not isinstance(value[0], list):
+            inner = typing.get_args(args[0]) if typing.get_origin(args[0]) is tuple else (Ellipsis,)
+            if Ellipsis not in inner and value and not isinstance(value[0], list):
                 value = [value]  # one value for a list of them: the same in every entry ([x, y] for centres)
             return tuple(_value(args[0], v, f"{key}[{k}]") for k, v in enumerate(value))
         if len(value) != len(args):

@@ -81,6 +81,9 @@ FORAGING_2026 = register(
 """The 2024 foraging task in the authors' 2026 code: their single-food setting closest to the 2024 paper's
 (arena 1, the [-1, 1] m start area), which agrees with the 2024 code within noise in their simulator."""
 
+CARRIERS_TICKS = 600
+"""``multifood-arena6-carriers``' trials: 300 s."""
+
 ARENA9_OTHER_FOOD_WEIGHT = 0.5
 """The penalty of the authors' arena-9 runs and of their public reference data (``argos_stats_multifood``)."""
 
@@ -90,7 +93,10 @@ ARENA9_OTHER_FOOD_WEIGHT = 0.5
 # projects) in the two layouts where a type changes what a robot perceives, 7 and 8 (``footbot_bt.cpp:242-254,
 # 269`` at 1cd2358), each robot starting around its own food kind 1 (the ``localised`` formation: even robots
 # at the food point, odd ones at the nest point). ``multifood-arena6-balanced`` is arena 6 scored by
-# ``foraging_balanced`` (this project's, issue 36: meant as a task where a division of labour could pay).
+# ``foraging_balanced`` (this project's, issue 36: meant as a task where a division of labour could pay), and
+# ``multifood-arena6-carriers`` the same with three robot groups that each pick up only one kind
+# (``Robots.carries``: ids 0-2 food, 3-5 food2, 6-8 food3) in trials of 300 s (at 100 s deliveries are too
+# rare to measure), where robots differ in what they can do and not only in what they perceive.
 _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
     *((f"multifood-arena{layout}", {"layout": layout}) for layout in range(1, 9)),
     *(
@@ -105,6 +111,15 @@ _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
         for layout in (7, 8)
     ),
     ("multifood-arena6-balanced", {"layout": 6, "balanced": True}),
+    (
+        "multifood-arena6-carriers",
+        {
+            "layout": 6,
+            "balanced": True,
+            "ticks": CARRIERS_TICKS,
+            "carries": (("food",), ("food2",), ("food3",)),
+        },
+    ),
 )
 for _name, _settings in _ARENA_TASKS:
     register(arena_task(FORAGING, name=_name, **_settings))

@@ -16,7 +16,16 @@ from dataclasses import dataclass, field, replace
 
 from bt_controller.language import ACTIONS, CONDITION_TABLE, CONDITIONS_2024
 from swarm_sim.errors import ConfigError
-from swarm_sim.model import DEFAULT, OBJECTIVES, PIECE_SHAPES, REGION_KINDS, Config, Piece, layout_to_text
+from swarm_sim.model import (
+    DEFAULT,
+    OBJECTIVES,
+    PIECE_SHAPES,
+    REGION_KINDS,
+    Config,
+    Piece,
+    carries_to_text,
+    layout_to_text,
+)
 from swarm_sim.model.regions import Layout, check_layout, kinds_needed
 
 
@@ -89,6 +98,11 @@ class Robots:
     """1: every robot perceives the regions as they are. 2: the authors' two robot types (their ``generic``
     projects): the odd robots perceive the nest and food kind 1 the other way round, one tree serving both
     (``Config.robot_types``; ``docs/model.md``, "Robot types")."""
+    carries: tuple[tuple[str, ...], ...] = DEFAULT.carries
+    """Which food kinds each group of robots can pick up: one entry per group, each a list of food kind names
+    (``food``, ``food2``, ``food3``; an empty one: robots that carry nothing); robot i is in group
+    ``i * len(carries) // count``. A robot on a kind it cannot carry senses it but does not pick it up.
+    Empty: every robot picks up every kind (``Config.carries``)."""
 
 
 @dataclass(frozen=True)
@@ -248,6 +262,7 @@ class TaskSpec:
             max_start_attempts=self.robots.start_attempts,
             formation=self.robots.formation,
             robot_types=self.robots.types,
+            carries=self.robots.carries,
             ticks=self.trials.ticks,
             chain_trials=self.trials.chain_trials,
             message_range=self.communication.range,
@@ -388,6 +403,7 @@ _TASK_KEY: dict[str, str] = {
     "max_start_attempts": "robots.start_attempts",
     "formation": "robots.formation",
     "robot_types": "robots.types",
+    "carries": "robots.carries",
     "ticks": "trials.ticks",
     "chain_trials": "trials.chain_trials",
     "message_range": "communication.range",
@@ -411,9 +427,10 @@ TASK_CONFIG_FIELDS: tuple[str, ...] = (*_TASK_KEY, "gaps", "layout")
 def world_parameters(config: Config) -> dict[str, object]:
     """The simulator node's parameters that give it the world of ``config`` as far as a task sets it: those
     that differ from the model's default world (so a parameter file can still set the others); a layout as
-    its JSON text (the node's ``layout`` parameter)."""
+    its JSON text (the node's ``layout`` parameter), the robot groups' food kinds likewise (``carries``)."""
+    texts = {"layout": layout_to_text(config.layout), "carries": carries_to_text(config.carries)}
     return {
-        name: layout_to_text(config.layout) if name == "layout" else getattr(config, name)
+        name: texts.get(name, getattr(config, name))
         for name in TASK_CONFIG_FIELDS
         if getattr(config, name) != getattr(DEFAULT, name)
     }

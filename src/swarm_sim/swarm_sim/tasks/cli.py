@@ -17,6 +17,18 @@ from swarm_sim.tasks._spec import TaskError
 EXIT_BAD = 2
 
 
+def carries_option(text: str) -> tuple[tuple[str, ...], ...]:
+    """``--carries``: groups separated by ``;``, a group's food kinds by ``,``, ``-`` for a group that carries
+    nothing (``food,food2;-;food3``); the names are the task's to check."""
+    groups = [group.strip() for group in text.split(";")]
+    if not text.strip() or any(not group for group in groups):
+        raise argparse.ArgumentTypeError(
+            f"expected groups separated by ';', each of food kinds separated by ',' or '-' for none, "
+            f"got {text!r}"
+        )
+    return tuple(() if group == "-" else tuple(kind.strip() for kind in group.split(",")) for group in groups)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="task", description="Tasks as data (docs/tasks.md): list, show and check them."
@@ -56,6 +68,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=1,
         help="2: the authors' two robot types, odd robots perceiving the nest and food swapped (default 1)",
     )
+    arena.add_argument(
+        "--carries",
+        type=carries_option,
+        default=(),
+        metavar="GROUPS",
+        help="robot groups that pick up only some food kinds (robots.carries): groups separated by ';', a "
+        "group's kinds by ',', '-' for a group that carries nothing; e.g. 'food;food2;food3' (quote it) "
+        "(default: every robot picks up every kind)",
+    )
+    arena.add_argument(
+        "--ticks", type=int, help="the trials' length in ticks, 2 a second (default: the task's)"
+    )
     arena.add_argument("--formation", help="the start formation (default: the task's)")
     arena.add_argument(
         "--first-entry",
@@ -71,6 +95,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 task = task_named(name)
                 two = task.robots.types == 2
                 types = ", two robot types (odd robots: nest and food swapped)" if two else ""
+                if task.robots.carries:
+                    types += f", {len(task.robots.carries)} robot groups carrying only some food kinds"
                 print(
                     f"{name}: {task.trial_seconds:g} s trials, {task.robots.count} robots{types}, objectives "
                     f"{', '.join(task.objectives) or 'none'}"
@@ -90,6 +116,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 other_food_weight=args.other_food_weight,
                 balanced=args.balanced,
                 types=args.types,
+                carries=args.carries,
+                ticks=args.ticks,
                 formation=args.formation,
                 first_entry=args.first_entry,
             )

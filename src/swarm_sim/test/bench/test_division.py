@@ -7,7 +7,9 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+from scipy.stats import wilcoxon
 
 from bt_controller.language import parse
 from swarm_sim.bench import division
@@ -80,6 +82,50 @@ def test_the_table_gives_mean_sem_and_the_ratio_to_the_best_homogeneous_swarm():
     assert "- c / best homogeneous (a), foraging_balanced: 0.600 / 0.300 = 2.00\n" in text
     assert "- d / best homogeneous (a), foraging_balanced: 0.150 / 0.300 = 0.50\n" in text
     assert division.read_rows(division.rows_csv(rows)) == rows
+
+
+def test_the_paired_table_compares_seed_by_seed_with_the_best_homogeneous_swarm_on_each_objective():
+    def row(name: str, composition: str, seed: int, foraging: float, balanced: float) -> dict[str, str]:
+        values = {c: "0.0" for c in division.COLUMNS}
+        values |= {"foraging": repr(foraging), "foraging_balanced": repr(balanced)}
+        return {"swarm": name, "composition": composition, "seed": str(seed), "trials": "10", **values}
+
+    seeds = range(1, 9)
+    # "a" is the best homogeneous swarm on foraging, "b" on foraging_balanced; "c" beats "a" by 0.1 to 0.8
+    # seed by seed on foraging although the seeds spread far more than that (a paired comparison sees it).
+    rows = [row("a", "homogeneous", s, 10.0 * s, 0.1) for s in seeds]
+    rows += [row("b", "homogeneous", s, 1.0, 0.5) for s in seeds]
+    rows += [row("c", "heterogeneous", s, 10.0 * s + 0.1 * s, 0.5) for s in seeds]
+    text = division.paired_table(rows)
+    lines = text.splitlines()
+    assert lines[0] == "| swarm | objective | best homogeneous | mean difference | 95 % CI | Wilcoxon p |"
+    differences = [0.1 * s for s in seeds]
+    p = wilcoxon(differences).pvalue
+    assert lines[2].startswith(f"| c | foraging | a | +{np.mean(differences):.3f} | [+0.")
+    assert lines[2].endswith(f"| {p:.3g} |") and p < 0.01
+    low, high = (float(v) for v in lines[2].split("[")[1].split("]")[0].split(", "))
+    assert 0.1 < low < np.mean(differences) < high < 0.8
+    assert lines[3] == "| c | foraging_balanced | b | +0.000 | [+0.000, +0.000] | 1 |"  # no difference at all
+    assert division.paired_table(rows) == text  # one seeded generator: the table is recomputed exactly
+    with pytest.raises(ValueError, match="not run on the same seeds"):
+        division.paired_table(rows[:-1])
+
+
+def test_on_the_carriers_task_the_two_specialist_swarms_are_one_controller_with_other_draws():
+    """Under ``multifood-arena6-carriers`` a robot carries only its group's kind, so going home with any kind
+    is going home with its own: the preferring specialists are the strict ones, but for their ``prob`` node's
+    draw key (its place in the tree). Keyed alike, they score alike to the bit."""
+    config = task_named("multifood-arena6-carriers").config()
+    built = division.swarms(config.n_robots)
+    strict = built[division.SPECIALISTS][1]
+    keyed = tuple(
+        tree.replace("prob(forward, forward_left", "prob@18(forward, forward_left")
+        for tree in built["specialists (prefer kind k)"][1]
+    )
+    assert all(str(parse(tree)).count("prob") == 1 for tree in strict)
+    evaluator = BatchEvaluator(config)
+    a, b = evaluator.evaluate([SwarmRequest(SwarmLayout(trees), 1, 5) for trees in (strict, keyed)])
+    assert a.fitness == b.fitness and a.fitness[OBJECTIVES.index("foraging")] > 0
 
 
 def test_a_task_of_one_food_kind_is_refused_in_one_line():

@@ -34,8 +34,9 @@ def test_defaults_follow_the_model():
 def test_params_carry_every_value_with_its_type():
     p = DEFAULT.params()
     for name in p._fields:
-        if name not in ("profile", "formation"):
+        if name not in ("profile", "formation", "carry_groups", "carry_masks"):
             assert getattr(p, name) == getattr(DEFAULT, name)
+    assert (p.carry_groups, p.carry_masks) == (0, 0)  # no groups: every robot carries every kind
     assert p.profile == 0 and Config(profile="clean").params().profile == 1
     assert p.formation == 0 and Config(formation="lattice", n_robots=4).params().formation == 1
     assert isinstance(p.n_robots, int) and isinstance(p.arena_half, float)
@@ -77,11 +78,14 @@ def test_as_dict_names_every_field():
     d = DEFAULT.as_dict()
     assert d["gaps"] == [500.0, 700.0]
     # every field; a layout only when there is one (the papers' arena is nest_radius and gaps), faults only
-    # when some are given, robot types only when there are two (files as before each)
-    quiet = {*FAULT_FIELDS, "robot_types"}
+    # when some are given, robot types only when there are two, groups' food kinds only when there are
+    # groups (files as before each)
+    quiet = {*FAULT_FIELDS, "robot_types", "carries"}
     assert set(d) == {f.name for f in dataclasses.fields(Config)} - {"layout", *quiet}
     nest = Piece("nest", "disc", 0.0, 0.0, 400.0)
-    laid_out = Config(layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),), robot_types=2)
+    laid_out = Config(
+        layout=(((nest, Piece("food", "disc", 1000.0, 0.0, 300.0)),),), robot_types=2, carries=(("food",), ())
+    )
     assert set(laid_out.as_dict()) == {f.name for f in dataclasses.fields(Config)} - set(FAULT_FIELDS)
     assert config_from_dict(laid_out.as_dict()) == laid_out
     faulty = Config(fault_robots=((0, "wheel-dead"), (3, "disruptive")))

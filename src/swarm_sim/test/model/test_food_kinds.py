@@ -157,7 +157,7 @@ def test_the_registered_arena_tasks():
 def test_the_unseen_twins_take_the_arenas_no_run_evolves_on():
     """``<task>-unseen``: the same task, trial k of a block on generated arena 5 + k, never on 0 to 4."""
     names = [n for n in task_names() if n.endswith("-unseen")]
-    assert len(names) == 9 and all(unseen_twin(n.removesuffix("-unseen")).name == n for n in names)
+    assert len(names) == 10 and all(unseen_twin(n.removesuffix("-unseen")).name == n for n in names)
     for name in names:
         seen, unseen = task_named(name.removesuffix("-unseen")), task_named(name)
         layout = int(name.split("arena")[1][0])
