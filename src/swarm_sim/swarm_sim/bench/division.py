@@ -11,7 +11,8 @@ k) and one that prefers kind k (it seeks kind k but turns home with any kind); a
 draws the kind it seeks anew whenever the seeking finishes (every tick or two: the trees have no memory, so a
 robot cannot draw a kind once and keep it); and a wanderer that reads no food condition (home with any kind,
 else a random walk), the floor that following the food estimates should beat. The heterogeneous swarms split
-the robots into as many groups as kinds, in id order (3 + 3 + 3 of nine), group k running the forager of
+the robots into as many groups as kinds, robot i in group i mod kinds (3 + 3 + 3 of nine: the groups of a
+team and of ``robots.carries``), group k running the forager of
 only kind k, or the one preferring kind k. Every forager picks up whatever kind it crosses (carrying is the
 world's, not the tree's) and delivers all it carries in the nest.
 
@@ -94,8 +95,9 @@ def random_kind_forager() -> str:
 
 def swarms(n_robots: int) -> dict[str, tuple[str, tuple[str, ...]]]:
     """Each swarm of the benchmark: its composition (``homogeneous`` or ``heterogeneous``) and its tree per
-    robot. The specialists: robot i in group i * kinds // n_robots, fetching that group's kind."""
-    group = [KINDS[i * len(KINDS) // n_robots] for i in range(n_robots)]
+    robot. The specialists: robot i fetches kind ``KINDS[i mod kinds]``, the groups of a team of as many trees
+    as kinds and of ``robots.carries`` (robot i in group i mod groups)."""
+    group = [KINDS[i % len(KINDS)] for i in range(n_robots)]
     return {
         "any kind": ("homogeneous", (any_forager(),) * n_robots),
         **{f"only kind {k}": ("homogeneous", (kind_forager(k),) * n_robots) for k in KINDS},

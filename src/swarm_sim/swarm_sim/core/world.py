@@ -815,10 +815,11 @@ def swap_received(counts: np.ndarray, values: np.ndarray, p: Params) -> None:
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def can_carry(i: int, f: int, p: Params) -> bool:
-    """Whether robot ``i`` picks up food kind ``f + 1`` (region ``f + 1``): always without groups."""
+    """Whether robot ``i`` picks up food kind ``f + 1`` (region ``f + 1``): always without groups; else as
+    its group ``i mod carry_groups`` may (the groups a team's trees take: robot i runs tree i mod K)."""
     if p.carry_groups == 0:
         return True
-    group = i * p.carry_groups // p.n_robots
+    group = i % p.carry_groups
     return (p.carry_masks >> (CARRY_KIND_BITS * group + f)) & 1 == 1
 
 

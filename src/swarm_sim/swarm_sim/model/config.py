@@ -237,9 +237,10 @@ class Config:
     carries: tuple[tuple[str, ...], ...] = ()
     """Which food kinds each group of robots can pick up: one entry per group, each the names of the food
     kinds (``food``, ``food2``, ``food3``) its robots pick up (an empty entry: robots that carry nothing).
-    Robot i belongs to group ``i * len(carries) // n_robots`` (contiguous blocks of ids). A robot standing on
-    a kind it cannot carry still senses it (ground sensor, estimates, conditions) but does not pick it up
-    (``world.can_carry``; ``docs/model.md``, "Robot types"). Empty: every robot picks up every kind."""
+    Robot i belongs to group ``i mod len(carries)``, as robot i runs tree ``i mod K`` of a team of K. A
+    robot standing on a kind it cannot carry still senses it (ground sensor, estimates, conditions) but does
+    not pick it up (``world.can_carry``; ``docs/model.md``, "Robot types"). Empty: every robot picks up
+    every kind."""
     fault_rate: float = 0.0
     """Per-robot faults (``swarm_sim.model.faults``): each robot is faulty with this probability, drawn per
     evaluation seed (``trial_data.robot_faults``); 0: none."""

@@ -95,8 +95,8 @@ ARENA9_OTHER_FOOD_WEIGHT = 0.5
 # at the food point, odd ones at the nest point). ``multifood-arena6-balanced`` is arena 6 scored by
 # ``foraging_balanced`` (this project's, issue 36: meant as a task where a division of labour could pay), and
 # ``multifood-arena6-carriers`` the same with three robot groups that each pick up only one kind
-# (``Robots.carries``: ids 0-2 food, 3-5 food2, 6-8 food3) in trials of 300 s (at 100 s deliveries are too
-# rare to measure), where robots differ in what they can do and not only in what they perceive.
+# (``Robots.carries``: robots 0, 3, 6 food, 1, 4, 7 food2, 2, 5, 8 food3) in trials of 300 s (at 100 s
+# deliveries are too rare to measure), where robots differ in what they can do, not only in what they sense.
 _ARENA_TASKS: tuple[tuple[str, dict[str, Any]], ...] = (
     *((f"multifood-arena{layout}", {"layout": layout}) for layout in range(1, 9)),
     *(

@@ -101,7 +101,7 @@ class Robots:
     carries: tuple[tuple[str, ...], ...] = DEFAULT.carries
     """Which food kinds each group of robots can pick up: one entry per group, each a list of food kind names
     (``food``, ``food2``, ``food3``; an empty one: robots that carry nothing); robot i is in group
-    ``i * len(carries) // count``. A robot on a kind it cannot carry senses it but does not pick it up.
+    ``i mod len(carries)``. A robot on a kind it cannot carry senses it but does not pick it up.
     Empty: every robot picks up every kind (``Config.carries``)."""
 
 

@@ -53,22 +53,23 @@ def _disc(config: Config, kind: int) -> tuple[float, float]:
     return float(row[2]), float(row[3])
 
 
-def test_groups_are_contiguous_blocks_of_ids_and_their_kinds_are_bits():
+def test_robot_i_is_in_group_i_mod_groups_as_in_a_team_and_the_kinds_are_bits():
     config = _short()
     p = config.params()
     assert (p.carry_groups, p.carry_masks) == (3, 0b100_010_001)
     allowed = [[world.can_carry(i, f, p) for f in range(3)] for i in range(9)]
-    assert allowed == [[i // 3 == f for f in range(3)] for i in range(9)]
-    # Uneven blocks: 7 robots in 3 groups are ids 0-2, 3-4, 5-6 (i * 3 // 7); a scout group carries nothing.
+    assert allowed == [[i % 3 == f for f in range(3)] for i in range(9)]
+    # the groups of a team of as many trees: robot i runs tree i mod K (evolution_manager's teams)
+    # 7 robots in 3 groups are 0, 3, 6 / 1, 4 / 2, 5; a scout group carries nothing.
     seven = replace(config, n_robots=7, carries=(("food", "food3"), (), ("food2",))).params()
     assert [[world.can_carry(i, f, seven) for f in range(3)] for i in range(7)] == [
         [True, False, True],
-        [True, False, True],
-        [True, False, True],
-        [False, False, False],
         [False, False, False],
         [False, True, False],
+        [True, False, True],
+        [False, False, False],
         [False, True, False],
+        [True, False, True],
     ]
     assert all(
         world.can_carry(i, f, replace(config, carries=()).params()) for i in range(9) for f in range(3)
@@ -98,7 +99,7 @@ def test_a_robot_on_a_kind_it_cannot_carry_never_carries_or_delivers_it(road):
     config = _short()
     record = road(FORAGER, 3, 1, config)  # a trial in which every kind is crossed by robots barred from it
     on = record.ground[:, :, 1:]  # what each robot reads of each food kind, step by step (no ground faults)
-    group = np.arange(9) // 3
+    group = np.arange(9) % 3
     for f in range(3):
         barred = group != f
         assert not record.carrying[:, barred, f].any(), f
