@@ -426,7 +426,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--tasks",
         metavar="T1,T2",
         help="with --study heterogeneity: which of its tasks to plan, comma-separated (default: its first "
-        "three; multifood-arena6-balanced is the fourth)",
+        "three; multifood-arena6-balanced and multifood-arena6-carriers are the fourth and fifth)",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)

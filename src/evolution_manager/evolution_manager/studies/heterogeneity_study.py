@@ -74,18 +74,22 @@ TASKS: tuple[tuple[str, str, str], ...] = (
     ("multifood-arena6", "foraging", "deliveries"),
     ("multifood-arena7-types", "foraging", "behaviour"),
     ("multifood-arena6-balanced", "foraging_balanced", "deliveries"),
+    ("multifood-arena6-carriers", "foraging", "deliveries"),
 )
 """The tasks, each with the objective its runs maximise and the behaviour space its repertoires and
 compositions are binned by: the authors' arena 9 biased towards kind 2 (their bias and penalty fitness,
 penalty 0.5); arena 6, three kinds of food and no bias; arena 7 with their two robot types (odd robots
 perceive the nest and the food swapped), every robot starting at its own food: one kind of food, so binned by
-the paper's behaviour; and arena 6 scored by the swarm's least delivered kind (``foraging_balanced``, issue
+the paper's behaviour; arena 6 scored by the swarm's least delivered kind (``foraging_balanced``, issue
 36), meant as a task where a division of labour could pay (hand-written specialists do not:
-``docs/results/heterogeneity/balanced``). A task's seeds derive from its index here, whichever are
-planned."""
+``docs/results/heterogeneity/balanced``); and arena 6 in trials of 300 s where robot i can pick up only food
+kind i mod 3 + 1 (``robots.carries``), maximising the deliveries of every kind (``foraging``), where
+hand-written specialists do beat the best homogeneous swarm (``docs/results/heterogeneity/carriers``); its
+groups are those of ``team3`` (robot i runs tree i mod K). A task's seeds derive from its index here,
+whichever are planned."""
 DEFAULT_TASKS: tuple[str, ...] = tuple(task for task, _, _ in TASKS[:3])
 """The tasks planned when ``--tasks`` is not given: the study's first three, whose plan (``experiment.json``)
-is the one studies begun before the fourth keep."""
+is the one studies begun before the fourth and fifth keep."""
 
 BASELINE = "homogeneous"
 GOAL = 1.2

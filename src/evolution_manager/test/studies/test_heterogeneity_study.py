@@ -122,6 +122,11 @@ def test_tasks_plans_the_tasks_named_each_on_the_seeds_of_its_row(tmp_path):
     repertoire = balanced["plan"][0]
     assert repertoire["dir"] == "repertoires/multifood-arena6-balanced/run00"
     assert repertoire["config"]["objective"] == "foraging_balanced"
+    carriers = _plan(tmp_path, "--tasks", "multifood-arena6-carriers")
+    assert carriers["tasks"] == [
+        {"task": "multifood-arena6-carriers", "objective": "foraging", "descriptors": "deliveries"}
+    ]
+    assert carriers["plan"] == [e for e in whole["plan"] if e["task"] == "multifood-arena6-carriers"]
     default = _plan(tmp_path)
     assert [t["task"] for t in default["tasks"]] == list(study.DEFAULT_TASKS)
     assert default == _plan(tmp_path, "--tasks", ",".join(reversed(study.DEFAULT_TASKS)))  # in TASKS order
