@@ -50,3 +50,26 @@ def test_our_side_is_the_models_and_the_readme_shows_both_tables():
         assert cells in readme, cells
         largest = max(largest, abs(z))
     assert f"the largest |z| is {largest:.2f}" in readme
+
+
+def test_the_teams_second_look_on_seeds_21_to_40():
+    """The README's second look at team2's best team: ours recomputed on seeds 21-40, ARGoS's from its
+    rows."""
+    swarms = [line for line in (FOLDER / "swarms.txt").read_text().splitlines() if line.startswith("swarm: ")]
+    team = swarms[-1]
+    argos = _table("argos_raw_team2_seeds21-40.tsv")
+    assert {row["tree"] for row in argos} == {team} and sorted(int(r["seed"]) for r in argos) == list(
+        range(21, 41)
+    )
+    evaluator = BatchEvaluator(task_named("multifood-arena9-kind2").config("paper"))
+    results = evaluator.evaluate([SwarmRequest(SwarmLayout(_trees(team)), s, 10) for s in range(21, 41)])
+    ours = [r.fitness[OBJECTIVES.index("foraging_biased")] for r in results]
+    theirs = [float(row["fitness"]) for row in argos]
+
+    def sem(values: list[float]) -> float:
+        return statistics.stdev(values) / len(values) ** 0.5
+
+    z = (statistics.mean(ours) - statistics.mean(theirs)) / (sem(ours) ** 2 + sem(theirs) ** 2) ** 0.5
+    mine, other = statistics.mean(ours), statistics.mean(theirs)
+    text = f"{mine:.3f} ±\n  {sem(ours):.3f} here against {other:.3f} ± {sem(theirs):.3f} there, z {z:+.2f}"
+    assert text in (FOLDER / "README.md").read_text(), text
