@@ -21,7 +21,7 @@ and the deliveries of each kind per robot); prints :func:`table` (mean and stand
 and the ratio of each heterogeneous swarm's ``foraging_balanced`` to the best homogeneous swarm's) and
 :func:`paired_table` (each heterogeneous swarm against the best homogeneous one seed by seed: a seed is the
 same scenario for every swarm, its start poses, wheel gains and message losses). On
-``multifood-arena6-carriers`` (``robots.carries``: robot i picks up only food kind i * 3 // 9 + 1) the
+``multifood-arena6-carriers`` (``robots.carries``: robot i picks up only food kind i mod 3 + 1) the
 specialists' groups are the task's, so each specialist seeks the one kind it can carry, while a homogeneous
 swarm's robots seek kinds that two thirds of them cannot pick up.
 ``--estimates`` also prints, for the wanderer and the specialists, how often a robot knows where each kind

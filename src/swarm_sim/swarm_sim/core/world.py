@@ -809,7 +809,7 @@ def swap_received(counts: np.ndarray, values: np.ndarray, p: Params) -> None:
 
 
 # Robot groups that pick up only some food kinds (``Config.carries``; ``docs/model.md``, "Robot types"): robot
-# i is in group i * groups // n, and a group's kinds are bits of ``Params.carry_masks``. A pick-up rule, not a
+# i is in group i mod groups, and a group's kinds are bits of ``Params.carry_masks``. A pick-up rule, not a
 # perception one: a robot on a kind it cannot carry senses it as any other, and does not pick it up.
 
 

@@ -28,7 +28,7 @@ LAYOUT_DESCRIPTION = (
 )
 CARRIES_DESCRIPTION = (
     "which food kinds each robot group picks up, as JSON: one list of kind names per group, robot i in group "
-    "i * groups // n_robots (docs/tasks.md, robots.carries); empty: every robot picks up every kind"
+    "i mod groups (docs/tasks.md, robots.carries); empty: every robot picks up every kind"
 )
 
 

@@ -203,9 +203,9 @@ def test_bad_carries_are_refused_by_name():
     ):
         replace(FORAGING, robots=replace(FORAGING.robots, carries=(("food2",),)))
     with pytest.raises(ConfigError, match="carries must be a list of robot groups"):
-        Config(carries=["food"])  # type: ignore[arg-type]
+        Config(carries=["food"])  # type: ignore[arg-type]  # the wrong type is what is refused
     with pytest.raises(ConfigError, match=r"carries\[0\] must be a list of food kinds"):
-        Config(carries=("food",))  # type: ignore[arg-type]
+        Config(carries=("food",))  # type: ignore[arg-type]  # the wrong type is what is refused
     with pytest.raises(ConfigError, match="carries has 22 robot groups; at most 21"):
         Config(n_robots=30, start_half=2000.0, carries=((),) * 22)
     with pytest.raises(ConfigError, match="carries must be a JSON list of lists of food kinds"):
