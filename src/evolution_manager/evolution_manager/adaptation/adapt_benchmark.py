@@ -47,8 +47,10 @@ Writes ``DIR/runs.csv`` (one row per method, task, condition, seed and repertoir
 ``DIR/ceilings.csv``, ``DIR/summary.json``, ``DIR/curves.png`` and ``DIR/report.md`` (per fault family: the
 conditions kept, the median trials to 90 % of the pre-fault score, the fraction recovered within 10 and 30
 trials, the held-out re-scores, per robot against per swarm, and SMBO's published figure beside ours). The
-filter's scores in ``conditions.csv`` and the ceilings in ``ceilings.csv`` are reused, so an interrupted
-benchmark continues where its costly parts ended.
+filter's scores in ``conditions.csv`` and the ceilings in ``ceilings.csv`` are reused, and the ceiling whose
+search was running continues from ``DIR/ceiling-checkpoint.json`` (saved every two minutes, removed when
+that ceiling is written), so an interrupted benchmark continues where its costly parts ended, with the same
+results.
 
 ``--cluster dask://HOST:PORT`` or ``--cluster slurm`` (``--cluster-config FILE``) evaluates on a Dask
 cluster's workers, each changed world sent whole to them (``cluster.evaluator.DaskEvaluator``), instead of in
@@ -82,6 +84,7 @@ from evolution_manager.adaptation.search import (
     ITEParameters,
     RandomPicks,
     RepertoireSetting,
+    SearchCheckpoint,
     Tried,
     best_so_far,
     composition,
@@ -89,6 +92,7 @@ from evolution_manager.adaptation.search import (
     reevolve,
     repertoire_setting,
     run_picker,
+    saved_search,
     struck_robots,
 )
 from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, finite, positive_int
@@ -454,8 +458,9 @@ OUTPUTS = (
     "summary.json",
     "curves.png",
     "report.md",
+    "ceiling-checkpoint.json",
 )
-"""The files the benchmark writes in ``--out``."""
+"""The files the benchmark writes in ``--out`` (the last only while a ceiling's search runs)."""
 
 
 def benchmark(args: argparse.Namespace) -> dict:
@@ -599,10 +604,18 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
             for algorithm in ("qd", "gp") if seed <= args.ceiling_seeds else ():
                 key = (condition, seed, algorithm)
                 if key not in ceilings:
-                    say(f"{condition} seed {seed}: ceiling, {algorithm} with {args.ceiling} evaluations")
+                    checkpoint = SearchCheckpoint(
+                        args.out / "ceiling-checkpoint.json",
+                        {"condition": condition, "seed": seed, "algorithm": algorithm, "task": task,
+                         "objective": args.objective, "evaluations": args.ceiling, "trials": args.trials,
+                         "profile": profile},
+                    )  # fmt: skip
+                    saved = saved_search(checkpoint)
+                    again = f", from its checkpoint at {len(saved['trees'])}" if saved else ""
+                    say(f"{condition} seed {seed}: ceiling, {algorithm}, {args.ceiling} evaluations{again}")
                     run_eval = ConditionEvaluation(batch, seed, args.trials)
                     trees, fitness = reevolve(
-                        algorithm, args.objective, args.ceiling, seed, run_eval, setting
+                        algorithm, args.objective, args.ceiling, seed, run_eval, setting, checkpoint
                     )
                     best = int(np.argmax(fitness))
                     ceilings[key] = [
@@ -614,6 +627,7 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
                     ]
                     ceilings[key] += [f"{fitness[best]:.6f}", trees[best], profile]
                     write_atomic(ceilings_path, _csv_text(CEILING_HEADER, list(ceilings.values())))
+                    checkpoint.path.unlink(missing_ok=True)  # the ceiling is in ceilings.csv now
                 best_ceiling = max(best_ceiling, float(ceilings[key][5]))
             ceiling_of[(condition, seed)] = best_ceiling
             say(f"{condition} seed {seed}: ceiling {best_ceiling:.4f}; the methods")

@@ -38,6 +38,7 @@ scratch). Nothing here imports ``rclpy``; of the simulator, only which robots a 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -51,11 +52,11 @@ from bt_controller.errors import TreeError
 from bt_controller.language import Library, parse, to_text
 from bt_controller.validate import integer
 from evolution_manager.errors import AskTellError, ConfigError, EvolutionError
-from evolution_manager.evolution.algorithms import Outcome, as_outcome
+from evolution_manager.evolution.algorithms import AskTell, Outcome, as_outcome
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.run import RunDirectory
 from evolution_manager.evolution.run_config import OBJECTIVES, RunConfig
-from evolution_manager.files import read_json_object
+from evolution_manager.files import read_json_object, write_json
 from swarm_sim.core import robot_faults
 from swarm_sim.evaluation import EvaluationRequest, Evaluator, SwarmRequest
 from swarm_sim.model import Config, SwarmLayout
@@ -341,6 +342,21 @@ class ConditionEvaluation:
                 self._cache[tree] = outcome
         return [self._cache[t] for t in trees]
 
+    def to_state(self) -> dict:
+        """What was simulated, as JSON-able data: ``restore`` continues with the same cache and count."""
+        outcomes = [[t, list(o.fitness or ()), list(o.descriptors or ())] for t, o in self._cache.items()]
+        return {"seed": self.seed, "trials": self.trials, "simulated": self.simulated, "outcomes": outcomes}
+
+    def restore(self, state: dict) -> None:
+        """Continue from ``to_state()``'s data, which must be of this seed and number of trials."""
+        if state["seed"] != self.seed or state["trials"] != self.trials:
+            raise ValueError(f"saved evaluations of seed {state['seed']}, {state['trials']} trials")
+        self.simulated = integer(state["simulated"], "simulated", 0)
+        self._cache = {
+            str(tree): Outcome(tuple(float(v) for v in fitness), tuple(float(v) for v in descriptors))
+            for tree, fitness, descriptors in state["outcomes"]
+        }
+
 
 def struck_robots(config: Config, seed: int) -> tuple[int, ...]:
     """The robots that ``config``'s conditions strike in evaluations of ``seed``, in id order: a per-robot
@@ -414,6 +430,42 @@ def run_picker(
             on_trial(picker.tried[-1])
 
 
+@dataclass(frozen=True)
+class SearchCheckpoint:
+    """Where a long ``reevolve`` saves itself between batches (atomically, at most every ``every`` seconds)
+    so that a killed one continues from there with the same results, and which search it is: a file saved
+    for another ``key`` is not resumed, and the first save replaces it."""
+
+    path: Path
+    key: dict[str, object]
+    every: float = 120.0
+
+
+def saved_search(checkpoint: SearchCheckpoint) -> dict | None:
+    """The state saved at ``checkpoint.path`` for ``checkpoint.key``: None when there is no file or it is
+    another search's. A damaged file raises ``AdaptationError`` naming it (nothing is overwritten)."""
+    if not checkpoint.path.exists():
+        return None
+    try:
+        saved = read_json_object(checkpoint.path)
+    except EvolutionError as error:
+        raise AdaptationError(f"{error}; remove it to start that search afresh") from error
+    return saved if saved.get("key") == checkpoint.key else None
+
+
+def _save_search(
+    checkpoint: SearchCheckpoint, search: AskTell, trees: list[str], fitness: list[float], evaluate: Evaluate
+) -> None:
+    state = {
+        "key": checkpoint.key,
+        "search": search.to_state(),
+        "trees": trees,
+        "fitness": fitness,
+        "evaluations": evaluate.to_state() if isinstance(evaluate, ConditionEvaluation) else None,
+    }
+    write_json(checkpoint.path, state, indent=None)
+
+
 def reevolve(
     algorithm: str,
     objective: str,
@@ -421,11 +473,15 @@ def reevolve(
     seed: int,
     evaluate: Evaluate,
     setting: RepertoireSetting | None = None,
+    checkpoint: SearchCheckpoint | None = None,
 ) -> tuple[list[str], list[float]]:
     """Evolve from scratch under the changed condition with ``algorithm`` (``gp``: GP_o, ``qd``:
     MAP-Elites, with the paper's parameters) for ``budget`` evaluations; every evaluated tree and its fitness
     in the order produced. With ``setting``, on the repertoire's task, profile and library (a foraging
-    repertoire's primitives as leaves); without, the default task's flat node set."""
+    repertoire's primitives as leaves); without, the default task's flat node set. With ``checkpoint``, it
+    continues the search saved there for the same key (the search, the trees and, for a
+    ``ConditionEvaluation``, what it simulated, so the results and the count of simulations are those of an
+    uninterrupted run) and saves itself as it goes; the caller removes the file when it has the result."""
     if algorithm not in ("gp", "qd"):
         raise ConfigError(f"re-evolution uses gp or qd, got {algorithm!r}")
     if setting is None:
@@ -448,6 +504,18 @@ def reevolve(
     k = OBJECTIVES.index(objective)
     trees: list[str] = []
     fitness: list[float] = []
+    if checkpoint is not None and (saved := saved_search(checkpoint)) is not None:
+        try:
+            search.restore(saved["search"])
+            trees = [str(t) for t in saved["trees"]]
+            fitness = [float(v) for v in saved["fitness"]]
+            if isinstance(evaluate, ConditionEvaluation) and saved["evaluations"] is not None:
+                evaluate.restore(saved["evaluations"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise AdaptationError(
+                f"{checkpoint.path} is damaged ({error}); remove it to start that search afresh"
+            ) from error
+    saved_at = time.monotonic()
     while not search.done and len(trees) < budget:
         asked = search.ask()
         # The budget counts evaluations, as adaptation's trials do (the algorithms' own budgets count the
@@ -460,6 +528,9 @@ def reevolve(
         if len(batch) < len(asked):
             break
         search.tell(outcomes)
+        if checkpoint is not None and time.monotonic() - saved_at >= checkpoint.every:
+            _save_search(checkpoint, search, trees, fitness, evaluate)
+            saved_at = time.monotonic()
     return trees, fitness
 
 

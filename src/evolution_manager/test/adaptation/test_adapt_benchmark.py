@@ -1,7 +1,8 @@
 """The harder adaptation benchmark and adaptation per robot: per-robot Intelligent Trial and Error changes
 only the robots a condition strikes; the 70 % rule keeps a harsh condition and drops a mild one; runs.csv has
 one row per method, task, condition, seed and repertoire; the held-out scenarios never meet an adaptation
-scenario; an interrupted benchmark reuses its filter scores and ceilings."""
+scenario; an interrupted benchmark reuses its filter scores and ceilings, and each ceiling's search saves
+itself under its own key."""
 
 import csv
 import io
@@ -224,10 +225,10 @@ def test_the_benchmark_keeps_a_harsh_condition_drops_a_mild_one_and_resumes(tmp_
     ceilings = []
     real = adapt_benchmark.reevolve
 
-    def counting(algorithm, objective, budget, seed, evaluate, setting=None):
+    def counting(algorithm, objective, budget, seed, evaluate, setting=None, checkpoint=None):
         if budget == 8:
-            ceilings.append(evaluate)
-        return real(algorithm, objective, budget, seed, evaluate, setting)
+            ceilings.append(checkpoint.key)
+        return real(algorithm, objective, budget, seed, evaluate, setting, checkpoint)
 
     monkeypatch.setattr(adapt_benchmark, "reevolve", counting)
     with pytest.raises(SystemExit) as ended:
@@ -236,6 +237,11 @@ def test_the_benchmark_keeps_a_harsh_condition_drops_a_mild_one_and_resumes(tmp_
     summary = json.loads((out / "summary.json").read_text())
     assert summary["candidates"]["message-loss=0"]["kept"]  # the edited score was read back
     assert len(ceilings) == 4  # the new condition's 2 seeds x 2 algorithms; the old ceilings were reused
+    # Each ceiling's search saves itself under its own key, and its checkpoint goes once it is written.
+    assert sorted((k["condition"], k["seed"], k["algorithm"]) for k in ceilings) == sorted(
+        ("message-loss=0", s, a) for s in (1, 2) for a in ("qd", "gp")
+    )
+    assert not (out / "ceiling-checkpoint.json").exists()
 
 
 def test_the_committed_primitives_reports_condition_table_is_its_runs_csv():

@@ -19,9 +19,11 @@ from evolution_manager.adaptation.search import (
     IntelligentTrialAndError,
     ITEParameters,
     RandomPicks,
+    SearchCheckpoint,
     load_candidates,
     reevolve,
     repertoire_setting,
+    saved_search,
     written_out,
 )
 from evolution_manager.errors import AskTellError
@@ -281,3 +283,48 @@ def test_reevolution_spends_exactly_its_budget_in_the_changed_world():
         trees, fitness = reevolve(algorithm, "food", 30, 2, evaluation)
         assert len(trees) == len(fitness) == 30
         assert all(0.0 <= f <= 1.0 for f in fitness)
+
+
+class _KilledAfter(ConditionEvaluation):
+    """Evaluations that stop the search (as a kill would) at their ``calls``-th batch."""
+
+    def __init__(self, evaluator, seed, trials, calls):
+        super().__init__(evaluator, seed, trials)
+        self.calls = calls
+
+    def __call__(self, trees):
+        self.calls -= 1
+        if self.calls == 0:
+            raise KeyboardInterrupt
+        return super().__call__(trees)
+
+
+@pytest.mark.parametrize("algorithm", ["qd", "gp"])
+def test_a_killed_reevolution_continues_from_its_checkpoint_as_if_never_killed(tmp_path, algorithm):
+    config, _ = apply_conditions(["weak-wheel=9:0.5"])
+    budget = 190  # MAP-Elites: its first batch of 100, then batches of 50; GP: generations of 25
+    whole = ConditionEvaluation(BatchEvaluator(config), 1, 1)
+    expected = reevolve(algorithm, "food", budget, 2, whole)
+    checkpoint = SearchCheckpoint(tmp_path / "ceiling.json", {"algorithm": algorithm}, every=0.0)
+    with pytest.raises(KeyboardInterrupt):
+        killed = _KilledAfter(BatchEvaluator(config), 1, 1, calls=3)
+        reevolve(algorithm, "food", budget, 2, killed, None, checkpoint)
+    saved = saved_search(checkpoint)
+    assert saved is not None and 0 < len(saved["trees"]) < budget
+    again = ConditionEvaluation(BatchEvaluator(config), 1, 1)
+    assert reevolve(algorithm, "food", budget, 2, again, None, checkpoint) == expected
+    assert again.simulated == whole.simulated  # what was simulated before the kill is not simulated again
+    assert saved_search(SearchCheckpoint(checkpoint.path, {"algorithm": "other"})) is None
+
+
+def test_a_damaged_reevolution_checkpoint_is_named_and_left_as_it_is(tmp_path):
+    config, _ = apply_conditions(["weak-wheel=9:0.5"])
+    path = tmp_path / "ceiling.json"
+    path.write_text('{"key": {"algorithm": "qd"}, "search": ')
+    checkpoint = SearchCheckpoint(path, {"algorithm": "qd"})
+    with pytest.raises(AdaptationError, match=r"ceiling\.json.*remove it to start that search afresh"):
+        reevolve("qd", "food", 30, 2, ConditionEvaluation(BatchEvaluator(config), 1, 1), None, checkpoint)
+    path.write_text('{"key": {"algorithm": "qd"}, "search": {}, "trees": [], "fitness": []}')
+    with pytest.raises(AdaptationError, match="is damaged"):
+        reevolve("qd", "food", 30, 2, ConditionEvaluation(BatchEvaluator(config), 1, 1), None, checkpoint)
+    assert path.read_text().startswith('{"key": {"algorithm": "qd"}, "search": {}')
