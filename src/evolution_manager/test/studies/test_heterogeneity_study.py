@@ -133,9 +133,11 @@ def test_tasks_plans_the_tasks_named_each_on_the_seeds_of_its_row(tmp_path):
     assert default["plan"] == [e for e in whole["plan"] if e["task"] in study.DEFAULT_TASKS]
 
 
-def test_the_running_studys_plan_is_still_planned_alike():
-    """experiments/heterogeneity/experiment.json: the plan the study's own options give today (no --tasks)."""
-    folder = Path(__file__).resolve().parents[4] / "experiments" / "heterogeneity"
+@pytest.mark.parametrize("name", ["heterogeneity", "heterogeneity-carriers"])
+def test_the_running_studys_plan_is_still_planned_alike(name):
+    """experiments/heterogeneity (cut to its first task) and experiments/heterogeneity-carriers: the plan the
+    study's own options give today."""
+    folder = Path(__file__).resolve().parents[4] / "experiments" / name
     saved = json.loads((folder / planning.PLAN_FILE).read_text())
     args = [
         "--study",
@@ -147,6 +149,7 @@ def test_the_running_studys_plan_is_still_planned_alike():
     ]
     args += ["--seed", str(saved["seed"]), "--trials", str(saved["trials"]), "--out", str(folder)]
     args += ["--swarm-evaluations", str(saved["swarm_evaluations"]), "--profile", saved["profile"]]
+    args += ["--tasks", ",".join(t["task"] for t in saved["tasks"])]
     document, _, _ = study.plan_study(build_parser().parse_args(args), saved["scenarios"], saved["design"])
     assert json.loads(json.dumps(document)) == saved
 
