@@ -244,28 +244,74 @@ def test_the_benchmark_keeps_a_harsh_condition_drops_a_mild_one_and_resumes(tmp_
     assert not (out / "ceiling-checkpoint.json").exists()
 
 
-def test_the_committed_primitives_reports_condition_table_is_its_runs_csv():
-    """docs/results/adaptation/primitives: per kept condition and method, the runs, the fraction recovered
-    within 10 and 30 trials and the median held-out re-scores recomputed from its runs.csv (floor 0.5)."""
-    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "adaptation" / "primitives"
+RESULTS = Path(__file__).resolve().parents[4] / "docs" / "results" / "adaptation"
+
+
+def _measures(mine: list[dict], floor: float) -> str:
+    """The cells a report gives a group of runs: their number, the median trials to 90 % of the pre-fault
+    score, the fraction recovered within 10 and 30 trials, and the median held-out re-scores at 10 trials and
+    at the budget (as fractions of the best tree's fault-free score there, counted from ``floor``)."""
+    hits = [int(r["trials_to_90"]) if r["trials_to_90"] else math.inf for r in mine]
+    scores = [
+        np.median(
+            [adapt_benchmark.relative(float(r[key]), float(r["heldout_pre_fault"]), floor) for r in mine]
+        )
+        for key in ("heldout_at_10", "heldout_final")
+    ]
+    middle = float(np.median(hits))
+    cells = [str(len(mine)), "never in 30" if math.isinf(middle) else f"{middle:g}"]
+    cells += [f"{100 * sum(h <= at for h in hits) / len(hits):.0f} %" for at in (10, 30)]
+    cells += [f"{100 * float(v):.0f} %" for v in scores]
+    return " | ".join(cells)
+
+
+@pytest.mark.parametrize(("task", "floor", "kept"), [("primitives", 0.5, 6), ("foraging", 0.0, 7)])
+def test_a_committed_task_reports_condition_table_is_its_runs_csv(task, floor, kept):
+    """docs/results/adaptation/<task>: per kept condition and method, the runs, the fraction recovered
+    within 10 and 30 trials and the median held-out re-scores recomputed from its runs.csv."""
+    folder = RESULTS / task
     rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
-    floor = 0.5
+    assert json.loads((folder / "summary.json").read_text())["floor"] == floor
     conditions = list(dict.fromkeys(r["condition"] for r in rows))
-    assert len(conditions) == 6
+    assert len(conditions) == kept
     for condition in conditions:
         for method in adapt_benchmark.METHODS:
             mine = [r for r in rows if r["condition"] == condition and r["method"] == method]
-            hits = [int(r["trials_to_90"]) if r["trials_to_90"] else math.inf for r in mine]
-            held = [
-                adapt_benchmark.relative(float(r[key]), float(r["heldout_pre_fault"]), floor)
-                for key in ("heldout_at_10", "heldout_final")
-                for r in mine
-            ]
-            at_10, final = held[: len(mine)], held[len(mine) :]
-            middle = float(np.median(hits))
-            trials = "never in 30" if math.isinf(middle) else f"{middle:g}"
-            cells = f"| {condition} | {adapt_benchmark.LABELS[method]} | {len(mine)} | {trials}"
-            percent = [f"{100 * sum(h <= at for h in hits) / len(hits):.0f} %" for at in (10, 30)]
-            scores = [f"{100 * float(np.median(v)):.0f} %" for v in (at_10, final)]
-            assert f"{cells} | {percent[0]} | {percent[1]} | {scores[0]} | {scores[1]} |" in report, cells
+            cells = f"| {condition} | {adapt_benchmark.LABELS[method]} | {_measures(mine, floor)} |"
+            assert cells in report, cells
+
+
+def test_the_adaptation_pages_tables_are_the_tasks_runs_and_ceilings():
+    """docs/results/adaptation/README.md: runs.csv is the two tasks' runs.csv joined; the table against the
+    goal (every kept condition of a task) and the ceilings over the pre-fault score recomputed from them."""
+    page = (RESULTS / "README.md").read_text()
+    joined = (RESULTS / "runs.csv").read_text().splitlines()
+    parts = [(RESULTS / task / "runs.csv").read_text().splitlines() for task in ("primitives", "foraging")]
+    assert joined == [parts[0][0], *parts[0][1:], *parts[1][1:]] and parts[0][0] == parts[1][0]
+    rows = list(csv.DictReader(io.StringIO("\n".join(joined))))
+    reached = 0
+    for task in ("primitives", "foraging"):
+        floor = json.loads((RESULTS / task / "summary.json").read_text())["floor"]
+        mine = [r for r in rows if r["task"] == task]
+        kept = len({r["condition"] for r in mine})
+        for method in adapt_benchmark.METHODS:
+            of_method = [r for r in mine if r["method"] == method]
+            cells = f"| {task} | {adapt_benchmark.LABELS[method]} | {kept} | {_measures(of_method, floor)} |"
+            assert cells in page, cells
+        ceilings: dict[tuple[str, str], float] = {}
+        for r in csv.DictReader(io.StringIO((RESULTS / task / "ceilings.csv").read_text())):
+            key = (r["condition"], r["seed"])
+            ceilings[key] = max(ceilings.get(key, -math.inf), float(r["best_fitness"]))
+        for (condition, seed), ceiling in ceilings.items():
+            pre = np.median(
+                [
+                    float(r["pre_fault"])
+                    for r in mine
+                    if (r["condition"], r["seed"]) == (condition, seed) and r["repertoire"]
+                ]
+            )
+            share = (ceiling - floor) / (pre - floor)
+            reached += share >= 0.9
+            assert f"| {task} | {condition} | {seed} | {100 * share:.0f} % |" in page
+    assert f"It reaches 90 % of the pre-fault score in {reached} of 25 condition-seeds" in page
