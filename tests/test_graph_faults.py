@@ -1,6 +1,6 @@
 """Per-robot faults travel through the node graph: the simulator node publishes the faulty robots' readings
 and moves their faulty wheels (the controllers are unchanged), so a faulty trial in the graph is the batch
-road's faulty trial, value for value, and its bag replays it."""
+road's faulty trial, value for value, and its bag replays it. A changed food region (``gap``, ``food-disc``) holds there alike."""
 
 import json
 from dataclasses import replace
@@ -60,3 +60,18 @@ def test_a_faulty_ground_sensor_reaches_the_controller_with_where_the_robot_stan
     plain = LockstepChain(2, 0, 1, SHORT.config("paper")).readings()
     ground, rab = reading_messages(plain, Time(), 1, frames)
     assert all(list(g.footing) == [] and footing_of(g) is None for g in ground)
+
+
+def test_a_smaller_food_region_holds_in_the_graph_as_on_the_batch_road(tmp_path):
+    """The resource changes (issue 39): the food moved away and shrunk to a disc, a trial of the graph is
+    the batch road's trial under the same conditions, and its bag replays it."""
+    conditions = ["gap=650", "food-disc=250"]
+    config, _ = apply_conditions(conditions, SHORT.config("paper"))
+    seed, trial, bag = 6, 0, tmp_path / "bag"
+    with TrialGraph(timeout=120.0, task=SHORT, conditions=conditions) as graph:
+        record = graph.run(TREE, seed, trial, bag)
+    ((_, changed),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(TREE, seed, 1)])
+    assert record.values == changed[0].values
+    assert np.array_equal(record.end_poses, changed[0].end_poses)
+    replay = verify_trial_bag(bag)
+    assert replay.reproduced, replay

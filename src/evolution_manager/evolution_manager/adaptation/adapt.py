@@ -71,7 +71,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="changed world (repeatable): dead-robots=K, weak-wheel=K:GAIN, message-loss=P, robots=N, gap=MM",
+        help="changed world (repeatable): dead-robots=K, weak-wheel=K:GAIN, message-loss=P, robots=N, "
+        "gap=MM, food-disc=R, faults=RATE[:KIND,KIND]|FILE",
     )
     parser.add_argument("--budget", type=positive_int, default=20, help="most trials (default 20)")
     parser.add_argument(

@@ -169,6 +169,7 @@ FAMILIES: dict[str, str] = {
     "message-loss": "radio",
     "robots": "swarm size",
     "gap": "resources",
+    "food-disc": "resources",
 }
 """The fault family of each fault kind and condition name."""
 RUN_HEADER = [

@@ -20,7 +20,14 @@ robots' own perception.
 ``robots=N``
     a swarm of N robots (``n_robots``).
 ``gap=MM``
-    every trial's nest-food gap is MM mm, instead of 500 and 700 in turn (``gaps = (MM,)``).
+    every trial's nest-food gap is MM mm, instead of 500 and 700 in turn (``gaps = (MM,)``): the food moves
+    away from the nest (and, in the 2023 arena, its region shrinks with it).
+``food-disc=R``
+    a smaller food region at the same distance: in the 2023 arena (a nest disc and food beyond a circle),
+    the food becomes a disc of radius R mm on the x axis, its near edge where the food's circle was (nest
+    radius plus the gap of each configuration, after ``gap``). It is the same arena as a layout
+    (``Config.layout``, ``regions.Piece``), so it holds on every road; a task with regions of its own has no
+    such circle, and is refused.
 ``faults=RATE``, ``faults=RATE:KIND,KIND``, ``faults=FILE``
     per-robot faults (``swarm_sim.model.faults``, which says what each kind does; kinds ``ground-stuck``,
     ``ground-inverted``, ``rab-deaf``, ``rab-noisy``, ``rab-mirrored``, ``wheel-dead``, ``wheel-weak``,
@@ -42,12 +49,21 @@ from pathlib import Path
 from swarm_sim.errors import ConditionError, ConfigError
 from swarm_sim.model.config import DEFAULT, Config
 from swarm_sim.model.faults import FAULT_KINDS, read_fault_file
+from swarm_sim.model.regions import Piece
 
-CONDITION_NAMES: tuple[str, ...] = ("dead-robots", "weak-wheel", "message-loss", "robots", "gap", "faults")
+CONDITION_NAMES: tuple[str, ...] = (
+    "dead-robots",
+    "weak-wheel",
+    "message-loss",
+    "robots",
+    "gap",
+    "food-disc",
+    "faults",
+)
 """Every condition name, in the order they are applied (``robots`` is applied first, whatever the order
 given, so that ``dead-robots`` and ``weak-wheel`` are checked against the swarm they damage)."""
 
-_ORDER = ("robots", "gap", "message-loss", "dead-robots", "weak-wheel", "faults")
+_ORDER = ("robots", "gap", "food-disc", "message-loss", "dead-robots", "weak-wheel", "faults")
 
 
 def _integer(name: str, text: str, piece: str | None = None, what: str = "") -> int:
@@ -89,6 +105,29 @@ def _gap(config: Config, text: str) -> tuple[Config, object]:
             f"walls), got {gap:g}"
         )
     return replace(config, gaps=(gap,)), gap
+
+
+def _food_disc(config: Config, text: str) -> tuple[Config, object]:
+    radius = _real("food-disc", text)
+    if config.layout:
+        raise ConditionError(
+            f"condition food-disc={text}: the task has regions of its own; food-disc changes the 2023 arena "
+            "(a nest disc and food beyond a circle)"
+        )
+    largest = (config.arena_half - config.robot_radius - config.nest_radius - max(config.gaps)) / 2
+    if not 0.0 < radius <= largest:
+        raise ConditionError(
+            f"condition food-disc={text}: expected a radius in (0, {largest:g}] mm (the disc must lie inside "
+            f"the walls beyond the largest gap), got {radius:g}"
+        )
+    layout = tuple(
+        ((Piece("nest", "disc", 0.0, 0.0, config.nest_radius),
+          Piece("food", "disc", config.nest_radius + gap + radius, 0.0, radius)),)
+        for gap in config.gaps
+    )  # fmt: skip
+    # The layout now says where the nest and the food are; nest_radius and gaps keep their defaults, as a
+    # layout requires (they describe only the concentric arena).
+    return replace(config, layout=layout, nest_radius=DEFAULT.nest_radius, gaps=DEFAULT.gaps), radius
 
 
 def _message_loss(config: Config, text: str) -> tuple[Config, object]:
@@ -152,6 +191,7 @@ def _faults(config: Config, text: str) -> tuple[Config, object]:
 _APPLY: dict[str, Callable[[Config, str], tuple[Config, object]]] = {
     "robots": _robots,
     "gap": _gap,
+    "food-disc": _food_disc,
     "message-loss": _message_loss,
     "dead-robots": _dead_robots,
     "weak-wheel": _weak_wheel,

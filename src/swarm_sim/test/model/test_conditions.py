@@ -12,6 +12,7 @@ from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.evaluation.cli import evaluate_main
 from swarm_sim.model import DEFAULT, Config, apply_conditions, condition_texts
 from swarm_sim.roads import reference_road, run_with_controllers
+from swarm_sim.tasks import resolve_task
 
 SHORT = Config(ticks=12)
 """A short trial keeps the hand-worked checks quick; the conditions do not depend on its length."""
@@ -109,9 +110,38 @@ def test_roads_agree_under_every_condition_at_once():
     assert normal.fitness != result.fitness
 
 
+def test_food_disc_puts_a_smaller_food_region_where_the_ring_began_on_every_road():
+    config, record = apply_conditions(["gap=600", "food-disc=300"], SHORT)
+    assert record == {"gap": 600.0, "food-disc": 300.0}
+    ((nest, food),) = config.arena_layout[0]
+    assert (nest.shape, nest.radius) == ("disc", 500.0)
+    assert (food.kind, food.shape, food.x, food.y, food.radius) == ("food", "disc", 1400.0, 0.0, 300.0)
+    # A point on the ring's inner edge is food only on the disc's side; the nest stays where it was.
+    assert food.distance(1100.0, 0.0) == 0.0 and food.distance(-1100.0, 0.0) > 0.0
+    assert nest.distance(0.0, 0.0) == 0.0
+    tree = "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward)"
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(tree, 9, 2)])
+    values, ref_records = reference_road.evaluate(parse(tree), 9, 2, config)
+    assert result.fitness + result.descriptors == values
+    for a, b in zip(records, ref_records, strict=True):
+        assert (a.end_poses == b.end_poses).all()
+    ring, _ = apply_conditions(["gap=600"], SHORT)
+    assert BatchEvaluator(ring).evaluate([EvaluationRequest(tree, 9, 2)])[0].fitness != result.fitness
+
+
+def test_food_disc_is_refused_where_there_is_no_2023_arena():
+    regions = resolve_task("multifood-arena6").config()
+    with pytest.raises(ConditionError, match="the task has regions of its own"):
+        apply_conditions(["food-disc=200"], regions)
+
+
 @pytest.mark.parametrize(
     ("texts", "says"),
     [
+        (["food-disc=0"], "expected a radius in (0, 582.482] mm"),
+        (["food-disc=600"], "expected a radius in (0, 582.482] mm"),
+        (["gap=1800", "food-disc=100"], "expected a radius in (0, 32.4816] mm"),
+        (["food-disc=inf"], "finite"),
         (["dead_robots=2"], "unknown condition 'dead_robots'"),
         (["dead-robots"], "expected NAME=VALUE"),
         (["dead-robots=two"], "expected an integer"),
