@@ -1,6 +1,7 @@
 """Per-robot faults travel through the node graph: the simulator node publishes the faulty robots' readings
 and moves their faulty wheels (the controllers are unchanged), so a faulty trial in the graph is the batch
-road's faulty trial, value for value, and its bag replays it. A changed food region (``gap``, ``food-disc``) holds there alike."""
+road's faulty trial, value for value, and its bag replays it. A changed food region (``gap``, ``food-disc``)
+holds there alike."""
 
 import json
 from dataclasses import replace
