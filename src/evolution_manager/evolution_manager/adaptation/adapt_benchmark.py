@@ -612,7 +612,8 @@ def _benchmark(args: argparse.Namespace, client: Client | None) -> dict:
                          "profile": profile},
                     )  # fmt: skip
                     saved = saved_search(checkpoint)
-                    again = f", from its checkpoint at {len(saved['trees'])}" if saved else ""
+                    done = saved.get("trees") if saved else None
+                    again = f", from its checkpoint at {len(done)}" if isinstance(done, list) else ""
                     say(f"{condition} seed {seed}: ceiling, {algorithm}, {args.ceiling} evaluations{again}")
                     run_eval = ConditionEvaluation(batch, seed, args.trials)
                     trees, fitness = reevolve(
