@@ -90,6 +90,20 @@ def test_robots_and_gap_set_the_swarm_and_the_arena():
         assert setup.gap == 650.0 and setup.gains.shape == (5, 2) and setup.position_keys.shape == (5,)
 
 
+FOOD_SEEKER = "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward)"
+
+
+def _roads_agree(config):
+    """The food seeker's fitness under ``config``, after checking that the batch road and the reference road
+    give the same values and end poses."""
+    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(FOOD_SEEKER, 9, 2)])
+    values, ref_records = reference_road.evaluate(parse(FOOD_SEEKER), 9, 2, config)
+    assert result.fitness + result.descriptors == values
+    for a, b in zip(records, ref_records, strict=True):
+        assert (a.end_poses == b.end_poses).all()
+    return result.fitness
+
+
 def test_roads_agree_under_every_condition_at_once():
     texts = ["robots=7", "dead-robots=2", "weak-wheel=3:0.5", "message-loss=0.3", "gap=600"]
     config, record = apply_conditions(texts, SHORT)
@@ -100,14 +114,8 @@ def test_roads_agree_under_every_condition_at_once():
         "robots=7",
         "gap=600.0",
     ]
-    tree = "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward)"
-    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(tree, 9, 2)])
-    values, ref_records = reference_road.evaluate(parse(tree), 9, 2, config)
-    assert result.fitness + result.descriptors == values
-    for a, b in zip(records, ref_records, strict=True):
-        assert (a.end_poses == b.end_poses).all()
-    normal = BatchEvaluator(SHORT).evaluate([EvaluationRequest(tree, 9, 2)])[0]
-    assert normal.fitness != result.fitness
+    normal = BatchEvaluator(SHORT).evaluate([EvaluationRequest(FOOD_SEEKER, 9, 2)])[0]
+    assert normal.fitness != _roads_agree(config)
 
 
 def test_food_disc_puts_a_smaller_food_region_where_the_ring_began_on_every_road():
@@ -119,14 +127,10 @@ def test_food_disc_puts_a_smaller_food_region_where_the_ring_began_on_every_road
     # A point on the ring's inner edge is food only on the disc's side; the nest stays where it was.
     assert food.distance(1100.0, 0.0) == 0.0 and food.distance(-1100.0, 0.0) > 0.0
     assert nest.distance(0.0, 0.0) == 0.0
-    tree = "sel(seq(food_left, forward_left), seq(food_right, forward_right), forward)"
-    ((result, records),) = BatchEvaluator(config).evaluate_trials([EvaluationRequest(tree, 9, 2)])
-    values, ref_records = reference_road.evaluate(parse(tree), 9, 2, config)
-    assert result.fitness + result.descriptors == values
-    for a, b in zip(records, ref_records, strict=True):
-        assert (a.end_poses == b.end_poses).all()
     ring, _ = apply_conditions(["gap=600"], SHORT)
-    assert BatchEvaluator(ring).evaluate([EvaluationRequest(tree, 9, 2)])[0].fitness != result.fitness
+    assert BatchEvaluator(ring).evaluate([EvaluationRequest(FOOD_SEEKER, 9, 2)])[0].fitness != _roads_agree(
+        config
+    )
 
 
 def test_food_disc_is_refused_where_there_is_no_2023_arena():
