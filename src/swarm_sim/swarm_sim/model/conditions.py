@@ -49,7 +49,7 @@ from pathlib import Path
 from swarm_sim.errors import ConditionError, ConfigError
 from swarm_sim.model.config import DEFAULT, Config
 from swarm_sim.model.faults import FAULT_KINDS, read_fault_file
-from swarm_sim.model.regions import Piece
+from swarm_sim.model.regions import concentric_food_disc
 
 CONDITION_NAMES: tuple[str, ...] = (
     "dead-robots",
@@ -120,11 +120,7 @@ def _food_disc(config: Config, text: str) -> tuple[Config, object]:
             f"condition food-disc={text}: expected a radius in (0, {largest:g}] mm (the disc must lie inside "
             f"the walls beyond the largest gap), got {radius:g}"
         )
-    layout = tuple(
-        ((Piece("nest", "disc", 0.0, 0.0, config.nest_radius),
-          Piece("food", "disc", config.nest_radius + gap + radius, 0.0, radius)),)
-        for gap in config.gaps
-    )  # fmt: skip
+    layout = concentric_food_disc(config.nest_radius, config.gaps, radius)
     # The layout now says where the nest and the food are; nest_radius and gaps keep their defaults, as a
     # layout requires (they describe only the concentric arena).
     return replace(config, layout=layout, nest_radius=DEFAULT.nest_radius, gaps=DEFAULT.gaps), radius

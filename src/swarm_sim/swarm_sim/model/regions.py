@@ -91,6 +91,20 @@ def concentric(nest_radius: float, gaps: Sequence[float]) -> Layout:
     )
 
 
+def concentric_food_disc(nest_radius: float, gaps: Sequence[float], radius: float) -> Layout:
+    """The 2023 arena with a smaller food region (the ``food-disc`` condition): per gap, a food disc of
+    ``radius`` on the x axis whose near edge is where ``concentric``'s food circle is."""
+    return tuple(
+        (
+            (
+                Piece("nest", "disc", 0.0, 0.0, nest_radius),
+                Piece("food", "disc", nest_radius + gap + radius, 0.0, radius),
+            ),
+        )
+        for gap in gaps
+    )
+
+
 def entry_of_trial(layout: Layout, trial: int, chain_trials: int) -> ArenaEntry:
     """The entry of trial ``trial`` of an evaluation: trials come in blocks of ``chain_trials``, the blocks
     cycle through the layout's configurations, and trial k of a block takes its configuration's entry k
