@@ -709,7 +709,20 @@ def _deliveries_figures(root: Path, document: dict, finished: Sequence[tuple[dic
         title = f"{task}: each robot's held-out deliveries per trial, by kind"
         path = figures.robot_deliveries(per_robot, title, root / "figures" / f"robots_{task}.png")
         drawn.append(f"![{title}](figures/{path.name})")
+        if config.carries:
+            drawn.append(carries_note(task, config.carries))
     return drawn
+
+
+def carries_note(task: str, carries: Sequence[Sequence[str]]) -> str:
+    """What the deliveries figure of ``task`` shows when its robots carry only some kinds (``carries``, as
+    ``Config.carries``): the colours are the rule's, not the swarm's."""
+    groups = "; ".join(f"group {g}: {', '.join(kinds)}" for g, kinds in enumerate(carries))
+    return (
+        f"On {task} robot i picks up only the kinds of group i mod {len(carries)} (`robots.carries`; "
+        f"{groups}), so each robot's colour follows that rule in every swarm, homogeneous or not: here a "
+        "specialised swarm shows in the heights of the bars, not in their colours."
+    )
 
 
 def _validated_section(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
@@ -808,9 +821,8 @@ def build_report(root: Path) -> Path:
         "## Figures\n\n" + "\n\n".join(_figure(root, rows, tasks)) + "\n\n"
         "## Who delivers what\n\nFor each task the baseline and each arm's best run (highest held-out best "
         "fitness): each robot's deliveries of each food kind per trial on the run's five held-out scenarios "
-        "(seeds shown modulo 10,000). A specialised swarm shows robots of different colours.\n\n"
-        + "\n\n".join(_deliveries_figures(root, document, arm_runs))
-        + "\n"
+        "(seeds shown modulo 10,000). Where every robot picks up every kind, a specialised swarm shows "
+        "robots of different colours.\n\n" + "\n\n".join(_deliveries_figures(root, document, arm_runs)) + "\n"
     )
     write_atomic(root / "report.md", text)
     return root / "report.md"

@@ -201,6 +201,7 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert per_robot.mean(axis=0).tolist() == pytest.approx(summary["heldout_descriptors"], abs=1e-12)
     assert (out / "figures" / "robots_multifood-arena6.png").stat().st_size > 0
     report = (out / "report.md").read_text()
+    assert "picks up only" not in report  # every robot of multifood-arena6 carries every kind
     assert (
         "## Does heterogeneity pay?" in report
         and "Holm" in report
@@ -265,12 +266,26 @@ def test_the_goals_power_is_the_paired_t_tests_from_the_noncentral_t():
     assert "power to detect the goal's gain" in study.goal_power(differences, gain)
 
 
-def test_the_committed_reports_tables_are_its_runs_csv():
-    """docs/results/heterogeneity/study: the report's three score tables recomputed from its runs.csv."""
-    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / "study"
+def test_the_carries_note_names_each_group_and_what_the_colours_follow():
+    carries = task_named("multifood-arena6-carriers").config("paper").carries
+    note = study.carries_note("multifood-arena6-carriers", carries)
+    assert "group i mod 3" in note and "group 0: food; group 1: food2; group 2: food3" in note
+    assert "heights of the bars, not in their colours" in note
+
+
+CARRIERS = ("multifood-arena6-carriers",)
+"""The carriers study's one task (``experiments/heterogeneity-carriers``)."""
+
+
+@pytest.mark.parametrize(("name", "tasks"), [("study", study.DEFAULT_TASKS), ("carriers-study", CARRIERS)])
+def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
+    """docs/results/heterogeneity/study and carriers-study: each report's score tables and QD table
+    recomputed from its runs.csv."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / name
     rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
-    tasks = list(study.DEFAULT_TASKS)
+    tasks = list(tasks)
+    assert {row["task"] for row in rows} <= set(tasks)
     for key in (study.HELDOUT, study.VALIDATED, study.UNSEEN):
         assert study.scores_table(rows, tasks, key) in report
     assert study.qd_table(rows, tasks) in report
