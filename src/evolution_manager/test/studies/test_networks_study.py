@@ -1,7 +1,7 @@
 """``experiment --study bt-vs-nn``: the plan (arms, objectives, seeds), the whole study end to end on a tiny
 budget (runs.csv, report, figures, each best network's action table), a second start that runs nothing
-again, the report command rebuilding the same report, and the readable form of a network (its action per
-input pattern, grouped as conditions)."""
+again, the report command rebuilding the same report, the readable form of a network (its action per input
+pattern, grouped as conditions), and the committed report's tables against its runs.csv."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import csv
 import io
 import json
 import random
+from pathlib import Path
 
 import pytest
 
@@ -16,6 +17,7 @@ from bt_controller.interpreters import N_WEIGHTS, Network, load_network
 from evolution_manager.studies import networks_study
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
+from evolution_manager.studies.significance import markdown_table
 
 
 def _members(cube: str) -> set[int]:
@@ -110,3 +112,19 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert (out / "report.md").read_bytes() == written["report.md"]
     assert experiment([*args[:-3], "--runs", "1", "--evaluations", "70", "--out", str(out)]) == 2
     assert "other options" in capsys.readouterr().err
+
+
+def test_the_committed_reports_tables_are_its_runs_csv():
+    """docs/results/bt-vs-nn: the report's score table and both test tables recomputed from its runs.csv,
+    over the objectives of the study's plan (experiments/bt-vs-nn)."""
+    root = Path(__file__).resolve().parents[4]
+    folder = root / "docs" / "results" / "bt-vs-nn"
+    table = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
+    report = (folder / "report.md").read_text()
+    objectives = json.loads((root / "experiments" / "bt-vs-nn" / "experiment.json").read_text())["objectives"]
+    assert {row["objective"] for row in table} <= set(objectives)
+    assert networks_study.scores_table(table, objectives) in report
+    best, repertoires = networks_study.comparisons(table, objectives)
+    for family in (best, repertoires):
+        if family:
+            assert markdown_table(family) in report
