@@ -23,7 +23,8 @@ import numba
 
 from bt_controller.language import parse, random_trees
 from bt_controller.model_settings import PROFILES
-from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, check_request
+from swarm_sim.bench.arguments import MAX_SEED, check_ranges, most_threads
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
 from swarm_sim.model import DEFAULT, Config
 from swarm_sim.roads import reference_road
 from swarm_sim.tasks import add_task_option
@@ -81,7 +82,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point of ``bench``."""
     parser = argparse.ArgumentParser(prog="bench", description=__doc__.split("\n")[0])
     parser.add_argument("--trees", type=int, default=200, help="requests in the timed batch")
-    parser.add_argument("--reference-trees", type=int, default=4, help="requests timed on the reference road")
+    parser.add_argument(
+        "--reference-trees", type=int, default=4, help="requests timed on the reference road (0: none)"
+    )
     parser.add_argument("--trials", type=int, default=10, help="trials per evaluation")
     parser.add_argument("--seed", type=int, default=0, help="seed of the tree set and of the requests")
     parser.add_argument("--parity", type=int, default=0, metavar="N", help="also compare roads on N trees")
@@ -89,6 +92,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--profile", choices=PROFILES, default=DEFAULT.profile, help="the model's profile")
     add_task_option(parser)
     args = parser.parse_args(argv)
+    counted = max(args.trees, args.reference_trees, args.parity + 1)  # seeds seed .. seed + counted - 1
+    check_ranges(
+        parser,
+        args,
+        {
+            "trees": (1, None),
+            "reference_trees": (0, None),  # the first of the batch's trees, as many as there are
+            "trials": (1, MAX_TRIALS),
+            "seed": (0, MAX_SEED - counted),
+            "parity": (0, None),
+            "threads": (1, most_threads()),
+        },
+    )
     config = args.task.config(args.profile)
     numba.set_num_threads(args.threads)
 
@@ -107,10 +123,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"batch:     {batch_rate:8.1f} evaluations/s ({len(requests)} in {batch_time:.2f} s, {args.threads} "
         f"thread(s); {cpu_rate:.1f} per CPU-second)"
     )
-    ref_requests = requests[: args.reference_trees]
-    ref_rate, ref_time = _reference_rate(ref_requests, config)
-    print(f"reference: {ref_rate:8.2f} evaluations/s ({len(ref_requests)} in {ref_time:.2f} s)")
-    print(f"ratio:     {batch_rate / ref_rate:8.0f}x")
+    if args.reference_trees:  # 0: the batch road alone (the reference road takes seconds a tree)
+        ref_requests = requests[: args.reference_trees]
+        ref_rate, ref_time = _reference_rate(ref_requests, config)
+        print(f"reference: {ref_rate:8.2f} evaluations/s ({len(ref_requests)} in {ref_time:.2f} s)")
+        print(f"ratio:     {batch_rate / ref_rate:8.0f}x")
     if args.parity:
         return 1 if parity(args.parity, args.seed, args.trials, config) else 0
     return 0

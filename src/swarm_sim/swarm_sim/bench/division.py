@@ -41,7 +41,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from swarm_ros.safe_paths import UnsafePathError, check_output, replace_file
-from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
+from swarm_sim.bench.arguments import check_ranges, most_threads
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, SwarmLayout
 from swarm_sim.roads import record_trial
 from swarm_sim.tasks import TaskError, resolve_task
@@ -293,9 +294,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="also how often robots have a food estimate (wanderer and specialists, seeds 1-5, trials 0-4)",
     )
     args = parser.parse_args(argv)
-    for name, least in (("seeds", 2), ("trials", 1), ("threads", 1)):
-        if getattr(args, name) < least:
-            parser.error(f"--{name} must be at least {least}, got {getattr(args, name)}")
+    bounds = {"seeds": (2, None), "trials": (1, MAX_TRIALS), "threads": (1, most_threads())}
+    check_ranges(parser, args, bounds)
     try:
         # before measuring: a link, a folder or a place under a file is refused (a file is replaced)
         if args.out:
