@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -32,6 +33,19 @@ def integer(
     if (low is not None and number < low) or (high is not None and number > high):
         raise error(f"{name} must be {_integer_kind(low, high)}, got {value!r}")
     return number
+
+
+def check_options(
+    args: object,
+    bounds: Mapping[str, tuple[int | None, int | None]],
+    *,
+    error: type[Exception] = ValueError,
+) -> None:
+    """Each integer option of ``args`` (an argparse namespace) that ``bounds`` names (attribute: (low, high),
+    either bound None) in its range, checked in ``bounds``' order; else raise ``error`` naming the option as
+    it is typed (``reference_trees``: ``--reference-trees``)."""
+    for name, (low, high) in bounds.items():
+        integer(getattr(args, name), "--" + name.replace("_", "-"), low, high, error=error)
 
 
 def _integer_kind(low: int | None, high: int | None) -> str:

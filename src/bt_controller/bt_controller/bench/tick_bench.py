@@ -24,6 +24,7 @@ from bt_controller.interpreters.semantics import ReferenceRobot
 from bt_controller.language.formats import from_xml
 from bt_controller.language.random_trees import random_blackboards, random_tree
 from bt_controller.language.tree import parse
+from bt_controller.validate import check_options
 
 PATHOLOGICAL: tuple[tuple[str, Callable[[str], object], str], ...] = (
     ("1e6 open brackets", parse, "(" * 1_000_000),
@@ -129,6 +130,13 @@ def main(argv: list[str] | None = None) -> int:
     for size in args.sizes:
         if size == 2 or size < 1:
             parser.error(f"no tree has {size} nodes")
+    counts = ("trees", "robots", "ticks", "repeats", "reference_robots")
+    try:
+        check_options(
+            args, {**{name: (1, None) for name in counts}, "agreement": (0, None), "seed": (0, None)}
+        )
+    except ValueError as error:
+        parser.error(str(error))
 
     print(f"robot-ticks per second on one core: best of {args.repeats} repeats of {args.robots} robots")
     print(f"x {args.ticks} ticks over {args.trees} random trees; reference: {args.reference_robots} robots")

@@ -21,10 +21,11 @@ from collections.abc import Sequence
 
 import numba
 
+from bt_controller.draws import MAX_SEED
 from bt_controller.language import parse, random_trees
 from bt_controller.model_settings import PROFILES
-from swarm_sim.bench.arguments import MAX_SEED, check_ranges, most_threads
-from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request
+from bt_controller.validate import check_options
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, EvaluationRequest, check_request, most_threads
 from swarm_sim.model import DEFAULT, Config
 from swarm_sim.roads import reference_road
 from swarm_sim.tasks import add_task_option
@@ -93,18 +94,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     add_task_option(parser)
     args = parser.parse_args(argv)
     counted = max(args.trees, args.reference_trees, args.parity + 1)  # seeds seed .. seed + counted - 1
-    check_ranges(
-        parser,
-        args,
-        {
-            "trees": (1, None),
-            "reference_trees": (0, None),  # the first of the batch's trees, as many as there are
-            "trials": (1, MAX_TRIALS),
-            "seed": (0, MAX_SEED - counted),
-            "parity": (0, None),
-            "threads": (1, most_threads()),
-        },
-    )
+    bounds = {
+        "trees": (1, None),
+        "reference_trees": (0, None),  # the first of the batch's trees, as many as there are
+        "trials": (1, MAX_TRIALS),
+        "seed": (0, MAX_SEED - counted),
+        "parity": (0, None),
+        "threads": (1, most_threads()),
+    }
+    try:
+        check_options(args, bounds)
+    except ValueError as error:
+        parser.error(str(error))
     config = args.task.config(args.profile)
     numba.set_num_threads(args.threads)
 

@@ -40,9 +40,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from bt_controller.validate import check_options
 from swarm_ros.safe_paths import UnsafePathError, check_output, replace_file
-from swarm_sim.bench.arguments import check_ranges, most_threads
-from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, SwarmRequest
+from swarm_sim.evaluation import MAX_TRIALS, BatchEvaluator, SwarmRequest, most_threads
 from swarm_sim.model import OBJECTIVES, SwarmLayout
 from swarm_sim.roads import record_trial
 from swarm_sim.tasks import TaskError, resolve_task
@@ -294,8 +294,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="also how often robots have a food estimate (wanderer and specialists, seeds 1-5, trials 0-4)",
     )
     args = parser.parse_args(argv)
-    bounds = {"seeds": (2, None), "trials": (1, MAX_TRIALS), "threads": (1, most_threads())}
-    check_ranges(parser, args, bounds)
+    try:
+        check_options(args, {"seeds": (2, None), "trials": (1, MAX_TRIALS), "threads": (1, most_threads())})
+    except ValueError as error:
+        parser.error(str(error))
     try:
         # before measuring: a link, a folder or a place under a file is refused (a file is replaced)
         if args.out:

@@ -16,9 +16,10 @@ import sys
 import time
 from collections.abc import Sequence
 
+from bt_controller.draws import MAX_SEED
 from bt_controller.language import random_trees
 from bt_controller.model_settings import PROFILES
-from swarm_sim.bench.arguments import MAX_SEED, check_ranges
+from bt_controller.validate import check_options
 from swarm_sim.evaluation import MAX_TRIALS
 from swarm_sim.model import DEFAULT, default_config
 from swarm_sim.roads import record_trial, record_trial_reference, warm_up
@@ -33,16 +34,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--reference-trees", type=int, default=3, help="trees recorded on the reference road")
     parser.add_argument("--profile", choices=PROFILES, default=DEFAULT.profile, help="the model's profile")
     args = parser.parse_args(argv)
-    check_ranges(
-        parser,
-        args,
-        {
-            "trees": (1, None),
-            "reference_trees": (0, None),
-            "trial": (0, MAX_TRIALS - 1),
-            "seed": (0, MAX_SEED - max(args.trees, args.reference_trees)),  # seeds seed .. seed + trees - 1
-        },
-    )
+    counted = max(args.trees, args.reference_trees)  # seeds seed .. seed + counted - 1
+    bounds = {
+        "trees": (1, None),
+        "reference_trees": (0, None),
+        "trial": (0, MAX_TRIALS - 1),
+        "seed": (0, MAX_SEED - counted),
+    }
+    try:
+        check_options(args, bounds)
+    except ValueError as error:
+        parser.error(str(error))
     config = default_config(args.profile)
     texts = random_trees(args.seed, max(args.trees, args.reference_trees))
     print(f"trial {args.trial} of {args.trees} random trees; profile {config.profile}")

@@ -15,6 +15,7 @@ from swarm_sim.evaluation.batch import (
     check_request,
     failed,
     from_values,
+    most_threads,
 )
 from swarm_sim.evaluation.result_messages import (
     evaluation_fields,
@@ -40,6 +41,7 @@ __all__ = [
     "failed",
     "fill",
     "from_values",
+    "most_threads",
     "named_values",
     "result_fields",
     "trial_fields",

@@ -116,6 +116,12 @@ def _parse(text: str, max_nodes: int, max_depth: int, library: Library | None) -
         raise ValueError(f"bad tree: {error}") from None
 
 
+def most_threads() -> int:
+    """The most numba threads this process may use (``NUMBA_NUM_THREADS``, fixed when numba loads)."""
+    most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set by numba at import
+    return most
+
+
 @functools.lru_cache(maxsize=4096)
 def _flat_tree(text: str, max_nodes: int, max_depth: int, library: Library | None) -> FlatTree | Network:
     """The flat tree of a tree text (a network as it is: ``compiled.pack`` packs it), remembered: evolution
@@ -155,8 +161,7 @@ class BatchEvaluator:
         threads: int = 1,
         library: Library | None = None,
     ) -> None:
-        most: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set by numba at import
-        integer(threads, "threads", 1, most)
+        integer(threads, "threads", 1, most_threads())
         self.threads = threads
         self.config = config
         self.max_nodes = max_nodes
