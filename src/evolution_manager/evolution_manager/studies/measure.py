@@ -18,10 +18,10 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int
+from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seed_in_range
 from evolution_manager.errors import UsageError
 from evolution_manager.evolution.run import Run
-from evolution_manager.evolution.run_config import ALGORITHMS, RunConfig
+from evolution_manager.evolution.run_config import ALGORITHMS, OBJECTIVES, RunConfig
 from swarm_ros.safe_paths import check_output, describe, replace_file
 from swarm_sim.evaluation import BatchEvaluator
 
@@ -57,8 +57,10 @@ def measure(argv: Sequence[str] | None = None) -> int:
         "--evaluations", type=positive_int, default=5000, help="evaluations per run (default 5000)"
     )
     parser.add_argument("--algorithms", nargs="+", choices=ALGORITHMS, default=list(ALGORITHMS))
-    parser.add_argument("--objective", default="food", help="objective of gp and qd (default food)")
-    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--objective", choices=OBJECTIVES, default="food", help="objective of gp and qd (default food)"
+    )
+    parser.add_argument("--seed", type=seed_in_range, default=1, help="run seed (default 1)")
     parser.add_argument("--workers", type=positive_int, default=1, help="evaluator threads (default 1)")
     parser.add_argument("--json", type=Path, help="also write the measurements to this file (new)")
     parser.add_argument("--force", action="store_true", help="overwrite a --json file that exists")
