@@ -35,6 +35,7 @@ import dataclasses
 import json
 import os
 import queue as queues
+import re
 import signal
 import subprocess
 import sys
@@ -354,6 +355,36 @@ def record_session(
     write_json(path, sessions)
 
 
+ORDERS = ("longest", "seed")
+"""``--order``'s choices: which of a stage's unfinished runs start first (``start_order``)."""
+
+_RUN_INDEX = re.compile(r"run(\d+)$")
+
+
+class _Budgeted(Protocol):
+    """A planned run's configuration, as far as the start order reads it."""
+
+    @property
+    def evaluations(self) -> int: ...
+
+
+_Budget = TypeVar("_Budget", bound=_Budgeted)
+
+
+def start_order(runs: Sequence[tuple[_Budget, str]], order: str) -> list[tuple[_Budget, str]]:
+    """``runs`` (configuration, run folder) in the order they start: ``longest``, the largest budget first
+    (the soonest end of a stage); ``seed``, by the run index of the folder (``.../run03``: 3), then the
+    largest budget; ties keep the plan's order. Each run's result is the same whatever the order."""
+
+    def index(folder: str) -> int:
+        found = _RUN_INDEX.search(Path(folder).name)
+        return int(found.group(1)) if found else 0
+
+    if order == "seed":
+        return sorted(runs, key=lambda item: (index(item[1]), -item[0].evaluations))
+    return sorted(runs, key=lambda item: -item[0].evaluations)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``experiment`` command line."""
     parser = Parser(prog="experiment", description=__doc__.split("\n")[0])
@@ -427,6 +458,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="T1,T2",
         help="with --study heterogeneity: which of its tasks to plan, comma-separated (default: its first "
         "three; multifood-arena6-balanced and multifood-arena6-carriers are the fourth and fifth)",
+    )
+    parser.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="longest",
+        help="which of a stage's runs start first: longest, the largest budgets (the soonest end, default); "
+        "seed, run 0 of every arm before run 1 (finished runs pair by seed early, so a study stopped midway "
+        "can be reported); never changes a result and is not in experiment.json",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
@@ -671,7 +710,7 @@ def execute(
                     return 1
                 paths = {str(out / path): path for _, path in planned}
                 to_run = [(config, str(out / path)) for config, path in planned if not finished(out / path)]
-                to_run.sort(key=lambda item: -item[0].evaluations)  # the longest first: a shorter makespan
+                to_run = start_order(to_run, args.order)
                 runs = [(config.to_json(), root) for config, root in to_run]
                 if client is None:
                     processes = args.processes or os.cpu_count() or 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -15,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from evolution_manager.cluster.settings import ClusterSettings
-from evolution_manager.studies.experiment import build_parser, experiment, record_session
+from evolution_manager.studies.experiment import build_parser, experiment, record_session, start_order
 from evolution_manager.studies.planning import paper_study, plan, shared_scenario_seed
 from evolution_manager.studies.report_command import report
 from evolution_manager.studies.significance import compare, holm
@@ -138,18 +139,34 @@ def test_more_runs_continue_an_experiment_and_leave_its_finished_runs_as_they_ar
     tmp_path, capsys, one_run_experiment
 ):
     """``--runs`` raised on an experiment folder: the runs it planned keep their seeds, folders and files,
-    and only the new ones run (issue 38's scenarios grow from 10 to 20 runs per group this way)."""
+    and only the new ones run (issue 38's scenarios grow from 10 to 20 runs per group this way), in any
+    ``--order``."""
     out = tmp_path / "experiment"
     shutil.copytree(one_run_experiment, out)
     args = ["--evaluations", "50", "--out", str(out), "--processes", "2", "--no-progress"]
     first = {p: p.read_bytes() for p in sorted(out.glob("runs/*/run00/*.json"))}
     plan = json.loads((out / "experiment.json").read_text())["plan"]
-    assert experiment(["--runs", "2", *args]) == 0
+    assert experiment(["--runs", "2", "--order", "seed", *args]) == 0  # the order is not an option it keeps
     assert "grows to 2 runs per group" in capsys.readouterr().err
     assert {p: p.read_bytes() for p in first} == first
     grown = json.loads((out / "experiment.json").read_text())
     assert grown["runs"] == 2 and all(entry in grown["plan"] for entry in plan)
     assert len(list(out.glob("runs/*/run01/summary.json"))) == 7
+
+
+@dataclasses.dataclass(frozen=True)
+class _Budget:
+    evaluations: int
+
+
+def test_the_start_order_is_the_largest_budget_first_or_run_0_of_every_arm_first():
+    runs = [(_Budget(50), "arms/a/run01"), (_Budget(50), "arms/a/run00"), (_Budget(90), "arms/b/run01")]
+    runs += [(_Budget(50), "arms/b/run00"), (_Budget(10), "libraries/x")]  # no run index: index 0
+    longest = [folder for _, folder in start_order(runs, "longest")]
+    assert longest == ["arms/b/run01", "arms/a/run01", "arms/a/run00", "arms/b/run00", "libraries/x"]
+    by_seed = [folder for _, folder in start_order(runs, "seed")]
+    assert by_seed == ["arms/a/run00", "arms/b/run00", "libraries/x", "arms/b/run01", "arms/a/run01"]
+    assert experiment(["--order", "random", "--out", "unused"]) == 2
 
 
 def test_other_options_are_named_in_the_refusal(tmp_path, capsys):
