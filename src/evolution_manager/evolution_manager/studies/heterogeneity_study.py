@@ -56,7 +56,7 @@ from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
-from evolution_manager.files import read_json, write_atomic
+from evolution_manager.files import read_json, read_json_object, write_atomic
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
@@ -572,6 +572,45 @@ def qd_table(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def repertoire_table(root: Path, document: dict) -> str:
+    """Per task, what its finished repertoires hold for the compositions to choose from: the bins filled of
+    each repertoire's grid (median, least and most), the cells a composition run chooses among (a bin's
+    elite in each objective's archive, ``repertoire_<objective>.json``), and for each food kind the fittest
+    tree of that kind's archive as scored in-run, nine copies of it (median over the repertoires)."""
+    lines = [
+        "| task | repertoires | bins filled: median [least, most] | cells to compose from (median) "
+        "| fittest tree per kind, in-run (median): kind 1 / kind 2 / kind 3 |",
+        "|---|---|---|---|---|",
+    ]
+    for spec in document["tasks"]:
+        task = spec["task"]
+        filled, cells, kinds = [], [], []
+        for entry in document["plan"]:
+            if entry["kind"] != "repertoire" or entry["task"] != task or _summary(root, entry["dir"]) is None:
+                continue
+            archives = {}
+            for objective in OBJECTIVES:
+                path = root / entry["dir"] / f"repertoire_{objective}.json"
+                if path.exists():
+                    archives[objective] = read_json_object(path)
+            if not archives:
+                continue
+            size = next(iter(archives.values()))["repertoire_size"]
+            grid = math.prod(next(iter(archives.values()))["shape"])
+            filled.append(size)
+            cells.append(size * len(archives))
+            kinds.append([archives.get(f"foraging{k}", {}).get("best_fitness", math.nan) for k in (1, 2, 3)])
+        if not filled:
+            continue
+        known = [[row[k] for row in kinds if not math.isnan(row[k])] for k in range(3)]
+        per_kind = " / ".join(f"{_median(values):.3g}" if values else "n/a" for values in known)
+        lines.append(
+            f"| {task} | {len(filled)} | {_median(filled):g} [{min(filled)}, {max(filled)}] of {grid} "
+            f"| {_median(cells):g} | {per_kind} |"
+        )
+    return "\n".join(lines) + "\n" if len(lines) > 2 else "No repertoire has finished yet.\n"
+
+
 def goal_text(
     rows: Sequence[dict[str, str]], tested: Sequence[Comparison], tasks: Sequence[str], key: str = HELDOUT
 ) -> str:
@@ -818,6 +857,13 @@ def build_report(root: Path) -> Path:
         "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "
         "runs, at equal evaluations.\n\n"
         f"{qd_table(rows, tasks)}\n"
+        "## What the repertoires hold\n\nA composition arm chooses each robot's tree among its "
+        "repertoire's elites, so a swarm can specialise only as far as the repertoire holds trees for each "
+        "kind. Bins filled of the repertoire's grid (the deliveries of each kind over [0, 0.5] per axis, 8 "
+        "bins each, or the paper's descriptors); the cells a composition chooses among (a bin's elite in "
+        "each objective's archive); the fittest tree of each kind's archive, scored in-run as nine copies "
+        "of it.\n\n"
+        f"{repertoire_table(root, document)}\n"
         "## Figures\n\n" + "\n\n".join(_figure(root, rows, tasks)) + "\n\n"
         "## Who delivers what\n\nFor each task the baseline and each arm's best run (highest held-out best "
         "fitness): each robot's deliveries of each food kind per trial on the run's five held-out scenarios "

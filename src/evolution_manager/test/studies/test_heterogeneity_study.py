@@ -202,6 +202,15 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert (out / "figures" / "robots_multifood-arena6.png").stat().st_size > 0
     report = (out / "report.md").read_text()
     assert "picks up only" not in report  # every robot of multifood-arena6 carries every kind
+    # what the repertoires hold: the bins each filled, from its archives
+    sizes = [
+        json.loads((out / f"repertoires/multifood-arena6/run0{r}/repertoire_foraging.json").read_text())[
+            "repertoire_size"
+        ]
+        for r in (0, 1)
+    ]
+    held = report[report.index("## What the repertoires hold") :]
+    assert f"| multifood-arena6 | 2 | {np.median(sizes):g} [{min(sizes)}, {max(sizes)}] of 512 |" in held
     assert (
         "## Does heterogeneity pay?" in report
         and "Holm" in report
