@@ -59,6 +59,7 @@ from evolution_manager.errors import ConfigError, RunDirectoryError
 from evolution_manager.evolution.archive import Repertoire
 from evolution_manager.evolution.descriptor_sets import (
     BEHAVIOUR,
+    DELIVERY_SETS,
     DescriptorSet,
     checked_space,
     descriptor_set,
@@ -636,7 +637,7 @@ def _preferred_axis(config: CompositionConfig) -> int | None:
     ``foraging_biased`` with a preferred kind (then a bin keeps the genome that delivers more of it, the
     authors' rule); None otherwise."""
     preferred = config.world().preferred_food
-    if config.descriptors != "deliveries" or config.objective != "foraging_biased" or not preferred:
+    if config.space not in DELIVERY_SETS or config.objective != "foraging_biased" or not preferred:
         return None
     return preferred - 1
 

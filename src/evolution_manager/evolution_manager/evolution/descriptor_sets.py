@@ -4,8 +4,11 @@
 [0, 1]). ``deliveries`` is the authors' 2026 one for swarms of several food kinds (``ga/qd.py``; their
 descriptors are the deliveries of each kind): a tree's deliveries of kinds 1, 2 and 3 per robot per trial,
 each divided by ``DELIVERY_DOMAIN`` so that the grid spans [0, 1]; more than that is kept in the last bin,
-as their grid keeps a value beyond its domain. ``evaluations.csv`` always records the evaluator's own
-values; the grids, the archive and the repertoire files hold the run's descriptors.
+as their grid keeps a value beyond its domain. ``deliveries-0.25`` is the same axes over [0, 0.25], for tasks
+whose trees deliver little of each kind (on ``multifood-arena6-carriers`` no tree of the heterogeneity study
+delivered more than 0.27 of a kind, so the authors' grid left seven bins in eight of each axis almost empty).
+``evaluations.csv`` always records the evaluator's own values; the grids, the archive and the repertoire
+files hold the run's descriptors.
 """
 
 from __future__ import annotations
@@ -49,8 +52,14 @@ def _delivery_values(fitness: Sequence[float], _: Sequence[float]) -> tuple[floa
     return tuple(float(fitness[OBJECTIVES.index(k)]) for k in FOOD_KINDS)
 
 
-def _delivery_point(values: Sequence[float]) -> tuple[float, ...]:
-    return tuple(min(1.0, max(0.0, v / DELIVERY_DOMAIN)) for v in values)
+def _deliveries(name: str, domain: float, whose: str) -> DescriptorSet:
+    """The deliveries of kinds 1-3 per robot per trial, each axis over [0, ``domain``] (more: last bin)."""
+
+    def point(values: Sequence[float]) -> tuple[float, ...]:
+        return tuple(min(1.0, max(0.0, v / domain)) for v in values)
+
+    description = f"deliveries of food kinds 1-3 per robot per trial over [0, {domain:g}] ({whose})"
+    return DescriptorSet(name, FOOD_KINDS, description, _delivery_values, point)
 
 
 BEHAVIOUR = DescriptorSet(
@@ -60,14 +69,11 @@ BEHAVIOUR = DescriptorSet(
     lambda _, descriptors: tuple(float(d) for d in descriptors),
     tuple,
 )
-DELIVERIES = DescriptorSet(
-    "deliveries",
-    FOOD_KINDS,
-    f"deliveries of food kinds 1-3 per robot per trial over [0, {DELIVERY_DOMAIN:g}] (the authors' 2026)",
-    _delivery_values,
-    _delivery_point,
-)
-DESCRIPTOR_SETS: dict[str, DescriptorSet] = {s.name: s for s in (BEHAVIOUR, DELIVERIES)}
+DELIVERIES = _deliveries("deliveries", DELIVERY_DOMAIN, "the authors' 2026")
+DELIVERIES_QUARTER = _deliveries("deliveries-0.25", 0.25, "for tasks of few deliveries")
+DELIVERY_SETS = (DELIVERIES, DELIVERIES_QUARTER)
+"""The behaviour spaces of deliveries per food kind: they need a task of several kinds."""
+DESCRIPTOR_SETS: dict[str, DescriptorSet] = {s.name: s for s in (BEHAVIOUR, *DELIVERY_SETS)}
 """Every behaviour space by name; ``behaviour`` is the default."""
 
 
@@ -82,9 +88,9 @@ def checked_space(name: str, task: TaskSpec, what: str, example: str) -> Descrip
     """The set named ``name`` for runs on ``task``; ValueError naming the choices, or, for ``deliveries`` on a
     task of one food kind, saying that ``what`` (trees, swarms) need a task of several (``example``)."""
     space = descriptor_set(name)
-    if space is DELIVERIES and task.config().food_kinds < 2:
+    if space in DELIVERY_SETS and task.config().food_kinds < 2:
         raise ValueError(
-            f"descriptors deliveries bins {what} by the deliveries of each food kind: task {task.name} has "
+            f"descriptors {name} bins {what} by the deliveries of each food kind: task {task.name} has "
             f"one kind of food; give a task of several ({example}, ...)"
         )
     return space

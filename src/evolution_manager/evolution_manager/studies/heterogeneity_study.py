@@ -54,6 +54,7 @@ import numpy as np
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
+from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.files import read_json, read_json_object, write_atomic
@@ -324,7 +325,7 @@ def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
     """The held-out deliveries of kinds 1 to 3 of a composition run: its held-out values of the deliveries
     axes; binned by behaviour (a task of one kind of food, objective ``foraging``), its held-out fitness as
     kind 1's and no other kind."""
-    if entry["descriptors"] == "deliveries":
+    if entry["descriptors"] in (s.name for s in DELIVERY_SETS):
         return [_number(v) for v in values] if isinstance(values, list) else ["", "", ""]
     return [_number(fitness) if entry["objective"] == "foraging" else "", "", ""]
 

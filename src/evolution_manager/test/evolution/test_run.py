@@ -308,6 +308,22 @@ class _KindsToy(ToyEvaluator):
         return type(result)(tuple(fitness), result.descriptors, None)
 
 
+def test_deliveries_over_a_quarter_bins_the_same_axes_twice_as_finely():
+    from evolution_manager.evolution.descriptor_sets import descriptor_set
+    from evolution_manager.evolution.run_config import ConfigError
+
+    fitness = [0.0] * len(OBJECTIVES)
+    for kind, value in (("foraging1", 0.05), ("foraging2", 0.2), ("foraging3", 0.3)):
+        fitness[OBJECTIVES.index(kind)] = value
+    assert descriptor_set("deliveries").point(fitness, (0, 0, 0)) == pytest.approx((0.1, 0.4, 0.6))
+    assert descriptor_set("deliveries-0.25").point(fitness, (0, 0, 0)) == pytest.approx((0.2, 0.8, 1.0))
+    config = RunConfig.make("qd", "foraging", 300, 5, task="multifood-arena6", descriptors="deliveries-0.25")
+    assert RunConfig.from_json(config.to_json()) == config
+    assert config.to_json()["descriptors"] == "deliveries-0.25"
+    with pytest.raises(ConfigError, match=r"descriptors deliveries-0\.25 bins trees .* one kind of food"):
+        RunConfig.make("qd", "foraging", 300, 5, task="foraging", descriptors="deliveries-0.25")
+
+
 def test_a_run_over_the_deliveries_of_each_food_kind_bins_by_them_and_resumes_alike(tmp_path):
     from evolution_manager.evolution.descriptor_sets import DELIVERY_DOMAIN
     from evolution_manager.evolution.run_config import ConfigError
