@@ -60,6 +60,7 @@ from evolution_manager.arguments import (
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import ClusterSettings, add_cluster_options, settings_from_args
 from evolution_manager.errors import EvolutionError, UsageError, WriteError
+from evolution_manager.evolution.descriptor_sets import DESCRIPTOR_SETS
 from evolution_manager.evolution.options import add_scenario_options
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.evolution.run_folder import COMPOSITIONS, NETWORKS, TEAMS
@@ -467,6 +468,18 @@ def build_parser() -> argparse.ArgumentParser:
         "seed, run 0 of every arm before run 1 (finished runs pair by seed early, so a study stopped midway "
         "can be reported); never changes a result and is not in experiment.json",
     )
+    parser.add_argument(
+        "--arms",
+        metavar="A1,A2",
+        help="with --study heterogeneity: which of its arms to plan, comma-separated (default all); each run "
+        "keeps the seed it has in the whole plan, so two folders' runs pair by seed",
+    )
+    parser.add_argument(
+        "--descriptors",
+        choices=tuple(DESCRIPTOR_SETS),
+        help="with --study heterogeneity: the behaviour space of every task's repertoires and compositions "
+        "(default: each task's own, the authors' deliveries)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_cluster_options(parser)
     return parser
@@ -562,8 +575,9 @@ def experiment(argv: Sequence[str] | None = None) -> int:
             raise UsageError("--objectives applies to --study bt-vs-nn only")
         if args.swarm_evaluations is not None and args.study != "heterogeneity":
             raise UsageError("--swarm-evaluations applies to --study heterogeneity only")
-        if args.tasks is not None and args.study != "heterogeneity":
-            raise UsageError("--tasks applies to --study heterogeneity only")
+        for name in ("tasks", "arms", "descriptors"):
+            if getattr(args, name) is not None and args.study != "heterogeneity":
+                raise UsageError(f"--{name} applies to --study heterogeneity only")
         if args.study == "foraging":
             from evolution_manager.studies import foraging_study  # late: loads scipy.stats (about 1 s)
 

@@ -185,6 +185,21 @@ def chosen_tasks(text: str | None) -> list[int]:
     return [t for t, name in enumerate(names) if name in given]
 
 
+def chosen_arms(text: str | None) -> list[Arm]:
+    """The arms of :data:`ARMS` that ``--arms`` names (comma-separated; in ``ARMS`` order), every arm when
+    None; ``UsageError`` in one line listing the choices for an unknown one. The homogeneous baseline comes
+    with every composition arm; a plan of team arms only has none."""
+    names = [arm.name for arm in ARMS]
+    if text is None:
+        return list(ARMS)
+    given = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in given if name not in names]
+    if unknown or not given:
+        what = f"unknown arm {unknown[0]!r}" if unknown else f"no arm in {text!r}"
+        raise UsageError(f"--arms: {what}; expected some of {','.join(names)}")
+    return [arm for arm in ARMS if arm.name in given]
+
+
 def plan_study(
     args: argparse.Namespace, scenarios: str, design: str | None
 ) -> tuple[dict, list[Stage], dict[str, int]]:
@@ -198,11 +213,15 @@ def plan_study(
         scenario_seed = shared_scenario_seed(args.seed)
     out = Path(args.out).absolute()
     chosen = chosen_tasks(args.tasks)
+    planned_arms = chosen_arms(args.arms)
+    # --descriptors: one behaviour space for every task's repertoires and compositions instead of its own
+    tasks = [(TASKS[t][0], TASKS[t][1], args.descriptors or TASKS[t][2]) for t in chosen]
+    if not any(not arm.team for arm in planned_arms):
+        raise UsageError("--arms: a plan needs a composition arm (its runs measure the homogeneous baseline)")
     entries: list[dict] = []
     stages: list[Stage] = []
     budgets: dict[str, int] = {}
-    for t in chosen:
-        task, objective, descriptors = TASKS[t]
+    for t, (task, objective, descriptors) in zip(chosen, tasks, strict=True):
         repertoires: list[tuple[RunConfig | TeamConfig, str]] = []
         for r in range(args.runs):
             seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
@@ -216,7 +235,7 @@ def plan_study(
             budgets[folder] = made.evaluations
         arms: list[dict] = []
         teams: list[tuple[RunConfig | TeamConfig, str]] = []
-        for arm in (a for a in ARMS if a.team):
+        for arm in (a for a in planned_arms if a.team):
             for r in range(args.runs):
                 seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
                 team = TeamConfig.make(
@@ -228,7 +247,7 @@ def plan_study(
                                 "seed": seed, "config": team.to_json()})  # fmt: skip
                 teams.append((team, folder))
                 budgets[folder] = team.evaluations
-        for arm in (a for a in ARMS if not a.team):
+        for arm in (a for a in planned_arms if not a.team):
             for r in range(args.runs):
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entry: dict[str, object] = {
@@ -254,8 +273,8 @@ def plan_study(
         "study": STUDY,
         **document_head(args, profile, scenarios, design, scenario_seed),
         "swarm_evaluations": swarm_evaluations,
-        "tasks": [{"task": t, "objective": o, "descriptors": d} for t, o, d in (TASKS[k] for k in chosen)],
-        "arms": [arm.name for arm in ARMS],
+        "tasks": [{"task": t, "objective": o, "descriptors": d} for t, o, d in tasks],
+        "arms": [arm.name for arm in planned_arms],
         "plan": entries,
     }
     return document, stages, budgets

@@ -96,6 +96,41 @@ def test_new_arms_grow_the_plan_and_keep_the_runs_planned_before(tmp_path, monke
     assert not planning.more_runs(saved, json.loads(json.dumps(changed)))
 
 
+def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_path, capsys):
+    """``--arms`` plans only the arms named and ``--descriptors`` bins every repertoire and composition by
+    another behaviour space; each run keeps the seed and folder it has in the whole plan, so the two folders'
+    runs pair by seed, and the part grows into the whole as new arms do."""
+    base = ["--study", "heterogeneity", "--runs", "2", "--swarm-evaluations", "300", "--out", str(tmp_path)]
+    base += ["--tasks", "multifood-arena6-carriers"]
+    whole, _, _ = study.plan_study(build_parser().parse_args(base), "fixed", "shared")
+    part_args = build_parser().parse_args([*base, "--arms", "qd, ga", "--descriptors", "deliveries-0.25"])
+    part, _, budgets = study.plan_study(part_args, "fixed", "shared")
+    assert part["arms"] == ["ga", "qd"] and part["tasks"][0]["descriptors"] == "deliveries-0.25"
+    assert {e.get("arm", "repertoire") for e in part["plan"]} == {"repertoire", "ga", "qd"}
+    assert len(part["plan"]) == 6 and set(budgets) == {e["dir"] for e in part["plan"]}
+    seeds = {e["dir"]: e.get("seed", e["config"]["seed"] if "config" in e else None) for e in whole["plan"]}
+    for entry in part["plan"]:
+        where = entry["config"] if entry["kind"] == "repertoire" else entry
+        assert where["descriptors"] == "deliveries-0.25"
+        assert entry.get("seed", entry.get("config", {}).get("seed")) == seeds[entry["dir"]]
+    only_args = build_parser().parse_args([*base, "--arms", "ga,qd"])
+    only_arms, _, _ = study.plan_study(only_args, "fixed", "shared")
+    assert planning.growth(json.loads(json.dumps(only_arms)), json.loads(json.dumps(whole))).startswith(
+        "by the arms ga-seeded, qd-mix"
+    )
+    for more, expected in (
+        (["--arms", "ga,gx"], "--arms: unknown arm 'gx'; expected some of ga,ga-seeded,qd,"),
+        (["--arms", "team3"], "--arms: a plan needs a composition arm"),
+    ):
+        assert experiment([*base, *more, "--out", str(tmp_path / "x")]) == 2
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1 and expected in error
+    for option in (["--arms", "ga"], ["--descriptors", "deliveries"]):
+        assert experiment(["--study", "paper", *option, "--out", str(tmp_path / "x")]) == 2
+        assert f"{option[0]} applies to --study heterogeneity only" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
 def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):
     args = ["--study", "paper", "--swarm-evaluations", "10", "--out", str(tmp_path / "x")]
     assert experiment(args) == 2
