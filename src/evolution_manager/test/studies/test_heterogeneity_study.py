@@ -168,10 +168,10 @@ def test_tasks_plans_the_tasks_named_each_on_the_seeds_of_its_row(tmp_path):
     assert default["plan"] == [e for e in whole["plan"] if e["task"] in study.DEFAULT_TASKS]
 
 
-@pytest.mark.parametrize("name", ["heterogeneity", "heterogeneity-carriers"])
+@pytest.mark.parametrize("name", ["heterogeneity", "heterogeneity-carriers", "heterogeneity-carriers-fine"])
 def test_the_running_studys_plan_is_still_planned_alike(name):
-    """experiments/heterogeneity (cut to its first task) and experiments/heterogeneity-carriers: the plan the
-    study's own options give today."""
+    """experiments/heterogeneity (cut to its first task), experiments/heterogeneity-carriers and its twin on
+    the finer delivery grid (two arms): the plan the study's own options give today."""
     folder = Path(__file__).resolve().parents[4] / "experiments" / name
     saved = json.loads((folder / planning.PLAN_FILE).read_text())
     args = [
@@ -185,6 +185,10 @@ def test_the_running_studys_plan_is_still_planned_alike(name):
     args += ["--seed", str(saved["seed"]), "--trials", str(saved["trials"]), "--out", str(folder)]
     args += ["--swarm-evaluations", str(saved["swarm_evaluations"]), "--profile", saved["profile"]]
     args += ["--tasks", ",".join(t["task"] for t in saved["tasks"])]
+    if saved["arms"] != [arm.name for arm in study.ARMS]:
+        args += ["--arms", ",".join(saved["arms"])]
+    if name.endswith("-fine"):
+        args += ["--descriptors", saved["tasks"][0]["descriptors"]]
     document, _, _ = study.plan_study(build_parser().parse_args(args), saved["scenarios"], saved["design"])
     assert json.loads(json.dumps(document)) == saved
 
