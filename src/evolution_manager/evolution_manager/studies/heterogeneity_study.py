@@ -54,7 +54,7 @@ import numpy as np
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
-from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS
+from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS, descriptor_set
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.files import read_json, read_json_object, write_atomic
@@ -837,6 +837,8 @@ def build_report(root: Path) -> Path:
     writer.writerows(rows)
     write_atomic(root / "runs.csv", buffer.getvalue())
     tasks = [t["task"] for t in document["tasks"]]
+    # the behaviour spaces the plan bins by, as each describes itself (the deliveries' domain among them)
+    spaces = "; ".join(dict.fromkeys(descriptor_set(t["descriptors"]).description for t in document["tasks"]))
     tested = comparisons(rows, tasks)
     arms = "\n".join(f"- **{arm.name}**: {arm.what}." for arm in ARMS)
     planned = sum(1 for e in document["plan"] if e["kind"] != "repertoire")
@@ -872,15 +874,14 @@ def build_report(root: Path) -> Path:
         f"{_validated_section(rows, tasks)}"
         f"{_unseen_section(rows, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
-        "Every genome a run evaluated, binned by the task's behaviour space (the deliveries of each kind "
-        "over [0, 0.5] per axis, or the paper's three descriptors), the "
+        f"Every genome a run evaluated, binned by the task's behaviour space ({spaces}), the "
         "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "
         "runs, at equal evaluations.\n\n"
         f"{qd_table(rows, tasks)}\n"
         "## What the repertoires hold\n\nA composition arm chooses each robot's tree among its "
         "repertoire's elites, so a swarm can specialise only as far as the repertoire holds trees for each "
-        "kind. Bins filled of the repertoire's grid (the deliveries of each kind over [0, 0.5] per axis, 8 "
-        "bins each, or the paper's descriptors); the cells a composition chooses among (a bin's elite in "
+        f"kind. Bins filled of the repertoire's grid ({spaces}; 8 bins per axis); the cells a composition "
+        "chooses among (a bin's elite in "
         "each objective's archive); the fittest tree of each kind's archive, scored in-run as nine copies "
         "of it.\n\n"
         f"{repertoire_table(root, document)}\n"

@@ -241,6 +241,7 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     assert (out / "figures" / "robots_multifood-arena6.png").stat().st_size > 0
     report = (out / "report.md").read_text()
     assert "picks up only" not in report  # every robot of multifood-arena6 carries every kind
+    assert report.count("deliveries of food kinds 1-3 per robot per trial over [0, 0.5]") == 2  # its space
     # what the repertoires hold: the bins each filled, from its archives
     sizes = [
         json.loads((out / f"repertoires/multifood-arena6/run0{r}/repertoire_foraging.json").read_text())[
