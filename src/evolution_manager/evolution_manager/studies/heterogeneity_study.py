@@ -53,11 +53,17 @@ import numpy as np
 
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
-from evolution_manager.evolution.compositions import QD_SCORE_BINS, CompositionConfig, CompositionParameters
+from evolution_manager.evolution.archive import GRID_SHAPE
+from evolution_manager.evolution.compositions import (
+    QD_SCORE_BINS,
+    CompositionConfig,
+    CompositionParameters,
+    read_sources,
+)
 from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS, descriptor_set
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
-from evolution_manager.files import read_json, read_json_object, write_atomic
+from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
@@ -170,18 +176,23 @@ def _folder(kind: str, task: str, r: int) -> str:
     return f"{kind}/{task}/run{r:02d}"
 
 
+def _named(text: str, names: Sequence[str], what: str) -> set[str]:
+    """The names a comma-separated option (``--tasks``, ``--arms``: ``what`` is ``task`` or ``arm``) gives;
+    ``UsageError`` in one line listing ``names`` for an unknown one or none."""
+    given = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in given if name not in names]
+    if unknown or not given:
+        problem = f"unknown {what} {unknown[0]!r}" if unknown else f"no {what} in {text!r}"
+        raise UsageError(f"--{what}s: {problem}; expected some of {','.join(names)}")
+    return set(given)
+
+
 def chosen_tasks(text: str | None) -> list[int]:
     """The indices in :data:`TASKS` of the tasks ``--tasks`` names (comma-separated; in ``TASKS`` order),
     those of :data:`DEFAULT_TASKS` when None; ``UsageError`` in one line listing the choices for an unknown
     one."""
     names = [task for task, _, _ in TASKS]
-    if text is None:
-        return [names.index(task) for task in DEFAULT_TASKS]
-    given = [name.strip() for name in text.split(",") if name.strip()]
-    unknown = [name for name in given if name not in names]
-    if unknown or not given:
-        what = f"unknown task {unknown[0]!r}" if unknown else f"no task in {text!r}"
-        raise UsageError(f"--tasks: {what}; expected some of {','.join(names)}")
+    given = set(DEFAULT_TASKS) if text is None else _named(text, names, "task")
     return [t for t, name in enumerate(names) if name in given]
 
 
@@ -189,14 +200,9 @@ def chosen_arms(text: str | None) -> list[Arm]:
     """The arms of :data:`ARMS` that ``--arms`` names (comma-separated; in ``ARMS`` order), every arm when
     None; ``UsageError`` in one line listing the choices for an unknown one. The homogeneous baseline comes
     with every composition arm; a plan of team arms only has none."""
-    names = [arm.name for arm in ARMS]
     if text is None:
         return list(ARMS)
-    given = [name.strip() for name in text.split(",") if name.strip()]
-    unknown = [name for name in given if name not in names]
-    if unknown or not given:
-        what = f"unknown arm {unknown[0]!r}" if unknown else f"no arm in {text!r}"
-        raise UsageError(f"--arms: {what}; expected some of {','.join(names)}")
+    given = _named(text, [arm.name for arm in ARMS], "arm")
     return [arm for arm in ARMS if arm.name in given]
 
 
@@ -344,7 +350,7 @@ def _kinds(entry: dict, fitness: object, values: object) -> list[str]:
     """The held-out deliveries of kinds 1 to 3 of a composition run: its held-out values of the deliveries
     axes; binned by behaviour (a task of one kind of food, objective ``foraging``), its held-out fitness as
     kind 1's and no other kind."""
-    if entry["descriptors"] in (s.name for s in DELIVERY_SETS):
+    if descriptor_set(entry["descriptors"]) in DELIVERY_SETS:
         return [_number(v) for v in values] if isinstance(values, list) else ["", "", ""]
     return [_number(fitness) if entry["objective"] == "foraging" else "", "", ""]
 
@@ -604,29 +610,26 @@ def repertoire_table(root: Path, document: dict) -> str:
     ]
     for spec in document["tasks"]:
         task = spec["task"]
-        filled, cells, kinds = [], [], []
+        filled, pool, kinds = [], [], []
         for entry in document["plan"]:
             if entry["kind"] != "repertoire" or entry["task"] != task or _summary(root, entry["dir"]) is None:
                 continue
-            archives = {}
-            for objective in OBJECTIVES:
-                path = root / entry["dir"] / f"repertoire_{objective}.json"
-                if path.exists():
-                    archives[objective] = read_json_object(path)
-            if not archives:
-                continue
-            size = next(iter(archives.values()))["repertoire_size"]
-            grid = math.prod(next(iter(archives.values()))["shape"])
-            filled.append(size)
-            cells.append(size * len(archives))
-            kinds.append([archives.get(f"foraging{k}", {}).get("best_fitness", math.nan) for k in (1, 2, 3)])
+            cells, _ = read_sources([root / entry["dir"]])  # the cells a composition of it chooses among
+            filled.append(len({cell.bin for cell in cells}))
+            pool.append(len(cells))
+            kinds.append(
+                [
+                    max((c.fitness for c in cells if c.objective == f"foraging{k}"), default=math.nan)
+                    for k in (1, 2, 3)
+                ]
+            )
         if not filled:
             continue
         known = [[row[k] for row in kinds if not math.isnan(row[k])] for k in range(3)]
         per_kind = " / ".join(f"{_median(values):.3g}" if values else "n/a" for values in known)
         lines.append(
-            f"| {task} | {len(filled)} | {_median(filled):g} [{min(filled)}, {max(filled)}] of {grid} "
-            f"| {_median(cells):g} | {per_kind} |"
+            f"| {task} | {len(filled)} | {_median(filled):g} [{min(filled)}, {max(filled)}] of "
+            f"{math.prod(GRID_SHAPE)} | {_median(pool):g} | {per_kind} |"
         )
     return "\n".join(lines) + "\n" if len(lines) > 2 else "No repertoire has finished yet.\n"
 
@@ -840,7 +843,7 @@ def build_report(root: Path) -> Path:
     # the behaviour spaces the plan bins by, as each describes itself (the deliveries' domain among them)
     spaces = "; ".join(dict.fromkeys(descriptor_set(t["descriptors"]).description for t in document["tasks"]))
     tested = comparisons(rows, tasks)
-    arms = "\n".join(f"- **{arm.name}**: {arm.what}." for arm in ARMS)
+    arms = "\n".join(f"- **{arm.name}**: {arm.what}." for arm in ARMS if arm.name in document["arms"])
     planned = sum(1 for e in document["plan"] if e["kind"] != "repertoire")
     finished = len(rows) - sum(1 for r in rows if r["arm"] == BASELINE)
     text = (
