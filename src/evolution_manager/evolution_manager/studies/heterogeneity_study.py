@@ -36,7 +36,9 @@ paired t-test or Wilcoxon signed-rank) with Holm's correction over the family of
 the authors' QD score at 1, 2, 4 and 8 bins per axis of every composition run, and each robot's deliveries
 of each kind in the best swarms. Two more tables with their own families: the runs' validated choices
 (``evolution.validation``), and the same choices on arenas no run evolved on (the task's ``-unseen`` twin,
-``swarm_sim.tasks.unseen_twin``, on the run's held-out seeds; measured once into ``unseen.csv``).
+``swarm_sim.tasks.unseen_twin``, on the run's held-out seeds; measured once into ``unseen.csv``). On a task
+of three food kinds, the hand-written swarms of ``division-bench`` on the same held-out scenarios, paired
+with the baseline (``handwritten_swarms``; measured once into ``handwritten.csv``).
 """
 
 from __future__ import annotations
@@ -64,9 +66,11 @@ from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS, descripto
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.files import read_json, write_atomic
+from evolution_manager.studies.handwritten_swarms import KIND_COLUMNS, Scenarios, handwritten_scores
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
+from swarm_sim.bench.division import swarms
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import TaskError, task_named, unseen_twin
@@ -515,6 +519,75 @@ def unseen_scores(
     return {(c.folder, c.swarm): float(kept[(c.folder, c.swarm)]["fitness"]) for c in wanted}
 
 
+# Hand-written swarms -------------------------------------------------------------------------------------
+HANDWRITTEN = "hand-written: "
+"""The prefix of a hand-written swarm's rows (``handwritten_swarms``), which pair with the baseline by seed
+as the arms' do but stay out of ``runs.csv``."""
+
+
+def _baseline_scenarios(finished: Sequence[tuple[dict, dict]]) -> list[tuple[str, str, Scenarios]]:
+    """Each task's and index's baseline run, as :func:`finished_rows` takes it (the first arm's composition
+    run with a baseline): the task, the seed and its held-out scenarios (task, seeds, trials)."""
+    found: dict[tuple[str, str], Scenarios] = {}
+    for entry, summary in finished:
+        if entry["kind"] != "composition" or not summary.get("homogeneous"):
+            continue
+        held = summary["heldout"]
+        scenarios = (entry["task"], tuple(int(s) for s in held["seeds"]), int(held["trials"]))
+        found.setdefault((entry["task"], str(entry["seed"])), scenarios)
+    return [(task, seed, scenarios) for (task, seed), scenarios in found.items()]
+
+
+def handwritten_rows(
+    root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
+) -> list[dict[str, str]]:
+    """Every hand-written swarm (``handwritten_swarms``) on the held-out scenarios of each task's and
+    index's baseline, as rows of :data:`HEADER` (its arm :data:`HANDWRITTEN` and the swarm's name), measured
+    once into the study's ``handwritten.csv``; none on a task without the benchmark's three food kinds."""
+    baselines = _baseline_scenarios(finished)
+    objectives = {t["task"]: t["objective"] for t in document["tasks"]}
+    found = handwritten_scores(root, document["profile"], objectives, [s for *_, s in baselines])
+    rows = []
+    for task, seed, scenarios in baselines:
+        for swarm in found.get(scenarios, []):
+            row = dict.fromkeys(HEADER, "")
+            row.update(
+                {"arm": HANDWRITTEN + swarm["swarm"], "task": task, "seed": seed, HELDOUT: swarm["fitness"]}
+            )
+            row.update({f"heldout_{column}": swarm[column] for column in KIND_COLUMNS})
+            rows.append(row)
+    return rows
+
+
+def _handwritten_section(
+    rows: Sequence[dict[str, str]], written: Sequence[dict[str, str]], tasks: Sequence[str]
+) -> str:
+    """The hand-written swarms against the baseline on the same held-out scenarios: the table, the tests (a
+    family of their own) and, for the heterogeneous ones, the goal; nothing when there are none."""
+    if not written:
+        return ""
+    names = list(dict.fromkeys(r["arm"] for r in written))
+    both = [r for r in rows if r["arm"] == BASELINE] + list(written)
+    tested = comparisons(both, tasks, HELDOUT, names)
+    mixed = [
+        HANDWRITTEN + name for name, (composition, _) in swarms(9).items() if composition == "heterogeneous"
+    ]
+    return (
+        "## Hand-written swarms on the same held-out scenarios\n\n"
+        "How far a swarm written by hand gets where the runs are scored, and so whether the task lets "
+        "specialisation pay at all: the hand-written swarms of `division-bench` "
+        "(`swarm_sim/bench/division.py`; the specialists run, on robot i, the forager of only kind i mod 3 + "
+        "1) on the baseline's held-out scenarios, scored by the task's objective, paired with each index's "
+        "baseline. Each is one swarm measured once: where the study's scenarios are shared, its score is the "
+        "same for every index, so the tests (a family of their own, Holm-corrected) ask whether the evolved "
+        "baselines differ from that one measurement, and its interval has no width. The goal lines apply "
+        "the issue's test to the heterogeneous ones: swarms a person wrote, not ones the study evolved.\n\n"
+        f"{scores_table(both, tasks, HELDOUT, names)}\n"
+        + (markdown_table(tested) if tested else "No hand-written swarm has two paired runs yet.\n")
+        + f"\n{goal_text(both, tested, tasks, HELDOUT, mixed)}\n"
+    )
+
+
 def _paired(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> tuple[list[float], list[float]]:
     """The arm's and the baseline's ``key`` on ``task``, paired by seed (seeds both have)."""
     mine = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key]}
@@ -527,17 +600,23 @@ def _values(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> li
     return [float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key] != ""]
 
 
-def comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT) -> list[Comparison]:
-    """Each arm against the homogeneous baseline on the held-out score ``key`` (of the best on the run's
-    scenario, or of the validated choice), paired by seed, per task: one family, Holm-corrected (every arm
-    on every task). Pairs of fewer than two runs are left out."""
+def _arm_names() -> tuple[str, ...]:
+    return tuple(arm.name for arm in ARMS)
+
+
+def comparisons(
+    rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT, names: Sequence[str] = ()
+) -> list[Comparison]:
+    """Each arm (or each of ``names``) against the homogeneous baseline on the held-out score ``key`` (of
+    the best on the run's scenario, or of the validated choice), paired by seed, per task: one family,
+    Holm-corrected (every arm on every task). Pairs of fewer than two runs are left out."""
     metric = METRICS[key]
     found = []
     for task in tasks:
-        for arm in ARMS:
-            a, b = _paired(rows, task, arm.name, key)
+        for name in names or _arm_names():
+            a, b = _paired(rows, task, name, key)
             if len(a) >= 2:
-                found.append(compare_paired(metric, task, arm.name, a, BASELINE, b))
+                found.append(compare_paired(metric, task, name, a, BASELINE, b))
     return holm(found) if found else []
 
 
@@ -545,10 +624,13 @@ def _median(values: Sequence[float]) -> float:
     return float(np.median(values))
 
 
-def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT) -> str:
-    """Per task and arm: runs, median of the held-out score ``key`` with a 95 % bootstrap interval, the
-    ratio of medians to the baseline's, the paired median difference with its interval, and for the best on
-    the run's scenario the median held-out deliveries per kind."""
+def scores_table(
+    rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str = HELDOUT, names: Sequence[str] = ()
+) -> str:
+    """Per task and arm (or each of ``names``, after the baseline): runs, median of the held-out score
+    ``key`` with a 95 % bootstrap interval, the ratio of medians to the baseline's, the paired median
+    difference with its interval, and for the best on the run's scenario the median held-out deliveries per
+    kind."""
     rng = np.random.default_rng(0)
     lines = [
         "| task | arm | runs | held-out median [95 % CI] | / homogeneous | paired Δ median [95 % CI] | "
@@ -557,7 +639,7 @@ def scores_table(rows: Sequence[dict[str, str]], tasks: Sequence[str], key: str 
     ]
     for task in tasks:
         base = _values(rows, task, BASELINE, key)
-        for name in (BASELINE, *(arm.name for arm in ARMS)):
+        for name in (BASELINE, *(names or _arm_names())):
             held = _values(rows, task, name, key)
             if not held:
                 continue
@@ -635,26 +717,31 @@ def repertoire_table(root: Path, document: dict) -> str:
 
 
 def goal_text(
-    rows: Sequence[dict[str, str]], tested: Sequence[Comparison], tasks: Sequence[str], key: str = HELDOUT
+    rows: Sequence[dict[str, str]],
+    tested: Sequence[Comparison],
+    tasks: Sequence[str],
+    key: str = HELDOUT,
+    names: Sequence[str] = (),
 ) -> str:
-    """Whether an arm reached the goal on a task: the median of the held-out score ``key`` at least
-    :data:`GOAL` times the baseline's with the paired test significant after Holm's correction."""
+    """Whether an arm (or each of ``names``) reached the goal on a task: the median of the held-out score
+    ``key`` at least :data:`GOAL` times the baseline's with the paired test significant after Holm's
+    correction."""
     lines = []
     for task in tasks:
         base = _values(rows, task, BASELINE, key)
         if not base:
             continue
-        for arm in ARMS:
-            held = _values(rows, task, arm.name, key)
-            row = next((c for c in tested if c.objective == task and c.first == arm.name), None)
+        for name in names or _arm_names():
+            held = _values(rows, task, name, key)
+            row = next((c for c in tested if c.objective == task and c.first == name), None)
             if not held or row is None or _median(base) <= 0:
                 continue
             ratio = _median(held) / _median(base)
             reached = ratio >= GOAL and row.significant and _median(held) > _median(base)
-            a, b = _paired(rows, task, arm.name, key)
+            a, b = _paired(rows, task, name, key)
             power = goal_power([x - y for x, y in zip(a, b, strict=True)], (GOAL - 1) * _median(base))
             lines.append(
-                f"- {task}, {arm.name}: {ratio:.3g} times the homogeneous median, Holm-adjusted p "
+                f"- {task}, {name}: {ratio:.3g} times the homogeneous median, Holm-adjusted p "
                 f"{row.p_holm:.3g} ({len(held)} runs): goal {'reached' if reached else 'not reached'}{power}."
             )
     return "\n".join(lines) + "\n" if lines else "No arm has paired runs yet.\n"
@@ -834,6 +921,7 @@ def build_report(root: Path) -> Path:
     rows = finished_rows(arm_runs, unseen_scores(root, document, arm_runs))
     if not rows:
         raise EvolutionError(f"{root} has no finished composition runs yet")
+    written = handwritten_rows(root, document, arm_runs)
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, HEADER, lineterminator="\n")
     writer.writeheader()
@@ -876,6 +964,7 @@ def build_report(root: Path) -> Path:
         f"{goal_text(rows, tested, tasks)}\n"
         f"{_validated_section(rows, tasks)}"
         f"{_unseen_section(rows, tasks)}"
+        f"{_handwritten_section(rows, written, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
         f"Every genome a run evaluated, binned by the task's behaviour space ({spaces}), the "
         "fittest kept per bin, summed and divided by the number of bins (their utilities.py); means over "

@@ -13,10 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from evolution_manager.studies import handwritten_swarms, planning
 from evolution_manager.studies import heterogeneity_study as study
-from evolution_manager.studies import planning
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
+from swarm_sim.bench import division
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, SwarmLayout
 from swarm_sim.tasks import task_named, unseen_twin
@@ -282,6 +283,30 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
         )
         assert float(row["fitness"]) == pytest.approx(mean, abs=1e-12)
     assert "## Unseen arenas" in report and "unseen-arena held-out fitness" in report
+    # the hand-written swarms on the baseline's held-out scenarios: every one measured once (the scenarios
+    # are the study's, shared by both indices), the specialists' score that swarm's mean over the scenarios
+    written = list(csv.DictReader(io.StringIO((out / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
+    assert [r["swarm"] for r in written] == list(division.swarms(9))
+    assert {r["seeds"] for r in written} == {" ".join(map(str, summary["heldout"]["seeds"]))}
+    specialists = division.swarms(9)[division.SPECIALISTS][1]
+    results = BatchEvaluator(config).evaluate(
+        [SwarmRequest(SwarmLayout(specialists), s, 1) for s in summary["heldout"]["seeds"]]
+    )
+    row = next(r for r in written if r["swarm"] == division.SPECIALISTS)
+    for column in ("foraging", "foraging1", "foraging2", "foraging3"):
+        mean = sum(r.fitness[OBJECTIVES.index(column)] for r in results) / len(results)
+        assert float(row["fitness" if column == "foraging" else column]) == pytest.approx(mean, abs=1e-12)
+    # the same road scores the baseline's nine copies as its run did: the pairing is like for like
+    copies = (summary["homogeneous"]["tree"],) * 9
+    results = BatchEvaluator(config).evaluate(
+        [SwarmRequest(SwarmLayout(copies), s, 1) for s in summary["heldout"]["seeds"]]
+    )
+    mean = sum(r.fitness[OBJECTIVES.index("foraging")] for r in results) / len(results)
+    assert mean == pytest.approx(summary["homogeneous"]["heldout_best_fitness"], abs=1e-12)
+    hand = report[report.index("## Hand-written swarms") : report.index("## The authors' QD score")]
+    assert f"| multifood-arena6 | {study.HANDWRITTEN}{division.SPECIALISTS} | 2 |" in hand
+    assert f"- multifood-arena6, {study.HANDWRITTEN}{division.SPECIALISTS}: " in hand
+    assert f"- multifood-arena6, {study.HANDWRITTEN}any kind: " not in hand  # the goal is heterogeneity's
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
     capsys.readouterr()
     assert experiment(args) == 0
@@ -329,7 +354,7 @@ CARRIERS = ("multifood-arena6-carriers",)
 @pytest.mark.parametrize(("name", "tasks"), [("study", study.DEFAULT_TASKS), ("carriers-study", CARRIERS)])
 def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
     """docs/results/heterogeneity/study and carriers-study: each report's score tables and QD table
-    recomputed from its runs.csv."""
+    recomputed from its runs.csv, and the hand-written swarms' table from handwritten.csv."""
     folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / name
     rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
@@ -338,3 +363,25 @@ def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
     for key in (study.HELDOUT, study.VALIDATED, study.UNSEEN):
         assert study.scores_table(rows, tasks, key) in report
     assert study.qd_table(rows, tasks) in report
+    # the hand-written swarms, paired with every index's baseline on the study's one set of scenarios
+    measured = list(csv.DictReader(io.StringIO((folder / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
+    begun = {row["task"] for row in rows if row["arm"] == study.BASELINE}
+    assert {r["task"] for r in measured} == begun
+    assert len({(r["task"], r["seeds"], r["trials"]) for r in measured}) == len(begun)
+    paired = [
+        {
+            **dict.fromkeys(study.HEADER, ""),
+            "arm": study.HANDWRITTEN + r["swarm"],
+            "task": r["task"],
+            "seed": base["seed"],
+            study.HELDOUT: r["fitness"],
+            **{f"heldout_foraging{k}": r[f"foraging{k}"] for k in (1, 2, 3)},
+        }
+        for base in rows
+        if base["arm"] == study.BASELINE
+        for r in measured
+        if r["task"] == base["task"]
+    ]
+    names = list(dict.fromkeys(r["arm"] for r in paired))
+    both = [r for r in rows if r["arm"] == study.BASELINE] + paired
+    assert study.scores_table(both, tasks, study.HELDOUT, names) in report
