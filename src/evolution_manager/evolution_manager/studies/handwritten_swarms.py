@@ -27,6 +27,11 @@ HEADER = ["task", "swarm", "composition", "seeds", "trials", "fitness", *KIND_CO
 separated, and trials): the mean over the scenarios of the task's objective and of each kind's deliveries
 per robot per trial."""
 
+HETEROGENEOUS = tuple(
+    name for name, (composition, _) in swarms(len(KINDS)).items() if composition == "heterogeneous"
+)
+"""The hand-written swarms that run different trees on different robots (the same for every swarm size)."""
+
 Scenarios = tuple[str, tuple[int, ...], int]
 """A task, its held-out seeds and the trials of each."""
 

@@ -66,11 +66,15 @@ from evolution_manager.evolution.descriptor_sets import DELIVERY_SETS, descripto
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.evolution.teams import TeamConfig
 from evolution_manager.files import read_json, write_atomic
-from evolution_manager.studies.handwritten_swarms import KIND_COLUMNS, Scenarios, handwritten_scores
+from evolution_manager.studies.handwritten_swarms import (
+    HETEROGENEOUS,
+    KIND_COLUMNS,
+    Scenarios,
+    handwritten_scores,
+)
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
-from swarm_sim.bench.division import swarms
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import TaskError, task_named, unseen_twin
@@ -569,9 +573,7 @@ def _handwritten_section(
     names = list(dict.fromkeys(r["arm"] for r in written))
     both = [r for r in rows if r["arm"] == BASELINE] + list(written)
     tested = comparisons(both, tasks, HELDOUT, names)
-    mixed = [
-        HANDWRITTEN + name for name, (composition, _) in swarms(9).items() if composition == "heterogeneous"
-    ]
+    mixed = [HANDWRITTEN + name for name in HETEROGENEOUS]
     return (
         "## Hand-written swarms on the same held-out scenarios\n\n"
         "How far a swarm written by hand gets where the runs are scored, and so whether the task lets "
