@@ -145,6 +145,10 @@ class CompositionParameters:
     """Which of :data:`CELL_MUTATIONS` a mutated child undergoes."""
     crossover_operator: str = "two-point"
     """Which of :data:`CROSSOVERS` makes children (``mix``: MAP-Elites only)."""
+    groups: int = 0
+    """K >= 2: the robots form K groups, robot i in group i mod K (a team's groups, and those of
+    ``robots.carries``), every robot of a group running one cell: the search is over K cells, not one per
+    robot. 0: a cell per robot (the authors')."""
 
     def __post_init__(self) -> None:
         if self.cell_mutation not in CELL_MUTATIONS:
@@ -157,6 +161,11 @@ class CompositionParameters:
             )
         integer(self.population, "population", 2, error=ConfigError)
         integer(self.homogeneous, "homogeneous", 0, error=ConfigError)
+        integer(self.groups, "groups", 0, error=ConfigError)
+        if self.groups == 1:
+            raise ConfigError(
+                "groups must be 0 (a cell per robot) or at least 2; one group is a homogeneous swarm"
+            )
         integer(self.tournament, "tournament", 1, error=ConfigError)
         integer(self.elites, "elites", 0, self.population - 1, error=ConfigError)
         integer(self.init_batch, "init_batch", 1, error=ConfigError)
@@ -503,6 +512,14 @@ class CompositionConfig:
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
         if self.scenarios not in SCENARIOS:
             raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
+        groups, robots = self.parameters.groups, self.world().n_robots
+        if groups > robots:
+            raise ConfigError(f"groups {groups}: the task has {robots} robots, so at most {robots} groups")
+        if 0 < groups < 3 and self.parameters.crossover_operator == "two-point":
+            raise ConfigError(
+                f"groups {groups}: two-point crossover needs genomes of at least 3 cells; give at least 3 "
+                "groups or crossover_operator mix"
+            )
 
     @property
     def label(self) -> str:
@@ -568,7 +585,12 @@ class CompositionConfig:
 
 _NOT_IN_ORDER = ("task", "objective", "descriptors", "scenarios")
 """Fields ``config.json`` writes elsewhere than in field order (they came later)."""
-_PARAMETER_DEFAULTS = {"homogeneous": 0, "cell_mutation": "one", "crossover_operator": "two-point"}
+_PARAMETER_DEFAULTS = {
+    "homogeneous": 0,
+    "cell_mutation": "one",
+    "crossover_operator": "two-point",
+    "groups": 0,
+}
 """The parameters ``config.json`` leaves out at these values, as runs made before them did not know them."""
 
 
@@ -656,6 +678,8 @@ class CompositionRun(CountedRun[Genome, Member]):
         self.evaluator = evaluator
         self.rng = random.Random(derive_seed(config.seed, RUN_ALGORITHM))
         self.n_robots = config.world().n_robots
+        self.groups = config.parameters.groups or self.n_robots
+        """The cells a genome chooses: one per group of robots (``groups``), or one per robot."""
         self.space = config.space
         self.neighbours = axis_neighbours(self.cells) if config.parameters.cell_mutation == "axis" else ()
         self.preferred = _preferred_axis(config)
@@ -732,6 +756,8 @@ class CompositionRun(CountedRun[Genome, Member]):
                 0 <= c < len(self.cells) for c in member.genome
             ):
                 raise ValueError(f"genome {list(member.genome)} is not {self.n_robots} cell indices")
+            if self._spread(self._roles(member.genome)) != member.genome:
+                raise ValueError(f"genome {list(member.genome)} is not one cell per group of {self.groups}")
 
     # Execution ---------------------------------------------------------------------------------------------
     def _ask(self) -> list[Genome]:
@@ -749,8 +775,18 @@ class CompositionRun(CountedRun[Genome, Member]):
             if p.crossover_operator == "mix":
                 return self._mixed(entries)[: self.config.evaluations - self.produced]
             parents = tournament(entries, p.batch, p.tournament, self.rng)
-        children = vary(parents, self.rng, p.crossover, p.mutation, n, self._mutate)
-        return children[: self.config.evaluations - self.produced]
+        roles = [self._roles(g) for g in parents]
+        children = vary(roles, self.rng, p.crossover, p.mutation, n, self._mutate)
+        return [self._spread(c) for c in children[: self.config.evaluations - self.produced]]
+
+    def _roles(self, genome: Genome) -> Genome:
+        """The cells a genome chooses, one per group (robot i runs cell ``i mod groups``): what the
+        operators vary."""
+        return genome[: self.groups]
+
+    def _spread(self, roles: Genome) -> Genome:
+        """The genome of one cell per robot whose groups run ``roles`` (the identity without groups)."""
+        return tuple(roles[i % len(roles)] for i in range(self.n_robots))
 
     def _mixed(self, entries: Sequence[Member]) -> list[Genome]:
         """A batch after Mix-ME: each child, with probability ``crossover``, mixes two genomes of different
@@ -761,10 +797,11 @@ class CompositionRun(CountedRun[Genome, Member]):
         for _ in range(p.batch):
             if len(entries) >= 2 and self.rng.random() < p.crossover:
                 a, b = self.rng.sample(range(len(entries)), 2)
-                child = mix(entries[a].genome, entries[b].genome, self.rng)
+                child = mix(self._roles(entries[a].genome), self._roles(entries[b].genome), self.rng)
             else:
-                child = tournament(entries, 1, p.tournament, self.rng)[0]
-            children.append(self._mutate(child, self.rng) if self.rng.random() < p.mutation else child)
+                child = self._roles(tournament(entries, 1, p.tournament, self.rng)[0])
+            child = self._mutate(child, self.rng) if self.rng.random() < p.mutation else child
+            children.append(self._spread(child))
         return children
 
     def _mutate(self, genome: Genome, rng: random.Random) -> Genome:
@@ -783,7 +820,10 @@ class CompositionRun(CountedRun[Genome, Member]):
     def _initial(self, size: int) -> list[Genome]:
         """``size`` genomes: the homogeneous swarms of the fittest cells asked for, then random ones."""
         seeded = homogeneous_genomes(self.cells, min(size, self.config.parameters.homogeneous), self.n_robots)
-        drawn = [random_genome(self.rng, len(self.cells), self.n_robots) for _ in range(size - len(seeded))]
+        drawn = [
+            self._spread(random_genome(self.rng, len(self.cells), self.groups))
+            for _ in range(size - len(seeded))
+        ]
         return seeded + drawn
 
     def _tell(self, batch: list[Genome], answers: list[Member]) -> None:

@@ -128,6 +128,14 @@ def build_parser() -> argparse.ArgumentParser:
         "mixing of two genomes of different bins (mix)",
     )
     parser.add_argument(
+        "--swarm-groups",
+        type=positive_int,
+        metavar="K",
+        help="with --swarm-from: the robots in K groups (robot i in group i mod K), each group running one "
+        "cell, so the search is over K cells (default: a cell per robot, as the authors'; K >= 2, and at "
+        "least 3 for two-point crossover)",
+    )
+    parser.add_argument(
         "--homogeneous",
         type=positive_int,
         metavar="K",
@@ -215,6 +223,12 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]
             raise UsageError(
                 "--homogeneous seeds compositions of repertoire cells: it goes with --swarm-from RUN_DIR"
             )
+        for name in ("swarm_mutation", "swarm_crossover", "swarm_groups"):
+            if getattr(args, name) is not None:
+                option = name.replace("_", "-")
+                raise UsageError(
+                    f"--{option} varies compositions of repertoire cells: it goes with --swarm-from"
+                )
         if args.workers is not None and not cluster.is_local:
             raise UsageError(
                 f"--workers applies to --cluster local only; on {cluster.describe()} the batches go to "
@@ -480,10 +494,15 @@ def _evolve_compositions(
                 "homogeneous": args.homogeneous,
                 "cell_mutation": args.swarm_mutation,
                 "crossover_operator": args.swarm_crossover,
+                "groups": args.swarm_groups,
             }
             for name, value in given.items():
                 if value is not None and value != getattr(saved.parameters, name):
-                    option = {"cell_mutation": "swarm-mutation", "crossover_operator": "swarm-crossover"}
+                    option = {
+                        "cell_mutation": "swarm-mutation",
+                        "crossover_operator": "swarm-crossover",
+                        "groups": "swarm-groups",
+                    }
                     raise UsageError(
                         f"--{option.get(name, name)} {value} differs from the run being resumed "
                         f"({getattr(saved.parameters, name)}); leave it out or start a new run in another "
@@ -504,6 +523,7 @@ def _evolve_compositions(
                 homogeneous=args.homogeneous or 0,
                 cell_mutation=args.swarm_mutation or "one",
                 crossover_operator=args.swarm_crossover or "two-point",
+                groups=args.swarm_groups or 0,
             )
             _check_homogeneous(args.algorithm, parameters, len(cells))
             config = comp.CompositionConfig(

@@ -125,6 +125,8 @@ class Arm:
     """K, for a team arm (``evolution.teams``); 0 for a composition arm."""
     scenarios: str = "fixed"
     """The arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
+    groups: int = 0
+    """K, for a composition arm of K groups of robots, one cell each (``CompositionParameters.groups``)."""
 
     @property
     def parameters(self) -> CompositionParameters:
@@ -132,6 +134,7 @@ class Arm:
             homogeneous=self.homogeneous,
             cell_mutation=self.cell_mutation,
             crossover_operator=self.crossover_operator,
+            groups=self.groups,
         )
 
 
@@ -154,7 +157,13 @@ ARMS: tuple[Arm, ...] = (
             "of its own", team=k, scenarios="fresh")
         for k in (2, 3, 9)
     ),
+    Arm("ga-groups3", "ga", "the authors' GA over 3 cells, robot i running cell i mod 3 (the groups of team3 "
+        "and of robots.carries)", groups=3),
+    Arm("qd-groups3", "qd", "the authors' MAP-Elites over 3 cells, robot i running cell i mod 3", groups=3),
 )  # fmt: skip
+DEFAULT_ARMS: tuple[str, ...] = tuple(arm.name for arm in ARMS[:12])
+"""The arms planned when ``--arms`` is not given: the study's first twelve, whose plan the studies begun
+before the group compositions keep."""
 HEADER = [
     "arm", "task", "seed", "best_fitness", "heldout_best_fitness",
     "heldout_foraging1", "heldout_foraging2", "heldout_foraging3",
@@ -205,11 +214,11 @@ def chosen_tasks(text: str | None) -> list[int]:
 
 
 def chosen_arms(text: str | None) -> list[Arm]:
-    """The arms of :data:`ARMS` that ``--arms`` names (comma-separated; in ``ARMS`` order), every arm when
-    None; ``UsageError`` in one line listing the choices for an unknown one. The homogeneous baseline comes
-    with every composition arm; a plan of team arms only has none."""
+    """The arms of :data:`ARMS` that ``--arms`` names (comma-separated; in ``ARMS`` order), those of
+    :data:`DEFAULT_ARMS` when None; ``UsageError`` in one line listing the choices for an unknown one. The
+    homogeneous baseline comes with every composition arm; a plan of team arms only has none."""
     if text is None:
-        return list(ARMS)
+        return [arm for arm in ARMS if arm.name in DEFAULT_ARMS]
     given = _named(text, [arm.name for arm in ARMS], "arm")
     return [arm for arm in ARMS if arm.name in given]
 

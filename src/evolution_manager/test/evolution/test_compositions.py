@@ -254,6 +254,37 @@ def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm, s
     assert _files(tmp_path / "stopped") == files and len(files) >= 14
 
 
+@pytest.mark.parametrize("algorithm", ["ga", "qd"])
+def test_groups_compose_one_cell_per_group_and_resume_identical(source, tmp_path, capsys, algorithm):
+    """--swarm-groups 3: every genome evaluated runs one cell per group (robot i the cell of robot i mod 3),
+    the best swarm too; the operators still vary the groups' cells; a stopped run resumes to the same files,
+    and a resume with other groups is refused in one line."""
+    extra = ["--evaluations", "60", "--seed", "5", "--swarm-groups", "3"]
+    assert _compose(source, tmp_path / "straight", algorithm, *extra) == 0
+    config = json.loads((tmp_path / "straight" / "config.json").read_text())
+    assert config["parameters"]["groups"] == 3
+    with open(tmp_path / "straight" / "evaluations.csv") as log:
+        genomes = [tuple(int(c) for c in row["genome"].split()) for row in csv.DictReader(log)]
+    assert len(genomes) >= 60 and all(g == tuple(g[i % 3] for i in range(9)) for g in genomes)
+    assert len({g[:3] for g in genomes}) > 10 and any(len(set(g)) > 1 for g in genomes)
+    trees = [(tmp_path / "straight" / f"best/foraging_robot{i}.txt").read_text() for i in range(9)]
+    assert all(trees[i] == trees[i % 3] for i in range(9))
+    cells = read_sources([source])[0]
+    evaluator = BatchEvaluator(CompositionConfig.from_json(config).world())
+    stopped = CompositionRun.start(
+        CompositionConfig.from_json(config), cells, tmp_path / "stopped", evaluator
+    )
+    stopped.execute(checkpoint_interval=1e9, stop_after=30)
+    stopped.lock.release()
+    stopped = CompositionRun.resume(tmp_path / "stopped", evaluator)
+    stopped.execute(checkpoint_interval=0)
+    stopped.write_results()
+    assert _files(tmp_path / "stopped") == _files(tmp_path / "straight")
+    capsys.readouterr()
+    assert evolve(["--out", str(tmp_path / "straight"), "--resume", "--swarm-groups", "4"]) == 2
+    assert "--swarm-groups 4 differs from the run being resumed (3)" in capsys.readouterr().err
+
+
 def test_fresh_scenarios_give_each_evaluation_a_scenario_of_its_own(source, tmp_path, capsys):
     """--scenarios fresh: evaluation i on evaluation_seed(seed, i), as a tree run's; recorded in config.json
     (a fixed run's file stays as before, without the key), the same seed the same files, and a resume with
@@ -316,6 +347,14 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
          "--homogeneous 100000: the runs hold"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--scenario-seed", "-1"],
          "--scenario-seed must be in [0, "),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-groups", "1"],
+         "one group is a homogeneous swarm"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-groups", "2"],
+         "two-point crossover needs genomes of at least 3 cells"),
+        (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-groups", "10"],
+         "groups 10: the task has 9 robots"),
+        (["--algorithm", "qd", "--objective", "food", "--swarm-groups", "3"],
+         "--swarm-groups varies compositions of repertoire cells: it goes with --swarm-from"),
     ],
 )  # fmt: skip
 def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, extra, words):

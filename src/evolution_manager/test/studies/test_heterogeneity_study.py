@@ -50,14 +50,15 @@ def test_the_plan_pairs_every_arm_with_its_repertoire_by_seed(tmp_path):
     assert [made.team for made, _ in third] == [2, 2, 3, 3, 9, 9] * 2
     assert [made.scenarios for made, _ in third] == ["fixed"] * 6 + ["fresh"] * 6
     arms = [e for e in document["plan"] if e["kind"] == "composition"]
-    assert len(arms) == 3 * sum(1 for a in study.ARMS if not a.team) * 2
+    planned = [a for a in study.ARMS if a.name in study.DEFAULT_ARMS]  # without --arms, the first twelve
+    assert len(arms) == 3 * sum(1 for a in planned if not a.team) * 2
     for entry in arms:
         repertoire = next(e for e in document["plan"] if e["dir"] == entry["from"])
         assert entry["seed"] == repertoire["config"]["seed"] and entry["task"] == repertoire["task"]
         assert budgets[entry["dir"]] == 300
     seeds = {(e["task"], e["seed"]) for e in arms}
     assert len(seeds) == 3 * 2  # one seed per task and index, shared by its arms
-    assert document["swarm_evaluations"] == 300 and document["arms"] == [a.name for a in study.ARMS]
+    assert document["swarm_evaluations"] == 300 and document["arms"] == list(study.DEFAULT_ARMS)
     for entry in teams:  # the teams share the seeds of the repertoires and compositions they are set beside
         assert (entry["task"], entry["seed"]) in seeds
 
@@ -119,6 +120,15 @@ def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_pat
     assert planning.growth(json.loads(json.dumps(only_arms)), json.loads(json.dumps(whole))).startswith(
         "by the arms ga-seeded, qd-mix"
     )
+    # the group compositions: planned only when named, on the seeds and repertoires of the whole plan
+    grouped_args = build_parser().parse_args([*base, "--arms", "ga-groups3,qd-groups3"])
+    grouped, _, _ = study.plan_study(grouped_args, "fixed", "shared")
+    entries = [e for e in grouped["plan"] if e["kind"] == "composition"]
+    assert {e["arm"] for e in entries} == {"ga-groups3", "qd-groups3"} and len(entries) == 4
+    assert not any(e.get("arm", "").endswith("groups3") for e in whole["plan"])
+    ga = {e["from"]: e["seed"] for e in whole["plan"] if e.get("arm") == "ga"}
+    assert all(ga[e["from"]] == e["seed"] for e in entries)
+    assert [a.parameters.groups for a in study.ARMS if a.name.endswith("groups3")] == [3, 3]
     for more, expected in (
         (["--arms", "ga,gx"], "--arms: unknown arm 'gx'; expected some of ga,ga-seeded,qd,"),
         (["--arms", "team3"], "--arms: a plan needs a composition arm"),
@@ -186,7 +196,7 @@ def test_the_running_studys_plan_is_still_planned_alike(name):
     args += ["--seed", str(saved["seed"]), "--trials", str(saved["trials"]), "--out", str(folder)]
     args += ["--swarm-evaluations", str(saved["swarm_evaluations"]), "--profile", saved["profile"]]
     args += ["--tasks", ",".join(t["task"] for t in saved["tasks"])]
-    if saved["arms"] != [arm.name for arm in study.ARMS]:
+    if saved["arms"] != list(study.DEFAULT_ARMS):
         args += ["--arms", ",".join(saved["arms"])]
     if name.endswith("-fine"):
         args += ["--descriptors", saved["tasks"][0]["descriptors"]]
@@ -220,7 +230,7 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
         mine = [r for r in rows if r["task"] == task]
         baselines = [r for r in mine if r["arm"] == study.BASELINE]
         assert len(baselines) == 2 and all(r["qd_score_1"] == "" for r in baselines)
-        for arm in study.ARMS:
+        for arm in (a for a in study.ARMS if a.name in study.DEFAULT_ARMS):
             runs = [r for r in mine if r["arm"] == arm.name]
             assert {r["seed"] for r in runs} == {r["seed"] for r in baselines}
             # the evaluated QD score at one bin is the run's best fitness
