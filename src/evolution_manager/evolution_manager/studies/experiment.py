@@ -520,7 +520,13 @@ def run_locally(
         except BaseException:
             # Interrupted (Ctrl-C, SIGTERM) or failing: stop the runs under way at once rather than wait for
             # them; each continues from its last checkpoint (a killed run resumes to the same bytes).
-            for pid in list(workers):
+            try:
+                pids = list(workers)
+            except (OSError, EOFError):
+                # the signal went to the whole process group (Ctrl-C in a terminal, `timeout`) and stopped
+                # the manager too; the workers got it as well, and die with this process in any case
+                pids = []
+            for pid in pids:
                 with contextlib.suppress(ProcessLookupError):
                     os.kill(pid, signal.SIGKILL)
             raise

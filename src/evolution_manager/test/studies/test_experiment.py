@@ -284,16 +284,24 @@ def _alive(pids: set[int]) -> set[int]:
     return alive
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
-def test_a_signal_to_the_command_alone_stops_its_runs_too(tmp_path, signum, never_stopped_runs_csv):
+@pytest.mark.parametrize(
+    ("signum", "group"), [(signal.SIGTERM, False), (signal.SIGKILL, False), (signal.SIGTERM, True)]
+)
+def test_a_signal_to_the_command_or_its_group_stops_its_runs_too(
+    tmp_path, signum, group, never_stopped_runs_csv
+):
     """SIGTERM to the experiment's process (not its group, as a scheduler or `kill PID` sends it) stops it as
-    Ctrl-C does, exit 143, and its runs stop at once; SIGKILL takes its workers with it. The experiment
-    then continues to the same runs.csv as one never stopped."""
+    Ctrl-C does, exit 143, and its runs stop at once; SIGKILL takes its workers with it. SIGTERM to its whole
+    process group (as `timeout` sends it, and a terminal its Ctrl-C), which stops its manager too, ends in
+    the same one line, no traceback. The experiment then continues to the same runs.csv as one never
+    stopped."""
     args = ONE_RUN_ARGS
     out = tmp_path / "stopped"
     call = f"experiment({[*args, '--out', str(out), '--no-progress']!r})"
     code = f"import sys; from evolution_manager.studies.experiment import experiment; sys.exit({call})"
-    process = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-c", code], stderr=subprocess.PIPE, text=True, start_new_session=group
+    )
     try:
         deadline = time.monotonic() + 300
         while not list(out.glob("runs/*/run00/checkpoint.json")) and process.poll() is None:
@@ -301,13 +309,17 @@ def test_a_signal_to_the_command_alone_stops_its_runs_too(tmp_path, signum, neve
             time.sleep(0.1)
         children = _children(process.pid)
         assert len(children) >= 3  # the manager and two workers (and spawn's resource tracker)
-        os.kill(process.pid, signum)
+        if group:
+            os.killpg(process.pid, signum)
+        else:
+            os.kill(process.pid, signum)
         _, err = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
             process.kill()
     if signum == signal.SIGTERM:
         assert process.returncode == 143 and "experiment: interrupted; run the same command again" in err
+        assert "Traceback" not in err, err
     deadline = time.monotonic() + 20
     while _alive(children) and time.monotonic() < deadline:
         time.sleep(0.1)
