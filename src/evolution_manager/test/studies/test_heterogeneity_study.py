@@ -361,9 +361,15 @@ CARRIERS = ("multifood-arena6-carriers",)
 """The carriers study's one task (``experiments/heterogeneity-carriers``)."""
 
 
-@pytest.mark.parametrize(("name", "tasks"), [("study", study.DEFAULT_TASKS), ("carriers-study", CARRIERS)])
+@pytest.mark.parametrize(
+    ("name", "tasks"),
+    [
+        ("study", study.DEFAULT_TASKS),
+        *((name, CARRIERS) for name in ("carriers-study", "carriers-fine", "carriers-groups")),
+    ],
+)
 def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
-    """docs/results/heterogeneity/study and carriers-study: each report's score tables and QD table
+    """docs/results/heterogeneity/study, carriers-study and its twins: each report's score tables and QD table
     recomputed from its runs.csv, and the hand-written swarms' table from handwritten.csv."""
     folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "heterogeneity" / name
     rows = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
