@@ -365,7 +365,10 @@ CARRIERS = ("multifood-arena6-carriers",)
     ("name", "tasks"),
     [
         ("study", study.DEFAULT_TASKS),
-        *((name, CARRIERS) for name in ("carriers-study", "carriers-fine", "carriers-groups")),
+        *(
+            (name, CARRIERS)
+            for name in ("carriers-study", "carriers-fine", "carriers-groups", "carriers-fine-groups")
+        ),
     ],
 )
 def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
