@@ -205,6 +205,14 @@ def evolve(argv: Sequence[str] | None = None) -> int:
     return status
 
 
+_SWARM_OPTIONS = {
+    "cell_mutation": "swarm-mutation",
+    "crossover_operator": "swarm-crossover",
+    "groups": "swarm-groups",
+}
+"""The options that vary compositions, by the ``CompositionParameters`` field each sets."""
+
+
 def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]) -> int:
     started = time.time()
     out: Path | None = None  # known once the options are read
@@ -223,9 +231,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]
             raise UsageError(
                 "--homogeneous seeds compositions of repertoire cells: it goes with --swarm-from RUN_DIR"
             )
-        for name in ("swarm_mutation", "swarm_crossover", "swarm_groups"):
-            if getattr(args, name) is not None:
-                option = name.replace("_", "-")
+        for option in _SWARM_OPTIONS.values():
+            if getattr(args, option.replace("-", "_")) is not None:
                 raise UsageError(
                     f"--{option} varies compositions of repertoire cells: it goes with --swarm-from"
                 )
@@ -490,21 +497,11 @@ def _evolve_compositions(
                     f"--task {args.task.name} differs from the run being resumed ({saved.task.name}); leave "
                     "it out or start a new run in another --out"
                 )
-            given = {
-                "homogeneous": args.homogeneous,
-                "cell_mutation": args.swarm_mutation,
-                "crossover_operator": args.swarm_crossover,
-                "groups": args.swarm_groups,
-            }
-            for name, value in given.items():
+            for name, option in {"homogeneous": "homogeneous", **_SWARM_OPTIONS}.items():
+                value = getattr(args, option.replace("-", "_"))
                 if value is not None and value != getattr(saved.parameters, name):
-                    option = {
-                        "cell_mutation": "swarm-mutation",
-                        "crossover_operator": "swarm-crossover",
-                        "groups": "swarm-groups",
-                    }
                     raise UsageError(
-                        f"--{option.get(name, name)} {value} differs from the run being resumed "
+                        f"--{option} {value} differs from the run being resumed "
                         f"({getattr(saved.parameters, name)}); leave it out or start a new run in another "
                         "--out"
                     )

@@ -14,6 +14,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from evolution_manager.errors import EvolutionError
 from evolution_manager.files import write_atomic
 from swarm_sim.bench.division import KINDS, swarms
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
@@ -47,8 +48,8 @@ def handwritten_scores(
 ) -> dict[Scenarios, list[dict[str, str]]]:
     """Every hand-written swarm on each of ``wanted`` whose task has the benchmark's three food kinds (the
     others get none), by scenarios: rows of :data:`HEADER`, in :func:`swarms`' order. ``objectives`` maps
-    each task to the objective it is scored by. Rows already in ``root``'s ``handwritten.csv`` are kept, the
-    missing ones measured and the file rewritten with exactly the wanted ones."""
+    each task to the objective it is scored by. Rows already in ``root``'s ``handwritten.csv`` are kept; when
+    any is missing it is measured and the file rewritten with exactly the wanted ones."""
     path = Path(root) / HANDWRITTEN_FILE
     kept: dict[tuple[str, str, str, str], dict[str, str]] = {}
     if path.exists():
@@ -75,8 +76,7 @@ def handwritten_scores(
             for name in missing:
                 outcomes = [next(results).fitness for _ in seeds]
                 if any(fitness is None for fitness in outcomes):
-                    raise RuntimeError(f"{task}: the hand-written swarm {name!r} could not be evaluated")
-
+                    raise EvolutionError(f"{task}: the hand-written swarm {name!r} could not be evaluated")
                 kept[(task, name, *key)] = {
                     "task": task, "swarm": name, "composition": named[name][0], "seeds": key[0],
                     "trials": key[1], "fitness": _mean(outcomes, objectives[task]),

@@ -69,7 +69,6 @@ from evolution_manager.files import read_json, write_atomic
 from evolution_manager.studies.handwritten_swarms import (
     HETEROGENEOUS,
     KIND_COLUMNS,
-    Scenarios,
     handwritten_scores,
 )
 from evolution_manager.studies.intervals import interval
@@ -391,6 +390,21 @@ def study_plan(root: Path) -> dict:
     return document
 
 
+def _baseline_runs(finished: Sequence[tuple[dict, dict]]) -> list[tuple[dict, dict]]:
+    """Each task's and index's baseline run among ``finished``: the first composition run, in the plan's
+    order, whose summary holds the homogeneous baseline (every arm of a seed measures the same one)."""
+    found: dict[tuple[str, object], tuple[dict, dict]] = {}
+    for entry, summary in finished:
+        if entry["kind"] == "composition" and summary.get("homogeneous"):
+            found.setdefault((entry["task"], entry["seed"]), (entry, summary))
+    return list(found.values())
+
+
+def _held(summary: dict) -> tuple[tuple[int, ...], int]:
+    """A run's held-out scenarios: their seeds and the trials of each."""
+    return tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"])
+
+
 def finished_rows(
     finished: Sequence[tuple[dict, dict]], unseen: dict[tuple[str, str], float] | None = None
 ) -> list[dict[str, str]]:
@@ -400,6 +414,7 @@ def finished_rows(
     unseen = unseen or {}
     rows: list[dict[str, str]] = []
     baselines: list[dict[str, str]] = []
+    holders = {entry["dir"] for entry, _ in _baseline_runs(finished)}
     for entry, summary in finished:
         seed, task = str(entry["seed"]), entry["task"]
         if entry["kind"] == "team":
@@ -414,8 +429,8 @@ def finished_rows(
                 UNSEEN: _number(unseen.get((entry["dir"], "validated"))),
             })  # fmt: skip
             continue
-        baseline = summary.get("homogeneous")
-        if baseline and not any(b["task"] == task and b["seed"] == seed for b in baselines):
+        if entry["dir"] in holders:
+            baseline = summary["homogeneous"]
             baselines.append({
                 "arm": BASELINE, "task": task, "seed": seed,
                 "best_fitness": _number(baseline["fitness"]),
@@ -455,22 +470,19 @@ class _Chosen:
 
 
 def _chosen_swarms(finished: Sequence[tuple[dict, dict]]) -> list[_Chosen]:
-    """Every finished arm run's validated choice, and each task's and index's baseline choice (from the
-    first arm's run, as :func:`finished_rows` takes it), in the plan's order."""
+    """Every finished arm run's validated choice, and each task's and index's baseline choice (from its
+    baseline run, :func:`_baseline_runs`), in the plan's order."""
     found: list[_Chosen] = []
-    baselines: set[tuple[str, int]] = set()
+    holders = {entry["dir"] for entry, _ in _baseline_runs(finished)}
     for entry, summary in finished:
-        held = (tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"]))
+        held = _held(summary)
         chosen = summary.get("validated")
         if isinstance(chosen, dict):
             trees = list(chosen["trees"])
             if entry["kind"] == "team":  # a tree per sub-group: robot i runs tree i mod K
                 trees = [trees[g] for g in summary["robot_groups"]]
             found.append(_Chosen(entry["dir"], "validated", entry["task"], tuple(trees), *held))
-        if entry["kind"] != "composition" or not summary.get("homogeneous"):
-            continue
-        if (entry["task"], entry["seed"]) not in baselines:
-            baselines.add((entry["task"], entry["seed"]))
+        if entry["dir"] in holders:
             choice = summary["homogeneous"].get("validated")
             if isinstance(choice, dict):
                 found.append(_Chosen(entry["dir"], BASELINE, entry["task"], tuple(choice["trees"]), *held))
@@ -538,26 +550,13 @@ HANDWRITTEN = "hand-written: "
 as the arms' do but stay out of ``runs.csv``."""
 
 
-def _baseline_scenarios(finished: Sequence[tuple[dict, dict]]) -> list[tuple[str, str, Scenarios]]:
-    """Each task's and index's baseline run, as :func:`finished_rows` takes it (the first arm's composition
-    run with a baseline): the task, the seed and its held-out scenarios (task, seeds, trials)."""
-    found: dict[tuple[str, str], Scenarios] = {}
-    for entry, summary in finished:
-        if entry["kind"] != "composition" or not summary.get("homogeneous"):
-            continue
-        held = summary["heldout"]
-        scenarios = (entry["task"], tuple(int(s) for s in held["seeds"]), int(held["trials"]))
-        found.setdefault((entry["task"], str(entry["seed"])), scenarios)
-    return [(task, seed, scenarios) for (task, seed), scenarios in found.items()]
-
-
 def handwritten_rows(
     root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
 ) -> list[dict[str, str]]:
     """Every hand-written swarm (``handwritten_swarms``) on the held-out scenarios of each task's and
     index's baseline, as rows of :data:`HEADER` (its arm :data:`HANDWRITTEN` and the swarm's name), measured
     once into the study's ``handwritten.csv``; none on a task without the benchmark's three food kinds."""
-    baselines = _baseline_scenarios(finished)
+    baselines = [(e["task"], str(e["seed"]), (e["task"], *_held(s))) for e, s in _baseline_runs(finished)]
     objectives = {t["task"]: t["objective"] for t in document["tasks"]}
     found = handwritten_scores(root, document["profile"], objectives, [s for *_, s in baselines])
     rows = []
