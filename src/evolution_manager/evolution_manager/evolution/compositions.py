@@ -1,6 +1,6 @@
 """Heterogeneous compositions: evolve which repertoire cell each robot of a swarm runs.
 
-``evolve --task TASK --swarm-from RUN_DIR [RUN_DIR ...] --algorithm ga|qd`` (``docs/algorithms.md``,
+``evolve --task TASK --swarm-from RUN_DIR [RUN_DIR ...] --algorithm ga|qd|ascent`` (``docs/algorithms.md``,
 "Heterogeneous compositions"); any task and objective (by default ``foraging``), binned by the paper's
 behaviour space or by the deliveries of each food kind (``--descriptors``, ``descriptor_sets``).
 
@@ -23,8 +23,15 @@ deliveries, the authors' rule: the one that delivers more of the preferred kind)
 genomes, then batches of ``batch`` genomes varied as above from tournament winners of the grid, or, with
 ``crossover_operator`` ``mix`` (after Mix-ME, Ingvarsson et al. 2023), each child with probability
 ``crossover`` made of two genomes of different bins drawn uniformly, each robot taking its cell from either,
-then mutated as above. The budget (``evaluations``) counts the genomes produced after the initial population,
-as every run's.
+then mutated as above. ``ascent``: coordinate ascent over the groups' cells (best responses, as in
+cooperative coevolution), from the homogeneous swarm of the fittest cell by its recorded fitness; each batch
+tries every other cell for one group, the others kept, and the fittest genome of the batch becomes the
+incumbent when it is strictly fitter; the groups take turns in order, and the run ends when the budget is
+spent or when every group's cell is its best response to the others (a turn of every group without a change:
+the budget may be left unspent). Each batch's cells are tried in an order drawn from the run's generator, so
+that a batch cut by the budget is not biased to low cell numbers; on one scenario only (``fixed``), where a
+genome's fitness is the same at every evaluation. The budget (``evaluations``) counts the genomes produced
+after the initial population, as every run's.
 
 A run directory holds ``config.json``, ``cells.json`` (the run's copy of its cells, checked by digest),
 ``evaluations.csv`` (index, seed, genome as space-separated cell indices, the objective, the behaviour
@@ -98,9 +105,9 @@ from swarm_sim.tasks import TaskSpec, resolve_task, task_from_record, task_named
 KIND = COMPOSITIONS
 """``config.json``'s ``kind``: what tells a composition run from a tree run."""
 
-ALGORITHMS: tuple[str, ...] = ("ga", "qd")
-DEFAULT_EVALUATIONS = {"ga": 1000, "qd": 1000}
-LABELS = {"ga": "GA_compositions", "qd": "QD_compositions"}
+ALGORITHMS: tuple[str, ...] = ("ga", "qd", "ascent")
+DEFAULT_EVALUATIONS = {"ga": 1000, "qd": 1000, "ascent": 1000}
+LABELS = {"ga": "GA_compositions", "qd": "QD_compositions", "ascent": "Ascent_compositions"}
 OBJECTIVE = "foraging"
 """The objective a run evolves unless it names another (every run before multi-food tasks)."""
 TASK = "foraging"
@@ -515,11 +522,33 @@ class CompositionConfig:
         groups, robots = self.parameters.groups, self.world().n_robots
         if groups > robots:
             raise ConfigError(f"groups {groups}: the task has {robots} robots, so at most {robots} groups")
-        if 0 < groups < 3 and self.parameters.crossover_operator == "two-point":
+        if self.algorithm == "ascent":
+            self._check_ascent()
+        elif 0 < groups < 3 and self.parameters.crossover_operator == "two-point":
             raise ConfigError(
                 f"groups {groups}: two-point crossover needs genomes of at least 3 cells; give at least 3 "
                 "groups or crossover_operator mix"
             )
+
+    def _check_ascent(self) -> None:
+        """Refuse what coordinate ascent has no use for: other scenarios than the fixed one (it compares
+        each genome with the incumbent's fitness) and the GA's seeds and operators."""
+        if self.scenarios != "fixed":
+            raise ConfigError(
+                "algorithm ascent compares every genome with the incumbent on one scenario: it goes with "
+                "scenarios fixed"
+            )
+        p = self.parameters
+        for name, value in (
+            ("homogeneous", p.homogeneous),
+            ("cell_mutation", p.cell_mutation),
+            ("crossover_operator", p.crossover_operator),
+        ):
+            if value != _PARAMETER_DEFAULTS[name]:
+                raise ConfigError(
+                    f"{name} {value!r}: algorithm ascent starts from the fittest cell's homogeneous swarm "
+                    "and has no mutation or crossover; leave it out"
+                )
 
     @property
     def label(self) -> str:
@@ -694,6 +723,13 @@ class CompositionRun(CountedRun[Genome, Member]):
         """The fittest genome evaluated (the first among equals)."""
         self.known: dict[Genome, Member] = {}
         """Genomes evaluated by this process (fixed scenario: a genome's result never changes)."""
+        self.incumbent: Member | None = None
+        """ascent: the genome every batch varies one group's cell of (None before the first batch)."""
+        self.turn = 0
+        """ascent: the group whose cell the next batch varies."""
+        self.settled = 0
+        """ascent: how many groups in a row hold a best response to the others' cells; all of them, and
+        the run has converged."""
 
     # Construction ----------------------------------------------------------------------------------------
     @classmethod
@@ -743,6 +779,15 @@ class CompositionRun(CountedRun[Genome, Member]):
             "population": [m.as_json() for m in self.population],
             "grid": [self.grid[b].as_json() for b in sorted(self.grid)],
             "best": None if self.best is None else self.best.as_json(),
+            # only ascent's: the checkpoints of the GA and MAP-Elites stay as they were
+            **({"ascent": self._ascent_state()} if self.config.algorithm == "ascent" else {}),
+        }
+
+    def _ascent_state(self) -> dict:
+        return {
+            "incumbent": None if self.incumbent is None else self.incumbent.as_json(),
+            "turn": self.turn,
+            "settled": self.settled,
         }
 
     def _restore(self, state: dict) -> None:
@@ -751,7 +796,13 @@ class CompositionRun(CountedRun[Genome, Member]):
         members = [Member.from_json(m) for m in state["grid"]]
         self.grid = {self._bin(m.descriptors): m for m in members if m.descriptors is not None}
         self.best = None if state["best"] is None else Member.from_json(state["best"])
-        for member in [*self.population, *members, *([self.best] if self.best else [])]:
+        if self.config.algorithm == "ascent":
+            ascent = state["ascent"]
+            self.incumbent = None if ascent["incumbent"] is None else Member.from_json(ascent["incumbent"])
+            self.turn = integer(ascent["turn"], "turn", 0, self.groups - 1, error=ValueError)
+            self.settled = integer(ascent["settled"], "settled", 0, self.groups, error=ValueError)
+        held = [self.best, self.incumbent]
+        for member in [*self.population, *members, *(m for m in held if m is not None)]:
             if len(member.genome) != self.n_robots or not all(
                 0 <= c < len(self.cells) for c in member.genome
             ):
@@ -760,10 +811,18 @@ class CompositionRun(CountedRun[Genome, Member]):
                 raise ValueError(f"genome {list(member.genome)} is not one cell per group of {self.groups}")
 
     # Execution ---------------------------------------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        """Whether the budget is spent, or ascent has converged."""
+        converged = self.config.algorithm == "ascent" and self.settled >= self.groups
+        return converged or super().done
+
     def _ask(self) -> list[Genome]:
         """The next batch of genomes: the initial population, or offspring cut to the budget left."""
         p = self.config.parameters
         n = len(self.cells)
+        if self.config.algorithm == "ascent":
+            return self._turn()
         if self.config.algorithm == "ga":
             if not self.population:
                 return self._initial(p.population)
@@ -778,6 +837,19 @@ class CompositionRun(CountedRun[Genome, Member]):
         roles = [self._roles(g) for g in parents]
         children = vary(roles, self.rng, p.crossover, p.mutation, n, self._mutate)
         return [self._spread(c) for c in children[: self.config.evaluations - self.produced]]
+
+    def _turn(self) -> list[Genome]:
+        """ascent's next batch: the fittest cell's homogeneous swarm first; then the incumbent with the
+        group of this turn running each other cell in turn, in a drawn order, cut to the budget left."""
+        if self.incumbent is None:
+            return homogeneous_genomes(self.cells, 1, self.n_robots)
+        roles = self._roles(self.incumbent.genome)
+        others = [c for c in range(len(self.cells)) if c != roles[self.turn]]
+        self.rng.shuffle(others)
+        return [
+            self._spread((*roles[: self.turn], c, *roles[self.turn + 1 :]))
+            for c in others[: self.config.evaluations - self.produced]
+        ]
 
     def _roles(self, genome: Genome) -> Genome:
         """The cells a genome chooses, one per group (robot i runs cell ``i mod groups``): what the
@@ -832,11 +904,15 @@ class CompositionRun(CountedRun[Genome, Member]):
 
     def _select(self, members: list[Member]) -> None:
         """The GA's next population, or the members kept in MAP-Elites' grid; the best so far."""
-        initial = not self.population if self.config.algorithm == "ga" else not self.grid
+        initial = {
+            "ga": not self.population, "qd": not self.grid, "ascent": self.incumbent is None
+        }[self.config.algorithm]  # fmt: skip
         if not initial:
             self.produced += len(members)
         self._keep_best(members)
-        if self.config.algorithm == "ga":
+        if self.config.algorithm == "ascent":
+            self._step(members, initial)
+        elif self.config.algorithm == "ga":
             if initial:
                 self.population = members
             else:
@@ -850,6 +926,21 @@ class CompositionRun(CountedRun[Genome, Member]):
                 held = self.grid.get(index)
                 if held is None or self._displaces(member, held):
                     self.grid[index] = member
+
+    def _step(self, members: list[Member], initial: bool) -> None:
+        """ascent: the incumbent after a batch (the fittest of it when strictly fitter), and the next turn."""
+        scored = [m for m in members if m.fitness is not None]
+        if initial:  # the homogeneous start (asked again if it failed)
+            self.incumbent = scored[0] if scored else None
+            return
+        assert self.incumbent is not None
+        challenger = fittest(scored) if scored else None
+        if challenger is not None and challenger.rank > self.incumbent.rank:
+            self.incumbent = challenger
+            self.settled = 1
+        else:
+            self.settled += 1
+        self.turn = (self.turn + 1) % self.groups
 
     def _displaces(self, member: Member, held: Member) -> bool:
         """Whether ``member`` takes the bin of ``held``: the fitter, or under a preferred kind the one that

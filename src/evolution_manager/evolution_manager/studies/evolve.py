@@ -71,8 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
     parser.add_argument(
         "--algorithm",
-        choices=(*ALGORITHMS, "ga", *NETWORK_ALGORITHMS),
-        help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga or qd over compositions; "
+        choices=(*ALGORITHMS, "ga", "ascent", *NETWORK_ALGORITHMS),
+        help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga, qd or ascent (coordinate "
+        "ascent over the groups' cells) over compositions; "
         "nn-cmaes, nn-ga or nn-qd (MAP-Elites): the weights of the 9-5-1 network controller",
     )
     parser.add_argument(
@@ -111,8 +112,8 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         type=Path,
         metavar="RUN_DIR",
-        help="evolve compositions (a repertoire cell per robot; --task TASK, --algorithm ga or qd) of "
-        "the repertoires in these run directories (docs/algorithms.md, 'Heterogeneous compositions')",
+        help="evolve compositions (a repertoire cell per robot; --task TASK, --algorithm ga, qd or ascent) "
+        "of the repertoires in these run directories (docs/algorithms.md, 'Heterogeneous compositions')",
     )
     parser.add_argument(
         "--swarm-mutation",
@@ -409,7 +410,7 @@ def _execute(
 def _compositions_asked(args: argparse.Namespace) -> bool:
     """Whether the command evolves compositions: ``--swarm-from`` or ``--algorithm ga`` given, or ``--resume``
     of a composition run."""
-    if args.swarm_from is not None or args.algorithm == "ga":
+    if args.swarm_from is not None or args.algorithm in ("ga", "ascent"):
         return True
     return bool(args.resume) and run_kind(args.out) == COMPOSITIONS
 
@@ -437,16 +438,16 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
         return
     if args.swarm_from is None:
         raise UsageError(
-            "--algorithm ga evolves compositions of repertoire cells: give --swarm-from RUN_DIR "
-            "[RUN_DIR ...] (and --task foraging)"
+            f"--algorithm {args.algorithm} evolves compositions of repertoire cells: give --swarm-from "
+            "RUN_DIR [RUN_DIR ...] (and --task foraging)"
         )
     if args.task is None:
         raise UsageError(
             "--swarm-from evolves compositions on a task of foraging: add --task (foraging, "
             "multifood-arena9-kind2, ...)"
         )
-    if args.algorithm not in ("ga", "qd"):
-        raise UsageError("--swarm-from evolves compositions with --algorithm ga or --algorithm qd")
+    if args.algorithm not in ("ga", "qd", "ascent"):
+        raise UsageError("--swarm-from evolves compositions with --algorithm ga, qd or ascent")
 
 
 def _check_homogeneous(algorithm: str, parameters: CompositionParameters, cells: int) -> None:
@@ -522,7 +523,8 @@ def _evolve_compositions(
                 crossover_operator=args.swarm_crossover or "two-point",
                 groups=args.swarm_groups or 0,
             )
-            _check_homogeneous(args.algorithm, parameters, len(cells))
+            if args.algorithm != "ascent":  # whose configuration refuses seeds
+                _check_homogeneous(args.algorithm, parameters, len(cells))
             config = comp.CompositionConfig(
                 args.algorithm,
                 args.evaluations or comp.DEFAULT_EVALUATIONS[args.algorithm],

@@ -159,6 +159,8 @@ ARMS: tuple[Arm, ...] = (
     Arm("ga-groups3", "ga", "the authors' GA over 3 cells, robot i running cell i mod 3 (the groups of team3 "
         "and of robots.carries)", groups=3),
     Arm("qd-groups3", "qd", "the authors' MAP-Elites over 3 cells, robot i running cell i mod 3", groups=3),
+    Arm("ascent-groups3", "ascent", "coordinate ascent over 3 cells from the best homogeneous swarm: each "
+        "group's cell in turn set to its best response to the others'", groups=3),
 )  # fmt: skip
 DEFAULT_ARMS: tuple[str, ...] = tuple(arm.name for arm in ARMS[:12])
 """The arms planned when ``--arms`` is not given: the study's first twelve, whose plan the studies begun

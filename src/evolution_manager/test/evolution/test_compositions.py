@@ -227,7 +227,9 @@ def _check_validated(summary, rows, cells):
     )
 
 
-@pytest.mark.parametrize(("algorithm", "scenarios"), [("ga", "fixed"), ("qd", "fixed"), ("ga", "fresh")])
+@pytest.mark.parametrize(
+    ("algorithm", "scenarios"), [("ga", "fixed"), ("qd", "fixed"), ("ga", "fresh"), ("ascent", "fixed")]
+)
 def test_a_run_stopped_and_resumed_ends_identical(source, tmp_path, algorithm, scenarios):
     extra = ["--evaluations", "120", "--seed", "5", "--scenarios", scenarios]
     assert _compose(source, tmp_path / "straight", algorithm, *extra) == 0
@@ -285,6 +287,63 @@ def test_groups_compose_one_cell_per_group_and_resume_identical(source, tmp_path
     assert "--swarm-groups 4 differs from the run being resumed (3)" in capsys.readouterr().err
 
 
+def test_ascent_takes_turns_over_the_groups_and_ends_at_best_responses(source, tmp_path):
+    """--algorithm ascent --swarm-groups 3: the fittest cell's homogeneous swarm first; then each batch tries
+    every other cell for one group, the groups in turn, the incumbent moving to a batch's fittest genome only
+    when strictly fitter; given budget enough, the run ends early at a genome where no one group's change is
+    fitter (each group's cell a best response), which is the best genome evaluated."""
+    assert _compose(source, tmp_path / "a", "ascent", "--evaluations", "5000", "--seed", "2",
+                    "--swarm-groups", "3") == 0  # fmt: skip
+    cells = read_sources([source])[0]
+    n = len(cells)
+    rows = list(csv.DictReader((tmp_path / "a" / "evaluations.csv").open()))
+    genomes = [tuple(int(c) for c in r["genome"].split()) for r in rows]
+    fitness = {g: float(r["foraging"]) for g, r in zip(genomes, rows, strict=True)}
+    fittest_cell = min(range(n), key=lambda c: (-cells[c].fitness, c))
+    assert genomes[0] == (fittest_cell,) * 9
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert summary["finished"] and summary["individuals_produced"] == len(rows) - 1 < 5000
+    # batches of n - 1 genomes, group 0, 1, 2, 0, ... each varying one group of the incumbent
+    incumbent = genomes[0]
+    turns = 0
+    for start in range(1, len(genomes), n - 1):
+        batch = genomes[start : start + n - 1]
+        group = turns % 3
+        assert len(batch) == n - 1 and all(g == tuple(g[i % 3] for i in range(9)) for g in batch)
+        assert {g[group] for g in batch} == set(range(n)) - {incumbent[group]}
+        kept = [k for k in range(3) if k != group]
+        assert all([g[k] for k in kept] == [incumbent[k] for k in kept] for g in batch)
+        challenger = max(batch, key=lambda g: fitness[g])
+        if fitness[challenger] > fitness[incumbent]:
+            incumbent = challenger
+        turns += 1
+    assert turns >= 3 and summary["best"]["genome"] == list(incumbent)
+    assert summary["best_fitness"] == fitness[incumbent] == max(fitness.values())
+    # a best response for every group: every one-group change of the final genome was tried and no fitter
+    for group in range(3):
+        for cell in range(n):
+            roles = list(incumbent[:3])
+            roles[group] = cell
+            neighbour = tuple(roles[i % 3] for i in range(9))
+            assert fitness[neighbour] <= fitness[incumbent]
+
+
+def test_ascent_stops_at_its_budget(source, tmp_path):
+    """A budget smaller than a turn: the one batch cut to it, the run finished with it spent."""
+    assert _compose(source, tmp_path / "a", "ascent", "--evaluations", "5", "--seed", "2") == 0
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert summary["finished"] and summary["evaluations"] == 6 and summary["individuals_produced"] == 5
+    rows = list(csv.DictReader((tmp_path / "a" / "evaluations.csv").open()))
+    genomes = [tuple(int(c) for c in r["genome"].split()) for r in rows]
+    # per robot (no groups): robot 0's turn first, five other cells in an order drawn from the run's seed
+    tried = [g[0] for g in genomes[1:]]
+    assert all(g[1:] == genomes[0][1:] for g in genomes[1:])
+    assert len(set(tried)) == 5 and genomes[0][0] not in tried
+    assert _compose(source, tmp_path / "b", "ascent", "--evaluations", "5", "--seed", "3") == 0
+    other = list(csv.DictReader((tmp_path / "b" / "evaluations.csv").open()))
+    assert [int(r["genome"].split()[0]) for r in other[1:]] != tried
+
+
 def test_fresh_scenarios_give_each_evaluation_a_scenario_of_its_own(source, tmp_path, capsys):
     """--scenarios fresh: evaluation i on evaluation_seed(seed, i), as a tree run's; recorded in config.json
     (a fixed run's file stays as before, without the key), the same seed the same files, and a resume with
@@ -337,7 +396,7 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
         (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--library", "LIB"],
          "--library cannot be combined with --swarm-from"),
         (["--algorithm", "gp", "--task", "foraging", "--swarm-from", "SOURCE"],
-         "--algorithm ga or --algorithm qd"),
+         "--algorithm ga, qd or ascent"),
         (["--algorithm", "ga", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-crossover", "mix"],
          "goes with algorithm qd"),
         (["--algorithm", "qd", "--task", "foraging", "--swarm-from", "SOURCE", "--descriptors", "deliveries"],
@@ -355,6 +414,13 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
          "groups 10: the task has 9 robots"),
         (["--algorithm", "qd", "--objective", "food", "--swarm-groups", "3"],
          "--swarm-groups varies compositions of repertoire cells: it goes with --swarm-from"),
+        (["--algorithm", "ascent", "--task", "foraging"], "--algorithm ascent evolves compositions"),
+        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
+         "algorithm ascent compares every genome with the incumbent on one scenario"),
+        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--homogeneous", "2"],
+         "homogeneous 2: algorithm ascent starts from the fittest cell's homogeneous swarm"),
+        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-mutation", "all"],
+         "cell_mutation 'all': algorithm ascent"),
     ],
 )  # fmt: skip
 def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, extra, words):

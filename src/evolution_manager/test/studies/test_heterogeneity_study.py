@@ -128,7 +128,12 @@ def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_pat
     assert not any(e.get("arm", "").endswith("groups3") for e in whole["plan"])
     ga = {e["from"]: e["seed"] for e in whole["plan"] if e.get("arm") == "ga"}
     assert all(ga[e["from"]] == e["seed"] for e in entries)
-    assert [a.parameters.groups for a in study.ARMS if a.name.endswith("groups3")] == [3, 3]
+    assert [a.parameters.groups for a in study.ARMS if a.name.endswith("groups3")] == [3, 3, 3]
+    ascent_args = build_parser().parse_args([*base, "--arms", "ascent-groups3"])
+    ascent, _, _ = study.plan_study(ascent_args, "fixed", "shared")
+    climbs = [e for e in ascent["plan"] if e["kind"] == "composition"]
+    assert {e["arm"] for e in climbs} == {"ascent-groups3"} and len(climbs) == 2
+    assert all(ga[e["from"]] == e["seed"] for e in climbs)
     for more, expected in (
         (["--arms", "ga,gx"], "--arms: unknown arm 'gx'; expected some of ga,ga-seeded,qd,"),
         (["--arms", "team3"], "--arms: a plan needs a composition arm"),
