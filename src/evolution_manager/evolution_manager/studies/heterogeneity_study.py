@@ -556,21 +556,65 @@ def handwritten_rows(
     root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
 ) -> list[dict[str, str]]:
     """Every hand-written swarm (``handwritten_swarms``) on the held-out scenarios of each task's and
-    index's baseline, as rows of :data:`HEADER` (its arm :data:`HANDWRITTEN` and the swarm's name), measured
-    once into the study's ``handwritten.csv``; none on a task without the benchmark's three food kinds."""
-    baselines = [(e["task"], str(e["seed"]), (e["task"], *_held(s))) for e, s in _baseline_runs(finished)]
+    index's baseline (``heldout_best_fitness``, with its kinds) and on the scenario the baseline's run
+    evolved on (``best_fitness``: where the runs' own scores were measured), as rows of :data:`HEADER` (its
+    arm :data:`HANDWRITTEN` and the swarm's name), measured once into the study's ``handwritten.csv``; none
+    on a task without the benchmark's three food kinds."""
+    baselines = [
+        (e["task"], str(e["seed"]), (e["task"], *_held(s)), (e["task"], *_trained(s)))
+        for e, s in _baseline_runs(finished)
+    ]
     objectives = {t["task"]: t["objective"] for t in document["tasks"]}
-    found = handwritten_scores(root, document["profile"], objectives, [s for *_, s in baselines])
+    wanted = [scenarios for _, _, held, trained in baselines for scenarios in (held, trained)]
+    found = handwritten_scores(root, document["profile"], objectives, wanted)
     rows = []
-    for task, seed, scenarios in baselines:
-        for swarm in found.get(scenarios, []):
+    for task, seed, held, trained in baselines:
+        for swarm, own in zip(found.get(held, []), found.get(trained, []), strict=True):
             row = dict.fromkeys(HEADER, "")
             row.update(
-                {"arm": HANDWRITTEN + swarm["swarm"], "task": task, "seed": seed, HELDOUT: swarm["fitness"]}
-            )
+                {
+                    "arm": HANDWRITTEN + swarm["swarm"], "task": task, "seed": seed,
+                    "best_fitness": own["fitness"], HELDOUT: swarm["fitness"],
+                }
+            )  # fmt: skip
             row.update({f"heldout_{column}": swarm[column] for column in KIND_COLUMNS})
             rows.append(row)
     return rows
+
+
+def _trained(summary: dict) -> tuple[tuple[int, ...], int]:
+    """The scenario a fixed-scenario run evolved on: its seed and trials."""
+    config = summary["config"]
+    return (int(config["scenario_seed"]),), int(config["trials"])
+
+
+def in_run_table(rows: Sequence[dict[str, str]], written: Sequence[dict[str, str]], task: str) -> str:
+    """Each hand-written swarm's median score on the scenario the runs evolved on and on the held-out ones,
+    each beside how many seeds' baselines score above it there (seed by seed): whether the score a search
+    maximises can tell the swarm from the baseline. Empty without a baseline on ``task``."""
+    base = {r["seed"]: r for r in rows if r["task"] == task and r["arm"] == BASELINE}
+    if not base:
+        return ""
+    lines = [
+        "| hand-written swarm | in-run | baselines above it in-run | held-out | baselines above it "
+        "held-out |",
+        "|---|---|---|---|---|",
+    ]
+    names = dict.fromkeys(r["arm"] for r in written if r["task"] == task)
+    for name in names:
+        mine = [r for r in written if r["task"] == task and r["arm"] == name and r["seed"] in base]
+        cells = []
+        for key in ("best_fitness", HELDOUT):
+            above = sum(1 for r in mine if float(base[r["seed"]][key]) > float(r[key]))
+            cells += [f"{_median([float(r[key]) for r in mine]):.3f}", f"{above} of {len(mine)}"]
+        lines.append(f"| {name.removeprefix(HANDWRITTEN)} | " + " | ".join(cells) + " |")
+    ins = sorted(float(b["best_fitness"]) for b in base.values())
+    held = sorted(float(b[HELDOUT]) for b in base.values())
+    return (
+        "\n".join(lines)
+        + f"\n\nThe baselines of {task}: in-run {ins[0]:.3f} to {ins[-1]:.3f}, held-out {held[0]:.3f} to "
+        f"{held[-1]:.3f}.\n"
+    )
 
 
 def _handwritten_section(
@@ -597,6 +641,13 @@ def _handwritten_section(
         f"{scores_table(both, tasks, HELDOUT, names)}\n"
         + (markdown_table(tested) if tested else "No hand-written swarm has two paired runs yet.\n")
         + f"\n{goal_text(both, tested, tasks, HELDOUT, mixed)}\n"
+        + "\n### On the scenario the runs evolved on\n\n"
+        "Every run is scored, while it evolves, on its one scenario (the study's design); the hand-written "
+        "swarms measured there too show whether that score can tell them from the baselines. Where a "
+        "hand-written swarm scores below most baselines in-run but above them held-out, a search maximising "
+        "the in-run score prefers the baseline to it, however well it searches. Seeds whose scenarios are "
+        "shared see the same in-run score for the swarm (one measurement).\n\n"
+        + "\n".join(in_run_table(rows, written, task) for task in tasks)
     )
 
 

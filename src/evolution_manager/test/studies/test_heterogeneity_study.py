@@ -301,8 +301,10 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     # the hand-written swarms on the baseline's held-out scenarios: every one measured once (the scenarios
     # are the study's, shared by both indices), the specialists' score that swarm's mean over the scenarios
     written = list(csv.DictReader(io.StringIO((out / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
-    assert [r["swarm"] for r in written] == list(division.swarms(9))
-    assert {r["seeds"] for r in written} == {" ".join(map(str, summary["heldout"]["seeds"]))}
+    # and on the scenario the runs evolved on (where their in-run scores come from)
+    assert [r["swarm"] for r in written] == list(division.swarms(9)) * 2
+    held_seeds = " ".join(map(str, summary["heldout"]["seeds"]))
+    assert [r["seeds"] for r in written[::11]] == [held_seeds, str(summary["config"]["scenario_seed"])]
     specialists = division.swarms(9)[division.SPECIALISTS][1]
     results = BatchEvaluator(config).evaluate(
         [SwarmRequest(SwarmLayout(specialists), s, 1) for s in summary["heldout"]["seeds"]]
@@ -318,8 +320,17 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
     )
     mean = sum(r.fitness[OBJECTIVES.index("foraging")] for r in results) / len(results)
     assert mean == pytest.approx(summary["homogeneous"]["heldout_best_fitness"], abs=1e-12)
+    trained = next(r for r in written[11:] if r["swarm"] == division.SPECIALISTS)
+    [again] = BatchEvaluator(config).evaluate(
+        [SwarmRequest(SwarmLayout(specialists), summary["config"]["scenario_seed"], 1)]
+    )
+    assert float(trained["fitness"]) == pytest.approx(again.fitness[OBJECTIVES.index("foraging")], abs=1e-12)
     hand = report[report.index("## Hand-written swarms") : report.index("## The authors' QD score")]
     assert f"| multifood-arena6 | {study.HANDWRITTEN}{division.SPECIALISTS} | 2 |" in hand
+    in_run = hand[hand.index("### On the scenario the runs evolved on") :]
+    above = sum(1 for r in rows if r["arm"] == study.BASELINE and float(r["best_fitness"]) > float(
+        trained["fitness"]))  # fmt: skip
+    assert f"| {division.SPECIALISTS} | {float(trained['fitness']):.3f} | {above} of 2 |" in in_run
     assert f"- multifood-arena6, {study.HANDWRITTEN}{division.SPECIALISTS}: " in hand
     assert f"- multifood-arena6, {study.HANDWRITTEN}any kind: " not in hand  # the goal is heterogeneity's
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != "sessions.json"}
@@ -391,21 +402,29 @@ def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
     measured = list(csv.DictReader(io.StringIO((folder / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
     begun = {row["task"] for row in rows if row["arm"] == study.BASELINE}
     assert {r["task"] for r in measured} == begun
-    assert len({(r["task"], r["seeds"], r["trials"]) for r in measured}) == len(begun)
+    # the five held-out scenarios; since the in-run section, the study's one training scenario too
+    held = [r for r in measured if len(r["seeds"].split()) == 5]
+    trained = {(r["task"], r["swarm"]): r["fitness"] for r in measured if len(r["seeds"].split()) == 1}
+    assert len({(r["task"], r["seeds"], r["trials"]) for r in held}) == len(begun)
+    assert len(held) + len(trained) == len(measured)
     paired = [
         {
             **dict.fromkeys(study.HEADER, ""),
             "arm": study.HANDWRITTEN + r["swarm"],
             "task": r["task"],
             "seed": base["seed"],
+            "best_fitness": trained.get((r["task"], r["swarm"]), ""),
             study.HELDOUT: r["fitness"],
             **{f"heldout_foraging{k}": r[f"foraging{k}"] for k in (1, 2, 3)},
         }
         for base in rows
         if base["arm"] == study.BASELINE
-        for r in measured
+        for r in held
         if r["task"] == base["task"]
     ]
     names = list(dict.fromkeys(r["arm"] for r in paired))
     both = [r for r in rows if r["arm"] == study.BASELINE] + paired
     assert study.scores_table(both, tasks, study.HELDOUT, names) in report
+    if trained:
+        for task in begun:
+            assert study.in_run_table(rows, paired, task) in report
