@@ -648,6 +648,7 @@ def _handwritten_section(
         "the in-run score prefers the baseline to it, however well it searches. Seeds whose scenarios are "
         "shared see the same in-run score for the swarm (one measurement).\n\n"
         + "\n".join(in_run_table(rows, written, task) for task in tasks)
+        + "\n"
     )
 
 
