@@ -383,7 +383,13 @@ CARRIERS = ("multifood-arena6-carriers",)
         ("study", study.DEFAULT_TASKS),
         *(
             (name, CARRIERS)
-            for name in ("carriers-study", "carriers-fine", "carriers-groups", "carriers-fine-groups")
+            for name in (
+                "carriers-study",
+                "carriers-fine",
+                "carriers-groups",
+                "carriers-fine-groups",
+                "carriers-ascent",
+            )
         ),
     ],
 )
