@@ -386,6 +386,9 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
 
 
 # Refusals --------------------------------------------------------------------------------------------------
+_ASCENT = ["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE"]
+
+
 @pytest.mark.parametrize(
     ("extra", "words"),
     [
@@ -415,12 +418,14 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
         (["--algorithm", "qd", "--objective", "food", "--swarm-groups", "3"],
          "--swarm-groups varies compositions of repertoire cells: it goes with --swarm-from"),
         (["--algorithm", "ascent", "--task", "foraging"], "--algorithm ascent evolves compositions"),
-        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--scenarios", "fresh"],
-         "algorithm ascent compares every genome with the incumbent on one scenario"),
-        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--homogeneous", "2"],
-         "homogeneous 2: algorithm ascent starts from the fittest cell's homogeneous swarm"),
-        (["--algorithm", "ascent", "--task", "foraging", "--swarm-from", "SOURCE", "--swarm-mutation", "all"],
-         "cell_mutation 'all': algorithm ascent"),
+        *(
+            ([*_ASCENT, *more], words)
+            for more, words in (
+                (["--scenarios", "fresh"], "algorithm ascent compares every genome with the incumbent"),
+                (["--homogeneous", "2"], "homogeneous 2: algorithm ascent starts from the fittest cell's"),
+                (["--swarm-mutation", "all"], "cell_mutation 'all': algorithm ascent"),
+            )
+        ),
     ],
 )  # fmt: skip
 def test_bad_composition_options_exit_2_with_one_line(source, tmp_path, capsys, extra, words):
