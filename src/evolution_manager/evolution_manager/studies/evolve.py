@@ -64,6 +64,9 @@ if TYPE_CHECKING:  # imported where used: Dask, tqdm and a run's modules load la
 
 NETWORK_ALGORITHMS = ("nn-cmaes", "nn-ga", "nn-qd")
 """The optimisers over a network's weights (``evolution.networks.ALGORITHMS``: that module loads late)."""
+COMPOSITION_ALGORITHMS = ("ga", "qd", "ascent")
+"""The optimisers over compositions (``evolution.compositions.ALGORITHMS``: that module loads late); ``qd``
+is a tree run's too, so only ``--swarm-from`` makes it a composition run."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -71,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="evolve", description=__doc__.split("\n")[0])
     parser.add_argument(
         "--algorithm",
-        choices=(*ALGORITHMS, "ga", "ascent", *NETWORK_ALGORITHMS),
+        choices=tuple(dict.fromkeys((*ALGORITHMS, *COMPOSITION_ALGORITHMS, *NETWORK_ALGORITHMS))),
         help="gp (GP_o), gp-fnd (GP_fnd) or qd (MAP-Elites); with --swarm-from, ga, qd or ascent (coordinate "
         "ascent over the groups' cells) over compositions; "
         "nn-cmaes, nn-ga or nn-qd (MAP-Elites): the weights of the 9-5-1 network controller",
@@ -408,9 +411,9 @@ def _execute(
 
 
 def _compositions_asked(args: argparse.Namespace) -> bool:
-    """Whether the command evolves compositions: ``--swarm-from`` or ``--algorithm ga`` given, or ``--resume``
-    of a composition run."""
-    if args.swarm_from is not None or args.algorithm in ("ga", "ascent"):
+    """Whether the command evolves compositions: ``--swarm-from`` or an algorithm only compositions have
+    (``ga``, ``ascent``) given, or ``--resume`` of a composition run."""
+    if args.swarm_from is not None or args.algorithm in set(COMPOSITION_ALGORITHMS) - set(ALGORITHMS):
         return True
     return bool(args.resume) and run_kind(args.out) == COMPOSITIONS
 
@@ -446,8 +449,9 @@ def _check_composition_options(args: argparse.Namespace, cluster: ClusterSetting
             "--swarm-from evolves compositions on a task of foraging: add --task (foraging, "
             "multifood-arena9-kind2, ...)"
         )
-    if args.algorithm not in ("ga", "qd", "ascent"):
-        raise UsageError("--swarm-from evolves compositions with --algorithm ga, qd or ascent")
+    if args.algorithm not in COMPOSITION_ALGORITHMS:
+        *others, last = COMPOSITION_ALGORITHMS
+        raise UsageError(f"--swarm-from evolves compositions with --algorithm {', '.join(others)} or {last}")
 
 
 def _check_homogeneous(algorithm: str, parameters: CompositionParameters, cells: int) -> None:

@@ -407,6 +407,13 @@ def _held(summary: dict) -> tuple[tuple[int, ...], int]:
     return tuple(int(s) for s in summary["heldout"]["seeds"]), int(summary["heldout"]["trials"])
 
 
+def _trained(summary: dict) -> tuple[tuple[int, ...], int]:
+    """The scenario a composition run measured its baseline and, on fixed scenarios, its genomes on: its
+    scenario seed and trials."""
+    config = summary["config"]
+    return (int(config["scenario_seed"]),), int(config["trials"])
+
+
 def finished_rows(
     finished: Sequence[tuple[dict, dict]], unseen: dict[tuple[str, str], float] | None = None
 ) -> list[dict[str, str]]:
@@ -580,12 +587,6 @@ def handwritten_rows(
             row.update({f"heldout_{column}": swarm[column] for column in KIND_COLUMNS})
             rows.append(row)
     return rows
-
-
-def _trained(summary: dict) -> tuple[tuple[int, ...], int]:
-    """The scenario a fixed-scenario run evolved on: its seed and trials."""
-    config = summary["config"]
-    return (int(config["scenario_seed"]),), int(config["trials"])
 
 
 def in_run_table(rows: Sequence[dict[str, str]], written: Sequence[dict[str, str]], task: str) -> str:

@@ -12,6 +12,7 @@ from killed_runs import straight_and_killed
 
 from evolution_manager.errors import ConfigError
 from evolution_manager.evolution.compositions import (
+    ALGORITHMS,
     Cell,
     CompositionConfig,
     CompositionParameters,
@@ -26,7 +27,7 @@ from evolution_manager.evolution.compositions import (
 )
 from evolution_manager.evolution.parameters import GPParameters
 from evolution_manager.evolution.run_config import evaluation_seed
-from evolution_manager.studies.evolve import evolve
+from evolution_manager.studies.evolve import COMPOSITION_ALGORITHMS, evolve
 from evolution_manager.studies.experiment import produced_so_far
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest
 from swarm_sim.evaluation.cli import evaluate_main
@@ -383,6 +384,11 @@ def test_a_killed_run_resumes_to_the_same_files(source, tmp_path):
     argv += ["--evaluations", "1500", "--seed", "6", "--trials", "2"]
     straight, killed = straight_and_killed(argv, tmp_path, rows=6)
     assert _files(killed) == _files(straight)
+
+
+def test_evolve_names_the_composition_algorithms_this_module_has():
+    """evolve's copy of the algorithms (it loads this module late) is this module's list."""
+    assert COMPOSITION_ALGORITHMS == ALGORITHMS
 
 
 # Refusals --------------------------------------------------------------------------------------------------
