@@ -7,6 +7,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from bt_controller.draws import MAX_SEED
@@ -31,6 +32,21 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         print(f"{self.prog}: error: {' '.join(message.split())}", file=sys.stderr)
         raise SystemExit(EXIT_USAGE)
+
+
+def tree_argument(argument: str) -> str:
+    """The tree text of a ``--tree``-like option: the text itself, unless it names an existing file (as ``bt``
+    reads it); ``ValueError`` for a file that cannot be read."""
+    try:
+        is_file = len(argument) < 4096 and "\n" not in argument and Path(argument).is_file()
+    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
+        is_file = False
+    if not is_file:
+        return argument
+    try:
+        return Path(argument).read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise ValueError(f"cannot read the tree file {argument}: {error}") from None
 
 
 def positive_int(text: str) -> int:

@@ -18,7 +18,9 @@ with its probability, the static limits), the other sub-groups copied unchanged 
 restricted crossover of team GP, which only crosses the trees of one position). A child no operator touched
 keeps its parent's fitness and is not evaluated, as in the tree GP. The budget counts the teams produced by
 the generations after the initial population (25 per generation, the elite included), as every run's; the
-generation that reaches it is completed.
+generation that reaches it is completed. With a start tree (``TeamConfig.start_tree``, ``--start-tree``) the
+initial population is 25 copies of that tree's homogeneous swarm instead of random trees, so every sub-group's
+tree evolves from it in the role its robots play beside the others.
 
 Every team is evaluated as a heterogeneous swarm (``swarm_sim.evaluation.SwarmRequest``) on the run's
 scenario seed (fixed scenarios, the default; a team this process evaluated before is answered from
@@ -178,6 +180,10 @@ class TeamConfig:
     """``fixed``: every evaluation on the scenario seed; ``fresh``: evaluation ``i`` on a scenario of its own
     (``run_config.evaluation_seed``), as a tree or composition run's. The held-out and validation scenarios
     come from the scenario seed either way."""
+    start_tree: str = ""
+    """A tree (text, kept as its canonical text) that every sub-group of every team of the initial population
+    runs: the run starts from that homogeneous swarm, and the GP varies it one sub-group at a time. Empty:
+    the 2023 GP's random trees."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -202,6 +208,14 @@ class TeamConfig:
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
         if self.scenarios not in SCENARIOS:
             raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
+        if self.start_tree:
+            try:
+                tree = tree_from_text(self.start_tree, make_primitive_set(self.conditions))
+            except ValueError as error:
+                raise ConfigError(
+                    f"the start tree is not a tree of task {self.task.name}'s nodes: {error}"
+                ) from None
+            object.__setattr__(self, "start_tree", tree_to_text(tree))
         p = self.gp
         if p.population < 2 or p.elites_per_objective >= p.population or p.tournament < 1:
             raise ConfigError(
@@ -221,6 +235,7 @@ class TeamConfig:
         task: TaskSpec | str = DEFAULT_TASK,
         scenario_seed: int | None = None,
         scenarios: str = "fixed",
+        start_tree: str = "",
     ) -> TeamConfig:
         """A configuration with the 2023 GP's parameters and the derating the tree GP of ``task`` would use
         (``RunConfig.make``: the 2024 flat baseline's on a foraging task, else the 2023 one)."""
@@ -237,6 +252,7 @@ class TeamConfig:
             -1 if scenario_seed is None else scenario_seed,
             GPParameters(derating=derating),
             scenarios=scenarios,
+            start_tree=start_tree,
         )
 
     @property
@@ -279,6 +295,8 @@ class TeamConfig:
         # written only when asked for: the configuration files of fixed runs stay as they were
         if self.scenarios != "fixed":
             document["scenarios"] = self.scenarios
+        if self.start_tree:
+            document["start_tree"] = self.start_tree
         return document
 
     @classmethod
@@ -300,6 +318,7 @@ class TeamConfig:
                 GPParameters(**gp),
                 str(data["algorithm"]),
                 str(data.get("scenarios", "fixed")),
+                str(data.get("start_tree", "")),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as error:
             if isinstance(error, ConfigError):
@@ -476,14 +495,17 @@ class TeamRun(CountedRun[Texts, Member]):
 
     # Execution ---------------------------------------------------------------------------------------
     def _ask(self) -> list[Texts]:
-        """The teams to evaluate next: the initial population, or the children of the next generation that
-        an operator touched (a generation of untouched children only is completed without evaluating)."""
+        """The teams to evaluate next: the initial population (random trees, or copies of the start tree's
+        homogeneous swarm), or the children of the next generation that an operator touched (a generation of
+        untouched children only is completed without evaluating)."""
         p = self.config.gp
         if not self.population:
+            start = self.config.start_tree
             self._children = [
                 Child(
                     tuple(
-                        tree_to_text(full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height))
+                        start
+                        or tree_to_text(full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height))
                         for _ in range(self.config.team)
                     ),
                     -1,

@@ -28,10 +28,19 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from contextlib import ExitStack
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from evolution_manager.arguments import EXIT_IO, EXIT_USAGE, Parser, positive_int, seconds, seed_int
+from evolution_manager.arguments import (
+    EXIT_IO,
+    EXIT_USAGE,
+    Parser,
+    positive_int,
+    seconds,
+    seed_int,
+    tree_argument,
+)
 from evolution_manager.cluster.client import open_client
 from evolution_manager.cluster.settings import add_cluster_options, settings_from_args
 from evolution_manager.errors import DispatchError, EvolutionError, UsageError, WriteError
@@ -153,6 +162,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --algorithm gp: evolve K trees together, robot i running tree i mod K "
         "(docs/algorithms.md, 'Teams')",
     )
+    parser.add_argument(
+        "--start-tree",
+        metavar="TREE",
+        help="with --team K: start from this tree (text, or a file holding it) in every sub-group of every "
+        "team of the initial population, instead of random trees",
+    )
     add_cluster_options(parser)
     return parser
 
@@ -227,6 +242,8 @@ def _evolve(argv: Sequence[str] | None, stack: ExitStack, given: dict[str, Path]
         check_scenario_seed(args)  # before anything: -1 is not "derive it", for tree and composition runs
         if _teams_asked(args):
             return _evolve_teams(args, argv, started, cluster)
+        if args.start_tree is not None:
+            raise UsageError("--start-tree seeds the teams of a team run: it goes with --team K")
         if _compositions_asked(args):
             return _evolve_compositions(args, argv, started, cluster)
         if _networks_asked(args):
@@ -652,6 +669,18 @@ def _check_team_options(args: argparse.Namespace, cluster: ClusterSettings) -> N
         raise UsageError(f"--team K evolves K trees together with --algorithm gp, not {args.algorithm}")
 
 
+def _start_tree(args: argparse.Namespace) -> str:
+    """The tree text ``--start-tree`` gives (the text, or the file it names); ``UsageError`` for an empty one
+    or a file that cannot be read."""
+    try:
+        text = tree_argument(args.start_tree).strip()
+    except ValueError as error:
+        raise UsageError(f"--start-tree: {error}") from None
+    if not text:
+        raise UsageError("--start-tree: expected a tree (text, or a file holding it), got nothing")
+    return text
+
+
 def _evolve_teams(
     args: argparse.Namespace, argv: Sequence[str] | None, started: float, cluster: ClusterSettings
 ) -> int:
@@ -678,6 +707,13 @@ def _evolve_teams(
                     f"--task {task_label(args.task)} differs from the run being resumed "
                     f"({task_label(saved.task)}); leave it out or start a new run in another --out"
                 )
+            if args.start_tree is not None and (
+                replace(saved, start_tree=_start_tree(args)).start_tree != saved.start_tree
+            ):
+                raise UsageError(
+                    "--start-tree differs from the run being resumed (its config.json: start_tree); leave it "
+                    "out or start a new run in another --out"
+                )
             config = saved
         else:
             _refuse_a_started_run(args.out)
@@ -697,6 +733,7 @@ def _evolve_teams(
                 task,
                 args.scenario_seed,
                 args.scenarios or "fixed",
+                "" if args.start_tree is None else _start_tree(args),
             )
         evaluator = _evaluator(args.workers, config)
         if args.resume:

@@ -36,7 +36,9 @@ paired t-test or Wilcoxon signed-rank) with Holm's correction over the family of
 the authors' QD score at 1, 2, 4 and 8 bins per axis of every composition run, and each robot's deliveries
 of each kind in the best swarms. Two more tables with their own families: the runs' validated choices
 (``evolution.validation``), and the same choices on arenas no run evolved on (the task's ``-unseen`` twin,
-``swarm_sim.tasks.unseen_twin``, on the run's held-out seeds; measured once into ``unseen.csv``). On a task
+``swarm_sim.tasks.unseen_twin``, on the run's held-out seeds; measured once into ``unseen.csv``). An arm with
+a twin (``Arm.twin``: the team evolved from a start tree and the same GP over one tree from that start) is
+also paired with it, in a table and family of its own. On a task
 of three food kinds, the hand-written swarms of ``division-bench`` on the same held-out scenarios, paired
 with the baseline (``handwritten_swarms``; measured once into ``handwritten.csv``).
 """
@@ -74,6 +76,7 @@ from evolution_manager.studies.handwritten_swarms import (
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
+from swarm_sim.bench.division import any_forager
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import TaskError, task_named, unseen_twin
@@ -126,6 +129,12 @@ class Arm:
     """The arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
     groups: int = 0
     """K, for a composition arm of K groups of robots, one cell each (``CompositionParameters.groups``)."""
+    start_tree: str = ""
+    """For a team arm: the tree every sub-group of its first teams runs (``TeamConfig.start_tree``); empty:
+    random trees."""
+    twin: str = ""
+    """The arm this one is also paired with: the same search over one tree from the same start, so that the
+    report can tell what evolving several trees adds from what the start gives."""
 
     @property
     def parameters(self) -> CompositionParameters:
@@ -161,6 +170,12 @@ ARMS: tuple[Arm, ...] = (
     Arm("qd-groups3", "qd", "the authors' MAP-Elites over 3 cells, robot i running cell i mod 3", groups=3),
     Arm("ascent-groups3", "ascent", "coordinate ascent over 3 cells from the best homogeneous swarm: each "
         "group's cell in turn set to its best response to the others'", groups=3),
+    Arm("team3-any-fresh", "gp", "GP over 3 trees, each group starting from the hand-written forager of "
+        "any kind, every evaluation on a scenario of its own", team=3, scenarios="fresh",
+        start_tree=any_forager(), twin="homogeneous-any-fresh"),
+    Arm("homogeneous-any-fresh", "gp", "GP over one tree from the same hand-written forager, every "
+        "evaluation on a scenario of its own: team3-any-fresh's homogeneous twin", team=1, scenarios="fresh",
+        start_tree=any_forager()),
 )  # fmt: skip
 DEFAULT_ARMS: tuple[str, ...] = tuple(arm.name for arm in ARMS[:12])
 """The arms planned when ``--arms`` is not given: the study's first twelve, whose plan the studies begun
@@ -264,7 +279,7 @@ def plan_study(
                 seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
                 team = TeamConfig.make(
                     arm.team, objective, args.evaluations + swarm_evaluations, seed, args.trials, profile,
-                    task, scenario_seed, arm.scenarios,
+                    task, scenario_seed, arm.scenarios, arm.start_tree,
                 )  # fmt: skip
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entries.append({"kind": "team", "arm": arm.name, "task": task, "dir": folder,
@@ -653,10 +668,13 @@ def _handwritten_section(
     )
 
 
-def _paired(rows: Sequence[dict[str, str]], task: str, arm: str, key: str) -> tuple[list[float], list[float]]:
-    """The arm's and the baseline's ``key`` on ``task``, paired by seed (seeds both have)."""
+def _paired(
+    rows: Sequence[dict[str, str]], task: str, arm: str, key: str, against: str = BASELINE
+) -> tuple[list[float], list[float]]:
+    """The arm's and the baseline's (or ``against``'s) ``key`` on ``task``, paired by seed (seeds both
+    have)."""
     mine = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == arm and r[key]}
-    base = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == BASELINE and r[key]}
+    base = {r["seed"]: float(r[key]) for r in rows if r["task"] == task and r["arm"] == against and r[key]}
     seeds = [s for s in mine if s in base]
     return [mine[s] for s in seeds], [base[s] for s in seeds]
 
@@ -683,6 +701,36 @@ def comparisons(
             if len(a) >= 2:
                 found.append(compare_paired(metric, task, name, a, BASELINE, b))
     return holm(found) if found else []
+
+
+def twin_comparisons(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> list[Comparison]:
+    """Each arm that has a twin (``Arm.twin``) against it, on the held-out score of the run's best and of the
+    validated choice, paired by seed, per task: one family, Holm-corrected. Pairs of fewer than two runs are
+    left out."""
+    found = []
+    for key in (HELDOUT, VALIDATED):
+        for task in tasks:
+            for arm in (a for a in ARMS if a.twin):
+                a, b = _paired(rows, task, arm.name, key, arm.twin)
+                if len(a) >= 2:
+                    found.append(compare_paired(METRICS[key], task, arm.name, a, arm.twin, b))
+    return holm(found) if found else []
+
+
+def _twins_section(rows: Sequence[dict[str, str]], tasks: Sequence[str]) -> str:
+    """The arms against their twins (:func:`twin_comparisons`); nothing when no pair has two runs."""
+    tested = twin_comparisons(rows, tasks)
+    if not tested:
+        return ""
+    pairs = ", ".join(f"{a.name} against {a.twin}" for a in ARMS if a.twin)
+    return (
+        "## Against the homogeneous twin\n\n"
+        "An arm that evolves several trees from a start tree is paired, seed by seed, with its twin: the "
+        f"same GP over one tree from the same start, on the same budget and scenarios ({pairs}). Beside "
+        "the baseline, which tells how far each gets, this tells what evolving several trees adds to what "
+        "the start gives. Held-out scores of the run's best and of its validated choice; Holm's correction "
+        "over the family of every row of this table.\n\n" + markdown_table(tested) + "\n"
+    )
 
 
 def _median(values: Sequence[float]) -> float:
@@ -1029,6 +1077,7 @@ def build_report(root: Path) -> Path:
         f"{goal_text(rows, tested, tasks)}\n"
         f"{_validated_section(rows, tasks)}"
         f"{_unseen_section(rows, tasks)}"
+        f"{_twins_section(rows, tasks)}"
         f"{_handwritten_section(rows, written, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
         f"Every genome a run evaluated, binned by the task's behaviour space ({spaces}), the "

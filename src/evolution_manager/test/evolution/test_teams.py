@@ -299,6 +299,62 @@ def test_fresh_scenarios_give_each_evaluated_team_a_scenario_of_its_own(tmp_path
     assert "--scenarios fixed differs from the run being resumed (fresh)" in error and error.count("\n") == 1
 
 
+START = "sel(seq(in_nest, stop), forward)"
+
+
+def test_a_start_tree_is_every_sub_groups_tree_of_the_first_generation(tmp_path):
+    """--start-tree: the 25 initial teams are the start tree's homogeneous swarm, then each child of the first
+    generation differs from it in the one sub-group it was varied in; the tree read from a file gives the
+    same run; config.json keeps its canonical text; without it the first teams are random."""
+    extra = ["--team", "3", "--evaluations", "50", "--seed", "3"]
+    assert _team(tmp_path / "text", *extra, "--start-tree", START) == 0
+    (tmp_path / "start.txt").write_text(START + "\n")
+    assert _team(tmp_path / "file", *extra, "--start-tree", str(tmp_path / "start.txt")) == 0
+    assert _files(tmp_path / "text") == _files(tmp_path / "file")
+    config = json.loads((tmp_path / "text" / "config.json").read_text())
+    assert config["start_tree"] == START
+    rows = list(csv.DictReader((tmp_path / "text" / "evaluations.csv").open()))
+    first = [r for r in rows if r["group"] == ""]
+    assert len(first) == 25 and all(json.loads(r["trees"]) == [START] * 3 for r in first)
+    progress = list(csv.DictReader((tmp_path / "text" / "progress.csv").open()))
+    children = rows[25 : int(progress[1]["evaluations"])]  # the first generation varied (progress row 2)
+    assert children and all(r["group"] != "" for r in children)
+    for row in children:
+        trees, group = json.loads(row["trees"]), int(row["group"])
+        assert [t for g, t in enumerate(trees) if g != group] == [START, START]
+    assert any(json.loads(r["trees"])[int(r["group"])] != START for r in children)
+    assert _team(tmp_path / "random", *extra) == 0
+    assert "start_tree" not in json.loads((tmp_path / "random" / "config.json").read_text())
+    random_rows = list(csv.DictReader((tmp_path / "random" / "evaluations.csv").open()))
+    assert all(json.loads(r["trees"]) != [START] * 3 for r in random_rows[:25])
+
+
+@pytest.mark.parametrize(
+    ("extra", "words"),
+    [
+        (["--team", "3", "--start-tree", "sel(food_left1, forward)"], "the start tree is not a tree of task"),
+        (["--team", "3", "--start-tree", "sel(forward"], "the start tree is not a tree of task"),
+        (["--team", "3", "--start-tree", " "], "--start-tree: expected a tree"),
+        (["--start-tree", START], "--start-tree seeds the teams of a team run: it goes with --team K"),
+    ],
+)
+def test_a_bad_start_tree_exits_2_with_one_line(tmp_path, capsys, extra, words):
+    assert _team(tmp_path / "out", *extra) == 2
+    error = capsys.readouterr().err
+    assert words in error and error.count("\n") == 1 and "Traceback" not in error
+    assert not (tmp_path / "out").exists()
+
+
+def test_resume_refuses_another_start_tree_and_takes_the_same_one(tmp_path, capsys):
+    assert _team(tmp_path / "run", "--team", "2", "--evaluations", "5", "--start-tree", START) == 0
+    capsys.readouterr()
+    resume = ["--out", str(tmp_path / "run"), "--resume", "--no-progress", "--start-tree"]
+    assert evolve([*resume, "sel(seq(in_nest, stop), reverse)"]) == 2
+    error = capsys.readouterr().err
+    assert "--start-tree differs from the run being resumed" in error and error.count("\n") == 1
+    assert evolve([*resume, START]) == 0
+
+
 # Refusals ---------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("extra", "words"),
@@ -372,6 +428,11 @@ def test_a_team_configuration_round_trips_and_takes_the_tasks_derating():
     assert TeamConfig.make(2, "food", 200, 1).gp.derating == "standard"
     fresh = TeamConfig.make(2, "food", 200, 1, scenarios="fresh")
     assert TeamConfig.from_json(json.loads(json.dumps(fresh.to_json()))) == fresh
+    started = TeamConfig.make(2, "food", 200, 1, start_tree=START)
+    assert TeamConfig.from_json(json.loads(json.dumps(started.to_json()))) == started
+    assert (
+        "start_tree" not in config.to_json()
+    )  # the configuration files of runs without one stay as they were
     with pytest.raises(ConfigError, match="scenarios must be one of fixed, fresh, got 'new'"):
         TeamConfig.make(2, "food", 200, 1, scenarios="new")
     with pytest.raises(ConfigError, match="not a team run's configuration"):

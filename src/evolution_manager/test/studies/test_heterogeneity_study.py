@@ -134,6 +134,17 @@ def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_pat
     climbs = [e for e in ascent["plan"] if e["kind"] == "composition"]
     assert {e["arm"] for e in climbs} == {"ascent-groups3"} and len(climbs) == 2
     assert all(ga[e["from"]] == e["seed"] for e in climbs)
+    # the teams from a start tree and their homogeneous twin: planned only when named, on the same seeds
+    started_args = build_parser().parse_args([*base, "--arms", "ga,team3-any-fresh,homogeneous-any-fresh"])
+    started, _, _ = study.plan_study(started_args, "fixed", "shared")
+    teams = [e for e in started["plan"] if e["kind"] == "team"]
+    assert sorted((e["arm"], e["config"]["team"]) for e in teams) == [
+        ("homogeneous-any-fresh", 1), ("homogeneous-any-fresh", 1),
+        ("team3-any-fresh", 3), ("team3-any-fresh", 3),
+    ]  # fmt: skip
+    assert all(e["config"]["start_tree"] == division.any_forager() for e in teams)
+    assert all(e["config"]["scenarios"] == "fresh" and ga[_from(e)] == e["seed"] for e in teams)
+    assert not any(e.get("arm", "").endswith("any-fresh") for e in whole["plan"])
     for more, expected in (
         (["--arms", "ga,gx"], "--arms: unknown arm 'gx'; expected some of ga,ga-seeded,qd,"),
         (["--arms", "team3"], "--arms: a plan needs a composition arm"),
@@ -145,6 +156,45 @@ def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_pat
         assert experiment(["--study", "paper", *option, "--out", str(tmp_path / "x")]) == 2
         assert f"{option[0]} applies to --study heterogeneity only" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def _from(entry: dict) -> str:
+    """The repertoire folder of a plan entry's index (a team plans none: its index's, by its folder)."""
+    task, index = entry["task"], entry["dir"].rsplit("/", 1)[1]
+    return f"repertoires/{task}/{index}"
+
+
+def test_an_arm_is_paired_with_its_homogeneous_twin_seed_by_seed():
+    """twin_comparisons: team3-any-fresh against homogeneous-any-fresh, on the held-out scores of the best and
+    of the validated choice, paired by seed (a seed only one of them has is left out), one Holm family; the
+    report's section names the pair."""
+
+    def row(arm, seed, held, validated):
+        return {
+            "arm": arm,
+            "task": "t",
+            "seed": str(seed),
+            study.HELDOUT: str(held),
+            study.VALIDATED: validated,
+        }
+
+    rows = [row("team3-any-fresh", s, 0.30 + 0.01 * s, str(0.31 + 0.01 * s)) for s in range(6)]
+    rows += [row("homogeneous-any-fresh", s, 0.20 + 0.013 * s, "") for s in range(1, 8)]
+    (held,) = study.twin_comparisons(rows, ["t"])  # no validated scores on the twin's side: one row
+    assert (held.first, held.second, held.n_first, held.metric) == (
+        "team3-any-fresh", "homogeneous-any-fresh", 5, study.METRICS[study.HELDOUT]
+    )  # fmt: skip
+    assert held.significant and held.p_holm == held.p_value
+    rows += [row("homogeneous-any-fresh", 0, 0.2, "0.2")]
+    rows = [{**r, study.VALIDATED: r[study.VALIDATED] or "0.25"} for r in rows]
+    both = study.twin_comparisons(rows, ["t"])
+    assert [c.metric for c in both] == [study.METRICS[study.HELDOUT], study.METRICS[study.VALIDATED]]
+    assert all(c.n_first == 6 for c in both) and all(c.p_holm >= c.p_value for c in both)
+    section = study._twins_section(rows, ["t"])
+    assert (
+        section.startswith("## Against the homogeneous twin") and "team3-any-fresh vs homogeneous" in section
+    )
+    assert study._twins_section(rows[:1], ["t"]) == ""
 
 
 def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):

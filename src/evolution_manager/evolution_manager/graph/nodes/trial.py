@@ -58,7 +58,14 @@ from bt_controller.language import Library, LibraryError, load_library, to_text
 from bt_controller.language import Node as TreeNode
 from bt_controller.model_settings import PROFILES, chain_of_trial
 from bt_controller.robot import timeline
-from evolution_manager.arguments import Parser, finite, non_negative_int, rate_argument, seed_in_range
+from evolution_manager.arguments import (
+    Parser,
+    finite,
+    non_negative_int,
+    rate_argument,
+    seed_in_range,
+    tree_argument,
+)
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics
 from evolution_manager.graph.startup import Bridge, Graph, GraphError, start_trial_graph
@@ -574,20 +581,6 @@ def domain_id(text: str) -> int:
     if not 0 <= value <= MAX_DOMAIN:
         raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_DOMAIN}, got {value}")
     return value
-
-
-def tree_argument(argument: str) -> str:
-    """The tree text of ``--tree``: the text itself, unless it names an existing file (as ``bt`` reads it)."""
-    try:
-        is_file = len(argument) < 4096 and "\n" not in argument and Path(argument).is_file()
-    except (OSError, ValueError):  # a name too long for the file system, a NUL byte
-        is_file = False
-    if not is_file:
-        return argument
-    try:
-        return Path(argument).read_text()
-    except (OSError, UnicodeDecodeError) as error:
-        raise ValueError(f"cannot read the tree file {argument}: {error}") from None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
