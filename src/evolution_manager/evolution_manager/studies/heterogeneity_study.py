@@ -838,13 +838,25 @@ def goal_text(
 ) -> str:
     """Whether an arm (or each of ``names``) reached the goal on a task: the median of the held-out score
     ``key`` at least :data:`GOAL` times the baseline's with the paired test significant after Holm's
-    correction."""
+    correction. A homogeneous arm (named ``homogeneous-...``) is no candidate: its line says how it stands
+    to the baseline and how the best heterogeneous median stands to it, since the goal is against the best
+    homogeneous forager."""
     lines = []
     for task in tasks:
         base = _values(rows, task, BASELINE, key)
         if not base:
             continue
-        for name in names or _arm_names():
+        candidates = [n for n in names or _arm_names() if not n.startswith(f"{BASELINE}-")]
+        for name in (n for n in names or _arm_names() if n.startswith(f"{BASELINE}-")):
+            held = _values(rows, task, name, key)
+            best = max((_median(v) for n in candidates if (v := _values(rows, task, n, key))), default=None)
+            if held and best is not None and _median(base) > 0 and _median(held) > 0:
+                lines.append(
+                    f"- {task}, {name}: a homogeneous arm, no candidate; its median is "
+                    f"{_median(held) / _median(base):.3g} times the baseline's ({len(held)} runs), and the "
+                    f"best heterogeneous median {best / _median(held):.3g} times its own."
+                )
+        for name in candidates:
             held = _values(rows, task, name, key)
             row = next((c for c in tested if c.objective == task and c.first == name), None)
             if not held or row is None or _median(base) <= 0:

@@ -190,6 +190,15 @@ def test_an_arm_is_paired_with_its_homogeneous_twin_seed_by_seed():
     both = study.twin_comparisons(rows, ["t"])
     assert [c.metric for c in both] == [study.METRICS[study.HELDOUT], study.METRICS[study.VALIDATED]]
     assert all(c.n_first == 6 for c in both) and all(c.p_holm >= c.p_value for c in both)
+    rows += [row(study.BASELINE, s, 0.1, "0.1") for s in range(8)]
+    goal = study.goal_text(rows, study.comparisons(rows, ["t"]), ["t"])
+    twin = np.median([0.2] + [0.20 + 0.013 * s for s in range(1, 8)])  # 0.2455
+    assert (
+        f"- t, homogeneous-any-fresh: a homogeneous arm, no candidate; its median is {twin / 0.1:.3g} times"
+        in goal
+    )
+    assert f"best heterogeneous median {0.325 / twin:.3g} times its own" in goal  # team3-any-fresh's 0.325
+    assert goal.count("goal reached") == 1 and "- t, team3-any-fresh: 3.25 times" in goal
     section = study._twins_section(rows, ["t"])
     assert (
         section.startswith("## Against the homogeneous twin") and "team3-any-fresh vs homogeneous" in section
