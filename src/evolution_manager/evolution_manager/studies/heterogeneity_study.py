@@ -146,6 +146,8 @@ class Arm:
         )
 
 
+ANY_FORAGER = any_forager()
+"""The start tree of ``team3-any-fresh`` and of its twin: one text, so that the two start alike."""
 ARMS: tuple[Arm, ...] = (
     Arm("ga", "ga", "the GA over compositions, all random at first (the authors' GA)"),
     Arm("ga-seeded", "ga", "the GA seeded with the homogeneous swarms of the 5 fittest cells", homogeneous=5),
@@ -172,10 +174,10 @@ ARMS: tuple[Arm, ...] = (
         "group's cell in turn set to its best response to the others'", groups=3),
     Arm("team3-any-fresh", "gp", "GP over 3 trees, each group starting from the hand-written forager of "
         "any kind, every evaluation on a scenario of its own", team=3, scenarios="fresh",
-        start_tree=any_forager(), twin="homogeneous-any-fresh"),
+        start_tree=ANY_FORAGER, twin="homogeneous-any-fresh"),
     Arm("homogeneous-any-fresh", "gp", "GP over one tree from the same hand-written forager, every "
         "evaluation on a scenario of its own: team3-any-fresh's homogeneous twin", team=1, scenarios="fresh",
-        start_tree=any_forager()),
+        start_tree=ANY_FORAGER),
 )  # fmt: skip
 DEFAULT_ARMS: tuple[str, ...] = tuple(arm.name for arm in ARMS[:12])
 """The arms planned when ``--arms`` is not given: the study's first twelve, whose plan the studies begun
@@ -846,10 +848,12 @@ def goal_text(
         base = _values(rows, task, BASELINE, key)
         if not base:
             continue
-        candidates = [n for n in names or _arm_names() if not n.startswith(f"{BASELINE}-")]
-        for name in (n for n in names or _arm_names() if n.startswith(f"{BASELINE}-")):
+        arms = names or _arm_names()
+        homogeneous = [n for n in arms if n.startswith(f"{BASELINE}-")]
+        candidates = [n for n in arms if n not in homogeneous]
+        best = max((_median(v) for n in candidates if (v := _values(rows, task, n, key))), default=None)
+        for name in homogeneous:
             held = _values(rows, task, name, key)
-            best = max((_median(v) for n in candidates if (v := _values(rows, task, n, key))), default=None)
             if held and best is not None and _median(base) > 0 and _median(held) > 0:
                 lines.append(
                     f"- {task}, {name}: a homogeneous arm, no candidate; its median is "
