@@ -18,9 +18,10 @@ with its probability, the static limits), the other sub-groups copied unchanged 
 restricted crossover of team GP, which only crosses the trees of one position). A child no operator touched
 keeps its parent's fitness and is not evaluated, as in the tree GP. The budget counts the teams produced by
 the generations after the initial population (25 per generation, the elite included), as every run's; the
-generation that reaches it is completed. With a start tree (``TeamConfig.start_tree``, ``--start-tree``) the
+generation that reaches it is completed. With a start tree (``TeamConfig.start_trees``, ``--start-tree``) the
 initial population is 25 copies of that tree's homogeneous swarm instead of random trees, so every sub-group's
-tree evolves from it in the role its robots play beside the others.
+tree evolves from it in the role its robots play beside the others; with K start trees (``--start-tree`` K
+times) the 25 copies are the team whose sub-group g runs the g-th.
 
 Every team is evaluated as a heterogeneous swarm (``swarm_sim.evaluation.SwarmRequest``) on the run's
 scenario seed (fixed scenarios, the default; a team this process evaluated before is answered from
@@ -180,10 +181,10 @@ class TeamConfig:
     """``fixed``: every evaluation on the scenario seed; ``fresh``: evaluation ``i`` on a scenario of its own
     (``run_config.evaluation_seed``), as a tree or composition run's. The held-out and validation scenarios
     come from the scenario seed either way."""
-    start_tree: str = ""
-    """A tree (text, kept as its canonical text) that every sub-group of every team of the initial population
-    runs: the run starts from that homogeneous swarm, and the GP varies it one sub-group at a time. Empty:
-    the 2023 GP's random trees."""
+    start_trees: tuple[str, ...] = ()
+    """The trees (texts, kept as their canonical texts) of every team of the initial population: one tree,
+    that every sub-group runs (the run starts from that homogeneous swarm), or K, sub-group g running the
+    g-th; the GP then varies them one sub-group at a time. Empty: the 2023 GP's random trees."""
 
     def __post_init__(self) -> None:
         if self.algorithm not in ALGORITHMS:
@@ -208,20 +209,41 @@ class TeamConfig:
         integer(self.scenario_seed, "the scenario seed", 0, MAX_SEED, error=ConfigError)
         if self.scenarios not in SCENARIOS:
             raise ConfigError(f"scenarios must be one of {', '.join(SCENARIOS)}, got {self.scenarios!r}")
-        if self.start_tree:
-            try:
-                tree = tree_from_text(self.start_tree, make_primitive_set(self.conditions))
-            except ValueError as error:
-                raise ConfigError(
-                    f"the start tree is not a tree of task {self.task.name}'s nodes: {error}"
-                ) from None
-            object.__setattr__(self, "start_tree", tree_to_text(tree))
+        object.__setattr__(self, "start_trees", self._canonical_start_trees())
         p = self.gp
         if p.population < 2 or p.elites_per_objective >= p.population or p.tournament < 1:
             raise ConfigError(
                 f"the GP needs a population of at least 2, fewer elites ({p.elites_per_objective}) than its "
                 f"population ({p.population}) and a tournament of at least 1 ({p.tournament})"
             )
+
+    def _canonical_start_trees(self) -> tuple[str, ...]:
+        """The start trees' canonical texts; ``ConfigError`` for a count other than 0, 1 or K, or a tree
+        that names a node the task lacks."""
+        if isinstance(self.start_trees, str) or not all(isinstance(t, str) for t in self.start_trees):
+            raise ConfigError(f"start trees must be a list of tree texts, got {self.start_trees!r}")
+        if len(self.start_trees) not in (0, 1, self.team):
+            raise ConfigError(
+                f"{len(self.start_trees)} start trees for a team of {self.team}; expected one (every "
+                f"sub-group starts from it) or {self.team} (sub-group g from the g-th)"
+            )
+        pset = make_primitive_set(self.conditions)
+        texts = []
+        for g, text in enumerate(self.start_trees):
+            which = "the start tree" if len(self.start_trees) == 1 else f"start tree {g + 1}"
+            try:
+                texts.append(tree_to_text(tree_from_text(text, pset)))
+            except ValueError as error:
+                raise ConfigError(
+                    f"{which} is not a tree of task {self.task.name}'s nodes: {error}"
+                ) from None
+        return tuple(texts)
+
+    def start_team(self) -> tuple[str, ...] | None:
+        """The team every member of the initial population is (sub-group g's tree at g); None: random."""
+        if not self.start_trees:
+            return None
+        return self.start_trees * self.team if len(self.start_trees) == 1 else self.start_trees
 
     @classmethod
     def make(
@@ -235,7 +257,7 @@ class TeamConfig:
         task: TaskSpec | str = DEFAULT_TASK,
         scenario_seed: int | None = None,
         scenarios: str = "fixed",
-        start_tree: str = "",
+        start_trees: Sequence[str] = (),
     ) -> TeamConfig:
         """A configuration with the 2023 GP's parameters and the derating the tree GP of ``task`` would use
         (``RunConfig.make``: the 2024 flat baseline's on a foraging task, else the 2023 one)."""
@@ -252,7 +274,7 @@ class TeamConfig:
             -1 if scenario_seed is None else scenario_seed,
             GPParameters(derating=derating),
             scenarios=scenarios,
-            start_tree=start_tree,
+            start_trees=tuple(start_trees),
         )
 
     @property
@@ -295,8 +317,11 @@ class TeamConfig:
         # written only when asked for: the configuration files of fixed runs stay as they were
         if self.scenarios != "fixed":
             document["scenarios"] = self.scenarios
-        if self.start_tree:
-            document["start_tree"] = self.start_tree
+        # one tree as its text, as the runs before per-group start trees wrote it; K trees as a list
+        if len(self.start_trees) == 1:
+            document["start_tree"] = self.start_trees[0]
+        elif self.start_trees:
+            document["start_tree"] = list(self.start_trees)
         return document
 
     @classmethod
@@ -318,12 +343,21 @@ class TeamConfig:
                 GPParameters(**gp),
                 str(data["algorithm"]),
                 str(data.get("scenarios", "fixed")),
-                str(data.get("start_tree", "")),
+                _start_trees(data.get("start_tree", [])),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as error:
             if isinstance(error, ConfigError):
                 raise
             raise ConfigError(f"not a team run's configuration: {error}") from error
+
+
+def _start_trees(value: object) -> tuple[str, ...]:
+    """``config.json``'s ``start_tree``: one text, or a list of them (absent: none)."""
+    if isinstance(value, str):
+        return (value,)
+    if not isinstance(value, list) or not all(isinstance(t, str) for t in value):
+        raise ConfigError(f"start_tree must be a tree text or a list of them, got {value!r}")
+    return tuple(value)
 
 
 # Evaluation ------------------------------------------------------------------------------------------------
@@ -500,12 +534,12 @@ class TeamRun(CountedRun[Texts, Member]):
         untouched children only is completed without evaluating)."""
         p = self.config.gp
         if not self.population:
-            start = self.config.start_tree
+            start = self.config.start_team()
             self._children = [
                 Child(
-                    tuple(
-                        start
-                        or tree_to_text(full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height))
+                    start
+                    or tuple(
+                        tree_to_text(full_tree(self.pset, self.rng, p.init_min_height, p.init_max_height))
                         for _ in range(self.config.team)
                     ),
                     -1,

@@ -165,8 +165,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--start-tree",
         metavar="TREE",
+        action="append",
         help="with --team K: start from this tree (text, or a file holding it) in every sub-group of every "
-        "team of the initial population, instead of random trees",
+        "team of the initial population, instead of random trees; given K times, sub-group g starts from the "
+        "g-th",
     )
     add_cluster_options(parser)
     return parser
@@ -669,16 +671,19 @@ def _check_team_options(args: argparse.Namespace, cluster: ClusterSettings) -> N
         raise UsageError(f"--team K evolves K trees together with --algorithm gp, not {args.algorithm}")
 
 
-def _start_tree(args: argparse.Namespace) -> str:
-    """The tree text ``--start-tree`` gives (the text, or the file it names); ``UsageError`` for an empty one
-    or a file that cannot be read."""
-    try:
-        text = tree_argument(args.start_tree).strip()
-    except ValueError as error:
-        raise UsageError(f"--start-tree: {error}") from None
-    if not text:
-        raise UsageError("--start-tree: expected a tree (text, or a file holding it), got nothing")
-    return text
+def _start_trees(args: argparse.Namespace) -> tuple[str, ...]:
+    """The tree texts the ``--start-tree`` options give (each the text, or the file it names), in order;
+    ``UsageError`` for an empty one or a file that cannot be read."""
+    texts = []
+    for given in args.start_tree or ():
+        try:
+            text = tree_argument(given).strip()
+        except ValueError as error:
+            raise UsageError(f"--start-tree: {error}") from None
+        if not text:
+            raise UsageError("--start-tree: expected a tree (text, or a file holding it), got nothing")
+        texts.append(text)
+    return tuple(texts)
 
 
 def _evolve_teams(
@@ -708,7 +713,7 @@ def _evolve_teams(
                     f"({task_label(saved.task)}); leave it out or start a new run in another --out"
                 )
             if args.start_tree is not None and (
-                replace(saved, start_tree=_start_tree(args)).start_tree != saved.start_tree
+                replace(saved, start_trees=_start_trees(args)).start_trees != saved.start_trees
             ):
                 raise UsageError(
                     "--start-tree differs from the run being resumed (its config.json: start_tree); leave it "
@@ -733,7 +738,7 @@ def _evolve_teams(
                 task,
                 args.scenario_seed,
                 args.scenarios or "fixed",
-                "" if args.start_tree is None else _start_tree(args),
+                _start_trees(args),
             )
         evaluator = _evaluator(args.workers, config)
         if args.resume:

@@ -76,7 +76,7 @@ from evolution_manager.studies.handwritten_swarms import (
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, Stage, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare_paired, holm, markdown_table
-from swarm_sim.bench.division import any_forager
+from swarm_sim.bench.division import KINDS, any_forager, kind_forager
 from swarm_sim.evaluation import BatchEvaluator, SwarmRequest
 from swarm_sim.model import OBJECTIVES, Config, SwarmLayout
 from swarm_sim.tasks import TaskError, task_named, unseen_twin
@@ -129,9 +129,9 @@ class Arm:
     """The arm's evaluations: on the study's scenario (``fixed``) or each on its own (``fresh``)."""
     groups: int = 0
     """K, for a composition arm of K groups of robots, one cell each (``CompositionParameters.groups``)."""
-    start_tree: str = ""
-    """For a team arm: the tree every sub-group of its first teams runs (``TeamConfig.start_tree``); empty:
-    random trees."""
+    start_trees: tuple[str, ...] = ()
+    """For a team arm: the tree every sub-group of its first teams runs, or one per sub-group
+    (``TeamConfig.start_trees``); empty: random trees."""
     twin: str = ""
     """The arm this one is also paired with: the same search over one tree from the same start, so that the
     report can tell what evolving several trees adds from what the start gives."""
@@ -148,6 +148,9 @@ class Arm:
 
 ANY_FORAGER = any_forager()
 """The start tree of ``team3-any-fresh`` and of its twin: one text, so that the two start alike."""
+SPECIALIST_FORAGERS = tuple(kind_forager(kind) for kind in KINDS)
+"""The start trees of ``team3-specialists-fresh``: group g the hand-written forager of kind g + 1 only, the
+kind its robots carry on ``multifood-arena6-carriers`` (``division-bench``'s hand-written specialists)."""
 ARMS: tuple[Arm, ...] = (
     Arm("ga", "ga", "the GA over compositions, all random at first (the authors' GA)"),
     Arm("ga-seeded", "ga", "the GA seeded with the homogeneous swarms of the 5 fittest cells", homogeneous=5),
@@ -174,10 +177,13 @@ ARMS: tuple[Arm, ...] = (
         "group's cell in turn set to its best response to the others'", groups=3),
     Arm("team3-any-fresh", "gp", "GP over 3 trees, each group starting from the hand-written forager of "
         "any kind, every evaluation on a scenario of its own", team=3, scenarios="fresh",
-        start_tree=ANY_FORAGER, twin="homogeneous-any-fresh"),
+        start_trees=(ANY_FORAGER,), twin="homogeneous-any-fresh"),
     Arm("homogeneous-any-fresh", "gp", "GP over one tree from the same hand-written forager, every "
         "evaluation on a scenario of its own: team3-any-fresh's homogeneous twin", team=1, scenarios="fresh",
-        start_tree=ANY_FORAGER),
+        start_trees=(ANY_FORAGER,)),
+    Arm("team3-specialists-fresh", "gp", "GP over 3 trees, group g starting from the hand-written forager of "
+        "kind g + 1 only (the kind its robots carry on the carriers task), every evaluation on a scenario of "
+        "its own", team=3, scenarios="fresh", start_trees=SPECIALIST_FORAGERS),
 )  # fmt: skip
 DEFAULT_ARMS: tuple[str, ...] = tuple(arm.name for arm in ARMS[:12])
 """The arms planned when ``--arms`` is not given: the study's first twelve, whose plan the studies begun
@@ -281,7 +287,7 @@ def plan_study(
                 seed = derive_seed(args.seed, RUN_STUDY, HETEROGENEITY_STAGE, t, r)
                 team = TeamConfig.make(
                     arm.team, objective, args.evaluations + swarm_evaluations, seed, args.trials, profile,
-                    task, scenario_seed, arm.scenarios, arm.start_tree,
+                    task, scenario_seed, arm.scenarios, arm.start_trees,
                 )  # fmt: skip
                 folder = f"arms/{task}/{arm.name}/run{r:02d}"
                 entries.append({"kind": "team", "arm": arm.name, "task": task, "dir": folder,

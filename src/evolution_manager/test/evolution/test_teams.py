@@ -300,6 +300,7 @@ def test_fresh_scenarios_give_each_evaluated_team_a_scenario_of_its_own(tmp_path
 
 
 START = "sel(seq(in_nest, stop), forward)"
+OTHER = "sel(seq(on_food, stop), forward_left)"
 
 
 def test_a_start_tree_is_every_sub_groups_tree_of_the_first_generation(tmp_path):
@@ -329,6 +330,26 @@ def test_a_start_tree_is_every_sub_groups_tree_of_the_first_generation(tmp_path)
     assert all(json.loads(r["trees"]) != [START] * 3 for r in random_rows[:25])
 
 
+def test_k_start_trees_start_sub_group_g_from_the_g_th(tmp_path, capsys):
+    """--start-tree K times: every initial team runs the g-th tree in sub-group g; each child of the first
+    generation keeps the others' trees; config.json lists them in order; --resume takes the same list and
+    refuses another order."""
+    extra = ["--team", "2", "--evaluations", "25", "--seed", "4"]
+    assert _team(tmp_path / "run", *extra, "--start-tree", START, "--start-tree", OTHER) == 0
+    assert json.loads((tmp_path / "run" / "config.json").read_text())["start_tree"] == [START, OTHER]
+    rows = list(csv.DictReader((tmp_path / "run" / "evaluations.csv").open()))
+    assert all(json.loads(r["trees"]) == [START, OTHER] for r in rows[:25])
+    for row in rows[25:]:
+        trees, group = json.loads(row["trees"]), int(row["group"])
+        assert trees[1 - group] == [START, OTHER][1 - group]
+    capsys.readouterr()
+    resume = ["--out", str(tmp_path / "run"), "--resume", "--no-progress"]
+    assert evolve([*resume, "--start-tree", OTHER, "--start-tree", START]) == 2
+    error = capsys.readouterr().err
+    assert "--start-tree differs from the run being resumed" in error and error.count("\n") == 1
+    assert evolve([*resume, "--start-tree", START, "--start-tree", OTHER]) == 0
+
+
 @pytest.mark.parametrize(
     ("extra", "words"),
     [
@@ -336,6 +357,14 @@ def test_a_start_tree_is_every_sub_groups_tree_of_the_first_generation(tmp_path)
         (["--team", "3", "--start-tree", "sel(forward"], "the start tree is not a tree of task"),
         (["--team", "3", "--start-tree", " "], "--start-tree: expected a tree"),
         (["--start-tree", START], "--start-tree seeds the teams of a team run: it goes with --team K"),
+        (
+            ["--team", "3", "--start-tree", START, "--start-tree", OTHER],
+            "2 start trees for a team of 3; expected one (every sub-group starts from it) or 3",
+        ),
+        (
+            ["--team", "2", "--start-tree", START, "--start-tree", "sel(food_left1, forward)"],
+            "start tree 2 is not a tree of task",
+        ),
     ],
 )
 def test_a_bad_start_tree_exits_2_with_one_line(tmp_path, capsys, extra, words):
@@ -428,8 +457,15 @@ def test_a_team_configuration_round_trips_and_takes_the_tasks_derating():
     assert TeamConfig.make(2, "food", 200, 1).gp.derating == "standard"
     fresh = TeamConfig.make(2, "food", 200, 1, scenarios="fresh")
     assert TeamConfig.from_json(json.loads(json.dumps(fresh.to_json()))) == fresh
-    started = TeamConfig.make(2, "food", 200, 1, start_tree=START)
+    started = TeamConfig.make(2, "food", 200, 1, start_trees=[START])
     assert TeamConfig.from_json(json.loads(json.dumps(started.to_json()))) == started
+    assert started.to_json()["start_tree"] == START  # one tree: its text, as the runs before K trees wrote it
+    each = TeamConfig.make(2, "food", 200, 1, start_trees=[START, OTHER])
+    assert each.to_json()["start_tree"] == [START, OTHER] and each.start_team() == (START, OTHER)
+    assert TeamConfig.from_json(json.loads(json.dumps(each.to_json()))) == each
+    assert started.start_team() == (START, START) and config.start_team() is None
+    with pytest.raises(ConfigError, match="start_tree must be a tree text or a list of them, got 3"):
+        TeamConfig.from_json({**each.to_json(), "start_tree": 3})
     assert (
         "start_tree" not in config.to_json()
     )  # the configuration files of runs without one stay as they were

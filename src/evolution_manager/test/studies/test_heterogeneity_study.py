@@ -143,6 +143,10 @@ def test_arms_and_descriptors_plan_a_part_of_the_study_on_the_same_seeds(tmp_pat
         ("team3-any-fresh", 3), ("team3-any-fresh", 3),
     ]  # fmt: skip
     assert all(e["config"]["start_tree"] == division.any_forager() for e in teams)
+    specialists_args = build_parser().parse_args([*base, "--arms", "ga,team3-specialists-fresh"])
+    specialists, _, _ = study.plan_study(specialists_args, "fixed", "shared")
+    started_from = [e["config"]["start_tree"] for e in specialists["plan"] if e["kind"] == "team"]
+    assert started_from == [[division.kind_forager(k) for k in (1, 2, 3)]] * 2
     assert all(e["config"]["scenarios"] == "fresh" and ga[_from(e)] == e["seed"] for e in teams)
     assert not any(e.get("arm", "").endswith("any-fresh") for e in whole["plan"])
     for more, expected in (
