@@ -202,7 +202,19 @@ def test_an_arm_is_paired_with_its_homogeneous_twin_seed_by_seed():
         in goal
     )
     assert f"best heterogeneous median {0.325 / twin:.3g} times its own" in goal  # team3-any-fresh's 0.325
-    assert goal.count("goal reached") == 1 and "- t, team3-any-fresh: 3.25 times" in goal
+    # the twin's median is above the baseline's: the goal is measured against the twin, in a family of its own
+    assert study.best_homogeneous(rows, "t", study.HELDOUT) == "homogeneous-any-fresh"
+    assert goal.startswith("The best homogeneous swarm is not the baseline here (t: homogeneous-any-fresh")
+    assert goal.count("goal reached") == 1
+    assert f"- t, team3-any-fresh: {0.325 / twin:.3g} times homogeneous-any-fresh's median" in goal
+    # where the baseline is the best homogeneous swarm (a tie included), the goal stays against it
+    lower = [{**r, study.HELDOUT: "0.1"} if r["arm"] == "homogeneous-any-fresh" else r for r in rows]
+    assert study.best_homogeneous(lower, "t", study.HELDOUT) == study.BASELINE
+    kept = study.goal_text(lower, study.comparisons(lower, ["t"]), ["t"])
+    assert (
+        kept.startswith("- t, homogeneous-any-fresh")
+        and "- t, team3-any-fresh: 3.25 times the homogeneous" in kept
+    )
     section = study._twins_section(rows, ["t"])
     assert (
         section.startswith("## Against the homogeneous twin") and "team3-any-fresh vs homogeneous" in section
@@ -425,6 +437,12 @@ def test_the_goals_power_is_the_paired_t_tests_from_the_noncentral_t():
 
     assert power == pytest.approx(exact(10), abs=1e-6)
     assert exact(needed) >= 0.8 > exact(needed - 1)
+    # effects so large that statsmodels' root finder gives up: the fewest pairs still counted, from 2
+    for large, fewest in ((0.2, 3), (1.0, 2)):
+        effect = large / np.std(differences, ddof=1)
+        power, needed = study.paired_power(differences, large)
+        assert needed == fewest and exact(needed) >= 0.8 and (needed == 2 or exact(needed - 1) < 0.8)
+        assert power > 0.999  # (scipy's noncentral t gives NaN this far out)
     assert study.paired_power(differences[:2], gain) is None and study.paired_power([0.1] * 5, gain) is None
     assert "power to detect the goal's gain" in study.goal_power(differences, gain)
 
