@@ -211,6 +211,10 @@ METRICS = {
 }
 UNSEEN_FILE = "unseen.csv"
 UNSEEN_HEADER = ["dir", "swarm", "seeds", "trials", "fitness"]
+MEMBERS_FILE = "members.csv"
+MEMBERS_HEADER = ["dir", "swarm", "group", "seeds", "trials", "fitness"]
+"""``members.csv``: each tree of a heterogeneous team's best and validated swarms run by every robot, on the
+run's held-out scenarios (:func:`member_scores`)."""
 """The study folder's record of every score on unseen arenas (a run's folder, ``validated`` or the
 baseline's ``homogeneous``, the held-out seeds and trials): measured once, read back by every report."""
 
@@ -578,6 +582,141 @@ def unseen_scores(
     return {(c.folder, c.swarm): float(kept[(c.folder, c.swarm)]["fitness"]) for c in wanted}
 
 
+# A team's members as homogeneous swarms ------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Member:
+    """One tree of a team run's swarm (``best``: the run's best; ``validated``: its validated choice), to be
+    run by every robot on the run's held-out scenarios."""
+
+    folder: str
+    swarm: str
+    group: int
+    task: str
+    tree: str
+    seeds: tuple[int, ...]
+    trials: int
+
+
+def _members(finished: Sequence[tuple[dict, dict]]) -> list[_Member]:
+    """Every tree of the best and the validated swarm of each finished team run of two trees or more, in the
+    plan's order."""
+    found = []
+    for entry, summary in finished:
+        if entry["kind"] != "team" or int(summary["config"]["team"]) < 2:
+            continue
+        for swarm, choice in (("best", summary.get("best")), ("validated", summary.get("validated"))):
+            if isinstance(choice, dict):
+                for g, tree in enumerate(choice["trees"]):
+                    found.append(_Member(entry["dir"], swarm, g, entry["task"], tree, *_held(summary)))
+    return found
+
+
+def member_scores(
+    root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
+) -> dict[tuple[str, str, int], float]:
+    """The mean fitness of each tree of the heterogeneous teams' best and validated swarms (:func:`_members`)
+    run by every robot, on its run's held-out seeds and trials, by (run folder, ``best`` or ``validated``,
+    sub-group): how far the team's own trees get as homogeneous swarms on the scenarios the team is scored
+    on. Kept in the study's ``members.csv`` and measured only once."""
+    root = Path(root)
+    path = root / MEMBERS_FILE
+    kept: dict[tuple[str, str, int], dict[str, str]] = {}
+    if path.exists():
+        kept = {
+            (r["dir"], r["swarm"], int(r["group"])): r for r in csv.DictReader(io.StringIO(path.read_text()))
+        }
+    objectives = {t["task"]: t["objective"] for t in document["tasks"]}
+    wanted = _members(finished)
+
+    def recorded(m: _Member) -> bool:
+        row = kept.get((m.folder, m.swarm, m.group))
+        return (
+            row is not None and row["seeds"] == " ".join(map(str, m.seeds)) and int(row["trials"]) == m.trials
+        )
+
+    missing = [m for m in wanted if not recorded(m)]
+    for task in dict.fromkeys(m.task for m in missing):
+        mine = [m for m in missing if m.task == task]
+        config = task_named(task).config(document["profile"])
+        evaluator = BatchEvaluator(config)
+        requests = [
+            SwarmRequest(SwarmLayout((m.tree,) * config.n_robots), s, m.trials) for m in mine for s in m.seeds
+        ]
+        results = iter(evaluator.evaluate(requests))
+        k = OBJECTIVES.index(objectives[task])
+        for m in mine:
+            scores = [r.fitness[k] for r in (next(results) for _ in m.seeds) if r.fitness is not None]
+            if len(scores) != len(m.seeds):
+                raise EvolutionError(
+                    f"{m.folder}: tree {m.group} of its {m.swarm} swarm could not be evaluated"
+                )
+            kept[(m.folder, m.swarm, m.group)] = {
+                "dir": m.folder, "swarm": m.swarm, "group": str(m.group),
+                "seeds": " ".join(map(str, m.seeds)), "trials": str(m.trials),
+                "fitness": repr(math.fsum(scores) / len(scores)),
+            }  # fmt: skip
+    if missing:
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, MEMBERS_HEADER, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(kept[(m.folder, m.swarm, m.group)] for m in wanted)
+        write_atomic(path, buffer.getvalue())
+    return {
+        (m.folder, m.swarm, m.group): float(kept[(m.folder, m.swarm, m.group)]["fitness"]) for m in wanted
+    }
+
+
+BEST_MEMBER = "its best tree x all"
+"""The second side of :func:`member_comparisons`: the best of a team's own trees as a homogeneous swarm."""
+
+
+def member_comparisons(
+    finished: Sequence[tuple[dict, dict]], scores: dict[tuple[str, str, int], float], tasks: Sequence[str]
+) -> list[Comparison]:
+    """Each heterogeneous team arm against the best of its own trees run by every robot (the highest of
+    :func:`member_scores`, chosen on the very scenarios it is compared on, so in the trees' favour), run
+    by run, on the held-out score of the run's best swarm and of its validated choice: one family,
+    Holm-corrected. Arms of fewer than two runs are left out."""
+    found = []
+    for key, swarm in ((HELDOUT, "best"), (VALIDATED, "validated")):
+        for task in tasks:
+            for arm in (a for a in ARMS if a.team >= 2):
+                pairs = []
+                for entry, summary in finished:
+                    if entry.get("arm") != arm.name or entry["task"] != task:
+                        continue
+                    mine = [v for (d, w, _), v in scores.items() if d == entry["dir"] and w == swarm]
+                    team = (
+                        summary.get("heldout_best_fitness")
+                        if swarm == "best"
+                        else (summary.get("validated") or {}).get("heldout_best_fitness")
+                    )
+                    if mine and team is not None:
+                        pairs.append((float(team), max(mine)))
+                if len(pairs) >= 2:
+                    a, b = zip(*pairs, strict=True)
+                    found.append(compare_paired(METRICS[key], task, arm.name, a, BEST_MEMBER, b))
+    return holm(found) if found else []
+
+
+def _members_section(
+    finished: Sequence[tuple[dict, dict]], scores: dict[tuple[str, str, int], float], tasks: Sequence[str]
+) -> str:
+    """The teams against their best own tree (:func:`member_comparisons`); nothing without two runs."""
+    tested = member_comparisons(finished, scores, tasks)
+    if not tested:
+        return ""
+    return (
+        "## Is a team more than its best tree?\n\n"
+        "A heterogeneous team could win only because one of its trees is a good forager that no homogeneous "
+        "search found. So each team run's swarm (its best, and its validated choice) is paired with the best "
+        "of its own trees run by every robot, on the same held-out scenarios (`members.csv`: every tree of "
+        "each swarm so scored). The best tree is chosen on those very scenarios, which favours it. Where a "
+        "team scores above it, the team's robots do better divided than any one of its trees does alone. "
+        "Holm's correction over the family of every row of this table.\n\n" + markdown_table(tested) + "\n"
+    )
+
+
 # Hand-written swarms -------------------------------------------------------------------------------------
 HANDWRITTEN = "hand-written: "
 """The prefix of a hand-written swarm's rows (``handwritten_swarms``), which pair with the baseline by seed
@@ -899,9 +1038,10 @@ def goal_text(
             a, b = _paired(rows, task, name, key, versus)
             power = goal_power([x - y for x, y in zip(a, b, strict=True)], (GOAL - 1) * _median(reference))
             which = "the homogeneous median" if versus == BASELINE else f"{versus}'s median"
+            runs = f"{len(held)} runs" + ("" if versus == BASELINE else f", {len(a)} paired with it")
             lines.append(
                 f"- {task}, {name}: {ratio:.3g} times {which}, Holm-adjusted p "
-                f"{row.p_holm:.3g} ({len(held)} runs): goal {'reached' if reached else 'not reached'}{power}."
+                f"{row.p_holm:.3g} ({runs}): goal {'reached' if reached else 'not reached'}{power}."
             )
     if not lines:
         return "No arm has paired runs yet.\n"
@@ -1097,6 +1237,7 @@ def build_report(root: Path) -> Path:
     document = study_plan(root)
     arm_runs = list(finished_arm_runs(root, document))  # every summary read once, for every table and figure
     rows = finished_rows(arm_runs, unseen_scores(root, document, arm_runs))
+    members = member_scores(root, document, arm_runs)
     if not rows:
         raise EvolutionError(f"{root} has no finished composition runs yet")
     written = handwritten_rows(root, document, arm_runs)
@@ -1143,6 +1284,7 @@ def build_report(root: Path) -> Path:
         f"{_validated_section(rows, tasks)}"
         f"{_unseen_section(rows, tasks)}"
         f"{_twins_section(rows, tasks)}"
+        f"{_members_section(arm_runs, members, tasks)}"
         f"{_handwritten_section(rows, written, tasks)}"
         "## The authors' QD score at 1, 2, 4 and 8 bins per axis\n\n"
         f"Every genome a run evaluated, binned by the task's behaviour space ({spaces}), the "

@@ -207,6 +207,7 @@ def test_an_arm_is_paired_with_its_homogeneous_twin_seed_by_seed():
     assert goal.startswith("The best homogeneous swarm is not the baseline here (t: homogeneous-any-fresh")
     assert goal.count("goal reached") == 1
     assert f"- t, team3-any-fresh: {0.325 / twin:.3g} times homogeneous-any-fresh's median" in goal
+    assert "(6 runs, 6 paired with it): goal reached" in goal
     # where the baseline is the best homogeneous swarm (a tie included), the goal stays against it
     lower = [{**r, study.HELDOUT: "0.1"} if r["arm"] == "homogeneous-any-fresh" else r for r in rows]
     assert study.best_homogeneous(lower, "t", study.HELDOUT) == study.BASELINE
@@ -373,6 +374,34 @@ def test_the_study_runs_end_to_end_and_a_second_start_runs_nothing_again(tmp_pat
         )
         assert float(row["fitness"]) == pytest.approx(mean, abs=1e-12)
     assert "## Unseen arenas" in report and "unseen-arena held-out fitness" in report
+    # a team's own trees run by every robot on its held-out scenarios: every tree of its best and its
+    # validated swarm, each score that homogeneous swarm's mean; the team arms paired with their best tree
+    members = list(csv.DictReader(io.StringIO((out / study.MEMBERS_FILE).read_text())))
+    assert list(members[0]) == study.MEMBERS_HEADER
+    team = json.loads((out / "arms/multifood-arena6/team3/run01/summary.json").read_text())
+    mine = [r for r in members if r["dir"] == "arms/multifood-arena6/team3/run01"]
+    assert [(r["swarm"], r["group"]) for r in mine] == [
+        (w, str(g)) for w in ("best", "validated") for g in range(3)
+    ]
+    assert len(members) == 2 * 2 * (2 + 3 + 9) * 2  # 2 runs of team2, 3 and 9, fixed and fresh; 2 swarms
+    tree = team["validated"]["trees"][2]
+    results = BatchEvaluator(config).evaluate(
+        [SwarmRequest(SwarmLayout((tree,) * 9), s, 1) for s in team["heldout"]["seeds"]]
+    )
+    mean = sum(r.fitness[OBJECTIVES.index("foraging")] for r in results) / len(results)
+    assert float(mine[5]["fitness"]) == pytest.approx(mean, abs=1e-12)
+    tested = study.member_comparisons(list(study.finished_arm_runs(out, study.study_plan(out))),
+                                      {(r["dir"], r["swarm"], int(r["group"])): float(r["fitness"])
+                                       for r in members}, ["multifood-arena6"])  # fmt: skip
+    assert [(c.first, c.second, c.n_first) for c in tested[:3]] == [
+        (f"team{k}", study.BEST_MEMBER, 2) for k in (2, 3, 9)
+    ]
+    assert len(tested) == 12 and all(c.p_holm >= c.p_value for c in tested)  # 6 arms, 2 scores
+    assert tested[1].mean_second == pytest.approx(np.mean([
+        max(float(r["fitness"]) for r in members if r["dir"] == f"arms/multifood-arena6/team3/run0{k}"
+            and r["swarm"] == "best") for k in (0, 1)
+    ]))  # fmt: skip
+    assert "## Is a team more than its best tree?" in report
     # the hand-written swarms on the baseline's held-out scenarios: every one measured once (the scenarios
     # are the study's, shared by both indices), the specialists' score that swarm's mean over the scenarios
     written = list(csv.DictReader(io.StringIO((out / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
