@@ -792,7 +792,10 @@ def _handwritten_section(
     names = list(dict.fromkeys(r["arm"] for r in written))
     both = [r for r in rows if r["arm"] == BASELINE] + list(written)
     tested = comparisons(both, tasks, HELDOUT, names)
-    mixed = [HANDWRITTEN + name for name in HETEROGENEOUS]
+    # the goal is against the best homogeneous swarm, which may be a homogeneous arm rather than the baseline
+    homogeneous = [a.name for a in ARMS if a.name.startswith(f"{BASELINE}-")]
+    mixed = [HANDWRITTEN + name for name in HETEROGENEOUS] + homogeneous
+    scored = both + [r for r in rows if r["arm"] in homogeneous]
     return (
         "## Hand-written swarms on the same held-out scenarios\n\n"
         "How far a swarm written by hand gets where the runs are scored, and so whether the task lets "
@@ -802,10 +805,11 @@ def _handwritten_section(
         "baseline. Each is one swarm measured once: where the study's scenarios are shared, its score is the "
         "same for every index, so the tests (a family of their own, Holm-corrected) ask whether the evolved "
         "baselines differ from that one measurement, and its interval has no width. The goal lines apply "
-        "the issue's test to the heterogeneous ones: swarms a person wrote, not ones the study evolved.\n\n"
+        "the issue's test to the heterogeneous ones (swarms a person wrote, not ones the study evolved), "
+        "against the best homogeneous swarm as the arms' goal lines do.\n\n"
         f"{scores_table(both, tasks, HELDOUT, names)}\n"
         + (markdown_table(tested) if tested else "No hand-written swarm has two paired runs yet.\n")
-        + f"\n{goal_text(both, tested, tasks, HELDOUT, mixed)}\n"
+        + f"\n{goal_text(scored, tested, tasks, HELDOUT, mixed)}\n"
         + "\n### On the scenario the runs evolved on\n\n"
         "Every run is scored, while it evolves, on its one scenario (the study's design); the hand-written "
         "swarms measured there too show whether that score can tell them from the baselines. Where a "

@@ -262,13 +262,22 @@ __all__ = [
 ]
 
 
+ROBOT_PANELS_PER_ROW = 4
+"""Panels a row of :func:`robot_deliveries`' figure."""
+
+
 def robot_deliveries(swarms: Mapping[str, np.ndarray], title: str, path: Path) -> Path:
     """Who delivers what: one panel per swarm (``swarms[label]``: robots x food kinds, each robot's mean
-    deliveries of each kind per trial), one stacked bar per robot, a colour per kind (the animation's)."""
+    deliveries of each kind per trial), one stacked bar per robot, a colour per kind (the animation's); at
+    most four panels a row, so that many swarms still read at page width."""
     labels = list(swarms)
-    figure, axes = subplots(1, len(labels), figsize=(3.2 * len(labels), 3.2), squeeze=False, sharey=True)
+    columns = min(len(labels), ROBOT_PANELS_PER_ROW)
+    rows = -(-len(labels) // columns)
+    figure, axes = subplots(rows, columns, figsize=(3.6 * columns, 3.2 * rows), squeeze=False, sharey=True)
+    for axis in axes.flat[len(labels) :]:
+        axis.set_visible(False)
     top = max((float(v.sum(axis=1).max()) for v in swarms.values() if v.size), default=0.0)
-    for axis, label in zip(axes[0], labels, strict=True):
+    for axis, label in zip(axes.flat, labels, strict=False):
         values = np.asarray(swarms[label], dtype=float)
         robots = np.arange(values.shape[0])
         bottom = np.zeros(values.shape[0])
@@ -281,7 +290,8 @@ def robot_deliveries(swarms: Mapping[str, np.ndarray], title: str, path: Path) -
         axis.set_xlabel("robot")
         axis.set_ylim(0, max(top * 1.1, 0.05))
         axis.grid(alpha=0.3, axis="y")
-    axes[0][0].set_ylabel("deliveries per trial")
+    for row in axes:
+        row[0].set_ylabel("deliveries per trial")
     axes[0][0].legend(fontsize=7)
     figure.suptitle(title, fontsize=10)
     figure.tight_layout()
