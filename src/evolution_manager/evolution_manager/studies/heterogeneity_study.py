@@ -211,12 +211,12 @@ METRICS = {
 }
 UNSEEN_FILE = "unseen.csv"
 UNSEEN_HEADER = ["dir", "swarm", "seeds", "trials", "fitness"]
+"""The study folder's record of every score on unseen arenas (a run's folder, ``validated`` or the
+baseline's ``homogeneous``, the held-out seeds and trials): measured once, read back by every report."""
 MEMBERS_FILE = "members.csv"
 MEMBERS_HEADER = ["dir", "swarm", "group", "seeds", "trials", "fitness"]
 """``members.csv``: each tree of a heterogeneous team's best and validated swarms run by every robot, on the
 run's held-out scenarios (:func:`member_scores`)."""
-"""The study folder's record of every score on unseen arenas (a run's folder, ``validated`` or the
-baseline's ``homogeneous``, the held-out seeds and trials): measured once, read back by every report."""
 
 
 def _folder(kind: str, task: str, r: int) -> str:
@@ -527,6 +527,65 @@ def _chosen_swarms(finished: Sequence[tuple[dict, dict]]) -> list[_Chosen]:
     return found
 
 
+@dataclass(frozen=True)
+class _Scoring:
+    """A swarm to score once and keep in a study's CSV file: the row's identity (the values of the file's
+    columns before ``seeds``), its task, each robot's tree, the scenarios and the message should it fail."""
+
+    key: tuple[str, ...]
+    task: str
+    trees: tuple[str, ...]
+    seeds: tuple[int, ...]
+    trials: int
+    failure: str
+
+
+def _scored_once(
+    path: Path,
+    header: Sequence[str],
+    wanted: Sequence[_Scoring],
+    configs: dict[str, Config],
+    objectives: dict[str, str],
+) -> dict[tuple[str, ...], float]:
+    """The mean fitness (the task's objective in ``objectives``) of each swarm ``wanted`` on its world in
+    ``configs`` over its seeds and trials, by its key. Scores already in the CSV file ``path`` (columns
+    ``header``: the key's, then ``seeds``, ``trials`` and ``fitness``) for the same seeds and trials are read
+    back, not measured again; the file is rewritten, in the order of ``wanted``, when any was missing."""
+    keys = list(header[:-3])
+    kept: dict[tuple[str, ...], dict[str, str]] = {}
+    if path.exists():
+        kept = {tuple(r[k] for k in keys): r for r in csv.DictReader(io.StringIO(path.read_text()))}
+
+    def recorded(w: _Scoring) -> bool:
+        row = kept.get(w.key)
+        return (
+            row is not None and row["seeds"] == " ".join(map(str, w.seeds)) and int(row["trials"]) == w.trials
+        )
+
+    missing = [w for w in wanted if not recorded(w)]
+    for task in dict.fromkeys(w.task for w in missing):
+        mine = [w for w in missing if w.task == task]
+        evaluator = BatchEvaluator(configs[task])
+        requests = [SwarmRequest(SwarmLayout(w.trees), s, w.trials) for w in mine for s in w.seeds]
+        results = iter(evaluator.evaluate(requests))
+        k = OBJECTIVES.index(objectives[task])
+        for w in mine:
+            scores = [r.fitness[k] for r in (next(results) for _ in w.seeds) if r.fitness is not None]
+            if len(scores) != len(w.seeds):
+                raise EvolutionError(w.failure)
+            kept[w.key] = {
+                **dict(zip(keys, w.key, strict=True)), "seeds": " ".join(map(str, w.seeds)),
+                "trials": str(w.trials), "fitness": repr(math.fsum(scores) / len(scores)),
+            }  # fmt: skip
+    if missing:
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, header, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(kept[w.key] for w in wanted)
+        write_atomic(path, buffer.getvalue())
+    return {w.key: float(kept[w.key]["fitness"]) for w in wanted}
+
+
 def unseen_scores(
     root: Path, document: dict, finished: Sequence[tuple[dict, dict]]
 ) -> dict[tuple[str, str], float]:
@@ -534,52 +593,23 @@ def unseen_scores(
     arenas (``unseen_twin``: the generated arenas no run evolves on) over the run's held-out seeds and
     trials, by (run folder, ``validated`` or ``homogeneous``). Scores are kept in the study's ``unseen.csv``
     and measured only once; a task without unseen arenas gets none."""
-    root = Path(root)
-    path = root / UNSEEN_FILE
-    kept: dict[tuple[str, str], dict[str, str]] = {}
-    if path.exists():
-        kept = {(r["dir"], r["swarm"]): r for r in csv.DictReader(io.StringIO(path.read_text()))}
     objectives = {t["task"]: t["objective"] for t in document["tasks"]}
     twins = {}
     for task in objectives:
         try:
-            twins[task] = unseen_twin(task)
+            twins[task] = unseen_twin(task).config(document["profile"])
         except TaskError:  # a task of one arena (or five) has none: its column stays empty
             continue
-    wanted = [c for c in _chosen_swarms(finished) if c.task in twins]
-
-    def recorded(c: _Chosen) -> bool:
-        row = kept.get((c.folder, c.swarm))
-        return (
-            row is not None and row["seeds"] == " ".join(map(str, c.seeds)) and int(row["trials"]) == c.trials
+    wanted = [
+        _Scoring(
+            (c.folder, c.swarm), c.task, c.trees, c.seeds, c.trials,
+            f"{c.folder}: its {c.swarm} swarm could not be evaluated on unseen arenas",
         )
-
-    missing = [c for c in wanted if not recorded(c)]
-    for task in dict.fromkeys(c.task for c in missing):
-        mine = [c for c in missing if c.task == task]
-        evaluator = BatchEvaluator(twins[task].config(document["profile"]))
-        requests = [SwarmRequest(SwarmLayout(c.trees), s, c.trials) for c in mine for s in c.seeds]
-        results = iter(evaluator.evaluate(requests))
-        k = OBJECTIVES.index(objectives[task])
-        for c in mine:
-            outcomes = [next(results) for _ in c.seeds]
-            scores = [r.fitness[k] for r in outcomes if r.fitness is not None]
-            if len(scores) != len(c.seeds):
-                raise EvolutionError(
-                    f"{c.folder}: its {c.swarm} swarm could not be evaluated on unseen arenas"
-                )
-            fitness = math.fsum(scores) / len(scores)
-            kept[(c.folder, c.swarm)] = {
-                "dir": c.folder, "swarm": c.swarm, "seeds": " ".join(map(str, c.seeds)),
-                "trials": str(c.trials), "fitness": repr(fitness),
-            }  # fmt: skip
-    if missing:
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, UNSEEN_HEADER, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(kept[(c.folder, c.swarm)] for c in wanted)
-        write_atomic(path, buffer.getvalue())
-    return {(c.folder, c.swarm): float(kept[(c.folder, c.swarm)]["fitness"]) for c in wanted}
+        for c in _chosen_swarms(finished)
+        if c.task in twins
+    ]  # fmt: skip
+    scores = _scored_once(Path(root) / UNSEEN_FILE, UNSEEN_HEADER, wanted, twins, objectives)
+    return {(folder, swarm): score for (folder, swarm), score in scores.items()}
 
 
 # A team's members as homogeneous swarms ------------------------------------------------------------------
@@ -618,52 +648,17 @@ def member_scores(
     run by every robot, on its run's held-out seeds and trials, by (run folder, ``best`` or ``validated``,
     sub-group): how far the team's own trees get as homogeneous swarms on the scenarios the team is scored
     on. Kept in the study's ``members.csv`` and measured only once."""
-    root = Path(root)
-    path = root / MEMBERS_FILE
-    kept: dict[tuple[str, str, int], dict[str, str]] = {}
-    if path.exists():
-        kept = {
-            (r["dir"], r["swarm"], int(r["group"])): r for r in csv.DictReader(io.StringIO(path.read_text()))
-        }
     objectives = {t["task"]: t["objective"] for t in document["tasks"]}
-    wanted = _members(finished)
-
-    def recorded(m: _Member) -> bool:
-        row = kept.get((m.folder, m.swarm, m.group))
-        return (
-            row is not None and row["seeds"] == " ".join(map(str, m.seeds)) and int(row["trials"]) == m.trials
+    configs = {task: task_named(task).config(document["profile"]) for task in objectives}
+    wanted = [
+        _Scoring(
+            (m.folder, m.swarm, str(m.group)), m.task, (m.tree,) * configs[m.task].n_robots, m.seeds,
+            m.trials, f"{m.folder}: tree {m.group} of its {m.swarm} swarm could not be evaluated",
         )
-
-    missing = [m for m in wanted if not recorded(m)]
-    for task in dict.fromkeys(m.task for m in missing):
-        mine = [m for m in missing if m.task == task]
-        config = task_named(task).config(document["profile"])
-        evaluator = BatchEvaluator(config)
-        requests = [
-            SwarmRequest(SwarmLayout((m.tree,) * config.n_robots), s, m.trials) for m in mine for s in m.seeds
-        ]
-        results = iter(evaluator.evaluate(requests))
-        k = OBJECTIVES.index(objectives[task])
-        for m in mine:
-            scores = [r.fitness[k] for r in (next(results) for _ in m.seeds) if r.fitness is not None]
-            if len(scores) != len(m.seeds):
-                raise EvolutionError(
-                    f"{m.folder}: tree {m.group} of its {m.swarm} swarm could not be evaluated"
-                )
-            kept[(m.folder, m.swarm, m.group)] = {
-                "dir": m.folder, "swarm": m.swarm, "group": str(m.group),
-                "seeds": " ".join(map(str, m.seeds)), "trials": str(m.trials),
-                "fitness": repr(math.fsum(scores) / len(scores)),
-            }  # fmt: skip
-    if missing:
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, MEMBERS_HEADER, lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(kept[(m.folder, m.swarm, m.group)] for m in wanted)
-        write_atomic(path, buffer.getvalue())
-    return {
-        (m.folder, m.swarm, m.group): float(kept[(m.folder, m.swarm, m.group)]["fitness"]) for m in wanted
-    }
+        for m in _members(finished)
+    ]  # fmt: skip
+    scores = _scored_once(Path(root) / MEMBERS_FILE, MEMBERS_HEADER, wanted, configs, objectives)
+    return {(folder, swarm, int(group)): score for (folder, swarm, group), score in scores.items()}
 
 
 BEST_MEMBER = "its best tree x all"
@@ -677,6 +672,9 @@ def member_comparisons(
     :func:`member_scores`, chosen on the very scenarios it is compared on, so in the trees' favour), run
     by run, on the held-out score of the run's best swarm and of its validated choice: one family,
     Holm-corrected. Arms of fewer than two runs are left out."""
+    best_tree: dict[tuple[str, str], float] = {}  # (run folder, swarm): its best tree's score
+    for (folder, swarm, _), score in scores.items():
+        best_tree[(folder, swarm)] = max(score, best_tree.get((folder, swarm), -math.inf))
     found = []
     for key, swarm in ((HELDOUT, "best"), (VALIDATED, "validated")):
         for task in tasks:
@@ -685,14 +683,14 @@ def member_comparisons(
                 for entry, summary in finished:
                     if entry.get("arm") != arm.name or entry["task"] != task:
                         continue
-                    mine = [v for (d, w, _), v in scores.items() if d == entry["dir"] and w == swarm]
+                    tree = best_tree.get((entry["dir"], swarm))
                     team = (
                         summary.get("heldout_best_fitness")
                         if swarm == "best"
                         else (summary.get("validated") or {}).get("heldout_best_fitness")
                     )
-                    if mine and team is not None:
-                        pairs.append((float(team), max(mine)))
+                    if tree is not None and team is not None:
+                        pairs.append((float(team), tree))
                 if len(pairs) >= 2:
                     a, b = zip(*pairs, strict=True)
                     found.append(compare_paired(METRICS[key], task, arm.name, a, BEST_MEMBER, b))
@@ -793,7 +791,7 @@ def _handwritten_section(
     both = [r for r in rows if r["arm"] == BASELINE] + list(written)
     tested = comparisons(both, tasks, HELDOUT, names)
     # the goal is against the best homogeneous swarm, which may be a homogeneous arm rather than the baseline
-    homogeneous = [a.name for a in ARMS if a.name.startswith(f"{BASELINE}-")]
+    homogeneous = homogeneous_arms(_arm_names())
     mixed = [HANDWRITTEN + name for name in HETEROGENEOUS] + homogeneous
     scored = both + [r for r in rows if r["arm"] in homogeneous]
     return (
@@ -982,13 +980,18 @@ def repertoire_table(root: Path, document: dict) -> str:
     return "\n".join(lines) + "\n" if len(lines) > 2 else "No repertoire has finished yet.\n"
 
 
+def homogeneous_arms(names: Sequence[str]) -> list[str]:
+    """The homogeneous arms among ``names``: those named ``homogeneous-...`` (one tree for every robot)."""
+    return [n for n in names if n.startswith(f"{BASELINE}-")]
+
+
 def best_homogeneous(rows: Sequence[dict[str, str]], task: str, key: str, names: Sequence[str] = ()) -> str:
     """The homogeneous arm the goal is measured against on ``task``: of the baseline and the homogeneous arms
-    (named ``homogeneous-...``, among ``names`` where given) with scores ``key``, the one of highest median;
-    the baseline on a tie or where no other has scores."""
-    arms = [n for n in (names or _arm_names()) if n.startswith(f"{BASELINE}-")]
-    scored = [(_median(v), n != BASELINE, n) for n in (BASELINE, *arms) if (v := _values(rows, task, n, key))]
-    return min(scored, key=lambda s: (-s[0], s[1]))[2] if scored else BASELINE
+    (:func:`homogeneous_arms` of ``names`` where given) with scores ``key``, the one of highest median; the
+    baseline on a tie or where no other has scores."""
+    arms = homogeneous_arms(names or _arm_names())
+    scored = [(_median(v), n == BASELINE, n) for n in (BASELINE, *arms) if (v := _values(rows, task, n, key))]
+    return max(scored, key=lambda s: (s[0], s[1]))[2] if scored else BASELINE
 
 
 def goal_text(
@@ -1005,7 +1008,7 @@ def goal_text(
     in a family of its own (shown with the lines). A homogeneous arm is no candidate: its line says how it
     stands to the baseline and how the best heterogeneous median stands to it."""
     arms = names or _arm_names()
-    homogeneous = [n for n in arms if n.startswith(f"{BASELINE}-")]
+    homogeneous = homogeneous_arms(arms)
     candidates = [n for n in arms if n not in homogeneous]
     against = {task: best_homogeneous(rows, task, key, arms) for task in tasks}
     moved = []
@@ -1241,9 +1244,9 @@ def build_report(root: Path) -> Path:
     document = study_plan(root)
     arm_runs = list(finished_arm_runs(root, document))  # every summary read once, for every table and figure
     rows = finished_rows(arm_runs, unseen_scores(root, document, arm_runs))
-    members = member_scores(root, document, arm_runs)
     if not rows:
         raise EvolutionError(f"{root} has no finished composition runs yet")
+    members = member_scores(root, document, arm_runs)
     written = handwritten_rows(root, document, arm_runs)
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, HEADER, lineterminator="\n")
