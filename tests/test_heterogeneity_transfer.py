@@ -73,3 +73,28 @@ def test_the_teams_second_look_on_seeds_21_to_40():
     mine, other = statistics.mean(ours), statistics.mean(theirs)
     text = f"{mine:.3f} ±\n  {sem(ours):.3f} here against {other:.3f} ± {sem(theirs):.3f} there, z {z:+.2f}"
     assert text in (FOLDER / "README.md").read_text(), text
+
+
+def test_the_shuttles_on_arena_6_recomputed_and_shown_beside_argos():
+    """The carriers study's two shuttle trees, nine copies each on ``multifood-arena6``: our side recomputed
+    for the first, and every README row from the two committed tables."""
+    trees = [line for line in (FOLDER / "shuttles.txt").read_text().splitlines() if line and line[0] != "#"]
+    ours = _table("ours_stats_shuttles.tsv")
+    argos = {row["tree"]: row for row in _table("argos_stats_shuttles.tsv")}
+    assert [row["tree"] for row in ours] == trees and set(argos) == set(trees)
+    evaluator = BatchEvaluator(task_named("multifood-arena6").config("paper"))
+    results = evaluator.evaluate([SwarmRequest(SwarmLayout((trees[0],) * 9), s, 10) for s in range(1, 21)])
+    for objective, column in (("foraging", "foraging"), ("foraging3", "food3")):
+        values = [r.fitness[OBJECTIVES.index(objective)] for r in results]
+        assert float(ours[0][f"{column}_mean"]) == statistics.mean(values)
+        assert float(ours[0][f"{column}_sem"]) == statistics.stdev(values) / len(values) ** 0.5
+    readme = (FOLDER / "README.md").read_text()
+    for row in ours:
+        for column in ("foraging", "food3"):
+            mine, mine_sem = float(row[f"{column}_mean"]), float(row[f"{column}_sem"])
+            theirs = argos[row["tree"]]
+            other, other_sem = float(theirs[f"{column}_mean"]), float(theirs[f"{column}_sem"])
+            z = (mine - other) / (mine_sem**2 + other_sem**2) ** 0.5
+            cells = f"| {mine:.3f} ± {mine_sem:.3f} | {other:.3f} ± {other_sem:.3f} "
+            cells += f"| {mine - other:+.3f} | {z:+.2f} |"
+            assert cells in readme, cells
