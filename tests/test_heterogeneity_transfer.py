@@ -55,8 +55,8 @@ def test_our_side_is_the_models_and_the_readme_shows_both_tables():
 def test_the_teams_second_look_on_seeds_21_to_40():
     """The README's second look at team2's best team: ours recomputed on seeds 21-40, ARGoS's from its
     rows."""
-    swarms = [line for line in (FOLDER / "swarms.txt").read_text().splitlines() if line.startswith("swarm: ")]
-    team = swarms[-1]
+    lines = (FOLDER / "swarms.txt").read_text().splitlines()
+    team = next(lines[k + 1] for k, line in enumerate(lines) if line.startswith("# team2 "))
     argos = _table("argos_raw_team2_seeds21-40.tsv")
     assert {row["tree"] for row in argos} == {team} and sorted(int(r["seed"]) for r in argos) == list(
         range(21, 41)
