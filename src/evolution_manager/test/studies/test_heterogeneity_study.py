@@ -223,6 +223,36 @@ def test_an_arm_is_paired_with_its_homogeneous_twin_seed_by_seed():
     assert study._twins_section(rows[:1], ["t"]) == ""
 
 
+def test_map_elites_is_paired_with_the_ga_and_mix_me_on_every_qd_score():
+    """qd_comparisons: qd against ga and against qd-mix at 1, 2, 4 and 8 bins, paired by seed (a seed only
+    one side has is left out), one Holm family; the section shows the table only once a pair has two runs."""
+
+    def row(arm, seed, score):
+        return {
+            "arm": arm,
+            "task": "t",
+            "seed": str(seed),
+            **{f"qd_score_{k}": str(score / k) for k in (1, 2, 4, 8)},
+        }
+
+    rows = [row("qd", s, 0.5 + 0.01 * s) for s in range(7)]
+    rows += [row("ga", s, 0.4 + 0.011 * s) for s in range(1, 8)] + [
+        row("qd-mix", s, 0.5 + 0.01 * s) for s in range(7)
+    ]
+    tested = study.qd_comparisons(rows, ["t"])
+    assert [(c.metric, c.first, c.second) for c in tested] == [
+        (f"QD score, {k} per axis", "qd", rival) for k in (1, 2, 4, 8) for rival in ("ga", "qd-mix")
+    ]
+    against_ga = [c for c in tested if c.second == "ga"]
+    assert all(c.n_first == 6 and c.significant and c.p_holm >= c.p_value for c in against_ga)
+    assert all(
+        c.p_value == 1.0 and c.n_first == 7 for c in tested if c.second == "qd-mix"
+    )  # identical scores
+    section = study._qd_section(rows, ["t"], "space")
+    assert section.startswith("## The authors' QD score") and study.markdown_table(tested) in section
+    assert "paired by seed" not in study._qd_section(rows[:1] + rows[7:8], ["t"], "space")
+
+
 def test_swarm_evaluations_belongs_to_the_heterogeneity_study(tmp_path, capsys):
     args = ["--study", "paper", "--swarm-evaluations", "10", "--out", str(tmp_path / "x")]
     assert experiment(args) == 2
@@ -514,6 +544,10 @@ def test_the_committed_reports_tables_are_its_runs_csv(name, tasks):
     for key in (study.HELDOUT, study.VALIDATED, study.UNSEEN):
         assert study.scores_table(rows, tasks, key) in report
     assert study.qd_table(rows, tasks) in report
+    # MAP-Elites against the GA and Mix-ME where the report has them, and no such table where it has not
+    qd_tested = study.qd_comparisons(rows, tasks)
+    assert ("| QD score, " in report) == bool(qd_tested)
+    assert not qd_tested or study.markdown_table(qd_tested) in report
     # the hand-written swarms, paired with every index's baseline on the study's one set of scenarios
     measured = list(csv.DictReader(io.StringIO((folder / handwritten_swarms.HANDWRITTEN_FILE).read_text())))
     begun = {row["task"] for row in rows if row["arm"] == study.BASELINE}
