@@ -76,8 +76,8 @@ def test_the_teams_second_look_on_seeds_21_to_40():
 
 
 def test_the_shuttles_on_arena_6_recomputed_and_shown_beside_argos():
-    """The carriers study's two shuttle trees, nine copies each on ``multifood-arena6``: our side recomputed
-    for the first, and every README row from the two committed tables."""
+    """The carriers study's three shuttle trees, nine copies each on ``multifood-arena6``: our side
+    recomputed for the first, and every README row from the two committed tables."""
     trees = [line for line in (FOLDER / "shuttles.txt").read_text().splitlines() if line and line[0] != "#"]
     ours = _table("ours_stats_shuttles.tsv")
     argos = {row["tree"]: row for row in _table("argos_stats_shuttles.tsv")}
