@@ -12,10 +12,14 @@ The primitive runs are read from the foraging study ``--primitives-from``, whose
 design and seed this study takes; seeds: run ``r`` on library ``l`` gets ``derive_seed(--seed, RUN_STUDY,
 REPLICATION_STAGE, l, r)``.
 
-The report (``report.md``, ``runs.csv`` with ``arm, library, seed, best_fitness, heldout_best_fitness``)
-gives each library's runs, then QD against GP_fnd libraries on the held-out best fitness: a linear mixed
-model with the library as a random intercept (statsmodels ``MixedLM``), its estimate with a 95 % confidence
-interval, and an equivalence test (two one-sided tests on that estimate, at ``EQUIVALENCE_MARGIN``).
+The report (``report.md``, ``runs.csv`` with ``arm, library, seed, best_fitness, heldout_best_fitness,
+argos_best_fitness``) gives each library's runs, then QD against GP_fnd libraries on the held-out best
+fitness, the in-run one and the ARGoS score: a linear mixed model with the library as a random intercept
+(statsmodels ``MixedLM``), its estimate with a 95 % confidence interval, and an equivalence test (two
+one-sided tests on that estimate, at ``EQUIVALENCE_MARGIN``). The ARGoS score is every run's best forager
+in the authors' 2024 foraging build, its library given as their sub-behaviours file (the foraging study's
+transfer, ``foraging_transfer``): ``report DIR --argos-eval DRIVER`` scores the runs not yet scored, and
+the rows stay in ``argos_raw_<library>.tsv``, so a later report needs no ARGoS.
 """
 
 from __future__ import annotations
@@ -31,7 +35,8 @@ from statistics import median
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
-from evolution_manager.files import write_atomic
+from evolution_manager.files import read_json, write_atomic
+from evolution_manager.studies import foraging_transfer
 from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
 from evolution_manager.studies.planning import (
     finished_foraging_runs,
@@ -53,7 +58,17 @@ EQUIVALENCE_MARGIN = 0.1
 """Deliveries per robot per trial within which QD and GP_fnd libraries count as equivalent (about 4 % of an
 ideal robot's 2.6): chosen before any run, as small as the study's ten runs per arm could hope to resolve."""
 
-CSV_HEADER = ["arm", "library", "seed", "best_fitness", "heldout_best_fitness"]
+ARGOS = "argos_best_fitness"
+"""The best forager's deliveries per robot per trial in the authors' ARGoS, the mean over the ARGoS seeds."""
+
+CSV_HEADER = ["arm", "library", "seed", "best_fitness", "heldout_best_fitness", ARGOS]
+
+SCORES = (
+    ("heldout_best_fitness", "held-out best fitness"),
+    ("best_fitness", "in-run best fitness"),
+    (ARGOS, "ARGoS score of the best forager"),
+)
+"""The scores the mixed model compares QD and GP_fnd libraries on: ``runs.csv``'s column and its name."""
 
 
 def plan_study(
@@ -118,17 +133,39 @@ def plan_study(
     return document, [foragers], budgets
 
 
-def rows(root: Path) -> list[dict[str, str]]:
-    """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order."""
+def foragers(root: Path) -> list[tuple[dict, foraging_transfer.Forager]]:
+    """Every finished forager run of the study in ``root``, in the plan's order: its plan entry and its best
+    forager (the tree as evolved, primitives by name, over the run's library)."""
+    found = []
+    for entry, best, held in finished_foraging_runs(root, "replication", "arms"):
+        summary = read_json(Path(root) / entry["dir"] / "summary.json")
+        assert isinstance(summary, dict)  # finished_foraging_runs has just read it as a finished run's
+        tree = summary["objectives"]["foraging"]["best_tree"]
+        run = int(entry["dir"].rsplit("run", 1)[1])
+        found.append(
+            (entry, foraging_transfer.Forager(entry["arm"], run, tree, best, held, entry["library"]))
+        )
+    return found
+
+
+def rows(root: Path, argos_seeds: Sequence[int] = tuple(range(1, 21))) -> list[dict[str, str]]:
+    """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order; its
+    ARGoS score where its library's raw file holds every one of ``argos_seeds`` for its best tree."""
+    found = foragers(root)
+    argos = {
+        (r.forager.library, r.forager.run): r.argos
+        for r in foraging_transfer.scored(root, [f for _, f in found], argos_seeds)[0]
+    }
     return [
         {
             "arm": entry["arm"],
             "library": entry["library"],
             "seed": str(entry["seed"]),
-            "best_fitness": repr(best),
-            "heldout_best_fitness": "" if held is None else repr(held),
+            "best_fitness": repr(f.best_fitness),
+            "heldout_best_fitness": "" if f.heldout is None else repr(f.heldout),
+            ARGOS: repr(argos[f.library, f.run]) if (f.library, f.run) in argos else "",
         }
-        for entry, best, held in finished_foraging_runs(root, "replication", "arms")
+        for entry, f in found
     ]
 
 
@@ -166,23 +203,22 @@ def mixed_comparison(
 def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     """The report's per-library table and its QD-against-GP_fnd verdicts, from ``runs.csv`` rows."""
     lines = [
-        "| library | runs | best fitness (median) | held-out best fitness (median) |",
-        "|---|---|---|---|",
+        "| library | runs | best fitness (median) | held-out best fitness (median) | ARGoS (median, runs) |",
+        "|---|---|---|---|---|",
     ]
     for library in dict.fromkeys(row["library"] for row in table):
         mine = [row for row in table if row["library"] == library]
         best = median(float(row["best_fitness"]) for row in mine)
         held = [float(row["heldout_best_fitness"]) for row in mine if row["heldout_best_fitness"]]
         held_text = f"{median(held):.4g}" if held else "n/a"
-        lines.append(f"| {library} | {len(mine)} | {best:.4g} | {held_text} |")
+        argos = [float(row[ARGOS]) for row in mine if row.get(ARGOS)]
+        argos_text = f"{median(argos):.4g} ({len(argos)})" if argos else "n/a"
+        lines.append(f"| {library} | {len(mine)} | {best:.4g} | {held_text} | {argos_text} |")
     verdicts = []
-    for key, name in (
-        ("heldout_best_fitness", "held-out best fitness"),
-        ("best_fitness", "in-run best fitness"),
-    ):
+    for key, name in SCORES:
         result = mixed_comparison(table, key)
         if result is None:
-            verdicts.append(f"- {name}: fewer than two libraries of a kind have runs; no model yet.")
+            verdicts.append(f"- {name}: fewer than two libraries of a kind have this score; no model yet.")
             continue
         estimate, low, high, p, p_tost = result
         equivalent = "equivalent" if p_tost <= 0.05 else "not shown equivalent"
@@ -194,10 +230,25 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
 
 
-def build_report(root: Path) -> Path:
-    """Write ``runs.csv`` and ``report.md`` of the replication study in ``root``; return the report's path."""
+def _seed_text(seeds: Sequence[int]) -> str:
+    return (
+        f"{seeds[0]}-{seeds[-1]}" if list(seeds) == list(range(seeds[0], seeds[-1] + 1)) else str(list(seeds))
+    )
+
+
+def build_report(
+    root: Path,
+    argos_eval: str | None = None,
+    argos_seeds: Sequence[int] = tuple(range(1, 21)),
+    argos_jobs: int = 1,
+) -> Path:
+    """Write ``runs.csv`` and ``report.md`` of the replication study in ``root``; return the report's path.
+    ``argos_eval``: the ARGoS harness's driver, to score first every finished run's best forager not yet
+    scored on ``argos_seeds``."""
     root = Path(root)
-    table = rows(root)
+    if argos_eval is not None:
+        foraging_transfer.measure(root, [f for _, f in foragers(root)], argos_eval, argos_seeds, argos_jobs)
+    table = rows(root, argos_seeds)
     if not table:
         raise EvolutionError(f"{root} has no finished forager runs yet")
     buffer = io.StringIO()
@@ -206,6 +257,7 @@ def build_report(root: Path) -> Path:
     writer.writerows(table)
     write_atomic(root / "runs.csv", buffer.getvalue())
     per_library, verdicts = tables_from_rows(table)
+    unscored = sum(1 for row in table if not row[ARGOS])
     text = (
         "# Library-level replication of the 2024 comparison\n\n"
         f"{len(table)} finished forager runs (hierarchical GP, 100 s foraging trials), one row per run in "
@@ -216,7 +268,11 @@ def build_report(root: Path) -> Path:
         "A linear mixed model: the score against the library's kind, with a random intercept per library "
         "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
         f"two one-sided tests of equivalence within +/-{EQUIVALENCE_MARGIN} deliveries per robot per trial, "
-        "chosen before the runs.\n\n"
+        "chosen before the runs. The ARGoS score: each run's best forager in the authors' 2024 foraging code "
+        f"(through the project's harness, `--build foraging`; seeds {_seed_text(argos_seeds)}, each ten "
+        "100 s trials, the run's library given as their sub-behaviours file), the mean deliveries per robot "
+        "per trial over the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
+        f"scores the runs not yet scored: {unscored} of {len(table)} here).\n\n"
         f"{verdicts}"
     )
     write_atomic(root / "report.md", text)

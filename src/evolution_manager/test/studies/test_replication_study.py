@@ -5,12 +5,17 @@ from __future__ import annotations
 
 import csv
 import io
+import json
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from evolution_manager.studies import replication_study
 from evolution_manager.studies.experiment import build_parser, experiment
+from evolution_manager.studies.report_command import report
 
 FORAGING = Path(__file__).resolve().parents[4] / "experiments" / "foraging"
 
@@ -64,6 +69,7 @@ def _rows(rng, gap):
                         "seed": str(100 * k + r),
                         "best_fitness": repr(value + 0.1),
                         "heldout_best_fitness": repr(value),
+                        replication_study.ARGOS: repr(value - 0.05),
                     }
                 )
     return rows
@@ -92,4 +98,51 @@ def test_the_report_tables_recompute_from_runs_csv(tmp_path):
     again = list(csv.DictReader(io.StringIO(buffer.getvalue())))
     assert replication_study.tables_from_rows(again) == replication_study.tables_from_rows(rows)
     per_library, verdicts = replication_study.tables_from_rows(rows)
-    assert per_library.count("\n") == 2 + 12 and "TOST" in verdicts
+    assert per_library.count("\n") == 2 + 12 and verdicts.count("TOST") == 3
+
+
+REPLICATION = Path(__file__).resolve().parents[4] / "experiments" / "foraging-replication"
+FORAGING_RAW = ["tree", "seed", "chromosome", "argos_wall_s", "foraging", "movement", "rotation",
+                "conditionality", "foraging_trials", "build", "subs"]  # fmt: skip
+
+
+def test_every_runs_best_forager_takes_its_argos_score_from_the_drivers_rows(tmp_path, monkeypatch, capsys):
+    """The committed runs' best foragers; the driver's rows (written here in its format) give a run its ARGoS
+    score only where every seed is there; the report's table and count follow; without a build the command
+    stops in one line and writes nothing."""
+    copy = tmp_path / "r"
+    shutil.copytree(REPLICATION, copy, ignore=shutil.ignore_patterns("checkpoint.json", "evaluations.csv"))
+    found = replication_study.foragers(copy)
+    assert len(found) >= 2
+    for entry, forager in found:
+        summary = json.loads((copy / entry["dir"] / "summary.json").read_text())
+        assert forager.tree == summary["objectives"]["foraging"]["best_tree"]
+        assert (forager.library, f"run{forager.run:02d}") == (entry["library"], entry["dir"].rsplit("/")[-1])
+    # without a build: one line, nothing written
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    for name in [k for k in os.environ if k.startswith(("ARGOS_", "BT_ARGOS", "SRAND"))]:
+        monkeypatch.delenv(name)
+    assert report([str(copy), "--argos-eval", str(tmp_path / "argos_eval.py"), "--argos-seeds", "1-2"]) == 2
+    error = capsys.readouterr().err
+    assert len(error.strip().splitlines()) == 1 and "ARGoS" in error and not list(copy.glob("argos_raw_*"))
+    assert report([str(copy), "--beside", str(copy / "x.csv")]) == 2
+    capsys.readouterr()
+    # the driver's rows for the first library's runs: seeds 1 and 2 for its first run, seed 1 for the others
+    first = found[0][1].library
+    mine = [f for _, f in found if f.library == first]
+    with (copy / f"argos_raw_{first}.tsv").open("w") as raw:
+        raw.write("\t".join(FORAGING_RAW) + "\n")
+        for k, forager in enumerate(mine):
+            for seed in (1, 2) if k == 0 else (1,):
+                value = 0.5 + 0.1 * k + 0.01 * seed
+                raw.write("\t".join([forager.tree, str(seed), "x", "2.0", str(value), "0", "0", "0.5", "",
+                                     "foraging", first]) + "\n")  # fmt: skip
+    table = replication_study.rows(copy, (1, 2))
+    scored = [row[replication_study.ARGOS] for row in table]
+    assert scored[0] and float(scored[0]) == pytest.approx(0.515) and not any(scored[1:])
+    assert report([str(copy), "--argos-seeds", "1-2"]) == 0
+    capsys.readouterr()
+    text = (copy / "report.md").read_text()
+    assert f"| {first} | {len(mine)} |" in text and "| 0.515 (1) |" in text
+    assert f"the runs not yet scored: {len(found) - 1} of {len(found)} here" in text
+    assert (copy / "runs.csv").read_text().splitlines()[0].endswith(",argos_best_fitness")
