@@ -146,3 +146,17 @@ def test_every_runs_best_forager_takes_its_argos_score_from_the_drivers_rows(tmp
     assert f"| {first} | {len(mine)} |" in text and "| 0.515 (1) |" in text
     assert f"the runs not yet scored: {len(found) - 1} of {len(found)} here" in text
     assert (copy / "runs.csv").read_text().splitlines()[0].endswith(",argos_best_fitness")
+
+
+def test_the_committed_reports_tables_are_its_runs_csv():
+    """docs/results/foraging/replication: the report's per-library table and verdicts recomputed from its
+    runs.csv, and the README's range of held-out medians from the same table."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "foraging" / "replication"
+    table = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
+    report = (folder / "report.md").read_text()
+    per_library, verdicts = replication_study.tables_from_rows(table)
+    assert per_library in report and verdicts in report
+    assert f"{len(table)} finished forager runs" in report
+    medians = [float(line.split(" | ")[3]) for line in per_library.splitlines()[2:]]
+    readme = " ".join((folder / "README.md").read_text().split())
+    assert f"range from {min(medians):.2f} to {max(medians):.2f} deliveries" in readme
