@@ -255,7 +255,7 @@ def _cell(values: Sequence[float]) -> str:
 
 def section(rows: Sequence[Transferred], missing: int, seeds: Sequence[int], folder: Path) -> str:
     """The report's section: the table per objective and algorithm, the comparisons and the figure."""
-    seed_text = f"{seeds[0]}-{seeds[-1]}" if list(seeds) == list(range(seeds[0], seeds[-1] + 1)) else seeds
+    seed_text = transfer.seeds_text(seeds)
     n = len(seeds)
     lines = [
         "## Transfer: each run's best tree in the authors' ARGoS (beyond the paper)\n",

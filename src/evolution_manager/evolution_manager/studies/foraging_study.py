@@ -683,7 +683,7 @@ def _libraries_table(root: Path, document: dict) -> str:
 def build_report(
     root: Path,
     argos_eval: str | None = None,
-    argos_seeds: Sequence[int] = tuple(range(1, 21)),
+    argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS,
     argos_jobs: int = 1,
 ) -> Path:
     """Write ``report.md``, ``runs.csv`` and ``figures/`` for the foraging study in ``root``; return the

@@ -32,6 +32,9 @@ from evolution_manager.files import write_atomic
 from swarm_sim.errors import UsageError as SimUsageError
 from swarm_sim.validation import transfer
 
+DEFAULT_SEEDS: tuple[int, ...] = tuple(range(1, 21))
+"""The ARGoS seeds a report reads a forager's rows for unless told others (the report command's 1-20)."""
+
 FLAT = "flat"
 """The raw file's name for foragers without a library."""
 
@@ -148,7 +151,7 @@ def scored(root: Path, foragers: Sequence[Forager], seeds: Sequence[int]) -> tup
 
 def section(rows: Sequence[Scored], missing: int, seeds: Sequence[int], swarm_arms: Sequence[str]) -> str:
     """The report's section: each arm's best forager here and in ARGoS."""
-    seed_text = f"{seeds[0]}-{seeds[-1]}" if list(seeds) == list(range(seeds[0], seeds[-1] + 1)) else seeds
+    seed_text = transfer.seeds_text(seeds)
     lines = [
         "\n## Transfer: each arm's best forager in the authors' ARGoS\n",
         "Each homogeneous arm's best forager (the run of highest in-run fitness) scored in the authors' 2024 "

@@ -44,6 +44,7 @@ from evolution_manager.studies.planning import (
     primitives_study_document,
     primitives_study_forager,
 )
+from swarm_sim.validation.transfer import seeds_text
 
 REPLICATION_STAGE = 4
 """The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
@@ -148,7 +149,7 @@ def foragers(root: Path) -> list[tuple[dict, foraging_transfer.Forager]]:
     return found
 
 
-def rows(root: Path, argos_seeds: Sequence[int] = tuple(range(1, 21))) -> list[dict[str, str]]:
+def rows(root: Path, argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS) -> list[dict[str, str]]:
     """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order; its
     ARGoS score where its library's raw file holds every one of ``argos_seeds`` for its best tree."""
     found = foragers(root)
@@ -230,16 +231,10 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
 
 
-def _seed_text(seeds: Sequence[int]) -> str:
-    return (
-        f"{seeds[0]}-{seeds[-1]}" if list(seeds) == list(range(seeds[0], seeds[-1] + 1)) else str(list(seeds))
-    )
-
-
 def build_report(
     root: Path,
     argos_eval: str | None = None,
-    argos_seeds: Sequence[int] = tuple(range(1, 21)),
+    argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS,
     argos_jobs: int = 1,
 ) -> Path:
     """Write ``runs.csv`` and ``report.md`` of the replication study in ``root``; return the report's path.
@@ -269,7 +264,7 @@ def build_report(
         "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
         f"two one-sided tests of equivalence within +/-{EQUIVALENCE_MARGIN} deliveries per robot per trial, "
         "chosen before the runs. The ARGoS score: each run's best forager in the authors' 2024 foraging code "
-        f"(through the project's harness, `--build foraging`; seeds {_seed_text(argos_seeds)}, each ten "
+        f"(through the project's harness, `--build foraging`; seeds {seeds_text(argos_seeds)}, each ten "
         "100 s trials, the run's library given as their sub-behaviours file), the mean deliveries per robot "
         "per trial over the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
         f"scores the runs not yet scored: {unscored} of {len(table)} here).\n\n"

@@ -51,6 +51,7 @@ __all__ = [
     "read_transfer_tsv",
     "render_markdown",
     "render_summary",
+    "seeds_text",
     "subs_text",
     "transfer_tsv",
 ]
@@ -105,6 +106,12 @@ class TransferRow:
 
 
 # ------------------------------------------------------------------------------------------ picking trees
+
+
+def seeds_text(seeds: Sequence[int]) -> str:
+    """Seeds as a report names them: ``A-B`` for consecutive seeds, else the list."""
+    seeds = list(seeds)
+    return f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else str(seeds)
 
 
 def parse_seeds(text: str) -> list[int]:

@@ -127,6 +127,12 @@ def test_runs_the_argos_driver_cannot_measure_are_refused_in_one_line(tmp_path):
         transfer.pick_trees([inverse], 1)
 
 
+def test_seeds_text_names_a_run_of_seeds_as_parse_seeds_reads_it():
+    assert transfer.seeds_text(range(1, 21)) == "1-20"
+    assert transfer.parse_seeds(transfer.seeds_text((4, 5, 6))) == [4, 5, 6]
+    assert transfer.seeds_text([2, 5, 6]) == "[2, 5, 6]"
+
+
 def test_parse_seeds():
     assert transfer.parse_seeds("3") == [1, 2, 3]
     assert transfer.parse_seeds("1-4") == [1, 2, 3, 4]
