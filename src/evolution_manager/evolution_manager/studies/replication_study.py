@@ -44,7 +44,7 @@ from evolution_manager.studies.planning import (
     primitives_study_document,
     primitives_study_forager,
 )
-from swarm_sim.validation.transfer import seeds_text
+from swarm_sim.validation import transfer
 
 REPLICATION_STAGE = 4
 """The stage index of this study's seeds (the foraging study uses 0 to 3), so that no run of it shares a
@@ -264,7 +264,7 @@ def build_report(
         "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
         f"two one-sided tests of equivalence within +/-{EQUIVALENCE_MARGIN} deliveries per robot per trial, "
         "chosen before the runs. The ARGoS score: each run's best forager in the authors' 2024 foraging code "
-        f"(through the project's harness, `--build foraging`; seeds {seeds_text(argos_seeds)}, each ten "
+        f"(through the project's harness, `--build foraging`; seeds {transfer.seeds_text(argos_seeds)}, each ten "
         "100 s trials, the run's library given as their sub-behaviours file), the mean deliveries per robot "
         "per trial over the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
         f"scores the runs not yet scored: {unscored} of {len(table)} here).\n\n"
