@@ -253,6 +253,7 @@ def build_report(
     write_atomic(root / "runs.csv", buffer.getvalue())
     per_library, verdicts = tables_from_rows(table)
     unscored = sum(1 for row in table if not row[ARGOS])
+    seeds = transfer.seeds_text(argos_seeds)
     text = (
         "# Library-level replication of the 2024 comparison\n\n"
         f"{len(table)} finished forager runs (hierarchical GP, 100 s foraging trials), one row per run in "
@@ -264,9 +265,9 @@ def build_report(
         "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
         f"two one-sided tests of equivalence within +/-{EQUIVALENCE_MARGIN} deliveries per robot per trial, "
         "chosen before the runs. The ARGoS score: each run's best forager in the authors' 2024 foraging code "
-        f"(through the project's harness, `--build foraging`; seeds {transfer.seeds_text(argos_seeds)}, each ten "
-        "100 s trials, the run's library given as their sub-behaviours file), the mean deliveries per robot "
-        "per trial over the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
+        f"(through the project's harness, `--build foraging`; seeds {seeds}, each ten 100 s trials, the "
+        "run's library given as their sub-behaviours file), the mean deliveries per robot per trial over "
+        "the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
         f"scores the runs not yet scored: {unscored} of {len(table)} here).\n\n"
         f"{verdicts}"
     )
