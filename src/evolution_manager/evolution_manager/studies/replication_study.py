@@ -36,8 +36,8 @@ from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
 from evolution_manager.files import read_json, write_atomic
-from evolution_manager.studies import foraging_transfer
-from evolution_manager.studies.foraging_study import PRIMITIVES, study_library
+from evolution_manager.studies import foraging_transfer, intervals
+from evolution_manager.studies.foraging_study import PRIMITIVES, load_arm_runs, study_library
 from evolution_manager.studies.planning import (
     finished_foraging_runs,
     foraging_study_plan,
@@ -149,10 +149,16 @@ def foragers(root: Path) -> list[tuple[dict, foraging_transfer.Forager]]:
     return found
 
 
-def rows(root: Path, argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS) -> list[dict[str, str]]:
+def rows(
+    root: Path,
+    argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS,
+    found: Sequence[tuple[dict, foraging_transfer.Forager]] | None = None,
+) -> list[dict[str, str]]:
     """One ``runs.csv`` row per finished forager run of the study in ``root``, in the plan's order; its
-    ARGoS score where its library's raw file holds every one of ``argos_seeds`` for its best tree."""
-    found = foragers(root)
+    ARGoS score where its library's raw file holds every one of ``argos_seeds`` for its best tree.
+    ``found``: ``foragers(root)`` where the caller has it already."""
+    if found is None:
+        found = foragers(root)
     argos = {
         (r.forager.library, r.forager.run): r.argos
         for r in foraging_transfer.scored(root, [f for _, f in found], argos_seeds)[0]
@@ -170,12 +176,58 @@ def rows(root: Path, argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEED
     ]
 
 
+def pooled_rows(
+    document: dict, argos_seeds: Sequence[int] = foraging_transfer.DEFAULT_SEEDS
+) -> list[dict[str, str]] | None:
+    """The best-of-seeds condition: one ``runs.csv`` row per finished run of the foraging study the
+    replication drew its primitives from (``document["primitives_from"]``, as the experiment read it) on
+    its libraries built from every seed (arms ``hier-qd8``, ``hier-gpfnd8``; library named by its kind
+    alone); the ARGoS score where that study's raw rows hold every seed for the run's best tree. None when
+    that study's folder is not here."""
+    folder = Path(document["primitives_from"])
+    if not (folder / "experiment.json").exists():
+        return None
+    _, runs = load_arm_runs(folder)
+    arms = {f"hier-{kind}": kind for kind, _ in KINDS}
+    mine = [run for run in runs if run.arm in arms]
+    found = [
+        foraging_transfer.Forager(
+            run.arm, run.index, run.best_tree, run.best_fitness, run.heldout_best_fitness, arms[run.arm]
+        )
+        for run in mine
+    ]
+    argos = {
+        (r.forager.arm, r.forager.run): r.argos
+        for r in foraging_transfer.scored(folder, found, argos_seeds)[0]
+    }
+    return [
+        {
+            "arm": run.arm,
+            "library": arms[run.arm],
+            "seed": str(run.seed),
+            "best_fitness": repr(run.best_fitness),
+            "heldout_best_fitness": ""
+            if run.heldout_best_fitness is None
+            else repr(run.heldout_best_fitness),
+            ARGOS: repr(argos[run.arm, run.index]) if (run.arm, run.index) in argos else "",
+        }
+        for run in mine
+    ]
+
+
+def is_pooled(row: dict[str, str]) -> bool:
+    """Whether a ``runs.csv`` row is of the best-of-seeds condition: its library is named by its kind alone
+    (``qd8``), where a per-seed library carries its seed (``qd8-s3``)."""
+    return row["library"] in dict(KINDS)
+
+
 def mixed_comparison(
     table: Sequence[dict[str, str]], key: str
 ) -> tuple[float, float, float, float, int] | None:
     """GP_fnd libraries against QD libraries on ``key``: the mixed model's estimate (gpfnd8 minus qd8),
     its 95 % CI, the p-value, and the TOST p-value of equivalence within ``EQUIVALENCE_MARGIN``; None with
-    fewer than two libraries of a kind."""
+    fewer than two libraries of a kind. Per-seed libraries only: the best-of-seeds rows are another
+    condition."""
     # statsmodels, pandas, scipy.stats: seconds to import, only when the model is fitted
     import statsmodels.formula.api as smf
     from pandas import DataFrame
@@ -184,7 +236,7 @@ def mixed_comparison(
     data = [
         (float(row[key]), float(row["library"].startswith("gpfnd8")), row["library"])
         for row in table
-        if row[key] != ""
+        if row[key] != "" and not is_pooled(row)
     ]
     kinds = {(gp, library) for _, gp, library in data}
     if sum(1 for gp, _ in kinds if gp) < 2 or sum(1 for gp, _ in kinds if not gp) < 2:
@@ -214,7 +266,8 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
         held_text = f"{median(held):.4g}" if held else "n/a"
         argos = [float(row[ARGOS]) for row in mine if row.get(ARGOS)]
         argos_text = f"{median(argos):.4g} ({len(argos)})" if argos else "n/a"
-        lines.append(f"| {library} | {len(mine)} | {best:.4g} | {held_text} | {argos_text} |")
+        name = f"{library} (every seed)" if is_pooled(mine[0]) else library
+        lines.append(f"| {name} | {len(mine)} | {best:.4g} | {held_text} | {argos_text} |")
     verdicts = []
     for key, name in SCORES:
         result = mixed_comparison(table, key)
@@ -231,6 +284,49 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
 
 
+POOLED_INTERVAL_SEED = 2024
+"""The bootstrap generator's seed for each best-of-seeds interval (``numpy.random.default_rng``)."""
+
+
+def pooled_from_rows(table: Sequence[dict[str, str]]) -> str:
+    """The report's best-of-seeds lines from ``runs.csv`` rows: per kind with best-of-seeds runs, its
+    held-out median with a 95 % bootstrap interval, beside the per-seed libraries' held-out medians."""
+    import numpy as np
+
+    lines = []
+    for kind, _ in KINDS:
+        pooled = [
+            float(r["heldout_best_fitness"])
+            for r in table
+            if r["library"] == kind and r["heldout_best_fitness"]
+        ]
+        if not pooled:
+            continue
+        bounds = intervals.interval(pooled, "median", np.random.default_rng(POOLED_INTERVAL_SEED))
+        ci = "" if bounds is None else f" (95 % CI {bounds[0]:.3f} to {bounds[1]:.3f})"
+        per_seed = [
+            median(values)
+            for library in dict.fromkeys(r["library"] for r in table if r["library"].startswith(f"{kind}-s"))
+            if (
+                values := [
+                    float(r["heldout_best_fitness"])
+                    for r in table
+                    if r["library"] == library and r["heldout_best_fitness"]
+                ]
+            )
+        ]
+        line = f"- {kind} from every seed: held-out median {median(pooled):.3f}{ci}, {len(pooled)} runs"
+        if per_seed:
+            below = sum(1 for m in per_seed if m < median(pooled))
+            line += (
+                f"; the {len(per_seed)} per-seed {kind} libraries' held-out medians range from "
+                f"{min(per_seed):.3f} to {max(per_seed):.3f} (median {median(per_seed):.3f}), "
+                f"{below} of them below it"
+            )
+        lines.append(line + ".")
+    return "\n".join(lines) + "\n" if lines else "No best-of-seeds runs with held-out scores.\n"
+
+
 def build_report(
     root: Path,
     argos_eval: str | None = None,
@@ -241,25 +337,46 @@ def build_report(
     ``argos_eval``: the ARGoS harness's driver, to score first every finished run's best forager not yet
     scored on ``argos_seeds``."""
     root = Path(root)
+    found = foragers(root)
     if argos_eval is not None:
-        foraging_transfer.measure(root, [f for _, f in foragers(root)], argos_eval, argos_seeds, argos_jobs)
-    table = rows(root, argos_seeds)
+        foraging_transfer.measure(root, [f for _, f in found], argos_eval, argos_seeds, argos_jobs)
+    table = rows(root, argos_seeds, found)
     if not table:
         raise EvolutionError(f"{root} has no finished forager runs yet")
+    document = read_json(root / "experiment.json")
+    assert isinstance(document, dict)  # foragers(root) has just read it as this study's plan
+    pooled = pooled_rows(document, argos_seeds)
+    if pooled:
+        table += pooled
+    if pooled is None:
+        pooled_text = (
+            f"The foraging study `{document['primitives_from']}` is not here (relative to the folder the "
+            "report runs in), so its runs are not shown.\n"
+        )
+    else:
+        pooled_text = pooled_from_rows(table)
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, CSV_HEADER, lineterminator="\n")
     writer.writeheader()
     writer.writerows(table)
     write_atomic(root / "runs.csv", buffer.getvalue())
     per_library, verdicts = tables_from_rows(table)
-    unscored = sum(1 for row in table if not row[ARGOS])
+    unscored = sum(1 for row in table if not row[ARGOS] and not is_pooled(row))
+    per_seed_runs = sum(1 for row in table if not is_pooled(row))
     seeds = transfer.seeds_text(argos_seeds)
     text = (
         "# Library-level replication of the 2024 comparison\n\n"
-        f"{len(table)} finished forager runs (hierarchical GP, 100 s foraging trials), one row per run in "
-        "[runs.csv](runs.csv). Each library is built from one seed of the primitive runs.\n\n"
+        f"{per_seed_runs} finished forager runs (hierarchical GP, 100 s foraging trials), one row per run in "
+        "[runs.csv](runs.csv). Each library is built from one seed of the primitive runs. The rows "
+        '"(every seed)" are the best-of-seeds condition: the foraging study\'s runs over its libraries '
+        "built from all the primitive runs (their ARGoS score where that study measured it: its best run "
+        "per arm), also in runs.csv, library named by its kind alone; the model below leaves them out.\n\n"
         "## Per library\n\n"
         f"{per_library}\n"
+        "## Best-of-seeds libraries\n\n"
+        "Each kind's library from every seed against the per-seed libraries; the interval is a percentile "
+        f"bootstrap of the median (10,000 resamples, `numpy.random.default_rng({POOLED_INTERVAL_SEED})`).\n\n"
+        f"{pooled_text}\n"
         "## QD against GP_fnd libraries\n\n"
         "A linear mixed model: the score against the library's kind, with a random intercept per library "
         "(statsmodels MixedLM, REML); the estimate with its Wald 95 % confidence interval and p-value, and "
@@ -268,7 +385,7 @@ def build_report(
         f"(through the project's harness, `--build foraging`; seeds {seeds}, each ten 100 s trials, the "
         "run's library given as their sub-behaviours file), the mean deliveries per robot per trial over "
         "the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
-        f"scores the runs not yet scored: {unscored} of {len(table)} here).\n\n"
+        f"scores the runs not yet scored: {unscored} of {per_seed_runs} here).\n\n"
         f"{verdicts}"
     )
     write_atomic(root / "report.md", text)

@@ -89,6 +89,60 @@ def test_the_mixed_model_finds_a_difference_and_equivalence_where_they_are():
     )
 
 
+def _pooled(rows, value):
+    """``rows`` with ten best-of-seeds rows of each kind at ``value``."""
+    extra = [
+        {
+            **rows[0],
+            "arm": f"hier-{kind}",
+            "library": kind,
+            "seed": str(r),
+            "heldout_best_fitness": repr(value),
+        }
+        for kind in ("qd8", "gpfnd8")
+        for r in range(10)
+    ]
+    return rows + extra
+
+
+def test_the_mixed_model_leaves_the_best_of_seeds_rows_out():
+    rows = _rows(np.random.default_rng(4), 0.2)
+    assert replication_study.mixed_comparison(_pooled(rows, 9.0), "heldout_best_fitness") == (
+        replication_study.mixed_comparison(rows, "heldout_best_fitness")
+    )
+    text = replication_study.pooled_from_rows(_pooled(rows, 9.0))
+    assert "- qd8 from every seed: held-out median 9.000" in text and "6 of them below it" in text
+    assert replication_study.pooled_from_rows(rows).startswith("No best-of-seeds runs")
+
+
+def test_the_best_of_seeds_rows_are_the_foraging_studys_runs_on_its_whole_libraries(tmp_path):
+    """The foraging study's hier-qd8 and hier-gpfnd8 runs, as the replication's plan names that study; an
+    ARGoS score only where its raw rows hold every seed; None when the study is not there."""
+    study = tmp_path / "foraging"
+    document = json.loads((FORAGING / "experiment.json").read_text())
+    study.mkdir()
+    (study / "experiment.json").write_text(json.dumps(document))
+    runs = [entry for entry in document["arms"] if entry["arm"] in ("hier-qd8", "hier-gpfnd8")]
+    for entry in runs:
+        (study / entry["dir"]).mkdir(parents=True)
+        shutil.copy(FORAGING / entry["dir"] / "summary.json", study / entry["dir"] / "summary.json")
+    first = json.loads((study / runs[0]["dir"] / "summary.json").read_text())
+    tree = first["objectives"]["foraging"]["best_tree"]
+    with (study / "argos_raw_qd8.tsv").open("w") as raw:
+        raw.write("\t".join(FORAGING_RAW) + "\n")
+        for seed in (1, 2):
+            fields = [tree, str(seed), "x", "2.0", str(1.0 + seed), "0", "0", "0.5", "", "foraging", "qd8"]
+            raw.write("\t".join(fields) + "\n")
+    pooled = replication_study.pooled_rows({"primitives_from": str(study)}, (1, 2))
+    assert [row["arm"] for row in pooled] == [entry["arm"] for entry in runs]
+    assert all(replication_study.is_pooled(row) for row in pooled)
+    assert [row["seed"] for row in pooled] == [str(entry["seed"]) for entry in runs]
+    assert pooled[0][replication_study.ARGOS] == repr(2.5) and not any(
+        row[replication_study.ARGOS] for row in pooled[1:]
+    )
+    assert replication_study.pooled_rows({"primitives_from": str(tmp_path / "gone")}) is None
+
+
 def test_the_report_tables_recompute_from_runs_csv(tmp_path):
     rows = _rows(np.random.default_rng(5), 0.05)
     buffer = io.StringIO()
@@ -151,14 +205,19 @@ def test_every_runs_best_forager_takes_its_argos_score_from_the_drivers_rows(tmp
 
 
 def test_the_committed_reports_tables_are_its_runs_csv():
-    """docs/results/foraging/replication: the report's per-library table and verdicts recomputed from its
-    runs.csv, and the README's range of held-out medians from the same table."""
+    """docs/results/foraging/replication: the report's per-library table, best-of-seeds lines and verdicts
+    recomputed from its runs.csv, and the README's range of the per-seed libraries' held-out medians from
+    the same table."""
     folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "foraging" / "replication"
     table = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
     per_library, verdicts = replication_study.tables_from_rows(table)
     assert per_library in report and verdicts in report
-    assert f"{len(table)} finished forager runs" in report
-    medians = [float(line.split(" | ")[3]) for line in per_library.splitlines()[2:]]
+    assert replication_study.pooled_from_rows(table) in report
+    per_seed = [row for row in table if not replication_study.is_pooled(row)]
+    assert f"{len(per_seed)} finished forager runs" in report
+    medians = [
+        float(line.split(" | ")[3]) for line in per_library.splitlines()[2:] if "(every seed)" not in line
+    ]
     readme = " ".join((folder / "README.md").read_text().split())
     assert f"range from {min(medians):.2f} to {max(medians):.2f} deliveries" in readme
