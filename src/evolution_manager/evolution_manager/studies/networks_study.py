@@ -47,11 +47,14 @@ from evolution_manager.evolution.networks import ALGORITHMS as NETWORK_ARMS
 from evolution_manager.evolution.networks import NetworkConfig
 from evolution_manager.evolution.run_config import DEFAULT_PROFILE, RunConfig
 from evolution_manager.files import read_json, write_atomic
+from evolution_manager.studies import networks_transfer
+from evolution_manager.studies.foraging_transfer import DEFAULT_SEEDS
 from evolution_manager.studies.intervals import interval
 from evolution_manager.studies.planning import PLAN_FILE, document_head, shared_scenario_seed
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.model import FAMILIES
+from swarm_sim.validation.reference import NETWORK_PREFIX
 
 STUDY = "bt-vs-nn"
 NETWORKS_STAGE = 6
@@ -276,6 +279,33 @@ def _best_tree(root: Path, found: Sequence[tuple[dict, dict[str, str]]], objecti
     return f"{head}\n\n    {tree}\n\n"
 
 
+def best_controllers(
+    root: Path, found: Sequence[tuple[dict, dict[str, str]]], objectives: Sequence[str]
+) -> list[networks_transfer.Best]:
+    """Per objective, its best tree and its best network (``_best_run``), as the ARGoS harness reads them."""
+    bests = []
+    for objective in objectives:
+        for kind, arms in (("tree", TREE_ARMS), ("network", NETWORK_ARMS)):
+            best = _best_run(found, objective, arms)
+            if best is None:
+                continue
+            row, folder = best
+            if kind == "tree":
+                summary = read_json(Path(root) / folder / "summary.json")
+                assert isinstance(summary, dict)  # a finished tree run's summary
+                subject = str(summary["objectives"][objective]["best_tree"])
+            else:
+                weights = load_network(Path(root) / folder / "best" / f"{objective}.json").weights
+                subject = f"{NETWORK_PREFIX} " + " ".join(repr(w) for w in weights)
+            held = row["heldout_best_fitness"]
+            bests.append(
+                networks_transfer.Best(
+                    objective, kind, row["arm"], row["seed"], folder, subject, float(held) if held else None
+                )
+            )
+    return bests
+
+
 def _network_section(
     root: Path, found: Sequence[tuple[dict, dict[str, str]]], objectives: Sequence[str]
 ) -> str:
@@ -378,13 +408,28 @@ def _figures(root: Path, table: Sequence[dict[str, str]], objectives: Sequence[s
     return drawn
 
 
-def build_report(root: Path) -> Path:
+def build_report(
+    root: Path,
+    argos_eval: str | None = None,
+    argos_seeds: Sequence[int] = DEFAULT_SEEDS,
+    argos_jobs: int = 1,
+) -> Path:
     """Write ``runs.csv``, ``report.md``, ``figures/`` and ``networks/`` of the study in ``root`` from its
-    finished runs; return the report's path."""
+    finished runs; return the report's path. ``argos_eval``: the ARGoS harness's driver, to score first each
+    objective's best tree and best network where their rows are missing; with rows there the report has a
+    section on them (``networks_transfer``)."""
     root = Path(root)
     document, found = finished_runs(root)
     if not found:
         raise EvolutionError(f"{root} has no finished runs yet")
+    bests = best_controllers(root, found, document["objectives"])
+    if argos_eval is not None:
+        networks_transfer.measure(root, bests, argos_eval, argos_seeds, argos_jobs)
+    scored = any(networks_transfer.trees_raw(root, task).exists() for task in networks_transfer.TRIAL_SECONDS)
+    if scored or (root / networks_transfer.NETWORKS_RAW).exists():
+        argos = "\n" + networks_transfer.section(root, bests, argos_seeds, document["profile"])
+    else:
+        argos = ""
     table = [row for _, row in found]
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, CSV_HEADER, lineterminator="\n")
@@ -430,6 +475,7 @@ def build_report(root: Path) -> Path:
         "conditions (a short cover of the patterns: a pattern that meets one condition picks the action)."
         "\n\n"
         f"{_network_section(root, found, objectives)}"
+        f"{argos}"
     )
     write_atomic(root / "report.md", text)
     return root / "report.md"

@@ -74,8 +74,9 @@ def report(argv: Sequence[str] | None = None) -> int:
         "--argos-eval",
         metavar="DRIVER",
         help="the ARGoS harness's argos_eval.py ($ARGOS_EVAL): score each run's best tree (a foraging "
-        "study: each arm's best forager; a replication study: every run's) in the authors' ARGoS (rows kept "
-        "in argos_raw*.tsv, run only when missing); the report's transfer section",
+        "study: each arm's best forager; a replication study: every run's; a bt-vs-nn study: each "
+        "objective's best tree and best network) in the authors' ARGoS (rows kept in argos_raw*.tsv, run "
+        "only when missing); the report's transfer section",
     )
     parser.add_argument(
         "--argos-seeds", default=argos_transfer.DEFAULT_SEEDS, help="ARGoS's seeds: N, A-B or a list (1-20)"
@@ -92,18 +93,22 @@ def report(argv: Sequence[str] | None = None) -> int:
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError("--beside and --argos-eval apply to an experiment folder, not to scenarios")
             print(scenarios.build_scenarios_report(args.dir))
-        elif _study(args.dir) in ("ablation", "bt-vs-nn", "heterogeneity", "qd-schedule"):
+        elif _study(args.dir) in ("ablation", "heterogeneity", "qd-schedule"):
             if args.beside is not None or args.argos_eval is not None:
                 raise UsageError(
-                    "--beside and --argos-eval apply to the paper's, the foraging and the replication study"
+                    "--beside and --argos-eval apply to the paper's, the foraging, the replication and the "
+                    "bt-vs-nn study"
                 )
             study = {
                 "ablation": ablation_study,
-                "bt-vs-nn": networks_study,
                 "heterogeneity": heterogeneity_study,
                 "qd-schedule": schedule_study,
             }[str(_study(args.dir))]
             print(study.build_report(args.dir))
+        elif _study(args.dir) == "bt-vs-nn":
+            if args.beside is not None:
+                raise UsageError("--beside applies to the paper's experiment, not to a bt-vs-nn study")
+            print(networks_study.build_report(args.dir, args.argos_eval, seeds, args.argos_jobs))
         elif _study(args.dir) == "replication":
             if args.beside is not None:
                 raise UsageError("--beside applies to the paper's experiment, not to a replication study")

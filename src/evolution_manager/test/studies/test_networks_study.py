@@ -8,16 +8,20 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import random
+import shutil
 from pathlib import Path
 
 import pytest
 
 from bt_controller.interpreters import N_WEIGHTS, Network, load_network
-from evolution_manager.studies import networks_study
+from evolution_manager.studies import networks_study, networks_transfer
 from evolution_manager.studies.experiment import build_parser, experiment
 from evolution_manager.studies.report_command import report as report_command
 from evolution_manager.studies.significance import markdown_table
+from swarm_sim.validation import reference as validation
+from swarm_sim.validation import transfer
 
 
 def _members(cube: str) -> set[int]:
@@ -128,3 +132,96 @@ def test_the_committed_reports_tables_are_its_runs_csv():
     for family in (best, repertoires):
         if family:
             assert markdown_table(family) in report
+
+
+STUDY = Path(__file__).resolve().parents[4] / "experiments" / "bt-vs-nn"
+TREE_RAW = ["tree", "seed", "chromosome", "argos_wall_s", "density", "nest", "food", "idensity", "inest",
+            "ifood", "movement", "rotation", "conditionality", "build", "subs"]  # fmt: skip
+
+
+def test_each_objectives_best_tree_and_network_take_their_argos_rows(tmp_path, monkeypatch, capsys):
+    """The committed study's best controllers (the runs of the highest held-out best fitness); the driver's
+    rows (written here in its formats) for density's tree and network make the report's ARGoS section, ours
+    beside them on the same seeds; the other controllers are counted as missing; without a build the
+    command stops in one line and writes no row."""
+    copy = tmp_path / "study"
+    # the summaries and best controllers only: no checkpoints, evaluation logs or repertoires
+    shutil.copytree(
+        STUDY, copy, ignore=shutil.ignore_patterns("checkpoint.json", "evaluations.csv", "repertoire_*")
+    )
+    for name in copy.glob("argos_raw_*"):
+        name.unlink()
+    document, found = networks_study.finished_runs(copy)
+    bests = networks_study.best_controllers(copy, found, document["objectives"])
+    kinds = {(b.objective, b.kind) for b in bests}
+    assert ("density", "tree") in kinds and ("density", "network") in kinds
+    for best in bests:
+        mine = next(row for entry, row in found if entry["dir"] == best.folder)
+        others = [
+            float(row["heldout_best_fitness"])
+            for _, row in found
+            if row["objective"] == best.objective
+            and (row["arm"] in networks_study.TREE_ARMS) == (best.kind == "tree")
+        ]
+        assert float(mine["heldout_best_fitness"]) == max(others) == best.heldout
+    tree = next(b for b in bests if b.objective == "density" and b.kind == "tree")
+    network = next(b for b in bests if b.objective == "density" and b.kind == "network")
+    assert network.subject.startswith("nn: ") and len(network.subject.split()) == 1 + N_WEIGHTS
+    # without a build: one line, no rows
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    for name in [k for k in os.environ if k.startswith(("ARGOS_", "BT_ARGOS", "SRAND"))]:
+        monkeypatch.delenv(name)
+    assert (
+        report_command([str(copy), "--argos-eval", str(tmp_path / "argos_eval.py"), "--argos-seeds", "1-2"])
+        == 2
+    )
+    error = capsys.readouterr().err
+    assert len(error.strip().splitlines()) == 1 and "ARGoS" in error and not list(copy.glob("argos_raw_*"))
+    assert report_command([str(copy), "--beside", str(copy / "x.csv")]) == 2
+    capsys.readouterr()
+    # density's tree and network on seeds 1 and 2
+    with (networks_transfer.trees_raw(copy, "primitives")).open("w") as raw:
+        raw.write("\t".join(TREE_RAW) + "\n")
+        for seed, value in ((1, 0.5), (2, 0.6)):
+            cells = [tree.subject, str(seed), "x", "0.3", str(value), *["0.5"] * 8, "primitives", ""]
+            raw.write("\t".join(cells) + "\n")
+    with (copy / networks_transfer.NETWORKS_RAW).open("w") as raw:
+        raw.write("\t".join(transfer.NETWORK_RAW_COLUMNS) + "\n")
+        for seed, value in ((1, 0.7), (2, 0.7)):
+            cells = [network.subject, str(seed), "20", str(value), *["0.5"] * 29, "0.3"]
+            raw.write("\t".join(cells) + "\n")
+    text = networks_transfer.section(copy, bests, (1, 2), document["profile"])
+    rows = [line for line in text.splitlines() if line.startswith("| density")]
+    assert len(rows) == 2 and rows[0].startswith(f"| density | tree, {tree.arm} seed {tree.seed} |")
+    assert "| 0.5500 ± 0.0500 |" in rows[0] and "| 0.7000 ± 0.0000 |" in rows[1]
+    assert f"{len(bests) - 2} of {len(bests)} controllers lack ARGoS rows" in text
+    ours = float(rows[0].split(" | ")[3].split(" ± ")[0])
+    assert abs(ours - tree.heldout) < 0.1  # ours on seeds 1-2 near the run's held-out score
+    assert report_command([str(copy), "--argos-seeds", "1-2"]) == 0
+    capsys.readouterr()
+    assert text in (copy / "report.md").read_text()
+
+
+def test_the_committed_reports_argos_column_is_its_raw_rows():
+    """docs/results/bt-vs-nn: each row of the ARGoS section names a run (arm and seed) of the study; that
+    run's best controller's rows in experiments/bt-vs-nn give the ARGoS cell, mean and standard error."""
+    folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "bt-vs-nn"
+    report = (folder / "report.md").read_text()
+    section = report.split("## In the authors' ARGoS")[1]
+    rows = [line for line in section.splitlines() if line.startswith("| ")][2:]
+    _, found = networks_study.finished_runs(STUDY)
+    assert rows
+    for line in rows:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        objective = cells[0].removesuffix(" †")
+        kind, rest = cells[1].split(", ")
+        arm, seed = rest.split(" seed ")
+        entry, row = next(
+            (e, r) for e, r in found if (r["arm"], r["objective"], r["seed"]) == (arm, objective, seed)
+        )
+        best = networks_study.best_controllers(STUDY, [(entry, row)], [objective])[0]
+        assert best.kind == kind
+        values = networks_transfer.argos_values(STUDY, best, range(1, 21))
+        assert values is not None
+        estimate = validation.estimate(values)
+        assert cells[4] == f"{estimate.mean:.4f} ± {estimate.sem:.4f}"

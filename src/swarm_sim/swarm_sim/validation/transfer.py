@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bt_controller.validate import strict_json
+from swarm_ros.safe_paths import open_no_follow, refuse_links
 from swarm_sim.errors import UsageError
 from swarm_sim.model import DESCRIPTORS, OBJECTIVES, PAPER_OBJECTIVES
 from swarm_sim.validation import reference as validation
@@ -45,9 +46,12 @@ __all__ = [
     "argos_estimates",
     "farthest_points",
     "grid_elites",
+    "network_means",
     "parse_seeds",
     "pick_trees",
     "read_foraging_raw",
+    "read_network_raw",
+    "read_raw_column",
     "read_transfer_tsv",
     "render_markdown",
     "render_summary",
@@ -290,14 +294,27 @@ class ArgosHarness:
         variable, folder = BUILDS[build]
         tree = Path(os.environ.get(variable, home / folder / "argos3"))
         shim = Path(os.environ.get("SRAND_SHIM", home / "build-shim" / "libsrand_shim.so"))
+        controllers = (
+            ("footbot_nn", "nn_loop_functions")
+            if build == NETWORK_BUILD
+            else ("footbot_bt", "bt_loop_functions")
+        )
         needed = [
             self.driver,
             prefix / "bin" / "argos3",
-            tree / "build" / "controllers" / "footbot_bt" / "libfootbot_bt.so",
-            tree / "build" / "loop_functions" / "bt_loop_functions" / "libbt_loop_functions.so",
+            tree / "build" / "controllers" / controllers[0] / f"lib{controllers[0]}.so",
+            tree / "build" / "loop_functions" / controllers[1] / f"lib{controllers[1]}.so",
             shim,
         ]
         return [path for path in needed if not path.is_file()]
+
+    def _check(self, build: str) -> None:
+        missing = self.missing(build)
+        if missing:
+            raise UsageError(
+                f"ARGoS build not found: {', '.join(map(str, missing))} missing "
+                f"(build it with the harness's {REBUILD[build]}; docs/validation/README.md)"
+            )
 
     def run(
         self,
@@ -312,14 +329,7 @@ class ArgosHarness:
         """Evaluate every (tree, seed) missing from ``raw`` with the driver (``batch``, which appends to
         ``raw``) in ``build``, named primitives defined by the sub-behaviours file ``subs``; UsageError when
         the build is missing or the driver fails."""
-        missing = self.missing(build)
-        if missing:
-            raise UsageError(
-                f"ARGoS build not found: {', '.join(map(str, missing))} missing "
-                "(build it with the harness's rebuild.sh"
-                + (" and rebuild_2024.sh" if build != "2023" else "")
-                + "; docs/validation/README.md)"
-            )
+        self._check(build)
         trees_file = work / "transfer_trees.txt"
         trees_file.write_text("".join(f"{tree}\n" for tree in trees))
         spec = ",".join(str(s) for s in seeds)
@@ -334,14 +344,138 @@ class ArgosHarness:
             last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
             raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
 
+    def run_networks(
+        self, networks: Sequence[str], seeds: Sequence[int], trial_s: int, raw: Path, work: Path
+    ) -> None:
+        """Evaluate every (network, seed) missing from ``raw`` at ``trial_s`` seconds a trial in the
+        authors' footbot_nn (the driver's ``eval --build multifood --nn``, its work folder kept under
+        ``work`` and read for all ten of the controller's per-trial values), appending one row each in
+        ``NETWORK_RAW_COLUMNS``. ``networks``: ``nn: w1 ... w56`` lines. UsageError when the build is
+        missing or the driver fails."""
+        refuse_links(raw)
+        have = read_network_raw(raw)
+        todo = [(n, s) for n in networks for s in seeds if (n, s, trial_s) not in have]
+        if not todo:
+            return
+        self._check(NETWORK_BUILD)
+        keep = (work / "argos_network_run").absolute()  # the driver runs ARGoS from inside it
+        refuse_links(keep)  # the driver empties and fills it
+        if not raw.exists():
+            _append(raw, "\t".join(NETWORK_RAW_COLUMNS) + "\n")
+        for network, seed in todo:
+            weights = network.removeprefix(validation.NETWORK_PREFIX).strip()
+            command = ["python3", str(self.driver), "eval", "--build", NETWORK_BUILD, "--nn", weights]
+            command += ["--seed", str(seed), "--trial-s", str(trial_s), "--keep", str(keep)]
+            done = subprocess.run(command, capture_output=True, text=True, check=False)
+            if done.returncode != 0:
+                last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+                raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
+            per_gap = [
+                network_means((keep / "txt" / f"result_gap{gap:g}.txt").read_text()) for gap in NETWORK_GAPS
+            ]
+            values = [math.fsum(g[i] for g in per_gap) / len(per_gap) for i in range(len(NETWORK_SLOTS))]
+            wall = float(json.loads(done.stdout)["argos_wall_s"])
+            cells = [network, str(seed), str(trial_s), *(f"{v:.9g}" for v in values)]
+            cells += [f"{v:.9g}" for g in per_gap for v in g] + [f"{wall:.3f}"]
+            _append(raw, "\t".join(cells) + "\n")
+
+
+def _append(path: Path, text: str) -> None:
+    """Append ``text`` to ``path`` (made if missing), never through a symbolic link."""
+    descriptor = open_no_follow(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    with os.fdopen(descriptor, "a", encoding="utf-8") as out:
+        out.write(text)
+
 
 BUILDS: dict[str, tuple[str, str]] = {
     "2023": ("BT_ARGOS_DIR", "bmr"),
     "foraging": ("BT_ARGOS_DIR_FORAGING", "bmr-a73"),
+    "primitives": ("BT_ARGOS_DIR_PRIMITIVES", "bmr-a73-prim"),
+    "multifood": ("BT_ARGOS_DIR_MULTIFOOD", "bmr-2026"),
 }
 """The harness's builds this module drives: the environment variable naming the build's ``argos3`` folder
 and the folder under ``~/argos-check`` it defaults to (the driver's own defaults): the 2023 commit (the
-primitives' 20 s trials) and the 2024 commit's foraging setting (100 s trials, deliveries)."""
+primitives' 20 s trials), the 2024 commit's foraging setting (100 s trials, deliveries) and its six
+primitives (20 s trials), and the 2026 commit, whose footbot_nn is the authors' neural controller."""
+
+REBUILD: dict[str, str] = {
+    "2023": "rebuild.sh",
+    "foraging": "rebuild.sh and rebuild_2024.sh",
+    "primitives": "rebuild.sh and rebuild_2024.sh",
+    "multifood": "rebuild.sh and rebuild_2026.sh",
+}
+"""The harness's scripts that make each build."""
+
+NETWORK_BUILD = "multifood"
+"""The build whose footbot_nn evaluates networks."""
+
+NETWORK_SLOTS: tuple[str, ...] = (
+    "density", "nest", "food", "idensity", "inest", "ifood",
+    "foraging", "movement", "rotation", "conditionality",
+)  # fmt: skip
+"""footbot_nn's ten per-trial values, in the order it prints them (movement and rotation in raw units,
+[-ticks, ticks]; foraging: deliveries in the trial)."""
+
+NETWORK_GAPS = (0.5, 0.7)
+"""The gaps of the authors' two runs per evaluation, as the driver names its result files."""
+
+NETWORK_TRIALS = 5
+"""Trials per ARGoS run of footbot_nn (their fixed network environment)."""
+
+NETWORK_ROBOTS = 9
+"""Footbots per run; their per-trial values are summed over them and divided by this."""
+
+NETWORK_RAW_COLUMNS: tuple[str, ...] = (
+    "tree",
+    "seed",
+    "trial_s",
+    *NETWORK_SLOTS,
+    *(f"{q}_gap{gap:g}" for gap in NETWORK_GAPS for q in NETWORK_SLOTS),
+    "argos_wall_s",
+)
+"""A network raw TSV's columns (``docs/validation/argos_raw_networks.tsv``): the network (``nn: ...``), the
+seed, the trial length, each value's mean over both runs, then each run's."""
+
+
+def network_means(result: str) -> list[float]:
+    """One footbot_nn run's ten values, each the mean per robot per trial, from the ``result <robot> ...``
+    lines ARGoS printed (per robot, slot-major: slot ``q`` of trial ``k`` at ``q * 5 + k``)."""
+    robots = [line.split()[2:] for line in result.splitlines() if line.startswith("result ")]
+    expected = len(NETWORK_SLOTS) * NETWORK_TRIALS
+    if not robots or any(len(values) != expected for values in robots):
+        raise UsageError(
+            f"footbot_nn's result lines: expected {expected} values per robot, one line per robot"
+        )
+    return [
+        math.fsum(float(v[q * NETWORK_TRIALS + k]) for v in robots for k in range(NETWORK_TRIALS))
+        / (NETWORK_ROBOTS * NETWORK_TRIALS)
+        for q in range(len(NETWORK_SLOTS))
+    ]
+
+
+def read_network_raw(raw: Path) -> dict[tuple[str, int, int], tuple[float, ...]]:
+    """A network raw TSV: per (network, seed, trial length in seconds), the ten values (``NETWORK_SLOTS``)."""
+    if not raw.is_file():
+        return {}
+    rows: dict[tuple[str, int, int], tuple[float, ...]] = {}
+    with io.StringIO(_raw_text(raw), newline="") as f:
+        reader = csv.DictReader(f, delimiter="\t")
+        missing = [
+            q for q in ("tree", "seed", "trial_s", *NETWORK_SLOTS) if q not in (reader.fieldnames or ())
+        ]
+        if missing:
+            raise UsageError(
+                f"{raw}: not a network raw TSV of footbot_nn: missing column(s) {', '.join(missing)}"
+            )
+        for line, row in enumerate(reader, start=2):
+            try:
+                key = (row["tree"], int(row["seed"]), int(row["trial_s"]))
+                rows[key] = tuple(_finite(row[q]) for q in NETWORK_SLOTS)
+            except (TypeError, ValueError):
+                raise UsageError(
+                    f"{raw}:{line}: expected numbers in the seed, trial_s and value columns (finite ones)"
+                ) from None
+    return rows
 
 
 def subs_text(library: Iterable[tuple[str, str]]) -> str:
@@ -375,23 +509,28 @@ def _finite(text: str) -> float:
 def read_foraging_raw(raw: Path) -> dict[tuple[str, int], float]:
     """The driver's raw TSV of the foraging build: per (tree, seed), the mean deliveries per robot per
     trial."""
+    return read_raw_column(raw, "foraging", "foraging")
+
+
+def read_raw_column(raw: Path, column: str, build: str) -> dict[tuple[str, int], float]:
+    """The driver's raw TSV of ``build`` (named in the message only): per (tree, seed), its ``column``."""
     if not raw.is_file():
         return {}
     rows: dict[tuple[str, int], float] = {}
     with io.StringIO(_raw_text(raw), newline="") as f:
         reader = csv.DictReader(f, delimiter="\t")
-        missing = [q for q in ("tree", "seed", "foraging", "build") if q not in (reader.fieldnames or ())]
+        missing = [q for q in ("tree", "seed", column, "build") if q not in (reader.fieldnames or ())]
         if missing:
             raise UsageError(
-                f"{raw}: not the ARGoS driver's raw TSV of the foraging build: missing column(s) "
+                f"{raw}: not the ARGoS driver's raw TSV of the {build} build: missing column(s) "
                 f"{', '.join(missing)}"
             )
         for line, row in enumerate(reader, start=2):
             try:
-                rows[(row["tree"], int(row["seed"]))] = _finite(row["foraging"])
+                rows[(row["tree"], int(row["seed"]))] = _finite(row[column])
             except (TypeError, ValueError):
                 raise UsageError(
-                    f"{raw}:{line}: expected numbers in the seed and foraging columns (finite ones)"
+                    f"{raw}:{line}: expected numbers in the seed and {column} columns (finite ones)"
                 ) from None
     return rows
 

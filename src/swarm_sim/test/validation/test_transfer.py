@@ -2,6 +2,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 
@@ -329,3 +330,72 @@ def test_a_runs_repertoire_is_read_strictly_by_the_transfer_check(tmp_path):
     path.write_text(path.read_text()[:-1] + ', "objective": "food"}')
     with pytest.raises(UsageError, match="appears twice"):
         transfer.pick_trees([run], 1)
+
+
+VALIDATION = Path(__file__).resolve().parents[4] / "docs" / "validation"
+
+
+def _result_lines(values_of_robot) -> str:
+    """footbot_nn's ``result`` lines: per robot, slot-major, its ten values in each of five trials."""
+    lines = ["ARGoS says hello"]
+    for robot in range(transfer.NETWORK_ROBOTS):
+        cells = [values_of_robot(robot, q, k) for q in range(10) for k in range(transfer.NETWORK_TRIALS)]
+        lines.append(f"result {robot} " + " ".join(repr(v) for v in cells))
+    return "\n".join(lines) + "\n"
+
+
+def test_footbot_nns_result_lines_give_each_value_per_robot_per_trial():
+    text = _result_lines(lambda robot, q, k: 10.0 * q + k + (robot == 0))
+    means = transfer.network_means(text)
+    assert means == pytest.approx([10.0 * q + 2.0 + 1.0 / 9 for q in range(10)])
+    with pytest.raises(UsageError, match="expected 50 values per robot"):
+        transfer.network_means(text.replace("result 3 ", "result 3 1.0 "))
+    with pytest.raises(UsageError, match="expected 50 values per robot"):
+        transfer.network_means("no results\n")
+
+
+def test_the_validations_network_rows_read_back_and_need_no_driver(tmp_path, monkeypatch):
+    """The committed footbot_nn rows (7 networks, seeds 1-20, 20 s and 100 s trials) read back by network,
+    seed and trial length; run_networks asks nothing of ARGoS when every row is there, names the build to
+    make when one is missing, and never writes through a planted link."""
+    committed = VALIDATION / "argos_raw_networks.tsv"
+    rows = transfer.read_network_raw(committed)
+    assert len(rows) == 7 * 20 * 2
+    first = committed.read_text().splitlines()[1].split("\t")
+    assert rows[(first[0], int(first[1]), int(first[2]))] == tuple(float(v) for v in first[3:13])
+    raw = tmp_path / "raw.tsv"
+    raw.write_bytes(committed.read_bytes())
+    harness = transfer.ArgosHarness(tmp_path / "absent_argos_eval.py")
+    harness.run_networks([first[0]], range(1, 21), int(first[2]), raw, tmp_path)  # all there: no driver
+    assert raw.read_bytes() == committed.read_bytes()
+    monkeypatch.setenv("ARGOS_PREFIX", str(tmp_path / "install"))
+    with pytest.raises(UsageError, match=r"ARGoS build not found: .*rebuild_2026\.sh"):
+        harness.run_networks([first[0]], [21], 20, raw, tmp_path)
+    # a build's files where the harness looks (none of them run: the link is refused first)
+    build = tmp_path / "bmr-2026" / "argos3" / "build"
+    monkeypatch.setenv("BT_ARGOS_DIR_MULTIFOOD", str(build.parent))
+    monkeypatch.setenv("SRAND_SHIM", str(tmp_path / "shim.so"))
+    for made in (
+        tmp_path / "install" / "bin" / "argos3",
+        build / "controllers" / "footbot_nn" / "libfootbot_nn.so",
+        build / "loop_functions" / "nn_loop_functions" / "libnn_loop_functions.so",
+        tmp_path / "shim.so",
+    ):
+        made.parent.mkdir(parents=True, exist_ok=True)
+        made.write_text("")
+    harness = transfer.ArgosHarness(Path(__file__))
+    assert harness.missing("multifood") == []
+    precious = tmp_path / "precious"
+    precious.write_text("keep me\n")
+    link = tmp_path / "linked.tsv"
+    link.symlink_to(precious)
+    with pytest.raises(OSError, match=r"linked\.tsv is a symbolic link"):
+        harness.run_networks([first[0]], [1], 20, link, tmp_path)
+    (tmp_path / "argos_network_run").symlink_to(precious)
+    with pytest.raises(OSError, match="argos_network_run is a symbolic link"):
+        harness.run_networks([first[0]], [1], 20, tmp_path / "new.tsv", tmp_path)
+    assert precious.read_text() == "keep me\n" and not (tmp_path / "new.tsv").exists()
+    bad = tmp_path / "bad.tsv"
+    bad.write_text("tree\tseed\n")
+    with pytest.raises(UsageError, match="not a network raw TSV of footbot_nn: missing column"):
+        transfer.read_network_raw(bad)
