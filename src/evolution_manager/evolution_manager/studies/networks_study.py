@@ -54,7 +54,6 @@ from evolution_manager.studies.planning import PLAN_FILE, document_head, shared_
 from evolution_manager.studies.significance import Comparison, compare, holm, markdown_table
 from swarm_ros.safe_paths import make_folder
 from swarm_sim.model import FAMILIES
-from swarm_sim.validation.reference import NETWORK_PREFIX
 
 STUDY = "bt-vs-nn"
 NETWORKS_STAGE = 6
@@ -295,8 +294,8 @@ def best_controllers(
                 assert isinstance(summary, dict)  # a finished tree run's summary
                 subject = str(summary["objectives"][objective]["best_tree"])
             else:
-                weights = load_network(Path(root) / folder / "best" / f"{objective}.json").weights
-                subject = f"{NETWORK_PREFIX} " + " ".join(repr(w) for w in weights)
+                network = load_network(Path(root) / folder / "best" / f"{objective}.json")
+                subject = networks_transfer.network_subject(network.weights)
             held = row["heldout_best_fitness"]
             bests.append(
                 networks_transfer.Best(

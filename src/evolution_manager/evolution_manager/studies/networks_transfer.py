@@ -59,6 +59,11 @@ class Best:
     heldout: float | None
 
 
+def network_subject(weights: Sequence[float]) -> str:
+    """A network as the harness reads it: ``nn: w1 ... w56``, each weight as Python prints it (exact)."""
+    return f"{validation.NETWORK_PREFIX} " + " ".join(repr(float(w)) for w in weights)
+
+
 def task_of(objective: str) -> str:
     """The task the study evolves ``objective`` on."""
     return "foraging" if objective == "foraging" else "primitives"
@@ -156,4 +161,13 @@ def section(root: Path, bests: Sequence[Best], seeds: Sequence[int], profile: st
     return "\n".join(lines) + "\n" + (tail if missing else "")
 
 
-__all__ = ["Best", "argos_values", "comparisons", "measure", "section", "task_of", "trees_raw"]
+__all__ = [
+    "Best",
+    "argos_values",
+    "comparisons",
+    "measure",
+    "network_subject",
+    "section",
+    "task_of",
+    "trees_raw",
+]
