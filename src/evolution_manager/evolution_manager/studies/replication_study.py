@@ -32,6 +32,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from statistics import median
 
+import numpy as np
+
 from bt_controller.draws import RUN_STUDY, derive_seed
 from evolution_manager.errors import EvolutionError, UsageError
 from evolution_manager.evolution.run_config import RunConfig
@@ -291,8 +293,6 @@ POOLED_INTERVAL_SEED = 2024
 def pooled_from_rows(table: Sequence[dict[str, str]]) -> str:
     """The report's best-of-seeds lines from ``runs.csv`` rows: per kind with best-of-seeds runs, its
     held-out median with a 95 % bootstrap interval, beside the per-seed libraries' held-out medians."""
-    import numpy as np
-
     lines = []
     for kind, _ in KINDS:
         pooled = [
