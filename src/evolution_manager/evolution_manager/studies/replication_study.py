@@ -19,7 +19,9 @@ fitness, the in-run one and the ARGoS score: a linear mixed model with the libra
 one-sided tests on that estimate, at ``EQUIVALENCE_MARGIN``). The ARGoS score is every run's best forager
 in the authors' 2024 foraging build, its library given as their sub-behaviours file (the foraging study's
 transfer, ``foraging_transfer``): ``report DIR --argos-eval DRIVER`` scores the runs not yet scored, and
-the rows stay in ``argos_raw_<library>.tsv``, so a later report needs no ARGoS.
+the rows stay in ``argos_raw_<library>.tsv``, so a later report needs no ARGoS. The best-of-seeds condition
+(``pooled_rows``): the foraging study's own runs over its libraries built from every seed, read from the
+folder the plan names, listed beside the per-seed libraries and left out of the model.
 """
 
 from __future__ import annotations
