@@ -424,8 +424,7 @@ def build_report(
     bests = best_controllers(root, found, document["objectives"])
     if argos_eval is not None:
         networks_transfer.measure(root, bests, argos_eval, argos_seeds, argos_jobs)
-    scored = any(networks_transfer.trees_raw(root, task).exists() for task in networks_transfer.TRIAL_SECONDS)
-    if scored or (root / networks_transfer.NETWORKS_RAW).exists():
+    if networks_transfer.has_rows(root):
         argos = "\n" + networks_transfer.section(root, bests, argos_seeds, document["profile"])
     else:
         argos = ""

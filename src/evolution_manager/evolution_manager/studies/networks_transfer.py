@@ -74,6 +74,12 @@ def trees_raw(root: Path, task: str) -> Path:
     return Path(root) / f"argos_raw_trees_{task}.tsv"
 
 
+def has_rows(root: Path) -> bool:
+    """Whether the study's folder holds any ARGoS rows (then its report has the ARGoS section)."""
+    raws = [trees_raw(root, task) for task in TRIAL_SECONDS] + [Path(root) / NETWORKS_RAW]
+    return any(raw.exists() for raw in raws)
+
+
 def measure(
     root: Path, bests: Sequence[Best], driver: str | None, seeds: Sequence[int], jobs: int = 1
 ) -> None:
@@ -116,15 +122,22 @@ def comparisons(
     root: Path, bests: Sequence[Best], seeds: Sequence[int], profile: str
 ) -> tuple[list[tuple[Best, validation.Comparison]], int]:
     """Each controller with every seed in ARGoS, ours beside it on its objective; and how many lack rows."""
-    done = []
-    for best in bests:
-        values = argos_values(root, best, seeds)
-        if values is None:
-            continue
-        config = task_named(task_of(best.objective)).config(profile)
-        ours = our_estimates([best.subject], list(seeds), OUR_TRIALS, config)[best.subject][best.objective]
-        theirs = validation.estimate(values)
-        done.append((best, validation.Comparison(best.subject, best.objective, ours, theirs)))
+    scored = [(best, values) for best in bests if (values := argos_values(root, best, seeds)) is not None]
+    ours: dict[str, dict[str, validation.Estimate]] = {}
+    for task in TRIAL_SECONDS:  # one batch per task
+        subjects = list(dict.fromkeys(b.subject for b, _ in scored if task_of(b.objective) == task))
+        if subjects:
+            config = task_named(task).config(profile)
+            ours.update(our_estimates(subjects, list(seeds), OUR_TRIALS, config))
+    done = [
+        (
+            b,
+            validation.Comparison(
+                b.subject, b.objective, ours[b.subject][b.objective], validation.estimate(v)
+            ),
+        )
+        for b, v in scored
+    ]
     return done, len(bests) - len(done)
 
 
@@ -165,6 +178,7 @@ __all__ = [
     "Best",
     "argos_values",
     "comparisons",
+    "has_rows",
     "measure",
     "network_subject",
     "section",

@@ -30,7 +30,7 @@ import argparse
 import csv
 import io
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from statistics import median
 
@@ -257,6 +257,11 @@ def mixed_comparison(
     return estimate, low, high, float(fit.pvalues["gpfnd"]), max(p_lower, p_upper)
 
 
+def _heldout(rows: Iterable[dict[str, str]]) -> list[float]:
+    """The held-out best fitness of each of ``rows`` that has one."""
+    return [float(row["heldout_best_fitness"]) for row in rows if row["heldout_best_fitness"]]
+
+
 def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     """The report's per-library table and its QD-against-GP_fnd verdicts, from ``runs.csv`` rows."""
     lines = [
@@ -266,7 +271,7 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     for library in dict.fromkeys(row["library"] for row in table):
         mine = [row for row in table if row["library"] == library]
         best = median(float(row["best_fitness"]) for row in mine)
-        held = [float(row["heldout_best_fitness"]) for row in mine if row["heldout_best_fitness"]]
+        held = _heldout(mine)
         held_text = f"{median(held):.4g}" if held else "n/a"
         argos = [float(row[ARGOS]) for row in mine if row.get(ARGOS)]
         argos_text = f"{median(argos):.4g} ({len(argos)})" if argos else "n/a"
@@ -297,26 +302,16 @@ def pooled_from_rows(table: Sequence[dict[str, str]]) -> str:
     held-out median with a 95 % bootstrap interval, beside the per-seed libraries' held-out medians."""
     lines = []
     for kind, _ in KINDS:
-        pooled = [
-            float(r["heldout_best_fitness"])
-            for r in table
-            if r["library"] == kind and r["heldout_best_fitness"]
-        ]
+        pooled = _heldout(r for r in table if r["library"] == kind)
         if not pooled:
             continue
         bounds = intervals.interval(pooled, "median", np.random.default_rng(POOLED_INTERVAL_SEED))
         ci = "" if bounds is None else f" (95 % CI {bounds[0]:.3f} to {bounds[1]:.3f})"
-        per_seed = [
-            median(values)
-            for library in dict.fromkeys(r["library"] for r in table if r["library"].startswith(f"{kind}-s"))
-            if (
-                values := [
-                    float(r["heldout_best_fitness"])
-                    for r in table
-                    if r["library"] == library and r["heldout_best_fitness"]
-                ]
-            )
-        ]
+        by_library: dict[str, list[dict[str, str]]] = {}
+        for r in table:
+            if r["library"].startswith(f"{kind}-s"):
+                by_library.setdefault(r["library"], []).append(r)
+        per_seed = [median(held) for mine in by_library.values() if (held := _heldout(mine))]
         line = f"- {kind} from every seed: held-out median {median(pooled):.3f}{ci}, {len(pooled)} runs"
         if per_seed:
             below = sum(1 for m in per_seed if m < median(pooled))

@@ -339,10 +339,7 @@ class ArgosHarness:
             command += ["--build", build]
         if subs is not None:
             command += ["--subs", str(subs)]
-        done = subprocess.run(command, capture_output=True, text=True, check=False)
-        if done.returncode != 0:
-            last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
-            raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
+        _run_driver(command)
 
     def run_networks(
         self, networks: Sequence[str], seeds: Sequence[int], trial_s: int, raw: Path, work: Path
@@ -366,10 +363,7 @@ class ArgosHarness:
             weights = network.removeprefix(validation.NETWORK_PREFIX).strip()
             command = ["python3", str(self.driver), "eval", "--build", NETWORK_BUILD, "--nn", weights]
             command += ["--seed", str(seed), "--trial-s", str(trial_s), "--keep", str(keep)]
-            done = subprocess.run(command, capture_output=True, text=True, check=False)
-            if done.returncode != 0:
-                last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
-                raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
+            done = _run_driver(command)
             per_gap = [
                 network_means((keep / "txt" / f"result_gap{gap:g}.txt").read_text()) for gap in NETWORK_GAPS
             ]
@@ -378,6 +372,15 @@ class ArgosHarness:
             cells = [network, str(seed), str(trial_s), *(f"{v:.9g}" for v in values)]
             cells += [f"{v:.9g}" for g in per_gap for v in g] + [f"{wall:.3f}"]
             _append(raw, "\t".join(cells) + "\n")
+
+
+def _run_driver(command: list[str]) -> subprocess.CompletedProcess[str]:
+    """Run the ARGoS driver; UsageError with its last line of output when it fails."""
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        last = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+        raise UsageError(f"the ARGoS driver failed (exit {done.returncode}): {last[0]}")
+    return done
 
 
 def _append(path: Path, text: str) -> None:
