@@ -69,9 +69,11 @@ A composite left with one child becomes that child (same statuses, same memory).
 subtree shows its parent on every tick, so it is sound wherever the subtree sits; the knowledge and blindness
 it relies on are facts about every run of the tree, which other rewrites keep (each keeps statuses), so rules
 can be applied one after the other until none applies. All passes are iterative (no recursion, whatever the
-depth), but each rewrite re-analyses the whole tree, so the work grows with the square of the size: trees of
-more than ``MAX_SIMPLIFY_NODES`` nodes are refused (TreeLimitError; a chain collapsing level by level at that
-size takes about a minute on one core, a random tree of that size a few seconds).
+depth). After each rewrite only the path above it and the subtrees whose knowledge it changed are analysed
+again (``_analyse``), which on evolved trees is a small part of them; but a chain collapsing level by level
+is analysed almost whole after each of its rewrites, so the work can grow with the square of the size: trees
+of more than ``MAX_SIMPLIFY_NODES`` nodes are refused (TreeLimitError; such a chain at that size takes 10-60 s
+on one core, depending on the machine, a random tree of that size a few seconds).
 
 Blackboard facts (``WORLD_FACTS``, ``WORLD_IMPLICATIONS``) hold in every profile: the two regions are
 disjoint (r < 500 mm against r >= 1000 mm), a direction is left or right but not both
@@ -85,7 +87,7 @@ and the flag of the same sensing step (no tick falls on a trial's unsensed first
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from bt_controller.errors import TreeLimitError
 from bt_controller.language.tree import MAX_NODES, Action, Composite, Condition, Node, draw_key_at
@@ -140,10 +142,13 @@ class _N:
     post_s: frozenset[Literal] = frozenset()
     post_f: frozenset[Literal] = frozenset()
     size: int = 1
-    position: int = 0
     shape: int = 0  # equal for equal subtrees (interned structure)
     parent: _N | None = None
     slot: int = 0  # index among the parent's children
+    seen: tuple[Knowledge, bool] | None = None  # what its last analysis was given: (knowledge, blind)
+    # its rewrites (``_rewrites``), and whether its subtree has none: made with each analysis of the node
+    rewrites: list[tuple[int, str, _N]] = field(default_factory=list)
+    quiet: bool = False
 
 
 def _from_node(tree: Node) -> _N:
@@ -198,11 +203,18 @@ class _Facts:
         for a, b in implications:
             self.implies.setdefault(_C[a], set()).add(_C[b])
             self.implied_by.setdefault(_C[b], set()).add(_C[a])
+        self._closed: dict[frozenset[Literal], frozenset[Literal]] = {}
 
     def close(self, known: frozenset[Literal]) -> frozenset[Literal]:
         """Add what the facts imply, until nothing more follows: a true condition makes every condition it
         excludes false and every condition it implies true; a false one makes every condition implying it
         false."""
+        closed = self._closed.get(known)
+        if closed is None:
+            closed = self._closed[known] = self._close(known)
+        return closed
+
+    def _close(self, known: frozenset[Literal]) -> frozenset[Literal]:
         while True:
             extra: set[Literal] = set()
             for c, v in known:
@@ -232,18 +244,25 @@ class _Visit:
     status: frozenset[str] = frozenset()
 
 
-def _analyse(root: _N, facts: _Facts) -> None:
-    """Fill in every node's statuses, purity, knowledge, blindness, post-conditions, size, position, shape
-    and parent; one iterative pass (pre-order on the way down, children before parents on the way up)."""
-    position = 0
-    shapes: dict[tuple, int] = {}  # subtree structure -> a small integer, equal for equal subtrees
+def _analyse(root: _N, facts: _Facts, shapes: dict[tuple, int]) -> list[_N]:
+    """Fill in every node's statuses, purity, knowledge, blindness, post-conditions, size, shape and parent;
+    one iterative pass (pre-order on the way down, children before parents on the way up). ``shapes`` maps a
+    subtree's structure to a small integer, equal for equal subtrees; keep it from one analysis to the next.
+
+    A subtree given the same knowledge and blindness as at its last analysis keeps that analysis: what a node
+    shows depends on nothing else, a subtree's nodes are never changed (a rewrite builds new nodes on the path
+    above it), and every node stands once in the tree. So after a rewrite only the path above it and the
+    subtrees whose knowledge it changed are analysed again, not the whole tree. Returns the nodes analysed
+    anew, children before parents."""
+    anew: list[_N] = []
 
     def enter(n: _N, fresh: Knowledge, blind: bool, parent: _N | None, slot: int) -> _Visit | None:
-        nonlocal position
-        n.position = position
-        position += 1
+        n.parent, n.slot = parent, slot
+        if n.seen is not None and n.seen[1] == blind and n.seen[0] == fresh:
+            return None
+        n.seen = (fresh, blind)
         n.fresh = None if fresh is None else facts.close(fresh)
-        n.blind, n.parent, n.slot = blind, parent, slot
+        n.blind = blind
         if n.kind == "cond":
             c = _C[n.name]
             n.post_s, n.post_f = frozenset({(c, True)}), frozenset({(c, False)})
@@ -257,6 +276,7 @@ def _analyse(root: _N, facts: _Facts) -> None:
                 n.status = frozenset({F})
             else:
                 n.status = frozenset({S, F})
+            anew.append(n)
             return None
         if n.kind == "act":
             # Entered afresh it starts and runs; resumed, it succeeds.
@@ -264,6 +284,7 @@ def _analyse(root: _N, facts: _Facts) -> None:
             n.pure, n.has_prob, n.size = n.fresh is None, False, 1
             n.shape = shapes.setdefault(("act", n.name), len(shapes))
             n.post_s = n.post_f = frozenset()
+            anew.append(n)
             return None
         return _Visit(n, knowledge=n.fresh)
 
@@ -293,6 +314,7 @@ def _analyse(root: _N, facts: _Facts) -> None:
         n.has_prob = n.kind == "prob" or any(c.has_prob for c in kids)
         n.size = 1 + sum(c.size for c in kids)
         n.shape = shapes.setdefault((n.kind, n.draw, *(c.shape for c in kids)), len(shapes))
+        anew.append(n)
 
     top = enter(root, frozenset(), True, None, 0)
     stack = [top] if top is not None else []
@@ -329,6 +351,7 @@ def _analyse(root: _N, facts: _Facts) -> None:
             continue
         finish(visit)
         stack.pop()
+    return anew
 
 
 def _meet(sets: list[frozenset[Literal]]) -> frozenset[Literal]:
@@ -432,6 +455,32 @@ def _replace(root: _N, target: _N, replacement: _N) -> _N:
     return new
 
 
+def _analyse_rewrites(root: _N, facts: _Facts, shapes: dict[tuple, int], kept_whole: frozenset[int]) -> None:
+    """Analyse the tree (``_analyse``) and find the rewrites of each node analysed anew (none for the nodes
+    of ``kept_whole``) and whether its subtree has any."""
+    for n in _analyse(root, facts, shapes):  # children before parents
+        n.rewrites = [] if n.orig in kept_whole else _rewrites(n)
+        n.quiet = not n.rewrites and all(c.quiet for c in n.children)
+
+
+def _candidates(root: _N) -> list[tuple[int, int, str, _N, _N]]:
+    """Every rewrite in the tree as (priority, minus the node's pre-order index, rule, node, replacement): the
+    order to try them in (later positions first: they shifted fewer probabilistic nodes when positions
+    mattered). Subtrees without a rewrite are passed over."""
+    out: list[tuple[int, int, str, _N, _N]] = []
+    stack = [(root, 0)]
+    while stack:
+        n, position = stack.pop()
+        if n.quiet:
+            continue
+        out.extend((priority, -position, rule, n, replacement) for priority, rule, replacement in n.rewrites)
+        below = position + n.size  # one past the subtree; children placed from the last back
+        for child in reversed(n.children):
+            below -= child.size
+            stack.append((child, below))
+    return out
+
+
 def _keeps_positions(root: _N) -> bool:
     """Every probabilistic node sits at its original pre-order index."""
     return all(n.kind != "prob" or n.orig == i for i, n in enumerate(_walk(root)))
@@ -483,16 +532,11 @@ def simplify_with_rules(
     known = _Facts(facts, implications)
     root = _from_node(tree)
     kept_whole = _kept_whole(tree, whole)
+    shapes: dict[tuple, int] = {}
     applied: list[str] = []
     while True:
-        _analyse(root, known)
-        candidates = []
-        for n in _walk(root):
-            if n.orig in kept_whole:
-                continue
-            for priority, rule, replacement in _rewrites(n):
-                # Later positions first (they shifted fewer probabilistic nodes when positions mattered).
-                candidates.append((priority, -n.position, rule, n, replacement))
+        _analyse_rewrites(root, known, shapes, kept_whole)
+        candidates = _candidates(root)
         candidates.sort(key=lambda c: (c[0], c[1]))
         for _, _, rule, target, replacement in candidates:
             new_root = _replace(root, target, replacement)

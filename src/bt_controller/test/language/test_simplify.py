@@ -14,7 +14,19 @@ from bt_controller.draws import choose, derive
 from bt_controller.interpreters.semantics import new_counts, new_memory, tick, wheels
 from bt_controller.language.formats import from_xml, to_ascii, to_dot, to_xml
 from bt_controller.language.random_trees import random_tree_grow
-from bt_controller.language.simplify import WORLD_FACTS, WORLD_IMPLICATIONS, simplify, simplify_with_rules
+from bt_controller.language.simplify import (
+    _N,
+    WORLD_FACTS,
+    WORLD_IMPLICATIONS,
+    _analyse_rewrites,
+    _candidates,
+    _Facts,
+    _from_node,
+    _replace,
+    _walk,
+    simplify,
+    simplify_with_rules,
+)
 from bt_controller.language.tree import (
     Action,
     Composite,
@@ -191,6 +203,59 @@ def test_probabilistic_nodes_keep_their_draw_key_and_children() -> None:
             assert before.get(i) == draw, (text, to_text(kept))
         if "@" not in text:
             assert "@" not in to_text(kept)
+
+
+def _scratch_analysis(root: _N, facts: _Facts) -> list[tuple]:
+    """Every node's analysis, in pre-order, from a copy of the tree that was never analysed."""
+
+    def copy(n: _N) -> _N:
+        return _N(n.kind, n.name, [copy(c) for c in n.children], n.orig, n.draw)
+
+    fresh = copy(root)
+    _analyse_rewrites(fresh, facts, {}, frozenset())
+    return _analysis(fresh)
+
+
+def _analysis(root: _N) -> list[tuple]:
+    """Each node's analysed fields in pre-order; shapes as the first pre-order index of their shape (the
+    integers themselves differ between analyses), rewrites by rule name."""
+    nodes = _walk(root)
+    first_of_shape: dict[int, int] = {}
+    return [
+        (
+            n.kind, n.name, n.status, n.pure, n.has_prob, n.fresh, n.blind, n.post_s, n.post_f, n.size,
+            first_of_shape.setdefault(n.shape, i), tuple(rule for _, rule, _ in n.rewrites), n.quiet,
+        )
+        for i, n in enumerate(nodes)
+    ]  # fmt: skip
+
+
+def test_each_analysis_after_a_rewrite_is_the_analysis_from_scratch() -> None:
+    """The simplifier analyses again only what a rewrite changed (``_analyse``) and looks for rewrites only
+    in subtrees that have some (``_candidates``). Following the rewrites ``simplify`` makes on random trees,
+    after each one the kept analysis of every node equals a fresh one, and the rewrites found equal those of
+    a walk over every node."""
+    facts = _Facts(WORLD_FACTS, WORLD_IMPLICATIONS)
+    steps = 0
+    for tree in random_trees(13, 400, keyed=0.2):
+        root = _from_node(tree)
+        shapes: dict[tuple, int] = {}
+        while True:
+            _analyse_rewrites(root, facts, shapes, frozenset())
+            assert _analysis(root) == _scratch_analysis(root, facts), to_text(tree)
+            everywhere = [
+                (priority, -position, rule, n, replacement)
+                for position, n in enumerate(_walk(root))
+                for priority, rule, replacement in n.rewrites
+            ]
+            found = _candidates(root)
+            assert sorted(found, key=lambda c: (c[0], c[1])) == sorted(everywhere, key=lambda c: (c[0], c[1]))
+            if not found:
+                break
+            _, _, _, target, replacement = min(found, key=lambda c: (c[0], c[1]))
+            root = _replace(root, target, replacement)
+            steps += 1
+    assert steps > 300  # the trees are rewritten, not only analysed once
 
 
 def test_simplify_is_idempotent_and_deterministic() -> None:
