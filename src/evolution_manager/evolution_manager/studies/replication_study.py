@@ -293,6 +293,33 @@ def tables_from_rows(table: Sequence[dict[str, str]]) -> tuple[str, str]:
     return "\n".join(lines) + "\n", "\n".join(verdicts) + "\n"
 
 
+AGREEMENT_WIDTH = 0.1
+"""The width, in deliveries per robot per trial, beyond which ``agreement_from_rows`` names a run."""
+
+
+def agreement_from_rows(table: Sequence[dict[str, str]]) -> str:
+    """The report's line on ARGoS against our held-out score, run by run, from ``runs.csv`` rows (a run is
+    named by its arm and seed): the mean absolute difference over the per-seed runs that have both, the
+    largest, and the runs beyond ``AGREEMENT_WIDTH``. The two are estimates on different trials (ARGoS's
+    seeds, our held-out scenarios), so a difference is the two estimates' noise as well as any disagreement
+    of the models."""
+    differences = [
+        (f"{row['arm']}, seed {row['seed']}", float(row[ARGOS]) - float(row["heldout_best_fitness"]))
+        for row in table
+        if row.get(ARGOS) and row["heldout_best_fitness"] and not is_pooled(row)
+    ]
+    if not differences:
+        return "No run has both an ARGoS score and a held-out score yet.\n"
+    sizes = [abs(d) for _, d in differences]
+    beyond = [f"{name} ({d:+.3f})" for name, d in differences if abs(d) > AGREEMENT_WIDTH]
+    text = (
+        f"ARGoS minus held-out, over the {len(differences)} runs that have both: mean absolute difference "
+        f"{sum(sizes) / len(sizes):.3f}, largest {max(sizes):.3f} deliveries per robot per trial; "
+        f"{len(differences) - len(beyond)} of {len(differences)} within {AGREEMENT_WIDTH}"
+    )
+    return text + (f" (beyond it: {', '.join(beyond)}).\n" if beyond else ".\n")
+
+
 POOLED_INTERVAL_SEED = 2024
 """The bootstrap generator's seed for each best-of-seeds interval (``numpy.random.default_rng``)."""
 
@@ -383,7 +410,9 @@ def build_report(
         "run's library given as their sub-behaviours file), the mean deliveries per robot per trial over "
         "the seeds; rows in `argos_raw_<library>.tsv` (`report DIR --argos-eval DRIVER` "
         f"scores the runs not yet scored: {unscored} of {per_seed_runs} here).\n\n"
-        f"{verdicts}"
+        f"{verdicts}\n"
+        "## ARGoS against held-out, run by run\n\n"
+        f"{agreement_from_rows(table)}"
     )
     write_atomic(root / "report.md", text)
     return root / "report.md"

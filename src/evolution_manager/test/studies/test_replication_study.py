@@ -155,6 +155,24 @@ def test_the_report_tables_recompute_from_runs_csv(tmp_path):
     assert per_library.count("\n") == 2 + 12 and verdicts.count("TOST") == 3
 
 
+def test_the_argos_agreement_line_names_the_runs_beyond_its_width():
+    def row(arm: str, library: str, held: str, argos: str) -> dict[str, str]:
+        return {"arm": arm, "library": library, "seed": str(len(arm) + len(held)), "best_fitness": "1.0",
+                "heldout_best_fitness": held, replication_study.ARGOS: argos}  # fmt: skip
+
+    table = [
+        row("hier-qd8-s0", "qd8-s0", "1.0", "1.05"),
+        row("hier-qd8-s0", "qd8-s0", "0.5", "0.7"),
+        row("hier-gpfnd8-s0", "gpfnd8-s0", "1.2", ""),  # not scored in ARGoS: left out
+        row("hier-qd8", "qd8", "1.0", "2.0"),  # best-of-seeds: left out
+    ]
+    line = replication_study.agreement_from_rows(table)
+    assert "over the 2 runs that have both: mean absolute difference 0.125, largest 0.200" in line
+    assert "1 of 2 within 0.1 (beyond it: hier-qd8-s0, seed 14 (+0.200))." in line
+    assert "No run" in replication_study.agreement_from_rows(table[2:])
+    assert "beyond" not in replication_study.agreement_from_rows(table[:1])
+
+
 REPLICATION = Path(__file__).resolve().parents[4] / "experiments" / "foraging-replication"
 FORAGING_RAW = ["tree", "seed", "chromosome", "argos_wall_s", "foraging", "movement", "rotation",
                 "conditionality", "foraging_trials", "build", "subs"]  # fmt: skip
