@@ -38,6 +38,7 @@ ROSDEP_KEYS = {
     "dask_jobqueue": "python3-dask-jobqueue",
     "statsmodels": "python3-statsmodels",
     "pandas": "python3-pandas",
+    "threadpoolctl": "python3-threadpoolctl",
 }
 """Python libraries by import name, with the key their package.xml dependency uses."""
 RUN_DEPENDENCIES = ("depend", "exec_depend")

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from deap import base, tools
 from killed_runs import straight_and_killed
+from threadpoolctl import threadpool_info
 
 from bt_controller.interpreters import N_WEIGHTS, load_network
 from evolution_manager.evolution.networks import (
@@ -127,6 +128,21 @@ def _files(root):  # type: ignore[no-untyped-def]  # a test helper, untyped like
     names = ("evaluations.csv", "progress.csv", "summary.json", "checkpoint.json", "best/food.json",
              "repertoire_food.json")  # fmt: skip
     return {name: (root / name).read_bytes() for name in names}
+
+
+def test_a_run_steps_its_optimiser_on_one_blas_thread_and_gives_the_threads_back(tmp_path):
+    """The optimisers' eigendecompositions run on one BLAS thread (``NetworkRun.execute``); after the run the
+    process has its BLAS threads as before."""
+    before = [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    assert before  # numpy's BLAS is loaded
+    config = NetworkConfig("nn-cmaes", "food", evaluations=60, seed=3, trials=1)
+    run = NetworkRun.start(config, tmp_path / "run", BatchEvaluator(config.world()))
+    during: list[list[int]] = []
+    run.execute(on_batch=lambda *_: during.append(
+        [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+    ))  # fmt: skip
+    assert during and all(threads == [1] * len(before) for threads in during)
+    assert [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"] == before
 
 
 @pytest.mark.parametrize("algorithm", ["nn-ga", "nn-cmaes", "nn-qd"])
