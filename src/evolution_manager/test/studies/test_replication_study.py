@@ -223,9 +223,9 @@ def test_every_runs_best_forager_takes_its_argos_score_from_the_drivers_rows(tmp
 
 
 def test_the_committed_reports_tables_are_its_runs_csv():
-    """docs/results/foraging/replication: the report's per-library table, best-of-seeds lines and verdicts
-    recomputed from its runs.csv, and the README's range of the per-seed libraries' held-out medians from
-    the same table."""
+    """docs/results/foraging/replication: the report's per-library table, best-of-seeds lines, verdicts and
+    ARGoS agreement recomputed from its runs.csv, and the README's range of the per-seed libraries' held-out
+    medians and its mean ARGoS difference from the same table."""
     folder = Path(__file__).resolve().parents[4] / "docs" / "results" / "foraging" / "replication"
     table = list(csv.DictReader(io.StringIO((folder / "runs.csv").read_text())))
     report = (folder / "report.md").read_text()
@@ -239,3 +239,7 @@ def test_the_committed_reports_tables_are_its_runs_csv():
     ]
     readme = " ".join((folder / "README.md").read_text().split())
     assert f"range from {min(medians):.2f} to {max(medians):.2f} deliveries" in readme
+    assert replication_study.agreement_from_rows(table) in report
+    both = [row for row in per_seed if row[replication_study.ARGOS] and row["heldout_best_fitness"]]
+    sizes = [abs(float(row[replication_study.ARGOS]) - float(row["heldout_best_fitness"])) for row in both]
+    assert f"mean absolute difference {sum(sizes) / len(sizes):.3f} over {len(both)} runs" in readme
