@@ -48,7 +48,8 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -574,19 +575,12 @@ class NetworkRun(CountedRun[list[float], Evaluated]):
         self.grid = {bin_of(e.descriptors): e for e in members if e.descriptors is not None}
 
     # Execution ---------------------------------------------------------------------------------------
-    def execute(
-        self,
-        on_batch: Callable[[int, int], None] | None = None,
-        checkpoint_interval: float = 30.0,
-        stop_after: int | None = None,
-        before_checkpoint: Callable[[], None] | None = None,
-    ) -> None:
-        """``RunLoop.execute`` with one BLAS thread: the optimisers' linear algebra is an eigendecomposition
-        of a 56 x 56 covariance a generation (pycma; pyribs' CMA-ME emitters), on which OpenBLAS's threads
-        cost more than they give (0.23 ms on one thread, 1.7 ms on two, and far more beside other work:
+    def _batch_context(self) -> AbstractContextManager[object]:
+        """One BLAS thread for the batches: the optimisers' linear algebra is an eigendecomposition of a 56 x
+        56 covariance a generation (pycma; pyribs' CMA-ME emitters), on which OpenBLAS's threads cost more
+        than they give (0.23 ms on one thread, 1.7 ms on two, and far more beside other work:
         docs/performance.md). The results are the same."""
-        with threadpool_limits(limits=1, user_api="blas"):
-            super().execute(on_batch, checkpoint_interval, stop_after, before_checkpoint)
+        return threadpool_limits(limits=1, user_api="blas")
 
     def _ask(self) -> list[list[float]]:
         self._counted = not self.optimiser.initial()

@@ -27,6 +27,7 @@ import tempfile
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Generic, Protocol, Self, TypeVar
@@ -421,6 +422,10 @@ class RunLoop(ABC, Generic[_Asked, _Answer]):
     def checkpoint(self) -> None:
         """Write the checkpoint atomically (only between batches)."""
 
+    def _batch_context(self) -> AbstractContextManager[object]:
+        """What ``execute`` runs its batches within: nothing here (a network run: one BLAS thread)."""
+        return nullcontext()
+
     # The loop ----------------------------------------------------------------------------------------
     def execute(
         self,
@@ -436,21 +441,22 @@ class RunLoop(ABC, Generic[_Asked, _Answer]):
         ``before_checkpoint()`` before every checkpoint (to put what else records the run on disk first).
         """
         last_checkpoint = time.monotonic()
-        while not self.done and (stop_after is None or self.evaluations < stop_after):
-            started = time.perf_counter()
-            batch = self._ask()
-            asked = time.perf_counter()
-            answers = self._evaluate(batch)
-            evaluated = time.perf_counter()
-            self._tell(batch, answers)
-            finished = time.perf_counter()
-            self.timing.evaluator += evaluated - asked
-            self.timing.manager += (asked - started) + (finished - evaluated)
-            if on_batch is not None:
-                on_batch(*self.progress())
-            if time.monotonic() - last_checkpoint >= checkpoint_interval:
-                self._save(before_checkpoint)
-                last_checkpoint = time.monotonic()
+        with self._batch_context():
+            while not self.done and (stop_after is None or self.evaluations < stop_after):
+                started = time.perf_counter()
+                batch = self._ask()
+                asked = time.perf_counter()
+                answers = self._evaluate(batch)
+                evaluated = time.perf_counter()
+                self._tell(batch, answers)
+                finished = time.perf_counter()
+                self.timing.evaluator += evaluated - asked
+                self.timing.manager += (asked - started) + (finished - evaluated)
+                if on_batch is not None:
+                    on_batch(*self.progress())
+                if time.monotonic() - last_checkpoint >= checkpoint_interval:
+                    self._save(before_checkpoint)
+                    last_checkpoint = time.monotonic()
         self._save(before_checkpoint)
 
     def _save(self, before_checkpoint: Callable[[], None] | None) -> None:
