@@ -86,8 +86,8 @@ and the flag of the same sensing step (no tick falls on a trial's unsensed first
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 from bt_controller.errors import TreeLimitError
 from bt_controller.language.tree import MAX_NODES, Action, Composite, Condition, Node, draw_key_at
@@ -147,7 +147,7 @@ class _N:
     slot: int = 0  # index among the parent's children
     seen: tuple[Knowledge, bool] | None = None  # what its last analysis was given: (knowledge, blind)
     # its rewrites (``_rewrites``), and whether its subtree has none: made with each analysis of the node
-    rewrites: list[tuple[int, str, _N]] = field(default_factory=list)
+    rewrites: Sequence[tuple[int, str, _N]] = ()
     quiet: bool = False
 
 
@@ -474,10 +474,10 @@ def _candidates(root: _N) -> list[tuple[int, int, str, _N, _N]]:
         if n.quiet:
             continue
         out.extend((priority, -position, rule, n, replacement) for priority, rule, replacement in n.rewrites)
-        below = position + n.size  # one past the subtree; children placed from the last back
-        for child in reversed(n.children):
-            below -= child.size
-            stack.append((child, below))
+        child_position = position + 1
+        for child in n.children:
+            stack.append((child, child_position))
+            child_position += child.size
     return out
 
 
