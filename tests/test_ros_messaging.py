@@ -13,6 +13,7 @@ from rclpy.node import Node
 from swarm_msgs.msg import RangeAndBearing, RangeAndBearingReadings, WheelCommand
 from swarm_msgs.srv import LoadTree
 from swarm_ros.isolation import domain_environment, reserved_domain
+from swarm_ros.services import call_until_answered
 
 RELAY = Path(__file__).parent / "nodes" / "relay_node.py"
 
@@ -70,10 +71,16 @@ def test_messages_and_service_cross_processes(relay, node):
     client = node.create_client(LoadTree, "/footbot_0/load_tree")
     assert client.wait_for_service(timeout_sec=20), "the relay's load_tree service never appeared"
 
-    future = client.call_async(LoadTree.Request(tree="sel(  seq(in_nest,\n stop), forward)"))
-    assert spin_until(executor, future.done, 10), "no answer to load_tree"
-    assert future.result().success
-    assert future.result().canonical_tree == "sel( seq(in_nest, stop), forward)"
+    # load_tree is idempotent, so a request whose answer was lost to discovery is simply sent again.
+    loaded = call_until_answered(
+        client,
+        LoadTree.Request(tree="sel(  seq(in_nest,\n stop), forward)"),
+        lambda future, seconds: spin_until(executor, future.done, seconds),
+        30.0,
+    )
+    assert loaded is not None, "no answer to load_tree"
+    assert loaded.success
+    assert loaded.canonical_tree == "sel( seq(in_nest, stop), forward)"
 
     readings = RangeAndBearingReadings(step=7)
     readings.readings = [
