@@ -24,6 +24,7 @@ from swarm_msgs.srv import StartTrial
 from swarm_ros.isolation import reserved_domain
 from swarm_ros.lifecycle import LifecycleClient
 from swarm_ros.qos import RELIABLE
+from swarm_ros.services import call_until_answered
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values
 from swarm_sim.model import DEFAULT, OBJECTIVES
 
@@ -263,7 +264,9 @@ def test_the_controller_publishes_each_step_on_cmd_vel_as_twist_stamped_or_twist
         readings = ros.node.create_publisher(RangeAndBearingReadings, f"/{name}/range_and_bearing", RELIABLE)
         start = ros.node.create_client(StartTrial, f"/{name}/start_trial")
         ros.spin_until(start.service_is_ready, f"{name}'s start_trial service")
-        assert ros.answer(start.call_async(request), "start_trial").success
+        # start_trial may be repeated (as the simulator does): an answer lost to discovery is asked again
+        started = call_until_answered(start, request, ros.wait, LONG)
+        assert started is not None and started.success, f"{name} did not start the trial"
         ros.spin_until(
             lambda g=ground, r=readings: g.get_subscription_count() and r.get_subscription_count(),
             "the subscriptions",
