@@ -154,14 +154,23 @@ def progress(
     return _save(figure, path)
 
 
+BOX_COLUMNS = 3
+"""Panels to a row of box plots, as the paper's figs. 4-6 have them: seven objectives side by side were
+3,200 px wide, unreadable at page width."""
+
+
 def boxes(samples: Mapping[str, Mapping[str, Sequence[float]]], metric: str, path: Path) -> Path:
-    """Box plots of one metric (figs. 4-6): one panel per objective, one box per algorithm.
-    ``samples[objective][algorithm label]`` is the metric over runs."""
+    """Box plots of one metric (figs. 4-6): one panel per objective, one box per algorithm, at most
+    ``BOX_COLUMNS`` panels to a row. ``samples[objective][algorithm label]`` is the metric over runs."""
     most = max(len(by_label) for by_label in samples.values())
     wide = most > 4  # many boxes (the foraging study's arms): a wider panel, labels slanted
     width = max(4.2, 0.8 * most) if wide else 4.2
-    figure, axes = subplots(1, len(samples), figsize=(width * len(samples), 3.8), squeeze=False)
-    for axis, (objective, by_label) in zip(axes[0], samples.items(), strict=True):
+    columns = min(BOX_COLUMNS, len(samples))
+    rows = math.ceil(len(samples) / columns)
+    figure, axes = subplots(rows, columns, figsize=(width * columns, 3.8 * rows), squeeze=False)
+    for axis in axes.flat[len(samples) :]:
+        axis.set_visible(False)  # the last row's empty places
+    for axis, (objective, by_label) in zip(axes.flat, samples.items(), strict=False):
         labels = list(by_label)
         axis.boxplot([list(by_label[label]) for label in labels], tick_labels=labels)
         axis.set_title(objective)
