@@ -76,6 +76,13 @@ class Bench:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.02)
 
+    def wait(self, future, seconds):
+        """Spin up to ``seconds`` for ``future``; whether it is done (``call_until_answered``'s wait)."""
+        deadline = time.monotonic() + seconds
+        while not future.done() and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+        return future.done()
+
     def send(self, step, ground=True, rab=True, in_nest=False):
         if ground:
             self.ground.publish(GroundSensor(step=step, in_nest=in_nest))
@@ -211,15 +218,8 @@ def start_lockstep(bench):
         wheel_speed=SPEED,
         wheel_separation=0.14,
     )
-
-    def wait(future, seconds):
-        deadline = time.monotonic() + seconds
-        while not future.done() and time.monotonic() < deadline:
-            bench.executor.spin_once(timeout_sec=0.02)
-        return future.done()
-
     # start_trial may be repeated, as the simulator does: an answer lost to discovery is asked again
-    started = call_until_answered(start, request, wait, WAIT)
+    started = call_until_answered(start, request, bench.wait, WAIT)
     assert started is not None, "no answer to start_trial"
     assert started.success, started.message
 

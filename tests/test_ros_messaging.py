@@ -71,12 +71,14 @@ def test_messages_and_service_cross_processes(relay, node):
     client = node.create_client(LoadTree, "/footbot_0/load_tree")
     assert client.wait_for_service(timeout_sec=20), "the relay's load_tree service never appeared"
 
-    # load_tree is idempotent, so a request whose answer was lost to discovery is simply sent again.
+    # load_tree is idempotent, so a request whose answer was lost to discovery is sent again (within the
+    # 10 s the single request had).
     loaded = call_until_answered(
         client,
         LoadTree.Request(tree="sel(  seq(in_nest,\n stop), forward)"),
         lambda future, seconds: spin_until(executor, future.done, seconds),
-        30.0,
+        10.0,
+        resend_after=5.0,
     )
     assert loaded is not None, "no answer to load_tree"
     assert loaded.success
