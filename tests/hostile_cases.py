@@ -449,6 +449,8 @@ def _graph_commands() -> list[Case]:
               plant=(flip,)),
         *_numbers(replay, ["{bag}"], "--rate", ["nan", "-1", "inf"], []),
         *_numbers(replay, ["{bag}", "--rate", "0"], "--delay", ["nan", "inf"], []),
+        *_numbers(replay, ["{bag}", "--rate", "0"], "--wait-timeout", ["nan", "-1", "inf"], []),
+        _case("--wait-for a topic the bag lacks", replay, "{bag}", "--wait-for", "/nothing"),
         _case("--verify of a bag that is no one trial", replay, "{bag}", "--verify"),
         _case("a good bag gets to the guard", replay, "{bag}", "--rate", "0", "--delay", "0", expect=SUCCEED,
               guard=True),

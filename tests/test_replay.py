@@ -111,6 +111,8 @@ def test_verify_takes_readings_in_each_robots_base_link_or_bare_as_older_bags_na
 
 
 def test_replay_republishes_the_bag_in_order(tmp_path):
+    """Every /swarm_state message reaches a listener, in order. ``--wait-for`` holds the first message until
+    the listener has matched: a fixed delay alone lost the first 59 on a loaded CI machine."""
     write_trial_bag(tmp_path / "bag")
     with reserved_domain() as domain:
         context = rclpy.Context()
@@ -124,7 +126,7 @@ def test_replay_republishes_the_bag_in_order(tmp_path):
             executor.add_node(node)
             command = [str(executable("evolution_manager", "replay")), str(tmp_path / "bag"), "--rate", "20"]
             replay = subprocess.Popen(
-                [*command, "--delay", "3"],
+                [*command, "--wait-for", "/swarm_state", "--delay", "1"],
                 env=domain_environment(domain),
                 stdout=subprocess.PIPE,
                 text=True,
@@ -141,6 +143,31 @@ def test_replay_republishes_the_bag_in_order(tmp_path):
         finally:
             executor.shutdown()
             rclpy.shutdown(context=context)
+
+
+def test_replay_waiting_for_a_topic_nobody_hears_publishes_nothing_and_says_so(tmp_path):
+    write_trial_bag(tmp_path / "bag")
+    replay = str(executable("evolution_manager", "replay"))
+    with reserved_domain() as domain:  # a domain of our own: nothing else subscribes there
+        done = subprocess.run(
+            [replay, str(tmp_path / "bag"), "--wait-for", "/swarm_state", "--wait-timeout", "1"],
+            capture_output=True,
+            text=True,
+            env=domain_environment(domain),
+            timeout=120,
+        )
+    assert done.returncode == 1, done.stdout + done.stderr
+    ready, refusal = done.stderr.splitlines()  # rclpy's log line, then ours
+    assert ready.endswith("; publishing once /swarm_state has a subscriber, then in 1.0 s")
+    assert refusal == "replay: no subscriber of /swarm_state appeared in 1 s; nothing published"
+    assert "replayed" not in done.stdout
+    missing = subprocess.run(
+        [replay, str(tmp_path / "bag"), "--wait-for", "/cmd_vel"], capture_output=True, text=True, timeout=120
+    )
+    assert missing.returncode == 2
+    assert missing.stderr.startswith(
+        f"replay: {tmp_path / 'bag'} has no topic /cmd_vel to wait for: its topics"
+    )
 
 
 def test_replay_refuses_a_bad_rate(tmp_path):

@@ -3,7 +3,8 @@
 ``ws/run evolution_manager replay BAG [--rate X]`` republishes every message of the bag on its topic, paced
 by the recorded timestamps (``--rate 2`` twice as fast, ``--rate 0`` as fast as possible) after ``--delay``
 seconds for discovery, with ``/clock`` following the bag's time, so any ROS tool (``ros2 topic echo``, RViz,
-Foxglove) can watch the trial again.
+Foxglove) can watch the trial again. ``--wait-for TOPIC`` (repeatable) first waits until each such topic has a
+subscriber, so a listener that is slow to discover the replay misses nothing.
 
 ``ws/run evolution_manager replay BAG --verify`` publishes nothing: it re-runs the recorded trial from its
 seed and reports whether it reproduces the recording bit for bit (exit code 0) or where it first differs (1).
@@ -86,12 +87,30 @@ def message_class(msgtype: str) -> type:
     return cls
 
 
-def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
-    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many. A bag whose
-    types are not all allowed (``check_message_type``) or whose MCAP files fail their CRCs is refused
-    (``BagError``) before the node starts."""
+class NoSubscriberError(Exception):
+    """A topic of ``--wait-for`` found no subscriber in the time allowed."""
+
+
+def replay(
+    bag: Path,
+    rate: float,
+    delay: float,
+    stop: threading.Event,
+    wait_for: Sequence[str] = (),
+    wait_timeout: float = 60.0,
+) -> int:
+    """Publish every message of ``bag``, after ``delay`` seconds for discovery; return how many. With
+    ``wait_for``, first wait until each of those topics has a matched subscription (``NoSubscriberError``
+    after ``wait_timeout`` seconds). A bag whose types are not all allowed (``check_message_type``), whose
+    MCAP files fail their CRCs, or that lacks a topic of ``wait_for`` is refused (``BagError``) before the
+    node starts."""
     topics = bag_topics(bag)
     check_crcs(bag)  # a damaged chunk: refused, not half published
+    missing = [topic for topic in wait_for if topic not in topics]
+    if missing:
+        raise BagError(
+            f"{bag} has no topic {missing[0]} to wait for: its topics are {', '.join(sorted(topics))}"
+        )
     context = rclpy.Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node("replay", context=context)
@@ -108,8 +127,17 @@ def replay(bag: Path, rate: float, delay: float, stop: threading.Event) -> int:
     }
     publishers["/clock"] = clock
     published = 0
-    node.get_logger().info(f"ready: {len(topics)} topics of {bag}; publishing in {delay} s")
+    subscribers = "has a subscriber" if len(wait_for) == 1 else "have subscribers"
+    waiting = f"once {', '.join(wait_for)} {subscribers}, then " if wait_for else ""
+    node.get_logger().info(f"ready: {len(topics)} topics of {bag}; publishing {waiting}in {delay} s")
     try:
+        # A matched subscription on our side can precede the subscriber matching us; the delay covers that.
+        deadline = time.monotonic() + wait_timeout
+        for topic in wait_for:
+            while publishers[topic].get_subscription_count() == 0 and not stop.is_set():
+                if time.monotonic() > deadline:
+                    raise NoSubscriberError(f"no subscriber of {topic} appeared in {wait_timeout:g} s")
+                stop.wait(0.05)
         stop.wait(delay)  # let subscribers discover and match the publishers
         wall_start = time.monotonic()
         bag_start: int | None = None
@@ -160,6 +188,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=1.0,
         help="seconds to wait for discovery first",
     )
+    parser.add_argument(
+        "--wait-for",
+        action="append",
+        default=[],
+        metavar="TOPIC",
+        help="before the delay, wait until TOPIC has a subscriber (repeatable)",
+    )
+    parser.add_argument(
+        "--wait-timeout",
+        type=finite(0.0, what="number of seconds"),
+        default=60.0,
+        help="seconds --wait-for waits for a subscriber before giving up (status 1)",
+    )
     parser.add_argument("--verify", action="store_true", help="re-run the recorded trial and compare")
     args = parser.parse_args(without_ros_args(sys.argv[1:] if argv is None else argv))
     try:
@@ -170,10 +211,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         stop = threading.Event()
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, lambda *_: stop.set())
-        count = replay(args.bag, args.rate, args.delay, stop)
+        count = replay(args.bag, args.rate, args.delay, stop, args.wait_for, args.wait_timeout)
     except BagError as error:
         print(f"replay: {error}", file=sys.stderr)
         return 2
+    except NoSubscriberError as error:
+        print(f"replay: {error}; nothing published", file=sys.stderr)
+        return 1
     print(f"replayed {count} messages from {args.bag}")
     return 0
 
