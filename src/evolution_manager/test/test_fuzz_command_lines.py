@@ -343,6 +343,8 @@ def _commands() -> dict[str, Command]:
                 bag,
                 Slot("--rate", "0", tuple(SECONDS)),
                 Slot("--delay", "0", tuple(SECONDS)),
+                Slot("--wait-for", "/swarm_state", tuple(_text(["/nothing", "", NOT_UTF8]))),
+                Slot("--wait-timeout", "0", tuple(SECONDS)),
             ),
             (),
             ((replay.rclpy, "init"),),
