@@ -309,12 +309,17 @@ def planned_library(config: RunConfig) -> Library | None:
     return library
 
 
-def current_commit() -> str:
-    """The commit of the working directory's git checkout ("unknown" outside one), "+" when it has
-    uncommitted changes."""
+CODE_DIRECTORY = Path(__file__).resolve().parent
+"""Where this code is installed: inside the checkout it was built from (``ws/install`` lies in it), which is
+not the working directory's when a frozen install runs a study whose folder is in another checkout."""
+
+
+def current_commit(code: Path = CODE_DIRECTORY) -> str:
+    """The commit of the git checkout holding ``code`` ("unknown" outside one), "+" when it has uncommitted
+    changes."""
     try:
         commit = subprocess.run(
-            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True, timeout=10
+            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True, timeout=10, cwd=code
         ).stdout.strip()
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--untracked-files=no"],
@@ -322,6 +327,7 @@ def current_commit() -> str:
             text=True,
             check=True,
             timeout=30,
+            cwd=code,
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown"
@@ -329,13 +335,18 @@ def current_commit() -> str:
 
 
 def record_session(
-    directory: Path, started: float, command: str, cluster: ClusterSettings, **more: object
+    directory: Path,
+    started: float,
+    command: str,
+    cluster: ClusterSettings,
+    code: Path = CODE_DIRECTORY,
+    **more: object,
 ) -> None:
-    """Record this session (wall seconds so far, commit, command, where it ran, and ``more``) in
-    ``directory/sessions.json``: appended the first time, updated at every later call (so a killed session
-    keeps the time up to its last record; the commit stays the one of the first record). ``experiment``
-    records after every run it finishes, ``evolve`` at its start and end; neither file is compared when a
-    run or experiment continues."""
+    """Record this session (wall seconds so far, the commit of the checkout holding ``code``, command, where
+    it ran, and ``more``) in ``directory/sessions.json``: appended the first time, updated at every later
+    call (so a killed session keeps the time up to its last record; the commit stays the one of the first
+    record). ``experiment`` records after every run it finishes, ``evolve`` at its start and end; neither
+    file is compared when a run or experiment continues."""
     path = directory / SESSIONS_FILE
     sessions = read_json(path) if path.exists() else []
     assert isinstance(sessions, list)
@@ -347,7 +358,7 @@ def record_session(
         {
             "started_unix": round(started, 1),
             "wall_seconds": round(time.time() - started, 1),
-            "commit": commit or current_commit(),
+            "commit": commit or current_commit(code),
             "command": command,
             "cluster": cluster.to_json(),
             **more,

@@ -16,7 +16,14 @@ from pathlib import Path
 import pytest
 
 from evolution_manager.cluster.settings import ClusterSettings
-from evolution_manager.studies.experiment import build_parser, experiment, record_session, start_order
+from evolution_manager.studies.experiment import (
+    CODE_DIRECTORY,
+    build_parser,
+    current_commit,
+    experiment,
+    record_session,
+    start_order,
+)
 from evolution_manager.studies.planning import paper_study, plan, shared_scenario_seed
 from evolution_manager.studies.report_command import report
 from evolution_manager.studies.significance import compare, holm
@@ -345,9 +352,14 @@ def test_a_session_keeps_the_commit_it_started_with(tmp_path, monkeypatch):
     first = commit("first")
     out = tmp_path / "experiment"
     out.mkdir()
-    record_session(out, 1000.0, "experiment", ClusterSettings(), runs_finished=0)
+    record_session(out, 1000.0, "experiment", ClusterSettings(), tmp_path, runs_finished=0)
     second = commit("second")
-    record_session(out, 1000.0, "experiment", ClusterSettings(), runs_finished=1)
-    record_session(out, 2000.0, "experiment", ClusterSettings(), runs_finished=0)
+    record_session(out, 1000.0, "experiment", ClusterSettings(), tmp_path, runs_finished=1)
+    record_session(out, 2000.0, "experiment", ClusterSettings(), tmp_path, runs_finished=0)
     sessions = json.loads((out / "sessions.json").read_text())
     assert [(s["commit"], s["runs_finished"]) for s in sessions] == [(first, 1), (second, 0)]
+    # By default the commit is the one of the checkout holding the code that runs, not the working
+    # directory's (a frozen install running a study whose folder lies in another checkout).
+    record_session(out, 3000.0, "experiment", ClusterSettings(), runs_finished=0)
+    recorded = json.loads((out / "sessions.json").read_text())[-1]["commit"]
+    assert recorded == current_commit(CODE_DIRECTORY) and recorded.rstrip("+") not in (first, second)
