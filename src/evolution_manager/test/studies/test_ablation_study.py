@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import statistics
 from pathlib import Path
 
 import numpy as np
@@ -206,3 +207,22 @@ def test_a_library_file_there_is_kept_and_a_damaged_one_refused_in_one_line(plan
     with pytest.raises(EvolutionError, match="remove it to make it again") as caught:
         ablation_study.ablation_library("random8", folder, FORAGING, document["libraries"]["random8"])
     assert "\n" not in str(caught.value)
+
+
+def test_the_committed_reports_tables_are_its_runs_csv():
+    """docs/results/foraging/replication/ablation: the report's two tables recomputed from its runs.csv, and
+    the README's run count and each arm's held-out median from the same rows."""
+    folder = (
+        Path(__file__).resolve().parents[4] / "docs" / "results" / "foraging" / "replication" / "ablation"
+    )
+    with (folder / "runs.csv").open(newline="") as handle:
+        table = list(csv.DictReader(handle))
+    report = (folder / "report.md").read_text()
+    per_arm, compared = ablation_study.tables_from_rows(table)
+    assert per_arm in report and compared in report
+    assert report.count(f"{len(table)} of 50 runs finished") == 1
+    readme = " ".join((folder / "README.md").read_text().split())
+    assert f"{len(table)} of the 50 planned runs" in readme
+    for arm in ablation_study.ARMS:
+        heldout = [float(row["heldout_best_fitness"]) for row in table if row["arm"] == arm.name]
+        assert f"`{arm.name}` {statistics.median(heldout):.3f} [" in readme, arm.name
