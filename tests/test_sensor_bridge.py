@@ -2,7 +2,8 @@
 poses (``geometry_msgs/PoseStamped`` per robot) gets each robot's readings, in its ``base_link``, as the model
 senses them; a free-running footbot controller fed by the bridge drives its robot on ``cmd_vel``; nothing is
 sensed before every robot has a pose; a bad task is one line. A free-running trial graph whose readings come
-from the bridge over a lossy, late link completes, its robots driven."""
+from the bridge over a lossy, late link completes, its robots driven; a trial's start drops the readings the
+link still held back."""
 
 import subprocess
 import time
@@ -17,12 +18,13 @@ from rclpy.node import Node
 from evolution_manager.graph.nodes.trial import TrialGraph
 from evolution_manager.graph.startup import Bridge, Graph, executable
 from evolution_manager.recording.bags import read_bag
-from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings
+from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TrialStart
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import RELIABLE
 from swarm_sim.model import DEFAULT
 from swarm_sim.nodes import visualisation
-from swarm_sim.nodes.virtual_sensors import VirtualSensors
+from swarm_sim.nodes.sensor_bridge import SensorBridgeNode
+from swarm_sim.nodes.virtual_sensors import Delivery, VirtualSensors
 from swarm_sim.roads import LockstepChain
 
 LONG = 300.0
@@ -139,3 +141,30 @@ def test_a_free_trial_sensed_by_the_bridge_over_a_lossy_late_link_completes_and_
         assert 60 < len(steps) < 160, len(steps)  # about a fifth lost (the trial has 160 periods)
         assert len(set(steps)) == len(steps)  # each period's pair once (a bag orders them by their stamps)
         assert {g.header.frame_id for g in ground} == {f"swarm_a/footbot_{robot}/base_link"}
+
+
+def test_a_trial_start_drops_the_readings_the_link_still_holds_back():
+    """A CI run recorded a robot's step 1 twice in the lossy, late trial above: the bridge had sensed before
+    the trial's ``trial_start`` reached it, and the readings its link still held back were delivered after
+    it, numbered by the steps before, so stale and repeating the new trial's step numbers."""
+    with reserved_domain() as domain:
+        rclpy.init(domain_id=domain)  # the bridge node lives in the default context
+        try:
+            node = SensorBridgeNode()
+            try:
+                node.link = Delivery(loss=0.0, delay=2, seed=3)
+                for robot in range(len(node.namespaces)):
+                    node.sensors.set_pose(robot, 300.0 * robot, 0.0, 0.0)
+                for _ in range(3):
+                    node._sense()
+                held = len(node.link.pending)
+                assert node.step == 3 and held > 0
+                node._on_trial_start(TrialStart(seed=5, trial=0, world=""))
+                assert node.step == 0 and node.link.pending == []
+                node._sense()
+                assert {period for period, _, _ in node.link.pending} <= {1, 2, 3}  # the new trial's alone
+                assert all(item[1][0].step == 1 for _, _, item in node.link.pending)
+            finally:
+                node.destroy_node()
+        finally:
+            rclpy.shutdown()

@@ -21,7 +21,8 @@ Subscriptions (``pose`` and ``wheels`` best effort, so a driver's ``qos_profile_
 publishers both match):
     trial_start (swarm_msgs/TrialStart, reliable and transient-local): in a trial graph whose simulator leaves
         the sensing to the bridge (``sensing:=external``), each trial's world, seed and trial replace the
-        parameters', the broadcasts start again from the estimate cap and the steps from 1.
+        parameters', the broadcasts start again from the estimate cap and the steps from 1; readings the
+        link still held back are dropped.
     <robot>/pose (geometry_msgs/PoseStamped): the robot's pose in the arena's frame (its centre, metres).
     <robot>/wheels (swarm_msgs/WheelCommand): its controller's answers, whose ``nest_estimate`` and
         ``food_estimate`` the robot broadcasts to the others (the estimate cap until the first).
@@ -129,7 +130,11 @@ class SensorBridgeNode(Node):
         self.sensors = VirtualSensors(config, int(msg.seed), int(msg.trial))
         self.sensors.poses[:] = poses
         self.step = 0
-        self.get_logger().info(f"trial {msg.trial} of seed {msg.seed}: sensing its world from step 1")
+        # Readings the link still holds back are of the world before this trial, and numbered by its steps:
+        # delivered now they would be stale, and repeat the new trial's step numbers.
+        dropped = self.link.clear()
+        held = f" ({dropped} held-back readings of the world before it dropped)" if dropped else ""
+        self.get_logger().info(f"trial {msg.trial} of seed {msg.seed}: sensing its world from step 1{held}")
 
     def _on_wheels(self, robot: int, msg: WheelCommand) -> None:
         self.sensors.set_broadcast(robot, msg.nest_estimate, msg.food_estimate, *msg.other_food_estimates)

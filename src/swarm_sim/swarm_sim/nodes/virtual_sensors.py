@@ -124,3 +124,9 @@ class Delivery:
         ready = [entry for entry in self.pending if entry[0] <= period]
         self.pending = [entry for entry in self.pending if entry[0] > period]
         return [item for _, _, item in sorted(ready, key=lambda entry: entry[1])]
+
+    def clear(self) -> int:
+        """Drop every item still held back (a new trial's world makes them stale); return how many."""
+        dropped = len(self.pending)
+        self.pending = []
+        return dropped

@@ -123,3 +123,12 @@ def test_a_lossy_late_link_loses_about_its_share_and_holds_the_rest_back_within_
 def test_a_link_refuses_a_loss_that_is_no_probability_or_a_negative_delay(loss, delay):
     with pytest.raises(ValueError, match=r"loss must be|delay must be"):
         Delivery(loss, delay)
+
+
+def test_clearing_a_link_drops_what_it_holds_back_and_says_how_many():
+    link = Delivery(delay=2, seed=1)
+    for period in (1, 2, 3):
+        link.send(period, period)
+    held = len(link.pending) - len(link.due(3))
+    assert link.clear() == held and link.due(10) == []
+    assert link.clear() == 0
