@@ -146,7 +146,8 @@ def test_a_free_trial_sensed_by_the_bridge_over_a_lossy_late_link_completes_and_
 def test_a_trial_start_drops_the_readings_the_link_still_holds_back():
     """A CI run recorded a robot's step 1 twice in the lossy, late trial above: the bridge had sensed before
     the trial's ``trial_start`` reached it, and the readings its link still held back were delivered after
-    it, numbered by the steps before, so stale and repeating the new trial's step numbers."""
+    it, numbered by the steps before, so stale and repeating the new trial's step numbers. In a trial graph
+    (``await_trial_start``) the bridge senses nothing before the first ``trial_start``."""
     with reserved_domain() as domain:
         rclpy.init(domain_id=domain)  # the bridge node lives in the default context
         try:
@@ -161,6 +162,10 @@ def test_a_trial_start_drops_the_readings_the_link_still_holds_back():
                 assert node.step == 3 and held > 0
                 node._on_trial_start(TrialStart(seed=5, trial=0, world=""))
                 assert node.step == 0 and node.link.pending == []
+                node.await_trial_start, node.trial_started = True, False  # as a trial graph starts it
+                node._sense()
+                assert node.step == 0, "sensed before the first trial_start"
+                node._on_trial_start(TrialStart(seed=5, trial=0, world=""))
                 node._sense()
                 assert {period for period, _, _ in node.link.pending} <= {1, 2, 3}  # the new trial's alone
                 assert all(item[1][0].step == 1 for _, _, item in node.link.pending)

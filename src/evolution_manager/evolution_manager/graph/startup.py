@@ -291,7 +291,7 @@ def trial_graph_nodes(
                 "swarm_sim",
                 "sensor_bridge",
                 prefix,
-                {"robots": robots, "use_sim_time": True, **link},
+                {"robots": robots, "use_sim_time": True, "await_trial_start": True, **link},
                 dict(remaps),
             )
         )

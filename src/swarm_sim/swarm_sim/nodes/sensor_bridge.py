@@ -16,6 +16,9 @@ Parameters (read-only):
     loss, delay: a link worse than the model's radio (``virtual_sensors.Delivery``): each robot's pair of
         readings of a period is lost with probability ``loss`` (default 0), or held back up to ``delay``
         sensing periods (default 0), drawn from ``seed``.
+    await_trial_start: no readings before the first ``trial_start`` (default false; a trial graph sets it:
+        its poses can reach the bridge before the trial's ``trial_start``, and readings sensed then would
+        be of the world before it and repeat the trial's first step numbers).
 
 Subscriptions (``pose`` and ``wheels`` best effort, so a driver's ``qos_profile_sensor_data`` and reliable
 publishers both match):
@@ -79,6 +82,13 @@ class SensorBridgeNode(Node):
         delay = declare(
             self, "delay", 0, descriptor("most sensing periods a pair is held back", read_only=True)
         )
+        self.await_trial_start = declare(
+            self,
+            "await_trial_start",
+            False,
+            descriptor("no readings before the first trial_start", read_only=True),
+        )
+        self.trial_started = False
         if trial < 0 or seed < 0 or robots < 0:
             raise ParameterError("parameters seed, trial and robots must not be negative")
         config = resolve_task(task).config(profile)
@@ -130,6 +140,7 @@ class SensorBridgeNode(Node):
         self.sensors = VirtualSensors(config, int(msg.seed), int(msg.trial))
         self.sensors.poses[:] = poses
         self.step = 0
+        self.trial_started = True
         # Readings the link still holds back are of the world before this trial, and numbered by its steps:
         # delivered now they would be stale, and repeat the new trial's step numbers.
         dropped = self.link.clear()
@@ -140,6 +151,8 @@ class SensorBridgeNode(Node):
         self.sensors.set_broadcast(robot, msg.nest_estimate, msg.food_estimate, *msg.other_food_estimates)
 
     def _sense(self) -> None:
+        if self.await_trial_start and not self.trial_started:
+            return
         missing = self.sensors.missing()
         if missing:
             if not self._waiting_said:
