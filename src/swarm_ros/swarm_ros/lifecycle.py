@@ -48,6 +48,10 @@ REACHES = {
 }
 """The state each transition (by its label) ends in when it succeeds."""
 
+STARTS = {"configure": "unconfigured", "activate": "inactive", "deactivate": "active", "cleanup": "inactive"}
+"""The state each transition but shutdown (from any primary state) starts from: a node still there after an
+unanswered request never got it, and is asked again."""
+
 WaitFunction = Callable[[Future, float], bool]
 """``wait(future, seconds)``: wait up to ``seconds`` for ``future``; whether it is done."""
 
@@ -164,32 +168,40 @@ class LifecycleClient:
         self._node.destroy_client(self._change)
         self._node.destroy_client(self._get)
 
-    def state(self, wait: WaitFunction, timeout: float) -> str:
+    def state(self, wait: WaitFunction, timeout: float, resend_after: float = RESEND_AFTER) -> str:
         """The target's state label; ``LifecycleError`` when no answer comes within ``timeout`` seconds."""
-        response = call_until_answered(self._get, GetState.Request(), wait, timeout)
+        response = call_until_answered(
+            self._get, GetState.Request(), wait, timeout, resend_after=resend_after
+        )
         if response is None:
             raise LifecycleError(f"{self.target} did not say its lifecycle state in {timeout:.0f} s")
         return str(response.current_state.label)
 
-    def transition(self, label: str, wait: WaitFunction, timeout: float) -> None:
+    def transition(
+        self, label: str, wait: WaitFunction, timeout: float, resend_after: float = RESEND_AFTER
+    ) -> None:
         """Make the transition ``label`` (configure, activate, deactivate, cleanup, shutdown) and wait until
         it is done; ``LifecycleError`` when the target refuses it or does not reach its state in ``timeout``
         seconds. A configure can take long (the kernels compile): while no answer comes the state is asked
-        (it is answered once the transition is over), since the answer after discovery can be lost."""
+        (it is answered once the transition is over), since the answer after discovery can be lost; and so
+        can the request: a target still in the transition's starting state is asked again."""
         if label not in REACHES:
             raise ValueError(f"no lifecycle transition {label!r}: expected one of {', '.join(REACHES)}")
         deadline = time.monotonic() + timeout
-        future = self._change.call_async(ChangeState.Request(transition=Transition(label=label)))
-        answered = wait(future, min(RESEND_AFTER, timeout))
-        response = future.result() if answered else None
-        if response is not None and response.success:
-            return
-        if not answered:
-            self._change.remove_pending_request(future)
-        state = self.state(wait, max(0.0, deadline - time.monotonic()))
-        if state != REACHES[label]:
-            why = "refused it" if answered else f"did not answer in {timeout:.0f} s"
-            raise LifecycleError(f"{self.target} could not {label}: it {why} and is {state}")
+        while True:
+            future = self._change.call_async(ChangeState.Request(transition=Transition(label=label)))
+            answered = wait(future, min(resend_after, max(0.0, deadline - time.monotonic())))
+            response = future.result() if answered else None
+            if response is not None and response.success:
+                return
+            if not answered:
+                self._change.remove_pending_request(future)
+            state = self.state(wait, max(0.0, deadline - time.monotonic()), resend_after)
+            if state == REACHES[label]:
+                return
+            if answered or state != STARTS.get(label) or time.monotonic() >= deadline:
+                why = "refused it" if answered else f"did not answer in {timeout:.0f} s"
+                raise LifecycleError(f"{self.target} could not {label}: it {why} and is {state}")
 
     def drive(self, labels: list[str], wait: WaitFunction, timeout: float) -> None:
         """Make each transition of ``labels`` in turn (each within ``timeout`` seconds)."""

@@ -108,6 +108,37 @@ def test_a_client_drives_a_managed_node_through_every_transition(graph):
     assert life.state(wait, 30) == "finalized" and toy.released == 2
 
 
+def test_a_configure_sent_before_the_node_was_there_is_sent_again():
+    """A request can be lost as well as its answer (a CI run: "simulator could not configure: it did not
+    answer and is unconfigured"); here the first request goes out before the node exists, so nobody gets it.
+    The client finds the node still unconfigured and asks again."""
+    with reserved_domain() as domain:
+        context = rclpy.Context()
+        rclpy.init(context=context, domain_id=domain)
+        executor = MultiThreadedExecutor(num_threads=2, context=context)
+        client = Node("lifecycle_test_client", context=context)
+        executor.add_node(client)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        try:
+            life = LifecycleClient(client, "/toy")
+            done = []
+            asking = threading.Thread(
+                target=lambda: done.append(life.transition("configure", wait, 60, resend_after=1.0))
+            )
+            asking.start()
+            time.sleep(0.5)  # the first configure is out, to no one
+            toy = Toy(context=context, parameter_overrides=[Parameter("autostart", value=False)])
+            executor.add_node(toy)
+            toy.start()
+            asking.join(timeout=60)
+            assert done == [None] and toy.publisher is not None and life.state(wait, 30) == "inactive"
+        finally:
+            executor.shutdown()
+            thread.join(timeout=10)
+            rclpy.shutdown(context=context)
+
+
 def test_autostart_configures_and_activates_the_node():
     with reserved_domain() as domain:
         context = rclpy.Context()
