@@ -162,7 +162,7 @@ def test_a_trial_start_drops_the_readings_the_link_still_holds_back():
                 assert node.step == 3 and held > 0
                 node._on_trial_start(TrialStart(seed=5, trial=0, world=""))
                 assert node.step == 0 and node.link.pending == []
-                node.await_trial_start, node.trial_started = True, False  # as a trial graph starts it
+                node.awaiting_trial_start = True  # as a trial graph starts it (await_trial_start:=true)
                 node._sense()
                 assert node.step == 0, "sensed before the first trial_start"
                 node._on_trial_start(TrialStart(seed=5, trial=0, world=""))

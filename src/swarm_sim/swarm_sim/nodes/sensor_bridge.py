@@ -82,13 +82,12 @@ class SensorBridgeNode(Node):
         delay = declare(
             self, "delay", 0, descriptor("most sensing periods a pair is held back", read_only=True)
         )
-        self.await_trial_start = declare(
+        self.awaiting_trial_start = declare(
             self,
             "await_trial_start",
             False,
             descriptor("no readings before the first trial_start", read_only=True),
         )
-        self.trial_started = False
         if trial < 0 or seed < 0 or robots < 0:
             raise ParameterError("parameters seed, trial and robots must not be negative")
         config = resolve_task(task).config(profile)
@@ -140,7 +139,7 @@ class SensorBridgeNode(Node):
         self.sensors = VirtualSensors(config, int(msg.seed), int(msg.trial))
         self.sensors.poses[:] = poses
         self.step = 0
-        self.trial_started = True
+        self.awaiting_trial_start = False
         # Readings the link still holds back are of the world before this trial, and numbered by its steps:
         # delivered now they would be stale, and repeat the new trial's step numbers.
         dropped = self.link.clear()
@@ -151,7 +150,7 @@ class SensorBridgeNode(Node):
         self.sensors.set_broadcast(robot, msg.nest_estimate, msg.food_estimate, *msg.other_food_estimates)
 
     def _sense(self) -> None:
-        if self.await_trial_start and not self.trial_started:
+        if self.awaiting_trial_start:
             return
         missing = self.sensors.missing()
         if missing:
