@@ -10,22 +10,30 @@ from itertools import pairwise
 
 import pytest
 import rclpy
+from builtin_interfaces.msg import Time as TimeMsg
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
 from rclpy.action import ActionClient
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
+from rclpy.time import Time
 from rosbags.interfaces import QosDurability
 from rosbags.rosbag2 import Reader
 from visualization_msgs.msg import MarkerArray
 
 from bt_controller.language import ACTIONS, random_trees
+from evolution_manager.graph.nodes.recorder import cdr_stamp_ns
 from evolution_manager.graph.nodes.trial import TrialGraph, expected_messages
 from evolution_manager.graph.startup import Graph, executable
 from evolution_manager.recording.bags import read_bag
 from evolution_manager.recording.reproduce import RESULT_TOPIC
 from swarm_msgs.action import EvaluateBatch
+from swarm_msgs.msg import SwarmState
 from swarm_ros.isolation import domain_environment, reserved_domain
 from swarm_ros.qos import LATCHED, RELIABLE
 from swarm_sim.evaluation import BatchEvaluator, EvaluationRequest, named_values
 from swarm_sim.model import DEFAULT, Config
+from tf2_msgs.msg import TFMessage
 
 TREE = "sel(seq(robot_left, forward_left), prob(forward, reverse_right))"
 
@@ -113,6 +121,58 @@ def test_a_late_joiner_gets_the_latched_arena_and_trial_start(graph):
         node.destroy_node()
     assert (received["start"].seed, received["start"].trial) == (3, 0)
     assert "walls" in {m.ns for m in received["markers"].markers}
+
+
+def _by_step(messages: list[tuple[str, bytes]], classes: dict[str, type]) -> dict[tuple[str, int], object]:
+    """Each message by (topic, step of the chain), its stamps cleared: the graph's clock runs on from trial to
+    trial, so two runs of one trial differ in their stamps alone. The step is read from swarm_state."""
+    step_ns = round(DEFAULT.step_dt * 1e9)
+    state = deserialize_message(next(d for t, d in messages if t == "/swarm_state"), SwarmState)
+    start = Time.from_msg(state.header.stamp).nanoseconds - state.step * step_ns
+    out: dict[tuple[str, int], object] = {}
+    for topic, data in messages:
+        message = deserialize_message(data, classes[topic])
+        stamp = cdr_stamp_ns(data, classes[topic])
+        for header in [t.header for t in message.transforms] if topic == "/tf" else [message.header]:
+            header.stamp = TimeMsg()
+        out[(topic, (stamp - start) // step_ns)] = message
+    return out
+
+
+def test_a_viewer_that_joins_mid_trial_gets_what_a_recording_has_from_its_first_step(graph, tmp_path):
+    """The simulator builds and publishes the observers' topics (swarm_state, poses, odom, /tf, the robots'
+    markers) only at a step when one of them has a subscriber, and keeps the robots' poses all the same: a
+    viewer that joins mid-trial gets, from its first message on, what a recording of the whole trial holds,
+    each odometry's velocity over the step before (which it never received) included."""
+    bag = tmp_path / "whole"
+    graph.run(TREE, 8, 0, bag)
+    topics = {"/swarm_state": SwarmState, "/footbot_0/odom": Odometry, "/tf": TFMessage}
+    recorded = _by_step([(m.topic, m.data) for m in read_bag(bag) if m.topic in topics], topics)
+    runner = graph.runner
+    runner.load_trees([TREE] * len(runner.load_clients))
+    handle = runner.send_trial(8, 0)
+    runner.spin_until(lambda: len(runner.feedback) >= 40, "40 steps of feedback")
+    joined_at = runner.feedback[-1]
+    node = Node("late_viewer", context=runner.node.context)
+    received: list[tuple[str, bytes]] = []
+    for topic, msg_class in topics.items():
+        node.create_subscription(
+            msg_class, topic, lambda data, topic=topic: received.append((topic, data)), RELIABLE, raw=True
+        )
+    runner.executor.add_node(node)
+    try:
+        runner.result(handle, 8, 0)
+    finally:
+        runner.executor.remove_node(node)
+        node.destroy_node()
+    seen = _by_step(received, topics)
+    for topic in topics:
+        steps = sorted(step for t, step in seen if t == topic)
+        assert steps[0] >= joined_at and len(steps) > 20, topic  # it joined mid-trial, and stayed to the end
+        assert steps == list(range(steps[0], steps[-1] + 1)), topic  # every step after
+        assert all(seen[(topic, step)] == recorded[(topic, step)] for step in steps), topic
+    # not a trivial match: the robot moves, its velocity shows
+    assert any(m.twist.twist != Twist() for (t, _), m in seen.items() if t == "/footbot_0/odom")
 
 
 # --- actions ------------------------------------------------------------------------------------------------

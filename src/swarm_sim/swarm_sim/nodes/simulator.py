@@ -350,6 +350,7 @@ class SimulatorNode(ManagedNode):
                 self.create_client(StartTrial, f"{ns}/start_trial", callback_group=listeners)
             )
         self._made += self._start_clients
+        self._observers = [self._state, self._poses, self._tf, self._robot_markers, *self._pose, *self._odom]
         trials = MutuallyExclusiveCallbackGroup()
         self._made.append(
             self.create_service(RunTrial, "~/run_trial", self._on_run_trial, callback_group=trials)
@@ -755,9 +756,27 @@ class SimulatorNode(ManagedNode):
         ):
             time.sleep(0.01)
 
+    def _observed(self) -> bool:
+        """Whether any subscription listens to what only observers read (the swarm's state, poses, frames
+        and markers: a recorder, RViz, the virtual-sensor bridge). A trial nobody watches builds and
+        publishes the robots' readings alone, about a third less of the simulator's work at a step."""
+        return any(p.get_subscription_count() > 0 for p in self._observers)
+
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
+        if not self._observed():
+            # the poses are kept all the same: a subscriber that joins at the next step gets its velocity
+            self._previous = step_poses(world)
+            if self.sensing == "external":
+                return
+            ground, readings = reading_messages(
+                world.readings(), stamp, world.step, [b for _, b in self.frames]
+            )
+            for i in range(len(self.namespaces)):
+                self._ground[i].publish(ground[i])
+                self._readings[i].publish(readings[i])
+            return
         messages = step_messages(
             world, stamp, seed, self.namespaces, self._actions, self.config, [b for _, b in self.frames]
         )
@@ -949,6 +968,11 @@ Poses = list[tuple[float, float, float]]
 """Each robot's (x mm, y mm, heading rad)."""
 
 
+def step_poses(world: LockstepChain) -> Poses:
+    """Each robot's pose at the step ``world`` is at."""
+    return [(x, y, t) for x, y, t in world.poses().tolist()]
+
+
 def frame_messages(
     world: LockstepChain, stamp: Time, previous: Poses | None, frames: Sequence[tuple[str, str]], dt: float
 ) -> tuple[list[Odometry], TFMessage, Poses]:
@@ -956,7 +980,7 @@ def frame_messages(
     poses to pass as ``previous`` at the next step. A robot's velocity is over the step from ``previous``
     (``dt`` seconds), zero at a trial's first step (the robots are placed) or without ``previous``. The node
     publishes these; ``replay --verify`` compares a recording with those of a re-run."""
-    poses: Poses = [(x, y, t) for x, y, t in world.poses().tolist()]
+    poses = step_poses(world)
     placed = timeline.step_in_trial(world.line, world.step) == 1  # teleported: no velocity
     odometry = [
         visualisation.odometry(
