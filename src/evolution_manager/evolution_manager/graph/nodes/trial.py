@@ -41,7 +41,7 @@ from typing import Any
 import rclpy
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
@@ -98,6 +98,9 @@ numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time,
 starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
 
 
+GRAPH_CHECK_INTERVAL = 0.25
+"""Seconds between two looks, while the runner waits, at whether a node's process has exited."""
+
 PUBLISHERS_MATCH_SETTLE = 1.0
 """Seconds a new recorder waits at least after its subscriptions matched, for the publishers to match them
 too; three times as long as its own side took when that was longer (on a loaded machine the publishers'
@@ -146,7 +149,10 @@ class TrialRunner:
         self.robots = robots
         self.timeout = timeout
         self.node = Node("trial_runner", namespace=namespace or "/", context=context)
-        self.executor = SingleThreadedExecutor(context=context)
+        # rclpy's events executor: a recorder's callback (one for each of about 40 messages a step) cost a
+        # third less CPU than under the single-threaded executor, which rebuilds its wait set of every
+        # subscription for each. It is spun one spin_once at a time, as swarm_ros.spinning explains.
+        self.executor = EventsExecutor(context=context)
         self.executor.add_node(self.node)
         self.load_clients: list[rclpy.client.Client] = [
             self.node.create_client(LoadTree, f"{robot}/load_tree") for robot in robot_namespaces(robots)
@@ -182,9 +188,13 @@ class TrialRunner:
     def spin_until(self, done: Callable[[], bool], what: str, timeout: float | None = None) -> None:
         """Spin until ``done()``; raise ``TrialFailedError`` naming ``what`` on timeout or a dead node."""
         deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        checked = -GRAPH_CHECK_INTERVAL
         while not done():
-            self.graph.check()
-            if time.monotonic() > deadline:
+            now = time.monotonic()
+            if now - checked >= GRAPH_CHECK_INTERVAL:  # not at every message: it polls every process
+                self.graph.check()
+                checked = now
+            if now > deadline:
                 raise TrialFailedError(f"timed out waiting for {what}")
             self.executor.spin_once(timeout_sec=0.05)
 
