@@ -35,7 +35,10 @@ from bt_controller.language.vocabulary import (
 from bt_controller.model_settings import CODE_2026, PAPER, PerceptionParams, PerceptionSettings
 from bt_controller.robot.timeline import trials_restart
 
-region_column = numba.njit(inline="always")(_region_column)  # no disk cache: its source is vocabulary's
+# For the compiled functions: no disk cache of its own (its source is vocabulary's), so the Python methods
+# below call vocabulary's function: called from Python, this would be compiled in every process that calls
+# it (about 0.2 s of each footbot controller's start).
+region_column = numba.njit(inline="always")(_region_column)
 DENSITY = SIDES.index("robot")
 """The column of the density in a robot's samples and smoothed values (``vocabulary.region_column``)."""
 ROBOT_SIDE = SIDES.index("robot")
@@ -315,7 +318,7 @@ class RobotView:
 
     def broadcast(self) -> np.ndarray:
         """The values this robot broadcasts, per region: its smoothed estimates in whole centimetres (mm)."""
-        return np.array([broadcast_value(self.smooth[region_column(r)]) for r in range(self.regions)])
+        return np.array([broadcast_value(self.smooth[_region_column(r)]) for r in range(self.regions)])
 
     def region_broadcast(self, ground: np.ndarray) -> np.ndarray:
         """The values broadcast at a chain's first step, per region."""
@@ -329,7 +332,7 @@ class RobotView:
         bearings = np.full(len(SIDES), math.nan)
         for region in range(self.regions):
             if self.sources[region] >= 0:
-                bearings[region_column(region)] = r.bearings[self.sources[region]]
+                bearings[_region_column(region)] = r.bearings[self.sources[region]]
         if self.nearest >= 0:
             bearings[ROBOT_SIDE] = r.bearings[self.nearest]
         out = np.zeros(N_CONDITIONS, dtype=np.bool_)
