@@ -765,37 +765,33 @@ class SimulatorNode(ManagedNode):
     def _publish_step(self, world: LockstepChain, seed: int) -> None:
         stamp = self._stamp()
         self._clock_publisher.publish(Clock(clock=stamp))
-        if not self._observed():
+        base_links = [b for _, b in self.frames]
+        sensed: tuple[list[GroundSensor], list[RangeAndBearingReadings]] | None = None
+        if self._observed():
+            messages = step_messages(
+                world, stamp, seed, self.namespaces, self._actions, self.config, base_links
+            )
+            self._state.publish(messages.state)
+            self._poses.publish(messages.poses)
+            for publisher, pose in zip(self._pose, messages.pose, strict=True):
+                publisher.publish(pose)
+            odometry, transforms, self._previous = frame_messages(
+                world, stamp, self._previous, self.frames, self.config.step_dt
+            )
+            for publisher, odom in zip(self._odom, odometry, strict=True):
+                publisher.publish(odom)
+            self._tf.publish(transforms)
+            self._robot_markers.publish(messages.robot_markers)
+            sensed = messages.ground, messages.readings
+        else:
             # the poses are kept all the same: a subscriber that joins at the next step gets its velocity
             self._previous = step_poses(world)
-            if self.sensing == "external":
-                return
-            ground, readings = reading_messages(
-                world.readings(), stamp, world.step, [b for _, b in self.frames]
-            )
-            for i in range(len(self.namespaces)):
-                self._ground[i].publish(ground[i])
-                self._readings[i].publish(readings[i])
-            return
-        messages = step_messages(
-            world, stamp, seed, self.namespaces, self._actions, self.config, [b for _, b in self.frames]
-        )
-        self._state.publish(messages.state)
-        self._poses.publish(messages.poses)
-        for publisher, pose in zip(self._pose, messages.pose, strict=True):
-            publisher.publish(pose)
-        odometry, transforms, self._previous = frame_messages(
-            world, stamp, self._previous, self.frames, self.config.step_dt
-        )
-        for publisher, odom in zip(self._odom, odometry, strict=True):
-            publisher.publish(odom)
-        self._tf.publish(transforms)
-        self._robot_markers.publish(messages.robot_markers)
         if self.sensing == "external":  # another node senses (the virtual-sensor bridge)
             return
+        ground, readings = sensed or reading_messages(world.readings(), stamp, world.step, base_links)
         for i in range(len(self.namespaces)):
-            self._ground[i].publish(messages.ground[i])
-            self._readings[i].publish(messages.readings[i])
+            self._ground[i].publish(ground[i])
+            self._readings[i].publish(readings[i])
 
     def _await_answers(self, step: int) -> list[WheelCommand]:
         with self._lock:
