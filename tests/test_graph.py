@@ -48,7 +48,8 @@ def test_trials_through_the_graph_equal_the_batch_evaluator():
 def test_under_the_clean_profile_the_graph_equals_the_batch_evaluator_too(tmp_path):
     trees = ["seq(forward, reverse)", *random_trees(seed=2024, count=CLEAN_PARITY_TREES - 1)]
     evaluator = BatchEvaluator(replace(DEFAULT, profile="clean"))
-    with TrialGraph(timeout=120.0, profile="clean") as clean:
+    # the controllers a process each, as on robots (the other graph tests hold them in one process)
+    with TrialGraph(timeout=120.0, profile="clean", controller_processes="per-robot") as clean:
         for index, text in enumerate(trees):
             seed, trial = 2000 + index, index % 3  # a chain is one trial under clean
             bag = tmp_path / f"trial{index}" if index == 0 else None

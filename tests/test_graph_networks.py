@@ -27,10 +27,12 @@ def test_trial_network_matches_the_batch_evaluator_and_replays(tmp_path, workspa
     bag = tmp_path / "net.bag"
     done = subprocess.run(
         [str(executable("evolution_manager", "trial")), "--network", str(network), "--seed", "43", "--trial",
-         "1", "--bag", str(bag)],
+         "1", "--bag", str(bag), "--controller-processes", "per-robot"],
         capture_output=True, text=True, timeout=1800, env=workspace.env,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
+    logs = sorted(p.name for p in (tmp_path / "net.bag.logs").glob("*.log"))
+    assert logs == sorted([*(f"footbot_{i}.log" for i in range(9)), "simulator.log"])  # a process each
     document = json.loads(done.stdout)
     assert document["network"] == WEIGHTS and "tree" not in document
     [(_, records)] = BatchEvaluator().evaluate_trials([EvaluationRequest(TEXT, 43, 2)])

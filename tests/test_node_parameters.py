@@ -4,6 +4,7 @@ wrong type or out of range, or a name the node does not declare, from ``-p NAME:
 would keep without a word), and a parameter file that is not YAML. The installed parameter files, whose
 ``/**`` sections every node of the graph reads, are accepted by each node."""
 
+import signal
 import subprocess
 
 import pytest
@@ -189,3 +190,50 @@ def test_a_controller_network_parameter_that_is_no_network_file(tmp_path):
     assert "give one controller, not both" in line
     line = refused("footbot_controller", "-p", "tree:=nn(1, 2)")
     assert "a network has 56 weights, got 2" in line
+
+
+def run_controllers(*arguments, until=None):
+    """Start ``footbot_controllers ARGUMENTS`` in a domain of its own; return (exit status, stderr lines).
+    With ``until`` (a number of lines of its log), stop it with SIGINT once it has written that many."""
+    command = [str(executable("bt_controller", "footbot_controllers")), *arguments]
+    with reserved_domain() as domain:
+        process = subprocess.Popen(
+            command,
+            env=domain_environment(domain),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+        lines = []
+        try:
+            for line in process.stdout:
+                lines.append(line.strip())
+                if until is not None and len(lines) == until:
+                    process.send_signal(signal.SIGINT)
+            return process.wait(timeout=STARTED), lines
+        finally:
+            process.kill()
+            process.wait()
+
+
+def test_the_controllers_in_one_process_take_each_nodes_own_arguments_and_refuse_a_bad_one_by_its_node():
+    def node(index, *ros_args):
+        return ["--node", "--ros-args", "-r", f"__ns:=/swarm_a/footbot_{index}", *ros_args]
+
+    # each node takes only its own parameters: robot 0's tree is not robot 1's
+    status, lines = run_controllers(*node(0, "-p", "tree:=forward"), *node(1), until=2)
+    assert status == 0, lines
+    assert lines[0].endswith("ready: robot 0 in /swarm_a/footbot_0 with tree forward"), lines
+    assert lines[1].endswith("ready: robot 1 in /swarm_a/footbot_1; waiting for load_tree"), lines
+    # a bad parameter of the second node: one line naming that node's arguments, exit status 2
+    status, lines = run_controllers(*node(0), *node(1, "-p", "tre:=forward"))
+    assert status == 2 and len(lines) == 1, lines
+    assert lines[0].startswith(
+        "footbot_controllers: --ros-args -r __ns:=/swarm_a/footbot_1 -p tre:=forward: unknown parameter tre "
+        "for node /swarm_a/footbot_1/footbot_controller: did you mean tree?"
+    ), lines
+    status, lines = run_controllers("--ros-args", "-r", "__ns:=/footbot_0")
+    assert status == 2 and len(lines) == 1, lines
+    assert lines[0].startswith("footbot_controllers: expected one '--node --ros-args ...' per controller"), (
+        lines
+    )

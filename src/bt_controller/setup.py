@@ -31,6 +31,7 @@ setup(
             "bt = bt_controller.tools.cli:main",
             "bench = bt_controller.bench.tick_bench:main",
             "footbot_controller = bt_controller.nodes.footbot_controller:main",
+            "footbot_controllers = bt_controller.nodes.footbot_controller:main_many",
         ],
     },
 )

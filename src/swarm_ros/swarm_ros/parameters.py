@@ -5,7 +5,8 @@ dataclass's, its description the field's docstring, with ranges and read-only fl
 validated object its core uses, so the parameters (``ros2 param list/describe``, a ``--params-file``) and the
 core's configuration never disagree. A field holding a tuple of numbers becomes a double array.
 
-Every node executable starts its node with :func:`start_node`: a value of the wrong type or out of range,
+Every node executable starts its node with :func:`start_node` (several nodes in one process:
+:func:`start_nodes`): a value of the wrong type or out of range,
 or a parameter the node does not declare, whether from ``-p NAME:=VALUE`` or from a ``--params-file``, stops
 it with one line naming the parameter, the value and what was expected, and exit status 2 (a parameter file
 that is not YAML: one line naming the file and the line). rclpy alone would raise a traceback for a wrong
@@ -374,18 +375,15 @@ def start_node(
     cannot be read, or one of ``errors`` raised by ``make`` (the node's own checks of its settings) prints
     one line ``PROGRAM: ...`` and exits with status 2."""
     argv = list(sys.argv if args is None else args)
-    files = parameter_files(argv)
     node: N | None = None
     try:
-        for path in files:  # before rcl, whose message names neither the file's line nor the problem plainly
-            read_parameter_file(path)
+        check_files_read(argv)
         try:
             rclpy.init(args=argv)
         except rclpy_implementation.RCLError as error:  # a file PyYAML reads but rcl does not
-            detail = re.sub(r",? at /\S+:\d+", "", str(error)).replace("failed to initialize rcl: ", "")
-            raise ParameterError(detail) from None
+            raise ParameterError(rcl_problem(error)) from None
         node = make()
-        check_overrides(node, files, shared)
+        check_overrides(node, parameter_files(argv), shared)
     except (ParameterError, *errors) as error:  # type: ignore[misc]  # a tuple of exception classes, unpacked
         print(f"{program}: {error}", file=sys.stderr)
         if node is not None:
@@ -393,3 +391,49 @@ def start_node(
         rclpy.try_shutdown()
         raise SystemExit(EXIT_BAD_PARAMETER) from None
     return node
+
+
+def start_nodes(
+    program: str,
+    make: Callable[..., N],
+    node_args: Sequence[Sequence[str]],
+    *,
+    shared: Collection[str] | None = frozenset(),
+    errors: tuple[type[Exception], ...] = (),
+) -> list[N]:
+    """Several nodes in one process (as a ROS 2 component container holds them): initialise rclpy without
+    arguments and return one node per entry of ``node_args``, built by ``make(cli_args=ARGS,
+    use_global_arguments=False)`` from the ROS arguments (``--ros-args ...``) it would have had as a process
+    of its own, and checked as :func:`start_node` checks them. A problem with any of them prints one line
+    ``PROGRAM: NODE ARGUMENTS: ...`` and exits with status 2, the nodes built so far destroyed."""
+    nodes: list[N] = []
+    rclpy.init(args=[])
+    current: Sequence[str] = ()
+    try:
+        for current in node_args:
+            check_files_read(current)
+            try:
+                node = make(cli_args=list(current), use_global_arguments=False)
+            except rclpy_implementation.RCLError as error:  # a file PyYAML reads but rcl does not
+                raise ParameterError(rcl_problem(error)) from None
+            nodes.append(node)
+            check_overrides(node, parameter_files(current), shared)
+    except (ParameterError, *errors) as error:  # type: ignore[misc]  # a tuple of exception classes, unpacked
+        print(f"{program}: {' '.join(current)}: {error}", file=sys.stderr)
+        for built in nodes:
+            built.destroy_node()
+        rclpy.try_shutdown()
+        raise SystemExit(EXIT_BAD_PARAMETER) from None
+    return nodes
+
+
+def check_files_read(args: Sequence[str]) -> None:
+    """Read every ``--params-file`` of ``args`` (``ParameterError`` for one that cannot be): before rcl, whose
+    message names neither the file's line nor the problem plainly."""
+    for path in parameter_files(args):
+        read_parameter_file(path)
+
+
+def rcl_problem(error: Exception) -> str:
+    """rcl's message for arguments it refused, without its source locations and prefix."""
+    return re.sub(r",? at /\S+:\d+", "", str(error)).replace("failed to initialize rcl: ", "")

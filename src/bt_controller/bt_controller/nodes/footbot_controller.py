@@ -1,7 +1,9 @@
 """The footbot controller node: one footbot's perception and behaviour tree, in the robot's namespace.
 
 Node ``footbot_controller``, started in the robot's namespace: ``--ros-args -r __ns:=/footbot_<i>`` (or
-``/<graph>/footbot_<i>``); every name it uses is relative to it.
+``/<graph>/footbot_<i>``); every name it uses is relative to it. Executable ``footbot_controller`` runs one
+node; ``footbot_controllers --node --ros-args ... --node --ros-args ...`` runs several in one process, each
+with only its own arguments (``main_many``: what ``trial`` starts by default).
 
 Parameters (``config/bt_controller.yaml``; ``ControllerSettings``; a bad value, type or name stops the node
 with one line, exit status 2):
@@ -72,6 +74,7 @@ interpreter; the logic is ``bt_controller.robot.controller``.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -105,7 +108,14 @@ from bt_controller.robot import (
 from swarm_msgs.msg import GroundSensor, RangeAndBearingReadings, TreeStatus, WheelCommand
 from swarm_msgs.srv import LoadTree, StartTrial
 from swarm_ros.names import NamespaceError, robot_frame, robot_index
-from swarm_ros.parameters import ANY, ParameterError, declare_dataclass, start_node
+from swarm_ros.parameters import (
+    ANY,
+    EXIT_BAD_PARAMETER,
+    ParameterError,
+    declare_dataclass,
+    start_node,
+    start_nodes,
+)
 from swarm_ros.qos import RELIABLE
 from swarm_ros.spinning import spin_until_shutdown
 
@@ -597,11 +607,11 @@ class InitialTreeError(ValueError):
     ``library`` parameter not a library."""
 
 
-def make_node() -> FootbotControllerNode:
-    """A controller node; a ``tree`` parameter that does not parse, or a ``library`` that cannot be read,
-    raises ``InitialTreeError``."""
+def make_node(**node_options: Any) -> FootbotControllerNode:
+    """A controller node (``node_options``: rclpy's); a ``tree`` parameter that does not parse, or a
+    ``library`` that cannot be read, raises ``InitialTreeError``."""
     try:
-        return FootbotControllerNode()
+        return FootbotControllerNode(**node_options)
     except TreeError as error:
         raise InitialTreeError(f"the tree parameter is not a valid tree: {error}") from None
     except LibraryError as error:
@@ -617,7 +627,54 @@ def main(args: list[str] | None = None) -> None:
     node = start_node(
         "footbot_controller", make_node, args, shared=ANY, errors=(InitialTreeError, NamespaceError)
     )
-    node.announce()
     # lockstep has no timer and one callback at a time: the events executor serves it for less CPU per step;
     # free timing keeps the single-threaded executor, whose timers follow a simulated clock
-    spin_until_shutdown(node, events=not node.settings.free)
+    spin_until_shutdown(node, events=not node.settings.free, on_ready=node.announce)
+
+
+NODE_MARK = "--node"
+"""What starts each node's arguments on ``footbot_controllers``' command line."""
+
+
+def node_arguments(args: Sequence[str]) -> list[list[str]]:
+    """The arguments of each node of ``footbot_controllers ARGS``: the words after each ``--node`` up to the
+    next; ``ValueError`` when there is none, or words before the first."""
+    if not args or args[0] != NODE_MARK:
+        raise ValueError(
+            "expected one '--node --ros-args ...' per controller, each with the arguments its own "
+            f"footbot_controller process would take; got {' '.join(args) or 'no arguments'}"
+        )
+    groups: list[list[str]] = []
+    for word in args:
+        if word == NODE_MARK:
+            groups.append([])
+        else:
+            groups[-1].append(word)
+    return groups
+
+
+def main_many(args: list[str] | None = None) -> None:
+    """``footbot_controllers --node --ros-args ... [--node --ros-args ...]``: several footbot controller nodes
+    in one process, as a ROS 2 component container holds nodes; each node takes only its own arguments (the
+    ones its own ``footbot_controller`` process would take: namespace, parameters, parameter files, remaps).
+    A trial graph's nine controllers start in about 1 s of CPU so, against about 1 s each as processes of
+    their own. The nodes share one executor: the events executor when every one is lockstep, else the
+    single-threaded one. A bad parameter of any node is one line naming its arguments, exit status 2."""
+    argv = list(sys.argv[1:] if args is None else args)
+    if argv in (["-h"], ["--help"]):
+        print(main_many.__doc__)
+        return
+    try:
+        groups = node_arguments(argv)
+    except ValueError as error:
+        print(f"footbot_controllers: {error}", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_PARAMETER) from None
+    nodes = start_nodes(
+        "footbot_controllers", make_node, groups, shared=ANY, errors=(InitialTreeError, NamespaceError)
+    )
+
+    def announce() -> None:
+        for node in nodes:
+            node.announce()
+
+    spin_until_shutdown(nodes, events=not any(node.settings.free for node in nodes), on_ready=announce)

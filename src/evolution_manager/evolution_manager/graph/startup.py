@@ -1,10 +1,10 @@
 """Start and stop node graphs as separate processes: the launcher behind ``trial``, the manager and the tests.
 
 A full ROS 2 install would use ``ros2 launch`` (see the launch files in ``launch/``); the PyPI wheels have no
-``launch``, so this module starts the installed executables itself, each in its own process, all in one ROS
-domain, and stops them with SIGINT, then SIGKILL for any that does not stop in time. Each node's output and
-its ROS log files (``ROS_LOG_DIR``) go to the graph's log directory when it has one. Nothing here imports
-``rclpy``. Every
+``launch``, so this module starts the installed executables itself, each node in its own process (or a
+trial graph's controllers all in one, ``CONTROLLER_PROCESSES``), all in one ROS domain, and stops them with
+SIGINT, then SIGKILL for any that does not stop in time. Each process's output and its ROS log files
+(``ROS_LOG_DIR``) go to the graph's log directory when it has one. Nothing here imports ``rclpy``. Every
 process it starts dies with the process that started it, whatever kills that one
 (``processes.die_with_parent``).
 """
@@ -50,6 +50,31 @@ def executable(package: str, name: str) -> Path:
     return path
 
 
+def ros_arguments(
+    *,
+    namespace: str = "",
+    node_name: str = "",
+    parameters: Mapping[str, object] | None = None,
+    params_files: Sequence[Path] = (),
+    remaps: Mapping[str, str] | None = None,
+) -> list[str]:
+    """One node's ROS arguments, ``--ros-args ...``: its namespace and name, ``remaps`` (topic name -> the
+    name it is remapped to), the parameter files (each overriding the ones before it) and ``parameters``
+    (overriding them all)."""
+    command = ["--ros-args"]
+    if namespace:
+        command += ["-r", f"__ns:={namespace}"]
+    if node_name:
+        command += ["-r", f"__node:={node_name}"]
+    for topic, remapped in (remaps or {}).items():
+        command += ["-r", f"{topic}:={remapped}"]
+    for params_file in params_files:
+        command += ["--params-file", str(params_file)]
+    for key, value in (parameters or {}).items():
+        command += ["-p", f"{key}:={parameter_text(value)}"]
+    return command
+
+
 class Graph:
     """A set of node processes in one ROS domain; a context manager that stops them all on exit."""
 
@@ -81,19 +106,29 @@ class Graph:
     ) -> subprocess.Popen:
         """Start one node process, known in this graph as ``name``. Each parameter file overrides the ones
         before it; ``parameters`` override them all; ``remaps``: topic name -> the name it is remapped to."""
+        ros_args = ros_arguments(
+            namespace=namespace,
+            node_name=node_name,
+            parameters=parameters,
+            params_files=params_files,
+            remaps=remaps,
+        )
+        return self._spawn(name, [str(executable(package, executable_name)), *arguments, *ros_args])
+
+    def start_nodes(
+        self, name: str, package: str, executable_name: str, nodes: Sequence[Sequence[str]]
+    ) -> subprocess.Popen:
+        """Start one process holding several nodes (``footbot_controllers``), known in this graph as
+        ``name``: each of ``nodes`` is one node's ROS arguments (:func:`ros_arguments`), given after a
+        ``--node`` of its own."""
+        command = [str(executable(package, executable_name))]
+        for node in nodes:
+            command += ["--node", *node]
+        return self._spawn(name, command)
+
+    def _spawn(self, name: str, command: list[str]) -> subprocess.Popen:
         if name in self.processes:
             raise GraphError(f"a process named {name} is already running")
-        command = [str(executable(package, executable_name)), *arguments, "--ros-args"]
-        if namespace:
-            command += ["-r", f"__ns:={namespace}"]
-        if node_name:
-            command += ["-r", f"__node:={node_name}"]
-        for topic, remapped in (remaps or {}).items():
-            command += ["-r", f"{topic}:={remapped}"]
-        for params_file in params_files:
-            command += ["--params-file", str(params_file)]
-        for key, value in (parameters or {}).items():
-            command += ["-p", f"{key}:={parameter_text(value)}"]
         output: IO[str] | int = subprocess.DEVNULL
         env = domain_environment(self.domain)
         if self.log_dir is not None:
@@ -378,6 +413,14 @@ def launch_graph_nodes(arguments: Mapping[str, str]) -> list[NodeSpec]:
     return nodes
 
 
+CONTROLLER_PROCESSES = ("one", "per-robot")
+"""How a started trial graph lays its controllers out in processes: ``one`` process holding every robot's
+controller node (``bt_controller footbot_controllers``, as a ROS 2 component container holds nodes: about
+1 s of CPU to start nine, against about 1 s each as processes of their own), or one process ``per-robot``
+(``footbot_controller``, as on robots, each with a computer of its own). The nodes, their names, topics,
+services and results are the same either way."""
+
+
 def start_trial_graph(
     graph: Graph,
     robots: int = DEFAULT.n_robots,
@@ -392,13 +435,19 @@ def start_trial_graph(
     timing: str = "lockstep",
     rate: float = 1.0,
     bridge: Bridge | None = None,
+    controller_processes: str = "one",
 ) -> None:
     """Start the nodes of ``trial_graph_nodes(robots, namespace, profile=profile, conditions=conditions,
-    clock=clock, library=library, world=world, timing=timing, rate=rate)``, each in its own process, with its
+    clock=clock, library=library, world=world, timing=timing, rate=rate)``, the controllers in processes as
+    ``controller_processes`` says (``CONTROLLER_PROCESSES``; the process holding them all is named
+    ``<namespace>/controllers`` in the graph), every other node in a process of its own, each with its
     package's parameter file and then ``params_file`` (every node's); ``robots`` overrides ``n_robots``,
     ``profile`` (when given) the simulator's model profile. The simulator, a managed node, is started
     unconfigured (``autostart:=false``): the caller drives it through configure and activate
     (``TrialRunner.activate``)."""
+    if controller_processes not in CONTROLLER_PROCESSES:
+        expected = ", ".join(CONTROLLER_PROCESSES)
+        raise GraphError(f"controller processes {controller_processes!r}: expected one of {expected}")
     nodes = trial_graph_nodes(
         robots,
         namespace,
@@ -411,15 +460,28 @@ def start_trial_graph(
         rate=rate,
         bridge=bridge,
     )
+    shared = controller_processes == "one"
+    held: list[list[str]] = []
     for spec in nodes:
         files = [package_config(spec.package), *([params_file] if params_file is not None else [])]
         managed = {"autostart": "false"} if spec.executable == "simulator" else {}
+        parameters = {**spec.parameters, **managed}
+        if shared and spec.executable == "footbot_controller":
+            held.append(
+                ros_arguments(
+                    namespace=spec.namespace, parameters=parameters, params_files=files, remaps=spec.remaps
+                )
+            )
+            continue
         graph.start(
             spec.name,
             spec.package,
             spec.executable,
             namespace=spec.namespace,
-            parameters={**spec.parameters, **managed},
+            parameters=parameters,
             params_files=files,
             remaps=spec.remaps,
         )
+    if held:
+        name = f"{namespace.rstrip('/')}/controllers".lstrip("/")
+        graph.start_nodes(name, "bt_controller", "footbot_controllers", held)

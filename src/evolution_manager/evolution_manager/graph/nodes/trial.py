@@ -1,7 +1,8 @@
 """Run one trial through the full node graph and record it.
 
 ``ws/run evolution_manager trial --tree TREE --seed S [--trial K] --bag DIR`` starts the simulator and one
-footbot controller per robot as separate processes, loads the tree into every controller (with ``--swarm
+footbot controller node per robot (all in one process, or a process each with ``--controller-processes
+per-robot``), loads the tree into every controller (with ``--swarm
 FILE``, a swarm layout of ``swarm_sim.model.swarm_layout``: each controller its own tree), runs trial K of
 seed S in lockstep through the simulator's ``run_trial`` action, records every topic of the graph to a rosbag2
 bag with MCAP storage, and prints the same JSON as ``ws/run swarm_sim evaluate --per-trial`` for that trial.
@@ -68,7 +69,13 @@ from evolution_manager.arguments import (
 )
 from evolution_manager.errors import TrialFailedError, UsageError
 from evolution_manager.graph.nodes.recorder import GraphRecorder, graph_frames, trial_topics
-from evolution_manager.graph.startup import Bridge, Graph, GraphError, start_trial_graph
+from evolution_manager.graph.startup import (
+    CONTROLLER_PROCESSES,
+    Bridge,
+    Graph,
+    GraphError,
+    start_trial_graph,
+)
 from evolution_manager.processes import exit_status, signals_as_interrupts
 from evolution_manager.recording.bags import BagError, BagRecorder, check_new_bag, is_latched
 from evolution_manager.recording.reproduce import RESULT_TOPIC
@@ -93,9 +100,10 @@ from swarm_sim.tasks import DEFAULT_TASK, TaskSpec, add_task_option, resolve_tas
 MAX_DOMAIN = 232
 """Largest ROS_DOMAIN_ID (Fast DDS's port arithmetic; 0-101 are safe on Linux)."""
 STARTUP_TIMEOUT = 600.0
-"""Seconds to wait for a node's services and actions to appear. Starting ten Python processes that load
-numba takes about 40 s of CPU: on a loaded machine that is minutes of wall time, and a node that dies while
-starting is noticed at once (``Graph.check``), so this only bounds a node that hangs."""
+"""Seconds to wait for a node's services and actions to appear. Starting the graph's Python processes that
+load numba took about 40 s of CPU with a process per controller: on a loaded machine that is minutes of wall
+time, and a node that dies while starting is noticed at once (``Graph.check``), so this only bounds a node
+that hangs."""
 
 
 GRAPH_CHECK_INTERVAL = 0.25
@@ -322,7 +330,9 @@ class TrialGraph:
     ``lockstep`` (exact) or ``free`` (the simulator steps at ``rate`` times real time, the controllers tick
     on their own timers in simulated time: ``startup.trial_graph_nodes``); ``frames``: whether a bag records
     odom, ``/tf`` and ``/tf_static`` too (``recorder.trial_topics``); ``bridge`` (free timing only): the
-    readings come from the virtual-sensor bridge over its link (``startup.Bridge``), not the simulator."""
+    readings come from the virtual-sensor bridge over its link (``startup.Bridge``), not the simulator;
+    ``controller_processes``: the controllers all in ``one`` process (the default: the graph starts in about
+    8 s less CPU) or one ``per-robot`` (``startup.CONTROLLER_PROCESSES``)."""
 
     def __init__(
         self,
@@ -342,8 +352,10 @@ class TrialGraph:
         rate: float = 1.0,
         frames: bool = True,
         bridge: Bridge | None = None,
+        controller_processes: str = "one",
     ) -> None:
         self.conditions = list(conditions)
+        self.controller_processes = controller_processes
         self.frames = frames
         self.bridge = bridge
         self.timing = timing
@@ -394,6 +406,7 @@ class TrialGraph:
                 timing=self.timing,
                 rate=self.rate,
                 bridge=self.bridge,
+                controller_processes=self.controller_processes,
             )
             context = rclpy.Context()
             rclpy.init(context=context, domain_id=domain, signal_handler_options=SignalHandlerOptions.NO)
@@ -536,6 +549,7 @@ def run_recorded_trial(
     timing: str = "lockstep",
     rate: float = 1.0,
     frames: bool = True,
+    controller_processes: str = "one",
 ) -> TrialRecord:
     """Run trial ``trial`` of ``seed`` with ``tree_text`` (every robot's, or a swarm layout) through a fresh
     node graph, recording it to ``bag_path``; return its record (see ``TrialGraph`` for the other
@@ -554,6 +568,7 @@ def run_recorded_trial(
         timing=timing,
         rate=rate,
         frames=frames,
+        controller_processes=controller_processes,
     ) as graph:
         return graph.run(tree_text, seed, trial, bag_path)
 
@@ -677,6 +692,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "(a bag about a third smaller, docs/performance.md)",
     )
     parser.add_argument(
+        "--controller-processes",
+        choices=CONTROLLER_PROCESSES,
+        default="one",
+        help="one: every robot's controller node in one process (default; about 8 s less CPU to start nine); "
+        "per-robot: a process each, as on robots. Same nodes, messages and result",
+    )
+    parser.add_argument(
         "--logs", type=Path, default=None, help="directory for the node logs (default <bag>.logs)"
     )
     try:
@@ -745,6 +767,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 timing=args.timing,
                 rate=1.0 if args.rate is None else args.rate,
                 frames=args.frames,
+                controller_processes=args.controller_processes,
             )
     except (TreeError, LibraryError, ValueError, BagError, GraphError, TrialFailedError, OSError) as error:
         print(f"trial: {error}", file=sys.stderr)
