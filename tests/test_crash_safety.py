@@ -181,7 +181,8 @@ def test_kill_9_of_trial_or_manager_leaves_no_node_process(tmp_path):
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
-    nodes = wait_for(lambda: len(descendants(trial.pid)) >= 10 and descendants(trial.pid), "the trial graph")
+    # the simulator and the process holding the nine controllers (`--controller-processes one`)
+    nodes = wait_for(lambda: len(descendants(trial.pid)) >= 2 and descendants(trial.pid), "the trial graph")
     trial.kill()
     trial.wait()
     assert gone_soon(nodes) == set(), "node processes outlived their trial"
