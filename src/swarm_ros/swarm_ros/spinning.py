@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 
 EVENTS_WAKE = 1.0
@@ -52,6 +53,9 @@ def spin_until_shutdown(
             executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except rclpy_implementation.RCLError:
+        if context.ok():  # not a Ctrl-C that shut the context down between the loop's look and spin_once
+            raise
     finally:
         if executor is not None:
             executor.shutdown()
