@@ -27,7 +27,7 @@ import textwrap
 from collections.abc import Callable, Collection, Mapping, Sequence
 from itertools import pairwise
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar
 
 import rclpy
 import yaml
@@ -386,11 +386,7 @@ def start_node(
         node = make()
         check_overrides(node, parameter_files(argv), shared)
     except (ParameterError, *errors) as error:  # type: ignore[misc]  # a tuple of exception classes, unpacked
-        print(f"{program}: {error}", file=sys.stderr)
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-        raise SystemExit(EXIT_BAD_PARAMETER) from None
+        refuse(f"{program}: {error}", [] if node is None else [node])
     return node
 
 
@@ -420,12 +416,18 @@ def start_nodes(
             nodes.append(node)
             check_overrides(node, parameter_files(current), shared)
     except (ParameterError, *errors) as error:  # type: ignore[misc]  # a tuple of exception classes, unpacked
-        print(f"{program}: {' '.join(current)}: {error}", file=sys.stderr)
-        for built in nodes:
-            built.destroy_node()
-        rclpy.try_shutdown()
-        raise SystemExit(EXIT_BAD_PARAMETER) from None
+        refuse(f"{program}: {' '.join(current)}: {error}", nodes)
     return nodes
+
+
+def refuse(line: str, built: Sequence[Node]) -> NoReturn:
+    """A node start-up's end on a bad parameter: print ``line``, destroy the nodes ``built`` so far, shut
+    rclpy down and exit with status 2."""
+    print(line, file=sys.stderr)
+    for node in built:
+        node.destroy_node()
+    rclpy.try_shutdown()
+    raise SystemExit(EXIT_BAD_PARAMETER) from None
 
 
 def init_rclpy(args: Sequence[str]) -> None:
