@@ -224,7 +224,8 @@ def test_the_controllers_in_one_process_take_each_nodes_own_arguments_and_refuse
     # each node takes only its own parameters: robot 0's tree is not robot 1's
     # and a Ctrl-C just as they said so stops them cleanly (it once aborted the process in 1 of 5 tries)
     status, lines = run_controllers(*node(0, "-p", "tree:=forward"), *node(1), until=2)
-    assert status == 0 and len(lines) == 2, lines
+    # (a node announcing just after the Ctrl-C shut the context down logs that it cannot reach /rosout)
+    assert status == 0 and not any("Traceback" in line for line in lines), lines
     assert lines[0].endswith("ready: robot 0 in /swarm_a/footbot_0 with tree forward"), lines
     assert lines[1].endswith("ready: robot 1 in /swarm_a/footbot_1; waiting for load_tree"), lines
     # a bad parameter of the second node: one line naming that node's arguments, exit status 2
